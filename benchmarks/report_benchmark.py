@@ -1,0 +1,198 @@
+"""Time and peak memory of the report for a large test event.
+
+10 shifts, 300 master segments (AUTO and ITO alternating, every ITO with one
+reason) and 200 000 GPS poses, bulk-created in a throw-away test database of
+the configured backend (FTT_DATABASE_URL for PostGIS, else SpatiaLite in
+FTT_DATA_DIR).  Measures the statistics alone and the full PDF (without map
+tiles, as offline in the field), each with wall time and the peak of Python
+allocations (tracemalloc, includes numpy arrays) plus peak RSS; each stage
+runs in a forked child, so the figures are per stage.
+BENCH_TRACEMALLOC=1 adds the Python allocation peak (tracemalloc makes the code 2-4x slower).
+
+    .venv/bin/python benchmarks/report_benchmark.py [--shifts 10] [--segments 300]
+                                                    [--poses 200000] [--skip-pdf]
+"""
+
+import argparse
+import json
+import os
+import resource
+import sys
+import time
+import tracemalloc
+import uuid
+from datetime import UTC, datetime, timedelta
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+os.environ.setdefault("DJANGO_SETTINGS_MODULE", "ftt_site.settings")
+
+import django  # noqa: E402
+
+django.setup()
+
+from django.contrib.gis.geos import Point  # noqa: E402
+from django.db import connection  # noqa: E402
+
+from events.models import Leg, Segment, Shift, TestEvent, Vehicle  # noqa: E402
+from telemetry.models import Pose  # noqa: E402
+
+REASONS = ("safety", "planner", "unexpected", "goal", "maintenance")
+
+
+def build(shifts: int, segments: int, poses: int) -> TestEvent:
+    start = datetime(2026, 6, 1, 6, 0, tzinfo=UTC)
+    event = TestEvent.objects.create(location="benchmark", time_zone="Europe/Berlin", start=start)
+    vehicle = Vehicle.objects.create(key="bench", short_description="Bench vehicle")
+    per_shift = segments // shifts
+    index = 0
+    lon, lat = 7.0, 50.0
+    t = start
+    pose_rows = []
+    for s in range(shifts):
+        shift = Shift.objects.create(
+            test_event=event, vehicle=vehicle, number=s + 1, start=t, end=None
+        )
+        leg = Leg.objects.create(shift=shift, number=1, start=t, weather_id="sunny")
+        masters = []
+        for k in range(per_shift):
+            # Spread the poses exactly: the first (poses % segments) get one more.
+            per_segment = poses // segments + (1 if index < poses % segments else 0)
+            seconds_per_segment = per_segment  # one pose per second
+            index += 1
+            kind = "auto" if k % 2 == 0 else "ito"
+            masters.append(
+                Segment(
+                    leg=leg,
+                    segment_type_id=kind,
+                    start=t,
+                    end=t + timedelta(seconds=seconds_per_segment),
+                    start_position=Point(lon, lat, srid=4326),
+                )
+            )
+            for p in range(per_segment):
+                lon += 0.00001  # about 0.7 m east per second
+                lat += 0.000002 * ((p // 50) % 2 * 2 - 1)
+                pose_rows.append((len(masters) - 1, lon, lat, t + timedelta(seconds=p + 1)))
+            t += timedelta(seconds=seconds_per_segment)
+        Segment.objects.bulk_create(masters, batch_size=500)
+        children = [
+            Segment(
+                leg=leg,
+                parent=m,
+                segment_type_id="ito",
+                ito_reason_id=REASONS[i % len(REASONS)],
+                start=m.start,
+                end=m.end,
+            )
+            for i, m in enumerate(masters)
+            if m.segment_type_id == "ito"
+        ]
+        Segment.objects.bulk_create(children, batch_size=500)
+        Pose.objects.bulk_create(
+            (
+                Pose(
+                    uid=uuid.uuid4(),
+                    segment=masters[i],
+                    point=Point(x, y, srid=4326),
+                    robot_stamp=stamp,
+                    received=stamp,
+                )
+                for i, x, y, stamp in pose_rows
+            ),
+            batch_size=5000,
+        )
+        pose_rows.clear()
+        Shift.objects.filter(pk=shift.pk).update(end=t)
+        Leg.objects.filter(pk=leg.pk).update(end=t)
+        t += timedelta(hours=1)
+    TestEvent.objects.filter(pk=event.pk).update(end=t)
+    event.refresh_from_db()
+    return event
+
+
+def measure(label: str, func) -> dict:
+    """Run ``func`` in a forked child: wall time, and the child's peak RSS and
+    Python allocation peak, so one stage's memory does not hide the next's."""
+    connection.close()  # the child opens its own connection
+    read_end, write_end = os.pipe()
+    pid = os.fork()
+    if pid == 0:
+        os.close(read_end)
+        code = 0
+        try:
+            if os.environ.get("BENCH_TRACEMALLOC") == "1":
+                tracemalloc.start()
+            started = time.perf_counter()
+            note = func() or ""
+            seconds = time.perf_counter() - started
+            _, peak = tracemalloc.get_traced_memory()
+            rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+            out = {"seconds": seconds, "peak": peak / 2**20, "rss": rss, "note": note}
+        except Exception as exc:  # report, do not hang the parent
+            out = {"error": repr(exc)}
+            code = 1
+        os.write(write_end, json.dumps(out).encode())
+        os._exit(code)
+    os.close(write_end)
+    with os.fdopen(read_end) as pipe:
+        out = json.loads(pipe.read() or "{}")
+    os.waitpid(pid, 0)
+    if "error" in out:
+        print(f"{label:<28} failed: {out['error']}")
+        return out
+    print(
+        f"{label:<28} {out['seconds']:8.2f} s   peak Python alloc {out['peak']:7.1f} MiB"
+        f"   peak RSS {out['rss']:7.1f} MiB   {out['note']}"
+    )
+    return out
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--shifts", type=int, default=10)
+    parser.add_argument("--segments", type=int, default=300)
+    parser.add_argument("--poses", type=int, default=200_000)
+    parser.add_argument("--skip-pdf", action="store_true")
+    args = parser.parse_args()
+
+    from reports.selectors.statistics import event_statistics
+    from reports.services.rendering import ReportOptions, render_report
+
+    backend = connection.vendor
+    old_name = connection.creation.create_test_db(verbosity=0, autoclobber=True, serialize=False)
+    try:
+        started = time.perf_counter()
+        event = build(args.shifts, args.segments, args.poses)
+        masters = Segment.objects.filter(parent=None).count()
+        print(
+            f"backend {backend}: {args.shifts} shifts, {masters} master segments,"
+            f" {Pose.objects.count()} poses"
+            f" (bulk-created in {time.perf_counter() - started:.1f} s)"
+        )
+
+        def statistics():
+            overall = event_statistics(event).overall
+            return f"{overall.total_distance / 1000:.2f} km, {overall.interventions} interventions"
+
+        def api_json():
+            return f"{len(json.dumps(event_statistics(event).as_dict())) / 1024:.0f} KiB JSON"
+
+        def pdf():
+            result = render_report(event, ReportOptions(no_tiles=True))
+            out = Path(os.environ.get("FTT_DATA_DIR", "data")) / "benchmark-report.pdf"
+            out.write_bytes(result.pdf)
+            return f"{len(result.pdf) / 2**20:.1f} MiB PDF: {out}"
+
+        measure("statistics (selectors)", statistics)
+        measure("statistics as API JSON", api_json)
+        if not args.skip_pdf:
+            measure("full PDF report (no tiles)", pdf)
+    finally:
+        connection.close()
+        connection.creation.destroy_test_db(old_name, verbosity=0)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,358 @@
+"""Django admin: the configuration UI for test administrators.
+
+Configuration and catalogues are edited here.  The log hierarchy is browsable
+with links up and down; its state changes (close, re-open) are admin actions
+that call the service layer, and robot-recorded data is read-only.
+"""
+
+from django.contrib import admin, messages
+from django.core.exceptions import ValidationError
+from django.urls import reverse
+from django.utils.html import format_html, format_html_join
+from leaflet.admin import LeafletGeoAdminMixin
+
+from events import roles
+from events.models import (
+    ItoReason,
+    Leg,
+    Note,
+    Performer,
+    Personnel,
+    PoseSource,
+    Segment,
+    SegmentType,
+    Shift,
+    TestEvent,
+    Vehicle,
+    Weather,
+)
+from events.services import deletion, logs, segments
+
+
+def admin_link(obj, label=None):
+    if obj is None:
+        return "—"
+    url = reverse(f"admin:{obj._meta.app_label}_{obj._meta.model_name}_change", args=[obj.pk])
+    return format_html('<a href="{}">{}</a>', url, label or str(obj))
+
+
+def children_links(queryset):
+    return format_html_join(", ", "{}", ((admin_link(o),) for o in queryset)) or "—"
+
+
+class ServiceDeleteMixin:
+    """Deletes go through the service, so refusals name where a row is used."""
+
+    def delete_model(self, request, obj):
+        try:
+            deletion.delete(obj)
+        except ValidationError as exc:
+            self.message_user(request, " ".join(exc.messages), messages.ERROR)
+
+    def delete_queryset(self, request, queryset):
+        for obj in queryset:
+            self.delete_model(request, obj)
+
+
+def run_service(modeladmin, request, queryset, service, done):
+    changed = 0
+    for obj in queryset:
+        try:
+            service(obj)
+            changed += 1
+        except ValidationError as exc:
+            modeladmin.message_user(request, f"{obj}: {' '.join(exc.messages)}", messages.WARNING)
+    if changed:
+        modeladmin.message_user(request, f"{changed} {done}.", messages.SUCCESS)
+
+
+# --- configuration ----------------------------------------------------------------------------
+
+
+@admin.register(Personnel)
+class PersonnelAdmin(ServiceDeleteMixin, admin.ModelAdmin):
+    list_display = ["name", "institution", "user"]
+    search_fields = ["name", "institution", "user__username"]
+    list_filter = ["institution"]
+    autocomplete_fields = ["user"]
+
+
+@admin.register(Performer)
+class PerformerAdmin(ServiceDeleteMixin, admin.ModelAdmin):
+    list_display = ["institution"]
+    search_fields = ["institution"]
+
+
+@admin.register(Vehicle)
+class VehicleAdmin(ServiceDeleteMixin, admin.ModelAdmin):
+    list_display = ["key", "short_description", "institution"]
+    search_fields = ["key", "short_description", "long_description", "institution"]
+    list_filter = ["institution"]
+
+
+@admin.register(PoseSource)
+class PoseSourceAdmin(ServiceDeleteMixin, admin.ModelAdmin):
+    list_display = ["key", "short_description"]
+    search_fields = ["key", "short_description", "long_description"]
+
+
+# --- catalogues -------------------------------------------------------------------------------
+
+
+class CatalogueAdmin(ServiceDeleteMixin, admin.ModelAdmin):
+    """Everyone with admin access may look; only administrators change."""
+
+    search_fields = ["key", "short_description", "long_description"]
+
+    def _is_administrator(self, request):
+        return roles.has_role(request.user, roles.ADMINISTRATOR)
+
+    def has_add_permission(self, request):
+        return self._is_administrator(request)
+
+    def has_change_permission(self, request, obj=None):
+        return self._is_administrator(request)
+
+    def has_delete_permission(self, request, obj=None):
+        return self._is_administrator(request)
+
+    def has_view_permission(self, request, obj=None):
+        return roles.has_role(request.user, roles.VIEWER)
+
+    def get_readonly_fields(self, request, obj=None):
+        return ["key"] if obj is not None else []
+
+
+def colour_swatch(obj):
+    return format_html(
+        '<span style="display:inline-block;width:1.5em;height:1em;background:rgb({})"></span> {}',
+        obj.color,
+        obj.color,
+    )
+
+
+colour_swatch.short_description = "colour"
+
+
+@admin.register(Weather)
+class WeatherAdmin(CatalogueAdmin):
+    list_display = ["key", "short_description", "long_description"]
+
+
+@admin.register(ItoReason)
+class ItoReasonAdmin(CatalogueAdmin):
+    list_display = ["key", "short_description", colour_swatch, "counts_as_intervention"]
+    list_filter = ["counts_as_intervention"]
+
+
+@admin.register(SegmentType)
+class SegmentTypeAdmin(CatalogueAdmin):
+    list_display = ["key", "short_description", colour_swatch]
+
+
+# --- the log hierarchy ------------------------------------------------------------------------
+
+
+class ReadOnlyInline(admin.TabularInline):
+    extra = 0
+    can_delete = False
+    show_change_link = True
+
+    def has_add_permission(self, request, obj=None):
+        return False
+
+    def has_change_permission(self, request, obj=None):
+        return False
+
+
+class ShiftInline(ReadOnlyInline):
+    model = Shift
+    fields = ["number", "vehicle", "performer", "start", "end"]
+
+
+class LegInline(ReadOnlyInline):
+    model = Leg
+    fields = ["number", "weather", "default_pose_source", "start", "end"]
+
+
+class SegmentInline(ReadOnlyInline):
+    model = Segment
+    fk_name = "leg"
+    fields = ["segment_type", "parent", "ito_reason", "start", "end"]
+
+    def get_queryset(self, request):
+        return super().get_queryset(request).select_related("segment_type", "ito_reason", "parent")
+
+
+class ChildInline(SegmentInline):
+    fk_name = "parent"
+
+
+class NoteInline(admin.TabularInline):
+    model = Note
+    extra = 0
+    fields = ["author", "text", "created", "edited"]
+    readonly_fields = ["created", "edited"]
+
+    def has_add_permission(self, request, obj=None):
+        return False
+
+
+@admin.register(TestEvent)
+class TestEventAdmin(ServiceDeleteMixin, admin.ModelAdmin):
+    list_display = ["__str__", "location", "version", "time_zone", "start", "end"]
+    list_filter = ["time_zone", ("end", admin.EmptyFieldListFilter)]
+    search_fields = ["location", "version", "note"]
+    date_hierarchy = "start"
+    readonly_fields = ["uid", "start", "end"]
+    fields = ["location", "version", "time_zone", "note", "uid", "start", "end"]
+    inlines = [ShiftInline]
+    actions = ["close_selected", "reopen_selected"]
+
+    def save_model(self, request, obj, form, change):
+        values = {name: form.cleaned_data[name] for name in logs.TEST_EVENT_FIELDS}
+        if change:
+            logs.update_test_event(obj, **values)
+        else:
+            obj.pk = logs.create_test_event(**values).pk
+
+    @admin.action(description="End selected test events (and everything open below)")
+    def close_selected(self, request, queryset):
+        run_service(self, request, queryset, logs.close_test_event, "test events ended")
+
+    @admin.action(description="Re-open selected test events")
+    def reopen_selected(self, request, queryset):
+        run_service(self, request, queryset, logs.reopen_test_event, "test events re-opened")
+
+
+@admin.register(Shift)
+class ShiftAdmin(ServiceDeleteMixin, admin.ModelAdmin):
+    list_display = ["__str__", "test_event_link", "vehicle", "performer", "start", "end"]
+    list_filter = ["vehicle", "performer", ("end", admin.EmptyFieldListFilter)]
+    search_fields = ["test_intent", "workspace", "note", "test_event__location"]
+    list_select_related = ["test_event", "vehicle", "performer"]
+    readonly_fields = ["test_event_link", "number", "uid", "start", "end"]
+    inlines = [LegInline]
+    actions = ["close_selected"]
+
+    def get_fields(self, request, obj=None):
+        head = ["test_event_link", "number"] if obj else ["test_event"]
+        return [*head, *logs.SHIFT_FIELDS, "uid", "start", "end"]
+
+    def get_readonly_fields(self, request, obj=None):
+        return self.readonly_fields if obj else ["uid", "start", "end"]
+
+    @admin.display(description="test event")
+    def test_event_link(self, obj):
+        return admin_link(obj.test_event)
+
+    def save_model(self, request, obj, form, change):
+        values = {name: form.cleaned_data[name] for name in logs.SHIFT_FIELDS}
+        if change:
+            logs.update_shift(obj, **values)
+        else:
+            vehicle = values.pop("vehicle")
+            created = logs.create_shift(
+                test_event=form.cleaned_data["test_event"], vehicle=vehicle, **values
+            )
+            obj.pk = created.pk
+
+    @admin.action(description="End selected shifts (and everything open below)")
+    def close_selected(self, request, queryset):
+        run_service(self, request, queryset, logs.close_shift, "shifts ended")
+
+
+@admin.register(Leg)
+class LegAdmin(ServiceDeleteMixin, admin.ModelAdmin):
+    list_display = ["__str__", "shift_link", "weather", "default_pose_source", "start", "end"]
+    list_filter = ["weather", ("end", admin.EmptyFieldListFilter)]
+    search_fields = ["note", "recording"]
+    list_select_related = ["shift", "weather", "default_pose_source"]
+    readonly_fields = ["shift_link", "number", "uid", "start", "end"]
+    inlines = [SegmentInline]
+    actions = ["close_selected"]
+
+    def get_fields(self, request, obj=None):
+        head = ["shift_link", "number"] if obj else ["shift"]
+        return [*head, *logs.LEG_FIELDS, "uid", "start", "end"]
+
+    def get_readonly_fields(self, request, obj=None):
+        return self.readonly_fields if obj else ["uid", "start", "end"]
+
+    @admin.display(description="shift")
+    def shift_link(self, obj):
+        return admin_link(obj.shift, f"{obj.shift} of {obj.shift.test_event}")
+
+    def get_inline_instances(self, request, obj=None):
+        return super().get_inline_instances(request, obj) if obj else []
+
+    def save_model(self, request, obj, form, change):
+        values = {name: form.cleaned_data[name] for name in logs.LEG_FIELDS}
+        if change:
+            logs.update_leg(obj, **values)
+        else:
+            obj.pk = logs.create_leg(shift=form.cleaned_data["shift"], **values).pk
+
+    @admin.action(description="End selected legs (and their open segments)")
+    def close_selected(self, request, queryset):
+        run_service(self, request, queryset, logs.close_leg, "legs ended")
+
+
+@admin.register(Segment)
+class SegmentAdmin(ServiceDeleteMixin, LeafletGeoAdminMixin, admin.ModelAdmin):
+    list_display = ["__str__", "leg_link", "segment_type", "ito_reason", "start", "end"]
+    list_filter = ["segment_type", "ito_reason", ("parent", admin.EmptyFieldListFilter)]
+    search_fields = ["obstacle", "lighting", "slope"]
+    list_select_related = ["leg__shift__test_event", "segment_type", "ito_reason"]
+    fields = [
+        "leg_link",
+        "parent_link",
+        "segment_type",
+        *Segment.ANNOTATION_FIELDS,
+        "start_position",
+        "start_local_x",
+        "start_local_y",
+        "start_local_frame",
+        "start",
+        "end",
+        "robot_stamp",
+        "uid",
+    ]
+    inlines = [ChildInline, NoteInline]
+    actions = ["close_selected"]
+
+    def has_add_permission(self, request):
+        # Segments come from mode switches (robot or GUI), never from a blank form.
+        return False
+
+    def get_readonly_fields(self, request, obj=None):
+        editable = set(Segment.ANNOTATION_FIELDS) if obj and obj.parent_id else set()
+        return [f for f in self.fields if f not in editable]
+
+    @admin.display(description="leg")
+    def leg_link(self, obj):
+        return admin_link(obj.leg, f"{obj.leg} of {obj.leg.shift}")
+
+    @admin.display(description="master")
+    def parent_link(self, obj):
+        return admin_link(obj.parent)
+
+    def save_model(self, request, obj, form, change):
+        values = {name: form.cleaned_data[name] for name in form.changed_data}
+        if values:
+            segments.annotate_segment(obj, **values)
+
+    @admin.action(description="End selected segments")
+    def close_selected(self, request, queryset):
+        run_service(self, request, queryset, segments.close_segment, "segments ended")
+
+
+@admin.register(Note)
+class NoteAdmin(ServiceDeleteMixin, admin.ModelAdmin):
+    list_display = ["__str__", "author", "segment", "created", "edited"]
+    search_fields = ["text", "author__name"]
+    list_select_related = ["author", "segment__segment_type"]
+    readonly_fields = ["segment", "author", "created", "edited", "uid"]
+
+    def has_add_permission(self, request):
+        return False

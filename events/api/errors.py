@@ -1,0 +1,89 @@
+"""One JSON error shape for the whole API: ``{"detail": ..., "errors": {field: [..]}}``."""
+
+import logging
+
+from django.core.exceptions import ValidationError as DjangoValidationError
+from django.db import DatabaseError, IntegrityError
+from django.db.models import ProtectedError, RestrictedError
+from django.http import JsonResponse
+from django.views import defaults
+from rest_framework import status
+from rest_framework.response import Response
+from rest_framework.views import exception_handler as drf_exception_handler
+
+from events.errors import NotFound, RuleViolation
+from events.services.deletion import describe_protected
+
+logger = logging.getLogger(__name__)
+
+
+def _field_errors(exc: DjangoValidationError) -> dict:
+    if hasattr(exc, "error_dict"):
+        return {field: [str(m) for m in msgs] for field, msgs in exc.message_dict.items()}
+    return {"non_field_errors": [str(m) for m in exc.messages]}
+
+
+def _first_message(errors) -> str:
+    """The first message anywhere in DRF's nested errors (lists of items nest as dicts)."""
+    if isinstance(errors, dict):
+        errors = list(errors.values())
+    if isinstance(errors, list):
+        return next((m for m in map(_first_message, errors) if m), "")
+    return str(errors)
+
+
+def exception_handler(exc, context):
+    if isinstance(exc, DjangoValidationError):
+        errors = _field_errors(exc)
+        code = status.HTTP_400_BAD_REQUEST
+        if isinstance(exc, RuleViolation):
+            code = status.HTTP_409_CONFLICT
+        elif isinstance(exc, NotFound):
+            code = status.HTTP_404_NOT_FOUND
+        detail = "; ".join(m for msgs in errors.values() for m in msgs)
+        return Response({"detail": detail, "errors": errors}, status=code)
+    if isinstance(exc, ProtectedError | RestrictedError):
+        detail = describe_protected(exc)
+        return Response({"detail": detail, "errors": {"non_field_errors": [detail]}}, status=409)
+    if isinstance(exc, IntegrityError):
+        # Only reached when two requests race past the service checks; the
+        # database constraint held, so report it as a conflict, not a crash.
+        logger.info("integrity conflict: %s", exc)
+        detail = "This change conflicts with another one made at the same time; retry."
+        return Response({"detail": detail, "errors": {"non_field_errors": [detail]}}, status=409)
+    if isinstance(exc, DatabaseError | ValueError | OverflowError):
+        logger.warning("rejected request: %s", exc)
+        detail = "The request contains a value the database cannot store."
+        return Response({"detail": detail, "errors": {"non_field_errors": [detail]}}, status=400)
+    response = drf_exception_handler(exc, context)
+    if response is not None and isinstance(response.data, dict) and "detail" in response.data:
+        response.data = {"detail": str(response.data["detail"]), "errors": {}}
+    elif response is not None:
+        errors = (
+            response.data
+            if isinstance(response.data, dict)
+            else {"non_field_errors": response.data}
+        )
+        response.data = {"detail": _first_message(errors) or "Invalid input.", "errors": errors}
+    return response
+
+
+def _outside_drf(request, status: int, detail: str, fallback, *args):
+    """URLs under /api/ that no view matched (or a crash outside DRF) still answer JSON."""
+    if request.path.startswith("/api/"):
+        return JsonResponse({"detail": detail, "errors": {}}, status=status)
+    return fallback(request, *args)
+
+
+def not_found(request, exception):
+    return _outside_drf(
+        request,
+        404,
+        "There is no API endpoint at this address.",
+        defaults.page_not_found,
+        exception,
+    )
+
+
+def server_error(request):
+    return _outside_drf(request, 500, "Internal error; it has been logged.", defaults.server_error)

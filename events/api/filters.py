@@ -1,0 +1,173 @@
+"""Query filters shared by the API list endpoints: by parent, time range, open/closed state
+and bounding box."""
+
+import math
+from datetime import UTC
+
+import django_filters as filters
+from django import forms
+from django.contrib.gis.geos import Polygon
+from django_filters.fields import IsoDateTimeField
+from rest_framework import serializers
+from rest_framework_gis.filters import InBBoxFilter
+
+from events.models import Leg, Note, Segment, SegmentType, Shift, TestEvent
+
+# Ids beyond this cannot exist; rejecting them early keeps huge numbers away from the database.
+MAX_ID = 2**63 - 1
+
+
+class IdFilter(filters.Filter):
+    """An integer id; anything else is a 400 with a field message."""
+
+    field_class = forms.IntegerField
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("min_value", 1)
+        kwargs.setdefault("max_value", MAX_ID)
+        super().__init__(*args, **kwargs)
+
+
+class StrictBooleanField(forms.NullBooleanField):
+    """``true`` / ``false`` (or 1 / 0); anything else is an error rather than "no filter"."""
+
+    def to_python(self, value):
+        if value in (None, ""):
+            return None
+        if str(value).lower() in ("true", "1"):
+            return True
+        if str(value).lower() in ("false", "0"):
+            return False
+        raise forms.ValidationError("Use true or false.", code="invalid")
+
+    def validate(self, value):
+        pass
+
+
+class BooleanFilter(filters.BooleanFilter):
+    field_class = StrictBooleanField
+
+    def __init__(self, *args, **kwargs):
+        # A text widget hands the raw value to the field; the select widget would
+        # quietly turn unknown values into "no filter".
+        kwargs.setdefault("widget", forms.TextInput)
+        super().__init__(*args, **kwargs)
+
+
+class UtcDateTimeField(IsoDateTimeField):
+    """ISO 8601 with any offset, compared in UTC: PostgreSQL refuses offsets beyond ±15:59."""
+
+    def to_python(self, value):
+        value = super().to_python(value)
+        if value is None:
+            return None
+        try:
+            return value.astimezone(UTC)
+        except OverflowError:
+            raise forms.ValidationError("Date/time out of range.", code="overflow") from None
+
+
+class DateTimeFilter(filters.IsoDateTimeFilter):
+    field_class = UtcDateTimeField
+
+
+class TimeRangeFilterSet(filters.FilterSet):
+    """Adds ``<field>_after`` / ``<field>_before`` for each name in ``Meta.time_fields``."""
+
+    @classmethod
+    def get_filters(cls):
+        result = super().get_filters()
+        for name in getattr(getattr(cls, "Meta", None), "time_fields", ()):
+            result[f"{name}_after"] = DateTimeFilter(
+                field_name=name, lookup_expr="gte", label=f"{name} at or after (ISO 8601)"
+            )
+            result[f"{name}_before"] = DateTimeFilter(
+                field_name=name, lookup_expr="lt", label=f"{name} before (ISO 8601)"
+            )
+        return result
+
+
+class OpenStateFilterSet(TimeRangeFilterSet):
+    open = BooleanFilter(
+        field_name="end", lookup_expr="isnull", label="true: still open; false: closed"
+    )
+
+
+class TestEventFilter(OpenStateFilterSet):
+    class Meta:
+        model = TestEvent
+        fields = []
+        time_fields = ["start", "end"]
+
+
+class ShiftFilter(OpenStateFilterSet):
+    test_event = IdFilter(field_name="test_event_id")
+    vehicle = IdFilter(field_name="vehicle_id")
+
+    class Meta:
+        model = Shift
+        fields = []
+        time_fields = ["start", "end"]
+
+
+class LegFilter(OpenStateFilterSet):
+    shift = IdFilter(field_name="shift_id")
+    test_event = IdFilter(field_name="shift__test_event_id")
+
+    class Meta:
+        model = Leg
+        fields = []
+        time_fields = ["start", "end"]
+
+
+class SegmentFilter(OpenStateFilterSet):
+    leg = IdFilter(field_name="leg_id")
+    shift = IdFilter(field_name="leg__shift_id")
+    test_event = IdFilter(field_name="leg__shift__test_event_id")
+    parent = IdFilter(field_name="parent_id")
+    master = BooleanFilter(
+        field_name="parent", lookup_expr="isnull", label="true: masters only; false: children"
+    )
+    mode = filters.ChoiceFilter(
+        field_name="segment_type_id", choices=[(SegmentType.ITO, "ITO"), (SegmentType.AUTO, "AUTO")]
+    )
+
+    class Meta:
+        model = Segment
+        fields = []
+        time_fields = ["start", "end", "robot_stamp"]
+
+
+class NoteFilter(TimeRangeFilterSet):
+    segment = IdFilter(field_name="segment_id")
+    leg = IdFilter(field_name="segment__leg_id")
+    author = IdFilter(field_name="author_id")
+
+    class Meta:
+        model = Note
+        fields = []
+        time_fields = ["created"]
+
+
+class BBoxFilter(InBBoxFilter):
+    """``in_bbox=min_lon,min_lat,max_lon,max_lat`` with finite WGS84 degrees."""
+
+    def get_filter_bbox(self, request):
+        raw = request.query_params.get(self.bbox_param)
+        if not raw:
+            return None
+        message = "Give in_bbox as min_lon,min_lat,max_lon,max_lat in degrees."
+        try:
+            values = [float(n) for n in raw.split(",")]
+        except ValueError:
+            raise serializers.ValidationError({self.bbox_param: [message]}) from None
+        if len(values) != 4 or not all(math.isfinite(v) for v in values):
+            raise serializers.ValidationError({self.bbox_param: [message]})
+        west, south, east, north = values
+        longitudes_ok = all(-180 <= v <= 180 for v in (west, east))
+        latitudes_ok = all(-90 <= v <= 90 for v in (south, north))
+        if not (longitudes_ok and latitudes_ok):
+            raise serializers.ValidationError({self.bbox_param: [message]})
+        bbox = Polygon.from_bbox((west, south, east, north))
+        bbox.srid = 4326
+        return bbox

@@ -1,0 +1,296 @@
+"""Serializers check the shape of a request (types, lengths, existing ids).
+
+Whether the request is allowed in the current state is decided by
+``events.services``; views hand ``validated_data`` to those functions.
+"""
+
+from django.db.models import IntegerField
+from rest_framework import serializers
+from rest_framework_gis.fields import GeometryField
+
+from events.models import (
+    ItoReason,
+    Leg,
+    Note,
+    Performer,
+    Personnel,
+    PoseSource,
+    Segment,
+    SegmentType,
+    Shift,
+    TestEvent,
+    Vehicle,
+    Weather,
+)
+from events.services import logs
+from events.services.segments import MODES, GpsPosition, LocalPosition
+
+
+class PrimaryKeyField(serializers.PrimaryKeyRelatedField):
+    """A reference by id. Integer ids must be integers: the database would quietly turn
+    1.5 or true into row 1."""
+
+    def to_internal_value(self, data):
+        if isinstance(self.get_queryset().model._meta.pk, IntegerField):
+            digits = isinstance(data, str) and data.isascii() and data.isdigit()
+            if isinstance(data, bool) or not (isinstance(data, int) or digits):
+                self.fail("incorrect_type", data_type=type(data).__name__)
+        return super().to_internal_value(data)
+
+
+class ServiceSerializer(serializers.ModelSerializer):
+    """Fields in ``Meta.create_only_fields`` (parents, client uid) are fixed once a row exists."""
+
+    serializer_related_field = PrimaryKeyField
+
+    def get_fields(self):
+        fields = super().get_fields()
+        if self.instance is not None:
+            for name in getattr(self.Meta, "create_only_fields", ()):
+                fields[name].read_only = True
+                fields[name].required = False
+        return fields
+
+
+class ClientUidMixin(serializers.Serializer):
+    # Declared explicitly so that no uniqueness validator runs: a retry with a
+    # known uid is answered with the existing row instead of an error.
+    uid = serializers.UUIDField(
+        required=False,
+        help_text="Client-chosen id; sending the same uid again returns the existing row.",
+    )
+
+
+# --- configuration and catalogues -----------------------------------------------------------
+
+
+class PersonnelSerializer(ServiceSerializer):
+    class Meta:
+        model = Personnel
+        fields = ["id", "name", "institution", "user"]
+
+
+class PerformerSerializer(ServiceSerializer):
+    class Meta:
+        model = Performer
+        fields = ["id", "institution"]
+
+
+class VehicleSerializer(ServiceSerializer):
+    class Meta:
+        model = Vehicle
+        fields = [
+            "id",
+            "key",
+            "short_description",
+            "long_description",
+            "institution",
+            "configuration",
+        ]
+
+
+class PoseSourceSerializer(ServiceSerializer):
+    class Meta:
+        model = PoseSource
+        fields = ["id", "key", "short_description", "long_description"]
+
+
+class WeatherSerializer(ServiceSerializer):
+    class Meta:
+        model = Weather
+        fields = ["key", "short_description", "long_description", "icon"]
+        create_only_fields = ["key"]
+
+
+class ItoReasonSerializer(ServiceSerializer):
+    class Meta:
+        model = ItoReason
+        fields = [
+            "key",
+            "short_description",
+            "long_description",
+            "color",
+            "counts_as_intervention",
+        ]
+        create_only_fields = ["key"]
+
+
+class SegmentTypeSerializer(ServiceSerializer):
+    class Meta:
+        model = SegmentType
+        fields = ["key", "short_description", "long_description", "color"]
+        read_only_fields = ["key"]
+
+
+# --- log hierarchy ------------------------------------------------------------------------
+
+
+class LogEntrySerializer(ClientUidMixin, ServiceSerializer):
+    is_open = serializers.BooleanField(read_only=True)
+
+
+class TestEventSerializer(LogEntrySerializer):
+    class Meta:
+        model = TestEvent
+        fields = ["id", "uid", *logs.TEST_EVENT_FIELDS, "start", "end", "is_open"]
+        read_only_fields = ["start", "end"]
+        create_only_fields = ["uid"]
+
+
+class ShiftSerializer(LogEntrySerializer):
+    class Meta:
+        model = Shift
+        fields = [
+            "id",
+            "uid",
+            "test_event",
+            "number",
+            *logs.SHIFT_FIELDS,
+            "start",
+            "end",
+            "is_open",
+        ]
+        read_only_fields = ["number", "start", "end"]
+        create_only_fields = ["uid", "test_event"]
+
+
+class LegSerializer(LogEntrySerializer):
+    class Meta:
+        model = Leg
+        fields = ["id", "uid", "shift", "number", *logs.LEG_FIELDS, "start", "end", "is_open"]
+        read_only_fields = ["number", "start", "end"]
+        create_only_fields = ["uid", "shift"]
+
+
+class SegmentSerializer(ServiceSerializer):
+    """Only the annotation (reason, obstacle, lighting, slope) is writable here;
+    segments are opened and closed through the leg and segment actions."""
+
+    start_position = GeometryField(read_only=True, allow_null=True)
+    is_open = serializers.BooleanField(read_only=True)
+    is_master = serializers.BooleanField(read_only=True)
+
+    class Meta:
+        model = Segment
+        fields = [
+            "id",
+            "uid",
+            "leg",
+            "parent",
+            "segment_type",
+            *Segment.ANNOTATION_FIELDS,
+            "start_position",
+            "start_local_x",
+            "start_local_y",
+            "start_local_frame",
+            "start",
+            "end",
+            "robot_stamp",
+            "is_open",
+            "is_master",
+        ]
+        read_only_fields = [
+            "uid",
+            "leg",
+            "parent",
+            "segment_type",
+            "start_local_x",
+            "start_local_y",
+            "start_local_frame",
+            "start",
+            "end",
+            "robot_stamp",
+        ]
+        extra_kwargs = {"ito_reason": {"allow_null": False}}
+
+
+class NoteSerializer(ClientUidMixin, ServiceSerializer):
+    author_name = serializers.CharField(source="author.name", read_only=True, default=None)
+
+    class Meta:
+        model = Note
+        fields = ["id", "uid", "segment", "author", "author_name", "text", "created", "edited"]
+        read_only_fields = ["created", "edited"]
+        create_only_fields = ["uid", "segment", "author"]
+        extra_kwargs = {
+            "author": {"help_text": "Personnel id; defaults to the person linked to your login."}
+        }
+
+
+# --- rule action payloads -----------------------------------------------------------------
+
+
+class PositionSerializer(serializers.Serializer):
+    """Where the robot was when a segment started; 0.0 is a valid coordinate."""
+
+    longitude = serializers.FloatField(
+        required=False, allow_null=True, min_value=-180, max_value=180
+    )
+    latitude = serializers.FloatField(required=False, allow_null=True, min_value=-90, max_value=90)
+    local_x = serializers.FloatField(required=False, allow_null=True)
+    local_y = serializers.FloatField(required=False, allow_null=True)
+    local_frame = serializers.CharField(
+        required=False, allow_blank=True, max_length=200, default=""
+    )
+
+    def validate(self, attrs):
+        attrs = super().validate(attrs)
+        errors = {}
+        for a, b in (("longitude", "latitude"), ("local_x", "local_y")):
+            if (attrs.get(a) is None) != (attrs.get(b) is None):
+                missing = b if attrs.get(b) is None else a
+                errors[missing] = [f"Give {a} and {b} together or neither."]
+        if errors:
+            raise serializers.ValidationError(errors)
+        return attrs
+
+    def positions(self) -> dict:
+        data = self.validated_data
+        gps = local = None
+        if data.get("longitude") is not None:
+            gps = GpsPosition(data["longitude"], data["latitude"])
+        if data.get("local_x") is not None:
+            local = LocalPosition(data["local_x"], data["local_y"], data.get("local_frame", ""))
+        return {"gps": gps, "local": local}
+
+
+class ReasonField(PrimaryKeyField):
+    def __init__(self, **kwargs):
+        kwargs.setdefault("queryset", ItoReason.objects.all())
+        kwargs.setdefault("required", False)
+        kwargs.setdefault("help_text", "ITO reason key; 'unassigned' when left out.")
+        super().__init__(**kwargs)
+
+
+class ModeReportSerializer(PositionSerializer):
+    mode = serializers.ChoiceField(choices=MODES)
+    reason = ReasonField()
+    robot_stamp = serializers.DateTimeField(required=False, allow_null=True)
+    uid = serializers.UUIDField(
+        required=False, allow_null=True, help_text="Id of the master segment a switch opens."
+    )
+
+
+class ManualSegmentSerializer(PositionSerializer):
+    reason = ReasonField()
+
+
+class ChildSerializer(serializers.Serializer):
+    reason = ReasonField()
+
+
+class ModeResultSerializer(serializers.Serializer):
+    changed = serializers.BooleanField(help_text="False when the mode was already open.")
+    segment = SegmentSerializer(help_text="The master segment open now.")
+
+
+class CurrentLegSerializer(LegSerializer):
+    open_segment = SegmentSerializer(read_only=True, allow_null=True)
+
+    class Meta(LegSerializer.Meta):
+        fields = [*LegSerializer.Meta.fields, "open_segment"]
+
+
+def reason_key(validated: dict) -> str:
+    reason = validated.get("reason")
+    return reason.pk if reason is not None else ItoReason.UNASSIGNED

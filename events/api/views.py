@@ -1,0 +1,286 @@
+"""REST endpoints for configuration, catalogues and the log hierarchy."""
+
+from django.http import Http404
+from django_filters.rest_framework import DjangoFilterBackend
+from drf_spectacular.utils import OpenApiResponse, extend_schema, extend_schema_view
+from rest_framework import status
+from rest_framework.decorators import action
+from rest_framework.exceptions import NotFound
+
+from events import roles
+from events.api import serializers as s
+from events.api.filters import (
+    BBoxFilter,
+    LegFilter,
+    NoteFilter,
+    SegmentFilter,
+    ShiftFilter,
+    TestEventFilter,
+)
+from events.api.viewsets import ServiceBaseViewSet, ServiceUpdateMixin, ServiceViewSet
+from events.models import (
+    ItoReason,
+    Leg,
+    Note,
+    Performer,
+    Personnel,
+    PoseSource,
+    Segment,
+    SegmentType,
+    Shift,
+    TestEvent,
+    Vehicle,
+    Weather,
+)
+from events.selectors import logs as log_selectors
+from events.services import configuration, logs, notes, segments
+
+NO_BODY = {"request": None}
+
+
+# --- configuration and catalogues -----------------------------------------------------------
+
+
+class ConfigurationViewSet(ServiceViewSet):
+    write_role = roles.ADMINISTRATOR
+
+    def create_with_service(self, data):
+        return configuration.create_configuration(self.queryset.model, **data)
+
+    def update_with_service(self, instance, data):
+        return configuration.update_configuration(instance, **data)
+
+    def delete_with_service(self, instance):
+        configuration.delete_configuration(instance)
+
+
+class PersonnelViewSet(ConfigurationViewSet):
+    queryset = Personnel.objects.all()
+    serializer_class = s.PersonnelSerializer
+
+
+class PerformerViewSet(ConfigurationViewSet):
+    queryset = Performer.objects.all()
+    serializer_class = s.PerformerSerializer
+
+
+class VehicleViewSet(ConfigurationViewSet):
+    """Vehicles are addressed by id or by key (``/api/vehicles/husky-1/``)."""
+
+    queryset = Vehicle.objects.all()
+    serializer_class = s.VehicleSerializer
+    lookup_value_regex = "[-a-zA-Z0-9_]+"
+
+    def get_object(self):
+        value = self.kwargs[self.lookup_url_kwarg or self.lookup_field]
+        queryset = self.filter_queryset(self.get_queryset())
+        vehicle = None
+        if value.isascii() and value.isdigit():
+            vehicle = queryset.filter(pk=int(value)).first()
+        if vehicle is None:
+            vehicle = queryset.filter(key=value).first()
+        if vehicle is None:
+            raise Http404
+        self.check_object_permissions(self.request, vehicle)
+        return vehicle
+
+    @extend_schema(
+        responses={
+            200: s.CurrentLegSerializer,
+            404: OpenApiResponse(description="The vehicle has no open leg."),
+        }
+    )
+    @action(detail=True, methods=["get"], url_path="current-leg")
+    def current_leg(self, request, pk=None):
+        """The open leg of the vehicle's open shift (where its robot logs now)."""
+        leg = log_selectors.open_leg_for_vehicle(self.get_object())
+        if leg is None:
+            raise NotFound("This vehicle has no open leg; start a shift and a leg first.")
+        leg.open_segment = log_selectors.open_master(leg)
+        return self.respond(leg, s.CurrentLegSerializer)
+
+
+class PoseSourceViewSet(ConfigurationViewSet):
+    queryset = PoseSource.objects.all()
+    serializer_class = s.PoseSourceSerializer
+
+
+class CatalogueViewSet(ConfigurationViewSet):
+    lookup_value_regex = "[-a-zA-Z0-9_]+"
+    pagination_class = None
+
+
+class WeatherViewSet(CatalogueViewSet):
+    queryset = Weather.objects.all()
+    serializer_class = s.WeatherSerializer
+
+
+class ItoReasonViewSet(CatalogueViewSet):
+    queryset = ItoReason.objects.all()
+    serializer_class = s.ItoReasonSerializer
+
+
+class SegmentTypeViewSet(CatalogueViewSet):
+    """The two modes are fixed by the logging rules: descriptions and colours can change,
+    rows cannot be added or removed."""
+
+    queryset = SegmentType.objects.all()
+    serializer_class = s.SegmentTypeSerializer
+    http_method_names = ["get", "put", "patch", "head", "options"]
+
+
+# --- log hierarchy ------------------------------------------------------------------------
+
+
+class TestEventViewSet(ServiceViewSet):
+    queryset = TestEvent.objects.all()
+    serializer_class = s.TestEventSerializer
+    filterset_class = TestEventFilter
+
+    def create_with_service(self, data):
+        return logs.create_test_event(**data)
+
+    def update_with_service(self, instance, data):
+        return logs.update_test_event(instance, **data)
+
+    @extend_schema(**NO_BODY)
+    @action(detail=True, methods=["post"])
+    def close(self, request, pk=None):
+        """End the test event and everything still open in it."""
+        return self.respond(logs.close_test_event(self.get_object()))
+
+    @extend_schema(**NO_BODY)
+    @action(detail=True, methods=["post"])
+    def reopen(self, request, pk=None):
+        """Open a closed test event again; its shifts stay closed."""
+        return self.respond(logs.reopen_test_event(self.get_object()))
+
+
+class ShiftViewSet(ServiceViewSet):
+    queryset = Shift.objects.all()
+    serializer_class = s.ShiftSerializer
+    filterset_class = ShiftFilter
+
+    def create_with_service(self, data):
+        return logs.create_shift(**data)
+
+    def update_with_service(self, instance, data):
+        return logs.update_shift(instance, **data)
+
+    @extend_schema(**NO_BODY)
+    @action(detail=True, methods=["post"])
+    def close(self, request, pk=None):
+        """End the shift and its open leg and segments."""
+        return self.respond(logs.close_shift(self.get_object()))
+
+
+class LegViewSet(ServiceViewSet):
+    queryset = Leg.objects.all()
+    serializer_class = s.LegSerializer
+    filterset_class = LegFilter
+
+    def create_with_service(self, data):
+        return logs.create_leg(**data)
+
+    def update_with_service(self, instance, data):
+        return logs.update_leg(instance, **data)
+
+    @extend_schema(**NO_BODY)
+    @action(detail=True, methods=["post"])
+    def close(self, request, pk=None):
+        """End the leg and its open segments."""
+        return self.respond(logs.close_leg(self.get_object()))
+
+    @extend_schema(
+        request=s.ModeReportSerializer,
+        responses={201: s.ModeResultSerializer, 200: s.ModeResultSerializer},
+    )
+    @action(detail=True, methods=["post"])
+    def mode(self, request, pk=None):
+        """The robot reports its mode. A change closes the open master segment and opens
+        one of the new mode (201); repeating the open mode changes nothing (200)."""
+        leg = self.get_object()
+        payload = s.ModeReportSerializer(data=request.data)
+        payload.is_valid(raise_exception=True)
+        data = payload.validated_data
+        outcome = segments.report_mode(
+            leg,
+            data["mode"],
+            robot_stamp=data.get("robot_stamp"),
+            reason=s.reason_key(data),
+            uid=data.get("uid"),
+            **payload.positions(),
+        )
+        result = {"changed": outcome.changed, "segment": outcome.master}
+        code = status.HTTP_201_CREATED if outcome.changed else status.HTTP_200_OK
+        return self.respond(result, s.ModeResultSerializer, code)
+
+    @extend_schema(request=s.ManualSegmentSerializer, responses={201: s.SegmentSerializer})
+    @action(detail=True, methods=["post"], url_path="manual-segment")
+    def manual_segment(self, request, pk=None):
+        """An operator records a take-over: a new ITO reason, switching to ITO if needed.
+        Answers with the new ITO child segment."""
+        leg = self.get_object()
+        payload = s.ManualSegmentSerializer(data=request.data)
+        payload.is_valid(raise_exception=True)
+        child = segments.new_manual_segment(
+            leg, reason=s.reason_key(payload.validated_data), **payload.positions()
+        )
+        return self.respond(child, s.SegmentSerializer, status.HTTP_201_CREATED)
+
+
+@extend_schema_view(
+    partial_update=extend_schema(
+        description="Annotate an ITO reason (child segment): reason, obstacle, lighting, "
+        "slope. Masters and AUTO segments answer 409."
+    )
+)
+class SegmentViewSet(ServiceUpdateMixin, ServiceBaseViewSet):
+    """Segments are opened by ``legs/{id}/mode``, ``legs/{id}/manual-segment`` and
+    ``segments/{id}/children``; PATCH annotates an ITO reason."""
+
+    queryset = Segment.objects.all()
+    serializer_class = s.SegmentSerializer
+    filterset_class = SegmentFilter
+    filter_backends = [DjangoFilterBackend, BBoxFilter]
+    bbox_filter_field = "start_position"
+    http_method_names = ["get", "patch", "post", "delete", "head", "options"]
+
+    def update_with_service(self, instance, data):
+        return segments.annotate_segment(instance, **data)
+
+    @extend_schema(**NO_BODY)
+    @action(detail=True, methods=["post"])
+    def close(self, request, pk=None):
+        """Closing a master also closes its children; closing a child ends only that reason."""
+        return self.respond(segments.close_segment(self.get_object()))
+
+    @extend_schema(request=s.ChildSerializer, responses={201: s.SegmentSerializer})
+    @action(detail=True, methods=["post"])
+    def children(self, request, pk=None):
+        """Add another take-over reason to an open ITO master."""
+        master = self.get_object()
+        payload = s.ChildSerializer(data=request.data)
+        payload.is_valid(raise_exception=True)
+        child = segments.add_ito_child(master, reason=s.reason_key(payload.validated_data))
+        return self.respond(child, s.SegmentSerializer, status.HTTP_201_CREATED)
+
+
+class NoteViewSet(ServiceViewSet):
+    queryset = Note.objects.select_related("author")
+    serializer_class = s.NoteSerializer
+    filterset_class = NoteFilter
+
+    def create_with_service(self, data):
+        author = data.get("author") or getattr(self.request.user, "personnel", None)
+        return notes.add_note(
+            data["segment"], text=data["text"], author=author, uid=data.get("uid")
+        )
+
+    def update_with_service(self, instance, data):
+        if "text" not in data:
+            return instance
+        return notes.edit_note(instance, text=data["text"])
+
+    def delete_with_service(self, instance):
+        notes.delete_note(instance)

@@ -1,0 +1,77 @@
+"""Base view sets: DRF handles reading, the service layer does every write."""
+
+from rest_framework import mixins, status, viewsets
+from rest_framework.response import Response
+
+from events import roles
+from events.services import deletion
+
+
+class ServiceBaseViewSet(
+    mixins.ListModelMixin,
+    mixins.RetrieveModelMixin,
+    mixins.DestroyModelMixin,
+    viewsets.GenericViewSet,
+):
+    """List, retrieve and delete; deletion goes through :meth:`delete_with_service`."""
+
+    read_role = roles.VIEWER
+    write_role = roles.OPERATOR
+
+    def delete_with_service(self, instance) -> None:
+        deletion.delete(instance)
+
+    def perform_destroy(self, instance):
+        self.delete_with_service(instance)
+
+    def respond(self, instance, serializer_class=None, code=status.HTTP_200_OK):
+        serializer_class = serializer_class or self.get_serializer_class()
+        context = self.get_serializer_context()
+        return Response(serializer_class(instance, context=context).data, status=code)
+
+
+class ServiceCreateMixin:
+    """Create through :meth:`create_with_service`.
+
+    A create that carries a ``uid`` already stored answers 200 with the stored row
+    (a retry after a lost answer); a new row answers 201.
+    """
+
+    def create_with_service(self, data: dict):
+        raise NotImplementedError
+
+    def already_stored(self, data: dict) -> bool:
+        uid = data.get("uid")
+        return uid is not None and self.get_queryset().model.objects.filter(uid=uid).exists()
+
+    def create(self, request, *args, **kwargs):
+        serializer = self.get_serializer(data=request.data)
+        serializer.is_valid(raise_exception=True)
+        data = dict(serializer.validated_data)
+        existed = self.already_stored(data)
+        instance = self.create_with_service(data)
+        code = status.HTTP_200_OK if existed else status.HTTP_201_CREATED
+        return self.respond(instance, code=code)
+
+
+class ServiceUpdateMixin:
+    """PUT / PATCH through :meth:`update_with_service`."""
+
+    def update_with_service(self, instance, data: dict):
+        raise NotImplementedError
+
+    def update(self, request, *args, **kwargs):
+        partial = kwargs.pop("partial", False)
+        instance = self.get_object()
+        serializer = self.get_serializer(instance, data=request.data, partial=partial)
+        serializer.is_valid(raise_exception=True)
+        instance = self.update_with_service(instance, dict(serializer.validated_data))
+        return self.respond(instance)
+
+    def partial_update(self, request, *args, **kwargs):
+        kwargs["partial"] = True
+        return self.update(request, *args, **kwargs)
+
+
+class ServiceViewSet(ServiceCreateMixin, ServiceUpdateMixin, ServiceBaseViewSet):
+    """Full CRUD, every write through a service function."""

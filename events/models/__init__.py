@@ -1,0 +1,19 @@
+from events.models.catalogues import ItoReason, SegmentType, Weather
+from events.models.configuration import Performer, Personnel, PoseSource, Vehicle
+from events.models.hierarchy import Leg, Segment, Shift, TestEvent
+from events.models.notes import Note
+
+__all__ = [
+    "ItoReason",
+    "Leg",
+    "Note",
+    "Performer",
+    "Personnel",
+    "PoseSource",
+    "Segment",
+    "SegmentType",
+    "Shift",
+    "TestEvent",
+    "Vehicle",
+    "Weather",
+]

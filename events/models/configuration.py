@@ -1,0 +1,60 @@
+"""Rows the test administrator maintains in Django admin."""
+
+from django.conf import settings
+from django.db import models
+
+
+class Personnel(models.Model):
+    name = models.CharField(max_length=200)
+    institution = models.CharField(max_length=200, blank=True)
+    user = models.OneToOneField(
+        settings.AUTH_USER_MODEL,
+        null=True,
+        blank=True,
+        on_delete=models.SET_NULL,
+        related_name="personnel",
+        help_text="Login account of this person; notes they write are attributed to them.",
+    )
+
+    class Meta:
+        ordering = ["name"]
+        verbose_name_plural = "personnel"
+
+    def __str__(self):
+        return f"{self.name} ({self.institution})" if self.institution else self.name
+
+
+class Performer(models.Model):
+    institution = models.CharField(max_length=200, unique=True)
+
+    class Meta:
+        ordering = ["institution"]
+
+    def __str__(self):
+        return self.institution
+
+
+class KeyedConfiguration(models.Model):
+    key = models.SlugField(max_length=64, unique=True)
+    short_description = models.CharField(max_length=200)
+    long_description = models.TextField(blank=True)
+
+    class Meta:
+        abstract = True
+        ordering = ["key"]
+
+    def __str__(self):
+        return self.short_description or self.key
+
+
+class Vehicle(KeyedConfiguration):
+    institution = models.CharField(max_length=200, blank=True)
+    configuration = models.TextField(blank=True)
+
+    class Meta(KeyedConfiguration.Meta):
+        pass
+
+
+class PoseSource(KeyedConfiguration):
+    class Meta(KeyedConfiguration.Meta):
+        pass

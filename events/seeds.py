@@ -1,0 +1,187 @@
+"""The seeded catalogues and role groups.
+
+Used by migration events.0002 and again by tests that flush the database
+(transactional tests), so both get exactly the same rows.  Every function is
+idempotent and takes an app registry (the migration's historical one or the
+live ``django.apps.apps``).
+"""
+
+WEATHER = [
+    (
+        "sunny",
+        "sunny",
+        "Mainly sunny, less than 30 percent of the sky is covered by clouds.",
+        "sun",
+    ),
+    (
+        "cloudy",
+        "cloudy",
+        "Mainly cloudy, between 30 and 95 percent of the sky is covered by clouds.",
+        "cloudy",
+    ),
+    (
+        "overcast",
+        "overcast",
+        "More than 95 percent of the sky is covered by clouds.",
+        "overcast",
+    ),
+    (
+        "foggy",
+        "foggy",
+        "Reduced visibility due to fog to less than one kilometer.",
+        "fog",
+    ),
+    ("rainy", "rainy", "", "rain"),
+    ("snowy", "snowy", "", "snow"),
+]
+
+# key, short, long, colour, counts as an intervention
+ITO_REASONS = [
+    (
+        "safety",
+        "Safety",
+        "Safety stop, initiated by an inhabitant of the vehicle.",
+        "255,0,0",
+        True,
+    ),
+    (
+        "maintenance",
+        "Maintenance",
+        "Maintenance stop, a stop initiated by the performer to fix code.",
+        "255,240,0",
+        True,
+    ),
+    (
+        "planner",
+        "Planner",
+        "Planner stop, a stop caused by a timeout or error of the planner.",
+        "255,120,0",
+        True,
+    ),
+    (
+        "apparatus",
+        "Apparatus",
+        "Apparatus stop, a stop that is initiated by the test admin to fix the test apparatus.",
+        "70,0,255",
+        True,
+    ),
+    (
+        "non_stop",
+        "Non-Stop",
+        "Non-Stop, indicates that no stop was performed. Ignore this ITO.",
+        "10,120,10",
+        False,
+    ),
+    (
+        "stereo",
+        "Stereo test",
+        "Stereo test stop, a stop initiated to perform a test of the stereo accuracy.",
+        "0,170,255",
+        True,
+    ),
+    (
+        "goal",
+        "Goal reached",
+        "Goal reached, a stop because the vehicle reached an (intermediate) goal.",
+        "0,0,139",
+        False,
+    ),
+    (
+        "end_shift",
+        "End of shift",
+        "End of shift indicates the stop was caused because the time for the shift was up.",
+        "0,0,220",
+        False,
+    ),
+    (
+        "manual_transit",
+        "Manual transit",
+        "Manual transit indicates that the vehicle was stopped to drive it manually "
+        "through a dangerous area.",
+        "100,100,100",
+        True,
+    ),
+    ("other", "Other", "Other reasons.", "180,180,180", True),
+    ("unassigned", "Unassigned", "Unassigned.", "80,80,80", True),
+    (
+        "unexpected",
+        "Unexpected",
+        "Unexpected, non safety-critical behavior.",
+        "200,200,0",
+        True,
+    ),
+]
+
+SEGMENT_TYPES = [
+    ("ito", "ITO", "ITO - inhabited take over (manual mode).", "255,0,0"),
+    ("auto", "AUTO", "Autonomous.", "0,255,0"),
+]
+
+CONFIGURATION = ["personnel", "performer", "vehicle", "posesource"]
+CATALOGUES = ["weather", "itoreason", "segmenttype"]
+OPERATED = ["testevent", "shift", "leg", "segment", "note", "image"]
+
+
+def seed_catalogues(apps) -> None:
+    Weather = apps.get_model("events", "Weather")
+    ItoReason = apps.get_model("events", "ItoReason")
+    SegmentType = apps.get_model("events", "SegmentType")
+    for key, short, long, icon in WEATHER:
+        Weather.objects.update_or_create(
+            key=key,
+            defaults={
+                "short_description": short,
+                "long_description": long,
+                "icon": icon,
+            },
+        )
+    for key, short, long, color, counts in ITO_REASONS:
+        ItoReason.objects.update_or_create(
+            key=key,
+            defaults={
+                "short_description": short,
+                "long_description": long,
+                "color": color,
+                "counts_as_intervention": counts,
+            },
+        )
+    for key, short, long, color in SEGMENT_TYPES:
+        SegmentType.objects.update_or_create(
+            key=key,
+            defaults={
+                "short_description": short,
+                "long_description": long,
+                "color": color,
+            },
+        )
+
+
+def create_roles(apps) -> None:
+    from django.contrib.auth.management import create_permissions
+
+    # Permissions are normally made after all migrations; the groups need them now.
+    for app_config in apps.get_app_configs():
+        original = getattr(app_config, "models_module", None)
+        app_config.models_module = original or True
+        create_permissions(app_config, apps=apps, verbosity=0)
+        app_config.models_module = original
+
+    Group = apps.get_model("auth", "Group")
+    Permission = apps.get_model("auth", "Permission")
+    ftt = Permission.objects.filter(content_type__app_label__in=["events", "telemetry"])
+    viewer, _ = Group.objects.get_or_create(name="viewer")
+    viewer.permissions.set(ftt.filter(codename__startswith="view_"))
+    operator, _ = Group.objects.get_or_create(name="operator")
+    operated = [f"{action}_{model}" for model in OPERATED for action in ("add", "change", "delete")]
+    operator.permissions.set(
+        ftt.filter(codename__startswith="view_") | ftt.filter(codename__in=operated)
+    )
+    administrator, _ = Group.objects.get_or_create(name="administrator")
+    administrator.permissions.set(ftt | Permission.objects.filter(content_type__app_label="auth"))
+
+
+def ensure(apps=None) -> None:
+    if apps is None:
+        from django.apps import apps
+    seed_catalogues(apps)
+    create_roles(apps)

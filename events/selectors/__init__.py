@@ -1,0 +1,1 @@
+"""Read-side queries shared by the API, GUI, collector and report."""

@@ -1,0 +1,53 @@
+"""Small helpers shared by the service modules."""
+
+from datetime import datetime
+
+from django.db.models import Max, Model
+from django.utils import timezone
+
+from events.errors import RuleViolation
+
+
+def instant(at: datetime | None) -> datetime:
+    if at is None:
+        return timezone.now()
+    if timezone.is_naive(at):
+        raise ValueError("Times must be timezone-aware.")
+    return at
+
+
+def lock(model_instance: Model) -> Model:
+    """Re-read a row with a row lock held until the surrounding transaction ends."""
+    return type(model_instance).objects.select_for_update().get(pk=model_instance.pk)
+
+
+def next_number(queryset) -> int:
+    # max+1, not count+1: numbers people wrote down stay valid after a delete.
+    return (queryset.aggregate(n=Max("number"))["n"] or 0) + 1
+
+
+def require_open(entry, label: str) -> None:
+    if entry.end is not None:
+        raise RuleViolation(f"{label} is closed; re-open it or pick an open one.", code="closed")
+
+
+def require_not_before(entry, at: datetime, label: str) -> None:
+    if at < entry.start:
+        raise RuleViolation(
+            f"{label} started at {entry.start.isoformat()}, after {at.isoformat()}."
+        )
+
+
+def check_fields(fields: dict, allowed: tuple[str, ...]) -> None:
+    # Foreign keys may be given as objects ("weather") or raw keys ("weather_id").
+    unknown = {name.removesuffix("_id") for name in fields} - set(allowed)
+    if unknown:
+        # A programming error in a caller, not bad user input.
+        raise TypeError(f"unexpected fields {sorted(unknown)}")
+
+
+def apply_fields(instance: Model, fields: dict, allowed: tuple[str, ...]) -> None:
+    check_fields(fields, allowed)
+    for name, value in fields.items():
+        setattr(instance, name, value)
+    instance.full_clean(exclude=[f.name for f in instance._meta.fields if f.name not in fields])

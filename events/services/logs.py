@@ -1,0 +1,205 @@
+"""Opening, editing, closing and re-opening test events, shifts and legs."""
+
+import uuid
+from datetime import datetime
+
+from django.db import transaction
+
+from events.errors import RuleViolation
+from events.models import Leg, Segment, Shift, TestEvent, Vehicle
+from events.services.common import (
+    apply_fields,
+    check_fields,
+    instant,
+    lock,
+    next_number,
+    require_not_before,
+    require_open,
+)
+from rosbridge_app.live import announced
+
+TEST_EVENT_FIELDS = ("location", "version", "time_zone", "note")
+SHIFT_FIELDS = (
+    "performer",
+    "test_administrator",
+    "test_director",
+    "safety_officer",
+    "robot_operator",
+    "test_intent",
+    "workspace",
+    "vehicle",
+    "note",
+)
+LEG_FIELDS = ("weather", "default_pose_source", "note", "recording")
+
+
+def _existing(model, uid: uuid.UUID | None):
+    """A retried create with the same uid returns the first result unchanged."""
+    if uid is None:
+        return None
+    return model.objects.filter(uid=uid).first()
+
+
+def _create(model, uid: uuid.UUID | None, **values):
+    obj = model(**values)
+    if uid is not None:
+        obj.uid = uid
+    obj.full_clean(validate_unique=False, validate_constraints=False)
+    obj.save()
+    return announced(obj)
+
+
+# --- test events ---------------------------------------------------------------------------
+
+
+@transaction.atomic
+def create_test_event(*, uid=None, at: datetime | None = None, **fields) -> TestEvent:
+    if existing := _existing(TestEvent, uid):
+        return existing
+    check_fields(fields, TEST_EVENT_FIELDS)
+    return _create(TestEvent, uid, start=instant(at), **fields)
+
+
+@transaction.atomic
+def update_test_event(event: TestEvent, **fields) -> TestEvent:
+    event = lock(event)
+    apply_fields(event, fields, TEST_EVENT_FIELDS)
+    event.save(update_fields=list(fields))
+    return announced(event)
+
+
+@transaction.atomic
+def close_test_event(event: TestEvent, at: datetime | None = None) -> TestEvent:
+    event = lock(event)
+    at = instant(at)
+    require_open(event, f"Test event '{event}'")
+    require_not_before(event, at, f"Test event '{event}'")
+    for shift in event.shifts.filter(end__isnull=True):
+        _close_shift(shift, at)
+    event.end = at
+    event.save(update_fields=["end"])
+    return announced(event)
+
+
+@transaction.atomic
+def reopen_test_event(event: TestEvent) -> TestEvent:
+    """Only test events re-open; their shifts stay closed, new ones can be added."""
+    event = lock(event)
+    if event.end is None:
+        raise RuleViolation(f"Test event '{event}' is already open.", code="open")
+    event.end = None
+    event.save(update_fields=["end"])
+    return announced(event)
+
+
+# --- shifts --------------------------------------------------------------------------------
+
+
+@transaction.atomic
+def create_shift(
+    *,
+    test_event: TestEvent,
+    vehicle: Vehicle,
+    uid=None,
+    at: datetime | None = None,
+    **fields,
+) -> Shift:
+    if existing := _existing(Shift, uid):
+        return existing
+    event = lock(test_event)
+    # Locking the vehicle serialises shift creation per vehicle, so two
+    # operators starting a shift at once end with one open shift, not two.
+    vehicle = lock(vehicle)
+    at = instant(at)
+    require_open(event, f"Test event '{event}'")
+    require_not_before(event, at, f"Test event '{event}'")
+    for open_shift in Shift.objects.select_for_update().filter(vehicle=vehicle, end__isnull=True):
+        _close_shift(open_shift, max(at, open_shift.start))
+    check_fields(fields, SHIFT_FIELDS)
+    return _create(
+        Shift,
+        uid,
+        test_event=event,
+        vehicle=vehicle,
+        number=next_number(event.shifts),
+        start=at,
+        **fields,
+    )
+
+
+@transaction.atomic
+def update_shift(shift: Shift, **fields) -> Shift:
+    shift = lock(shift)
+    if "vehicle_id" in fields:
+        fields["vehicle"] = Vehicle.objects.get(pk=fields.pop("vehicle_id"))
+    if "vehicle" in fields and fields["vehicle"] != shift.vehicle and shift.is_open:
+        vehicle = lock(fields["vehicle"])
+        if Shift.objects.filter(vehicle=vehicle, end__isnull=True).exclude(pk=shift.pk).exists():
+            raise RuleViolation(
+                {"vehicle": [f"Vehicle '{vehicle}' already has an open shift; end it first."]}
+            )
+    apply_fields(shift, fields, SHIFT_FIELDS)
+    shift.save(update_fields=list(fields))
+    return announced(shift)
+
+
+@transaction.atomic
+def close_shift(shift: Shift, at: datetime | None = None) -> Shift:
+    shift = lock(shift)
+    at = instant(at)
+    require_open(shift, str(shift))
+    require_not_before(shift, at, str(shift))
+    return announced(_close_shift(shift, at))
+
+
+def _close_shift(shift: Shift, at: datetime) -> Shift:
+    for leg in shift.legs.filter(end__isnull=True):
+        _close_leg(leg, at)
+    shift.end = at
+    shift.save(update_fields=["end"])
+    return shift
+
+
+# --- legs ----------------------------------------------------------------------------------
+
+
+@transaction.atomic
+def create_leg(*, shift: Shift, uid=None, at: datetime | None = None, **fields) -> Leg:
+    if existing := _existing(Leg, uid):
+        return existing
+    shift = lock(shift)
+    at = instant(at)
+    require_open(shift, str(shift))
+    require_not_before(shift, at, str(shift))
+    for open_leg in Leg.objects.select_for_update().filter(shift=shift, end__isnull=True):
+        _close_leg(open_leg, max(at, open_leg.start))
+    check_fields(fields, LEG_FIELDS)
+    return _create(Leg, uid, shift=shift, number=next_number(shift.legs), start=at, **fields)
+
+
+@transaction.atomic
+def update_leg(leg: Leg, **fields) -> Leg:
+    leg = lock(leg)
+    apply_fields(leg, fields, LEG_FIELDS)
+    leg.save(update_fields=list(fields))
+    return announced(leg)
+
+
+@transaction.atomic
+def close_leg(leg: Leg, at: datetime | None = None) -> Leg:
+    leg = lock(leg)
+    at = instant(at)
+    require_open(leg, str(leg))
+    require_not_before(leg, at, str(leg))
+    return announced(_close_leg(leg, at))
+
+
+def _close_leg(leg: Leg, at: datetime) -> Leg:
+    # Children and masters alike: everything still open below ends now.
+    open_segments = Segment.objects.filter(leg=leg, end__isnull=True)
+    for segment in open_segments:
+        segment.end = max(at, segment.start)
+        segment.save(update_fields=["end"])
+    leg.end = at
+    leg.save(update_fields=["end"])
+    return leg

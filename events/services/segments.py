@@ -1,0 +1,252 @@
+"""The segment state machine, scoped to one leg.
+
+A master segment is one continuous run in one mode (ITO or AUTO).  An ITO
+master always has at least one child; children carry the take-over reason and
+its context.  Every change of mode, from the robot or from an operator, goes
+through :func:`report_mode` or :func:`new_manual_segment`.
+"""
+
+import math
+from dataclasses import dataclass
+from datetime import datetime
+
+from django.contrib.gis.geos import Point
+from django.db import transaction
+
+from events.errors import RuleViolation
+from events.models import ItoReason, Leg, Segment, SegmentType
+from events.services.common import (
+    apply_fields,
+    instant,
+    lock,
+    require_not_before,
+    require_open,
+)
+from rosbridge_app.live import announced
+
+MODES = (SegmentType.ITO, SegmentType.AUTO)
+
+
+@dataclass(frozen=True)
+class GpsPosition:
+    longitude: float
+    latitude: float
+
+    def __post_init__(self):
+        errors = {}
+        if not (isinstance(self.longitude, int | float) and math.isfinite(self.longitude)):
+            errors["longitude"] = ["Longitude must be a finite number."]
+        elif not -180 <= self.longitude <= 180:
+            errors["longitude"] = ["Longitude must be between -180 and 180 degrees."]
+        if not (isinstance(self.latitude, int | float) and math.isfinite(self.latitude)):
+            errors["latitude"] = ["Latitude must be a finite number."]
+        elif not -90 <= self.latitude <= 90:
+            errors["latitude"] = ["Latitude must be between -90 and 90 degrees."]
+        if errors:
+            raise RuleViolation(errors)
+
+    def as_point(self) -> Point:
+        return Point(self.longitude, self.latitude, srid=4326)
+
+
+@dataclass(frozen=True)
+class LocalPosition:
+    x: float
+    y: float
+    frame: str = ""
+
+    def __post_init__(self):
+        for name in ("x", "y"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and math.isfinite(value)):
+                raise RuleViolation(
+                    {f"local_{name}": ["Local coordinates must be finite numbers."]}
+                )
+
+
+@dataclass(frozen=True)
+class ModeReport:
+    """What :func:`report_mode` did: the master now open and whether it is new."""
+
+    master: Segment
+    changed: bool
+
+
+def _position_fields(gps: GpsPosition | None, local: LocalPosition | None) -> dict:
+    # `is None`, never truthiness: 0.0 is a real coordinate.
+    return {
+        "start_position": gps.as_point() if gps is not None else None,
+        "start_local_x": local.x if local is not None else None,
+        "start_local_y": local.y if local is not None else None,
+        "start_local_frame": local.frame if local is not None else "",
+    }
+
+
+def _reason(key: str) -> ItoReason:
+    try:
+        return ItoReason.objects.get(pk=key)
+    except ItoReason.DoesNotExist:
+        raise RuleViolation({"ito_reason": [f"Unknown ITO reason '{key}'."]}) from None
+
+
+def _open_master(leg: Leg) -> Segment | None:
+    return (
+        Segment.objects.select_for_update()
+        .filter(leg=leg, parent__isnull=True, end__isnull=True)
+        .first()
+    )
+
+
+def _close(segment: Segment, at: datetime) -> None:
+    end = max(at, segment.start)
+    if segment.parent_id is None:
+        segment.children.filter(end__isnull=True).update(end=end)
+    segment.end = end
+    segment.save(update_fields=["end"])
+
+
+def _start_master(leg, mode, at, robot_stamp, positions, reason_key, uid) -> Segment:
+    master = Segment(
+        leg=leg,
+        segment_type_id=mode,
+        start=at,
+        robot_stamp=robot_stamp,
+        **positions,
+    )
+    if uid is not None:
+        master.uid = uid
+    master.save()
+    if mode == SegmentType.ITO:
+        _add_child(master, _reason(reason_key), at, robot_stamp)
+    return master
+
+
+def _add_child(master: Segment, reason: ItoReason, at: datetime, robot_stamp=None) -> Segment:
+    return Segment.objects.create(
+        leg_id=master.leg_id,
+        parent=master,
+        segment_type_id=SegmentType.ITO,
+        ito_reason=reason,
+        start=at,
+        robot_stamp=robot_stamp,
+        start_position=master.start_position if at == master.start else None,
+        start_local_x=master.start_local_x if at == master.start else None,
+        start_local_y=master.start_local_y if at == master.start else None,
+        start_local_frame=master.start_local_frame if at == master.start else "",
+    )
+
+
+@transaction.atomic
+def report_mode(
+    leg: Leg,
+    mode: str,
+    *,
+    at: datetime | None = None,
+    robot_stamp: datetime | None = None,
+    gps: GpsPosition | None = None,
+    local: LocalPosition | None = None,
+    reason: str = ItoReason.UNASSIGNED,
+    uid=None,
+) -> ModeReport:
+    """The robot (or an importer) says which mode it is in now.
+
+    Reporting the mode that is already open is not an error and changes
+    nothing, so publishers that repeat their state are harmless.
+    """
+    if mode not in MODES:
+        raise RuleViolation({"mode": [f"Mode must be one of {', '.join(MODES)}, not '{mode}'."]})
+    if uid is not None and (existing := Segment.objects.filter(uid=uid).first()):
+        return ModeReport(existing, changed=False)
+    leg = lock(leg)
+    at = instant(at)
+    require_open(leg, str(leg))
+    current = _open_master(leg)
+    if current is not None and current.segment_type_id == mode:
+        return ModeReport(current, changed=False)
+    if current is not None:
+        require_not_before(current, at, f"The open {current.segment_type_id.upper()} segment")
+        _close(current, at)
+    else:
+        require_not_before(leg, at, str(leg))
+    master = _start_master(leg, mode, at, robot_stamp, _position_fields(gps, local), reason, uid)
+    return ModeReport(announced(master), changed=True)
+
+
+@transaction.atomic
+def new_manual_segment(
+    leg: Leg,
+    *,
+    reason: str = ItoReason.UNASSIGNED,
+    at: datetime | None = None,
+    gps: GpsPosition | None = None,
+    local: LocalPosition | None = None,
+) -> Segment:
+    """An operator records a take-over: a new reason under the open ITO master,
+    or, while AUTO runs (or nothing is open), a switch to ITO.  Returns the child."""
+    leg = lock(leg)
+    at = instant(at)
+    require_open(leg, str(leg))
+    current = _open_master(leg)
+    if current is not None and current.segment_type_id == SegmentType.ITO:
+        require_not_before(current, at, "The open ITO segment")
+        return announced(_add_child(current, _reason(reason), at))
+    outcome = report_mode(leg, SegmentType.ITO, at=at, gps=gps, local=local, reason=reason)
+    return outcome.master.children.get()
+
+
+@transaction.atomic
+def add_ito_child(
+    master: Segment, *, reason: str = ItoReason.UNASSIGNED, at: datetime | None = None
+) -> Segment:
+    master = lock(master)
+    at = instant(at)
+    if master.parent_id is not None:
+        raise RuleViolation("Reasons are added to the ITO master segment, not to a reason.")
+    if master.segment_type_id != SegmentType.ITO:
+        raise RuleViolation("An AUTO segment has no take-over reasons.")
+    require_open(master, "This ITO segment")
+    require_not_before(master, at, "This ITO segment")
+    return announced(_add_child(master, _reason(reason), at))
+
+
+@transaction.atomic
+def close_segment(segment: Segment, at: datetime | None = None) -> Segment:
+    """Closing a child ends only that reason; closing a master ends its children too."""
+    segment = lock(segment)
+    at = instant(at)
+    require_open(segment, "This segment")
+    _close(segment, at)
+    return announced(segment)
+
+
+@transaction.atomic
+def close_open_master(leg: Leg, at: datetime | None = None) -> Segment | None:
+    """Used when logging stops: end whatever master is open, if any."""
+    leg = lock(leg)
+    at = instant(at)
+    current = _open_master(leg)
+    if current is not None:
+        _close(announced(current), at)
+    return current
+
+
+@transaction.atomic
+def annotate_segment(segment: Segment, **fields) -> Segment:
+    """Set reason, obstacle, lighting or slope of an ITO reason (child segment).
+
+    Empty strings clear the text fields; ``ito_reason`` takes a catalogue key.
+    """
+    segment = lock(segment)
+    if segment.parent_id is None:
+        kind = "an AUTO segment" if segment.segment_type_id == SegmentType.AUTO else "a master"
+        raise RuleViolation(
+            f"Reason, obstacle, lighting and slope describe an ITO take-over reason; "
+            f"they cannot be set on {kind}."
+        )
+    if "ito_reason" in fields and not isinstance(fields["ito_reason"], ItoReason):
+        if fields["ito_reason"] is None:
+            raise RuleViolation({"ito_reason": ["An ITO reason cannot be empty; use Unassigned."]})
+        fields["ito_reason"] = _reason(fields["ito_reason"])
+    apply_fields(segment, fields, Segment.ANNOTATION_FIELDS)
+    segment.save(update_fields=list(fields))
+    return announced(segment)

@@ -1,0 +1,1 @@
+"""Server-rendered pages of the operator GUI (the JSON API is in events.api)."""

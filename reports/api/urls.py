@@ -1,0 +1,19 @@
+from django.urls import path, re_path
+
+from reports.api import views
+
+urlpatterns = [
+    path("", views.ReportListView.as_view(), name="report-list"),
+    path("<int:pk>/", views.ReportDetailView.as_view(), name="report-detail"),
+    path("<int:pk>/pdf/", views.ReportPdfView.as_view(), name="report-pdf"),
+    path(
+        "statistics/<int:test_event_id>/",
+        views.StatisticsView.as_view(),
+        name="report-statistics",
+    ),
+    re_path(
+        r"^exports/(?P<test_event_id>\d+)/(?P<filename>segments\.csv|tracks\.geojson|tracks\.gpx)$",
+        views.ExportView.as_view(),
+        name="report-export",
+    ),
+]

@@ -1,0 +1,117 @@
+"""Reports over the API: statistics as JSON, PDF jobs, exports.
+
+Reading needs the viewer role; requesting a report needs operator.
+"""
+
+from django.http import FileResponse, HttpResponse
+from django.shortcuts import get_object_or_404
+from drf_spectacular.utils import OpenApiParameter, extend_schema
+from rest_framework import status
+from rest_framework.exceptions import ValidationError
+from rest_framework.response import Response
+from rest_framework.views import APIView
+
+from events import roles
+from events.api.permissions import RolePermission
+from events.models import TestEvent
+from reports.api.serializers import ReportRequestSerializer, ReportSerializer
+from reports.models import Report
+from reports.selectors import exports
+from reports.selectors.reports import reports_of
+from reports.selectors.statistics import event_statistics
+from reports.selectors.tracks import MODES
+from reports.services.generation import fail_stale_reports, request_report
+
+MODE_PARAM = OpenApiParameter("mode", str, enum=list(MODES), description="gps (default) or local")
+
+
+def _mode(request) -> str:
+    mode = request.query_params.get("mode", "gps")
+    if mode not in MODES:
+        raise ValidationError({"mode": [f"mode must be one of {', '.join(MODES)}."]})
+    return mode
+
+
+class StatisticsView(APIView):
+    """Figures of a test event, per shift, leg and vehicle (seconds and metres)."""
+
+    permission_classes = [RolePermission]
+    read_role = roles.VIEWER
+
+    @extend_schema(parameters=[MODE_PARAM], responses={200: dict})
+    def get(self, request, test_event_id: int):
+        event = get_object_or_404(TestEvent, pk=test_event_id)
+        return Response(event_statistics(event, _mode(request)).as_dict())
+
+
+class ReportListView(APIView):
+    permission_classes = [RolePermission]
+    read_role = roles.VIEWER
+    write_role = roles.OPERATOR
+
+    @extend_schema(
+        parameters=[OpenApiParameter("test_event", int)],
+        responses={200: ReportSerializer(many=True)},
+    )
+    def get(self, request):
+        fail_stale_reports()
+        event_id = request.query_params.get("test_event")
+        if event_id is not None and not event_id.isdigit():
+            raise ValidationError({"test_event": ["A test event id is a number."]})
+        rows = reports_of(int(event_id) if event_id else None)
+        return Response(ReportSerializer(rows, many=True, context={"request": request}).data)
+
+    @extend_schema(request=ReportRequestSerializer, responses={202: ReportSerializer})
+    def post(self, request):
+        body = ReportRequestSerializer(data=request.data)
+        body.is_valid(raise_exception=True)
+        event = get_object_or_404(TestEvent, pk=body.validated_data["test_event"])
+        report = request_report(event, body.validated_data["options"], user=request.user)
+        data = ReportSerializer(report, context={"request": request}).data
+        return Response(data, status=status.HTTP_202_ACCEPTED)
+
+
+class ReportDetailView(APIView):
+    permission_classes = [RolePermission]
+    read_role = roles.VIEWER
+
+    @extend_schema(responses={200: ReportSerializer})
+    def get(self, request, pk: int):
+        report = get_object_or_404(Report, pk=pk)
+        return Response(ReportSerializer(report, context={"request": request}).data)
+
+
+class ReportPdfView(APIView):
+    permission_classes = [RolePermission]
+    read_role = roles.VIEWER
+
+    @extend_schema(responses={(200, "application/pdf"): bytes})
+    def get(self, request, pk: int):
+        report = get_object_or_404(Report, pk=pk, status=Report.Status.DONE)
+        name = f"ftt-report-test-event-{report.test_event_id}-{report.pk}.pdf"
+        return FileResponse(report.pdf.open("rb"), as_attachment=True, filename=name)
+
+
+class ExportView(APIView):
+    """segments.csv, tracks.geojson or tracks.gpx of a test event."""
+
+    permission_classes = [RolePermission]
+    read_role = roles.VIEWER
+    formats = {
+        "segments.csv": "text/csv; charset=utf-8",
+        "tracks.geojson": "application/geo+json",
+        "tracks.gpx": "application/gpx+xml",
+    }
+
+    @extend_schema(parameters=[MODE_PARAM], responses={(200, "text/csv"): bytes})
+    def get(self, request, test_event_id: int, filename: str):
+        event = get_object_or_404(TestEvent, pk=test_event_id)
+        if filename == "segments.csv":
+            body = exports.segments_csv(event, _mode(request))
+        elif filename == "tracks.geojson":
+            body = exports.tracks_geojson_text(event)
+        else:
+            body = exports.tracks_gpx(event)
+        response = HttpResponse(body, content_type=self.formats[filename])
+        response["Content-Disposition"] = f'attachment; filename="test-event-{event.pk}-{filename}"'
+        return response

@@ -1,0 +1,71 @@
+"""The mode timeline of a shift: AUTO and ITO runs, reasons, weather, goals."""
+
+from datetime import timedelta
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.dates as mdates  # noqa: E402
+import matplotlib.pyplot as plt  # noqa: E402
+
+from reports.figures.style import rgb  # noqa: E402
+
+MARKER_REASONS = ("goal", "end_shift")
+
+
+def draw_timeline(shift_runs, reasons, weather_changes, tz, path, dpi=150) -> str:
+    """``shift_runs``: runs of one shift; ``reasons``: ItoReason by key;
+    ``weather_changes``: [(time, label)].  Times are drawn in ``tz``."""
+    reason_rows = sorted(
+        {span.reason for run in shift_runs for span in run.reasons},
+        key=lambda key: reasons[key].short_description if key in reasons else key,
+    )
+    labels = ["AUTO", "ITO"] + [
+        reasons[key].short_description if key in reasons else key for key in reason_rows
+    ]
+    height = 1.2 + 0.28 * len(labels)
+    fig, ax = plt.subplots(figsize=(7.0, height), layout="constrained")
+    row_of = {key: 2 + i for i, key in enumerate(reason_rows)}
+    for run in shift_runs:
+        row = 0 if run.kind == "auto" else 1
+        color = "#2ca02c" if run.kind == "auto" else "#d62728"
+        _bar(ax, row, run.start, run.end, color, 0.6, hatch="//" if run.is_open else None)
+        for span in run.reasons:
+            catalogue = reasons.get(span.reason)
+            color = rgb(catalogue.color) if catalogue else (0.5, 0.5, 0.5)
+            if span.end == span.start or span.reason in MARKER_REASONS:
+                ax.plot(span.start, row_of[span.reason], "o", color=color, mec="black")
+            else:
+                _bar(ax, row_of[span.reason], span.start, span.end, color, 0.5)
+    first = min(run.start for run in shift_runs)
+    last = max(run.end for run in shift_runs)
+    span = max(last - first, timedelta(seconds=60))
+    ax.set_xlim(first - span * 0.02, first + span * 1.02)
+    for when, label in weather_changes:
+        # A leg opened long before its first segment would squeeze the runs.
+        when = min(max(when, first), last)
+        ax.axvline(when, color="#1f77b4", linewidth=0.6, linestyle="--")
+        ax.text(when, -0.75, label, fontsize=6, color="#1f77b4", va="bottom")
+    ax.set_yticks(range(len(labels)), labels, fontsize=7)
+    ax.set_ylim(len(labels) - 0.5, -0.9)
+    ax.xaxis.set_major_formatter(mdates.DateFormatter("%H:%M", tz=tz))
+    ax.tick_params(axis="x", labelsize=7)
+    ax.set_xlabel(f"time ({tz.key})", fontsize=7)
+    ax.grid(True, axis="x", linewidth=0.3, alpha=0.6)
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return path
+
+
+def _bar(ax, row, start, end, color, height, hatch=None):
+    ax.barh(
+        row,
+        end - start,
+        left=start,
+        height=height,
+        color=color,
+        edgecolor="black",
+        linewidth=0.3,
+        hatch=hatch,
+    )

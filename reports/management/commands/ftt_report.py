@@ -1,0 +1,129 @@
+"""manage.py ftt_report: the PDF report of a test event, and its exports.
+
+    manage.py ftt_report --test-event 3 -o report.pdf --name "Trial 3" --recipient ACME
+    manage.py ftt_report --test-event 3 --csv segments.csv --geojson tracks.geojson --gpx t.gpx
+    manage.py ftt_report --job 17        # worker for a report requested from the GUI
+
+Without -o and without any export option the PDF goes to report.pdf.
+"""
+
+import sys
+from pathlib import Path
+
+from django.core.management.base import BaseCommand, CommandError
+
+from events.models import TestEvent
+from reports.models import Report
+from reports.selectors import exports
+from reports.services.generation import run_job
+from reports.services.rendering import ReportError, ReportOptions, render_report
+
+
+class ProgressBar:
+    """A one-line bar on a terminal; silent when stderr is not one."""
+
+    def __init__(self, stream, width=30):
+        self.stream = stream
+        self.width = width
+        self.enabled = stream.isatty()
+
+    def __call__(self, fraction: float, message: str) -> None:
+        if not self.enabled:
+            return
+        filled = int(round(self.width * fraction))
+        bar = "#" * filled + "-" * (self.width - filled)
+        self.stream.write(f"\r[{bar}] {100 * fraction:3.0f}% {message[:40]:<40}")
+        if fraction >= 1.0:
+            self.stream.write("\n")
+        self.stream.flush()
+
+
+class Command(BaseCommand):
+    help = "Make the PDF field-test report of a test event (and CSV/GeoJSON/GPX exports)."
+
+    def create_parser(self, prog_name, subcommand, **kwargs):
+        # --version is the report's version here, not Django's.
+        kwargs.setdefault("conflict_handler", "resolve")
+        return super().create_parser(prog_name, subcommand, **kwargs)
+
+    def add_arguments(self, parser):
+        parser.add_argument("--test-event", type=int, help="Id of the test event.")
+        parser.add_argument("--job", type=int, help="Make the queued report with this id.")
+        parser.add_argument("-o", "--output", help="PDF file to write (default report.pdf).")
+        parser.add_argument("--local", action="store_true", help="Use local (map-frame) poses.")
+        parser.add_argument("--name", default="", help="Report name on the title page.")
+        parser.add_argument("--version", dest="report_version", default="1.0")
+        parser.add_argument("--recipient", default="", help="Prepared for: name.")
+        parser.add_argument(
+            "--recipient-address", action="append", default=[], help="Address line (repeat)."
+        )
+        parser.add_argument("--creator", default="", help="Prepared by: name.")
+        parser.add_argument(
+            "--creator-address", action="append", default=[], help="Address line (repeat)."
+        )
+        parser.add_argument("--logo", help="Logo image (PNG, JPEG or SVG) for the title page.")
+        parser.add_argument("--tile-url", help="Tile URL template with {z}/{x}/{y}.")
+        parser.add_argument("--no-tiles", action="store_true", help="Draw maps without tiles.")
+        parser.add_argument("--csv", help="Write the segments as CSV to this file.")
+        parser.add_argument("--geojson", help="Write the GPS tracks as GeoJSON to this file.")
+        parser.add_argument("--gpx", help="Write the GPS tracks as GPX to this file.")
+
+    def handle(self, *args, **o):
+        if o["job"] is not None:
+            return self._job(o["job"])
+        if o["test_event"] is None:
+            raise CommandError("Give --test-event ID (or --job ID).")
+        event = TestEvent.objects.filter(pk=o["test_event"]).first()
+        if event is None:
+            raise CommandError(f"Test event {o['test_event']} does not exist.")
+        exported = self._exports(event, o)
+        if o["output"] or not exported:
+            self._pdf(event, o)
+
+    def _job(self, report_id: int):
+        if not Report.objects.filter(pk=report_id).exists():
+            raise CommandError(f"Report {report_id} does not exist.")
+        report = run_job(report_id)
+        if report.status == Report.Status.FAILED:
+            raise CommandError(report.error)
+        self.stdout.write(f"report {report_id}: {report.pdf.name}")
+
+    def _exports(self, event, o) -> bool:
+        writers = (
+            ("csv", lambda: exports.segments_csv(event, "local" if o["local"] else "gps")),
+            ("geojson", lambda: exports.tracks_geojson_text(event)),
+            ("gpx", lambda: exports.tracks_gpx(event)),
+        )
+        done = False
+        for key, make in writers:
+            if o[key]:
+                Path(o[key]).write_text(make(), encoding="utf-8")
+                self.stdout.write(f"{key}: {o[key]}")
+                done = True
+        return done
+
+    def _pdf(self, event, o):
+        options = ReportOptions(
+            name=o["name"],
+            version=o["report_version"],
+            recipient=o["recipient"],
+            recipient_address=o["recipient_address"],
+            creator=o["creator"],
+            creator_address=o["creator_address"],
+            local=o["local"],
+            tile_url=o["tile_url"],
+            no_tiles=o["no_tiles"],
+            logo=o["logo"],
+        )
+        if options.logo and not Path(options.logo).is_file():
+            raise CommandError(f"Logo file {options.logo} does not exist.")
+        output = Path(o["output"] or "report.pdf")
+        try:
+            result = render_report(event, options, ProgressBar(sys.stderr))
+        except ReportError as exc:
+            raise CommandError(str(exc)) from None
+        output.write_bytes(result.pdf)
+        for warning in result.warnings:
+            self.stderr.write(f"warning: {warning}")
+        note = " (provisional: open segments)" if result.provisional else ""
+        self.stdout.write(f"{output}: written in {result.seconds:.1f} s{note}")

@@ -1,0 +1,396 @@
+"""Reliability statistics of a test event, per leg, shift, vehicle and overall.
+
+Everything the report, the GUI and the API show as a figure comes from here.
+
+Definitions (also printed in the report's methods appendix, see ``FORMULAS``):
+
+* A *run* is a master segment: one continuous stretch in one mode (AUTO or ITO).
+* Duration of a run = end - start (server clock).  An open run (no end yet)
+  lasts until the latest thing known about it: its newest pose or reason.
+  Statistics over open runs are *provisional*.
+* Distance of a run = length of the polyline
+  [start position] + its poses in time order + [start position of the next
+  master in the same leg].  GPS: geodesic on the WGS84 ellipsoid (pyproj
+  Geod, the same model as PostGIS geography); local: planar in map metres.
+  The joins make the distances of consecutive runs add up to the distance
+  driven, with no metre lost at a mode switch.  A run without poses
+  contributes the straight join from its start to the next start, if both
+  are known, and is listed as a data gap.
+* An *intervention* is an ITO master with at least one reason (child) whose
+  catalogue entry ``counts_as_intervention``.  A master with several counted
+  reasons is one intervention overall and one under each of its reasons.
+* Exposure: autonomous distance D_a and autonomous time T_a (sums over AUTO runs).
+  I = number of interventions.
+* Autonomy ratio by distance = D_a / (D_a + D_m); by time = T_a / (T_a + T_m),
+  where D_m, T_m sum over all ITO runs, counted or not (the share of the test
+  the vehicle drove itself).
+* MDBI = D_a / I, MTBI = T_a / I.  Two-sided 90 % confidence bounds assume a
+  homogeneous Poisson process observed over a fixed exposure E:
+  lower = 2E / chi2(0.95; 2I + 2), upper = 2E / chi2(0.05; 2I) (infinite for I = 0).
+  With I = 0 there is no point estimate: the value is reported as ">= E".
+* Interventions per km = I / (D_a / 1000); per hour = I / (T_a / 3600).
+* Manual time per reason = sum of the durations of the reasons (children)
+  with that key; children of one master may overlap.
+"""
+
+from collections import defaultdict
+from dataclasses import asdict, dataclass, field
+from datetime import datetime
+
+from scipy.stats import chi2
+
+from events.models import ItoReason, Segment, SegmentType, TestEvent
+from reports.selectors.tracks import GPS, Track, load_tracks, path_length
+
+CONFIDENCE = 0.90
+
+FORMULAS = (
+    (
+        "Distance",
+        "Sum of geodesic (GPS: WGS84 ellipsoid) or straight (local: map frame) steps along "
+        "[segment start] + positions in time order (robot clock, then arrival) + "
+        "[start of the next master segment of the same leg]. Positions without a fix are "
+        "left out.",
+    ),
+    (
+        "Duration",
+        "end - start of each master segment; an open segment lasts until its newest "
+        "position or reason, and every figure including it is provisional.",
+    ),
+    (
+        "Exposure",
+        "D_a, T_a: autonomous distance and time; D_m, T_m: manual (ITO) distance and time; "
+        "I: number of interventions.",
+    ),
+    (
+        "Intervention",
+        "An ITO master segment with at least one reason that counts as an intervention; "
+        "one with several counted reasons counts once overall and once per reason.",
+    ),
+    ("Autonomy by distance", "D_a / (D_a + D_m)"),
+    ("Autonomy by time", "T_a / (T_a + T_m)"),
+    ("MDBI", "MDBI = D_a / I (mean distance between interventions)"),
+    ("MTBI", "MTBI = T_a / I (mean time between interventions)"),
+    (
+        "Bounds",
+        "Two-sided 90 % bounds for exposure E (homogeneous Poisson process, fixed exposure): "
+        "lower = 2E / chi2(0.95; 2I + 2), upper = 2E / chi2(0.05; 2I).",
+    ),
+    (
+        "No intervention",
+        "I = 0: the estimate is shown as '>= E'; lower bound 2E / chi2(0.95; 2), no upper bound.",
+    ),
+    ("Interventions per km", "I / (D_a / 1000 m)"),
+    ("Interventions per hour", "I / (T_a / 3600 s)"),
+    ("Mean / longest autonomous run", "Mean and maximum distance of the AUTO segments."),
+    (
+        "Manual time per reason",
+        "Sum of the durations of the reasons with that key (reasons of one segment may overlap).",
+    ),
+)
+
+
+@dataclass
+class ReasonSpan:
+    id: int
+    reason: str
+    start: datetime
+    end: datetime
+    is_open: bool
+    obstacle: str = ""
+    lighting: str = ""
+    slope: str = ""
+
+    @property
+    def seconds(self) -> float:
+        return (self.end - self.start).total_seconds()
+
+
+@dataclass
+class Run:
+    """One master segment with what the statistics need to know about it."""
+
+    id: int
+    kind: str
+    leg_id: int
+    shift_id: int
+    vehicle_id: int
+    start: datetime
+    end: datetime
+    is_open: bool
+    distance: float
+    pose_count: int
+    reasons: list[ReasonSpan] = field(default_factory=list)
+    counted_reasons: list[str] = field(default_factory=list)
+    track: Track | None = None
+    has_start_position: bool = False
+    # The polyline the distance was measured on, joins included.
+    path_x: list[float] = field(default_factory=list)
+    path_y: list[float] = field(default_factory=list)
+
+    @property
+    def seconds(self) -> float:
+        return (self.end - self.start).total_seconds()
+
+    @property
+    def is_intervention(self) -> bool:
+        return bool(self.counted_reasons)
+
+
+@dataclass
+class Estimate:
+    """Exposure per intervention with its confidence bounds.
+
+    ``value`` is None when there were no interventions (censored: ">= exposure").
+    ``upper`` is None when unbounded.
+    """
+
+    exposure: float
+    count: int
+    value: float | None
+    lower: float | None
+    upper: float | None
+    censored: bool
+
+
+def poisson_estimate(exposure: float, count: int, confidence: float = CONFIDENCE) -> Estimate:
+    """Exposure / count with exact two-sided chi-square bounds (see module docstring)."""
+    alpha = 1.0 - confidence
+    if exposure <= 0:
+        return Estimate(exposure, count, None, None, None, count == 0)
+    lower = 2.0 * exposure / chi2.ppf(1.0 - alpha / 2.0, 2 * count + 2)
+    if count == 0:
+        return Estimate(exposure, 0, None, float(lower), None, True)
+    upper = 2.0 * exposure / chi2.ppf(alpha / 2.0, 2 * count)
+    return Estimate(exposure, count, exposure / count, float(lower), float(upper), False)
+
+
+def _ratio(part: float, whole: float) -> float | None:
+    return part / whole if whole > 0 else None
+
+
+@dataclass
+class Figures:
+    auto_runs: int
+    ito_runs: int
+    auto_seconds: float
+    manual_seconds: float
+    auto_distance: float
+    manual_distance: float
+    autonomy_ratio_distance: float | None
+    autonomy_ratio_time: float | None
+    interventions: int
+    interventions_by_reason: dict[str, int]
+    manual_seconds_by_reason: dict[str, float]
+    mean_auto_run: float | None
+    max_auto_run: float | None
+    mdbi: Estimate
+    mtbi: Estimate
+    interventions_per_km: float | None
+    interventions_per_hour: float | None
+    provisional: bool
+
+    @property
+    def total_distance(self) -> float:
+        return self.auto_distance + self.manual_distance
+
+    @property
+    def total_seconds(self) -> float:
+        return self.auto_seconds + self.manual_seconds
+
+    def as_dict(self) -> dict:
+        data = asdict(self)
+        data["total_distance"] = self.total_distance
+        data["total_seconds"] = self.total_seconds
+        return data
+
+
+def figures(runs: list[Run]) -> Figures:
+    """Aggregate runs of any grouping (leg, shift, vehicle, event) into figures."""
+    auto = [r for r in runs if r.kind == SegmentType.AUTO]
+    ito = [r for r in runs if r.kind == SegmentType.ITO]
+    d_a = sum(r.distance for r in auto)
+    d_m = sum(r.distance for r in ito)
+    t_a = sum(r.seconds for r in auto)
+    t_m = sum(r.seconds for r in ito)
+    count = sum(1 for r in ito if r.is_intervention)
+    by_reason: dict[str, int] = defaultdict(int)
+    time_by_reason: dict[str, float] = defaultdict(float)
+    for run in ito:
+        for key in set(run.counted_reasons):
+            by_reason[key] += 1
+        for span in run.reasons:
+            time_by_reason[span.reason] += span.seconds
+    return Figures(
+        auto_runs=len(auto),
+        ito_runs=len(ito),
+        auto_seconds=t_a,
+        manual_seconds=t_m,
+        auto_distance=d_a,
+        manual_distance=d_m,
+        autonomy_ratio_distance=_ratio(d_a, d_a + d_m),
+        autonomy_ratio_time=_ratio(t_a, t_a + t_m),
+        interventions=count,
+        interventions_by_reason=dict(sorted(by_reason.items(), key=lambda kv: (-kv[1], kv[0]))),
+        manual_seconds_by_reason=dict(sorted(time_by_reason.items())),
+        mean_auto_run=d_a / len(auto) if auto else None,
+        max_auto_run=max((r.distance for r in auto), default=None),
+        mdbi=poisson_estimate(d_a, count),
+        mtbi=poisson_estimate(t_a, count),
+        interventions_per_km=count / (d_a / 1000.0) if d_a > 0 else None,
+        interventions_per_hour=count / (t_a / 3600.0) if t_a > 0 else None,
+        provisional=any(r.is_open or any(s.is_open for s in r.reasons) for r in runs),
+    )
+
+
+def _start_point(segment: Segment, mode: str) -> tuple[float, float] | None:
+    if mode == GPS:
+        p = segment.start_position
+        return (p.x, p.y) if p is not None else None
+    if segment.start_local_x is None:
+        return None
+    return (segment.start_local_x, segment.start_local_y)
+
+
+def _effective_end(segment: Segment, track: Track | None, children: list[Segment]):
+    if segment.end is not None:
+        return segment.end
+    known = [segment.start]
+    if track is not None and track.last_stamp is not None:
+        known.append(track.last_stamp)
+    for child in children:
+        known.append(child.end or child.start)
+    return max(known)
+
+
+def event_runs(event: TestEvent, mode: str = GPS) -> list[Run]:
+    """All master segments of a test event as runs, ordered by leg and time."""
+    segments = list(
+        Segment.objects.filter(leg__shift__test_event=event)
+        .select_related("leg__shift")
+        .order_by("leg__shift__start", "leg__shift_id", "leg__start", "leg_id", "start", "id")
+    )
+    counted = set(
+        ItoReason.objects.filter(counts_as_intervention=True).values_list("key", flat=True)
+    )
+    masters = [s for s in segments if s.parent_id is None]
+    children: dict[int, list[Segment]] = defaultdict(list)
+    for s in segments:
+        if s.parent_id is not None:
+            children[s.parent_id].append(s)
+    tracks = load_tracks([m.id for m in masters], mode)
+
+    runs = []
+    for i, master in enumerate(masters):
+        follower = masters[i + 1] if i + 1 < len(masters) else None
+        if follower is not None and follower.leg_id != master.leg_id:
+            follower = None
+        track = tracks.get(master.id)
+        xs, ys = ([], []) if track is None else (list(track.x), list(track.y))
+        start = _start_point(master, mode)
+        if start is not None:
+            xs.insert(0, start[0])
+            ys.insert(0, start[1])
+        after = _start_point(follower, mode) if follower is not None else None
+        if after is not None:
+            xs.append(after[0])
+            ys.append(after[1])
+        kids = children.get(master.id, [])
+        end = _effective_end(master, track, kids)
+        spans = [
+            ReasonSpan(
+                id=c.id,
+                reason=c.ito_reason_id or ItoReason.UNASSIGNED,
+                start=c.start,
+                end=c.end or max(end, c.start),
+                is_open=c.end is None,
+                obstacle=c.obstacle,
+                lighting=c.lighting,
+                slope=c.slope,
+            )
+            for c in kids
+        ]
+        runs.append(
+            Run(
+                id=master.id,
+                kind=master.segment_type_id,
+                leg_id=master.leg_id,
+                shift_id=master.leg.shift_id,
+                vehicle_id=master.leg.shift.vehicle_id,
+                start=master.start,
+                end=end,
+                is_open=master.end is None,
+                distance=path_length(xs, ys, mode),
+                pose_count=len(track) if track is not None else 0,
+                reasons=spans,
+                counted_reasons=[s.reason for s in spans if s.reason in counted],
+                track=track,
+                has_start_position=start is not None,
+                path_x=xs,
+                path_y=ys,
+            )
+        )
+    return runs
+
+
+@dataclass
+class EventStatistics:
+    test_event_id: int
+    mode: str
+    overall: Figures
+    by_shift: dict[int, Figures]
+    by_leg: dict[int, Figures]
+    by_vehicle: dict[int, Figures]
+    counted_reasons: list[str]
+    runs: list[Run]
+
+    @property
+    def provisional(self) -> bool:
+        return self.overall.provisional
+
+    def runs_by_shift(self) -> dict[int, list[Run]]:
+        groups: dict[int, list[Run]] = defaultdict(list)
+        for run in self.runs:
+            groups[run.shift_id].append(run)
+        return groups
+
+    def as_dict(self) -> dict:
+        """Plain JSON-ready figures (seconds and metres), as the API returns them."""
+        return {
+            "test_event": self.test_event_id,
+            "mode": self.mode,
+            "confidence": CONFIDENCE,
+            "provisional": self.provisional,
+            "counted_reasons": self.counted_reasons,
+            "formulas": dict(FORMULAS),
+            "overall": self.overall.as_dict(),
+            "shifts": {str(k): v.as_dict() for k, v in self.by_shift.items()},
+            "legs": {str(k): v.as_dict() for k, v in self.by_leg.items()},
+            "vehicles": {str(k): v.as_dict() for k, v in self.by_vehicle.items()},
+        }
+
+
+def _grouped(runs: list[Run], key) -> dict[int, Figures]:
+    groups: dict[int, list[Run]] = defaultdict(list)
+    for run in runs:
+        groups[key(run)].append(run)
+    return {k: figures(v) for k, v in groups.items()}
+
+
+def event_statistics(
+    event: TestEvent, mode: str = GPS, runs: list[Run] | None = None
+) -> EventStatistics:
+    """Figures for the whole test event and each leg, shift and vehicle in it."""
+    runs = event_runs(event, mode) if runs is None else runs
+    return EventStatistics(
+        test_event_id=event.pk,
+        mode=mode,
+        overall=figures(runs),
+        by_shift=_grouped(runs, lambda r: r.shift_id),
+        by_leg=_grouped(runs, lambda r: r.leg_id),
+        by_vehicle=_grouped(runs, lambda r: r.vehicle_id),
+        counted_reasons=sorted(
+            ItoReason.objects.filter(counts_as_intervention=True).values_list("key", flat=True)
+        ),
+        runs=runs,
+    )

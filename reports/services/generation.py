@@ -1,0 +1,173 @@
+"""Reports requested from the GUI or the API: queued, made in the background, kept.
+
+:func:`request_report` stores a ``Report`` row and returns at once; a worker
+makes the PDF and records its progress on the row, so the GUI can poll it.
+Every report is kept with its test event for download later.
+
+The worker is a thread of the web process by default (works in every setup,
+including tests against a test database).  ``FTT_REPORT_WORKER=subprocess``
+runs ``manage.py ftt_report --job ID`` instead, which keeps matplotlib and
+typst out of the web process.  One report is made at a time per process: the
+machine is small and the figures are CPU-bound; the others wait as "queued".
+"""
+
+import logging
+import subprocess
+import sys
+import threading
+import time
+from datetime import timedelta
+from pathlib import Path
+
+from django.conf import settings
+from django.core.exceptions import ValidationError
+from django.core.files.base import ContentFile
+from django.db import connection, transaction
+from django.utils import timezone
+
+from events.errors import RuleViolation
+from events.models import TestEvent
+from reports.models import Report
+from reports.services.rendering import ReportError, ReportOptions, check_reportable, render_report
+
+log = logging.getLogger(__name__)
+
+_ONE_AT_A_TIME = threading.Semaphore(1)
+# A report whose row has not moved for this long lost its worker (server restart).
+STALE_AFTER = timedelta(minutes=15)
+PROGRESS_INTERVAL_S = 0.5
+
+
+def request_report(
+    test_event: TestEvent, options: dict | ReportOptions | None = None, *, user=None
+) -> Report:
+    """Queue a report of the test event and start making it; returns the new row."""
+    opts = options if isinstance(options, ReportOptions) else _checked_options(options or {})
+    try:
+        check_reportable(test_event)
+    except ReportError as exc:
+        raise RuleViolation(str(exc), code="empty") from None
+    report = Report.objects.create(
+        test_event=test_event,
+        options=opts.as_dict(),
+        requested_by=user if user is not None and user.is_authenticated else None,
+        message="waiting for the report worker",
+    )
+    transaction.on_commit(lambda: _start(report.pk))
+    return report
+
+
+# A requested report reads no file and fetches no URL chosen by the requester:
+# the logo and tile server are the site's (FTT_TILE_URL), settable on the CLI only.
+REQUESTABLE = {
+    "name": str,
+    "version": str,
+    "recipient": str,
+    "recipient_address": list,
+    "creator": str,
+    "creator_address": list,
+    "local": bool,
+    "no_tiles": bool,
+}
+
+
+def _checked_options(options: dict) -> ReportOptions:
+    if not isinstance(options, dict):
+        raise ValidationError({"options": ["Options must be an object."]})
+    errors = []
+    for key, value in options.items():
+        kind = REQUESTABLE.get(key)
+        if kind is None:
+            errors.append(f"Unknown or not requestable option '{key}'.")
+        elif not isinstance(value, kind) or (
+            kind is list and not all(isinstance(line, str) for line in value)
+        ):
+            expected = {str: "text", list: "a list of text lines", bool: "true or false"}[kind]
+            errors.append(f"Option '{key}' must be {expected}.")
+    if errors:
+        raise ValidationError({"options": errors})
+    return ReportOptions.from_dict(options)
+
+
+def _start(report_id: int) -> None:
+    mode = getattr(settings, "FTT_REPORT_WORKER", "thread")
+    if mode == "subprocess":
+        manage = Path(settings.BASE_DIR) / "manage.py"
+        subprocess.Popen(
+            [sys.executable, str(manage), "ftt_report", "--job", str(report_id)],
+            start_new_session=True,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+        return
+    threading.Thread(
+        target=_run_in_thread, args=(report_id,), daemon=True, name=f"report-{report_id}"
+    ).start()
+
+
+def _run_in_thread(report_id: int) -> None:
+    try:
+        run_job(report_id)
+    finally:
+        connection.close()
+
+
+def run_job(report_id: int) -> Report:
+    """Make the PDF of a queued report row (worker side); never raises for bad data."""
+    with _ONE_AT_A_TIME:
+        report = Report.objects.select_related("test_event").get(pk=report_id)
+        if report.is_finished:
+            return report
+        Report.objects.filter(pk=report_id).update(
+            status=Report.Status.RUNNING, message="starting", updated=timezone.now()
+        )
+        last = [0.0]
+
+        def progress(fraction: float, message: str) -> None:
+            now = time.monotonic()
+            if now - last[0] < PROGRESS_INTERVAL_S and fraction < 1.0:
+                return
+            last[0] = now
+            Report.objects.filter(pk=report_id).update(
+                progress=round(fraction, 3), message=message[:200], updated=timezone.now()
+            )
+
+        try:
+            result = render_report(
+                report.test_event, ReportOptions.from_dict(report.options), progress
+            )
+        except ReportError as exc:
+            return _fail(report_id, str(exc))
+        except Exception as exc:  # a worker must record every failure on its row
+            log.exception("report %s failed", report_id)
+            return _fail(report_id, f"Unexpected error: {exc.__class__.__name__}: {exc}")
+        report.refresh_from_db()
+        report.pdf.save(f"report-{report.pk}.pdf", ContentFile(result.pdf), save=False)
+        report.status = Report.Status.DONE
+        report.progress = 1.0
+        report.message = "done"
+        report.provisional = result.provisional
+        report.finished = timezone.now()
+        report.error = "\n".join(result.warnings)
+        report.save()
+        return report
+
+
+def _fail(report_id: int, message: str) -> Report:
+    Report.objects.filter(pk=report_id).update(
+        status=Report.Status.FAILED, error=message, message="failed", finished=timezone.now()
+    )
+    return Report.objects.get(pk=report_id)
+
+
+def fail_stale_reports(now=None) -> int:
+    """Mark reports whose worker vanished (no progress for STALE_AFTER) as failed."""
+    now = now or timezone.now()
+    return Report.objects.filter(
+        status__in=[Report.Status.QUEUED, Report.Status.RUNNING], updated__lt=now - STALE_AFTER
+    ).update(
+        status=Report.Status.FAILED,
+        error="The report worker stopped (server restart?). Request the report again.",
+        message="failed",
+        finished=now,
+    )

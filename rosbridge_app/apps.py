@@ -1,0 +1,6 @@
+from django.apps import AppConfig
+
+
+class RosbridgeAppConfig(AppConfig):
+    name = "rosbridge_app"
+    verbose_name = "Robot bridge"

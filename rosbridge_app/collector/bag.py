@@ -1,0 +1,201 @@
+"""Robot recordings (ROS 1 .bag, ROS 2 sqlite3/mcap) → the collector's events.
+
+For the bag player and for bag imports.  Reading needs only rosbags (no ROS);
+:func:`to_rclpy` (the player) needs rclpy.
+
+* :func:`bag_messages` yields every message with its record time;
+* :func:`feed_pipeline` routes them into a :class:`Pipeline` exactly as the
+  live node's subscriptions do;
+* :func:`bag_events` returns the events a live collector would have produced
+  had it been logging while the bag was recorded; store them with
+  :func:`rosbridge_app.collector.recorder.record_events`.
+"""
+
+import array
+import importlib
+from collections.abc import Iterator
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+
+import numpy as np
+from rosbags.highlevel import AnyReader
+from rosbags.typesys import Stores, get_typestore
+
+from rosbridge_app.collector.events import Event
+from rosbridge_app.collector.modes import BOOL, INDUSTRIAL, mode_of
+from rosbridge_app.collector.params import SPECS
+from rosbridge_app.collector.pipeline import Pipeline
+
+ROBOT_MODE = "industrial_msgs/msg/RobotMode"
+BOOL_TYPE = "std_msgs/msg/Bool"
+NAVSATFIX = "sensor_msgs/msg/NavSatFix"
+TF = "tf2_msgs/msg/TFMessage"
+POSE = "geometry_msgs/msg/PoseStamped"
+GRID = "nav_msgs/msg/OccupancyGrid"
+IMAGE = "sensor_msgs/msg/Image"
+COMPRESSED = "sensor_msgs/msg/CompressedImage"
+
+
+@dataclass
+class BagMessage:
+    topic: str
+    msgtype: str
+    time_ns: int
+    msg: object
+    latched: bool
+
+    @property
+    def at(self) -> datetime:
+        return datetime.fromtimestamp(self.time_ns / 1e9, tz=UTC)
+
+
+def open_bag(path: Path) -> AnyReader:
+    """A rosbags reader for a ROS 1 bag file or a ROS 2 bag directory/file."""
+    path = Path(path)
+    if path.is_file() and path.suffix in (".db3", ".mcap"):
+        path = path.parent  # rosbag2 is opened by its directory (metadata.yaml)
+    return AnyReader([path], default_typestore=get_typestore(Stores.ROS2_JAZZY))
+
+
+def _latched(connection) -> bool:
+    ext = connection.ext
+    if getattr(ext, "latching", None):
+        return True
+    for qos in getattr(ext, "offered_qos_profiles", None) or []:
+        if "transient_local" in str(getattr(qos, "durability", "")).lower():
+            return True
+    return connection.topic in ("/tf_static", "tf_static")
+
+
+def bag_messages(path: Path, topics: set[str] | None = None) -> Iterator[BagMessage]:
+    with open_bag(path) as reader:
+        connections = [c for c in reader.connections if topics is None or c.topic in topics]
+        latched = {c.id: _latched(c) for c in connections}
+        for connection, time_ns, raw in reader.messages(connections=connections):
+            yield BagMessage(
+                connection.topic,
+                connection.msgtype,
+                time_ns,
+                reader.deserialize(raw, connection.msgtype),
+                latched[connection.id],
+            )
+
+
+def _same_topic(a: str, b: str) -> bool:
+    return bool(a) and bool(b) and a.lstrip("/") == b.lstrip("/")
+
+
+def route(pipeline: Pipeline, topic: str, msgtype: str):
+    """The pipeline method for a bag topic, chosen by the configured topic
+    names first and by message type otherwise; None: not something we record."""
+    p = pipeline.params
+    if msgtype == ROBOT_MODE:
+        return lambda m, at: _mode(pipeline, m, at, INDUSTRIAL)
+    if msgtype == BOOL_TYPE and _same_topic(topic, p["topics.robot_mode"]):
+        return lambda m, at: _mode(pipeline, m, at, BOOL)
+    if msgtype == NAVSATFIX:
+        return pipeline.on_fix
+    if msgtype == TF:
+        static = _same_topic(topic, p["topics.tf_static"]) or topic.endswith("tf_static")
+        return lambda m, at: pipeline.on_tf(m, at, static=static)
+    if msgtype == POSE:
+        return pipeline.on_pose
+    if msgtype == GRID:
+        return pipeline.on_grid
+    if msgtype == IMAGE:
+        return pipeline.on_image
+    if msgtype == COMPRESSED:
+        if _same_topic(topic, p["topics.map_jpeg"]):
+            return pipeline.on_map_jpeg
+        return lambda m, at: pipeline.on_image(m, at, compressed=True)
+    return None
+
+
+def _mode(pipeline: Pipeline, msg, at, mode_type: str) -> None:
+    mode = mode_of(msg, mode_type)
+    if mode is not None:
+        pipeline.on_mode_value(mode, at)
+
+
+def feed_pipeline(path: Path, pipeline: Pipeline) -> dict[str, int]:
+    """Route every message of the bag into the pipeline; returns counts per topic."""
+    counts: dict[str, int] = {}
+    handlers: dict[tuple[str, str], object] = {}
+    last = None
+    for m in bag_messages(path):
+        key = (m.topic, m.msgtype)
+        if key not in handlers:
+            handlers[key] = route(pipeline, m.topic, m.msgtype)
+        handler = handlers[key]
+        if handler is None:
+            continue
+        at = m.at
+        handler(m.msg, at)
+        counts[m.topic] = counts.get(m.topic, 0) + 1
+        if last is None or (at - last).total_seconds() >= 1.0:
+            pipeline.tick(at)
+            last = at
+    return counts
+
+
+def bag_events(path: Path, params: dict | None = None, *, stop_at_end: bool = True) -> list[Event]:
+    """The events of a whole bag, as a collector logging from the bag's first
+    message would have produced them (the last segment closed at the end
+    when ``stop_at_end``).  Pictures are still unrendered: Event.prepare()."""
+    events: list[Event] = []
+    pipeline = Pipeline(
+        events.append, {**{k: s.default for k, s in SPECS.items()}, **(params or {})}
+    )
+    with open_bag(path) as reader:
+        if not reader.message_count:
+            return events
+        first, last = (
+            datetime.fromtimestamp(t / 1e9, tz=UTC) for t in (reader.start_time, reader.end_time)
+        )
+    pipeline.start_logging(first)
+    feed_pipeline(path, pipeline)
+    if stop_at_end:
+        pipeline.stop_logging(last)
+    return events
+
+
+# --- to live ROS messages (the player) ------------------------------------------------------
+
+
+def rclpy_type(msgtype: str):
+    package, _, name = msgtype.split("/")
+    return getattr(importlib.import_module(f"{package}.msg"), name)
+
+
+def to_rclpy(value, cls):
+    """Copy a rosbags message into a new rclpy message of class ``cls``,
+    field by field (ROS 1 fields such as Header.seq are dropped)."""
+    out = cls()
+    for field, type_name in cls.get_fields_and_field_types().items():
+        if not hasattr(value, field):
+            continue
+        setattr(out, field, _convert(getattr(value, field), getattr(out, field), type_name))
+    return out
+
+
+def _convert(value, current, type_name: str):
+    if hasattr(current, "get_fields_and_field_types"):
+        return to_rclpy(value, type(current))
+    if type_name.startswith("sequence<") and "/" in type_name:
+        inner = type_name[len("sequence<") :].split(",")[0].rstrip(">")
+        package, name = inner.split("/")
+        cls = getattr(importlib.import_module(f"{package}.msg"), name)
+        return [to_rclpy(v, cls) for v in value]
+    if isinstance(current, array.array):
+        data = np.asarray(value)
+        return array.array(current.typecode, data.astype(np.dtype(current.typecode)).tobytes())
+    if isinstance(current, np.ndarray):
+        return np.asarray(value, dtype=current.dtype)
+    if isinstance(current, bytes) and isinstance(value, np.ndarray):
+        return value.astype(np.uint8).tobytes()
+    if isinstance(current, list) and isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value

@@ -1,0 +1,55 @@
+"""What the collector (or a bag import) has decided to record.
+
+An event is plain data: a kind, the wall-clock time it happened, a uid that
+becomes the row's uid (so writing it twice stores it once), a JSON-able dict
+and, for pictures, bytes.  Heavy conversions (PNG/JPEG encoding) are deferred
+in ``render`` so the ROS callbacks stay fast; :meth:`Event.prepare` runs them.
+"""
+
+import uuid
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from datetime import datetime
+
+MODE = "mode"  # data: mode, robot_stamp, gps [lon, lat] | None, local [x, y, frame] | None
+GPS = "gps"  # data: lon, lat, alt, status, accuracy, robot_stamp
+LOCAL = "local"  # data: x, y, yaw, frame, robot_stamp
+MAP = "map"  # data: frame, width, height, resolution, origin_*, robot_stamp, checksum; blob PNG
+IMAGE = "image"  # data: master (uid of the mode event), suffix, description, robot_stamp; blob
+START = "start"
+STOP = "stop"
+KINDS = (MODE, GPS, LOCAL, MAP, IMAGE, START, STOP)
+
+_STAMP_KEYS = ("robot_stamp",)
+
+
+@dataclass
+class Event:
+    kind: str
+    at: datetime
+    data: dict = field(default_factory=dict)
+    blob: bytes | None = None
+    uid: uuid.UUID = field(default_factory=uuid.uuid4)
+    render: Callable[[], tuple[dict, bytes]] | None = field(default=None, repr=False)
+
+    def prepare(self) -> "Event":
+        """Run the deferred conversion; an event that cannot be converted raises."""
+        if self.render is not None:
+            extra, self.blob = self.render()
+            self.data.update(extra)
+            self.render = None
+        return self
+
+    def to_record(self) -> tuple[str, str, str, dict, bytes | None]:
+        data = dict(self.data)
+        for key in _STAMP_KEYS:
+            if isinstance(data.get(key), datetime):
+                data[key] = data[key].isoformat()
+        return self.kind, self.at.isoformat(), str(self.uid), data, self.blob
+
+    @classmethod
+    def from_record(cls, kind: str, at: str, uid: str, data: dict, blob) -> "Event":
+        for key in _STAMP_KEYS:
+            if isinstance(data.get(key), str):
+                data[key] = datetime.fromisoformat(data[key])
+        return cls(kind, datetime.fromisoformat(at), data, blob, uuid.UUID(uid))

@@ -1,0 +1,367 @@
+"""The ROS side of ftt_collect: subscriptions, services and parameters.
+
+Runs in one SingleThreadedExecutor thread.  Callbacks only convert and decide
+(:class:`Pipeline`) and hand events to a thread-safe sink; nothing here waits
+for the database.  Every callback catches its own exceptions: an exception
+that escapes a callback would end ``spin()`` and with it the collector.
+"""
+
+import concurrent.futures
+import functools
+import logging
+import queue
+import threading
+import time
+from datetime import UTC, datetime
+from pathlib import Path
+
+from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import (
+    DurabilityPolicy,
+    HistoryPolicy,
+    QoSProfile,
+    ReliabilityPolicy,
+)
+from std_srvs.srv import SetBool, Trigger
+
+from rosbridge_app.collector import params as P
+from rosbridge_app.collector.modes import message_type
+from rosbridge_app.collector.pipeline import Pipeline
+
+log = logging.getLogger("ftt.collector")
+
+RELIABLE_LATCHED = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=1,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+
+
+def _qos(depth: int, reliable: bool, latched: bool = False) -> QoSProfile:
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST,
+        depth=depth,
+        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE,
+    )
+
+
+def now() -> datetime:
+    return datetime.now(UTC)
+
+
+class Status:
+    """What the writer thread knows, for service answers (plain attributes: the
+    GIL makes single reads and writes safe)."""
+
+    def __init__(self):
+        self.leg: str | None = None
+        self.database_ok = True
+        self.pending = 0
+        self.note = ""
+
+    def describe(self) -> str:
+        parts = [f"logging into {self.leg}" if self.leg else "no open leg for the vehicle"]
+        if not self.database_ok:
+            parts.append(f"database unreachable, {self.pending} records spooled")
+        elif self.pending:
+            parts.append(f"{self.pending} records waiting")
+        if self.note:
+            parts.append(self.note)
+        return "; ".join(parts)
+
+
+class CollectorNode(Node):
+    def __init__(
+        self,
+        sink,
+        *,
+        params_file: Path | None,
+        status: Status | None = None,
+        on_logging=None,
+        overrides: dict | None = None,
+    ):
+        super().__init__(P.NODE_NAME)
+        self.params_file = Path(params_file) if params_file else None
+        self.status = status or Status()
+        self.on_logging = on_logging or (lambda logging_on: None)
+        self.inputs: dict[str, dict] = {}
+        self.topics: list = []
+        self._errors: dict[str, float] = {}
+        self._ftt_subs: dict[str, object] = {}
+        self._ftt_services: dict[str, object] = {}
+        self._calls: queue.Queue = queue.Queue()
+        self._lock = threading.Lock()
+        overrides = overrides or {}
+        for name, spec in P.SPECS.items():
+            descriptor = ParameterDescriptor(description=spec.description, dynamic_typing=True)
+            value = self.declare_parameter(
+                name, overrides.get(name, spec.default), descriptor
+            ).value
+            try:
+                P.check(name, value)
+            except P.InvalidParameter as exc:
+                log.warning("%s; using the default %r", exc, spec.default)
+                self.set_parameters([Parameter(name, value=spec.default)])
+        self.pipeline = Pipeline(sink, self.current_parameters())
+        self.add_on_set_parameters_callback(self._check_parameters)
+        self.add_post_set_parameters_callback(self._parameters_changed)
+        self._make_services()
+        self._subscribe()
+        self._guard = self.create_guard_condition(self._run_calls)
+        self.create_timer(1.0, self._safe("tick", self._tick))
+        self._tick()
+
+    # --- parameters ---------------------------------------------------------------------
+
+    def current_parameters(self) -> dict:
+        return {name: self.get_parameter(name).value for name in P.SPECS}
+
+    def _check_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+        try:
+            for p in parameters:
+                P.check(p.name, p.value)
+        except P.InvalidParameter as exc:
+            return SetParametersResult(successful=False, reason=str(exc))
+        except Exception as exc:  # an odd value must not take the executor down
+            return SetParametersResult(successful=False, reason=f"invalid value: {exc}")
+        return SetParametersResult(successful=True)
+
+    def _parameters_changed(self, parameters: list[Parameter]) -> None:
+        try:
+            changed = {p.name: p.value for p in parameters if p.name in P.SPECS}
+            self.pipeline.update_params(changed)
+            if any(n.endswith("_service") for n in changed):
+                self._make_services()
+            if any(
+                n.startswith("topics.")
+                or n in ("params.robot_mode_type", "params.use_tf", "params.sensor_reliable")
+                for n in changed
+            ):
+                self._subscribe()
+            log.info("parameters changed: %s", changed)
+        except Exception:
+            log.exception("applying parameter changes failed")
+
+    def save_parameters(self) -> tuple[bool, str]:
+        if self.params_file is None:
+            return False, "No parameters file: start ftt_collect with --params-file."
+        try:
+            P.write_file(self.params_file, self.current_parameters())
+        except Exception as exc:
+            return False, f"Could not write {self.params_file}: {exc}"
+        return True, f"FTT parameters saved to {self.params_file}"
+
+    # --- services -----------------------------------------------------------------------
+
+    def _make_services(self) -> None:
+        for srv in self._ftt_services.values():
+            self.destroy_service(srv)
+        get = self.get_parameter
+        self._ftt_services = {
+            "set": self.create_service(
+                SetBool, get("set_ftt_logging_service").value, self._srv_set_logging
+            ),
+            "get": self.create_service(
+                Trigger, get("get_ftt_logging_service").value, self._srv_get_logging
+            ),
+            "save": self.create_service(
+                Trigger, get("save_ftt_params_service").value, self._srv_save
+            ),
+        }
+
+    def set_logging(self, on: bool) -> tuple[bool, str]:
+        if on == self.pipeline.logging:
+            state = "started" if on else "stopped"
+            return True, f"Logging was already {state}; {self.status.describe()}."
+        try:
+            self.on_logging(on)  # persists the state first: a restart resumes it
+        except Exception as exc:
+            return False, f"Could not {'start' if on else 'stop'} logging: {exc}"
+        if on:
+            self.pipeline.start_logging(now())
+            return True, f"Logging started; {self.status.describe()}."
+        self.pipeline.stop_logging(now())
+        msg = "Logging stopped; the open segment is closed"
+        if not self.status.database_ok:
+            msg += " as soon as the database is back (the request is spooled)"
+        return True, msg + "."
+
+    def _srv_set_logging(self, request, response):
+        try:
+            response.success, response.message = self.set_logging(bool(request.data))
+        except Exception as exc:
+            log.exception("set_ftt_logging failed")
+            response.success, response.message = False, f"Internal error: {exc}"
+        return response
+
+    def _srv_get_logging(self, request, response):
+        response.success = self.pipeline.logging
+        try:
+            response.message = ("logging; " if self.pipeline.logging else "not logging; ") + (
+                self.status.describe()
+            )
+        except Exception as exc:
+            response.message = f"status unknown: {exc}"
+        return response
+
+    def _srv_save(self, request, response):
+        response.success, response.message = self.save_parameters()
+        return response
+
+    # --- subscriptions ------------------------------------------------------------------
+
+    def _safe(self, name: str, fn):
+        @functools.wraps(fn)
+        def wrapper(*args):
+            try:
+                return fn(*args)
+            except Exception as exc:
+                # Log each kind of failure at most every 10 s: a bad publisher
+                # must not flood the log either.
+                last = self._errors.get(name, 0.0)
+                if time.monotonic() - last > 10:
+                    self._errors[name] = time.monotonic()
+                    log.warning("%s: ignored a message that failed: %r", name, exc)
+
+        return wrapper
+
+    def _input(self, name: str, handler):
+        def receive(msg):
+            at = now()
+            info = self.inputs.get(name)
+            if info is not None:
+                info["count"] += 1
+                info["last_received"] = at.isoformat()
+            handler(msg, at)
+
+        return self._safe(name, receive)
+
+    def _subscribe(self) -> None:
+        from geometry_msgs.msg import PoseStamped
+        from nav_msgs.msg import OccupancyGrid
+        from sensor_msgs.msg import CompressedImage, Image, NavSatFix
+
+        for sub in self._ftt_subs.values():
+            self.destroy_subscription(sub)
+        self._ftt_subs = {}
+        get = lambda name: self.get_parameter(name).value  # noqa: E731
+        reliable = get("params.sensor_reliable")
+        mode_type = get("params.robot_mode_type")
+        pipe = self.pipeline
+        wanted = [
+            (
+                "robot_mode",
+                message_type(mode_type),
+                get("topics.robot_mode"),
+                _qos(50, True),
+                pipe.on_mode,
+            ),
+            ("gps_fix", NavSatFix, get("topics.gps_fix"), _qos(200, reliable), pipe.on_fix),
+            ("map", OccupancyGrid, get("topics.map"), RELIABLE_LATCHED, pipe.on_grid),
+            ("map_jpeg", CompressedImage, get("topics.map_jpeg"), _qos(1, True), pipe.on_map_jpeg),
+            ("image", Image, get("topics.image"), _qos(2, reliable), pipe.on_image),
+            (
+                "image_compressed",
+                CompressedImage,
+                get("topics.image_compressed"),
+                _qos(2, reliable),
+                lambda m, at: pipe.on_image(m, at, compressed=True),
+            ),
+        ]
+        if get("params.use_tf"):
+            from tf2_msgs.msg import TFMessage
+
+            wanted += [
+                ("tf", TFMessage, get("topics.tf"), _qos(100, True), pipe.on_tf),
+                (
+                    "tf_static",
+                    TFMessage,
+                    get("topics.tf_static"),
+                    _qos(100, True, latched=True),
+                    lambda m, at: pipe.on_tf(m, at, static=True),
+                ),
+            ]
+        else:
+            wanted.append(
+                (
+                    "local_pose",
+                    PoseStamped,
+                    get("topics.local_pose"),
+                    _qos(100, reliable),
+                    pipe.on_pose,
+                )
+            )
+        inputs = {}
+        for name, msg_type, topic, qos, handler in wanted:
+            if not topic:
+                continue
+            try:
+                self._ftt_subs[name] = self.create_subscription(
+                    msg_type, topic, self._input(name, handler), qos
+                )
+            except Exception as exc:
+                log.error("cannot subscribe to %s (%s): %s", topic, name, exc)
+                continue
+            old = self.inputs.get(name, {})
+            resolved = self.resolve_topic_name(topic)
+            inputs[name] = {
+                "topic": resolved,
+                "type": f"{msg_type.__module__.split('.')[0]}/msg/{msg_type.__name__}",
+                "count": old.get("count", 0) if old.get("topic") == resolved else 0,
+                "last_received": old.get("last_received"),
+            }
+        if "map" in self._ftt_subs:
+            # Only a TRANSIENT_LOCAL subscription gets a map latched before it
+            # existed, but it never matches a volatile publisher (cartographer's
+            # /map); this second one takes those.  A map that arrives twice is
+            # dropped by the pipeline's checksum.
+            self._ftt_subs["map (volatile)"] = self.create_subscription(
+                OccupancyGrid, get("topics.map"), self._input("map", pipe.on_grid), _qos(1, True)
+            )
+        self.inputs = inputs
+
+    def _tick(self) -> None:
+        self.pipeline.tick(now())
+        self.topics = [
+            {"name": name, "types": types} for name, types in self.get_topic_names_and_types()
+        ]
+
+    # --- calls from other threads -------------------------------------------------------
+
+    def submit(self, fn, *args) -> concurrent.futures.Future:
+        """Run ``fn(*args)`` in the executor thread (ROS objects are not thread-safe)."""
+        future: concurrent.futures.Future = concurrent.futures.Future()
+        self._calls.put((future, fn, args))
+        self._guard.trigger()
+        return future
+
+    def _run_calls(self) -> None:
+        while True:
+            try:
+                future, fn, args = self._calls.get_nowait()
+            except queue.Empty:
+                return
+            if not future.set_running_or_notify_cancel():
+                continue
+            try:
+                future.set_result(fn(*args))
+            except Exception as exc:
+                future.set_exception(exc)
+
+    def set_parameter_values(self, values: dict) -> tuple[bool, str]:
+        unknown = sorted(set(values) - set(P.SPECS))
+        if unknown:
+            return False, f"Unknown parameters: {', '.join(unknown)}"
+        results = self.set_parameters(
+            [Parameter(name, value=value) for name, value in values.items()]
+        )
+        failed = [
+            f"{n}: {r.reason}" for n, r in zip(values, results, strict=True) if not r.successful
+        ]
+        if failed:
+            return False, "; ".join(failed)
+        return True, f"Set {', '.join(sorted(values))}."

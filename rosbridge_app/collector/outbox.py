@@ -1,0 +1,103 @@
+"""The durable local queue between receiving and the database.
+
+Every event is appended here (SQLite in WAL mode, on the robot's disk) before
+anything tries the database; the writer deletes events only after the
+transaction that stored them has committed.  So a database outage, a crash or
+a SIGKILL loses at most the events of the last fraction of a second that were
+still in memory, and replaying after a crash can only repeat events whose
+rows carry the same uid, which the recording services ignore.
+
+The file also keeps a little state (whether logging was on) for a restart.
+"""
+
+import json
+import sqlite3
+import threading
+from pathlib import Path
+
+from rosbridge_app.collector.events import Event
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS event (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,
+    kind TEXT NOT NULL,
+    at TEXT NOT NULL,
+    uid TEXT NOT NULL,
+    data TEXT NOT NULL,
+    blob BLOB
+);
+CREATE TABLE IF NOT EXISTS state (key TEXT PRIMARY KEY, value TEXT NOT NULL);
+"""
+
+
+class Outbox:
+    def __init__(self, path: Path):
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        # One connection shared by the threads, serialised by the lock: the
+        # statements are short, and SQLite would serialise the writes anyway.
+        self._db = sqlite3.connect(self.path, check_same_thread=False, isolation_level=None)
+        self._lock = threading.Lock()
+        with self._lock:
+            self._db.execute("PRAGMA journal_mode=WAL")
+            # NORMAL in WAL mode survives a process crash (the case we care
+            # about); only a power cut may lose the last commits.
+            self._db.execute("PRAGMA synchronous=NORMAL")
+            self._db.executescript(_SCHEMA)
+
+    def close(self) -> None:
+        with self._lock:
+            self._db.close()
+
+    def append(self, events: list[Event]) -> None:
+        rows = []
+        for event in events:
+            kind, at, uid, data, blob = event.to_record()
+            rows.append((kind, at, uid, json.dumps(data), blob))
+        with self._lock:
+            self._db.execute("BEGIN IMMEDIATE")
+            try:
+                self._db.executemany(
+                    "INSERT INTO event (kind, at, uid, data, blob) VALUES (?, ?, ?, ?, ?)", rows
+                )
+                self._db.execute("COMMIT")
+            except BaseException:
+                self._db.execute("ROLLBACK")
+                raise
+
+    def peek(self, limit: int = 500, max_bytes: int = 32 * 1024 * 1024) -> list[tuple[int, Event]]:
+        """The oldest events, in order, without removing them."""
+        out, size = [], 0
+        with self._lock:
+            cursor = self._db.execute(
+                "SELECT id, kind, at, uid, data, blob FROM event ORDER BY id LIMIT ?", (limit,)
+            )
+            for row_id, kind, at, uid, data, blob in cursor:
+                out.append((row_id, Event.from_record(kind, at, uid, json.loads(data), blob)))
+                size += len(blob or b"") + len(data)
+                if size >= max_bytes:
+                    break
+        return out
+
+    def remove(self, ids: list[int]) -> None:
+        if not ids:
+            return
+        with self._lock:
+            self._db.execute("DELETE FROM event WHERE id BETWEEN ? AND ?", (min(ids), max(ids)))
+
+    def __len__(self) -> int:
+        with self._lock:
+            return self._db.execute("SELECT count(*) FROM event").fetchone()[0]
+
+    def get_state(self, key: str, default: str | None = None) -> str | None:
+        with self._lock:
+            row = self._db.execute("SELECT value FROM state WHERE key = ?", (key,)).fetchone()
+        return row[0] if row else default
+
+    def set_state(self, key: str, value: str) -> None:
+        with self._lock:
+            self._db.execute(
+                "INSERT INTO state (key, value) VALUES (?, ?) "
+                "ON CONFLICT (key) DO UPDATE SET value = excluded.value",
+                (key, value),
+            )

@@ -1,0 +1,181 @@
+"""The collector's ROS parameters: names, defaults, checks, and the YAML file.
+
+Names follow the original node (``topics.*``, ``params.*`` and the three
+service names); everything this project adds is listed in docs/collector.md.
+The file format is the standard ROS 2 parameters file, so it can be passed to
+``--params-file`` of any ROS tool as well.
+"""
+
+import math
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import yaml
+
+from rosbridge_app.collector.modes import MODE_TYPES
+
+NODE_NAME = "ftt_collector"
+DEFAULT_FILE = Path(__file__).resolve().parent.parent / "config" / "ftt_collect.yaml"
+
+
+@dataclass(frozen=True)
+class Spec:
+    default: object
+    description: str
+    minimum: float | None = None
+    choices: tuple | None = None
+    topic: bool = False
+
+
+SPECS: dict[str, Spec] = {
+    "vehicle": Spec("", "Vehicle key; the collector logs into its open shift's open leg."),
+    "set_ftt_logging_service": Spec("/set_ftt_logging", "SetBool: start/stop logging."),
+    "get_ftt_logging_service": Spec("/get_ftt_logging", "Trigger: success = logging."),
+    "save_ftt_params_service": Spec("/save_ftt_params", "Trigger: write parameters to file."),
+    "topics.robot_mode": Spec("robot_mode", "Operating mode topic.", topic=True),
+    "topics.gps_fix": Spec("gps_fix", "sensor_msgs/NavSatFix topic.", topic=True),
+    "topics.local_pose": Spec(
+        "local_pose", "geometry_msgs/PoseStamped (use_tf false).", topic=True
+    ),
+    "topics.map": Spec("map", "nav_msgs/OccupancyGrid topic.", topic=True),
+    "topics.map_jpeg": Spec(
+        "", "sensor_msgs/CompressedImage of the same map; empty: off.", topic=True
+    ),
+    "topics.image": Spec("image", "sensor_msgs/Image camera topic; empty: off.", topic=True),
+    "topics.image_compressed": Spec(
+        "", "sensor_msgs/CompressedImage camera; empty: off.", topic=True
+    ),
+    "topics.tf": Spec("/tf", "Dynamic transforms.", topic=True),
+    "topics.tf_static": Spec("/tf_static", "Static transforms.", topic=True),
+    "params.robot_mode_type": Spec(
+        "bool",
+        "bool (std_msgs/Bool, true = autonomous) or industrial (industrial_msgs/RobotMode).",
+        choices=MODE_TYPES,
+    ),
+    "params.use_tf": Spec(True, "Local position from TF map_frame→robot_frame, else local_pose."),
+    "params.map_frame": Spec("map", "Frame of local positions."),
+    "params.robot_frame": Spec("base_link", "The robot's frame."),
+    "params.sensor_reliable": Spec(
+        False,
+        "Subscribe GPS/pose/camera RELIABLE; the default "
+        "BEST_EFFORT connects to publishers of either kind.",
+    ),
+    "params.pose_min_distance": Spec(0.5, "GPS: metres between recorded fixes.", minimum=0.0),
+    "params.pose_min_period": Spec(0.2, "GPS: seconds between recorded fixes.", minimum=0.0),
+    "params.local_min_distance": Spec(0.2, "Local: metres between recorded poses.", minimum=0.0),
+    "params.local_min_period": Spec(0.1, "Local: seconds between recorded poses.", minimum=0.0),
+    "params.local_min_yaw": Spec(
+        0.1, "Local: a turn of this many radians is recorded too.", minimum=0.0
+    ),
+    "params.position_max_age": Spec(
+        5.0,
+        "A segment's start position is the last one if it is at most this old (s).",
+        minimum=0.0,
+    ),
+    "params.send_map_period": Spec(2.0, "Minimum seconds between two stored maps.", minimum=0.0),
+    "params.image_buffer_size": Spec(3, "Camera frames kept for the next mode switch.", minimum=0),
+    "params.image_buffer_step": Spec(1.0, "Minimum seconds between buffered frames.", minimum=0.0),
+    "params.image_max_side": Spec(
+        1920, "Larger frames are scaled down to this (px); 0: never.", minimum=0
+    ),
+}
+
+
+class InvalidParameter(ValueError):
+    pass
+
+
+def check(name: str, value) -> object:
+    """The value to keep, or InvalidParameter with a reason a person understands."""
+    spec = SPECS.get(name)
+    if spec is None:
+        return value
+    default = spec.default
+    if isinstance(default, bool):
+        if not isinstance(value, bool):
+            raise InvalidParameter(f"{name} must be true or false")
+    elif isinstance(default, int):
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise InvalidParameter(f"{name} must be an integer")
+    elif isinstance(default, float):
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise InvalidParameter(f"{name} must be a number")
+        value = float(value)
+        if not math.isfinite(value):
+            raise InvalidParameter(f"{name} must be finite")
+    elif isinstance(default, str) and not isinstance(value, str):
+        raise InvalidParameter(f"{name} must be a string")
+    if spec.minimum is not None and value < spec.minimum:
+        raise InvalidParameter(f"{name} must be >= {spec.minimum:g}")
+    if spec.choices is not None and value not in spec.choices:
+        raise InvalidParameter(f"{name} must be one of {', '.join(spec.choices)}")
+    if name.endswith("_service") and not value:
+        raise InvalidParameter(f"{name} cannot be empty")
+    return value
+
+
+def _nested(flat: dict) -> dict:
+    tree: dict = {}
+    for name, value in sorted(flat.items()):
+        node = tree
+        *parents, leaf = name.split(".")
+        for part in parents:
+            node = node.setdefault(part, {})
+        node[leaf] = value
+    return tree
+
+
+def _flatten(tree: dict, prefix: str = "") -> dict:
+    flat = {}
+    for key, value in tree.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, dict):
+            flat.update(_flatten(value, name + "."))
+        else:
+            flat[name] = value
+    return flat
+
+
+def read_file(path: Path, node_name: str = NODE_NAME) -> dict:
+    """Flat {name: value} of the node's section (or the ``/**`` wildcard section)."""
+    data = yaml.safe_load(Path(path).read_text()) or {}
+    for key in (node_name, f"/{node_name}", "/**"):
+        section = data.get(key)
+        if isinstance(section, dict) and isinstance(section.get("ros__parameters"), dict):
+            return _flatten(section["ros__parameters"])
+    return {}
+
+
+def write_file(path: Path, values: dict, node_name: str = NODE_NAME) -> None:
+    """Write the node's section, keeping other nodes' sections of the same file.
+
+    Written to a temporary file and renamed, so a crash never leaves half a file.
+    """
+    path = Path(path)
+    data = {}
+    if path.exists():
+        data = yaml.safe_load(path.read_text()) or {}
+        if not isinstance(data, dict):
+            data = {}
+    for key in (f"/{node_name}", "/**"):
+        if key in data and isinstance(data[key], dict) and "ros__parameters" in data[key]:
+            node_key = key
+            break
+    else:
+        node_key = node_name
+    data[node_key] = {"ros__parameters": _nested(values)}
+    text = (
+        "# ftt_collect parameters (ROS 2 parameters file). Written by /save_ftt_params;\n"
+        "# see docs/collector.md for what each one does.\n"
+        + yaml.safe_dump(data, sort_keys=False, default_flow_style=False)
+    )
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
+    try:
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise

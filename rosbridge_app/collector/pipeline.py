@@ -1,0 +1,373 @@
+"""From robot messages to events: the collector's decisions, free of ROS.
+
+The live node calls these methods from its subscriptions, a bag import calls
+them for every message of a bag; both hand the resulting events to the same
+:class:`~rosbridge_app.collector.recorder.Recorder`.  ``at`` is always the
+wall-clock time of the message (receive time live, record time in a bag).
+
+Rules implemented here:
+* the first mode after logging starts opens a segment, later ones only when
+  the mode changes; the last mode is kept while logging is off, so a
+  publisher that only sends on change is not missed;
+* a segment starts at the last known GPS and local positions when they are
+  fresh, and the latest fix closes the old segment and opens the new one, so
+  per-segment paths add up to the whole path;
+* positions are thinned (see thinning.py); unusable fixes and missing TF
+  produce nothing, never a made-up (0, 0);
+* maps are stored when they changed, at most every ``send_map_period``;
+* camera frames go to a ring buffer that is written to each new master and
+  then emptied.
+"""
+
+import hashlib
+import logging
+import uuid
+from collections import deque
+from collections.abc import Callable
+from datetime import datetime
+
+from rosbridge_app.collector import conversions as conv
+from rosbridge_app.collector import events as ev
+from rosbridge_app.collector.events import Event
+from rosbridge_app.collector.modes import mode_of
+from rosbridge_app.collector.params import SPECS
+from rosbridge_app.collector.tf_buffer import TfBuffer, TfLookupError
+from rosbridge_app.collector.thinning import Thinner
+
+log = logging.getLogger("ftt.collector")
+
+
+def _seconds(at: datetime) -> float:
+    return at.timestamp()
+
+
+def _measured(at: datetime, value: dict) -> float:
+    """Thinning runs on the robot's clock when the message has one, so a bag
+    replayed faster than real time is thinned like the live robot."""
+    stamp = value.get("robot_stamp")
+    return _seconds(stamp if stamp is not None else at)
+
+
+class Pipeline:
+    def __init__(self, sink: Callable[[Event], None], params: dict | None = None):
+        self.sink = sink
+        self.params = {name: spec.default for name, spec in SPECS.items()}
+        self.gps_thinner = Thinner(geographic=True)
+        self.local_thinner = Thinner()
+        self.tf = TfBuffer()
+        self.images: deque = deque(maxlen=1)
+        self.update_params(params or {})
+        self.logging = False
+        self.last_mode: str | None = None  # from the robot, logging or not
+        self.open_mode: str | None = None  # what we last reported while logging
+        self.last_fix: tuple[datetime, dict] | None = None
+        self.last_fix_recorded = False
+        self.last_local: tuple[datetime, dict] | None = None
+        self.last_image_at: float | None = None
+        self.grid_msg = None
+        self.grid_quick: tuple | None = None
+        self.grid_checksum: str | None = None
+        self.grid_geometry: dict | None = None
+        self.map_jpeg: bytes | None = None
+        self.map_pending = False
+        self.stored_map_checksum: str | None = None
+        self.last_map_at: float | None = None
+        self.last_tf_sample: int | None = None
+
+    # --- configuration ------------------------------------------------------------------
+
+    def update_params(self, changes: dict) -> None:
+        self.params.update(changes)
+        p = self.params
+        self.gps_thinner.min_distance = p["params.pose_min_distance"]
+        self.gps_thinner.min_period = p["params.pose_min_period"]
+        self.local_thinner.min_distance = p["params.local_min_distance"]
+        self.local_thinner.min_period = p["params.local_min_period"]
+        self.local_thinner.min_yaw = p["params.local_min_yaw"]
+        size = max(0, int(p["params.image_buffer_size"]))
+        if self.images.maxlen != size:
+            self.images = deque(self.images, maxlen=size)
+        if any(k in changes for k in ("params.map_frame", "params.robot_frame", "params.use_tf")):
+            self.last_local = None
+            self.local_thinner.reset()
+
+    # --- logging on/off -----------------------------------------------------------------
+
+    def start_logging(self, at: datetime) -> None:
+        if self.logging:
+            return
+        self.logging = True
+        self.open_mode = None
+        self.gps_thinner.reset()
+        self.local_thinner.reset()
+        self.stored_map_checksum = None
+        self.sink(Event(ev.START, at))
+        if self.last_mode is not None:
+            self._switch(self.last_mode, at)
+        if self.grid_msg is not None:
+            self.map_pending = True
+            self._maybe_store_map(at, force=True)
+
+    def stop_logging(self, at: datetime) -> None:
+        if not self.logging:
+            return
+        self._close_track(at)
+        self.logging = False
+        self.open_mode = None
+        self.sink(Event(ev.STOP, at))
+
+    # --- mode ---------------------------------------------------------------------------
+
+    def on_mode(self, msg, at: datetime) -> None:
+        mode = mode_of(msg, self.params["params.robot_mode_type"])
+        if mode is None:
+            return
+        self.on_mode_value(mode, at)
+
+    def on_mode_value(self, mode: str, at: datetime) -> None:
+        self.last_mode = mode
+        if self.logging and mode != self.open_mode:
+            self._switch(mode, at)
+
+    def _fresh(self, sample, at: datetime):
+        if sample is None:
+            return None
+        when, value = sample
+        if abs(_seconds(at) - _seconds(when)) > self.params["params.position_max_age"]:
+            return None
+        return value
+
+    def _switch(self, mode: str, at: datetime) -> None:
+        if self.open_mode is not None:
+            self._close_track(at)
+        fix = self._fresh(self.last_fix, at)
+        local = self._fresh(self.last_local, at)
+        master = uuid.uuid4()
+        self.sink(
+            Event(
+                ev.MODE,
+                at,
+                {
+                    "mode": mode,
+                    "robot_stamp": None,
+                    "gps": [fix["lon"], fix["lat"]] if fix else None,
+                    "local": [local["x"], local["y"], local["frame"]] if local else None,
+                },
+                uid=master,
+            )
+        )
+        self.open_mode = mode
+        # The new segment's track starts where the robot is now.
+        self.gps_thinner.reset()
+        self.local_thinner.reset()
+        if fix is not None:
+            self._record_fix(self.last_fix[0], fix)
+        if local is not None:
+            self._record_local(self.last_local[0], local)
+        self._flush_images(master, at)
+
+    def _close_track(self, at: datetime) -> None:
+        """The latest fix ends the old segment's track if thinning skipped it."""
+        if self.last_fix is not None and not self.last_fix_recorded:
+            fix = self._fresh(self.last_fix, at)
+            if fix is not None:
+                self._record_fix(self.last_fix[0], fix)
+
+    # --- positions ----------------------------------------------------------------------
+
+    def on_fix(self, msg, at: datetime) -> None:
+        fix = conv.navsat_fix(msg)
+        if fix is None:
+            return
+        self.last_fix = (at, fix)
+        self.last_fix_recorded = False
+        if self.logging and self.open_mode is not None:
+            if self.gps_thinner.offer(fix["lon"], fix["lat"], _measured(at, fix)):
+                self._emit_fix(at, fix)
+
+    def _record_fix(self, at: datetime, fix: dict) -> None:
+        self.gps_thinner.keep(fix["lon"], fix["lat"], _measured(at, fix))
+        self._emit_fix(at, fix)
+
+    def _emit_fix(self, at: datetime, fix: dict) -> None:
+        self.last_fix_recorded = True
+        self.sink(Event(ev.GPS, at, dict(fix)))
+
+    def on_tf(self, msg, at: datetime, static: bool = False) -> None:
+        if not self.params["params.use_tf"]:
+            return
+        for t in msg.transforms:
+            try:
+                self.tf.set_transform(
+                    t.header.frame_id,
+                    t.child_frame_id,
+                    conv.transform_of(t.transform, t.header.stamp),
+                    static=static,
+                )
+            except ValueError as exc:
+                log.debug("ignored transform %s→%s: %s", t.header.frame_id, t.child_frame_id, exc)
+        self._sample_tf(at)
+
+    def _sample_tf(self, at: datetime) -> None:
+        frame = self.params["params.map_frame"].lstrip("/")
+        try:
+            tf = self.tf.lookup(frame, self.params["params.robot_frame"])
+        except TfLookupError:
+            return  # not connected (yet): no local position, never (0, 0)
+        if tf.stamp_ns == self.last_tf_sample:
+            return
+        self.last_tf_sample = tf.stamp_ns
+        stamp = None
+        if tf.stamp_ns:
+            stamp = conv.stamp_to_datetime(_Stamp(tf.stamp_ns))
+        self.on_local_value(
+            {
+                "x": tf.translation[0],
+                "y": tf.translation[1],
+                "yaw": tf.yaw,
+                "frame": frame,
+                "robot_stamp": stamp,
+            },
+            at,
+        )
+
+    def on_pose(self, msg, at: datetime) -> None:
+        if self.params["params.use_tf"]:
+            return
+        pose = conv.pose_stamped(msg)
+        if pose is None:
+            return
+        if not pose["frame"]:
+            pose["frame"] = self.params["params.map_frame"].lstrip("/")
+        self.on_local_value(pose, at)
+
+    def on_local_value(self, pose: dict, at: datetime) -> None:
+        self.last_local = (at, pose)
+        if self.logging and self.open_mode is not None:
+            if self.local_thinner.offer(pose["x"], pose["y"], _measured(at, pose), pose["yaw"]):
+                self.sink(Event(ev.LOCAL, at, dict(pose)))
+
+    def _record_local(self, at: datetime, pose: dict) -> None:
+        self.local_thinner.keep(pose["x"], pose["y"], _measured(at, pose), pose["yaw"])
+        self.sink(Event(ev.LOCAL, at, dict(pose)))
+
+    # --- map ----------------------------------------------------------------------------
+
+    def on_grid(self, msg, at: datetime) -> None:
+        # A latched map reaches both map subscriptions at once: the same stamp
+        # and size within two seconds is that copy, so skip hashing 4 MB again.
+        info = msg.info
+        quick = (
+            msg.header.stamp.sec,
+            msg.header.stamp.nanosec,
+            info.width,
+            info.height,
+            len(msg.data),
+        )
+        last_key, last_at = self.grid_quick or (None, None)
+        if quick[:2] != (0, 0) and quick == last_key and _seconds(at) - last_at < 2.0:
+            return
+        self.grid_quick = (quick, _seconds(at))
+        if not conv.grid_is_usable(msg):
+            log.warning(
+                "ignored an empty or inconsistent map (%dx%d, %d cells)",
+                msg.info.width,
+                msg.info.height,
+                len(msg.data),
+            )
+            return
+        geometry = conv.grid_geometry(msg)
+        checksum = conv.grid_checksum(msg, geometry)
+        if checksum == self.grid_checksum:
+            return
+        self.grid_msg, self.grid_geometry, self.grid_checksum = msg, geometry, checksum
+        self.map_jpeg = None
+        self.map_pending = True
+        self._maybe_store_map(at)
+
+    def on_map_jpeg(self, msg, at: datetime) -> None:
+        """A ready-made picture of the map; the geometry still comes from the grid."""
+        try:
+            data, _ = conv.compressed_image(msg)
+        except conv.UnsupportedImage as exc:
+            log.warning("ignored map image: %s", exc)
+            return
+        if data == self.map_jpeg:
+            return
+        self.map_jpeg = data
+        if self.grid_geometry is not None:
+            self.map_pending = True
+            self._maybe_store_map(at)
+
+    def tick(self, at: datetime) -> None:
+        """Called about once a second: stores a map held back by send_map_period."""
+        if self.map_pending:
+            self._maybe_store_map(at)
+
+    def _maybe_store_map(self, at: datetime, force: bool = False) -> None:
+        if not self.logging or self.grid_geometry is None:
+            return
+        now = _seconds(at)
+        period = self.params["params.send_map_period"]
+        if not force and self.last_map_at is not None and now - self.last_map_at < period:
+            return
+        self.map_pending = False
+        self.last_map_at = now
+        msg, geometry, jpeg = self.grid_msg, dict(self.grid_geometry), self.map_jpeg
+        checksum = self.grid_checksum
+        if jpeg is not None:
+            checksum = hashlib.sha256(checksum.encode() + jpeg).hexdigest()
+        if checksum == self.stored_map_checksum:
+            return
+        self.stored_map_checksum = checksum
+
+        def render():
+            png = conv.any_image_to_png(jpeg) if jpeg is not None else conv.grid_to_png(msg)
+            return {}, png
+
+        self.sink(Event(ev.MAP, at, {**geometry, "checksum": checksum}, render=render))
+
+    # --- camera -------------------------------------------------------------------------
+
+    def on_image(self, msg, at: datetime, compressed: bool = False) -> None:
+        if self.images.maxlen == 0:
+            return
+        now = _seconds(at)
+        if (
+            self.last_image_at is not None
+            and now - self.last_image_at < self.params["params.image_buffer_step"]
+        ):
+            return
+        self.last_image_at = now
+        self.images.append((at, msg, compressed))
+
+    def _flush_images(self, master: uuid.UUID, at: datetime) -> None:
+        frames, max_side = list(self.images), self.params["params.image_max_side"]
+        self.images.clear()
+        for when, msg, compressed in frames:
+            age = (at - when).total_seconds()
+
+            def render(msg=msg, compressed=compressed):
+                if compressed:
+                    data, suffix = conv.compressed_image(msg)
+                else:
+                    data, suffix = conv.image_to_jpeg(msg, max_side), "jpg"
+                return {"suffix": suffix}, data
+
+            self.sink(
+                Event(
+                    ev.IMAGE,
+                    at,
+                    {
+                        "master": str(master),
+                        "robot_stamp": conv.stamp_to_datetime(msg.header.stamp),
+                        "description": f"Camera, {age:.1f} s before the mode switch",
+                    },
+                    render=render,
+                )
+            )
+
+
+class _Stamp:
+    def __init__(self, ns: int):
+        self.sec, self.nanosec = divmod(ns, 1_000_000_000)

@@ -1,0 +1,288 @@
+"""Events → rows, through the Foundation services only.
+
+Used by the live collector (events from its outbox) and by bag imports
+(events straight from :class:`~rosbridge_app.collector.pipeline.Pipeline`).
+The leg is asked for at write time: live, that is the open leg of the
+vehicle's open shift, so closing a leg in the GUI and opening another is
+followed without a restart (the current mode is re-reported into the new leg,
+and a new shift gets the current map).
+
+Every row gets the event's uid (or one derived from it), so applying the same
+events again stores nothing twice.
+"""
+
+import copy
+import logging
+import uuid
+from collections.abc import Callable
+
+from django.db import InterfaceError, OperationalError, transaction
+from django.utils import timezone
+
+from events.errors import RuleViolation
+from events.models import Leg, Segment
+from events.selectors.logs import open_master
+from events.services.segments import (
+    GpsPosition,
+    LocalPosition,
+    close_open_master,
+    report_mode,
+)
+from rosbridge_app.collector import events as ev
+from rosbridge_app.collector.events import Event
+from telemetry.services.recording import (
+    GpsFix,
+    MapPose,
+    attach_image,
+    record_local_poses,
+    record_map,
+    record_poses,
+)
+
+log = logging.getLogger("ftt.collector")
+_MAP_PER_SHIFT = uuid.UUID("0c6f3d2e-57a4-4c57-9d53-3a7e4c1f2b90")
+
+
+class DatabaseUnavailable(Exception):
+    """Nothing of the batch was stored; try the same events again later."""
+
+
+def _unavailable(exc: BaseException) -> bool:
+    return isinstance(exc, OperationalError | InterfaceError)
+
+
+class Recorder:
+    def __init__(self, leg_provider: Callable[[], Leg | None]):
+        self.leg_provider = leg_provider
+        self.state = {
+            "leg_id": None,
+            "shift_id": None,
+            "logging": False,
+            "mode": None,  # data of the last mode event while logging
+            "map": None,  # the last map event (data + blob), for a new shift
+            "map_shift_id": None,
+        }
+        self.leg: Leg | None = None
+        self.skipped = 0  # events that could not be placed (no leg, no segment, bad data)
+
+    # --- public -------------------------------------------------------------------------
+
+    def apply(self, events: list[Event]) -> None:
+        """Store events in order.  Raises DatabaseUnavailable with nothing stored
+        (and this object's state unchanged) when the database cannot be used."""
+        saved = copy.copy(self.state), self.leg, self.skipped
+        try:
+            with transaction.atomic():
+                self._sync()
+                self._apply_all(events)
+        except Exception as exc:
+            self.state, self.leg, self.skipped = saved
+            if _unavailable(exc):
+                raise DatabaseUnavailable(str(exc)) from exc
+            log.warning(
+                "a batch of %d events failed (%s); storing them one by one", len(events), exc
+            )
+            self._apply_one_by_one(events)
+
+    def sync(self) -> Leg | None:
+        """Follow leg changes now (called periodically while no events arrive)."""
+        saved = copy.copy(self.state), self.leg
+        try:
+            with transaction.atomic():
+                self._sync()
+        except Exception as exc:
+            self.state, self.leg = saved
+            if _unavailable(exc):
+                raise DatabaseUnavailable(str(exc)) from exc
+            raise
+        return self.leg
+
+    # --- internals ----------------------------------------------------------------------
+
+    def _apply_one_by_one(self, events: list[Event]) -> None:
+        for event in events:
+            saved = copy.copy(self.state), self.leg, self.skipped
+            try:
+                with transaction.atomic():
+                    self._apply_all([event])
+            except Exception as exc:
+                self.state, self.leg, self.skipped = saved
+                if _unavailable(exc):
+                    raise DatabaseUnavailable(str(exc)) from exc
+                self.skipped += 1
+                log.warning("dropped a %s event: %s", event.kind, exc)
+
+    def _sync(self) -> None:
+        leg = self.leg_provider()
+        leg_id = leg.pk if leg is not None else None
+        self.leg = leg
+        if leg_id == self.state["leg_id"]:
+            return
+        self.state["leg_id"] = leg_id
+        if leg is None:
+            return
+        log.info("logging into %s of %s", leg, leg.shift)
+        mode = self.state["mode"]
+        if self.state["logging"] and mode is not None:
+            report_mode(leg, mode["mode"], at=timezone.now())
+        if self.state["map"] is not None and self.state["map_shift_id"] != leg.shift_id:
+            self._store_map(self.state["map"])
+
+    def _master(self) -> Segment | None:
+        return open_master(self.leg) if self.leg is not None else None
+
+    def _apply_all(self, events: list[Event]) -> None:
+        fixes: list[Event] = []
+        locals_: list[Event] = []
+        for event in events:
+            if event.kind != ev.GPS and fixes:
+                self._store_fixes(fixes)
+                fixes = []
+            if event.kind != ev.LOCAL and locals_:
+                self._store_locals(locals_)
+                locals_ = []
+            if event.kind == ev.GPS:
+                fixes.append(event)
+            elif event.kind == ev.LOCAL:
+                locals_.append(event)
+            else:
+                getattr(self, f"_on_{event.kind}")(event)
+        self._store_fixes(fixes)
+        self._store_locals(locals_)
+
+    def _on_start(self, event: Event) -> None:
+        self.state["logging"] = True
+
+    def _on_stop(self, event: Event) -> None:
+        self.state["logging"] = False
+        self.state["mode"] = None
+        if self.leg is not None:
+            close_open_master(self.leg, at=max(event.at, self.leg.start))
+
+    def _on_mode(self, event: Event) -> None:
+        self.state["logging"] = True
+        self.state["mode"] = dict(event.data)
+        if self.leg is None:
+            self.skipped += 1
+            return
+        data = event.data
+        gps = local = None
+        try:
+            if data.get("gps"):
+                gps = GpsPosition(*data["gps"])
+            if data.get("local"):
+                local = LocalPosition(*data["local"])
+        except RuleViolation as exc:
+            log.warning("mode switch recorded without its bad start position: %s", exc)
+        at = event.at
+        current = self._master()
+        if current is not None and at < current.start:
+            # The robot's switch cannot be older than the open segment (a clock
+            # step on the collector machine); record it at the segment's start.
+            at = current.start
+        report_mode(
+            self.leg,
+            data["mode"],
+            at=max(at, self.leg.start),
+            robot_stamp=data.get("robot_stamp"),
+            gps=gps,
+            local=local,
+            uid=event.uid,
+        )
+
+    def _store_fixes(self, fixes: list[Event]) -> None:
+        if not fixes:
+            return
+        master = self._master()
+        if master is None:
+            self.skipped += len(fixes)
+            return
+        rows = [
+            GpsFix(
+                longitude=e.data["lon"],
+                latitude=e.data["lat"],
+                altitude=e.data.get("alt"),
+                fix_status=e.data.get("status", 0),
+                horizontal_accuracy=e.data.get("accuracy"),
+                robot_stamp=e.data.get("robot_stamp") or e.at,
+                uid=e.uid,
+            )
+            for e in fixes
+        ]
+        record_poses(master, rows)
+
+    def _store_locals(self, poses: list[Event]) -> None:
+        if not poses:
+            return
+        master = self._master()
+        if master is None:
+            self.skipped += len(poses)
+            return
+        rows = [
+            MapPose(
+                x=e.data["x"],
+                y=e.data["y"],
+                frame=e.data["frame"],
+                yaw=e.data.get("yaw"),
+                robot_stamp=e.data.get("robot_stamp") or e.at,
+                uid=e.uid,
+            )
+            for e in poses
+        ]
+        record_local_poses(master, rows)
+
+    def _on_map(self, event: Event) -> None:
+        self.state["map"] = event
+        if self.leg is None:
+            self.skipped += 1
+            return
+        self._store_map(event)
+
+    def _store_map(self, event: Event) -> None:
+        shift = self.leg.shift
+        d = event.data
+        record_map(
+            shift,
+            png=event.blob,
+            frame=d["frame"],
+            width=d["width"],
+            height=d["height"],
+            resolution=d["resolution"],
+            origin_x=d["origin_x"],
+            origin_y=d["origin_y"],
+            origin_yaw=d.get("origin_yaw", 0.0),
+            robot_stamp=d.get("robot_stamp"),
+            checksum=d.get("checksum"),
+            # One map event may be stored in several shifts: one uid per shift.
+            uid=uuid.uuid5(_MAP_PER_SHIFT, f"{event.uid}/{shift.uid}"),
+        )
+        self.state["map_shift_id"] = shift.pk
+
+    def _on_image(self, event: Event) -> None:
+        master = Segment.objects.filter(uid=event.data["master"]).first()
+        if master is None or not event.blob:
+            # The switch it belonged to was not a new segment (same mode already
+            # open, e.g. after a restart) or was never stored.
+            self.skipped += 1
+            return
+        attach_image(
+            master,
+            content=event.blob,
+            filename=f"{event.uid}.{event.data.get('suffix', 'jpg')}",
+            description=event.data.get("description", ""),
+            robot_stamp=event.data.get("robot_stamp"),
+            uid=event.uid,
+        )
+
+
+def record_events(leg: Leg, events: list[Event]) -> Recorder:
+    """Store events into a fixed leg (a bag import): prepares and applies them."""
+    recorder = Recorder(lambda: leg)
+    batch = []
+    for event in events:
+        try:
+            batch.append(event.prepare())
+        except Exception as exc:
+            log.warning("dropped a %s event: %s", event.kind, exc)
+    recorder.apply(batch)
+    return recorder

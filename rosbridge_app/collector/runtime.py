@@ -1,0 +1,344 @@
+"""Threads of ``manage.py ftt_collect``.
+
+* ROS thread: one SingleThreadedExecutor spinning :class:`CollectorNode`;
+  callbacks put events on an in-memory queue and return.
+* Spool thread: renders pictures (PNG/JPEG) and appends events to the
+  :class:`Outbox` on disk, a few times a second.
+* Main thread: the only one that talks to the database: applies outbox events
+  in order through :class:`Recorder`, beats, takes GUI commands, follows the
+  vehicle's leg.  When the database is unreachable it says so once, backs off
+  and retries; the outbox keeps growing meanwhile and is replayed in order.
+
+SIGINT/SIGTERM (rclpy's handlers) stop the ROS thread; then the queue is
+spooled, the outbox is written to the database if it can be, and the process
+exits.  A SIGKILL loses only what was still in memory (< ~0.1 s of data).
+"""
+
+import logging
+import os
+import queue
+import socket
+import threading
+import time
+from pathlib import Path
+
+import rclpy
+from django.conf import settings
+from django.db import InterfaceError, OperationalError, close_old_connections, connections
+from django.utils import timezone
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.parameter import Parameter
+
+from events.models import Vehicle
+from events.selectors.logs import open_leg_for_vehicle
+from rosbridge_app.collector.node import CollectorNode, Status
+from rosbridge_app.collector.outbox import Outbox
+from rosbridge_app.collector.recorder import DatabaseUnavailable, Recorder
+from rosbridge_app.models import CollectorCommand
+from rosbridge_app.services import collectors as link
+
+log = logging.getLogger("ftt.collector")
+
+SPOOL_INTERVAL = 0.05
+BATCH = 500
+HEARTBEAT = 1.0
+COMMAND_POLL = 0.25
+SYNC = 1.0
+RETRY = 1.0
+EXIT_FLUSH_SECONDS = 10.0
+
+
+def default_spool(name: str) -> Path:
+    safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in name)
+    return Path(settings.DATA_DIR) / "collector" / f"{safe}.spool.sqlite3"
+
+
+class Spooler(threading.Thread):
+    def __init__(self, events: queue.Queue, outbox: Outbox):
+        super().__init__(name="ftt-spool", daemon=True)
+        self.events, self.outbox = events, outbox
+        self.stop = threading.Event()
+        self.dropped = 0
+
+    def run(self) -> None:
+        while not self.stop.is_set() or not self.events.empty():
+            self.spool_once(timeout=SPOOL_INTERVAL)
+
+    def spool_once(self, timeout: float) -> int:
+        batch = []
+        deadline = time.monotonic() + timeout
+        while len(batch) < BATCH:
+            try:
+                event = self.events.get(timeout=max(0.0, deadline - time.monotonic()))
+            except queue.Empty:
+                break
+            try:
+                batch.append(event.prepare())
+            except Exception as exc:
+                self.dropped += 1
+                log.warning("dropped a %s that cannot be converted: %s", event.kind, exc)
+        if batch:
+            while True:
+                try:
+                    self.outbox.append(batch)
+                    break
+                except Exception:
+                    # The disk is our last resort: keep trying rather than drop.
+                    log.exception("cannot write the spool %s; retrying", self.outbox.path)
+                    time.sleep(1.0)
+        return len(batch)
+
+
+class CollectorRuntime:
+    def __init__(
+        self,
+        *,
+        vehicle: str,
+        params_file: Path | None,
+        name: str | None,
+        spool: Path | None,
+        start_logging: bool,
+    ):
+        self.host = socket.gethostname()
+        self.vehicle_key = vehicle
+        self.params_file = params_file
+        self.name = name
+        self.spool_path = spool
+        self.start_logging = start_logging
+        self.events: queue.Queue = queue.Queue()
+        self.status = Status()
+        self.collector = None
+        self._said_no_leg = None
+        self._db_down_since = None
+        self._last_mode_logged = None
+
+    # --- setup --------------------------------------------------------------------------
+
+    def run(self, ros_args: list[str]) -> int:
+        rclpy.init(args=["ftt_collect", "--ros-args", *ros_args])
+        try:
+            return self._run()
+        finally:
+            rclpy.try_shutdown()
+
+    def _run(self) -> int:
+        db = connections["default"]
+        if db.vendor == "postgresql":
+            # An unreachable server must fail fast, not hang the writer.
+            db.settings_dict.setdefault("OPTIONS", {}).setdefault("connect_timeout", 3)
+        self.node = CollectorNode(
+            self.events.put,
+            params_file=self.params_file,
+            status=self.status,
+            on_logging=self._persist_logging,
+        )
+        if self.vehicle_key:
+            self.node.set_parameters([Parameter("vehicle", value=self.vehicle_key)])
+        self.vehicle_key = self.node.get_parameter("vehicle").value
+        self.name = self.name or f"{self.host}/{self.vehicle_key or self.node.get_name()}"
+        self.outbox = Outbox(self.spool_path or default_spool(self.name))
+        self.recorder = Recorder(self._leg)
+        pending = len(self.outbox)
+        log.info(
+            "collector %s for vehicle '%s'; spool %s (%d records pending)",
+            self.name,
+            self.vehicle_key,
+            self.outbox.path,
+            pending,
+        )
+        if self.start_logging or self.outbox.get_state("logging") == "1":
+            self.node.set_logging(True)
+        self.spooler = Spooler(self.events, self.outbox)
+        self.spooler.start()
+        self.executor = SingleThreadedExecutor()
+        self.executor.add_node(self.node)
+        self.ros_thread = threading.Thread(target=self._spin, name="ftt-ros", daemon=True)
+        self.ros_thread.start()
+        try:
+            self._write_loop()
+        except KeyboardInterrupt:
+            pass  # rclpy's SIGINT handler chains to Python's: same as SIGTERM
+        finally:
+            self._shutdown()
+        return 0
+
+    def _spin(self) -> None:
+        try:
+            self.executor.spin()
+        except (ExternalShutdownException, KeyboardInterrupt):
+            pass
+        except Exception:
+            log.exception("the ROS executor stopped")
+
+    def _persist_logging(self, on: bool) -> None:
+        self.outbox.set_state("logging", "1" if on else "0")
+
+    # --- database side ------------------------------------------------------------------
+
+    def _vehicle(self):
+        return Vehicle.objects.filter(key=self.vehicle_key).first() if self.vehicle_key else None
+
+    def _leg(self):
+        vehicle = self._vehicle()
+        return open_leg_for_vehicle(vehicle) if vehicle is not None else None
+
+    def _write_loop(self) -> None:
+        next_beat = next_commands = next_sync = next_prune = 0.0
+        retry_at = 0.0
+        while self.ros_thread.is_alive():
+            t = time.monotonic()
+            if t < retry_at:
+                time.sleep(0.1)
+                continue
+            try:
+                if t >= next_beat:
+                    self._heartbeat()
+                    next_beat = t + HEARTBEAT
+                if t >= next_commands:
+                    self._commands()
+                    next_commands = t + COMMAND_POLL
+                if t >= next_prune:
+                    link.prune_announcements()
+                    next_prune = t + 60
+                if self._write_batch():
+                    continue
+                if t >= next_sync:
+                    self.recorder.sync()
+                    self._say_leg()
+                    next_sync = t + SYNC
+                time.sleep(0.05)
+            except (DatabaseUnavailable, OperationalError, InterfaceError) as exc:
+                self._database_down(exc)
+                retry_at = time.monotonic() + RETRY
+
+    def _write_batch(self) -> bool:
+        batch = self.outbox.peek(BATCH)
+        self.status.pending = len(self.outbox) if batch else 0
+        if not batch:
+            return False
+        self.recorder.apply([event for _, event in batch])
+        self.outbox.remove([row_id for row_id, _ in batch])
+        self._database_up()
+        self._say_leg()
+        return True
+
+    def _say_leg(self) -> None:
+        leg = self.recorder.leg
+        self.status.leg = f"{leg} of {leg.shift}" if leg is not None else None
+        key = leg.pk if leg is not None else None
+        if key == self._said_no_leg:
+            return
+        self._said_no_leg = key
+        if leg is None:
+            log.warning(
+                "no open leg for vehicle '%s': nothing is stored until one is opened "
+                "(still running)",
+                self.vehicle_key,
+            )
+
+    def _database_down(self, exc) -> None:
+        self.status.database_ok = False
+        self.status.pending = len(self.outbox)
+        if self._db_down_since is None:
+            self._db_down_since = timezone.now()
+            log.warning(
+                "database unreachable (%s); spooling to %s", str(exc).strip(), self.outbox.path
+            )
+        for conn in connections.all():
+            try:
+                conn.close()
+            except Exception:
+                pass
+
+    def _database_up(self) -> None:
+        if self._db_down_since is not None:
+            log.warning(
+                "database back after %.0f s; replaying %d spooled records",
+                (timezone.now() - self._db_down_since).total_seconds(),
+                len(self.outbox),
+            )
+            self._db_down_since = None
+        self.status.database_ok = True
+
+    def _heartbeat(self) -> None:
+        close_old_connections()
+        leg = self.recorder.leg
+        fields = {
+            "vehicle": self._vehicle(),
+            "host": self.host,
+            "pid": os.getpid(),
+            "logging": self.node.pipeline.logging,
+            "leg": leg,
+            "state": self.status.describe(),
+            "pending": len(self.outbox),
+            "parameters": self.node.current_parameters(),
+            "topics": list(self.node.topics),
+            "inputs": {k: dict(v) for k, v in self.node.inputs.items()},
+            "stopped": None,
+        }
+        if self.collector is None:
+            fields["started"] = timezone.now()
+        self.collector = link.heartbeat(self.name, **fields)
+        self._database_up()
+
+    def _commands(self) -> None:
+        if self.collector is None:
+            return
+        for command in link.take_commands(self.collector):
+            ok, message = self._execute(command)
+            link.finish_command(
+                command,
+                ok,
+                message,
+                {
+                    "parameters": self.node.current_parameters(),
+                    "logging": self.node.pipeline.logging,
+                },
+            )
+            self._heartbeat()
+
+    def _execute(self, command) -> tuple[bool, str]:
+        kind, node = command.kind, self.node
+        calls = {
+            CollectorCommand.Kind.START_LOGGING: (node.set_logging, True),
+            CollectorCommand.Kind.STOP_LOGGING: (node.set_logging, False),
+            CollectorCommand.Kind.SAVE_PARAMETERS: (node.save_parameters,),
+            CollectorCommand.Kind.SET_PARAMETERS: (
+                node.set_parameter_values,
+                (command.arguments or {}).get("parameters") or {},
+            ),
+        }
+        if kind not in calls:
+            return False, f"Unknown command '{kind}'."
+        fn, *args = calls[kind]
+        try:
+            return node.submit(fn, *args).result(timeout=5)
+        except Exception as exc:
+            return False, f"Failed: {exc}"
+
+    # --- exit ---------------------------------------------------------------------------
+
+    def _shutdown(self) -> None:
+        log.info("stopping: spooling what is still in memory")
+        self.executor.shutdown(timeout_sec=2)
+        self.spooler.stop.set()
+        self.spooler.join(10)
+        deadline = time.monotonic() + EXIT_FLUSH_SECONDS
+        try:
+            while time.monotonic() < deadline and self._write_batch():
+                pass
+            if self.collector is not None:
+                self._heartbeat()  # the final counts
+                link.mark_stopped(self.collector)
+        except Exception as exc:
+            log.warning("database not reachable at exit (%s)", exc)
+        left = len(self.outbox)
+        if left:
+            log.warning("%d records stay in %s for the next start", left, self.outbox.path)
+        else:
+            log.info("everything written")
+        self.outbox.close()
+        try:
+            self.node.destroy_node()
+        except Exception:
+            pass

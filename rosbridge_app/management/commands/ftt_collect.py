@@ -1,0 +1,60 @@
+"""manage.py ftt_collect: log a robot's ROS 2 topics into FTT (docs/collector.md)."""
+
+import argparse
+from pathlib import Path
+
+from django.core.management.base import BaseCommand
+
+from rosbridge_app.collector.params import DEFAULT_FILE
+
+
+class Command(BaseCommand):
+    help = "Record robot mode, positions, map and camera from ROS 2 into the open leg."
+
+    def add_arguments(self, parser):
+        parser.add_argument("--vehicle", default="", help="Vehicle key (else the parameter).")
+        parser.add_argument(
+            "--params-file",
+            type=Path,
+            default=DEFAULT_FILE,
+            help="ROS parameters YAML; /save_ftt_params writes back to it.",
+        )
+        parser.add_argument(
+            "--name", default=None, help="Collector name shown in the GUI (default host/vehicle)."
+        )
+        parser.add_argument(
+            "--spool",
+            type=Path,
+            default=None,
+            help="Local outbox file (default $FTT_DATA_DIR/collector/).",
+        )
+        parser.add_argument(
+            "--start-logging",
+            action="store_true",
+            help="Log from the start (else as left last time, or off).",
+        )
+        parser.add_argument(
+            "--ros-args",
+            nargs=argparse.REMAINDER,
+            default=[],
+            dest="ros_args",
+            help="Last option: everything after it goes to rclpy (e.g. -r __ns:=/robot1).",
+        )
+
+    def handle(self, *args, **opts):
+        from rosbridge_app.collector.runtime import CollectorRuntime
+
+        params_file = opts["params_file"]
+        ros_args = list(opts["ros_args"])
+        if params_file is not None:
+            if not params_file.exists():
+                raise SystemExit(f"parameters file {params_file} does not exist")
+            ros_args = ["--params-file", str(params_file), *ros_args]
+        runtime = CollectorRuntime(
+            vehicle=opts["vehicle"],
+            params_file=params_file,
+            name=opts["name"],
+            spool=opts["spool"],
+            start_logging=opts["start_logging"],
+        )
+        raise SystemExit(runtime.run(ros_args))

@@ -1,0 +1,117 @@
+"""manage.py ftt_simulate: a simulated robot publishing over ROS 2 (docs/collector.md)."""
+
+import time
+
+from django.core.management.base import BaseCommand
+
+
+class Command(BaseCommand):
+    help = "Publish a simulated drive: mode switches, GPS, TF, map and camera."
+
+    def add_arguments(self, parser):
+        from rosbridge_app.collector.simulator import SimConfig
+
+        d = SimConfig()
+        a = parser.add_argument
+        a("--latitude", type=float, default=d.latitude)
+        a("--longitude", type=float, default=d.longitude)
+        a("--radius", type=float, default=d.radius, help="Circle radius (m).")
+        a("--speed", type=float, default=d.speed, help="m/s.")
+        a(
+            "--switch-every",
+            type=float,
+            default=d.switch_every,
+            help="Seconds between mode switches (starts manual).",
+        )
+        a("--mode-type", choices=("bool", "industrial"), default=d.mode_type)
+        a("--mode-rate", type=float, default=d.mode_rate)
+        a("--gps-rate", type=float, default=d.gps_rate)
+        a("--tf-rate", type=float, default=d.tf_rate)
+        a("--camera-rate", type=float, default=d.camera_rate)
+        a("--camera-size", default=f"{d.camera_width}x{d.camera_height}")
+        a("--map-size", type=int, default=d.map_size, help="Cells per side.")
+        a(
+            "--map-rate",
+            type=float,
+            default=d.map_rate,
+            help="Republish a changed map at this rate (0: once, latched).",
+        )
+        a("--prefix", default="", help="Topic prefix (robot namespace).")
+        a("--duration", type=float, default=0.0, help="Seconds; 0 runs until stopped.")
+        a(
+            "--open-leg",
+            metavar="VEHICLE",
+            default="",
+            help="For demos: make sure this vehicle exists and has an open test event, "
+            "shift and leg (created through the services if missing).",
+        )
+        a(
+            "--wait-for-subscriber",
+            type=float,
+            default=0.0,
+            help="Wait up to this many seconds for a GPS subscriber before starting.",
+        )
+
+    def handle(self, *args, **o):
+        import rclpy
+        from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+
+        from rosbridge_app.collector.simulator import SimConfig, SimulatedRobot
+
+        width, height = (int(v) for v in o["camera_size"].lower().split("x"))
+        config = SimConfig(
+            latitude=o["latitude"],
+            longitude=o["longitude"],
+            radius=o["radius"],
+            speed=o["speed"],
+            switch_every=o["switch_every"],
+            mode_type=o["mode_type"],
+            mode_rate=o["mode_rate"],
+            gps_rate=o["gps_rate"],
+            tf_rate=o["tf_rate"],
+            camera_rate=o["camera_rate"],
+            camera_width=width,
+            camera_height=height,
+            map_size=o["map_size"],
+            map_rate=o["map_rate"],
+            prefix=o["prefix"],
+        )
+        if o["open_leg"]:
+            self.stdout.write(ensure_open_leg(o["open_leg"]))
+        rclpy.init()
+        robot = SimulatedRobot(config)
+        robot.start(o["wait_for_subscriber"])
+        executor = SingleThreadedExecutor()
+        executor.add_node(robot)
+        self.stdout.write(
+            f"simulated robot near {config.latitude}, {config.longitude}; Ctrl-C stops it"
+        )
+        end = time.monotonic() + o["duration"] if o["duration"] > 0 else None
+        try:
+            while rclpy.ok() and (end is None or time.monotonic() < end):
+                executor.spin_once(timeout_sec=0.1)
+        except (KeyboardInterrupt, ExternalShutdownException):
+            pass
+        finally:
+            self.stdout.write(f"published {robot.counts}")
+            executor.shutdown()
+            robot.destroy_node()
+            rclpy.try_shutdown()
+
+
+def ensure_open_leg(key: str) -> str:
+    from events.models import Vehicle
+    from events.selectors.logs import open_leg_for_vehicle
+    from events.services import logs
+
+    vehicle, _ = Vehicle.objects.get_or_create(
+        key=key, defaults={"short_description": "Simulated robot (ftt_simulate)"}
+    )
+    leg = open_leg_for_vehicle(vehicle)
+    if leg is None:
+        shift = vehicle.shifts.filter(end__isnull=True).first()
+        if shift is None:
+            event = logs.create_test_event(location="Simulation", version="demo")
+            shift = logs.create_shift(test_event=event, vehicle=vehicle)
+        leg = logs.create_leg(shift=shift)
+    return f"vehicle '{key}' logs into {leg} of {leg.shift}"

@@ -1,0 +1,67 @@
+"""Reads of the collector link, for the GUI (see docs/collector.md)."""
+
+from datetime import timedelta
+
+from django.utils import timezone
+
+from rosbridge_app.models import Announcement, Collector, CollectorCommand
+
+# Collectors beat every second; three missed beats make one offline.
+OFFLINE_AFTER = timedelta(seconds=3)
+
+
+def is_online(collector: Collector, now=None) -> bool:
+    now = now or timezone.now()
+    return collector.stopped is None and now - collector.last_seen <= OFFLINE_AFTER
+
+
+def collector_status(collector: Collector, now=None) -> dict:
+    """Everything the GUI shows about one collector, JSON-ready."""
+    now = now or timezone.now()
+    inputs = {}
+    for name, info in (collector.inputs or {}).items():
+        info = dict(info)
+        last = info.get("last_received")
+        if last:
+            info["age"] = round((now - _parse(last)).total_seconds(), 1)
+        inputs[name] = info
+    return {
+        "id": collector.pk,
+        "name": collector.name,
+        "vehicle": collector.vehicle.key if collector.vehicle_id else None,
+        "host": collector.host,
+        "online": is_online(collector, now),
+        "last_seen": collector.last_seen.isoformat(),
+        "logging": collector.logging,
+        "leg": collector.leg_id,
+        "state": collector.state,
+        "pending": collector.pending,
+        "parameters": collector.parameters,
+        "topics": collector.topics,
+        "inputs": inputs,
+    }
+
+
+def _parse(value: str):
+    from datetime import datetime
+
+    return datetime.fromisoformat(value)
+
+
+def collectors(vehicle=None):
+    qs = Collector.objects.select_related("vehicle")
+    return qs.filter(vehicle=vehicle) if vehicle is not None else qs
+
+
+def announcements_after(last_id: int, limit: int = 500) -> list[Announcement]:
+    """Outbox rows newer than ``last_id``; a reader keeps the last id it saw."""
+    return list(Announcement.objects.filter(pk__gt=last_id).order_by("id")[:limit])
+
+
+def latest_announcement_id() -> int:
+    last = Announcement.objects.order_by("-id").values_list("id", flat=True).first()
+    return last or 0
+
+
+def command(pk: int) -> CollectorCommand | None:
+    return CollectorCommand.objects.filter(pk=pk).first()

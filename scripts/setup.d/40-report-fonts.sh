@@ -1,0 +1,4 @@
+# Fonts for the PDF report: DejaVu covers Latin, Greek and Cyrillic, WenQuanYi
+# Micro Hei (1.6 MB, far smaller than Noto CJK) covers Chinese, Japanese and
+# Korean, so names and notes in any of those render instead of as boxes.
+ftt_apt_ensure "fonts-dejavu-core" "fonts-wqy-microhei|fonts-noto-cjk"

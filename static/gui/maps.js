@@ -1,0 +1,204 @@
+/* Map drawing for the FTT GUI: a GPS map (tiles optional) and a local map in
+ * map-frame metres.  Tracks are polylines that grow point by point, so live
+ * updates never redraw what is already on screen. */
+"use strict";
+
+const COLORS = { auto: "#1a9c3a", ito: "#d22020", selected: "#1f5fbf" };
+
+/* An image placed by three corners (top-left, top-right, bottom-left), so it
+ * can be rotated and scaled; Leaflet's own imageOverlay only takes a box. */
+const AffineImage = L.Layer.extend({
+  initialize(url, corners, options) {
+    this._url = url;
+    this._corners = corners;
+    L.setOptions(this, options);
+  },
+  onAdd(map) {
+    this._img = L.DomUtil.create("img", "leaflet-zoom-hide ftt-affine");
+    this._img.style.position = "absolute";
+    this._img.style.transformOrigin = "0 0";
+    this._img.style.opacity = this.options.opacity ?? 1;
+    this._img.style.pointerEvents = "none";
+    this._img.onload = () => this._update();
+    this._img.src = this._url;
+    map.getPanes().overlayPane.appendChild(this._img);
+    map.on("zoomend viewreset moveend", this._update, this);
+    this._update();
+  },
+  onRemove(map) {
+    L.DomUtil.remove(this._img);
+    map.off("zoomend viewreset moveend", this._update, this);
+  },
+  setImage(url, corners) {
+    this._corners = corners;
+    if (this._img && this._url !== url) this._img.src = url;
+    this._url = url;
+    this._update();
+  },
+  _update() {
+    if (!this._map || !this._img || !this._img.naturalWidth) return;
+    const p = (c) => this._map.latLngToLayerPoint(c);
+    const tl = p(this._corners.topLeft), tr = p(this._corners.topRight), bl = p(this._corners.bottomLeft);
+    const w = this._img.naturalWidth, h = this._img.naturalHeight;
+    const m = [(tr.x - tl.x) / w, (tr.y - tl.y) / w, (bl.x - tl.x) / h, (bl.y - tl.y) / h, tl.x, tl.y];
+    this._img.style.left = "0px";
+    this._img.style.top = "0px";
+    this._img.style.transform = `matrix(${m.join(",")})`;
+  },
+});
+
+class TrackMap {
+  /* toLatLng turns a stored point into a Leaflet position for this map. */
+  constructor(element, options, toLatLng) {
+    this.element = element;
+    this.map = L.map(element, options);
+    this.toLatLng = toLatLng;
+    this.tracks = new Map(); // master segment id -> {line, mode}
+    this.markers = L.layerGroup().addTo(this.map);
+    this.selectedId = null;
+    this.fitted = false;
+  }
+  clear() {
+    for (const t of this.tracks.values()) t.line.remove();
+    this.tracks.clear();
+    this.markers.clearLayers();
+    this.fitted = false;
+  }
+  style(id, mode) {
+    const selected = id === this.selectedId;
+    return { color: selected ? COLORS.selected : COLORS[mode] || "#666", weight: selected ? 6 : 3, opacity: 0.9 };
+  }
+  setTrack(id, mode, points) {
+    let t = this.tracks.get(id);
+    const latlngs = points.map(this.toLatLng);
+    if (!t) {
+      const line = L.polyline(latlngs, this.style(id, mode)).addTo(this.map);
+      line.bindTooltip(`Segment ${id} (${mode.toUpperCase()})`);
+      t = { line, mode };
+      this.tracks.set(id, t);
+    } else {
+      t.line.setLatLngs(latlngs);
+    }
+    return t;
+  }
+  appendPoints(id, mode, points) {
+    const t = this.tracks.get(id) || this.setTrack(id, mode, []);
+    for (const p of points) t.line.addLatLng(this.toLatLng(p));
+    if (!this.fitted) this.fitAll();
+  }
+  addTakeOver(id, point) {
+    L.circleMarker(this.toLatLng(point), { radius: 7, color: COLORS.ito, weight: 2, fillOpacity: 0.2 })
+      .bindTooltip(`Take-over, segment ${id}`)
+      .addTo(this.markers);
+  }
+  select(id) {
+    const previous = this.selectedId;
+    this.selectedId = id;
+    for (const key of [previous, id]) {
+      const t = this.tracks.get(key);
+      if (t) t.line.setStyle(this.style(key, t.mode));
+    }
+    const t = this.tracks.get(id);
+    if (t && t.line.getLatLngs().length) {
+      t.line.bringToFront();
+      this.map.fitBounds(t.line.getBounds(), { maxZoom: this.maxFocusZoom, padding: [30, 30] });
+    }
+  }
+  fitAll() {
+    let bounds = null;
+    for (const t of this.tracks.values()) {
+      if (!t.line.getLatLngs().length) continue;
+      bounds = bounds ? bounds.extend(t.line.getBounds()) : L.latLngBounds(t.line.getBounds().getSouthWest(), t.line.getBounds().getNorthEast());
+    }
+    if (bounds) {
+      this.map.fitBounds(bounds, { maxZoom: this.maxFocusZoom, padding: [20, 20] });
+      this.fitted = true;
+    }
+  }
+  invalidate() { this.map.invalidateSize(); }
+}
+
+class GpsMap extends TrackMap {
+  constructor(element, messageElement) {
+    super(element, { center: [50.6, 7.2], zoom: 3, maxZoom: 21, zoomControl: true }, (p) => L.latLng(p[0], p[1]));
+    this.maxFocusZoom = 19;
+    this.messageElement = messageElement;
+    this.tileLayer = null;
+    this.overlay = null;
+    this.layers = L.control.layers(null, null, { collapsed: true });
+  }
+  setTiles(url, attribution) {
+    if (this.tileLayer) this.tileLayer.remove();
+    this.tileLayer = null;
+    this.tilesLoaded = 0;
+    this.tileErrors = 0;
+    if (!url) {
+      this.noTiles("No tile server is set: the map shows tracks on a plain background.");
+      return;
+    }
+    this.element.classList.remove("no-tiles");
+    this.messageElement.hidden = true;
+    // OpenStreetMap's tile policy asks for this credit on every map.
+    const credit = attribution || (url.includes("openstreetmap") ? "© OpenStreetMap contributors" : "");
+    this.tileLayer = L.tileLayer(url, { maxZoom: 21, maxNativeZoom: 19, attribution: credit });
+    this.tileLayer.on("tileload", () => {
+      this.tilesLoaded += 1;
+      this.element.classList.remove("no-tiles");
+      this.messageElement.hidden = true;
+    });
+    this.tileLayer.on("tileerror", () => {
+      this.tileErrors += 1;
+      if (!this.tilesLoaded) this.noTiles("Map tiles are unavailable (the tile server cannot be reached). Tracks are still shown on a plain background.");
+    });
+    this.tileLayer.addTo(this.map);
+  }
+  noTiles(message) {
+    this.element.classList.add("no-tiles");
+    this.messageElement.textContent = message;
+    this.messageElement.hidden = false;
+  }
+  setOverlay(url, corners) {
+    const c = { topLeft: corners.top_left, topRight: corners.top_right, bottomLeft: corners.bottom_left };
+    if (this.overlay) {
+      this.overlay.setImage(url, c);
+      return;
+    }
+    this.overlay = new AffineImage(url, c, { opacity: 0.45 });
+    this.layers.addOverlay(this.overlay, "Local map");
+    this.layers.addTo(this.map);
+  }
+  removeOverlay() {
+    if (!this.overlay) return;
+    this.layers.removeLayer(this.overlay);
+    this.overlay.remove();
+    this.overlay = null;
+    this.layers.remove();
+  }
+}
+
+class LocalMap extends TrackMap {
+  constructor(element) {
+    // Map-frame metres: Leaflet's "lat" is y and "lng" is x.
+    super(element, { crs: L.CRS.Simple, center: [0, 0], zoom: 2, minZoom: -5, maxZoom: 8, zoomSnap: 0.25 }, (p) => L.latLng(p[1], p[0]));
+    this.maxFocusZoom = 6;
+    this.image = null;
+  }
+  setMapImage(info) {
+    const corner = (xy) => L.latLng(xy[1], xy[0]);
+    const c = { topLeft: corner(info.corners.top_left), topRight: corner(info.corners.top_right), bottomLeft: corner(info.corners.bottom_left) };
+    if (this.image) this.image.setImage(info.url, c);
+    else {
+      this.image = new AffineImage(info.url, c, { opacity: 0.9 }).addTo(this.map);
+    }
+    if (!this.fitted) {
+      const b = L.latLngBounds([c.topLeft, c.topRight, c.bottomLeft]);
+      this.map.fitBounds(b);
+    }
+  }
+  removeMapImage() {
+    if (this.image) this.image.remove();
+    this.image = null;
+  }
+}
+
+window.FttMaps = { GpsMap, LocalMap };

@@ -1,0 +1,273 @@
+"""REST endpoints for robot data (poses, maps, images) and the track views built on them."""
+
+import django_filters as filters
+from django_filters.rest_framework import DjangoFilterBackend
+from drf_spectacular.types import OpenApiTypes
+from drf_spectacular.utils import OpenApiParameter, OpenApiResponse, extend_schema
+from rest_framework import serializers, status, viewsets
+from rest_framework.decorators import action
+from rest_framework.exceptions import NotFound
+from rest_framework.parsers import FormParser, MultiPartParser
+from rest_framework.response import Response
+
+from events import roles
+from events.api.filters import BBoxFilter, IdFilter, TimeRangeFilterSet
+from events.api.serializers import PrimaryKeyField
+from events.api.viewsets import ServiceBaseViewSet, ServiceCreateMixin
+from events.models import Leg, Shift, TestEvent
+from telemetry.api import serializers as s
+from telemetry.models import Image, LocalPose, MapImage, Pose
+from telemetry.selectors import maps as map_selectors
+from telemetry.selectors import tracks
+from telemetry.services import recording
+
+# --- filters ------------------------------------------------------------------------------
+
+
+class SegmentDataFilter(TimeRangeFilterSet):
+    """Rows hanging off a segment, filterable by any ancestor."""
+
+    segment = IdFilter(field_name="segment_id")
+    leg = IdFilter(field_name="segment__leg_id")
+    shift = IdFilter(field_name="segment__leg__shift_id")
+    test_event = IdFilter(field_name="segment__leg__shift__test_event_id")
+
+
+class PoseFilter(SegmentDataFilter):
+    class Meta:
+        model = Pose
+        fields = []
+        time_fields = ["robot_stamp", "received"]
+
+
+class LocalPoseFilter(SegmentDataFilter):
+    frame = filters.CharFilter()
+
+    class Meta:
+        model = LocalPose
+        fields = []
+        time_fields = ["robot_stamp", "received"]
+
+
+class ImageFilter(SegmentDataFilter):
+    class Meta:
+        model = Image
+        fields = []
+        time_fields = ["robot_stamp", "received"]
+
+
+class MapFilter(TimeRangeFilterSet):
+    shift = IdFilter(field_name="shift_id")
+    test_event = IdFilter(field_name="shift__test_event_id")
+
+    class Meta:
+        model = MapImage
+        fields = []
+        time_fields = ["robot_stamp", "received"]
+
+
+# --- robot data ---------------------------------------------------------------------------
+
+
+class RecordingViewSet(ServiceCreateMixin, ServiceBaseViewSet):
+    """Robot data is created and deleted, never edited."""
+
+    def stored_row(self, uid):
+        return self.get_queryset().get(uid=uid)
+
+    def store_batch(self, request, serializer_class, store):
+        payload = serializer_class(data=request.data)
+        payload.is_valid(raise_exception=True)
+        stored = store(**payload.validated_data)
+        return Response({"stored": stored}, status=status.HTTP_201_CREATED)
+
+
+class PoseViewSet(RecordingViewSet):
+    queryset = Pose.objects.all()
+    serializer_class = s.PoseSerializer
+    filterset_class = PoseFilter
+    filter_backends = [DjangoFilterBackend, BBoxFilter]
+    bbox_filter_field = "point"
+
+    def create_with_service(self, data):
+        fix = s.gps_fix(data)
+        recording.record_poses(data["segment"], [fix], data.get("pose_source"))
+        return self.stored_row(fix.uid)
+
+    @extend_schema(request=s.PoseBatchSerializer, responses={201: s.BatchResultSerializer})
+    @action(detail=False, methods=["post"])
+    def batch(self, request):
+        """Store many GPS fixes of one segment at once; known uids are skipped."""
+        return self.store_batch(
+            request,
+            s.PoseBatchSerializer,
+            lambda segment, poses, pose_source=None: recording.record_poses(
+                segment, [s.gps_fix(p) for p in poses], pose_source
+            ),
+        )
+
+
+class LocalPoseViewSet(RecordingViewSet):
+    queryset = LocalPose.objects.all()
+    serializer_class = s.LocalPoseSerializer
+    filterset_class = LocalPoseFilter
+
+    def create_with_service(self, data):
+        pose = s.map_pose(data)
+        recording.record_local_poses(data["segment"], [pose])
+        return self.stored_row(pose.uid)
+
+    @extend_schema(request=s.LocalPoseBatchSerializer, responses={201: s.BatchResultSerializer})
+    @action(detail=False, methods=["post"])
+    def batch(self, request):
+        """Store many map-frame poses of one segment at once; known uids are skipped."""
+        return self.store_batch(
+            request,
+            s.LocalPoseBatchSerializer,
+            lambda segment, poses: recording.record_local_poses(
+                segment, [s.map_pose(p) for p in poses]
+            ),
+        )
+
+
+class MapImageViewSet(RecordingViewSet):
+    """Maps are uploaded as multipart/form-data with the PNG in ``image``."""
+
+    queryset = MapImage.objects.all()
+    serializer_class = s.MapImageSerializer
+    filterset_class = MapFilter
+    parser_classes = [MultiPartParser, FormParser]
+
+    def create(self, request, *args, **kwargs):
+        serializer = self.get_serializer(data=request.data)
+        serializer.is_valid(raise_exception=True)
+        data = dict(serializer.validated_data)
+        upload = data.pop("image")
+        shift = data.pop("shift")
+        map_image, stored = recording.record_map(shift, png=upload.read(), **data)
+        # An unchanged map (or a retried uid) is answered with the map already stored.
+        code = status.HTTP_201_CREATED if stored else status.HTTP_200_OK
+        return self.respond(map_image, code=code)
+
+    @extend_schema(
+        parameters=[OpenApiParameter("shift", OpenApiTypes.INT, required=True)],
+        responses={200: s.MapImageSerializer, 404: OpenApiResponse(description="No map yet.")},
+    )
+    @action(detail=False, methods=["get"])
+    def current(self, request):
+        """The newest map of a shift: the one the GUI and the report draw."""
+        shift = _parent(request.query_params, {"shift": Shift}, required=True)["shift"]
+        map_image = map_selectors.current_map(shift)
+        if map_image is None:
+            raise NotFound("This shift has no map yet.")
+        return self.respond(map_image)
+
+
+class ImageViewSet(RecordingViewSet):
+    """Images are uploaded as multipart/form-data with the file in ``image``."""
+
+    queryset = Image.objects.all()
+    serializer_class = s.ImageSerializer
+    filterset_class = ImageFilter
+    parser_classes = [MultiPartParser, FormParser]
+
+    def create_with_service(self, data):
+        upload = data["image"]
+        return recording.attach_image(
+            data["segment"],
+            content=upload.read(),
+            filename=upload.name or "image.jpg",
+            description=data.get("description", ""),
+            robot_stamp=data.get("robot_stamp"),
+            uid=data.get("uid"),
+        )
+
+    def delete_with_service(self, instance):
+        recording.delete_image(instance)
+
+
+# --- tracks -------------------------------------------------------------------------------
+
+PARENTS = {"leg": Leg, "shift": Shift, "test_event": TestEvent}
+TRACK_PARAMETERS = [
+    OpenApiParameter(name, OpenApiTypes.INT, description=f"Tracks of this {name}.")
+    for name in PARENTS
+]
+
+
+class _ParentQuery(serializers.Serializer):
+    leg = PrimaryKeyField(queryset=Leg.objects.all(), required=False)
+    shift = PrimaryKeyField(queryset=Shift.objects.all(), required=False)
+    test_event = PrimaryKeyField(queryset=TestEvent.objects.all(), required=False)
+
+
+def _parent(params, allowed: dict, required: bool = False) -> dict:
+    """Validate ``?leg=`` / ``?shift=`` / ``?test_event=`` query parameters."""
+    query = _ParentQuery(data={k: params[k] for k in allowed if k in params})
+    query.is_valid(raise_exception=True)
+    found = {k: v for k, v in query.validated_data.items() if k in allowed}
+    if required and len(found) != 1:
+        names = " or ".join(allowed)
+        raise serializers.ValidationError({"non_field_errors": [f"Give exactly one of {names}."]})
+    return found
+
+
+def _segment_properties(segment) -> dict:
+    return {
+        "segment": segment.pk,
+        "uid": str(segment.uid),
+        "leg": segment.leg_id,
+        "mode": segment.segment_type_id,
+        "start": segment.start.isoformat(),
+        "end": segment.end.isoformat() if segment.end else None,
+    }
+
+
+class TrackViewSet(viewsets.ViewSet):
+    """GPS tracks as GeoJSON: one LineString feature per master segment."""
+
+    read_role = roles.VIEWER
+
+    @extend_schema(parameters=TRACK_PARAMETERS, responses={200: OpenApiTypes.OBJECT})
+    def list(self, request):
+        """A FeatureCollection with one feature per master segment that has poses, oldest
+        first. Coordinates are [longitude, latitude] in time order (points without a fix are
+        left out); a master with a single point is a Point."""
+        parent = _parent(request.query_params, PARENTS, required=True)
+        features = []
+        for track in tracks.segment_tracks(tracks.masters(**parent), tracks.GPS):
+            coordinates = track.coordinates()
+            geometry = (
+                {"type": "LineString", "coordinates": coordinates}
+                if len(coordinates) > 1
+                else {"type": "Point", "coordinates": coordinates[0]}
+            )
+            properties = _segment_properties(track.segment)
+            properties["point_count"] = len(coordinates)
+            features.append(
+                {
+                    "type": "Feature",
+                    "id": track.segment.pk,
+                    "geometry": geometry,
+                    "properties": properties,
+                }
+            )
+        return Response({"type": "FeatureCollection", "features": features})
+
+
+class LocalTrackViewSet(viewsets.ViewSet):
+    """Tracks in the map frame: per master segment, x and y arrays in time order."""
+
+    read_role = roles.VIEWER
+
+    @extend_schema(parameters=TRACK_PARAMETERS, responses={200: OpenApiTypes.OBJECT})
+    def list(self, request):
+        parent = _parent(request.query_params, PARENTS, required=True)
+        result = []
+        for track in tracks.segment_tracks(tracks.masters(**parent), tracks.LOCAL):
+            item = _segment_properties(track.segment)
+            item.update(
+                frame=track.frame, point_count=len(track), x=track.x.tolist(), y=track.y.tolist()
+            )
+            result.append(item)
+        return Response({"tracks": result})

@@ -1,0 +1,27 @@
+import uuid
+
+from django.db import models
+from django.utils import timezone
+
+from events.models import Segment
+
+
+def image_upload_to(instance, filename):
+    suffix = filename.rsplit(".", 1)[-1].lower() if "." in filename else "jpg"
+    return f"images/segment-{instance.segment.uid}/{instance.uid}.{suffix}"
+
+
+class Image(models.Model):
+    uid = models.UUIDField(default=uuid.uuid4, unique=True, editable=False)
+    segment = models.ForeignKey(Segment, on_delete=models.CASCADE, related_name="images")
+    image = models.ImageField(upload_to=image_upload_to)
+    description = models.CharField(max_length=500, blank=True)
+    robot_stamp = models.DateTimeField(null=True, blank=True)
+    received = models.DateTimeField(default=timezone.now)
+
+    class Meta:
+        ordering = ["robot_stamp", "received", "id"]
+        indexes = [models.Index(fields=["segment", "received"], name="image_segment_received")]
+
+    def __str__(self):
+        return self.description or f"Image {self.pk}"

@@ -1,0 +1,67 @@
+"""Track points.  They always hang off master segments (see events.services)."""
+
+import uuid
+
+from django.contrib.gis.db import models
+from django.utils import timezone
+
+from events.models import PoseSource, Segment
+
+
+class FixStatus(models.IntegerChoices):
+    # sensor_msgs/NavSatStatus values, so the collector can store them as-is.
+    NO_FIX = -1, "no fix"
+    FIX = 0, "fix"
+    SBAS = 1, "SBAS-augmented fix"
+    GBAS = 2, "GBAS-augmented fix (RTK)"
+
+
+class TrackPoint(models.Model):
+    uid = models.UUIDField(default=uuid.uuid4, unique=True, editable=False)
+    robot_stamp = models.DateTimeField(null=True, blank=True)
+    received = models.DateTimeField(default=timezone.now)
+
+    class Meta:
+        abstract = True
+
+
+class Pose(TrackPoint):
+    segment = models.ForeignKey(Segment, on_delete=models.CASCADE, related_name="poses")
+    point = models.PointField(srid=4326)
+    altitude = models.FloatField(null=True, blank=True)
+    fix_status = models.SmallIntegerField(choices=FixStatus.choices, default=FixStatus.FIX)
+    horizontal_accuracy = models.FloatField(
+        null=True,
+        blank=True,
+        help_text="1-sigma horizontal accuracy in metres, when known.",
+    )
+    pose_source = models.ForeignKey(
+        PoseSource,
+        on_delete=models.PROTECT,
+        null=True,
+        blank=True,
+        related_name="poses",
+    )
+
+    class Meta:
+        ordering = ["robot_stamp", "received", "id"]
+        indexes = [
+            models.Index(fields=["segment", "robot_stamp", "received"], name="pose_segment_time"),
+        ]
+
+
+class LocalPose(TrackPoint):
+    segment = models.ForeignKey(Segment, on_delete=models.CASCADE, related_name="local_poses")
+    frame = models.CharField(max_length=200)
+    x = models.FloatField()
+    y = models.FloatField()
+    yaw = models.FloatField(null=True, blank=True, help_text="Heading in radians, when known.")
+
+    class Meta:
+        ordering = ["robot_stamp", "received", "id"]
+        indexes = [
+            models.Index(
+                fields=["segment", "robot_stamp", "received"],
+                name="localpose_segment_time",
+            ),
+        ]

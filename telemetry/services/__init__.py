@@ -1,0 +1,1 @@
+"""Writes of robot data: poses, local poses, maps and images."""

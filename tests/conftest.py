@@ -1,0 +1,104 @@
+"""Fixtures shared by every test package: configuration rows and an open log chain."""
+
+import pytest
+
+from events import seeds
+from events.models import Performer, Personnel, PoseSource, Vehicle
+from events.services import logs
+
+
+@pytest.fixture(autouse=True)
+def _seeds_after_flush(request):
+    """Transactional tests flush the database, seeded catalogues included;
+    put them back so every test sees what ``migrate`` gives a real install."""
+    marker = request.node.get_closest_marker("django_db")
+    if marker and marker.kwargs.get("transaction"):
+        request.getfixturevalue("transactional_db")
+        seeds.ensure()
+
+
+@pytest.fixture
+def media_root(settings, tmp_path):
+    settings.MEDIA_ROOT = tmp_path / "media"
+    return settings.MEDIA_ROOT
+
+
+@pytest.fixture
+def vehicle(db):
+    return Vehicle.objects.create(key="husky", short_description="Husky A200", institution="FKIE")
+
+
+@pytest.fixture
+def other_vehicle(db):
+    return Vehicle.objects.create(key="jackal", short_description="Jackal", institution="FKIE")
+
+
+@pytest.fixture
+def performer(db):
+    return Performer.objects.create(institution="Fraunhofer FKIE")
+
+
+@pytest.fixture
+def person(db):
+    return Personnel.objects.create(name="Jörg Müller", institution="FKIE")
+
+
+@pytest.fixture
+def pose_source(db):
+    return PoseSource.objects.create(key="gps", short_description="RTK GPS")
+
+
+@pytest.fixture
+def test_event(db):
+    return logs.create_test_event(location="Wachtberg", version="1.0", time_zone="Europe/Berlin")
+
+
+@pytest.fixture
+def shift(test_event, vehicle, performer, person):
+    return logs.create_shift(
+        test_event=test_event, vehicle=vehicle, performer=performer, robot_operator=person
+    )
+
+
+@pytest.fixture
+def leg(shift, pose_source):
+    return logs.create_leg(shift=shift, default_pose_source=pose_source, weather_id="sunny")
+
+
+# --- API users: one per role, each with a token (tests/events/api, tests/telemetry/api) ---
+
+
+@pytest.fixture
+def role_user(db, django_user_model):
+    """role_user("operator") -> a user in that group (None: no role at all), with a token."""
+    from django.contrib.auth.models import Group
+    from rest_framework.authtoken.models import Token
+
+    made = []
+
+    def make(role):
+        made.append(role)
+        name = f"{role or 'norole'}-{len(made)}"
+        user = django_user_model.objects.create_user(name, password="pw")
+        if role:
+            user.groups.add(Group.objects.get(name=role))
+        Token.objects.create(user=user)
+        return user
+
+    return make
+
+
+@pytest.fixture
+def api_client(role_user):
+    """api_client("viewer") -> a DRF client sending that user's token (None: anonymous)."""
+    from rest_framework.test import APIClient
+
+    def make(role="operator", *, anonymous=False):
+        client = APIClient()
+        if not anonymous:
+            user = role_user(role)
+            client.credentials(HTTP_AUTHORIZATION=f"Token {user.auth_token.key}")
+            client.user = user
+        return client
+
+    return make

@@ -1,0 +1,151 @@
+"""The whole field test as a new user does it, in a real browser."""
+
+import io
+import time
+
+import pytest
+from PIL import Image as PILImage
+from playwright.sync_api import expect
+
+from tests.e2e.conftest import login
+from tests.e2e.robot import Robot
+
+pytestmark = pytest.mark.e2e
+
+NOTE = "Grüße aus Köln: Weg überflutet, Ölspur – 東京 ✓"
+
+
+def photo_bytes() -> bytes:
+    buffer = io.BytesIO()
+    PILImage.new("RGB", (64, 48), (200, 120, 40)).save(buffer, "JPEG")
+    return buffer.getvalue()
+
+
+def admin_adds(page, model, values, shot, name):
+    page.goto(page.url.split("/admin/")[0] + f"/admin/events/{model}/add/")
+    for field, value in values.items():
+        page.fill(f"#id_{field}", value)
+    page.click("input[name=_save]")
+    expect(page.locator(".messagelist")).to_contain_text("added successfully")
+    shot(page, name)
+
+
+def new_level(page, level, values, shot):
+    """Press New on a level and save its edit dialog; a tuple value picks an option."""
+    page.locator(f'[data-action="new"][data-level="{level}"]').click()
+    dialog = page.locator("#form-dialog")
+    expect(dialog).to_be_visible()
+    for label, value in values.items():
+        if isinstance(value, tuple):
+            dialog.get_by_label(label).select_option(label=value[0])
+        else:
+            dialog.get_by_label(label).fill(value)
+    shot(page, f"{level}-dialog")
+    dialog.get_by_role("button", name="Save").click()
+    expect(dialog).to_be_hidden()
+
+
+def wait_live(locator, committed_at, figures, label):
+    expect(locator).to_be_visible(timeout=3000)
+    delay = time.time() - committed_at
+    figures[label] = delay
+    assert delay < 1.0, f"{label} took {delay:.2f} s to appear"
+
+
+def test_field_walk(browser, server, shot):
+    figures = {}
+    # 1. The administrator configures what a shift needs.
+    admin = browser.new_page()
+    login(admin, server, "ada")
+    expect(admin.locator("#first-run")).to_contain_text("Add a vehicle")
+    shot(admin, "admin-first-run-hint")
+    base = server.url
+    admin.goto(f"{base}/admin/")
+    admin_adds(admin, "performer", {"institution": "Fraunhofer FKIE"}, shot, "performer")
+    admin_adds(
+        admin, "vehicle", {"key": "husky-walk", "short_description": "Husky Walk"}, shot, "vehicle"
+    )
+    admin_adds(
+        admin, "posesource", {"key": "rtk", "short_description": "RTK GNSS"}, shot, "pose-source"
+    )
+    admin.goto(base + "/")
+    expect(admin.locator("#first-run")).to_have_count(0)
+    admin.close()
+
+    robot = Robot(server, "husky-walk")
+    try:
+        page = browser.new_page()
+        page.route("**/tiles/**", lambda r: r.fulfill(status=404))
+        login(page, server, "otto")
+        expect(page.locator("#live-status")).to_have_text("live")
+
+        # 2. The operator opens a test event, a shift and a leg.
+        new_level(
+            page, "event", {"Location": "Köln-Wahn Übungsplatz", "Time zone": "Europe/Berlin"}, shot
+        )
+        expect(page.locator("#pick-event option:checked")).to_contain_text("Köln-Wahn Übungsplatz")
+        new_level(page, "shift", {"Vehicle": ("Husky Walk",), "Test intent": "Überlandfahrt"}, shot)
+        expect(page.locator("#pick-shift option:checked")).to_contain_text("Husky Walk")
+        new_level(page, "leg", {}, shot)
+        expect(page.locator("#segments-section")).to_be_visible()
+        expect(page.locator("#segments-empty")).to_be_visible()
+        shot(page, "leg-open")
+
+        # 3. Logging starts; the robot's segments appear without a reload.
+        toggle = page.locator("#logging-toggle")
+        expect(toggle).to_be_enabled(timeout=8000)
+        expect(page.locator("#collector-status")).to_contain_text("online")
+        toggle.click()
+        expect(toggle).to_have_text("Stop logging", timeout=5000)
+
+        rows = page.locator("#segment-table tbody tr")
+        at = robot.do("auto")
+        wait_live(rows.filter(has_text="AUTO"), at, figures, "AUTO segment")
+        at = robot.do("poses")
+        track = page.locator("#gps-map path.leaflet-interactive")
+        expect(track.first).to_be_attached(timeout=3000)
+        figures["poses"] = time.time() - at
+        at = robot.do("ito")
+        ito_row = rows.filter(has_text="ITO")
+        wait_live(ito_row, at, figures, "ITO segment")
+        expect(page.locator("#gps-map .leaflet-tooltip-pane, #gps-map path")).not_to_have_count(0)
+        shot(page, "live-segments")
+
+        # 4. A quick reason, a note with umlauts and a photo.
+        ito_row.click()
+        page.get_by_role("button", name="Safety", exact=True).click()
+        expect(ito_row.locator("td").nth(2)).to_have_text("Safety")
+        shot(page, "quick-reason")
+
+        ito_row.dblclick()
+        seg = page.locator("#segment-dialog")
+        expect(seg).to_be_visible()
+        seg.get_by_label("New note").fill(NOTE)
+        seg.get_by_role("button", name="Add note").click()
+        note = seg.locator(".notes li").filter(has_text=NOTE)
+        expect(note).to_be_visible()
+        expect(note).to_contain_text("Jörg Müller")
+        seg.locator("input[name=file]").set_input_files(
+            {"name": "pothole.jpg", "mimeType": "image/jpeg", "buffer": photo_bytes()}
+        )
+        expect(seg.locator(".images img")).to_have_count(1)
+        expect(seg.locator(".images img")).to_have_js_property("complete", True)
+        shot(page, "segment-dialog")
+        seg.get_by_role("button", name="Close").last.click()
+        expect(seg).to_be_hidden()
+
+        # 5. Logging stops (closing the open segment), then the test event ends.
+        toggle.click()
+        expect(toggle).to_have_text("Start logging", timeout=5000)
+        expect(ito_row.locator("td").nth(7)).to_have_text("CLOSED", timeout=3000)
+        page.locator('[data-action="end"][data-level="event"]').click()
+        expect(page.locator('[data-state="event"]')).to_have_text("closed")
+        expect(page.locator('[data-action="reopen"][data-level="event"]')).to_be_visible()
+        shot(page, "test-event-ended")
+
+        # What the page showed survives a reload, Unicode included.
+        page.reload()
+        expect(page.locator("#pick-event option:checked")).to_contain_text("Köln-Wahn Übungsplatz")
+        print("live delays (s):", {k: round(v, 3) for k, v in figures.items()})
+    finally:
+        robot.stop()

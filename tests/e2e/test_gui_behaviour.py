@@ -1,0 +1,297 @@
+"""Roles, maps without tiles, reconnects, notes and error messages in the browser."""
+
+import itertools
+import time
+
+import pytest
+from playwright.sync_api import expect
+
+from tests.e2e.conftest import login
+from tests.e2e.robot import Robot
+from tests.reports.pdf_helpers import flat, pdf_text
+
+pytestmark = pytest.mark.e2e
+
+_numbers = itertools.count(1)
+
+
+@pytest.fixture
+def open_leg(server):
+    """A vehicle with an open test event, shift and leg, made in a separate process."""
+    key = f"rover-{next(_numbers)}-{int(time.time() * 1000) % 100000}"
+    server.python(
+        f"""
+        from events.models import Performer, PoseSource, Vehicle
+        from events.services import logs
+        Performer.objects.get_or_create(institution="Fraunhofer FKIE")
+        PoseSource.objects.get_or_create(key="gps", defaults={{"short_description": "GPS"}})
+        v = Vehicle.objects.create(key="{key}", short_description="Rover {key}")
+        e = logs.create_test_event(location="Gelände {key}", time_zone="Europe/Berlin")
+        s = logs.create_shift(test_event=e, vehicle=v)
+        logs.create_leg(shift=s, weather_id="sunny")
+        """
+    )
+    return key
+
+
+def choose(page, key):
+    """Pick the test event made for this test; the shift and leg follow by themselves."""
+    option = page.locator("#pick-event option", has_text=f"Gelände {key}")
+    page.select_option("#pick-event", value=option.get_attribute("value"))
+    expect(page.locator("#segments-section")).to_be_visible()
+
+
+def test_viewer_sees_but_cannot_change_anything(page, server, open_leg, shot):
+    login(page, server, "vera")
+    choose(page, open_leg)
+    for action in ("new", "end", "delete"):
+        expect(page.locator(f'[data-action="{action}"][data-level="leg"]')).to_be_disabled()
+    expect(page.get_by_role("button", name="Safety", exact=True)).to_be_disabled()
+    expect(page.locator("#segment-new")).to_be_disabled()
+    # Viewers read every field of a level, but cannot save it.
+    page.locator('[data-action="edit"][data-level="event"]').click()
+    form = page.locator("#form-dialog")
+    expect(form.get_by_label("Location")).to_have_value(f"Gelände {open_leg}")
+    expect(form.get_by_label("Location")).to_be_disabled()
+    expect(form.get_by_role("button", name="Save")).to_be_hidden()
+    form.get_by_role("button", name="Cancel").click()
+    shot(page, "viewer")
+    # Even a request made by hand is refused, and the page says why in words.
+    page.evaluate(
+        "document.querySelector('#segment-new').disabled = false;"
+        "document.querySelector('#segment-new').click()"
+    )
+    expect(page.locator("#error")).to_contain_text("does not have the role")
+    expect(page.locator("#segment-table tbody tr")).to_have_count(0)
+
+
+def test_map_without_tiles_says_so_and_still_draws(page, server, open_leg, shot):
+    # The loopback tile address in the server's settings has nothing listening.
+    robot = Robot(server, open_leg)
+    try:
+        robot.do("auto")
+        robot.do("poses")
+    finally:
+        robot.stop()
+    login(page, server, "otto")
+    choose(page, open_leg)
+    expect(page.locator("#tile-message")).to_contain_text("tiles are unavailable")
+    expect(page.locator("#gps-map")).to_have_class(
+        "map leaflet-container leaflet-touch "
+        "leaflet-fade-anim leaflet-grab "
+        "leaflet-touch-drag leaflet-touch-zoom no-tiles"
+    )
+    expect(page.locator("#gps-map path.leaflet-interactive").first).to_be_attached()
+    shot(page, "no-tiles")
+
+
+def test_reconnecting_browser_catches_up(page, server, open_leg, shot):
+    login(page, server, "otto")
+    choose(page, open_leg)
+    expect(page.locator("#live-status")).to_have_text("live")
+    # Drop the socket and keep it down for a while, as a flaky field network does.
+    page.evaluate("FTT.Live.retry = 2500; FTT.Live.socket.close()")
+    expect(page.locator("#live-status")).to_have_text("reconnecting…")
+    robot = Robot(server, open_leg)
+    try:
+        robot.do("ito")
+    finally:
+        robot.stop()
+    rows = page.locator("#segment-table tbody tr")
+    expect(rows).to_have_count(0)
+    expect(page.locator("#live-status")).to_have_text("live", timeout=6000)
+    expect(rows.filter(has_text="ITO")).to_have_count(1, timeout=3000)
+    shot(page, "caught-up")
+
+
+def test_notes_can_be_edited_and_deleted(page, server, open_leg, shot):
+    login(page, server, "otto")
+    choose(page, open_leg)
+    page.locator("#segment-new").click()
+    row = page.locator("#segment-table tbody tr.child")
+    expect(row).to_have_count(1)
+    row.dblclick()
+    dialog = page.locator("#segment-dialog")
+    dialog.get_by_label("New note").fill("Erste Notiz")
+    dialog.get_by_role("button", name="Add note").click()
+    note = dialog.locator(".notes li").filter(has_text="Erste Notiz")
+    note.get_by_role("button", name="Edit").click()
+    dialog.get_by_label("Note text").fill("Geänderte Notiz – ÄÖÜß")
+    dialog.get_by_role("button", name="Save note").click()
+    edited = dialog.locator(".notes li").filter(has_text="Geänderte Notiz – ÄÖÜß")
+    expect(edited).to_contain_text("edited")
+    shot(page, "note-edited")
+    edited.get_by_role("button", name="Delete").click()
+    confirm = page.locator("#confirm-dialog")
+    expect(confirm).to_contain_text("Delete this note")
+    confirm.get_by_role("button", name="Delete").click()
+    expect(dialog.locator(".notes li")).to_have_text(["No notes yet."])
+    # An empty note is refused with the server's words, inside the dialog.
+    dialog.get_by_role("button", name="Add note").click()
+    expect(dialog.locator(".dialog-error")).to_contain_text("Text: This field may not be blank")
+    shot(page, "note-error")
+
+
+def test_refused_edit_is_explained_in_the_dialog(page, server, open_leg, shot):
+    login(page, server, "otto")
+    choose(page, open_leg)
+    page.locator('[data-action="edit"][data-level="event"]').click()
+    dialog = page.locator("#form-dialog")
+    dialog.get_by_label("Time zone").fill("Mars/Olympus")
+    dialog.get_by_role("button", name="Save").click()
+    expect(dialog.locator(".dialog-error")).to_contain_text("time zone")
+    expect(dialog).to_be_visible()
+    shot(page, "time-zone-refused")
+    # Fields can be cleared, and text in any script is kept.
+    dialog.get_by_label("Time zone").fill("Asia/Tokyo")
+    dialog.get_by_label("Location").fill("東京 テスト場")
+    dialog.get_by_label("Version").fill("")
+    dialog.get_by_role("button", name="Save").click()
+    expect(dialog).to_be_hidden()
+    expect(page.locator("#pick-event option:checked")).to_contain_text("東京 テスト場")
+
+
+def test_reports_dialog_offers_exports_and_makes_a_report(page, server, open_leg, shot, tmp_path):
+    login(page, server, "otto")
+    choose(page, open_leg)
+    page.locator("#segment-new").click()
+    expect(page.locator("#segment-table tbody tr")).to_have_count(1)
+    page.locator('[data-action="end"][data-level="event"]').click()
+    expect(page.locator('[data-state="event"]')).to_have_text("closed")
+    page.get_by_role("button", name="Reports & exports").click()
+    dialog = page.locator("#reports-dialog")
+    expect(dialog.get_by_role("link", name="Segments (CSV)")).to_be_visible()
+    href = dialog.get_by_role("link", name="Segments (CSV)").get_attribute("href")
+    csv = page.request.get(server.url + href)
+    assert csv.ok
+    archive = dialog.get_by_role("link", name="Everything (FTT archive, ZIP)").get_attribute("href")
+    assert page.request.get(server.url + archive).body()[:2] == b"PK"
+    dialog.get_by_label("Report name").fill("Abnahme Übung")
+    dialog.get_by_role("button", name="Generate report").click()
+    entry = dialog.locator("#report-list li")
+    expect(entry.first).to_be_visible(timeout=5000)
+    shot(page, "report-requested")
+    # The background job finishes while the dialog is open; what it made is
+    # the PDF a person downloads, so read that back.
+    link = dialog.locator("#report-list li a")
+    expect(link.first).to_be_visible(timeout=90_000)
+    href = link.first.get_attribute("href")
+    pdf = page.request.get(href if href.startswith("http") else server.url + href)
+    assert pdf.ok
+    assert "Abnahme Übung" in flat(pdf_text(pdf.body(), tmp_path))
+    shot(page, "report-ready")
+
+
+def test_ros_parameters_are_typed_and_suggest_matching_topics(page, server, open_leg, shot):
+    robot = Robot(server, open_leg)
+    try:
+        login(page, server, "otto")
+        choose(page, open_leg)
+        expect(page.locator("#collector-status")).to_contain_text("online", timeout=8000)
+        page.get_by_role("button", name="ROS parameters").click()
+        dialog = page.locator("#parameters-dialog")
+        gps = dialog.get_by_label("topics.gps_fix")
+        # Only the NavSatFix topic of the robot's graph is offered for the GPS input.
+        options = dialog.locator(f"#{gps.get_attribute('list')} option")
+        expect(options).to_have_count(1)
+        expect(options.first).to_have_text("/fix")
+        expect(dialog.get_by_label("params.use_tf")).to_have_value("true")
+        expect(dialog.get_by_label("params.pose_min_distance")).to_have_attribute("type", "number")
+        gps.fill("/fix")
+        dialog.get_by_label("params.pose_min_distance").fill("1.5")
+        shot(page, "parameters")
+        dialog.get_by_role("button", name="Apply").click()
+        expect(page.locator("#notice")).to_contain_text("set_parameters done", timeout=5000)
+        page.get_by_role("button", name="Close").last.click()
+        page.get_by_role("button", name="ROS parameters").click()
+        expect(dialog.get_by_label("topics.gps_fix")).to_have_value("/fix")
+        expect(dialog.get_by_label("params.pose_min_distance")).to_have_value("1.5")
+    finally:
+        robot.stop()
+
+
+def test_local_map_and_overlay_appear_live(page, server, open_leg, shot):
+    login(page, server, "otto")
+    choose(page, open_leg)
+    expect(page.locator("#live-status")).to_have_text("live")
+    robot = Robot(server, open_leg)
+    try:
+        for step in ("auto", "poses", "ito", "poses", "map"):
+            robot.do(step)
+    finally:
+        robot.stop()
+    local = page.locator("#local-map")
+    expect(local).to_be_visible(timeout=3000)
+    expect(local.locator("img.ftt-affine")).to_have_count(1)
+    # Two tracks and the take-over circle of the ITO segment.
+    expect(local.locator("path.leaflet-interactive")).to_have_count(3)
+    expect(page.locator("#local-message")).to_contain_text("2×2 cells of 40 m")
+    # Two segments started with both positions: the overlay is fitted and offered.
+    expect(page.locator("#overlay-message")).to_contain_text("fitted from 2 segments")
+    expect(page.locator("#gps-map .leaflet-control-layers")).to_have_count(1)
+    shot(page, "local-map-live")
+
+
+def test_phone_layout_and_delete_confirmation(browser, server, open_leg, shot):
+    page = browser.new_page(viewport={"width": 390, "height": 844}, is_mobile=True)
+    login(page, server, "otto")
+    choose(page, open_leg)
+    # Nothing wider than the phone: no sideways scrolling of the page.
+    assert page.evaluate("document.documentElement.scrollWidth") <= 390
+    shot(page, "phone")
+    page.locator('[data-action="delete"][data-level="leg"]').click()
+    confirm = page.locator("#confirm-dialog")
+    expect(confirm).to_contain_text("Delete leg 1 with all its segments, notes and images?")
+    shot(page, "delete-confirmation")
+    confirm.get_by_role("button", name="Keep it").click()
+    expect(page.locator('[data-state="leg"]')).to_have_text("open")
+    page.locator('[data-action="delete"][data-level="leg"]').click()
+    confirm.get_by_role("button", name="Delete").click()
+    expect(page.locator("#pick-leg option")).to_have_text(["no leg yet"])
+    expect(page.locator("#segments-section")).to_be_hidden()
+    page.close()
+
+
+def test_ending_a_leg_while_logging_stops_logging_first(page, server, open_leg, shot):
+    robot = Robot(server, open_leg)
+    try:
+        login(page, server, "otto")
+        choose(page, open_leg)
+        toggle = page.locator("#logging-toggle")
+        expect(toggle).to_be_enabled(timeout=8000)
+        toggle.click()
+        expect(toggle).to_have_text("Stop logging", timeout=5000)
+        robot.do("auto")
+        expect(page.locator("#segment-table tbody tr")).to_have_count(1)
+        page.locator('[data-action="end"][data-level="leg"]').click()
+        expect(page.locator('[data-state="leg"]')).to_have_text("closed")
+        expect(toggle).to_have_text("Start logging", timeout=5000)
+        # Closed levels: logging cannot start again until a new leg is opened.
+        expect(toggle).to_be_disabled()
+        expect(page.locator("#logging-why")).to_contain_text("open test event, shift and leg")
+        expect(page.locator("#segment-table tbody tr td").nth(7)).to_have_text("CLOSED")
+        shot(page, "leg-ended")
+    finally:
+        robot.stop()
+
+
+def test_tile_server_can_be_overridden_per_browser(page, server, open_leg, tiles, shot):
+    login(page, server, "otto")
+    choose(page, open_leg)
+    gps = page.locator("#gps-map")
+    expect(gps.locator("img.leaflet-tile-loaded").first).to_be_attached()
+    expect(page.locator("#tile-message")).to_be_hidden()
+    page.get_by_role("button", name="Map settings").click()
+    settings = page.locator("#map-settings-dialog")
+    settings.get_by_label("Tile URL").fill("http://127.0.0.1:9/elsewhere/{z}/{x}/{y}.png")
+    settings.get_by_role("button", name="Save").click()
+    expect(page.locator("#tile-message")).to_contain_text("tiles are unavailable")
+    # The choice is this browser's: it survives a reload.
+    page.reload()
+    choose(page, open_leg)
+    expect(page.locator("#tile-message")).to_contain_text("tiles are unavailable")
+    shot(page, "own-tile-server-down")
+    page.get_by_role("button", name="Map settings").click()
+    settings.get_by_role("button", name="Use site default").click()
+    expect(gps.locator("img.leaflet-tile-loaded").first).to_be_attached()
+    expect(page.locator("#tile-message")).to_be_hidden()

@@ -1,0 +1,74 @@
+"""List endpoints of the log hierarchy and configuration run a fixed number of queries."""
+
+import itertools
+
+import pytest
+
+from events.models import Performer, Personnel, PoseSource, SegmentType, Vehicle, Weather
+from events.services import logs, notes, segments
+from tests.events.api.querycount import LIST_QUERIES, assert_constant_queries
+
+counter = itertools.count()
+
+
+def _test_events(n, leg):
+    for _ in range(n):
+        logs.create_test_event(location=f"site {next(counter)}")
+
+
+def _shifts(n, leg):
+    for _ in range(n):
+        logs.create_shift(test_event=leg.shift.test_event, vehicle=leg.shift.vehicle)
+
+
+def _legs(n, leg):
+    shift = leg.shift.test_event.shifts.filter(end__isnull=True).first()
+    for _ in range(n):
+        logs.create_leg(shift=shift)
+
+
+def _segments(n, leg):
+    for i in range(n):
+        segments.report_mode(leg, SegmentType.ITO if i % 2 else SegmentType.AUTO)
+
+
+def _notes(n, leg):
+    segment = segments.new_manual_segment(leg)
+    author = Personnel.objects.first()
+    for i in range(n):
+        notes.add_note(segment, text=f"note {i}", author=author)
+
+
+def _configuration(model, **fields):
+    def add(n, leg):
+        for _ in range(n):
+            i = next(counter)
+            model.objects.create(**{k: f"{v}{i}" for k, v in fields.items()})
+
+    return add
+
+
+CASES = {
+    "/api/test-events/": _test_events,
+    "/api/shifts/": _shifts,
+    "/api/legs/": _legs,
+    "/api/segments/": _segments,
+    "/api/notes/": _notes,
+    "/api/personnel/": _configuration(Personnel, name="p"),
+    "/api/performers/": _configuration(Performer, institution="i"),
+    "/api/vehicles/": _configuration(Vehicle, key="v", short_description="v"),
+    "/api/pose-sources/": _configuration(PoseSource, key="s", short_description="s"),
+    # Catalogues are not paginated: no count query.
+    "/api/weather/": _configuration(Weather, key="w", short_description="w"),
+}
+
+
+@pytest.mark.parametrize("url", CASES)
+def test_list_queries_do_not_grow_with_rows(url, api_client, django_assert_max_num_queries, leg):
+    assert_constant_queries(
+        api_client,
+        django_assert_max_num_queries,
+        f"{url}?page_size=1000",
+        lambda n: CASES[url](n, leg),
+        most=LIST_QUERIES,
+    )

@@ -1,0 +1,139 @@
+"""A small but complete field day, built through the services the way FTT records one."""
+
+import io
+from datetime import UTC, datetime, timedelta
+
+from PIL import Image as PILImage
+
+from events.models import Performer, Personnel, PoseSource, Vehicle
+from events.services import logs, notes, segments
+from events.services.segments import GpsPosition, LocalPosition
+from telemetry.services import recording
+
+T0 = datetime(2026, 5, 4, 8, 0, tzinfo=UTC)
+
+
+def png(colour: int, size=(8, 6)) -> bytes:
+    buffer = io.BytesIO()
+    PILImage.new("L", size, colour).save(buffer, "PNG")
+    return buffer.getvalue()
+
+
+def jpeg(colour: int) -> bytes:
+    buffer = io.BytesIO()
+    PILImage.new("RGB", (16, 12), (colour, 10, 200)).save(buffer, "JPEG")
+    return buffer.getvalue()
+
+
+def configuration(vehicle_key="husky"):
+    vehicle, _ = Vehicle.objects.get_or_create(
+        key=vehicle_key, defaults={"short_description": "Husky A200", "institution": "FKIE"}
+    )
+    source, _ = PoseSource.objects.get_or_create(
+        key="gps", defaults={"short_description": "RTK GPS"}
+    )
+    performer, _ = Performer.objects.get_or_create(institution="Fraunhofer FKIE")
+    person, _ = Personnel.objects.get_or_create(name="Jörg Müller", institution="FKIE")
+    return vehicle, source, performer, person
+
+
+def field_day(start=T0, *, vehicle_key="husky", close=True, event=None):
+    """One shift with one leg: ITO, AUTO, ITO with poses, local poses, a map, an image, a note."""
+    vehicle, source, performer, person = configuration(vehicle_key)
+    at = start
+    if event is None:
+        event = logs.create_test_event(
+            at=at, location="Wachtberg", version="1.0", time_zone="Europe/Berlin"
+        )
+    shift = logs.create_shift(
+        test_event=event,
+        vehicle=vehicle,
+        at=at + timedelta(minutes=1),
+        performer=performer,
+        robot_operator=person,
+        test_intent="loop",
+    )
+    leg = logs.create_leg(
+        shift=shift, at=at + timedelta(minutes=2), default_pose_source=source, weather_id="sunny"
+    )
+    lon, lat = 7.12796, 50.61568
+    for index, mode in enumerate(("ito", "auto", "ito")):
+        t = at + timedelta(minutes=3 + index * 5)
+        master = segments.report_mode(
+            leg,
+            mode,
+            at=t,
+            robot_stamp=t - timedelta(milliseconds=5),
+            gps=GpsPosition(lon + index * 1e-4, lat),
+            local=LocalPosition(float(index), -0.5, "map"),
+        ).master
+        recording.record_poses(
+            master,
+            [
+                recording.GpsFix(
+                    longitude=lon + index * 1e-4 + k * 1e-6,
+                    latitude=lat + k * 1e-6,
+                    altitude=101.25,
+                    horizontal_accuracy=0.02,
+                    robot_stamp=t + timedelta(seconds=2 * k),
+                )
+                for k in range(5)
+            ],
+        )
+        recording.record_local_poses(
+            master,
+            [
+                recording.MapPose(
+                    x=index + k * 0.5,
+                    y=k * 0.25,
+                    frame="map",
+                    yaw=0.1 * k,
+                    robot_stamp=t + timedelta(seconds=2 * k),
+                )
+                for k in range(4)
+            ],
+        )
+    child = master.children.get()
+    segments.annotate_segment(child, ito_reason="safety", obstacle="fence")
+    notes.add_note(child, text="stopped at the fence", author=person)
+    recording.record_map(
+        shift,
+        png=png(200),
+        frame="map",
+        width=8,
+        height=6,
+        resolution=0.5,
+        origin_x=-2.0,
+        origin_y=-1.5,
+        robot_stamp=at + timedelta(minutes=4),
+    )
+    recording.attach_image(
+        master,
+        content=jpeg(90),
+        filename="front.jpg",
+        description="front camera",
+        robot_stamp=at + timedelta(minutes=14),
+    )
+    if close:
+        logs.close_test_event(event, at=at + timedelta(minutes=20))
+    return event
+
+
+def more_logging():
+    """The robot goes on after a first export: a second leg with new data, then the day ends."""
+    from events.models import Shift
+
+    shift = Shift.objects.get(end__isnull=True)
+    at = T0 + timedelta(minutes=30)
+    leg = logs.create_leg(shift=shift, at=at, weather_id="cloudy")
+    for index, mode in enumerate(("auto", "ito")):
+        t = at + timedelta(minutes=1 + index * 3)
+        master = segments.report_mode(leg, mode, at=t, gps=GpsPosition(7.128, 50.616)).master
+        recording.record_poses(
+            master,
+            [
+                recording.GpsFix(longitude=7.128 + k * 1e-5, latitude=50.616, robot_stamp=t)
+                for k in range(3)
+            ],
+        )
+    logs.close_test_event(shift.test_event, at=at + timedelta(minutes=10))

@@ -1,0 +1,39 @@
+"""The database itself refuses states the services never create."""
+
+import pytest
+from django.db import IntegrityError, transaction
+from django.utils import timezone
+
+from events.models import Leg, Segment, Shift
+from events.services import segments
+
+
+def test_second_open_shift_for_a_vehicle_is_refused_by_the_database(shift):
+    with pytest.raises(IntegrityError), transaction.atomic():
+        Shift.objects.create(
+            test_event=shift.test_event, vehicle=shift.vehicle, number=99, start=timezone.now()
+        )
+
+
+def test_second_open_leg_in_a_shift_is_refused_by_the_database(leg):
+    with pytest.raises(IntegrityError), transaction.atomic():
+        Leg.objects.create(shift=leg.shift, number=99, start=timezone.now())
+
+
+def test_second_open_master_in_a_leg_is_refused_by_the_database(leg):
+    segments.report_mode(leg, "auto")
+    with pytest.raises(IntegrityError), transaction.atomic():
+        Segment.objects.create(leg=leg, segment_type_id="ito", start=timezone.now())
+
+
+def test_auto_children_and_annotated_masters_are_refused_by_the_database(leg):
+    master = segments.report_mode(leg, "auto").master
+    with pytest.raises(IntegrityError), transaction.atomic():
+        Segment.objects.create(leg=leg, parent=master, segment_type_id="auto", start=master.start)
+    with pytest.raises(IntegrityError), transaction.atomic():
+        Segment.objects.filter(pk=master.pk).update(obstacle="rock")
+
+
+def test_end_before_start_is_refused_by_the_database(leg):
+    with pytest.raises(IntegrityError), transaction.atomic():
+        Leg.objects.filter(pk=leg.pk).update(end=leg.start - timezone.timedelta(seconds=1))

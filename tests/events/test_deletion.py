@@ -1,0 +1,72 @@
+"""Deleting log levels takes everything below along; configuration in use stays."""
+
+import pytest
+from django.core.files.storage import default_storage
+
+from events.errors import RuleViolation
+from events.models import Leg, Note, Segment, Shift
+from events.services import deletion, notes, segments
+from telemetry.models import Image, MapImage, Pose
+from telemetry.services import recording
+
+PNG = (
+    b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\x00\x00\x00\x01\x00\x00\x00\x01\x08\x06\x00\x00\x00\x1f"
+    b"\x15\xc4\x89\x00\x00\x00\rIDATx\x9cc\xf8\xff\xff?\x00\x05\xfe\x02\xfe\xa7V\xbd\xfa\x00\x00"
+    b"\x00\x00IEND\xaeB`\x82"
+)
+
+
+@pytest.fixture
+def recorded_leg(leg, person, media_root, django_capture_on_commit_callbacks):
+    master = segments.report_mode(leg, "ito").master
+    recording.record_poses(master, [recording.GpsFix(7.1, 50.6)])
+    image = recording.attach_image(master, content=PNG, filename="cam.png")
+    map_image, _ = recording.record_map(
+        leg.shift,
+        png=PNG,
+        frame="map",
+        width=1,
+        height=1,
+        resolution=0.05,
+        origin_x=0.0,
+        origin_y=0.0,
+    )
+    notes.add_note(master.children.get(), text="Hindernis", author=person)
+    return leg, [image.image.name, map_image.image.name]
+
+
+def test_deleting_a_test_event_removes_everything_below_and_the_files(
+    recorded_leg, django_capture_on_commit_callbacks
+):
+    leg, files = recorded_leg
+    assert all(default_storage.exists(name) for name in files)
+    with django_capture_on_commit_callbacks(execute=True):
+        deletion.delete(leg.shift.test_event)
+    for model in (Shift, Leg, Segment, Pose, Image, MapImage, Note):
+        assert not model.objects.exists(), model.__name__
+    assert not any(default_storage.exists(name) for name in files)
+
+
+def test_deleting_a_leg_keeps_its_shift_and_the_shift_map(recorded_leg):
+    leg, _ = recorded_leg
+    deletion.delete(leg)
+    assert Shift.objects.filter(pk=leg.shift_id).exists()
+    assert MapImage.objects.filter(shift=leg.shift_id).exists()
+    assert not Segment.objects.exists()
+
+
+def test_configuration_in_use_cannot_be_deleted_and_the_error_says_where(shift):
+    with pytest.raises(RuleViolation) as exc:
+        deletion.delete(shift.vehicle)
+    message = " ".join(exc.value.messages)
+    assert "shifts" in message and "Shift 1" in message
+
+
+def test_person_who_wrote_a_note_cannot_be_deleted(recorded_leg, person):
+    with pytest.raises(RuleViolation, match="note"):
+        deletion.delete(person)
+
+
+def test_unused_configuration_can_be_deleted(other_vehicle):
+    deletion.delete(other_vehicle)
+    assert not type(other_vehicle).objects.filter(pk=other_vehicle.pk).exists()

@@ -1,0 +1,173 @@
+"""Statistics, report jobs and exports over the API; background generation."""
+
+import threading
+import time
+
+import pytest
+from django.db import connection
+
+from reports.models import Report
+from reports.services import generation
+from reports.services.generation import fail_stale_reports, request_report, run_job
+from tests.reports.pdf_helpers import flat, pdf_text
+from tests.reports.scenario import STEP_M
+
+
+def test_statistics_endpoint_returns_the_selector_figures(scenario, api_client):
+    response = api_client("viewer").get(f"/api/reports/statistics/{scenario.event.pk}/")
+    assert response.status_code == 200
+    data = response.json()
+    assert data["overall"]["interventions"] == 2
+    assert data["overall"]["auto_distance"] == pytest.approx(13 * STEP_M)
+    assert data["overall"]["mdbi"]["value"] == pytest.approx(13 * STEP_M / 2)
+    assert data["overall"]["mdbi"]["censored"] is False
+    s1 = str(scenario.shifts[0].pk)
+    assert data["shifts"][s1]["auto_seconds"] == 340
+    assert "MDBI" in data["formulas"]
+
+
+def test_statistics_need_a_role_and_a_valid_mode(scenario, api_client):
+    url = f"/api/reports/statistics/{scenario.event.pk}/"
+    assert api_client(anonymous=True).get(url).status_code == 401
+    assert api_client(None).get(url).status_code == 403
+    response = api_client("viewer").get(url + "?mode=mars")
+    assert response.status_code == 400
+    assert "mode" in response.json()["errors"]
+    assert api_client("viewer").get("/api/reports/statistics/999999/").status_code == 404
+
+
+def test_viewer_cannot_request_a_report(scenario, api_client):
+    response = api_client("viewer").post(
+        "/api/reports/", {"test_event": scenario.event.pk}, format="json"
+    )
+    assert response.status_code == 403
+
+
+def test_request_returns_at_once_and_the_worker_makes_a_downloadable_pdf(
+    scenario, api_client, django_capture_on_commit_callbacks, settings, tmp_path
+):
+    settings.FTT_TILE_CACHE = tmp_path / "tiles"
+    operator = api_client("operator")
+    with django_capture_on_commit_callbacks(execute=False) as callbacks:
+        response = operator.post(
+            "/api/reports/",
+            {"test_event": scenario.event.pk, "options": {"name": "Bericht", "no_tiles": True}},
+            format="json",
+        )
+    assert response.status_code == 202
+    body = response.json()
+    assert body["status"] == "queued" and body["download"] is None
+    assert len(callbacks) == 1  # the worker starts only once the row is committed
+
+    report = run_job(body["id"])  # what the worker thread does
+    assert report.status == Report.Status.DONE and report.progress == 1.0
+    listed = api_client("viewer").get(f"/api/reports/?test_event={scenario.event.pk}").json()
+    assert [r["id"] for r in listed] == [body["id"]]
+    assert listed[0]["download"].endswith(f"/api/reports/{body['id']}/pdf/")
+    pdf = api_client("viewer").get(f"/api/reports/{body['id']}/pdf/")
+    assert pdf.status_code == 200
+    text = flat(pdf_text(b"".join(pdf.streaming_content), tmp_path))
+    assert "Bericht" in text and scenario.event.location in text
+
+
+def test_every_report_is_kept_per_test_event(
+    scenario, django_capture_on_commit_callbacks, tmp_path
+):
+    with django_capture_on_commit_callbacks(execute=False):
+        first = request_report(scenario.event, {"no_tiles": True})
+        second = request_report(scenario.event, {"no_tiles": True, "name": "zwei"})
+    run_job(first.pk)
+    run_job(second.pk)
+    kept = Report.objects.filter(test_event=scenario.event, status="done")
+    assert kept.count() == 2
+    assert len({r.pdf.name for r in kept}) == 2
+    assert "zwei" in flat(pdf_text(Report.objects.get(pk=second.pk).pdf.read(), tmp_path))
+
+
+def test_bad_requests_are_refused_before_queueing(scenario, api_client, db):
+    from events.services import logs
+
+    operator = api_client("operator")
+    empty = logs.create_test_event(location="leer")
+    response = operator.post("/api/reports/", {"test_event": empty.pk}, format="json")
+    assert response.status_code == 409
+    assert "no segments" in response.json()["detail"]
+    for options, field in (
+        ({"colour": 1}, "colour"),
+        ({"version": 2}, "version"),
+        ({"recipient_address": "one line"}, "recipient_address"),
+        ({"tile_url": "http://10.0.0.1/{z}/{x}/{y}.png"}, "tile_url"),  # no fetching for users
+        ({"logo": "/etc/hostname"}, "logo"),  # no reading server files for users
+    ):
+        response = operator.post(
+            "/api/reports/", {"test_event": scenario.event.pk, "options": options}, format="json"
+        )
+        assert response.status_code == 400, options
+        assert field in " ".join(response.json()["errors"]["options"])
+    assert Report.objects.count() == 0
+
+
+def test_failures_are_recorded_on_the_row(
+    scenario, monkeypatch, django_capture_on_commit_callbacks
+):
+    def explode(*args, **kwargs):
+        raise RuntimeError("disk full")
+
+    monkeypatch.setattr(generation, "render_report", explode)
+    with django_capture_on_commit_callbacks(execute=False):
+        report = request_report(scenario.event, {})
+    report = run_job(report.pk)
+    assert report.status == Report.Status.FAILED
+    assert "disk full" in report.error
+
+
+def test_reports_whose_worker_vanished_are_marked_failed(
+    scenario, django_capture_on_commit_callbacks
+):
+    from django.utils import timezone
+
+    with django_capture_on_commit_callbacks(execute=False):
+        report = request_report(scenario.event, {})
+    later = timezone.now() + generation.STALE_AFTER * 2
+    assert fail_stale_reports(now=later) == 1
+    report.refresh_from_db()
+    assert report.status == Report.Status.FAILED and "Request the report again" in report.error
+
+
+@pytest.mark.django_db(transaction=True)
+def test_background_thread_finishes_the_report(
+    vehicle, other_vehicle, performer, media_root, tmp_path
+):
+    from tests.reports.scenario import build_scenario
+
+    scenario = build_scenario(vehicle, other_vehicle, performer)
+    started = time.monotonic()
+    report = request_report(scenario.event, {"no_tiles": True})
+    assert time.monotonic() - started < 2.0  # the request does not wait for the PDF
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        report.refresh_from_db()
+        if report.is_finished:
+            break
+        time.sleep(0.5)
+    assert report.status == Report.Status.DONE, report.error
+    assert scenario.event.location in flat(pdf_text(report.pdf.read(), tmp_path))
+    report.pdf.close()
+    for thread in threading.enumerate():
+        if thread.name.startswith("report-"):
+            thread.join(timeout=10)
+    connection.close()
+
+
+def test_exports_over_the_api(scenario, api_client):
+    client = api_client("viewer")
+    base = f"/api/reports/exports/{scenario.event.pk}/"
+    csv_response = client.get(base + "segments.csv")
+    assert csv_response.status_code == 200
+    assert csv_response["Content-Type"].startswith("text/csv")
+    assert csv_response.content.decode().startswith("test_event,shift,leg,segment_id")
+    geo = client.get(base + "tracks.geojson")
+    assert geo.status_code == 200 and geo.json()["type"] == "FeatureCollection"
+    gpx = client.get(base + "tracks.gpx")
+    assert gpx.status_code == 200 and b"<trkpt" in gpx.content
+    assert client.get(base + "tracks.kml").status_code == 404

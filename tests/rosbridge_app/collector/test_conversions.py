@@ -1,0 +1,147 @@
+import io
+import math
+from types import SimpleNamespace as NS
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from rosbridge_app.collector import conversions as conv
+
+
+def stamp(sec=100, nanosec=0):
+    return NS(sec=sec, nanosec=nanosec)
+
+
+def fix(lat=50.6, lon=7.1, status=0, alt=100.0, cov=(0.04, 0, 0, 0, 0.09, 0, 0, 0, 1), ctype=2):
+    return NS(
+        header=NS(stamp=stamp()),
+        status=NS(status=status),
+        latitude=lat,
+        longitude=lon,
+        altitude=alt,
+        position_covariance=list(cov),
+        position_covariance_type=ctype,
+    )
+
+
+def test_fix_keeps_position_altitude_and_accuracy():
+    f = conv.navsat_fix(fix())
+    assert (f["lon"], f["lat"], f["alt"], f["status"]) == (7.1, 50.6, 100.0, 0)
+    assert f["accuracy"] == pytest.approx(0.3)
+    assert f["robot_stamp"].timestamp() == 100
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [
+        {"status": -1},
+        {"lat": float("nan")},
+        {"lon": float("inf")},
+        {"lat": 91.0},
+    ],
+)
+def test_unusable_fixes_are_dropped(bad):
+    assert conv.navsat_fix(fix(**bad)) is None
+
+
+def test_fix_with_nan_altitude_keeps_the_position():
+    assert conv.navsat_fix(fix(alt=float("nan")))["alt"] is None
+
+
+def grid(width, height, data, yaw=0.0, ox=-1.0, oy=-2.0, res=0.05):
+    o = NS(
+        position=NS(x=ox, y=oy, z=0.0),
+        orientation=NS(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)),
+    )
+    return NS(
+        header=NS(stamp=stamp(), frame_id="map"),
+        info=NS(width=width, height=height, resolution=res, origin=o),
+        data=data,
+    )
+
+
+def test_grid_becomes_png_with_origin_at_the_bottom_left():
+    # Cell (row 0, col 0) is at the origin, i.e. the image's bottom-left pixel.
+    cells = [100, 0, 0, -1, -1, -1]  # 3 wide, 2 high
+    msg = grid(3, 2, cells, yaw=0.5)
+    img = Image.open(io.BytesIO(conv.grid_to_png(msg)))
+    assert img.size == (3, 2)
+    px = np.asarray(img)
+    assert px[1, 0] == 0  # occupied: black, bottom-left
+    assert px[1, 1] == 254  # free: white
+    assert px[0, 0] == 205  # unknown: grey, top row
+    geometry = conv.grid_geometry(msg)
+    assert geometry["origin_yaw"] == pytest.approx(0.5)
+    assert (geometry["origin_x"], geometry["origin_y"], geometry["resolution"]) == (-1, -2, 0.05)
+
+
+def test_empty_or_inconsistent_grid_is_not_usable():
+    assert not conv.grid_is_usable(grid(0, 0, []))
+    assert not conv.grid_is_usable(grid(3, 2, [0, 0]))
+
+
+def image(encoding, pixels: np.ndarray, step_pad=0, bigendian=False):
+    h, w = pixels.shape[:2]
+    rows = pixels.reshape(h, -1).view(np.uint8)
+    if step_pad:
+        rows = np.hstack([rows, np.zeros((h, step_pad), np.uint8)])
+    return NS(
+        header=NS(stamp=stamp()),
+        encoding=encoding,
+        width=w,
+        height=h,
+        step=rows.shape[1],
+        is_bigendian=bigendian,
+        data=rows.tobytes(),
+    )
+
+
+def decoded(jpeg: bytes) -> np.ndarray:
+    return np.asarray(Image.open(io.BytesIO(jpeg)).convert("RGB")).astype(int)
+
+
+@pytest.mark.parametrize(
+    "encoding,order",
+    [("rgb8", [0, 1, 2]), ("bgr8", [2, 1, 0]), ("rgba8", [0, 1, 2, 3]), ("bgra8", [2, 1, 0, 3])],
+)
+def test_colour_images_keep_their_colours(encoding, order):
+    red = np.zeros((16, 16, len(order)), np.uint8)
+    red[..., 0] = 220  # in RGB(A) order
+    if len(order) == 4:
+        red[..., 3] = 255
+    pixels = red[..., order]
+    out = decoded(conv.image_to_jpeg(image(encoding, pixels, step_pad=4)))
+    r, g, b = out[8, 8]
+    assert r > 180 and g < 40 and b < 40
+
+
+def test_mono16_is_stretched_to_visible_grey():
+    depth = np.array([[1000, 3000], [2000, 3000]], dtype=np.uint16)
+    out = decoded(conv.image_to_jpeg(image("mono16", depth)))
+    assert out[0, 0, 0] < out[1, 0, 0] < out[0, 1, 0]
+
+
+def test_unknown_encoding_and_short_data_raise():
+    with pytest.raises(conv.UnsupportedImage):
+        conv.image_to_jpeg(
+            NS(encoding="weird", width=2, height=2, step=2, is_bigendian=False, data=b"0000")
+        )
+    with pytest.raises(conv.UnsupportedImage):
+        conv.image_to_jpeg(
+            NS(encoding="rgb8", width=4, height=4, step=12, is_bigendian=False, data=b"\0" * 10)
+        )
+
+
+def test_large_frames_are_scaled_down():
+    big = np.zeros((2160, 3840, 3), np.uint8)
+    out = Image.open(io.BytesIO(conv.image_to_jpeg(image("rgb8", big), max_side=1920)))
+    assert out.size == (1920, 1080)
+
+
+def test_compressed_images_must_decode():
+    buf = io.BytesIO()
+    Image.new("RGB", (4, 4)).save(buf, format="PNG")
+    assert conv.compressed_image(NS(format="png", data=buf.getvalue()))[1] == "png"
+    with pytest.raises(conv.UnsupportedImage):
+        conv.compressed_image(NS(format="jpeg", data=b"\xff\xd8garbage"))

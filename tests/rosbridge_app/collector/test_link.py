@@ -1,0 +1,71 @@
+"""The database link between the GUI and collectors (rosbridge_app services/selectors)."""
+
+from datetime import timedelta
+
+import pytest
+from django.utils import timezone
+
+from events.errors import RuleViolation
+from rosbridge_app.models import Announcement, Collector, CollectorCommand
+from rosbridge_app.selectors.collectors import collector_status, is_online
+from rosbridge_app.services.collectors import (
+    finish_command,
+    heartbeat,
+    issue_command,
+    mark_stopped,
+    take_commands,
+)
+
+pytestmark = pytest.mark.django_db
+
+
+def test_heartbeat_registers_and_announces_only_changes(vehicle):
+    first = heartbeat("robot/husky", vehicle=vehicle, logging=False, state="idle")
+    heartbeat("robot/husky", vehicle=vehicle, logging=False, state="idle")
+    assert Announcement.objects.filter(kind="collector").count() == 1
+    heartbeat("robot/husky", vehicle=vehicle, logging=True, state="logging")
+    assert Announcement.objects.filter(kind="collector").count() == 2
+    assert Collector.objects.get(pk=first.pk).logging
+
+
+def test_online_status_and_input_ages(vehicle):
+    received = (timezone.now() - timedelta(seconds=4)).isoformat()
+    collector = heartbeat(
+        "robot/husky", vehicle=vehicle, inputs={"gps_fix": {"count": 3, "last_received": received}}
+    )
+    status = collector_status(collector)
+    assert status["online"] and status["vehicle"] == "husky"
+    assert 3.5 < status["inputs"]["gps_fix"]["age"] < 10
+    Collector.objects.filter(pk=collector.pk).update(
+        last_seen=timezone.now() - timedelta(seconds=10)
+    )
+    assert not is_online(Collector.objects.get(pk=collector.pk))
+    mark_stopped(collector)
+    collector = Collector.objects.get(pk=collector.pk)
+    assert not is_online(collector) and collector.stopped is not None
+
+
+def test_commands_are_taken_once_and_answered(vehicle):
+    collector = heartbeat("robot/husky", vehicle=vehicle)
+    with pytest.raises(RuleViolation):
+        issue_command(collector, "self_destruct")
+    with pytest.raises(RuleViolation):
+        issue_command(collector, CollectorCommand.Kind.SET_PARAMETERS, {"parameters": {}})
+    command = issue_command(collector, CollectorCommand.Kind.START_LOGGING)
+    assert take_commands(collector) == [command]
+    assert take_commands(collector) == []
+    finish_command(command, True, "Logging started.", {"logging": True})
+    command.refresh_from_db()
+    assert command.success and command.done is not None
+    assert Announcement.objects.filter(kind="command").count() == 1
+
+
+def test_commands_nobody_takes_fail_after_a_while(vehicle):
+    collector = heartbeat("robot/husky", vehicle=vehicle)
+    command = issue_command(collector, CollectorCommand.Kind.STOP_LOGGING)
+    CollectorCommand.objects.filter(pk=command.pk).update(
+        issued=timezone.now() - timedelta(minutes=5)
+    )
+    assert take_commands(collector) == []
+    command.refresh_from_db()
+    assert command.success is False and "in time" in command.message

@@ -1,0 +1,115 @@
+"""Events → rows through the Foundation services (what the live collector's
+writer and a bag import both do)."""
+
+from datetime import UTC, datetime, timedelta
+
+import pytest
+
+from events.models import Segment
+from events.selectors.logs import open_leg_for_vehicle
+from events.services import logs
+from rosbridge_app.collector import events as ev
+from rosbridge_app.collector.bag import bag_events
+from rosbridge_app.collector.events import Event
+from rosbridge_app.collector.recorder import Recorder, record_events
+from telemetry.models import Image, MapImage, Pose
+from tests.fkie import FKIE_BAG, master_path_length
+
+pytestmark = pytest.mark.django_db
+
+
+@pytest.mark.skipif(not FKIE_BAG.exists(), reason="fkie_test.bag not available")
+def test_fkie_bag_gives_five_masters_and_its_path_once(vehicle, media_root):
+    # The leg must start before the bag (2019) to take its segments.
+    start = datetime(2019, 4, 8, tzinfo=UTC)
+    event = logs.create_test_event(at=start)
+    leg = logs.create_leg(
+        shift=logs.create_shift(test_event=event, vehicle=vehicle, at=start), at=start
+    )
+    events = bag_events(FKIE_BAG, {"params.robot_mode_type": "industrial"})
+    record_events(leg, events)
+    masters = list(Segment.objects.filter(leg=leg, parent__isnull=True).order_by("start"))
+    assert [m.segment_type_id for m in masters] == ["ito", "auto", "ito", "auto", "ito"]
+    for m in masters:
+        children = list(m.children.values_list("ito_reason_id", flat=True))
+        assert children == (["unassigned"] if m.segment_type_id == "ito" else [])
+        assert m.end is not None and m.start_position is not None
+    total = sum(master_path_length(m) for m in masters)
+    assert total == pytest.approx(224, rel=0.01)
+    rows = Pose.objects.count()
+    record_events(leg, events)  # an import run twice
+    assert Pose.objects.count() == rows
+    assert Segment.objects.filter(leg=leg).count() == 8
+
+
+BASE = datetime.now(UTC)
+
+
+@pytest.fixture(autouse=True)
+def _base_after_fixture_legs():
+    # Set per test, not at import: a long run would otherwise put these times
+    # before the legs the fixtures open and the services would refuse them.
+    global BASE
+    BASE = datetime.now(UTC) + timedelta(minutes=1)
+
+
+def at(s):
+    return BASE + timedelta(seconds=s)
+
+
+def test_follows_a_new_leg_and_gives_a_new_shift_its_map(leg, media_root):
+    vehicle = leg.shift.vehicle
+    recorder = Recorder(lambda: open_leg_for_vehicle(vehicle))
+    png = b"\x89PNG\r\n\x1a\n" + b"0" * 20
+    grid = {
+        "frame": "map",
+        "width": 2,
+        "height": 2,
+        "resolution": 0.1,
+        "origin_x": 0.0,
+        "origin_y": 0.0,
+        "origin_yaw": 0.3,
+        "checksum": "abc",
+    }
+    recorder.apply(
+        [
+            Event(ev.START, at(0)),
+            Event(ev.MODE, at(1), {"mode": "auto", "gps": [7.1, 50.6], "local": None}),
+            Event(ev.MAP, at(1), grid, blob=png),
+            Event(ev.GPS, at(2), {"lon": 7.1, "lat": 50.6}),
+        ]
+    )
+    first = Segment.objects.get(leg=leg)
+    assert first.poses.count() == 1 and first.segment_type_id == "auto"
+    logs.close_leg(leg)
+    recorder.sync()
+    assert recorder.leg is None  # no open leg: keeps going, writes nothing
+    recorder.apply([Event(ev.GPS, at(3), {"lon": 7.2, "lat": 50.6})])
+    assert Pose.objects.count() == 1
+    new_shift = logs.create_shift(test_event=leg.shift.test_event, vehicle=vehicle)
+    new_leg = logs.create_leg(shift=new_shift)
+    recorder.sync()
+    master = Segment.objects.get(leg=new_leg, parent__isnull=True)
+    assert master.segment_type_id == "auto" and master.end is None
+    assert MapImage.objects.filter(shift=new_shift, origin_yaw=0.3).count() == 1
+
+
+def test_images_only_for_a_new_master_and_stop_closes(leg, media_root):
+    recorder = Recorder(lambda: leg)
+    auto = Event(ev.MODE, at(1), {"mode": "auto"})
+    again = Event(ev.MODE, at(2), {"mode": "auto"})  # e.g. first message after a restart
+    jpeg = b"\xff\xd8\xff\xe0" + b"0" * 50
+    recorder.apply(
+        [
+            Event(ev.START, at(0)),
+            auto,
+            Event(ev.IMAGE, at(1), {"master": str(auto.uid), "suffix": "jpg"}, blob=jpeg),
+            again,
+            Event(ev.IMAGE, at(2), {"master": str(again.uid), "suffix": "jpg"}, blob=jpeg),
+            Event(ev.STOP, at(3)),
+        ]
+    )
+    master = Segment.objects.get(leg=leg)
+    assert master.uid == auto.uid
+    assert Image.objects.filter(segment=master).count() == 1
+    assert master.end == at(3)

@@ -1,0 +1,166 @@
+"""The websocket pushes outbox rows to subscribed browsers and catches up reconnects."""
+
+import asyncio
+
+import pytest
+from channels.db import database_sync_to_async
+from channels.testing import WebsocketCommunicator
+from django.contrib.auth.models import AnonymousUser, Group, User
+
+from events.services import segments
+from rosbridge_app import consumers
+from rosbridge_app.consumers import LiveConsumer
+from telemetry.services import recording
+
+pytestmark = [
+    pytest.mark.django_db(transaction=True),
+    pytest.mark.asyncio,
+]
+
+
+@pytest.fixture
+def viewer(db):
+    user = User.objects.create_user("vera", password="pw")
+    user.groups.add(Group.objects.get(name="viewer"))
+    return user
+
+
+async def connect(user, **subscribe):
+    communicator = WebsocketCommunicator(LiveConsumer.as_asgi(), "/ws/live/")
+    communicator.scope["user"] = user
+    connected, _ = await communicator.connect()
+    assert connected
+    await communicator.send_json_to({"type": "subscribe", **subscribe})
+    reply = await communicator.receive_json_from(timeout=3)
+    assert reply["type"] == "subscribed"
+    return communicator, reply["last_id"]
+
+
+async def next_events(communicator, timeout=2.0):
+    message = await communicator.receive_json_from(timeout=timeout)
+    assert message["type"] == "events"
+    return message["events"]
+
+
+async def test_user_without_role_is_refused(db):
+    communicator = WebsocketCommunicator(LiveConsumer.as_asgi(), "/ws/live/")
+    communicator.scope["user"] = AnonymousUser()
+    connected, code = await communicator.connect()
+    assert not connected and code == 4403
+
+
+async def test_new_segment_and_poses_arrive_within_a_second(viewer, leg):
+    communicator, _ = await connect(viewer, leg=leg.pk)
+    loop = asyncio.get_running_loop()
+    started = loop.time()
+    master = (await database_sync_to_async(segments.report_mode)(leg, "auto")).master
+    await database_sync_to_async(recording.record_poses)(master, [recording.GpsFix(7.0, 50.0)])
+    received = []
+    while len(received) < 2:
+        received += await next_events(communicator)
+    assert loop.time() - started < 1.0
+    assert [e["kind"] for e in received] == ["segment", "poses"]
+    assert received[1]["payload"]["points"] == [[7.0, 50.0]]
+    await communicator.disconnect()
+
+
+async def test_other_legs_poses_are_not_sent(viewer, leg, shift):
+    from events.services import logs
+
+    communicator, _ = await connect(viewer, leg=leg.pk)
+    other = await database_sync_to_async(logs.create_leg)(shift=shift)  # closes `leg`
+    events = await next_events(communicator)
+    assert [e["kind"] for e in events] == ["log"]  # pickers hear about every level
+    master = (await database_sync_to_async(segments.report_mode)(other, "ito")).master
+    await database_sync_to_async(recording.record_poses)(master, [recording.GpsFix(7.0, 50.0)])
+    assert await communicator.receive_nothing(timeout=0.8)
+    await communicator.disconnect()
+
+
+async def test_reconnecting_browser_gets_what_it_missed(viewer, leg):
+    communicator, last_id = await connect(viewer, leg=leg.pk)
+    await communicator.disconnect()
+    await database_sync_to_async(segments.report_mode)(leg, "ito")
+    again, _ = await connect_expecting_catch_up(viewer, leg.pk, last_id)
+    assert [e["kind"] for e in again] == ["segment"]
+
+
+async def connect_expecting_catch_up(user, leg_id, last_id):
+    communicator = WebsocketCommunicator(LiveConsumer.as_asgi(), "/ws/live/")
+    communicator.scope["user"] = user
+    await communicator.connect()
+    await communicator.send_json_to({"type": "subscribe", "leg": leg_id, "last_id": last_id})
+    events = await next_events(communicator)
+    reply = await communicator.receive_json_from(timeout=2)
+    assert reply["type"] == "subscribed"
+    await communicator.disconnect()
+    return events, reply
+
+
+async def test_poller_waits_for_a_gap_before_skipping_it(viewer, leg, monkeypatch):
+    poller = consumers.OutboxPoller()
+    poller.floor = 10
+    poller.seen = {12}
+    monkeypatch.setattr(consumers, "GAP_PATIENCE", 0.05)
+    poller._advance_floor()
+    assert poller.floor == 10  # id 11 may still commit
+    await asyncio.sleep(0.1)
+    poller._advance_floor()
+    assert poller.floor == 12 and not poller.seen
+
+
+def _redis_or_skip():
+    import redis
+
+    try:
+        redis.Redis.from_url(REDIS_TEST_URL, socket_connect_timeout=0.5).ping()
+    except Exception:  # noqa: BLE001
+        pytest.skip("no Redis server on 127.0.0.1:6379")
+
+
+REDIS_TEST_URL = "redis://127.0.0.1:6379/7"
+
+
+async def test_with_redis_a_commit_wakes_the_poller_at_once(viewer, leg, settings, monkeypatch):
+    _redis_or_skip()
+    from channels.layers import channel_layers
+
+    settings.REDIS_URL = REDIS_TEST_URL
+    settings.CHANNEL_LAYERS = {
+        "default": {
+            "BACKEND": "channels_redis.pubsub.RedisPubSubChannelLayer",
+            "CONFIG": {"hosts": [REDIS_TEST_URL]},
+        }
+    }
+    channel_layers.backends.clear()
+    # Polling alone would take 5 s now: only the wake-up can be this fast.
+    monkeypatch.setattr(consumers, "POLL_INTERVAL", 5.0)
+    try:
+        communicator, _ = await connect(viewer, leg=leg.pk)
+        await asyncio.sleep(0.3)  # the first poll has passed; the poller now sleeps
+        loop = asyncio.get_running_loop()
+        started = loop.time()
+        await database_sync_to_async(segments.report_mode)(leg, "auto")
+        events = await next_events(communicator, timeout=3)
+        assert [e["kind"] for e in events] == ["segment"]
+        assert loop.time() - started < 1.0
+        await communicator.disconnect()
+    finally:
+        channel_layers.backends.clear()
+
+
+async def test_browser_away_longer_than_the_outbox_keeps_is_told_to_reload(viewer, leg):
+    from rosbridge_app.models import Announcement
+
+    await database_sync_to_async(segments.report_mode)(leg, "auto")
+    await database_sync_to_async(segments.report_mode)(leg, "ito")
+    newest = await database_sync_to_async(lambda: Announcement.objects.order_by("-id")[0].pk)()
+    # Everything up to the newest row was pruned while the browser was away.
+    await database_sync_to_async(lambda: Announcement.objects.filter(pk__lt=newest).delete())()
+    communicator = WebsocketCommunicator(LiveConsumer.as_asgi(), "/ws/live/")
+    communicator.scope["user"] = viewer
+    await communicator.connect()
+    await communicator.send_json_to({"type": "subscribe", "leg": leg.pk, "last_id": 1})
+    reply = await communicator.receive_json_from(timeout=2)
+    assert reply == {"type": "reset", "last_id": newest}
+    await communicator.disconnect()

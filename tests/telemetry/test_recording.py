@@ -1,0 +1,74 @@
+"""Robot data lands on master segments, once, with nothing invented."""
+
+import math
+import uuid
+
+import pytest
+
+from events.errors import RuleViolation
+from events.services import segments
+from telemetry.models import Image, LocalPose, MapImage, Pose
+from telemetry.services import recording
+from tests.events.test_deletion import PNG
+
+
+@pytest.fixture
+def ito(leg):
+    return segments.report_mode(leg, "ito").master
+
+
+def test_fixes_sent_for_a_reason_are_stored_on_its_master(ito):
+    child = ito.children.get()
+    recording.record_poses(child, [recording.GpsFix(7.0, 50.0)])
+    assert Pose.objects.get().segment == ito
+
+
+def test_pose_keeps_altitude_fix_quality_accuracy_and_default_pose_source(ito, pose_source):
+    fix = recording.GpsFix(7.0, 50.0, altitude=123.4, fix_status=2, horizontal_accuracy=0.02)
+    recording.record_poses(ito, [fix])
+    pose = Pose.objects.get()
+    assert (pose.altitude, pose.fix_status, pose.horizontal_accuracy) == (123.4, 2, 0.02)
+    assert pose.pose_source == pose_source
+
+
+def test_retried_points_are_stored_once(ito):
+    fixes = [recording.GpsFix(7.0 + i * 1e-5, 50.0, uid=uuid.uuid4()) for i in range(5)]
+    assert recording.record_poses(ito, fixes) == 5
+    assert recording.record_poses(ito, fixes) == 0
+    assert Pose.objects.count() == 5
+
+
+def test_non_finite_values_are_refused_and_nothing_is_written(ito):
+    fixes = [recording.GpsFix(7.0, 50.0), recording.GpsFix(7.0, 50.0, altitude=math.inf)]
+    with pytest.raises(RuleViolation):
+        recording.record_poses(ito, fixes)
+    assert not Pose.objects.exists()
+
+
+def test_local_pose_keeps_yaw_and_zero_coordinates(ito):
+    recording.record_local_poses(ito, [recording.MapPose(0.0, 0.0, "map", yaw=1.5)])
+    pose = LocalPose.objects.get()
+    assert (pose.x, pose.y, pose.yaw, pose.frame) == (0.0, 0.0, 1.5, "map")
+
+
+def test_unchanged_map_is_not_stored_again_but_a_changed_one_is(leg, media_root):
+    meta = dict(frame="map", width=1, height=1, resolution=0.05, origin_x=1.0, origin_y=2.0)
+    first, stored = recording.record_map(leg.shift, png=PNG, origin_yaw=0.3, **meta)
+    again, stored_again = recording.record_map(leg.shift, png=PNG, origin_yaw=0.3, **meta)
+    moved, stored_moved = recording.record_map(leg.shift, png=PNG, origin_yaw=0.5, **meta)
+    assert (stored, stored_again, stored_moved) == (True, False, True)
+    assert again == first
+    assert MapImage.objects.count() == 2
+    assert leg.shift.maps.latest() == moved
+
+
+def test_images_are_files_in_media_storage_on_the_master(ito, media_root):
+    image = recording.attach_image(ito.children.get(), content=PNG, filename="x.png")
+    assert image.segment == ito
+    assert (media_root / image.image.name).read_bytes() == PNG
+    assert Image.objects.count() == 1
+
+
+def test_empty_image_is_refused(ito, media_root):
+    with pytest.raises(RuleViolation):
+        recording.attach_image(ito, content=b"")

@@ -1,0 +1,115 @@
+"""The shell machinery: syntax, README ↔ .ci/run, apt alternatives, warm setup."""
+
+import os
+import re
+import shutil
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+SCRIPTS = sorted(
+    [*ROOT.glob("scripts/*.sh"), *ROOT.glob("scripts/setup.d/*.sh"), ROOT / ".ci" / "run"]
+)
+
+
+def readme_commands() -> list[str]:
+    """The one-line commands in the README's bash code blocks, in order."""
+    blocks = re.findall(r"```bash\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
+    return [b.strip() for b in blocks if b.strip().startswith("bash scripts/")]
+
+
+@pytest.mark.parametrize("script", SCRIPTS, ids=lambda p: str(p.relative_to(ROOT)))
+def test_shell_syntax(script):
+    result = subprocess.run(["bash", "-n", script], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+
+
+@pytest.mark.skipif(shutil.which("shellcheck") is None, reason="shellcheck not installed")
+def test_shellcheck():
+    result = subprocess.run(
+        ["shellcheck", "-x", "--shell=bash", "--severity=warning", *SCRIPTS],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+    )
+    assert result.returncode == 0, result.stdout
+
+
+def test_readme_has_the_two_commands_and_ci_runs_the_second():
+    assert readme_commands() == ["bash scripts/run.sh", "bash scripts/test.sh"]
+    ci = ROOT / ".ci" / "run"
+    assert os.access(ci, os.X_OK)
+    lines = [
+        line.strip()
+        for line in ci.read_text().splitlines()
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
+    assert lines[0] == "set -euo pipefail"
+    assert lines[-1] == readme_commands()[1]
+
+
+def fake_tool(bin_dir: Path, name: str, body: str) -> None:
+    path = bin_dir / name
+    path.write_text("#!/usr/bin/env bash\n" + body)
+    path.chmod(0o755)
+
+
+def test_apt_alternatives_pick_what_is_installed_or_available(tmp_path):
+    """ftt_apt_ensure against fake dpkg/apt: an Ubuntu 24.04-like system."""
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    log = tmp_path / "apt.log"
+    fake_tool(bin_dir, "id", "echo 0\n")
+    # Installed: libproj25 only. Offered: the Ubuntu 24.04 names.
+    fake_tool(
+        bin_dir,
+        "dpkg-query",
+        'case "${@: -1}" in libproj25) echo "install ok installed";; *) exit 1;; esac\n',
+    )
+    fake_tool(
+        bin_dir,
+        "apt-cache",
+        'case "$2" in libgdal34t64|libgeos-c1t64|libsqlite3-mod-spatialite)'
+        ' echo "  Candidate: 1.0";; *) echo "  Candidate: (none)";; esac\n',
+    )
+    fake_tool(bin_dir, "apt-get", f'echo "$*" >> {log}\n')
+    script = (
+        f"source {ROOT}/scripts/lib.sh\n"
+        'ftt_apt_ensure "libgdal32|libgdal34t64" "libgeos-c1v5|libgeos-c1t64" '
+        '"libproj25" "libsqlite3-mod-spatialite"\n'
+        'ftt_apt_ensure "libproj25"\n'
+        'ftt_apt_ensure "not-packaged-anywhere" && echo unexpected\n'
+    )
+    env = {**os.environ, "PATH": f"{bin_dir}:{os.environ['PATH']}"}
+    result = subprocess.run(["bash", "-c", script], env=env, capture_output=True, text=True)
+
+    assert result.returncode != 0
+    assert "no apt package for: not-packaged-anywhere" in result.stderr
+    assert "unexpected" not in result.stdout
+    calls = log.read_text().splitlines()
+    assert calls[0] == "update -qq"
+    assert calls[1].startswith("install ")
+    assert calls[1].split()[-3:] == [
+        "libgdal34t64",
+        "libgeos-c1t64",
+        "libsqlite3-mod-spatialite",
+    ]
+    assert len(calls) == 2  # one update, one install; libproj25 never asked for again
+
+
+@pytest.mark.skipif(
+    "FTT_ROOT" not in os.environ, reason="only under scripts/test.sh, which has run setup"
+)
+def test_second_setup_run_only_checks():
+    started = time.monotonic()
+    result = subprocess.run(
+        ["bash", "scripts/setup.sh", "--test"], cwd=ROOT, capture_output=True, text=True
+    )
+    elapsed = time.monotonic() - started
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "apt-get" not in result.stdout
+    assert "already installed" in result.stdout
+    assert elapsed < 15, f"warm setup took {elapsed:.1f}s"
