@@ -1,0 +1,105 @@
+"""Django admin is the configuration UI; it must work offline and respect roles."""
+
+import pytest
+from django.contrib.auth.models import Group, User
+from django.urls import reverse
+
+from events.models import ItoReason, Segment
+from events.services import segments
+from tests.pages import external_assets
+
+
+def staff_user(role):
+    user = User.objects.create_user(
+        f"{role}-staff", password="pw-not-used-elsewhere", is_staff=True
+    )
+    user.groups.add(Group.objects.get(name=role))
+    return user
+
+
+@pytest.fixture
+def admin_client(client, db):
+    client.force_login(staff_user("administrator"))
+    return client
+
+
+def test_every_changelist_and_add_page_renders(admin_client):
+    for name in [
+        "personnel",
+        "performer",
+        "vehicle",
+        "posesource",
+        "weather",
+        "itoreason",
+        "segmenttype",
+        "testevent",
+        "shift",
+        "leg",
+        "segment",
+        "note",
+    ]:
+        url = reverse(f"admin:events_{name}_changelist")
+        assert admin_client.get(url).status_code == 200, url
+    for name in ["pose", "localpose", "mapimage", "image"]:
+        assert admin_client.get(reverse(f"admin:telemetry_{name}_changelist")).status_code == 200
+
+
+def test_hierarchy_pages_link_up_and_down_and_load_no_external_assets(admin_client, leg):
+    master = segments.report_mode(leg, "ito").master
+    child = master.children.get()
+    page = admin_client.get(reverse("admin:events_segment_change", args=[child.pk]))
+    html = page.content.decode()
+    assert page.status_code == 200
+    assert reverse("admin:events_leg_change", args=[leg.pk]) in html
+    assert reverse("admin:events_segment_change", args=[master.pk]) in html
+    assert external_assets(html) == []
+    leg_page = admin_client.get(reverse("admin:events_leg_change", args=[leg.pk])).content.decode()
+    assert reverse("admin:events_segment_change", args=[master.pk]) in leg_page
+    assert reverse("admin:events_shift_change", args=[leg.shift.pk]) in leg_page
+
+
+def test_catalogues_are_read_only_for_operators(client, db):
+    client.force_login(staff_user("operator"))
+    url = reverse("admin:events_itoreason_change", args=["safety"])
+    page = client.get(url)
+    assert page.status_code == 200
+    assert b'name="short_description"' not in page.content
+    response = client.post(url, {"short_description": "Hacked", "color": "1,1,1"})
+    assert response.status_code == 403
+    assert ItoReason.objects.get(pk="safety").short_description == "Safety"
+
+
+def test_administrator_edits_a_catalogue(admin_client):
+    url = reverse("admin:events_itoreason_change", args=["other"])
+    data = {
+        "short_description": "Sonstiges",
+        "long_description": "Andere Gründe.",
+        "color": "180,180,180",
+        "counts_as_intervention": "on",
+    }
+    assert admin_client.post(url, data).status_code == 302
+    assert ItoReason.objects.get(pk="other").short_description == "Sonstiges"
+
+
+def test_admin_action_ends_a_test_event_through_the_service(admin_client, leg):
+    segments.report_mode(leg, "auto")
+    event = leg.shift.test_event
+    admin_client.post(
+        reverse("admin:events_testevent_changelist"),
+        {"action": "close_selected", "_selected_action": [event.pk]},
+    )
+    assert not Segment.objects.filter(end__isnull=True).exists()
+    event.refresh_from_db()
+    assert event.end is not None
+
+
+def test_deleting_a_vehicle_in_use_is_refused_with_where_it_is_used(admin_client, shift):
+    url = reverse("admin:events_vehicle_delete", args=[shift.vehicle.pk])
+    response = admin_client.post(url, {"post": "yes"}, follow=True)
+    assert type(shift.vehicle).objects.filter(pk=shift.vehicle.pk).exists()
+    assert "Shift 1" in response.content.decode()
+
+
+def test_recorded_data_is_read_only(admin_client):
+    page = admin_client.get(reverse("admin:telemetry_pose_add"))
+    assert page.status_code == 403
