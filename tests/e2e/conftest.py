@@ -5,6 +5,7 @@ default with no broker, and the "robot" writes from yet another process, so
 live updates are tested the way they happen in the field.
 """
 
+import io
 import os
 import shutil
 import socket
@@ -15,6 +16,7 @@ import time
 from pathlib import Path
 
 import pytest
+from PIL import Image
 
 # Playwright's sync API keeps an event loop in the test thread.
 os.environ.setdefault("DJANGO_ALLOW_ASYNC_UNSAFE", "true")
@@ -177,7 +179,9 @@ def shot(request):
 @pytest.fixture
 def tiles(page):
     """Answer tile requests with a tiny grey PNG, as a reachable tile server would."""
-    png = (ROOT / "static" / "vendor" / "leaflet" / "images" / "layers.png").read_bytes()
+    buffer = io.BytesIO()
+    Image.new("RGB", (256, 256), (200, 200, 200)).save(buffer, format="PNG")
+    png = buffer.getvalue()
     page.route("**/tiles/**", lambda route: route.fulfill(body=png, content_type="image/png"))
     return png
 

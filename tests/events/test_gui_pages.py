@@ -7,6 +7,7 @@ from events.models import Performer, PoseSource
 from events.services import segments
 from rosbridge_app.services import collectors
 from telemetry.services import recording
+from tests.pages import asset_urls, external_assets
 
 pytestmark = pytest.mark.django_db
 
@@ -35,6 +36,19 @@ def test_administrator_gets_first_run_hint_until_configured(client, vehicle):
     Performer.objects.create(institution="FKIE")
     PoseSource.objects.create(key="gps", short_description="GPS")
     assert "Before the first shift" not in client.get("/").content.decode()
+
+
+def test_every_script_and_stylesheet_of_the_page_is_served_by_ftt_itself(client):
+    # Operators are often offline: Leaflet and our own code must come from this server.
+    member(client, "olga", "operator")
+    page = client.get("/").content.decode()
+    assert external_assets(page) == []
+    urls = asset_urls(page)
+    assert any(url.endswith("leaflet.js") for url in urls)
+    for url in urls:
+        response = client.get(url)
+        assert response.status_code == 200, url
+        assert b"".join(response.streaming_content if response.streaming else [response.content])
 
 
 def test_operator_gets_no_admin_link_and_account_without_role_is_told(client):
