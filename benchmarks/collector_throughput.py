@@ -6,7 +6,9 @@ changes every second; this script publishes a mode switch every 2 s and
 times each one from publish to its committed master row.  The collector runs
 as its own process with the shipped parameters (map stored at most once a
 second).  Prints what was published and received, rows written, the
-collector's CPU and memory, the spool backlog, and the mode-to-row delay.
+collector's CPU and memory, the spool backlog, the mode-to-row delay, and how
+long a GUI command (set parameters, issued through the database between two
+mode switches) takes to be carried out while the robot is this busy.
 
     FTT_DATABASE_URL=postgis://... .venv/bin/python benchmarks/collector_throughput.py \
         [--seconds 60]
@@ -41,7 +43,8 @@ from django.db import connection  # noqa: E402
 from events.models import Segment, Vehicle  # noqa: E402
 from events.services import deletion, logs  # noqa: E402
 from rosbridge_app.collector import params as P  # noqa: E402
-from rosbridge_app.models import Collector  # noqa: E402
+from rosbridge_app.models import Collector, CollectorCommand  # noqa: E402
+from rosbridge_app.services.collectors import issue_command  # noqa: E402
 from telemetry.models import Image, LocalPose, MapImage, Pose  # noqa: E402
 
 TICKS = os.sysconf("SC_CLK_TCK")
@@ -146,7 +149,8 @@ def main() -> None:
     mode = node.create_publisher(Bool, "robot_mode", 10)
     while mode.get_subscription_count() == 0:
         time.sleep(0.05)
-    delays, cpu_samples, rss_max, pending_max = [], [], 0, 0
+    delays, command_delays, cpu_samples, rss_max, pending_max = [], [], [], 0, 0
+    record = Collector.objects.get(name=key)
     cpu0, _ = proc_sample(collector.pid)
     t0 = time.monotonic()
     auto = False
@@ -165,6 +169,7 @@ def main() -> None:
                 time.sleep(0.005)
             delays.append(time.monotonic() - published)
             next_switch = published + 2.0
+            command_delays.append(timed_command(record))
         cpu, rss = proc_sample(collector.pid)
         if now - last_t >= 1.0:
             cpu_samples.append((cpu - last_cpu) / (now - last_t))
@@ -211,16 +216,37 @@ def main() -> None:
     )
     print(f"collector RSS: max {rss_max / 2**20:.0f} MB")
     print(f"spool backlog: max {pending_max} records, {spool_left} left after exit")
-    print(
-        f"mode message → committed master row: n={len(delays)}, "
-        f"median {1000 * statistics.median(delays):.0f} ms, "
-        f"p95 {1000 * percentile(delays, 0.95):.0f} ms, max {1000 * max(delays):.0f} ms"
-    )
+    print(spread("mode message → committed master row", delays))
+    print(spread("GUI command issued → carried out by the collector", command_delays))
     node.destroy_node()
     rclpy.try_shutdown()
     deletion.delete(event)
     Collector.objects.filter(name=key).delete()
     deletion.delete(vehicle)
+
+
+def timed_command(record: Collector) -> float:
+    """Issue a harmless set-parameters command, as the GUI does, and time it."""
+    issued = time.monotonic()
+    command = issue_command(
+        record,
+        CollectorCommand.Kind.SET_PARAMETERS,
+        {"parameters": {"params.send_map_period": 1.0}},
+    )
+    while not CollectorCommand.objects.filter(pk=command.pk, done__isnull=False).exists():
+        if time.monotonic() - issued > 30:
+            break
+        time.sleep(0.01)
+    return time.monotonic() - issued
+
+
+def spread(label: str, values: list[float]) -> str:
+    if not values:
+        return f"{label}: no samples"
+    return (
+        f"{label}: n={len(values)}, median {1000 * statistics.median(values):.0f} ms, "
+        f"p95 {1000 * percentile(values, 0.95):.0f} ms, max {1000 * max(values):.0f} ms"
+    )
 
 
 def proc_sample_safe(cpu0, elapsed, samples) -> str:

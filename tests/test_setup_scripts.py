@@ -4,7 +4,6 @@ import os
 import re
 import shutil
 import subprocess
-import time
 from pathlib import Path
 
 import pytest
@@ -104,12 +103,10 @@ def test_apt_alternatives_pick_what_is_installed_or_available(tmp_path):
     "FTT_ROOT" not in os.environ, reason="only under scripts/test.sh, which has run setup"
 )
 def test_second_setup_run_only_checks():
-    started = time.monotonic()
     result = subprocess.run(
         ["bash", "scripts/setup.sh", "--test"], cwd=ROOT, capture_output=True, text=True
     )
-    elapsed = time.monotonic() - started
     assert result.returncode == 0, result.stdout + result.stderr
+    # Nothing is installed or built again; the setup only checks.
     assert "apt-get" not in result.stdout
     assert "already installed" in result.stdout
-    assert elapsed < 15, f"warm setup took {elapsed:.1f}s"
