@@ -28,7 +28,7 @@ from std_srvs.srv import SetBool, Trigger
 
 from rosbridge_app.collector import params as P
 from rosbridge_app.collector.modes import message_type
-from rosbridge_app.collector.pipeline import Pipeline
+from rosbridge_app.collector.pipeline import SECOND_COPY, Pipeline
 
 log = logging.getLogger("ftt.collector")
 
@@ -232,11 +232,15 @@ class CollectorNode(Node):
     def _input(self, name: str, handler):
         def receive(msg):
             at = now()
-            info = self.inputs.get(name)
-            if info is not None:
-                info["count"] += 1
-                info["last_received"] = at.isoformat()
-            handler(msg, at)
+            answer = None
+            try:
+                answer = handler(msg, at)
+            finally:
+                # Counted even when the handler fails: the message did arrive.
+                info = self.inputs.get(name)
+                if info is not None and answer is not SECOND_COPY:
+                    info["count"] += 1
+                    info["last_received"] = at.isoformat()
 
         return self._safe(name, receive)
 

@@ -36,6 +36,10 @@ from rosbridge_app.collector.thinning import Thinner
 
 log = logging.getLogger("ftt.collector")
 
+# Returned by a handler for a second copy of a message it has already had, so
+# the node does not count that copy as received (see Node._input).
+SECOND_COPY = object()
+
 
 def _seconds(at: datetime) -> float:
     return at.timestamp()
@@ -266,7 +270,7 @@ class Pipeline:
         )
         last_key, last_at = self.grid_quick or (None, None)
         if quick[:2] != (0, 0) and quick == last_key and _seconds(at) - last_at < 2.0:
-            return
+            return SECOND_COPY
         self.grid_quick = (quick, _seconds(at))
         if not conv.grid_is_usable(msg):
             log.warning(

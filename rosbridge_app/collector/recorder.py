@@ -111,6 +111,11 @@ class Recorder:
                     raise DatabaseUnavailable(str(exc)) from exc
                 self.skipped += 1
                 log.warning("dropped a %s event: %s", event.kind, exc)
+                if event.kind == ev.MODE:
+                    # The robot is in this mode even though its segment could not
+                    # be stored; the next leg must start in it, not in the old one.
+                    self.state["logging"] = True
+                    self.state["mode"] = dict(event.data)
 
     def _sync(self) -> None:
         leg = self.leg_provider()

@@ -51,7 +51,8 @@ def test_every_input_type_ends_up_in_the_database(ros, start_collector, robot_le
     grid.info.origin.position.x, grid.info.origin.position.y = -1.0, -0.5
     grid.info.origin.orientation.z, grid.info.origin.orientation.w = math.sin(0.2), math.cos(0.2)
     grid.data = [100] * 40 + [0] * 760
-    ros.publisher(OccupancyGrid, "/map", latched()).publish(grid)
+    map_publisher = ros.publisher(OccupancyGrid, "/map", latched())
+    map_publisher.publish(grid)
 
     collector = start_collector(
         params={
@@ -141,6 +142,20 @@ def test_every_input_type_ends_up_in_the_database(ros, start_collector, robot_le
     )
     assert status.inputs["map"]["count"] == 1
     assert any(t["name"] == "/gps_fix" for t in status.topics)
+    # A latched map published while the collector listens reaches both of its map
+    # subscriptions; the status page must still count one map, not two. (Logging
+    # is off by now, so this map is only counted, not stored.)
+    grid.data = [0] * 760 + [100] * 40
+    now_stamp(grid.header)
+    map_publisher.publish(grid)
+    status = wait_for(
+        lambda: Collector.objects.filter(name="collector", inputs__map__count__gte=2).first(),
+        5,
+        what="the heartbeat counting map 2",
+    )
+    time.sleep(1.5)  # a further heartbeat, which would carry a doubled count
+    status.refresh_from_db()
+    assert status.inputs["map"]["count"] == 2
     assert collector.alive()
 
 
@@ -172,9 +187,9 @@ def test_parameters_services_and_gui_commands(ros, start_collector, robot_leg):
     assert on_disk["params"]["robot_mode_type"] == "industrial"
     assert on_disk["params"]["use_tf"] is False
 
-    # The GUI side: commands through the database, answered within about a second.
+    # The GUI side: commands through the database. How fast they are answered is
+    # measured by benchmarks/command_latency.py.
     record = Collector.objects.get(name="collector")
-    issued = time.monotonic()
     command = issue_command(record, CollectorCommand.Kind.START_LOGGING)
     command = wait_for(
         lambda: CollectorCommand.objects.filter(pk=command.pk, done__isnull=False).first(),
@@ -183,7 +198,6 @@ def test_parameters_services_and_gui_commands(ros, start_collector, robot_leg):
         "the start command",
     )
     assert command.success, command.message
-    assert time.monotonic() - issued < 2.0
     mode = ros.publisher(RobotMode, "/robot_mode")
     pose = ros.publisher(PoseStamped, "/local_pose")
     ros.wait_subscribed(mode)

@@ -113,3 +113,31 @@ def test_images_only_for_a_new_master_and_stop_closes(leg, media_root):
     assert master.uid == auto.uid
     assert Image.objects.filter(segment=master).count() == 1
     assert master.end == at(3)
+
+
+def test_a_mode_that_failed_to_store_is_the_mode_the_next_leg_starts_in(
+    leg, media_root, monkeypatch
+):
+    from rosbridge_app.collector import recorder as recorder_module
+
+    vehicle = leg.shift.vehicle
+    recorder = Recorder(lambda: open_leg_for_vehicle(vehicle))
+    recorder.apply([Event(ev.START, at(0)), Event(ev.MODE, at(1), {"mode": "auto"})])
+    stored = recorder_module.report_mode
+
+    def refuse_ito(leg, mode, **kwargs):
+        if mode == "ito":
+            raise ValueError("a broken row")
+        return stored(leg, mode, **kwargs)
+
+    monkeypatch.setattr(recorder_module, "report_mode", refuse_ito)
+    recorder.apply([Event(ev.MODE, at(2), {"mode": "ito"})])  # logged and dropped
+    assert recorder.skipped == 1
+    assert list(Segment.objects.filter(leg=leg).values_list("segment_type_id", flat=True)) == [
+        "auto"
+    ]
+    monkeypatch.setattr(recorder_module, "report_mode", stored)
+    new_leg = logs.create_leg(shift=leg.shift)  # the GUI ends the leg and opens the next
+    recorder.sync()
+    master = Segment.objects.get(leg=new_leg, parent__isnull=True)
+    assert master.segment_type_id == "ito" and master.end is None
