@@ -3,9 +3,11 @@
 import asyncio
 
 import pytest
+import pytest_asyncio
 from channels.db import database_sync_to_async
 from channels.testing import WebsocketCommunicator
 from django.contrib.auth.models import AnonymousUser, Group, User
+from django.db import connections
 
 from events.services import segments
 from rosbridge_app import consumers
@@ -16,6 +18,14 @@ pytestmark = [
     pytest.mark.django_db(transaction=True),
     pytest.mark.asyncio,
 ]
+
+
+@pytest_asyncio.fixture(autouse=True)
+async def _close_the_worker_threads_connection():
+    # The ORM calls above run in asgiref's worker thread, whose connection
+    # (kept open by CONN_MAX_AGE) would otherwise outlive the test database.
+    yield
+    await database_sync_to_async(connections.close_all)()
 
 
 @pytest.fixture
@@ -49,16 +59,14 @@ async def test_user_without_role_is_refused(db):
     assert not connected and code == 4403
 
 
-async def test_new_segment_and_poses_arrive_within_a_second(viewer, leg):
+async def test_new_segment_and_poses_arrive_without_asking(viewer, leg):
+    # How fast is measured by benchmarks/live_latency.py; here: they arrive unasked.
     communicator, _ = await connect(viewer, leg=leg.pk)
-    loop = asyncio.get_running_loop()
-    started = loop.time()
     master = (await database_sync_to_async(segments.report_mode)(leg, "auto")).master
     await database_sync_to_async(recording.record_poses)(master, [recording.GpsFix(7.0, 50.0)])
     received = []
     while len(received) < 2:
         received += await next_events(communicator)
-    assert loop.time() - started < 1.0
     assert [e["kind"] for e in received] == ["segment", "poses"]
     assert received[1]["payload"]["points"] == [[7.0, 50.0]]
     await communicator.disconnect()
@@ -133,17 +141,14 @@ async def test_with_redis_a_commit_wakes_the_poller_at_once(viewer, leg, setting
         }
     }
     channel_layers.backends.clear()
-    # Polling alone would take 5 s now: only the wake-up can be this fast.
-    monkeypatch.setattr(consumers, "POLL_INTERVAL", 5.0)
+    # Polling alone would take an hour now: only the wake-up can deliver the event.
+    monkeypatch.setattr(consumers, "POLL_INTERVAL", 3600.0)
     try:
         communicator, _ = await connect(viewer, leg=leg.pk)
         await asyncio.sleep(0.3)  # the first poll has passed; the poller now sleeps
-        loop = asyncio.get_running_loop()
-        started = loop.time()
         await database_sync_to_async(segments.report_mode)(leg, "auto")
-        events = await next_events(communicator, timeout=3)
+        events = await next_events(communicator, timeout=10)
         assert [e["kind"] for e in events] == ["segment"]
-        assert loop.time() - started < 1.0
         await communicator.disconnect()
     finally:
         channel_layers.backends.clear()
