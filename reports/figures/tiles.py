@@ -52,8 +52,11 @@ def fit_zoom(west, south, east, north, max_tiles: int = 16, max_zoom: int = MAX_
 
 
 class TileSource:
-    def __init__(self, url: str | None, cache_dir: Path, timeout: float = 5.0):
+    def __init__(
+        self, url: str | None, cache_dir: Path, timeout: float = 5.0, max_zoom: int = MAX_ZOOM
+    ):
         self.url = url
+        self.max_zoom = max_zoom
         self.timeout = timeout
         key = hashlib.sha256((url or "").encode()).hexdigest()[:16]
         self.cache_dir = Path(cache_dir) / key
@@ -99,7 +102,7 @@ class TileSource:
         """(RGB array, (west, south, east, north) of the array) or None without tiles."""
         if not self.url:
             return None
-        zoom = fit_zoom(west, south, east, north)
+        zoom = fit_zoom(west, south, east, north, max_zoom=self.max_zoom)
         fx0, fy0 = lonlat_to_tile(west, north, zoom)
         fx1, fy1 = lonlat_to_tile(east, south, zoom)
         x0, y0, x1, y1 = int(fx0), int(fy0), int(fx1), int(fy1)

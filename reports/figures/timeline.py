@@ -14,7 +14,15 @@ from reports.figures.style import rgb  # noqa: E402
 MARKER_REASONS = ("goal", "end_shift")
 
 
-def draw_timeline(shift_runs, reasons, weather_changes, tz, path, dpi=150) -> str:
+def time_axis(first, last, min_span=timedelta(0)):
+    """The drawn time range: the runs with a small margin, at least ``min_span`` long."""
+    span = max(last - first, timedelta(seconds=60), min_span)
+    return first - span * 0.02, first + span * 1.02
+
+
+def draw_timeline(
+    shift_runs, reasons, weather_changes, tz, path, dpi=150, min_span=timedelta(0)
+) -> str:
     """``shift_runs``: runs of one shift; ``reasons``: ItoReason by key;
     ``weather_changes``: [(time, label)].  Times are drawn in ``tz``."""
     reason_rows = sorted(
@@ -40,8 +48,7 @@ def draw_timeline(shift_runs, reasons, weather_changes, tz, path, dpi=150) -> st
                 _bar(ax, row_of[span.reason], span.start, span.end, color, 0.5)
     first = min(run.start for run in shift_runs)
     last = max(run.end for run in shift_runs)
-    span = max(last - first, timedelta(seconds=60))
-    ax.set_xlim(first - span * 0.02, first + span * 1.02)
+    ax.set_xlim(*time_axis(first, last, min_span))
     for when, label in weather_changes:
         # A leg opened long before its first segment would squeeze the runs.
         when = min(max(when, first), last)

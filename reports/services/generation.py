@@ -12,6 +12,7 @@ machine is small and the figures are CPU-bound; the others wait as "queued".
 """
 
 import logging
+import math
 import subprocess
 import sys
 import threading
@@ -68,6 +69,8 @@ REQUESTABLE = {
     "creator_address": list,
     "local": bool,
     "no_tiles": bool,
+    "min_timeline_hours": float,
+    "max_zoom": int,
 }
 
 
@@ -79,14 +82,31 @@ def _checked_options(options: dict) -> ReportOptions:
         kind = REQUESTABLE.get(key)
         if kind is None:
             errors.append(f"Unknown or not requestable option '{key}'.")
-        elif not isinstance(value, kind) or (
-            kind is list and not all(isinstance(line, str) for line in value)
-        ):
-            expected = {str: "text", list: "a list of text lines", bool: "true or false"}[kind]
+        elif not _is_a(value, kind):
+            expected = {
+                str: "text",
+                list: "a list of text lines",
+                bool: "true or false",
+                float: "a number",
+                int: "a whole number",
+            }[kind]
             errors.append(f"Option '{key}' must be {expected}.")
     if errors:
         raise ValidationError({"options": errors})
-    return ReportOptions.from_dict(options)
+    checked = ReportOptions.from_dict(options)
+    if problems := checked.problems():
+        raise ValidationError({"options": problems})
+    return checked
+
+
+def _is_a(value, kind) -> bool:
+    if isinstance(value, bool):  # JSON true is no number
+        return kind is bool
+    if kind is float:
+        return isinstance(value, int | float) and math.isfinite(value)
+    if kind is list:
+        return isinstance(value, list) and all(isinstance(line, str) for line in value)
+    return isinstance(value, kind)
 
 
 def _start(report_id: int) -> None:

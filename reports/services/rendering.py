@@ -13,7 +13,7 @@ import time
 from collections import defaultdict
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from datetime import date
+from datetime import date, timedelta
 from pathlib import Path
 
 import numpy as np
@@ -26,7 +26,7 @@ from events.models import ItoReason, Note, Segment, TestEvent
 from reports import formatting as fmt
 from reports.figures import charts, style
 from reports.figures.maps import Background, Line, MapPainter
-from reports.figures.tiles import TileSource
+from reports.figures.tiles import MAX_ZOOM, TileSource
 from reports.figures.timeline import draw_timeline
 from reports.selectors.statistics import (
     CONFIDENCE,
@@ -44,6 +44,7 @@ DEFAULT_LOGO = TEMPLATE_DIR / "logo.svg"
 FONT_NOTE = "DejaVu Sans with WenQuanYi Micro Hei or Noto CJK for Chinese, Japanese and Korean"
 
 Progress = Callable[[float, str], None]
+MAX_TIMELINE_HOURS = 48
 
 
 class ReportError(Exception):
@@ -62,6 +63,23 @@ class ReportOptions:
     tile_url: str | None = None  # None: the site's FTT_TILE_URL
     no_tiles: bool = False
     logo: str | None = None
+    # The original's min_dur: a short shift's timeline still spans this many
+    # hours, so timelines of several reports can be compared by eye.
+    min_timeline_hours: float = 0.0
+    # The original's zoom_level, as an upper bound: the zoom is still fitted to
+    # each track, but never closer than this (a tile server may stop at 17).
+    max_zoom: int = MAX_ZOOM
+
+    def problems(self) -> list[str]:
+        """What is out of range, in words for the person who asked."""
+        found = []
+        if not 0 <= self.min_timeline_hours <= MAX_TIMELINE_HOURS:
+            found.append(
+                f"The minimum timeline length must be between 0 and {MAX_TIMELINE_HOURS} hours."
+            )
+        if not 1 <= self.max_zoom <= MAX_ZOOM:
+            found.append(f"The maximum map zoom must be between 1 and {MAX_ZOOM}.")
+        return found
 
     @classmethod
     def from_dict(cls, data: dict) -> "ReportOptions":
@@ -149,7 +167,7 @@ class _Builder:
         if tile_url is None and not options.no_tiles and self.mode == GPS:
             tile_url = settings.FTT_TILE_URL
         cache = Path(getattr(settings, "FTT_TILE_CACHE", settings.DATA_DIR / "tile_cache"))
-        self.tiles = TileSource(tile_url, cache) if tile_url else None
+        self.tiles = TileSource(tile_url, cache, max_zoom=options.max_zoom) if tile_url else None
         self.painter = MapPainter(tiles=self.tiles)
         self.snippets = MapPainter(tiles=self.tiles, dpi=110)
         self.figure_count = 0
@@ -457,7 +475,14 @@ class _Builder:
                 for leg in self.legs[shift.id]
             ]
             timeline = self._rel(
-                draw_timeline(runs, self.reasons, weather_changes, tz, str(self._file("timeline")))
+                draw_timeline(
+                    runs,
+                    self.reasons,
+                    weather_changes,
+                    tz,
+                    str(self._file("timeline")),
+                    min_span=timedelta(hours=self.options.min_timeline_hours),
+                )
             )
         tick(f"shift {shift.number}")
         legs = {leg.id: leg for leg in self.legs[shift.id]}

@@ -345,7 +345,8 @@ function buildField(spec, value) {
     input.value = value || "";
   } else {
     input = document.createElement("input");
-    input.value = value || "";
+    input.value = value ?? "";
+    if (spec.number) input.inputMode = "decimal";
     if (spec.list) {
       ensureTimeZoneList();
       input.setAttribute("list", spec.list);
@@ -1230,6 +1231,8 @@ const REPORT_FIELDS = [
   { name: "creator", label: "Creator" },
   { name: "creator_address", label: "Creator address", type: "textarea" },
   { name: "local", label: "Positions", options: [["false", "GPS"], ["true", "Local (map frame)"]], required: true },
+  { name: "min_timeline_hours", label: "Timeline at least (hours, optional)", number: true },
+  { name: "max_zoom", label: "Closest map zoom (1–19, optional)", number: true },
 ];
 const EXPORTS = [
   ["segments.csv", "Segments (CSV)"],
@@ -1295,6 +1298,13 @@ const Reports = {
         recipient_address: lines(values.recipient_address),
         creator_address: lines(values.creator_address),
       };
+      // Empty number fields mean "the server's default"; whatever else was typed
+      // goes to the server as a number or as text, and the server says what is wrong.
+      for (const spec of REPORT_FIELDS.filter((s) => s.number)) {
+        const raw = values[spec.name].trim();
+        if (raw === "") delete options[spec.name];
+        else options[spec.name] = Number.isFinite(Number(raw)) ? Number(raw) : raw;
+      }
       try {
         await api("POST", "reports/", { test_event: event.id, options });
         await this.refresh(event);

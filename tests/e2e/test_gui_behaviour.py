@@ -167,6 +167,13 @@ def test_reports_dialog_offers_exports_and_makes_a_report(page, server, open_leg
     archive = dialog.get_by_role("link", name="Everything (FTT archive, ZIP)").get_attribute("href")
     assert page.request.get(server.url + archive).body()[:2] == b"PK"
     dialog.get_by_label("Report name").fill("Abnahme Übung")
+    # A zoom no tile server has is refused in words, and nothing is queued.
+    dialog.get_by_label("Closest map zoom").fill("30")
+    dialog.get_by_role("button", name="Generate report").click()
+    expect(dialog.locator(".dialog-error")).to_contain_text("maximum map zoom")
+    expect(dialog.locator("#report-list li")).to_have_count(0)
+    dialog.get_by_label("Closest map zoom").fill("17")
+    dialog.get_by_label("Timeline at least").fill("1.5")
     dialog.get_by_role("button", name="Generate report").click()
     entry = dialog.locator("#report-list li")
     expect(entry.first).to_be_visible(timeout=5000)

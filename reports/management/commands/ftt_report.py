@@ -13,6 +13,7 @@ from pathlib import Path
 from django.core.management.base import BaseCommand, CommandError
 
 from events.models import TestEvent
+from reports.figures.tiles import MAX_ZOOM
 from reports.models import Report
 from reports.selectors import exports
 from reports.services.generation import run_job
@@ -64,6 +65,19 @@ class Command(BaseCommand):
         parser.add_argument("--logo", help="Logo image (PNG, JPEG or SVG) for the title page.")
         parser.add_argument("--tile-url", help="Tile URL template with {z}/{x}/{y}.")
         parser.add_argument("--no-tiles", action="store_true", help="Draw maps without tiles.")
+        parser.add_argument(
+            "--min-timeline",
+            type=float,
+            default=0.0,
+            metavar="HOURS",
+            help="Draw each shift's timeline at least this long (the original's min_dur).",
+        )
+        parser.add_argument(
+            "--max-zoom",
+            type=int,
+            default=MAX_ZOOM,
+            help=f"Never use map tiles closer than this zoom level (1-{MAX_ZOOM}).",
+        )
         parser.add_argument("--csv", help="Write the segments as CSV to this file.")
         parser.add_argument("--geojson", help="Write the GPS tracks as GeoJSON to this file.")
         parser.add_argument("--gpx", help="Write the GPS tracks as GPX to this file.")
@@ -114,7 +128,11 @@ class Command(BaseCommand):
             tile_url=o["tile_url"],
             no_tiles=o["no_tiles"],
             logo=o["logo"],
+            min_timeline_hours=o["min_timeline"],
+            max_zoom=o["max_zoom"],
         )
+        if problems := options.problems():
+            raise CommandError(" ".join(problems))
         if options.logo and not Path(options.logo).is_file():
             raise CommandError(f"Logo file {options.logo} does not exist.")
         output = Path(o["output"] or "report.pdf")
