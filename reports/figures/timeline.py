@@ -9,9 +9,11 @@ matplotlib.use("Agg")
 import matplotlib.dates as mdates  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 
+from reports.figures import weather  # noqa: E402
 from reports.figures.style import rgb  # noqa: E402
 
 MARKER_REASONS = ("goal", "end_shift")
+WEATHER_ROW = -1.2  # a band above the AUTO bars
 
 
 def time_axis(first, last, min_span=timedelta(0)):
@@ -24,7 +26,8 @@ def draw_timeline(
     shift_runs, reasons, weather_changes, tz, path, dpi=150, min_span=timedelta(0)
 ) -> str:
     """``shift_runs``: runs of one shift; ``reasons``: ItoReason by key;
-    ``weather_changes``: [(time, label)].  Times are drawn in ``tz``."""
+    ``weather_changes``: [(time, label, icon key)], drawn as a symbol and its
+    name above the bars.  Times are drawn in ``tz``."""
     reason_rows = sorted(
         {span.reason for run in shift_runs for span in run.reasons},
         key=lambda key: reasons[key].short_description if key in reasons else key,
@@ -32,7 +35,7 @@ def draw_timeline(
     labels = ["AUTO", "ITO"] + [
         reasons[key].short_description if key in reasons else key for key in reason_rows
     ]
-    height = 1.2 + 0.28 * len(labels)
+    height = 1.2 + 0.28 * len(labels) + (0.3 if weather_changes else 0.0)
     fig, ax = plt.subplots(figsize=(7.0, height), layout="constrained")
     row_of = {key: 2 + i for i, key in enumerate(reason_rows)}
     for run in shift_runs:
@@ -49,13 +52,22 @@ def draw_timeline(
     first = min(run.start for run in shift_runs)
     last = max(run.end for run in shift_runs)
     ax.set_xlim(*time_axis(first, last, min_span))
-    for when, label in weather_changes:
+    for when, label, icon in weather_changes:
         # A leg opened long before its first segment would squeeze the runs.
         when = min(max(when, first), last)
         ax.axvline(when, color="#1f77b4", linewidth=0.6, linestyle="--")
-        ax.text(when, -0.75, label, fontsize=6, color="#1f77b4", va="bottom")
+        weather.place(ax, when, WEATHER_ROW, icon)
+        ax.annotate(
+            label,
+            (when, WEATHER_ROW),
+            xytext=(weather.SIZE + 2, 0),
+            textcoords="offset points",
+            fontsize=6,
+            color="#1f77b4",
+            va="center",
+        )
     ax.set_yticks(range(len(labels)), labels, fontsize=7)
-    ax.set_ylim(len(labels) - 0.5, -0.9)
+    ax.set_ylim(len(labels) - 0.5, WEATHER_ROW - 0.55 if weather_changes else -0.9)
     ax.xaxis.set_major_formatter(mdates.DateFormatter("%H:%M", tz=tz))
     ax.tick_params(axis="x", labelsize=7)
     ax.set_xlabel(f"time ({tz.key})", fontsize=7)

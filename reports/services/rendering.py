@@ -471,7 +471,11 @@ class _Builder:
         timeline = None
         if runs:
             weather_changes = [
-                (leg.start, leg.weather.short_description if leg.weather else "weather unknown")
+                (
+                    leg.start,
+                    leg.weather.short_description if leg.weather else "weather unknown",
+                    leg.weather.icon if leg.weather else "",
+                )
                 for leg in self.legs[shift.id]
             ]
             timeline = self._rel(
