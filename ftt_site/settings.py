@@ -242,6 +242,9 @@ FTT_TILE_CACHE = Path(env_str("FTT_TILE_CACHE", str(DATA_DIR / "tile_cache")))
 FTT_REPORT_WORKER = env_str("FTT_REPORT_WORKER", "thread")
 # Title-page logo of every report (PNG, JPEG or SVG); empty: FTT's own.
 FTT_REPORT_LOGO = env_str("FTT_REPORT_LOGO", "")
+# Behind nginx: the internal location that maps to MEDIA_ROOT. FTT still checks
+# the role, then hands the file transfer to nginx (X-Accel-Redirect).
+FTT_MEDIA_ACCEL_PREFIX = env_str("FTT_MEDIA_ACCEL_PREFIX", "")
 
 # django-leaflet ships Leaflet itself, so admin map widgets work offline; only
 # the tiles come from the network, and the widget still works without them.

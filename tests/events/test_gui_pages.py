@@ -1,5 +1,7 @@
 """The GUI page, login, protected media and the GUI's own JSON reads."""
 
+from urllib.parse import quote
+
 import pytest
 from django.contrib.auth.models import Group, User
 
@@ -71,6 +73,27 @@ def test_photos_are_only_served_to_users_with_a_role(client, leg, media_root):
     response = client.get(url)
     assert response.status_code == 200
     assert b"".join(response.streaming_content) == b"\xff\xd8jpeg"
+
+
+def test_behind_nginx_the_file_transfer_is_handed_to_the_proxy(client, leg, media_root, settings):
+    settings.FTT_MEDIA_ACCEL_PREFIX = "/protected-media/"
+    master = segments.report_mode(leg, "ito").master
+    image = recording.attach_image(master, content=b"\xff\xd8jpeg", filename="Über.jpg")
+    url = image.image.url
+    member(client, "nobody")
+    refused = client.get(url)
+    assert refused.status_code == 403 and "X-Accel-Redirect" not in refused
+    client.logout()
+    member(client, "vera", "viewer")
+    response = client.get(url)
+    assert response.status_code == 200 and response.content == b""
+    assert response["Content-Type"] == "image/jpeg"
+    stored = image.image.name
+    assert response["X-Accel-Redirect"] == "/protected-media/" + quote(stored)
+    # Only existing files under the media root are ever named to the proxy.
+    for bad in ("../ftt.sqlite3", "images/missing.jpg", "%2e%2e/secret_key"):
+        answer = client.get(f"/media/{bad}")
+        assert answer.status_code == 404 and "X-Accel-Redirect" not in answer, bad
 
 
 def test_leg_tracks_carry_points_and_distance(client, leg):
