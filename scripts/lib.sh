@@ -145,3 +145,17 @@ ftt_pg_major() {
 # ftt_stamp_ok NAME VALUE: status 0 when the stamp NAME holds VALUE.
 ftt_stamp_ok() { [ -f "$FTT_VENV/.ftt-stamp-$1" ] && [ "$(cat "$FTT_VENV/.ftt-stamp-$1")" = "$2" ]; }
 ftt_stamp_write() { printf '%s' "$2" >"$FTT_VENV/.ftt-stamp-$1"; }
+
+# Prints the first Chromium on PATH that really starts. On Ubuntu 24.04 the
+# apt package "chromium-browser" is a stub that only asks for the snap.
+ftt_working_chromium() {
+    local name path
+    for name in chromium chromium-browser; do
+        path=$(command -v "$name") || continue
+        if timeout 30 "$path" --headless --no-sandbox --version >/dev/null 2>&1; then
+            printf '%s\n' "$path"
+            return 0
+        fi
+    done
+    return 1
+}

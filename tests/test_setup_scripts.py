@@ -99,6 +99,59 @@ def test_apt_alternatives_pick_what_is_installed_or_available(tmp_path):
     assert len(calls) == 2  # one update, one install; libproj25 never asked for again
 
 
+SNAP_STUB = "echo \"Command '$0' requires the chromium snap to be installed.\" >&2; exit 1\n"
+
+
+def run_with(bin_dir: Path, script: str, **env) -> subprocess.CompletedProcess:
+    environment = {**os.environ, **env, "PATH": f"{bin_dir}:{os.environ['PATH']}"}
+    return subprocess.run(
+        ["bash", "-c", f"source {ROOT}/scripts/lib.sh\n{script}"],
+        env=environment,
+        capture_output=True,
+        text=True,
+    )
+
+
+def test_a_snap_stub_is_not_taken_for_a_browser(tmp_path):
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    fake_tool(bin_dir, "chromium", SNAP_STUB)
+    fake_tool(bin_dir, "chromium-browser", 'echo "Chromium 150.0"\n')
+    found = run_with(bin_dir, "ftt_working_chromium")
+    assert found.returncode == 0 and found.stdout.strip() == str(bin_dir / "chromium-browser")
+    fake_tool(bin_dir, "chromium-browser", SNAP_STUB)
+    assert run_with(bin_dir, "ftt_working_chromium").returncode == 1
+
+
+def test_without_a_working_chromium_the_setup_fetches_playwrights_once(tmp_path):
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    venv = tmp_path / "venv"
+    venv.mkdir()
+    calls = tmp_path / "calls.log"
+    for name in ("chromium", "chromium-browser"):
+        fake_tool(bin_dir, name, SNAP_STUB)
+    fake_tool(
+        bin_dir,
+        "fake-python",
+        f'echo "$*" >> {calls}\n[ "$3" = --version ] && echo "Version 1.65.0"\nexit 0\n',
+    )
+    hook = f"source {ROOT}/scripts/setup.d/60-test-browser.sh"
+    env = {"FTT_SETUP_MODE": "test", "FTT_VENV": str(venv), "FTT_PY": str(bin_dir / "fake-python")}
+    first = run_with(bin_dir, hook, **env)
+    assert first.returncode == 0, first.stderr
+    assert "installing Playwright's Chromium" in first.stderr + first.stdout
+    second = run_with(bin_dir, hook, **env)
+    assert second.returncode == 0, second.stderr
+    installs = [c for c in calls.read_text().splitlines() if "install" in c]
+    assert installs == ["-m playwright install --with-deps chromium"]
+    # With a working Chromium from apt nothing is fetched at all.
+    fake_tool(bin_dir, "chromium", 'echo "Chromium 150.0"\n')
+    calls.write_text("")
+    assert run_with(bin_dir, hook, **env).returncode == 0
+    assert calls.read_text() == ""
+
+
 @pytest.mark.skipif(
     "FTT_ROOT" not in os.environ, reason="only under scripts/test.sh, which has run setup"
 )

@@ -27,11 +27,25 @@ ARTIFACTS = Path(os.environ.get("FTT_E2E_ARTIFACTS", ROOT / "test-artifacts" / "
 PASSWORD = "field-test-2026"
 
 
+def system_chromium() -> str | None:
+    """The distribution's Chromium if it starts (the same test scripts/setup.sh
+    makes); None means Playwright's own build, which the setup then fetched."""
+    found = subprocess.run(
+        ["bash", "-c", f"source {ROOT}/scripts/lib.sh && ftt_working_chromium"],
+        capture_output=True,
+        text=True,
+    )
+    if found.returncode != 0:
+        return None
+    return found.stdout.strip()
+
+
 @pytest.fixture(scope="session")
 def browser_type_launch_args(browser_type_launch_args):
+    executable = os.environ.get("FTT_CHROMIUM") or system_chromium()
     return {
         **browser_type_launch_args,
-        "executable_path": shutil.which("chromium") or "/usr/bin/chromium",
+        **({"executable_path": executable} if executable else {}),
         "args": [
             *browser_type_launch_args.get("args", []),
             "--no-sandbox",
