@@ -14,6 +14,7 @@ stores them through the services.  What this module adds:
   so they too are found again), closed at the bag's end.
 """
 
+import functools
 import uuid
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -154,11 +155,14 @@ def import_bag(
     leg: Leg | None = None,
     test_event: TestEvent | None = None,
     params: dict | None = None,
-    progress: Callable[[int, int], None] | None = None,
+    progress: Callable[[str, int, int], None] | None = None,
 ) -> BagImportResult:
+    """``progress(phase, done, total)``: phase "reading" counts the bag's messages,
+    "storing" the collector events made from them."""
     info = bag_info(path)
     settings = collector_params(params or {})
-    events = bag_events(info.path, settings)
+    reading = None if progress is None else functools.partial(progress, "reading")
+    events = bag_events(info.path, settings, progress=reading)
     before = _counts()
     with transaction.atomic():
         target, created = _target_leg(info, vehicle, leg, test_event)
@@ -174,7 +178,7 @@ def import_bag(
                     unreadable += 1
             recorder.apply(batch)
             if progress is not None:
-                progress(min(start + BATCH, len(events)), len(events))
+                progress("storing", min(start + BATCH, len(events)), len(events))
         if created:
             target.refresh_from_db()
             shift, event = target.shift, target.shift.test_event

@@ -13,7 +13,7 @@ For the bag player and for bag imports.  Reading needs only rosbags (no ROS);
 
 import array
 import importlib
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -35,6 +35,7 @@ POSE = "geometry_msgs/msg/PoseStamped"
 GRID = "nav_msgs/msg/OccupancyGrid"
 IMAGE = "sensor_msgs/msg/Image"
 COMPRESSED = "sensor_msgs/msg/CompressedImage"
+PROGRESS_EVERY = 2000  # routed messages between two progress reports
 
 
 @dataclass
@@ -118,28 +119,49 @@ def _mode(pipeline: Pipeline, msg, at, mode_type: str) -> None:
         pipeline.on_mode_value(mode, at)
 
 
-def feed_pipeline(path: Path, pipeline: Pipeline) -> dict[str, int]:
-    """Route every message of the bag into the pipeline; returns counts per topic."""
+def feed_pipeline(
+    path: Path, pipeline: Pipeline, progress: Callable[[int, int], None] | None = None
+) -> dict[str, int]:
+    """Route every message of the bag into the pipeline; returns counts per topic.
+
+    ``progress(done, total)`` hears about the routed messages now and then."""
+    with open_bag(path) as reader:
+        handlers = {
+            (c.topic, c.msgtype): route(pipeline, c.topic, c.msgtype) for c in reader.connections
+        }
+        total = sum(
+            c.msgcount for c in reader.connections if handlers[(c.topic, c.msgtype)] is not None
+        )
+    # Topics we do not record (point clouds, say) are never deserialised.
+    wanted = {topic for (topic, _), handler in handlers.items() if handler is not None}
     counts: dict[str, int] = {}
-    handlers: dict[tuple[str, str], object] = {}
     last = None
-    for m in bag_messages(path):
-        key = (m.topic, m.msgtype)
-        if key not in handlers:
-            handlers[key] = route(pipeline, m.topic, m.msgtype)
-        handler = handlers[key]
+    done = 0
+    for m in bag_messages(path, wanted):
+        handler = handlers.get((m.topic, m.msgtype))
         if handler is None:
             continue
         at = m.at
         handler(m.msg, at)
         counts[m.topic] = counts.get(m.topic, 0) + 1
+        done += 1
+        if progress is not None and done % PROGRESS_EVERY == 0:
+            progress(done, total)
         if last is None or (at - last).total_seconds() >= 1.0:
             pipeline.tick(at)
             last = at
+    if progress is not None:
+        progress(total, total)
     return counts
 
 
-def bag_events(path: Path, params: dict | None = None, *, stop_at_end: bool = True) -> list[Event]:
+def bag_events(
+    path: Path,
+    params: dict | None = None,
+    *,
+    stop_at_end: bool = True,
+    progress: Callable[[int, int], None] | None = None,
+) -> list[Event]:
     """The events of a whole bag, as a collector logging from the bag's first
     message would have produced them (the last segment closed at the end
     when ``stop_at_end``).  Pictures are still unrendered: Event.prepare()."""
@@ -154,7 +176,7 @@ def bag_events(path: Path, params: dict | None = None, *, stop_at_end: bool = Tr
             datetime.fromtimestamp(t / 1e9, tz=UTC) for t in (reader.start_time, reader.end_time)
         )
     pipeline.start_logging(first)
-    feed_pipeline(path, pipeline)
+    feed_pipeline(path, pipeline, progress)
     if stop_at_end:
         pipeline.stop_logging(last)
     return events

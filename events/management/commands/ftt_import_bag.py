@@ -75,7 +75,7 @@ class Command(BaseCommand):
         params = _pairs(topic, "topics.") | _pairs(param, "params.")
         if mode_type:
             params["params.robot_mode_type"] = mode_type
-        self.stderr.write(f"Reading {bag} ...")
+        self.stderr.write(f"Importing {bag}")
         try:
             result = import_bag(
                 bag,
@@ -96,10 +96,11 @@ class Command(BaseCommand):
             f"outside an open segment)."
         )
 
-    def _progress(self, done: int, total: int) -> None:
+    def _progress(self, phase: str, done: int, total: int) -> None:
         width = 30
         filled = width * done // max(total, 1)
-        sys.stderr.write(f"\rStoring [{'#' * filled}{'.' * (width - filled)}] {done}/{total}")
+        label = {"reading": "Reading messages", "storing": "Storing events  "}[phase]
+        sys.stderr.write(f"\r{label} [{'#' * filled}{'.' * (width - filled)}] {done}/{total}")
         if done >= total:
             sys.stderr.write("\n")
         sys.stderr.flush()

@@ -1,6 +1,7 @@
 """ftt_import_bag on the original FTT's sample recording (ROS 1, and converted to ROS 2)."""
 
 import io
+import re
 import shutil
 import subprocess
 import sys
@@ -61,9 +62,14 @@ def assert_fkie_result():
     return total
 
 
-def test_ros1_bag_becomes_a_closed_test_event_with_five_masters(vehicle, media_root):
+def test_ros1_bag_becomes_a_closed_test_event_with_five_masters(vehicle, media_root, capsys):
     out = import_bag(FKIE_BAG, "--vehicle", "husky")
     assert "5 master segments" in out
+    # Both phases show a bar that ends full: the bag's 22,143 routed messages,
+    # then the events the collector's code made of them.
+    bars = capsys.readouterr().err
+    assert "Reading messages [" + "#" * 30 + "] 22143/22143" in bars
+    assert re.search(r"Storing events +\[#{30}\] (\d+)/\1", bars)
     assert_fkie_result()
     event = TestEvent.objects.get()
     assert event.start.replace(microsecond=0) == BAG_START and event.end is not None
