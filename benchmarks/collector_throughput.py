@@ -203,7 +203,6 @@ def main() -> None:
     match = re.search(r"\{.*\}", published)
     if match:
         sent = eval(match.group(0), {})  # our own simulator's printed dict
-        # A latched map reaches both map subscriptions (see node.py): ~2 per map.
         for name, topic in (("gps", "gps_fix"), ("tf", "tf"), ("image", "image"), ("map", "map")):
             got = counts.get(topic, 0)
             print(
