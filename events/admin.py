@@ -26,7 +26,7 @@ from events.models import (
     Vehicle,
     Weather,
 )
-from events.services import deletion, logs, segments
+from events.services import configuration, deletion, logs, notes, segments
 
 
 def admin_link(obj, label=None):
@@ -43,9 +43,11 @@ def children_links(queryset):
 class ServiceDeleteMixin:
     """Deletes go through the service, so refusals name where a row is used."""
 
+    delete_service = staticmethod(deletion.delete)
+
     def delete_model(self, request, obj):
         try:
-            deletion.delete(obj)
+            self.delete_service(obj)
         except ValidationError as exc:
             self.message_user(request, " ".join(exc.messages), messages.ERROR)
 
@@ -103,6 +105,8 @@ class CatalogueAdmin(ServiceDeleteMixin, admin.ModelAdmin):
     """Everyone with admin access may look; only administrators change."""
 
     search_fields = ["key", "short_description", "long_description"]
+    # Refuses the keys the logging rules name (unassigned, ito, auto).
+    delete_service = staticmethod(configuration.delete_configuration)
 
     def _is_administrator(self, request):
         return roles.has_role(request.user, roles.ADMINISTRATOR)
@@ -114,6 +118,8 @@ class CatalogueAdmin(ServiceDeleteMixin, admin.ModelAdmin):
         return self._is_administrator(request)
 
     def has_delete_permission(self, request, obj=None):
+        if obj is not None and configuration.is_used_by_rules(obj):
+            return False
         return self._is_administrator(request)
 
     def has_view_permission(self, request, obj=None):
@@ -148,6 +154,10 @@ class ItoReasonAdmin(CatalogueAdmin):
 @admin.register(SegmentType)
 class SegmentTypeAdmin(CatalogueAdmin):
     list_display = ["key", "short_description", colour_swatch]
+
+    def has_add_permission(self, request):
+        # The state machine knows ITO and AUTO only; a third type could never be logged.
+        return False
 
 
 # --- the log hierarchy ------------------------------------------------------------------------
@@ -188,14 +198,10 @@ class ChildInline(SegmentInline):
     fk_name = "parent"
 
 
-class NoteInline(admin.TabularInline):
+class NoteInline(ReadOnlyInline):
+    # Edited on the note's own page, where saving goes through the notes service.
     model = Note
-    extra = 0
     fields = ["author", "text", "created", "edited"]
-    readonly_fields = ["created", "edited"]
-
-    def has_add_permission(self, request, obj=None):
-        return False
 
 
 @admin.register(TestEvent)
@@ -353,6 +359,11 @@ class NoteAdmin(ServiceDeleteMixin, admin.ModelAdmin):
     search_fields = ["text", "author__name"]
     list_select_related = ["author", "segment__segment_type"]
     readonly_fields = ["segment", "author", "created", "edited", "uid"]
+    delete_service = staticmethod(notes.delete_note)
 
     def has_add_permission(self, request):
         return False
+
+    def save_model(self, request, obj, form, change):
+        # The service stamps "edited" and tells the live map, as for API edits.
+        notes.edit_note(obj, text=form.cleaned_data["text"])

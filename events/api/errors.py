@@ -32,6 +32,17 @@ def _first_message(errors) -> str:
     return str(errors)
 
 
+# PostgreSQL's serialization failure and deadlock: the transaction was rolled back whole.
+_TRANSIENT_PGCODES = {"40001", "40P01"}
+
+
+def _is_transient_conflict(exc) -> bool:
+    return (
+        isinstance(exc, DatabaseError)
+        and getattr(exc.__cause__, "pgcode", None) in _TRANSIENT_PGCODES
+    )
+
+
 def exception_handler(exc, context):
     if isinstance(exc, DjangoValidationError):
         errors = _field_errors(exc)
@@ -45,10 +56,11 @@ def exception_handler(exc, context):
     if isinstance(exc, ProtectedError | RestrictedError):
         detail = describe_protected(exc)
         return Response({"detail": detail, "errors": {"non_field_errors": [detail]}}, status=409)
-    if isinstance(exc, IntegrityError):
-        # Only reached when two requests race past the service checks; the
-        # database constraint held, so report it as a conflict, not a crash.
-        logger.info("integrity conflict: %s", exc)
+    if isinstance(exc, IntegrityError) or _is_transient_conflict(exc):
+        # Only reached when two requests race past the service checks (or the
+        # database chose one of two to abort); nothing was written, so report
+        # a conflict to retry, not a crash and not a bad value.
+        logger.info("concurrent conflict: %s", exc)
         detail = "This change conflicts with another one made at the same time; retry."
         return Response({"detail": detail, "errors": {"non_field_errors": [detail]}}, status=409)
     if isinstance(exc, DatabaseError | ValueError | OverflowError):

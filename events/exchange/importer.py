@@ -3,7 +3,8 @@
 Rules (docs/data-exchange.md explains them for administrators):
 
 * Log entries, notes and telemetry are matched by ``uid``.  A known uid is
-  updated where the archive differs, otherwise left alone; an unknown one is
+  updated where the archive differs and its copy changed later than ours
+  (``modified``; the later change wins), otherwise left alone; an unknown one is
   added with the archive's uid, times and ordinal number.  Numbers are never
   changed: if the number is taken by another entry of the same parent the
   import is refused.
@@ -34,6 +35,7 @@ from pathlib import PurePosixPath
 from django.core.exceptions import ValidationError
 from django.core.files.base import ContentFile
 from django.db import DatabaseError, IntegrityError, transaction
+from django.db.models import Q
 
 from events.exchange import records as rec
 from events.exchange.archive import ArchiveError
@@ -235,6 +237,9 @@ class _Importer:
         """Add or update one log entry; ``clashes`` are (queryset, message) pairs that
         must be empty before a new entry may be added."""
         uid = uuid.UUID(record["uid"])
+        # Archives written before rows carried a change stamp have none: then
+        # the archive's copy is taken, as it always was.
+        modified = rec.time_in(record.get("modified"), "modified")
         row = model.objects.filter(uid=uid).first()
         if row is None:
             for queryset, message in clashes:
@@ -242,8 +247,10 @@ class _Importer:
                 if other is not None:
                     self.refuse(f"{message} (here: uid {other.uid}; archive: uid {uid}).")
             row = model(uid=uid, **values)
+            if modified is not None:
+                row.modified = modified
             row.full_clean(validate_unique=False, validate_constraints=False)
-            row.save()
+            row.save(keep_modified=modified is not None)
             self.plan.note(table, "added")
             return row
         if parent and getattr(row, parent) != values[parent]:
@@ -252,16 +259,27 @@ class _Importer:
                 f"the archive; the two installations disagree about uid {uid}."
             )
         values.pop("number", None)
+        if modified is not None and modified <= row.modified:
+            # Changed here since that copy was made (or the same copy): a stale
+            # archive must not undo what was recorded later.
+            self.plan.note(table, "unchanged")
+            return row
         if row.end is not None and values.get("end", row.end) is None:
             values["end"] = row.end  # never re-open; see the module docstring
         changed = [name for name, value in values.items() if getattr(row, name) != value]
         if changed:
             for name in changed:
                 setattr(row, name, values[name])
+            if modified is not None:
+                row.modified = modified
             row.full_clean(validate_unique=False, validate_constraints=False)
-            row.save(update_fields=changed)
+            row.save(update_fields=[*changed, "modified"], keep_modified=modified is not None)
             self.plan.note(table, "updated")
         else:
+            if modified is not None:
+                # Saved again there without a change: only the stamp moves along.
+                row.modified = modified
+                row.save(update_fields=["modified"], keep_modified=True)
             self.plan.note(table, "unchanged")
         return row
 
@@ -558,6 +576,33 @@ class _Importer:
         self.local_pose_rows()
         self.map_rows()
         self.image_rows()
+        self.nothing_open_under_closed()
+
+    def nothing_open_under_closed(self):
+        """Closing cascades down in the services; an import may not leave an open entry
+        under a closed one either (a new open leg in a shift closed here, or an archive
+        that ends a test event whose shift is still running here)."""
+        self.where = "after all records"
+        segments = [pk for pk, _, _ in self.segments.values()]
+        checks = [
+            (Shift, "test_event", self.shifts.values(), self.events.values(), "shift"),
+            (Leg, "shift", self.legs.values(), self.shifts.values(), "leg"),
+            (Segment, "leg", segments, self.legs.values(), "segment"),
+            (Segment, "parent", segments, segments, "ITO reason"),
+        ]
+        for model, parent, touched, parents, label in checks:
+            stranded = (
+                model.objects.filter(end__isnull=True, **{f"{parent}__end__isnull": False})
+                .filter(Q(pk__in=list(touched)) | Q(**{f"{parent}_id__in": list(parents)}))
+                .select_related(parent)
+                .first()
+            )
+            if stranded is not None:
+                self.refuse(
+                    f"{label.capitalize()} {stranded.uid} would stay open inside "
+                    f"{getattr(stranded, parent)} (uid {getattr(stranded, parent).uid}), "
+                    f"which is closed; end the {label} where it is still open and try again."
+                )
 
     def discard_files(self):
         for storage, name in self.written:

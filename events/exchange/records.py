@@ -98,6 +98,7 @@ def keyed_record(row, *extra: str) -> dict:
 def _entry(row) -> dict:
     return {
         "uid": str(row.uid),
+        "modified": time_out(row.modified),
         "start": time_out(row.start),
         "end": time_out(row.end),
         "note": row.note,
@@ -140,6 +141,7 @@ def segment_record(segment, uids: dict) -> dict:
     """``uids`` maps segment and leg primary keys to uids (one query instead of one per row)."""
     return {
         "uid": str(segment.uid),
+        "modified": time_out(segment.modified),
         "leg": uids["leg", segment.leg_id],
         "parent": uids["segment", segment.parent_id] if segment.parent_id else None,
         "segment_type": segment.segment_type_id,

@@ -11,6 +11,7 @@ import zoneinfo
 from django.contrib.gis.db import models
 from django.core.exceptions import ValidationError
 from django.db.models import F, Q
+from django.utils import timezone
 
 from events.models.catalogues import ItoReason, SegmentType, Weather
 from events.models.configuration import Performer, Personnel, PoseSource, Vehicle
@@ -28,7 +29,28 @@ def _ends_after_start(name: str) -> models.CheckConstraint:
     )
 
 
-class LogEntry(models.Model):
+class ChangeStamped(models.Model):
+    """``modified``: when the row last changed, here or where it was logged.
+
+    Every save stamps it, whoever saves (services, admin); an import keeps the
+    archive's stamp (``keep_modified=True``).  It lets an import tell a newer
+    copy of a row from a stale one: the later change wins.
+    """
+
+    modified = models.DateTimeField(default=timezone.now, editable=False)
+
+    class Meta:
+        abstract = True
+
+    def save(self, *args, keep_modified: bool = False, **kwargs):
+        if not keep_modified:
+            self.modified = timezone.now()
+            if kwargs.get("update_fields") is not None:
+                kwargs["update_fields"] = {*kwargs["update_fields"], "modified"}
+        super().save(*args, **kwargs)
+
+
+class LogEntry(ChangeStamped):
     """Shared shape of every level: a global id, an interval and a note."""
 
     uid = models.UUIDField(default=uuid.uuid4, unique=True, editable=False)
@@ -142,7 +164,7 @@ class Leg(LogEntry):
         return f"Leg {self.number}"
 
 
-class Segment(models.Model):
+class Segment(ChangeStamped):
     """A master is one continuous run in one mode; ITO children carry reasons."""
 
     ANNOTATION_FIELDS = ("ito_reason", "obstacle", "lighting", "slope")
@@ -191,6 +213,12 @@ class Segment(models.Model):
                 condition=Q(parent__isnull=False)
                 | Q(ito_reason__isnull=True, obstacle="", lighting="", slope=""),
                 name="segment_masters_have_no_annotation",
+            ),
+            # Statistics count interventions by reason; a child without one
+            # would drop out of every figure.
+            models.CheckConstraint(
+                condition=Q(parent__isnull=True) | Q(ito_reason__isnull=False),
+                name="segment_children_have_a_reason",
             ),
             models.CheckConstraint(
                 condition=Q(start_local_x__isnull=True, start_local_y__isnull=True)

@@ -36,9 +36,13 @@ def update_configuration(instance: Model, **fields) -> Model:
     return instance
 
 
+def is_used_by_rules(instance: Model) -> bool:
+    return instance.pk in _KEYS_IN_CODE.get(type(instance), ())
+
+
 @transaction.atomic
 def delete_configuration(instance: Model) -> None:
-    if instance.pk in _KEYS_IN_CODE.get(type(instance), ()):
+    if is_used_by_rules(instance):
         raise RuleViolation(
             f"'{instance.pk}' is used by the logging rules themselves and cannot be deleted."
         )

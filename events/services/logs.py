@@ -74,7 +74,8 @@ def close_test_event(event: TestEvent, at: datetime | None = None) -> TestEvent:
     at = instant(at)
     require_open(event, f"Test event '{event}'")
     require_not_before(event, at, f"Test event '{event}'")
-    for shift in event.shifts.filter(end__isnull=True):
+    # Top-down locks (event, shift, leg), the order the writers below use too.
+    for shift in event.shifts.select_for_update().filter(end__isnull=True):
         _close_shift(shift, at)
     event.end = at
     event.save(update_fields=["end"])
@@ -153,7 +154,7 @@ def close_shift(shift: Shift, at: datetime | None = None) -> Shift:
 
 
 def _close_shift(shift: Shift, at: datetime) -> Shift:
-    for leg in shift.legs.filter(end__isnull=True):
+    for leg in shift.legs.select_for_update().filter(end__isnull=True):
         _close_leg(leg, at)
     shift.end = at
     shift.save(update_fields=["end"])

@@ -1,14 +1,15 @@
+from django.core.exceptions import ValidationError
 from django.db import transaction
 from django.utils import timezone
 
-from events.errors import RuleViolation
 from events.models import Note, Personnel, Segment
 from rosbridge_app.live import announce_row, announced
 
 
 def _clean_text(text: str) -> str:
     if not isinstance(text, str) or not text.strip():
-        raise RuleViolation({"text": ["A note needs some text."]})
+        # A bad value, not a state conflict: callers answer 400, not 409.
+        raise ValidationError({"text": ["A note needs some text."]})
     return text
 
 

@@ -12,6 +12,7 @@ from datetime import datetime
 
 from django.contrib.gis.geos import Point
 from django.db import transaction
+from django.utils import timezone
 
 from events.errors import RuleViolation
 from events.models import ItoReason, Leg, Segment, SegmentType
@@ -89,6 +90,14 @@ def _reason(key: str) -> ItoReason:
         raise RuleViolation({"ito_reason": [f"Unknown ITO reason '{key}'."]}) from None
 
 
+def _lock_with_leg(segment: Segment) -> Segment:
+    # Leg before segment is the order every writer takes, so closing a leg
+    # waits for (or is waited on by) additions to its segments: no deadlock,
+    # and no segment opened under a leg that has just been closed.
+    Leg.objects.select_for_update().filter(pk=segment.leg_id).first()
+    return lock(segment)
+
+
 def _open_master(leg: Leg) -> Segment | None:
     return (
         Segment.objects.select_for_update()
@@ -100,7 +109,7 @@ def _open_master(leg: Leg) -> Segment | None:
 def _close(segment: Segment, at: datetime) -> None:
     end = max(at, segment.start)
     if segment.parent_id is None:
-        segment.children.filter(end__isnull=True).update(end=end)
+        segment.children.filter(end__isnull=True).update(end=end, modified=timezone.now())
     segment.end = end
     segment.save(update_fields=["end"])
 
@@ -198,7 +207,7 @@ def new_manual_segment(
 def add_ito_child(
     master: Segment, *, reason: str = ItoReason.UNASSIGNED, at: datetime | None = None
 ) -> Segment:
-    master = lock(master)
+    master = _lock_with_leg(master)
     at = instant(at)
     if master.parent_id is not None:
         raise RuleViolation("Reasons are added to the ITO master segment, not to a reason.")
@@ -212,7 +221,7 @@ def add_ito_child(
 @transaction.atomic
 def close_segment(segment: Segment, at: datetime | None = None) -> Segment:
     """Closing a child ends only that reason; closing a master ends its children too."""
-    segment = lock(segment)
+    segment = _lock_with_leg(segment)
     at = instant(at)
     require_open(segment, "This segment")
     _close(segment, at)

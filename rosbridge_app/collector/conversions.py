@@ -190,7 +190,9 @@ _CHANNELS = {
     "32fc1": ("f4", 1, "L"),
     "64fc1": ("f8", 1, "L"),
 }
-_BAYER = {"bayer_rggb8": "RG", "bayer_bggr8": "BG", "bayer_gbrg8": "GB", "bayer_grbg8": "GR"}
+# OpenCV names a Bayer pattern after the second row's second and third pixels,
+# ROS after the first row's first two: the ROS pattern RGGB is OpenCV's BG.
+_BAYER = {"bayer_rggb8": "BG", "bayer_bggr8": "RG", "bayer_gbrg8": "GR", "bayer_grbg8": "GB"}
 
 
 class UnsupportedImage(ValueError):

@@ -266,7 +266,13 @@ class CollectorNode(Node):
             ),
             ("gps_fix", NavSatFix, get("topics.gps_fix"), _qos(200, reliable), pipe.on_fix),
             ("map", OccupancyGrid, get("topics.map"), RELIABLE_LATCHED, pipe.on_grid),
-            ("map_jpeg", CompressedImage, get("topics.map_jpeg"), _qos(1, True), pipe.on_map_jpeg),
+            (
+                "map_jpeg",
+                CompressedImage,
+                get("topics.map_jpeg"),
+                RELIABLE_LATCHED,
+                pipe.on_map_jpeg,
+            ),
             ("image", Image, get("topics.image"), _qos(2, reliable), pipe.on_image),
             (
                 "image_compressed",
@@ -318,14 +324,18 @@ class CollectorNode(Node):
                 "count": old.get("count", 0) if old.get("topic") == resolved else 0,
                 "last_received": old.get("last_received"),
             }
-        if "map" in self._ftt_subs:
-            # Only a TRANSIENT_LOCAL subscription gets a map latched before it
-            # existed, but it never matches a volatile publisher (cartographer's
-            # /map); this second one takes those.  A map that arrives twice is
-            # dropped by the pipeline's checksum.
-            self._ftt_subs["map (volatile)"] = self.create_subscription(
-                OccupancyGrid, get("topics.map"), self._input("map", pipe.on_grid), _qos(1, True)
-            )
+        # Only a TRANSIENT_LOCAL subscription gets a map latched before it
+        # existed, but it never matches a volatile publisher (cartographer's
+        # /map); a second, volatile one takes those.  A map that arrives twice
+        # is dropped by the pipeline's checksum or byte comparison.
+        for name, msg_type, handler in (
+            ("map", OccupancyGrid, pipe.on_grid),
+            ("map_jpeg", CompressedImage, pipe.on_map_jpeg),
+        ):
+            if name in self._ftt_subs:
+                self._ftt_subs[f"{name} (volatile)"] = self.create_subscription(
+                    msg_type, get(f"topics.{name}"), self._input(name, handler), _qos(1, True)
+                )
         self.inputs = inputs
 
     def _tick(self) -> None:

@@ -124,8 +124,18 @@ class CollectorRuntime:
     def _run(self) -> int:
         db = connections["default"]
         if db.vendor == "postgresql":
-            # An unreachable server must fail fast, not hang the writer.
-            db.settings_dict.setdefault("OPTIONS", {}).setdefault("connect_timeout", 3)
+            # An unreachable server must fail fast, not hang the writer; keepalives
+            # notice a connection that died with the robot's Wi-Fi within a minute
+            # instead of the kernel's two hours.
+            options = db.settings_dict.setdefault("OPTIONS", {})
+            for name, value in (
+                ("connect_timeout", 3),
+                ("keepalives", 1),
+                ("keepalives_idle", 20),
+                ("keepalives_interval", 5),
+                ("keepalives_count", 4),
+            ):
+                options.setdefault(name, value)
         self.node = CollectorNode(
             self.events.put,
             params_file=self.params_file,
@@ -176,7 +186,13 @@ class CollectorRuntime:
     # --- database side ------------------------------------------------------------------
 
     def _vehicle(self):
-        return Vehicle.objects.filter(key=self.vehicle_key).first() if self.vehicle_key else None
+        # Read on every lookup: an engineer may point a running collector at
+        # another vehicle with `ros2 param set` or from the GUI.
+        key = self.node.get_parameter("vehicle").value
+        if key != self.vehicle_key:
+            log.info("vehicle changed from '%s' to '%s'", self.vehicle_key, key)
+            self.vehicle_key = key
+        return Vehicle.objects.filter(key=key).first() if key else None
 
     def _leg(self):
         vehicle = self._vehicle()

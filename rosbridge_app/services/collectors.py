@@ -75,6 +75,20 @@ def take_commands(collector: Collector) -> list[CollectorCommand]:
     )
     for command in stale:
         _finish(command, False, "The collector did not take the command in time.", {})
+    # Taken by an earlier run of this collector that died before answering: the
+    # person who issued it must not wait for an answer that never comes.
+    orphaned = CollectorCommand.objects.filter(
+        collector=collector,
+        done__isnull=True,
+        taken__lt=now - COMMAND_EXPIRY,
+    )
+    for command in orphaned:
+        _finish(
+            command,
+            False,
+            "The collector stopped before carrying this out; check its state and try again.",
+            {},
+        )
     todo = list(
         CollectorCommand.objects.select_for_update()
         .filter(collector=collector, done__isnull=True, taken__isnull=True)

@@ -1,6 +1,7 @@
 import uuid
 
 from django.db import models
+from django.db.models import Q
 from django.utils import timezone
 
 from events.models import Shift
@@ -47,6 +48,13 @@ class MapImage(models.Model):
         ordering = ["-received", "-id"]
         get_latest_by = ["received", "id"]
         indexes = [models.Index(fields=["shift", "received"], name="map_shift_received")]
+        # A map of no cells or of no size cannot be placed on the ground.
+        constraints = [
+            models.CheckConstraint(
+                condition=Q(width__gt=0, height__gt=0, resolution__gt=0),
+                name="map_has_a_size",
+            )
+        ]
 
     def __str__(self):
         return f"Map {self.frame} {self.width}x{self.height} ({self.received:%H:%M:%S})"

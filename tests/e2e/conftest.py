@@ -113,6 +113,8 @@ class Server:
 
     def start(self):
         self.manage("migrate", "--noinput", timeout=300)
+        ARTIFACTS.mkdir(parents=True, exist_ok=True)
+        self.log = open(ARTIFACTS / "daphne.log", "w")  # noqa: SIM115 - open while it runs
         self.process = subprocess.Popen(
             [
                 sys.executable,
@@ -126,8 +128,9 @@ class Server:
             ],
             cwd=ROOT,
             env=self.env,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
+            # Kept as an artifact: when a page hangs, the server's side tells why.
+            stdout=self.log,
+            stderr=subprocess.STDOUT,
         )
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline:
@@ -145,6 +148,7 @@ class Server:
                 self.process.wait(10)
             except subprocess.TimeoutExpired:
                 self.process.kill()
+            self.log.close()
 
 
 def _tile_url() -> str:

@@ -4,7 +4,7 @@ import pytest
 from django.contrib.auth.models import Group, User
 from django.urls import reverse
 
-from events.models import ItoReason, Segment
+from events.models import ItoReason, Segment, SegmentType
 from events.services import segments
 from tests.pages import external_assets
 
@@ -103,3 +103,33 @@ def test_deleting_a_vehicle_in_use_is_refused_with_where_it_is_used(admin_client
 def test_recorded_data_is_read_only(admin_client):
     page = admin_client.get(reverse("admin:telemetry_pose_add"))
     assert page.status_code == 403
+
+
+def test_keys_the_rules_need_cannot_be_deleted_from_admin(admin_client):
+    page = admin_client.get(reverse("admin:events_itoreason_change", args=["unassigned"]))
+    delete_url = reverse("admin:events_itoreason_delete", args=["unassigned"])
+    assert delete_url not in page.content.decode()
+    assert admin_client.post(delete_url, {"post": "yes"}).status_code == 403
+    response = admin_client.post(
+        reverse("admin:events_segmenttype_changelist"),
+        {"action": "delete_selected", "_selected_action": ["ito", "auto"], "post": "yes"},
+    )
+    assert response.status_code == 403
+    assert set(SegmentType.objects.values_list("key", flat=True)) == {"ito", "auto"}
+    assert ItoReason.objects.filter(pk="unassigned").exists()
+
+
+def test_no_third_segment_type_can_be_added(admin_client):
+    assert admin_client.get(reverse("admin:events_segmenttype_add")).status_code == 403
+
+
+def test_editing_a_note_in_admin_goes_through_the_notes_service(admin_client, leg):
+    from events.services import notes
+
+    note = notes.add_note(segments.new_manual_segment(leg), text="first")
+    url = reverse("admin:events_note_change", args=[note.pk])
+    assert admin_client.post(url, {"text": "second"}).status_code == 302
+    edited = type(note).objects.get(pk=note.pk)
+    assert edited.text == "second" and edited.edited > note.edited
+    segment_page = admin_client.get(reverse("admin:events_segment_change", args=[note.segment_id]))
+    assert b'name="notes-0-text"' not in segment_page.content

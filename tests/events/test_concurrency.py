@@ -6,6 +6,7 @@ from concurrent.futures import ThreadPoolExecutor
 import pytest
 from django.db import connection, connections
 
+from events.errors import RuleViolation
 from events.models import Leg, Segment, Shift
 from events.services import logs, segments
 
@@ -77,3 +78,32 @@ def test_parallel_manual_segments_share_one_ito_master(leg):
     assert {c.parent_id for c in children} == {ito_masters.get().pk}
     # The switch itself adds "unassigned"; every operator's reason is kept too.
     assert ito_masters.get().children.filter(ito_reason="planner").count() == WRITERS
+
+
+def test_closing_a_shift_while_robot_and_operators_write_leaves_nothing_open(leg):
+    # The close lands at a random point among the writers; whatever order the
+    # database picks, every writer either finishes before it or is refused.
+    for _ in range(6):
+        shift = logs.create_shift(test_event=leg.shift.test_event, vehicle=leg.shift.vehicle)
+        this_leg = logs.create_leg(shift=shift)
+        master = segments.report_mode(this_leg, "ito").master
+
+        def act(kind, shift=shift, leg=this_leg, master=master):
+            try:
+                if kind == "close":
+                    logs.close_shift(shift)
+                elif kind == "reason":
+                    segments.add_ito_child(master, reason="planner")
+                elif kind == "end-reason":
+                    segments.close_segment(master.children.first())
+                else:
+                    segments.report_mode(leg, kind)
+            except RuleViolation:
+                return "refused"
+            return "done"
+
+        kinds = ["close", "reason", "reason", "auto", "ito", "end-reason", "reason", "auto"]
+        outcomes = run_in_parallel(act, [(k,) for k in kinds])
+        assert set(outcomes) <= {"done", "refused"}
+        assert not Segment.objects.filter(leg=this_leg, end__isnull=True).exists()
+        assert Leg.objects.get(pk=this_leg.pk).end is not None

@@ -243,3 +243,29 @@ def test_empty_shift_and_unreadable_image_do_not_stop_the_report(
     assert "No segments in this shift." in text
     assert f"Image {image.pk} unreadable" in text  # listed under warnings
     assert f"Total distance {m(17)}" in text
+
+
+def test_per_vehicle_reliability_contents_and_note_authors(report, scenario):
+    _, raw = report
+    # Each vehicle drove one shift here, so its row repeats that shift's figures.
+    assert has_row(
+        raw, "Husky A200", "1", m(5), f"{m(2 * 5 / CHI2_95[4])} – {m(2 * 5 / CHI2_05[2])}"
+    )
+    assert has_row(raw, "Jackal", "1", m(8), f"{m(2 * 8 / CHI2_95[4])} – {m(2 * 8 / CHI2_05[2])}")
+    text = flat(raw)
+    assert text.index("Contents") < text.index("Global statistics")
+    for heading in ("Global statistics", "Per vehicle", "Reasons: interventions and manual time"):
+        assert text.count(heading) >= 2, heading  # in the outline and as a heading
+    author = flat(scenario.people["operator"].name)
+    assert f"{author} (" in text and f"note {flat(HOSTILE)}" in text
+
+
+def test_progress_is_reported_in_order_up_to_done(scenario, tile_cache):
+    steps = []
+    render_report(
+        scenario.event, ReportOptions(no_tiles=True), lambda f, msg: steps.append((f, msg))
+    )
+    fractions = [f for f, _ in steps]
+    assert fractions == sorted(fractions) and len(steps) >= 4
+    assert steps[-1] == (1.0, "done") and 0.0 <= fractions[0] < 0.5
+    assert any("typesetting" in msg for _, msg in steps)

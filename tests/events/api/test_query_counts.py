@@ -4,7 +4,15 @@ import itertools
 
 import pytest
 
-from events.models import Performer, Personnel, PoseSource, SegmentType, Vehicle, Weather
+from events.models import (
+    ItoReason,
+    Performer,
+    Personnel,
+    PoseSource,
+    SegmentType,
+    Vehicle,
+    Weather,
+)
 from events.services import logs, notes, segments
 from tests.events.api.querycount import LIST_QUERIES, assert_constant_queries
 
@@ -39,11 +47,11 @@ def _notes(n, leg):
         notes.add_note(segment, text=f"note {i}", author=author)
 
 
-def _configuration(model, **fields):
+def _configuration(model, constant=None, **fields):
     def add(n, leg):
         for _ in range(n):
             i = next(counter)
-            model.objects.create(**{k: f"{v}{i}" for k, v in fields.items()})
+            model.objects.create(**{k: f"{v}{i}" for k, v in fields.items()}, **(constant or {}))
 
     return add
 
@@ -60,6 +68,9 @@ CASES = {
     "/api/pose-sources/": _configuration(PoseSource, key="s", short_description="s"),
     # Catalogues are not paginated: no count query.
     "/api/weather/": _configuration(Weather, key="w", short_description="w"),
+    "/api/ito-reasons/": _configuration(
+        ItoReason, {"color": "10,20,30"}, key="r", short_description="r"
+    ),
 }
 
 

@@ -63,6 +63,31 @@ def test_viewer_cannot_run_actions(api_client, leg):
     assert leg.is_open and not leg.segments.exists()
 
 
+def test_viewer_is_refused_every_rule_action_and_nothing_changes(api_client, leg):
+    master = segments.report_mode(leg, SegmentType.ITO).master
+    child = master.children.get()
+    event, shift = leg.shift.test_event, leg.shift
+    viewer = api_client(roles.VIEWER)
+    attempts = [
+        (f"/api/test-events/{event.pk}/close/", {}),
+        (f"/api/test-events/{event.pk}/reopen/", {}),
+        (f"/api/shifts/{shift.pk}/close/", {}),
+        (f"/api/legs/{leg.pk}/manual-segment/", {"ito_reason": "safety"}),
+        (f"/api/segments/{master.pk}/children/", {"ito_reason": "planner"}),
+        (f"/api/segments/{child.pk}/close/", {}),
+    ]
+    for url, body in attempts:
+        assert_error_shape(viewer.post(url, body, format="json"), 403)
+    patched = viewer.patch(f"/api/segments/{child.pk}/", {"obstacle": "x"}, format="json")
+    assert_error_shape(patched, 403)
+    assert Segment.objects.filter(leg=leg).count() == 2
+    assert not Segment.objects.filter(leg=leg, end__isnull=False).exists()
+    child.refresh_from_db()
+    assert child.obstacle == "" and child.ito_reason_id == "unassigned"
+    assert TestEventModel.objects.get(pk=event.pk).end is None
+    assert Shift.objects.get(pk=shift.pk).end is None
+
+
 # --- the mode endpoint the collector uses ----------------------------------------------
 
 

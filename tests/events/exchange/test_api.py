@@ -75,3 +75,23 @@ def test_administrator_downloads_a_backup(api_client, media_root):
     names = backup.namelist()
     assert any(n.startswith("database/") for n in names)
     assert sum(n.startswith("media/") for n in names) == 2
+
+
+def test_import_that_conflicts_with_data_here_is_409_and_changes_nothing(
+    api_client, media_root, wipe
+):
+    from events.services import logs
+    from tests.events.exchange.builders import T0, configuration
+
+    data = download(api_client("viewer"), field_day(close=False))
+    wipe()
+    vehicle, *_ = configuration()
+    logs.create_shift(test_event=logs.create_test_event(at=T0), vehicle=vehicle, at=T0)
+    before = snapshot()
+    response = api_client("administrator").post(
+        "/api/archives/import/", {"archive": io.BytesIO(data)}, format="multipart"
+    )
+    assert response.status_code == 409
+    assert "already has an open shift" in response.json()["detail"]
+    assert "Nothing was imported" in response.json()["detail"]
+    assert snapshot() == before

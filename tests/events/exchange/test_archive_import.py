@@ -97,6 +97,74 @@ def test_old_archive_never_reopens_what_was_closed_here(media_root, tmp_path):
     assert snapshot() == closed
 
 
+def test_new_open_leg_under_a_shift_closed_here_is_refused(media_root, tmp_path):
+    event = field_day(close=False)
+    export_all(tmp_path / "open.zip")
+    shift = event.shifts.get()
+    logs.close_shift(shift, at=T0 + timedelta(minutes=50))
+    shift.legs.all().delete()  # unknown here again, so the archive would add it open
+    before = snapshot()
+    with pytest.raises(ImportRefused, match=r"Leg .* would stay open inside Shift 1"):
+        load(tmp_path / "open.zip")
+    assert snapshot() == before
+
+
+def test_archive_closing_an_event_whose_shift_runs_here_is_refused(media_root, tmp_path):
+    vehicle, *_ = configuration()
+    event = logs.create_test_event(at=T0, location="Wachtberg")
+    logs.close_test_event(event, at=T0 + timedelta(minutes=5))
+    export_all(tmp_path / "closed.zip")
+    logs.reopen_test_event(event)
+    logs.create_shift(test_event=event, vehicle=vehicle, at=T0 + timedelta(minutes=10))
+    # As if the other installation had closed the event after our re-opening.
+    TestEvent.objects.filter(pk=event.pk).update(modified=T0)
+    before = snapshot()
+    with pytest.raises(ImportRefused, match="would stay open inside"):
+        load(tmp_path / "closed.zip")
+    assert snapshot() == before
+
+
+def test_a_stale_archive_does_not_undo_a_later_change(media_root, tmp_path):
+    vehicle, *_ = configuration()
+    event = logs.create_test_event(at=T0, location="Wachtberg")
+    shift = logs.create_shift(test_event=event, vehicle=vehicle, at=T0 + timedelta(minutes=1))
+    export_all(tmp_path / "before.zip")
+    logs.update_test_event(event, location="Wachtberg, north field")
+    logs.update_shift(shift, workspace="meadow")
+    plan = load(tmp_path / "before.zip")
+    assert plan.changes() == 0
+    assert TestEvent.objects.get().location == "Wachtberg, north field"
+    assert Shift.objects.get().workspace == "meadow"
+
+
+def test_notes_keep_the_later_edit_whichever_side_made_it(day, tmp_path):
+    from events.models import Note
+
+    note = Note.objects.get()
+    export_all(tmp_path / "before-edit.zip")
+    notes.edit_note(note, text="edited here after the export")
+    plan = load(tmp_path / "before-edit.zip")
+    assert plan.counts["notes"] == {"unchanged": 1}
+    assert Note.objects.get().text == "edited here after the export"
+
+    export_all(tmp_path / "after-edit.zip")
+    Note.objects.filter(pk=note.pk).update(text="stale", edited=note.created)
+    plan = load(tmp_path / "after-edit.zip")
+    assert plan.counts["notes"] == {"updated": 1}
+    assert Note.objects.get().text == "edited here after the export"
+
+
+def test_image_description_is_the_only_image_field_an_import_changes(day, tmp_path):
+    image = Image.objects.get()
+    stored = image.image.name
+    export_all(tmp_path / "day.zip")
+    Image.objects.filter(pk=image.pk).update(description="changed here")
+    plan = load(tmp_path / "day.zip")
+    assert plan.counts["images"] == {"updated": 1}
+    image.refresh_from_db()
+    assert image.description != "changed here" and image.image.name == stored
+
+
 def test_dry_run_reports_the_plan_and_writes_nothing(day, tmp_path, wipe, media_root):
     export_all(tmp_path / "day.zip")
     wipe()

@@ -80,6 +80,30 @@ def test_sigkill_and_restart_continue_the_segment_without_duplicates(
     assert Collector.objects.get(name="collector").logging
 
 
+def test_sigterm_stores_everything_received_before_exiting(ros, start_collector, robot_leg):
+    collector = start_collector(params=EVERY_FIX, args=["--start-logging"])
+    drive = Drive(ros, rate=150.0)
+
+    def segment_opened():
+        drive.mode_pub.publish(drive.Bool(data=True))
+        return Segment.objects.filter(leg=robot_leg).exists()
+
+    # Fixes sent before the collector has a segment have nowhere to go; under
+    # load that window is long, so the drive starts once the segment exists.
+    wait_for(segment_opened, interval=0.3, what="the first segment")
+    drive.start()
+    time.sleep(3.0)
+    drive.stop()
+    time.sleep(0.2)  # the last fixes reach the collector; most are not written yet
+    assert collector.stop(signal.SIGTERM) == 0
+    record = Collector.objects.get(name="collector")
+    received = record.inputs["gps_fix"]["count"]  # the final heartbeat's count
+    assert received >= 0.9 * len(drive.sent)
+    assert Pose.objects.count() == received
+    assert record.stopped is not None
+    assert "everything written" in collector.output()
+
+
 def _aware(t):
     from datetime import UTC, datetime
 

@@ -188,7 +188,7 @@ def test_parameters_services_and_gui_commands(ros, start_collector, robot_leg):
     assert on_disk["params"]["use_tf"] is False
 
     # The GUI side: commands through the database. How fast they are answered is
-    # measured by benchmarks/command_latency.py.
+    # measured by benchmarks/collector_throughput.py.
     record = Collector.objects.get(name="collector")
     command = issue_command(record, CollectorCommand.Kind.START_LOGGING)
     command = wait_for(
@@ -236,6 +236,24 @@ def test_parameters_services_and_gui_commands(ros, start_collector, robot_leg):
     assert good.success and good.result["parameters"]["params.pose_min_distance"] == 2.0
     assert stop.success
     wait_for(lambda: masters(next_leg)[0].end is not None, 5, what="the master closed")
+
+    # Pointed at another vehicle while running, it logs into that vehicle's leg.
+    from events.models import Vehicle
+
+    other = Vehicle.objects.create(key="second-bot", short_description="Second robot")
+    other_leg = logs.create_leg(
+        shift=logs.create_shift(test_event=robot_leg.shift.test_event, vehicle=other)
+    )
+    result = ros.await_future(params.set_parameters([Parameter("vehicle", value="second-bot")]))
+    assert result.results[0].successful
+    assert ros.set_logging(True).success
+    mode.publish(RobotMode(val=RobotMode.MANUAL))
+    wait_for(
+        lambda: [m for m in masters(other_leg) if m.segment_type_id == "ito"],
+        10,
+        what="the take-over in the other vehicle's leg",
+    )
+    assert len(masters(next_leg)) == 1
 
     # Saving where the file cannot be written is reported as a failure.
     collector.params_file.unlink()

@@ -116,6 +116,49 @@ def test_colour_images_keep_their_colours(encoding, order):
     assert r > 180 and g < 40 and b < 40
 
 
+@pytest.mark.parametrize("pattern", ["rggb", "bggr", "gbrg", "grbg"])
+def test_bayer_mosaics_keep_their_colours(pattern):
+    # A scene of one orange colour, sampled through the named 2x2 filter.
+    colour = {"r": 230, "g": 120, "b": 10}
+    cell = np.array([[colour[c] for c in pattern[:2]], [colour[c] for c in pattern[2:]]])
+    mosaic = np.tile(cell, (8, 8)).astype(np.uint8)
+    out = decoded(conv.image_to_jpeg(image(f"bayer_{pattern}8", mosaic[..., None])))
+    r, g, b = out[8, 8]
+    assert abs(r - 230) < 25 and abs(g - 120) < 25 and abs(b - 10) < 25, (r, g, b)
+
+
+@pytest.mark.parametrize("encoding", ["uyvy", "yuv422", "yuyv"])
+def test_yuv422_keeps_its_colours(encoding):
+    # BT.601 red: Y 82, U (Cb) 90, V (Cr) 240, two pixels in four bytes.
+    y, u, v = 82, 90, 240
+    pair = [y, u, y, v] if encoding == "yuyv" else [u, y, v, y]
+    rows = np.tile(np.array(pair, np.uint8), (8, 8))  # 8 rows of 16 pixels
+    msg = image(encoding, rows)
+    msg.width = 16
+    r, g, b = decoded(conv.image_to_jpeg(msg))[4, 8]
+    assert r > 200 and g < 60 and b < 60, (r, g, b)
+
+
+@pytest.mark.parametrize("encoding,dtype", [("32FC1", np.float32), ("16UC1", np.uint16)])
+def test_depth_images_are_stretched_and_invalid_depths_are_black(encoding, dtype):
+    depth = np.array([[0.5, 2.0], [1.25, 2.0]], dtype=np.float64)
+    depth = (depth * 1000).astype(dtype) if dtype == np.uint16 else depth.astype(dtype)
+    if dtype == np.float32:
+        depth[1, 1] = np.nan
+    pixels, mode = conv.image_array(image(encoding, depth))
+    assert mode == "L"
+    assert pixels[0, 0] == 0 and pixels[0, 1] == 255
+    assert pixels[1, 0] == pytest.approx(127, abs=1)
+    if dtype == np.float32:
+        assert pixels[1, 1] == 0
+
+
+def test_mono8_is_kept_as_grey():
+    grey = np.array([[0, 100], [200, 255]], np.uint8)
+    pixels, mode = conv.image_array(image("mono8", grey))
+    assert mode == "L" and pixels.tolist() == grey.tolist()
+
+
 def test_mono16_is_stretched_to_visible_grey():
     depth = np.array([[1000, 3000], [2000, 3000]], dtype=np.uint16)
     out = decoded(conv.image_to_jpeg(image("mono16", depth)))

@@ -69,3 +69,18 @@ def test_commands_nobody_takes_fail_after_a_while(vehicle):
     assert take_commands(collector) == []
     command.refresh_from_db()
     assert command.success is False and "in time" in command.message
+
+
+def test_commands_taken_by_a_collector_that_died_are_answered_on_restart(vehicle):
+    collector = heartbeat("robot/husky", vehicle=vehicle)
+    command = issue_command(collector, CollectorCommand.Kind.SAVE_PARAMETERS)
+    assert take_commands(collector) == [command]
+    # The process is killed here; its next run polls again a minute later.
+    CollectorCommand.objects.filter(pk=command.pk).update(
+        taken=timezone.now() - timedelta(minutes=1)
+    )
+    assert take_commands(collector) == []
+    command.refresh_from_db()
+    assert command.done is not None and command.success is False
+    assert "stopped before carrying this out" in command.message
+    assert Announcement.objects.filter(kind="command", payload__command=command.pk).exists()

@@ -168,6 +168,35 @@ def test_map_is_stored_only_when_it_changes(pipe, sink):
     assert maps[0].blob.startswith(b"\x89PNG")
 
 
+def test_ready_made_map_picture_replaces_the_drawn_grid(pipe, sink):
+    import io
+
+    from PIL import Image as PilImage
+
+    o = NS(position=NS(x=-1.0, y=2.0, z=0.0), orientation=NS(x=0.0, y=0.0, z=0.0, w=1.0))
+    grid = NS(
+        header=NS(stamp=stamp(0), frame_id="map"),
+        info=NS(width=8, height=4, resolution=0.5, origin=o),
+        data=np.zeros(32, np.int8),
+    )
+    picture = io.BytesIO()
+    PilImage.new("RGB", (8, 4), (20, 40, 220)).save(picture, format="JPEG")
+    jpeg = NS(format="jpeg", data=picture.getvalue())
+    pipe.start_logging(at(0))
+    pipe.on_map_jpeg(jpeg, at(1))  # no geometry yet: nothing to store
+    assert not [e for e in sink if e.kind == ev.MAP]
+    pipe.on_grid(grid, at(100))
+    pipe.on_map_jpeg(jpeg, at(200))
+    pipe.on_map_jpeg(jpeg, at(300))  # the same picture again changes nothing
+    maps = [e.prepare() for e in sink if e.kind == ev.MAP]
+    assert len(maps) == 2
+    drawn, pictured = (PilImage.open(io.BytesIO(m.blob)).convert("RGB") for m in maps)
+    assert drawn.getpixel((0, 0)) == (254, 254, 254)  # free grid cells
+    r, g, b = pictured.getpixel((4, 2))
+    assert b > 180 and r < 60
+    assert (maps[1].data["width"], maps[1].data["origin_x"]) == (8, -1.0)
+
+
 @pytest.mark.skipif(not FKIE_BAG.exists(), reason="fkie_test.bag not available")
 def test_thinned_fkie_path_is_within_one_percent_of_full_rate():
     events = bag_events(FKIE_BAG, {"params.robot_mode_type": "industrial"})

@@ -50,6 +50,9 @@ CASES = {
     # Token + user, groups, the leg, its masters, their points: more segments add none.
     "/api/tracks/?leg={leg}": (_poses, 5),
     "/api/local-tracks/?leg={leg}": (_local_poses, 5),
+    "/api/tracks/?shift={shift}": (_poses, 5),
+    "/api/tracks/?test_event={test_event}": (_poses, 5),
+    "/api/local-tracks/?shift={shift}": (_local_poses, 5),
 }
 
 
@@ -61,7 +64,7 @@ def test_list_queries_do_not_grow_with_rows(
     assert_constant_queries(
         api_client,
         django_assert_max_num_queries,
-        url.format(leg=leg.pk),
+        url.format(leg=leg.pk, shift=leg.shift_id, test_event=leg.shift.test_event_id),
         lambda n: add(n, leg),
         most=most,
     )
