@@ -1,6 +1,13 @@
+import faulthandler
 import os
+import signal
 
 from django.core.asgi import get_asgi_application
+
+# `kill -USR1 <pid>` prints every thread's stack to stderr: the way to see
+# where a server that stopped answering is stuck, without stopping it.
+if hasattr(signal, "SIGUSR1"):
+    faulthandler.register(signal.SIGUSR1, all_threads=True)
 
 os.environ.setdefault("DJANGO_SETTINGS_MODULE", "ftt_site.settings")
 django_asgi_app = get_asgi_application()

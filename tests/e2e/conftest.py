@@ -8,6 +8,7 @@ live updates are tested the way they happen in the field.
 import io
 import os
 import shutil
+import signal
 import socket
 import subprocess
 import sys
@@ -151,6 +152,19 @@ class Server:
             self.log.close()
 
 
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_makereport(item, call):
+    report = yield
+    server = _running_server
+    if report.failed and server is not None and server.process.poll() is None:
+        # The server's thread stacks at the moment of failure, in daphne.log.
+        server.process.send_signal(signal.SIGUSR1)
+    return report
+
+
+_running_server = None
+
+
 def _tile_url() -> str:
     # A loopback tile host; tests answer it with page.route or leave it dead.
     return "http://127.0.0.1:9/tiles/{z}/{x}/{y}.png"
@@ -158,8 +172,10 @@ def _tile_url() -> str:
 
 @pytest.fixture(scope="session")
 def server(tmp_path_factory):
+    global _running_server
     srv = Server(tmp_path_factory.mktemp("ftt-e2e"), _tile_url())
     srv.start()
+    _running_server = srv
     srv.python(
         f"""
         from django.contrib.auth.models import Group, User
