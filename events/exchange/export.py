@@ -56,24 +56,32 @@ def select_events(
         return events
     events = TestEvent.objects.all()
     if since is not None:
-        # An event that ended before `since` counts only if something was recorded or
-        # noted in it since.
+        # An event that ended before `since` counts only if something in it was
+        # recorded, noted or edited since.
         # One query per table: OR-ing the reverse joins would multiply the rows.
+        in_segment = "segment__leg__shift__test_event"
         touched = set()
-        for model, stamp in ((Pose, "received"), (LocalPose, "received"), (Image, "received"),
-                             (Note, "edited")):  # fmt: skip
+        for model, stamp, event in (
+            (Pose, "received", in_segment),
+            (LocalPose, "received", in_segment),
+            (Image, "received", in_segment),
+            (Note, "edited", in_segment),
+            (MapImage, "received", "shift__test_event"),
+            (Shift, "modified", "test_event"),
+            (Leg, "modified", "shift__test_event"),
+            (Segment, "modified", "leg__shift__test_event"),
+        ):
             touched |= set(
                 model.objects.filter(**{f"{stamp}__gte": since})
-                .values_list("segment__leg__shift__test_event", flat=True)
+                .values_list(event, flat=True)
                 .distinct()
             )
-        touched |= set(
-            MapImage.objects.filter(received__gte=since)
-            .values_list("shift__test_event", flat=True)
-            .distinct()
-        )
         events = events.filter(
-            Q(end__isnull=True) | Q(end__gte=since) | Q(start__gte=since) | Q(pk__in=touched)
+            Q(end__isnull=True)
+            | Q(end__gte=since)
+            | Q(start__gte=since)
+            | Q(modified__gte=since)
+            | Q(pk__in=touched)
         )
     return list(events.order_by("start", "id"))
 

@@ -327,6 +327,20 @@ def test_since_archive_carries_only_new_telemetry_but_completes_the_event(
     assert snapshot() == final
 
 
+def test_since_selects_a_closed_event_whose_entries_were_edited_since(media_root, tmp_path):
+    from django.utils import timezone
+
+    field_day()  # closed
+    quiet = field_day(T0 + timedelta(days=1), vehicle_key="jackal")
+    cut = timezone.now()
+    assert select_events(since=cut) == []
+    segments.annotate_segment(
+        Segment.objects.filter(leg__shift__test_event=quiet, parent__isnull=False).first(),
+        obstacle="a puddle noticed in the video afterwards",
+    )
+    assert select_events(since=cut) == [quiet]
+
+
 def test_commands_export_chosen_events_and_print_the_plan(day, tmp_path, wipe):
     import io
 
