@@ -28,6 +28,9 @@ from events.models import (
 )
 from events.services import configuration, deletion, logs, notes, segments
 
+# Shown, never edited: the services and the importer set them.
+ENTRY_STAMPS = ["uid", "start", "end", "modified"]
+
 
 def admin_link(obj, label=None):
     if obj is None:
@@ -174,6 +177,11 @@ class ReadOnlyInline(admin.TabularInline):
     def has_change_permission(self, request, obj=None):
         return False
 
+    def get_readonly_fields(self, request, obj=None):
+        # Saving the parent page builds the inline's form too; listing the
+        # fields as read-only keeps non-editable ones (number) out of that form.
+        return self.fields
+
 
 class ShiftInline(ReadOnlyInline):
     model = Shift
@@ -210,8 +218,8 @@ class TestEventAdmin(ServiceDeleteMixin, admin.ModelAdmin):
     list_filter = ["time_zone", ("end", admin.EmptyFieldListFilter)]
     search_fields = ["location", "version", "note"]
     date_hierarchy = "start"
-    readonly_fields = ["uid", "start", "end"]
-    fields = ["location", "version", "time_zone", "note", "uid", "start", "end"]
+    readonly_fields = ENTRY_STAMPS
+    fields = ["location", "version", "time_zone", "note", *ENTRY_STAMPS]
     inlines = [ShiftInline]
     actions = ["close_selected", "reopen_selected"]
 
@@ -237,16 +245,16 @@ class ShiftAdmin(ServiceDeleteMixin, admin.ModelAdmin):
     list_filter = ["vehicle", "performer", ("end", admin.EmptyFieldListFilter)]
     search_fields = ["test_intent", "workspace", "note", "test_event__location"]
     list_select_related = ["test_event", "vehicle", "performer"]
-    readonly_fields = ["test_event_link", "number", "uid", "start", "end"]
+    readonly_fields = ["test_event_link", "number", *ENTRY_STAMPS]
     inlines = [LegInline]
     actions = ["close_selected"]
 
     def get_fields(self, request, obj=None):
         head = ["test_event_link", "number"] if obj else ["test_event"]
-        return [*head, *logs.SHIFT_FIELDS, "uid", "start", "end"]
+        return [*head, *logs.SHIFT_FIELDS, *ENTRY_STAMPS]
 
     def get_readonly_fields(self, request, obj=None):
-        return self.readonly_fields if obj else ["uid", "start", "end"]
+        return self.readonly_fields if obj else ENTRY_STAMPS
 
     @admin.display(description="test event")
     def test_event_link(self, obj):
@@ -274,16 +282,16 @@ class LegAdmin(ServiceDeleteMixin, admin.ModelAdmin):
     list_filter = ["weather", ("end", admin.EmptyFieldListFilter)]
     search_fields = ["note", "recording"]
     list_select_related = ["shift", "weather", "default_pose_source"]
-    readonly_fields = ["shift_link", "number", "uid", "start", "end"]
+    readonly_fields = ["shift_link", "number", *ENTRY_STAMPS]
     inlines = [SegmentInline]
     actions = ["close_selected"]
 
     def get_fields(self, request, obj=None):
         head = ["shift_link", "number"] if obj else ["shift"]
-        return [*head, *logs.LEG_FIELDS, "uid", "start", "end"]
+        return [*head, *logs.LEG_FIELDS, *ENTRY_STAMPS]
 
     def get_readonly_fields(self, request, obj=None):
-        return self.readonly_fields if obj else ["uid", "start", "end"]
+        return self.readonly_fields if obj else ENTRY_STAMPS
 
     @admin.display(description="shift")
     def shift_link(self, obj):
@@ -323,6 +331,7 @@ class SegmentAdmin(ServiceDeleteMixin, LeafletGeoAdminMixin, admin.ModelAdmin):
         "end",
         "robot_stamp",
         "uid",
+        "modified",
     ]
     inlines = [ChildInline, NoteInline]
     actions = ["close_selected"]

@@ -1,5 +1,7 @@
 """Django admin is the configuration UI; it must work offline and respect roles."""
 
+from html.parser import HTMLParser
+
 import pytest
 from django.contrib.auth.models import Group, User
 from django.urls import reverse
@@ -133,3 +135,61 @@ def test_editing_a_note_in_admin_goes_through_the_notes_service(admin_client, le
     assert edited.text == "second" and edited.edited > note.edited
     segment_page = admin_client.get(reverse("admin:events_segment_change", args=[note.segment_id]))
     assert b'name="notes-0-text"' not in segment_page.content
+
+
+class _FormFields(HTMLParser):
+    """The values a browser would post for the admin change form of a page."""
+
+    def __init__(self):
+        super().__init__()
+        self.data, self._select, self._textarea = {}, None, None
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        name = a.get("name")
+        if tag == "input" and name and a.get("type") not in ("submit", "checkbox", "file"):
+            self.data[name] = a.get("value") or ""
+        elif tag == "input" and name and a.get("type") == "checkbox" and "checked" in a:
+            self.data[name] = a.get("value") or "on"
+        elif tag == "select" and name:
+            self._select = name
+            self.data.setdefault(name, "")
+        elif tag == "option" and self._select and "selected" in a:
+            self.data[self._select] = a.get("value") or ""
+        elif tag == "textarea" and name:
+            self._textarea = name
+            self.data[name] = ""
+
+    def handle_endtag(self, tag):
+        if tag == "select":
+            self._select = None
+        elif tag == "textarea":
+            self._textarea = None
+
+    def handle_data(self, data):
+        if self._textarea:
+            self.data[self._textarea] += (
+                data.lstrip("\n") if not self.data[self._textarea] else data
+            )
+
+
+def _resave(client, url, **changes):
+    parser = _FormFields()
+    parser.feed(client.get(url).content.decode())
+    parser.data.pop("csrfmiddlewaretoken", None)
+    response = client.post(url, {**parser.data, **changes})
+    assert response.status_code == 302, response.content.decode()[:3000]
+
+
+def test_each_level_with_children_can_be_saved_from_its_admin_page(admin_client, leg):
+    """The read-only inlines list non-editable columns (numbers); saving must not trip on them."""
+    master = segments.report_mode(leg, "ito").master
+    child = master.children.get()
+    shift, event = leg.shift, leg.shift.test_event
+    _resave(admin_client, reverse("admin:events_testevent_change", args=[event.pk]), note="Ü")
+    _resave(admin_client, reverse("admin:events_shift_change", args=[shift.pk]), workspace="pit")
+    _resave(admin_client, reverse("admin:events_leg_change", args=[leg.pk]), note="wet")
+    _resave(admin_client, reverse("admin:events_segment_change", args=[child.pk]), slope="5 %")
+    event.refresh_from_db(), shift.refresh_from_db(), leg.refresh_from_db(), child.refresh_from_db()
+    assert (event.note, shift.workspace, leg.note, child.slope) == ("Ü", "pit", "wet", "5 %")
+    assert shift.legs.get() == leg and leg.segments.filter(parent=None).get() == master
