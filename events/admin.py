@@ -332,6 +332,7 @@ class SegmentAdmin(ServiceDeleteMixin, LeafletGeoAdminMixin, admin.ModelAdmin):
         "robot_stamp",
         "uid",
         "modified",
+        "annotated",
     ]
     inlines = [ChildInline, NoteInline]
     actions = ["close_selected"]

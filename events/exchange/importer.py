@@ -4,7 +4,8 @@ Rules (docs/data-exchange.md explains them for administrators):
 
 * Log entries, notes and telemetry are matched by ``uid``.  A known uid is
   updated where the archive differs and its copy changed later than ours
-  (``modified``; the later change wins), otherwise left alone; an unknown one is
+  (``modified``; the later change wins, and a segment's annotation by its own
+  stamp ``annotated``), otherwise left alone; an unknown one is
   added with the archive's uid, times and ordinal number.  Numbers are never
   changed: if the number is taken by another entry of the same parent the
   import is refused.
@@ -233,22 +234,31 @@ class _Importer:
             cache[uid] = pk
         return cache[uid]
 
-    def save_entry(self, table, model, record, values, *, parent=None, clashes=()):
-        """Add or update one log entry; ``clashes`` are (queryset, message) pairs that
-        must be empty before a new entry may be added."""
+    def save_entry(self, table, model, record, values, *, parent=None, clashes=(), annotation=None):
+        """Add or update one log entry.
+
+        ``clashes`` are (queryset, message) pairs that must be empty before a new
+        entry may be added.  ``annotation`` holds a segment's reason fields: they
+        follow their own stamp (``annotated``), so that an operator's annotation
+        survives the robot closing the same segment later on the other side.
+        """
         uid = uuid.UUID(record["uid"])
-        # Archives written before rows carried a change stamp have none: then
-        # the archive's copy is taken, as it always was.
+        # Archives written before rows carried change stamps have none: then the
+        # archive's copy is taken, as it always was.
         modified = rec.time_in(record.get("modified"), "modified")
+        annotated = rec.time_in(record.get("annotated"), "annotated")
+        annotation = annotation or {}
         row = model.objects.filter(uid=uid).first()
         if row is None:
             for queryset, message in clashes:
                 other = queryset.first()
                 if other is not None:
                     self.refuse(f"{message} (here: uid {other.uid}; archive: uid {uid}).")
-            row = model(uid=uid, **values)
+            row = model(uid=uid, **values, **annotation)
             if modified is not None:
                 row.modified = modified
+            if annotation:
+                row.annotated = annotated
             row.full_clean(validate_unique=False, validate_constraints=False)
             row.save(keep_modified=modified is not None)
             self.plan.note(table, "added")
@@ -259,28 +269,33 @@ class _Importer:
                 f"the archive; the two installations disagree about uid {uid}."
             )
         values.pop("number", None)
-        if modified is not None and modified <= row.modified:
-            # Changed here since that copy was made (or the same copy): a stale
-            # archive must not undo what was recorded later.
-            self.plan.note(table, "unchanged")
-            return row
-        if row.end is not None and values.get("end", row.end) is None:
-            values["end"] = row.end  # never re-open; see the module docstring
-        changed = [name for name, value in values.items() if getattr(row, name) != value]
+        wanted = {}
+        # A copy not newer than ours was made before our latest change: a stale
+        # archive must not undo what was recorded later.
+        if modified is None or modified > row.modified:
+            if row.end is not None and values.get("end", row.end) is None:
+                values["end"] = row.end  # never re-open; see the module docstring
+            wanted |= values
+        stamps = []
+        if annotation and (
+            "annotated" not in record or _later(annotated, getattr(row, "annotated", None))
+        ):
+            wanted |= annotation
+            if row.annotated != annotated:
+                row.annotated = annotated
+                stamps.append("annotated")
+        if _later(modified, row.modified):
+            row.modified = modified
+            stamps.append("modified")
+        changed = [name for name, value in wanted.items() if getattr(row, name) != value]
+        for name in changed:
+            setattr(row, name, wanted[name])
         if changed:
-            for name in changed:
-                setattr(row, name, values[name])
-            if modified is not None:
-                row.modified = modified
             row.full_clean(validate_unique=False, validate_constraints=False)
-            row.save(update_fields=[*changed, "modified"], keep_modified=modified is not None)
-            self.plan.note(table, "updated")
-        else:
-            if modified is not None:
-                # Saved again there without a change: only the stamp moves along.
-                row.modified = modified
-                row.save(update_fields=["modified"], keep_modified=True)
-            self.plan.note(table, "unchanged")
+        if changed or stamps:
+            # Stamps move along also without a change of content (saved again there).
+            row.save(update_fields=[*changed, *stamps], keep_modified=modified is not None)
+        self.plan.note(table, "updated" if changed else "unchanged")
         return row
 
     @staticmethod
@@ -387,14 +402,16 @@ class _Importer:
                 parent_id, grandparent, parent_leg = self._segment(r["parent"])
                 if grandparent is not None or parent_leg != leg_id:
                     self.refuse(f"{self.where}: its parent is not a master of the same leg.")
-            values = {
-                "leg_id": leg_id,
-                "parent_id": parent_id,
-                "segment_type_id": r["segment_type"],
+            annotation = {
                 "ito_reason_id": r["ito_reason"],
                 "obstacle": r["obstacle"],
                 "lighting": r["lighting"],
                 "slope": r["slope"],
+            }
+            values = {
+                "leg_id": leg_id,
+                "parent_id": parent_id,
+                "segment_type_id": r["segment_type"],
                 "start_position": rec.point_in(r["start_position"], "start_position"),
                 "start_local_x": r["start_local_x"],
                 "start_local_y": r["start_local_y"],
@@ -413,7 +430,15 @@ class _Importer:
                         "This leg already has another open master segment here; close it first",
                     )
                 )
-            row = self.save_entry("segments", Segment, r, values, parent="leg_id", clashes=clashes)
+            row = self.save_entry(
+                "segments",
+                Segment,
+                r,
+                values,
+                parent="leg_id",
+                clashes=clashes,
+                annotation=annotation,
+            )
             self.segments[r["uid"]] = (row.pk, row.parent_id, row.leg_id)
 
     def _segment(self, uid) -> tuple[int, int | None, int]:
@@ -608,6 +633,10 @@ class _Importer:
         for storage, name in self.written:
             storage.delete(name)
         self.written.clear()
+
+
+def _later(archived, ours) -> bool:
+    return archived is not None and (ours is None or archived > ours)
 
 
 def _messages(exc: ValidationError) -> str:

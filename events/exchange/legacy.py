@@ -518,6 +518,10 @@ class LegacyBundle:
             end = max(end, start)  # whole-second server clock; never end before start
         return {
             "uid": uid,
+            # The original keeps no change time; its latest known time stands in,
+            # so that running the import again changes nothing and later edits
+            # made here win.
+            "modified": rec.time_out(_time(start if end is None else end)),
             "start": rec.time_out(_time(start)),
             "end": rec.time_out(_time(end)),
             "note": _text(r.get("note")),
@@ -559,8 +563,12 @@ class LegacyBundle:
         local = _xy(r["local_start_position"])
         start = self.segment_start[r["id"]]
         end = _num(r["endtime_secs"])
+        end = None if end is None else max(end, start)
+        latest = rec.time_out(_time(start if end is None else end))  # as in _entry
         return {
             "uid": self.segment_uid[r["id"]],
+            "modified": latest,
+            "annotated": None if master else latest,
             "leg": legs[r["leg_id"]],
             "parent": None if master else self.segment_uid.get(r["parent_id"]),
             "segment_type": types.get(r["segment_type_id"])
@@ -571,6 +579,6 @@ class LegacyBundle:
             "start_local_y": local[1] if local else None,
             "start_local_frame": "",
             "start": rec.time_out(_time(start)),
-            "end": rec.time_out(_time(None if end is None else max(end, start))),
+            "end": rec.time_out(_time(end)),
             "robot_stamp": rec.time_out(_time(r["orig_starttime_secs"])),
         }

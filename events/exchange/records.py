@@ -149,6 +149,7 @@ def segment_record(segment, uids: dict) -> dict:
         "obstacle": segment.obstacle,
         "lighting": segment.lighting,
         "slope": segment.slope,
+        "annotated": time_out(segment.annotated),
         "start_position": point_out(segment.start_position),
         "start_local_x": segment.start_local_x,
         "start_local_y": segment.start_local_y,

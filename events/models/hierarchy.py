@@ -194,6 +194,9 @@ class Segment(ChangeStamped):
     robot_stamp = models.DateTimeField(
         null=True, blank=True, help_text="The robot's own clock at the mode switch."
     )
+    # When an operator last set reason, obstacle, lighting or slope (never: null).
+    # Imports merge the annotation by this stamp, the rest of the row by `modified`.
+    annotated = models.DateTimeField(null=True, blank=True, editable=False)
 
     class Meta:
         ordering = ["-start", "-id"]

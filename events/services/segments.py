@@ -257,5 +257,6 @@ def annotate_segment(segment: Segment, **fields) -> Segment:
             raise RuleViolation({"ito_reason": ["An ITO reason cannot be empty; use Unassigned."]})
         fields["ito_reason"] = _reason(fields["ito_reason"])
     apply_fields(segment, fields, Segment.ANNOTATION_FIELDS)
-    segment.save(update_fields=list(fields))
+    segment.annotated = timezone.now()
+    segment.save(update_fields=[*fields, "annotated"])
     return announced(segment)

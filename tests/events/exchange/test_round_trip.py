@@ -95,3 +95,37 @@ def test_robot_exports_repeatedly_to_base_station_without_duplicates(tmp_path, m
     assert load(tmp_path / "second.zip").changes() == 0
     assert load(tmp_path / "first.zip").changes() == 0  # a stale archive undoes nothing
     assert here() == final
+
+
+def test_annotation_made_at_the_base_survives_the_robot_closing_the_segment(tmp_path, media_root):
+    from events.models import Segment
+    from events.services import segments
+
+    robot = fresh_site(tmp_path / "robot")
+    robot.python(
+        "from tests.events.exchange.builders import field_day; field_day(close=False)\n"
+        "from events.models import Segment\n"
+        "from events.services import segments\n"
+        "master = Segment.objects.get(parent=None, end=None)\n"
+        "print('SECOND', segments.add_ito_child(master).uid)\n"
+    )
+    robot.manage("ftt_export", str(tmp_path / "first.zip"))
+    load(tmp_path / "first.zip")
+    # The operator at the base station gives the robot's open take-over its reason ...
+    second = Segment.objects.get(parent__isnull=False, end=None, ito_reason="unassigned")
+    segments.annotate_segment(second, ito_reason="planner", obstacle="ditch")
+    # ... and later the robot, still offline, drives on: the take-over ends there.
+    robot.python(
+        "from events.models import Segment\n"
+        "from events.services import segments\n"
+        "segments.close_segment(Segment.objects.get(parent=None, end=None))\n"
+    )
+    robot.manage("ftt_export", str(tmp_path / "second.zip"))
+    plan = load(tmp_path / "second.zip")
+    assert plan.counts["segments"]["updated"] >= 2  # the master and its reasons ended
+    second.refresh_from_db()
+    assert (second.ito_reason_id, second.obstacle) == ("planner", "ditch")
+    assert second.end is not None and second.parent.end is not None
+    # The robot's own annotation of the first reason came across as well.
+    first = second.parent.children.exclude(pk=second.pk).get()
+    assert (first.ito_reason_id, first.obstacle) == ("safety", "fence")
