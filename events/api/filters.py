@@ -97,7 +97,7 @@ class TestEventFilter(OpenStateFilterSet):
     class Meta:
         model = TestEvent
         fields = []
-        time_fields = ["start", "end"]
+        time_fields = ["start", "end", "modified"]
 
 
 class ShiftFilter(OpenStateFilterSet):
@@ -107,7 +107,7 @@ class ShiftFilter(OpenStateFilterSet):
     class Meta:
         model = Shift
         fields = []
-        time_fields = ["start", "end"]
+        time_fields = ["start", "end", "modified"]
 
 
 class LegFilter(OpenStateFilterSet):
@@ -117,7 +117,7 @@ class LegFilter(OpenStateFilterSet):
     class Meta:
         model = Leg
         fields = []
-        time_fields = ["start", "end"]
+        time_fields = ["start", "end", "modified"]
 
 
 class SegmentFilter(OpenStateFilterSet):
@@ -135,7 +135,7 @@ class SegmentFilter(OpenStateFilterSet):
     class Meta:
         model = Segment
         fields = []
-        time_fields = ["start", "end", "robot_stamp"]
+        time_fields = ["start", "end", "robot_stamp", "modified"]
 
 
 class NoteFilter(TimeRangeFilterSet):

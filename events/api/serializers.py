@@ -132,7 +132,7 @@ class LogEntrySerializer(ClientUidMixin, ServiceSerializer):
 class TestEventSerializer(LogEntrySerializer):
     class Meta:
         model = TestEvent
-        fields = ["id", "uid", *logs.TEST_EVENT_FIELDS, "start", "end", "is_open"]
+        fields = ["id", "uid", *logs.TEST_EVENT_FIELDS, "start", "end", "is_open", "modified"]
         read_only_fields = ["start", "end"]
         create_only_fields = ["uid"]
 
@@ -149,6 +149,7 @@ class ShiftSerializer(LogEntrySerializer):
             "start",
             "end",
             "is_open",
+            "modified",
         ]
         read_only_fields = ["number", "start", "end"]
         create_only_fields = ["uid", "test_event"]
@@ -157,7 +158,17 @@ class ShiftSerializer(LogEntrySerializer):
 class LegSerializer(LogEntrySerializer):
     class Meta:
         model = Leg
-        fields = ["id", "uid", "shift", "number", *logs.LEG_FIELDS, "start", "end", "is_open"]
+        fields = [
+            "id",
+            "uid",
+            "shift",
+            "number",
+            *logs.LEG_FIELDS,
+            "start",
+            "end",
+            "is_open",
+            "modified",
+        ]
         read_only_fields = ["number", "start", "end"]
         create_only_fields = ["uid", "shift"]
 
@@ -188,6 +199,8 @@ class SegmentSerializer(ServiceSerializer):
             "robot_stamp",
             "is_open",
             "is_master",
+            "modified",
+            "annotated",
         ]
         read_only_fields = [
             "uid",

@@ -55,3 +55,18 @@ def test_segment_filters_mode_master_and_bbox(viewer, leg):
     # The child starts where its master starts.
     assert viewer("/api/segments/", in_bbox="-71,-31,-69,-29") == [ito.pk, child.pk]
     assert viewer("/api/segments/", open="true", leg=leg.pk) == [ito.pk, child.pk]
+
+
+def test_modified_after_lists_only_what_changed_since(viewer, api_client, leg):
+    """A script that mirrors FTT asks for what changed since its last visit."""
+    from django.utils import timezone
+
+    ito = segments.report_mode(leg, SegmentType.ITO).master
+    child = ito.children.get()
+    cut = timezone.now().isoformat()
+    assert viewer("/api/segments/", modified_after=cut) == []
+    assert viewer("/api/legs/", modified_after=cut) == []
+    segments.annotate_segment(child, obstacle="rock")
+    assert viewer("/api/segments/", modified_after=cut) == [child.pk]
+    row = api_client(roles.VIEWER).get(f"/api/segments/{child.pk}/").json()
+    assert row["annotated"] is not None and row["modified"] >= row["annotated"]
