@@ -193,3 +193,28 @@ def test_each_level_with_children_can_be_saved_from_its_admin_page(admin_client,
     event.refresh_from_db(), shift.refresh_from_db(), leg.refresh_from_db(), child.refresh_from_db()
     assert (event.note, shift.workspace, leg.note, child.slope) == ("Ü", "pit", "wet", "5 %")
     assert shift.legs.get() == leg and leg.segments.filter(parent=None).get() == master
+
+
+def test_each_level_can_be_added_from_its_admin_page(admin_client, vehicle, pose_source):
+    from events.models import Leg, Shift, TestEvent
+
+    _resave(
+        admin_client,
+        reverse("admin:events_testevent_add"),
+        location="Übungsplatz Süd",
+        time_zone="Europe/Berlin",
+    )
+    event = TestEvent.objects.get()
+    _resave(
+        admin_client, reverse("admin:events_shift_add"), test_event=event.pk, vehicle=vehicle.pk
+    )
+    shift = Shift.objects.get()
+    _resave(
+        admin_client,
+        reverse("admin:events_leg_add"),
+        shift=shift.pk,
+        default_pose_source=pose_source.pk,
+    )
+    leg = Leg.objects.get()
+    assert (event.location, shift.number, leg.number) == ("Übungsplatz Süd", 1, 1)
+    assert leg.is_open and leg.default_pose_source == pose_source
