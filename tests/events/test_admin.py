@@ -183,13 +183,17 @@ def _resave(client, url, **changes):
 
 def test_each_level_with_children_can_be_saved_from_its_admin_page(admin_client, leg):
     """The read-only inlines list non-editable columns (numbers); saving must not trip on them."""
+    from events.services import notes
+
     master = segments.report_mode(leg, "ito").master
     child = master.children.get()
+    notes.add_note(child, text="seen from the tower")
     shift, event = leg.shift, leg.shift.test_event
     _resave(admin_client, reverse("admin:events_testevent_change", args=[event.pk]), note="Ü")
     _resave(admin_client, reverse("admin:events_shift_change", args=[shift.pk]), workspace="pit")
     _resave(admin_client, reverse("admin:events_leg_change", args=[leg.pk]), note="wet")
     _resave(admin_client, reverse("admin:events_segment_change", args=[child.pk]), slope="5 %")
+    _resave(admin_client, reverse("admin:events_segment_change", args=[master.pk]))
     event.refresh_from_db(), shift.refresh_from_db(), leg.refresh_from_db(), child.refresh_from_db()
     assert (event.note, shift.workspace, leg.note, child.slope) == ("Ü", "pit", "wet", "5 %")
     assert shift.legs.get() == leg and leg.segments.filter(parent=None).get() == master
