@@ -144,6 +144,17 @@ function fmtTime(iso) {
     return new Date(iso).toLocaleString();
   }
 }
+/* Time of day only: in the segment list the date is the leg's and would push
+   duration and distance out of sight on a laptop; the full time is the title. */
+function fmtClock(iso) {
+  if (!iso) return "—";
+  const options = { hour: "2-digit", minute: "2-digit", second: "2-digit", hourCycle: "h23" };
+  try {
+    return new Date(iso).toLocaleTimeString(undefined, { ...zoneOptions(), ...options, timeZoneName: undefined });
+  } catch {
+    return new Date(iso).toLocaleTimeString(undefined, options);
+  }
+}
 const fmtDay = (iso) => (iso ? new Date(iso).toLocaleDateString() : "");
 
 function fmtDuration(start, end) {
@@ -545,15 +556,16 @@ function renderSegments() {
       s.id,
       s.segment_type.toUpperCase(),
       s.parent === null ? "" : reasonName(s.ito_reason),
-      fmtTime(s.start),
-      s.end ? fmtTime(s.end) : "—",
+      { text: fmtClock(s.start), title: fmtTime(s.start) },
+      s.end ? { text: fmtClock(s.end), title: fmtTime(s.end) } : "—",
       fmtDuration(s.start, s.end),
       fmtDistance(track ? track.distance_m : null),
       s.is_open ? "OPEN" : "CLOSED",
     ];
     tr.replaceChildren(...cells.map((c) => {
       const td = document.createElement("td");
-      td.textContent = c;
+      td.textContent = typeof c === "object" ? c.text : c;
+      if (typeof c === "object") td.title = c.title;
       return td;
     }));
     tr.addEventListener("click", () => selectSegment(s.id === state.segment ? null : s.id));

@@ -1,6 +1,7 @@
 """Roles, maps without tiles, reconnects, notes and error messages in the browser."""
 
 import itertools
+import re
 import time
 
 import pytest
@@ -276,7 +277,11 @@ def test_ending_a_leg_while_logging_stops_logging_first(page, server, open_leg, 
         # Closed levels: logging cannot start again until a new leg is opened.
         expect(toggle).to_be_disabled()
         expect(page.locator("#logging-why")).to_contain_text("open test event, shift and leg")
-        expect(page.locator("#segment-table tbody tr td").nth(7)).to_have_text("CLOSED")
+        cells = page.locator("#segment-table tbody tr td")
+        expect(cells.nth(7)).to_have_text("CLOSED")
+        # The list shows the time of day; the full date and zone are in the tooltip.
+        expect(cells.nth(3)).to_have_text(re.compile(r"^\d{2}:\d{2}:\d{2}$"))
+        expect(cells.nth(3)).to_have_attribute("title", re.compile(r"20\d\d"))
         shot(page, "leg-ended")
     finally:
         robot.stop()
