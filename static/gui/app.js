@@ -1290,7 +1290,8 @@ const Reports = {
     const form = document.createElement("form");
     form.id = "report-form";
     const saved = JSON.parse(localStorage.getItem("ftt.reportFields") || "{}");
-    for (const spec of REPORT_FIELDS) form.append(buildField(spec, saved[spec.name] ?? (spec.name === "version" ? "1.0" : "")));
+    const defaults = { version: "1.0", local: "false" };
+    for (const spec of REPORT_FIELDS) form.append(buildField(spec, saved[spec.name] ?? defaults[spec.name] ?? ""));
     const go = document.createElement("button");
     go.type = "submit";
     go.className = "primary";

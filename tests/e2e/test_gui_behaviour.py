@@ -167,6 +167,8 @@ def test_reports_dialog_offers_exports_and_makes_a_report(page, server, open_leg
     assert csv.ok
     archive = dialog.get_by_role("link", name="Everything (FTT archive, ZIP)").get_attribute("href")
     assert page.request.get(server.url + archive).body()[:2] == b"PK"
+    # A new user meets the GPS report preselected, not an empty choice.
+    expect(dialog.get_by_label("Positions")).to_have_value("false")
     dialog.get_by_label("Report name").fill("Abnahme Übung")
     # A zoom no tile server has is refused in words, and nothing is queued.
     dialog.get_by_label("Closest map zoom").fill("30")
