@@ -111,7 +111,7 @@ class _Terminal(io.StringIO):
 
 
 def test_progress_bar_only_on_a_terminal():
-    from reports.management.commands.ftt_report import ProgressBar
+    from ftt_site.progress import ProgressBar
 
     terminal, pipe = _Terminal(), io.StringIO()
     for stream in (terminal, pipe):

@@ -9,7 +9,10 @@ from django.db.models import Q
 
 from events.exchange.bag import BagImportError, import_bag
 from events.models import Leg, TestEvent, Vehicle
+from ftt_site.progress import ProgressBar
 from rosbridge_app.collector.modes import MODE_TYPES
+
+PHASES = {"reading": "Reading messages", "storing": "Storing events  "}
 
 
 def _pairs(values: list[str], prefix: str) -> dict:
@@ -76,6 +79,7 @@ class Command(BaseCommand):
         if mode_type:
             params["params.robot_mode_type"] = mode_type
         self.stderr.write(f"Importing {bag}")
+        bar = ProgressBar(options.get("stderr") or sys.stderr)
         try:
             result = import_bag(
                 bag,
@@ -83,7 +87,7 @@ class Command(BaseCommand):
                 leg=_lookup(Leg, leg),
                 test_event=_lookup(TestEvent, test_event),
                 params=params,
-                progress=self._progress,
+                progress=lambda phase, done, total: bar.count(PHASES[phase], done, total),
             )
         except BagImportError as exc:
             raise CommandError(str(exc)) from None
@@ -95,12 +99,3 @@ class Command(BaseCommand):
             f"added {added}; {result.skipped} event(s) stored nothing (already there, or "
             f"outside an open segment)."
         )
-
-    def _progress(self, phase: str, done: int, total: int) -> None:
-        width = 30
-        filled = width * done // max(total, 1)
-        label = {"reading": "Reading messages", "storing": "Storing events  "}[phase]
-        sys.stderr.write(f"\r{label} [{'#' * filled}{'.' * (width - filled)}] {done}/{total}")
-        if done >= total:
-            sys.stderr.write("\n")
-        sys.stderr.flush()

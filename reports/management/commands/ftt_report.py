@@ -13,30 +13,12 @@ from pathlib import Path
 from django.core.management.base import BaseCommand, CommandError
 
 from events.models import TestEvent
+from ftt_site.progress import ProgressBar
 from reports.figures.tiles import MAX_ZOOM
 from reports.models import Report
 from reports.selectors import exports
 from reports.services.generation import run_job
 from reports.services.rendering import ReportError, ReportOptions, render_report
-
-
-class ProgressBar:
-    """A one-line bar on a terminal; silent when stderr is not one."""
-
-    def __init__(self, stream, width=30):
-        self.stream = stream
-        self.width = width
-        self.enabled = stream.isatty()
-
-    def __call__(self, fraction: float, message: str) -> None:
-        if not self.enabled:
-            return
-        filled = int(round(self.width * fraction))
-        bar = "#" * filled + "-" * (self.width - filled)
-        self.stream.write(f"\r[{bar}] {100 * fraction:3.0f}% {message[:40]:<40}")
-        if fraction >= 1.0:
-            self.stream.write("\n")
-        self.stream.flush()
 
 
 class Command(BaseCommand):
@@ -137,7 +119,7 @@ class Command(BaseCommand):
             raise CommandError(f"Logo file {options.logo} does not exist.")
         output = Path(o["output"] or "report.pdf")
         try:
-            result = render_report(event, options, ProgressBar(sys.stderr))
+            result = render_report(event, options, ProgressBar(o.get("stderr") or sys.stderr))
         except ReportError as exc:
             raise CommandError(str(exc)) from None
         output.write_bytes(result.pdf)

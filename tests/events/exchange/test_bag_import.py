@@ -41,9 +41,14 @@ def ros2_bags(tmp_path_factory):
     shutil.rmtree(root, ignore_errors=True)
 
 
-def import_bag(*args) -> str:
+class Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def import_bag(*args, stderr=None) -> str:
     out = io.StringIO()
-    call_command("ftt_import_bag", *map(str, args), stdout=out, stderr=io.StringIO())
+    call_command("ftt_import_bag", *map(str, args), stdout=out, stderr=stderr or io.StringIO())
     return out.getvalue()
 
 
@@ -62,12 +67,13 @@ def assert_fkie_result():
     return total
 
 
-def test_ros1_bag_becomes_a_closed_test_event_with_five_masters(vehicle, media_root, capsys):
-    out = import_bag(FKIE_BAG, "--vehicle", "husky")
+def test_ros1_bag_becomes_a_closed_test_event_with_five_masters(vehicle, media_root):
+    terminal = Terminal()
+    out = import_bag(FKIE_BAG, "--vehicle", "husky", stderr=terminal)
     assert "5 master segments" in out
-    # Both phases show a bar that ends full: the bag's 22,143 routed messages,
-    # then the events the collector's code made of them.
-    bars = capsys.readouterr().err
+    # On a terminal both phases show a bar that ends full: the bag's 22,143
+    # routed messages, then the events the collector's code made of them.
+    bars = terminal.getvalue()
     assert "Reading messages [" + "#" * 30 + "] 22143/22143" in bars
     assert re.search(r"Storing events +\[#{30}\] (\d+)/\1", bars)
     assert_fkie_result()
@@ -79,7 +85,9 @@ def test_ros1_bag_becomes_a_closed_test_event_with_five_masters(vehicle, media_r
 
 
 def test_importing_the_same_bag_again_adds_nothing(vehicle, media_root):
-    import_bag(FKIE_BAG, "--vehicle", "husky")
+    log = io.StringIO()
+    import_bag(FKIE_BAG, "--vehicle", "husky", stderr=log)
+    assert "Importing" in log.getvalue() and "[#" not in log.getvalue()  # no bars in a log
     poses, segments = Pose.objects.count(), Segment.objects.count()
     out = import_bag(FKIE_BAG, "--vehicle", "husky")
     assert "added 0 Pose" in out
