@@ -277,9 +277,7 @@ class _Importer:
                 values["end"] = row.end  # never re-open; see the module docstring
             wanted |= values
         stamps = []
-        if annotation and (
-            "annotated" not in record or _later(annotated, getattr(row, "annotated", None))
-        ):
+        if annotation and ("annotated" not in record or _later(annotated, row.annotated)):
             wanted |= annotation
             if row.annotated != annotated:
                 row.annotated = annotated

@@ -512,16 +512,20 @@ class LegacyBundle:
             )
 
     @staticmethod
-    def _entry(r, uid: str, start: float) -> dict:
+    def _interval(r, start: float) -> tuple[float | None, str]:
+        """The row's end and its stand-in change stamp.  The original keeps no
+        change time; its latest known time stands in, so that running the import
+        again changes nothing and later edits made here win."""
         end = _num(r["endtime_secs"])
         if end is not None:
             end = max(end, start)  # whole-second server clock; never end before start
+        return end, rec.time_out(_time(start if end is None else end))
+
+    def _entry(self, r, uid: str, start: float) -> dict:
+        end, modified = self._interval(r, start)
         return {
             "uid": uid,
-            # The original keeps no change time; its latest known time stands in,
-            # so that running the import again changes nothing and later edits
-            # made here win.
-            "modified": rec.time_out(_time(start if end is None else end)),
+            "modified": modified,
             "start": rec.time_out(_time(start)),
             "end": rec.time_out(_time(end)),
             "note": _text(r.get("note")),
@@ -562,9 +566,7 @@ class LegacyBundle:
         position = _xy(r["start_position"])
         local = _xy(r["local_start_position"])
         start = self.segment_start[r["id"]]
-        end = _num(r["endtime_secs"])
-        end = None if end is None else max(end, start)
-        latest = rec.time_out(_time(start if end is None else end))  # as in _entry
+        end, latest = self._interval(r, start)
         return {
             "uid": self.segment_uid[r["id"]],
             "modified": latest,

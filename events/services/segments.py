@@ -109,6 +109,7 @@ def _open_master(leg: Leg) -> Segment | None:
 def _close(segment: Segment, at: datetime) -> None:
     end = max(at, segment.start)
     if segment.parent_id is None:
+        # A bulk update bypasses save(), which stamps `modified` everywhere else.
         segment.children.filter(end__isnull=True).update(end=end, modified=timezone.now())
     segment.end = end
     segment.save(update_fields=["end"])

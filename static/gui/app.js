@@ -136,25 +136,18 @@ function zoneOptions() {
   const event = byId(state.rows.event, state.selected.event);
   return event && event.time_zone ? { timeZone: event.time_zone, timeZoneName: "short" } : {};
 }
-function fmtTime(iso) {
+function fmtTime(iso, options = {}) {
   if (!iso) return "—";
   try {
-    return new Date(iso).toLocaleString(undefined, zoneOptions());
+    return new Date(iso).toLocaleString(undefined, { ...zoneOptions(), ...options });
   } catch {
-    return new Date(iso).toLocaleString();
+    return new Date(iso).toLocaleString(undefined, options);
   }
 }
 /* Time of day only: in the segment list the date is the leg's and would push
    duration and distance out of sight on a laptop; the full time is the title. */
-function fmtClock(iso) {
-  if (!iso) return "—";
-  const options = { hour: "2-digit", minute: "2-digit", second: "2-digit", hourCycle: "h23" };
-  try {
-    return new Date(iso).toLocaleTimeString(undefined, { ...zoneOptions(), ...options, timeZoneName: undefined });
-  } catch {
-    return new Date(iso).toLocaleTimeString(undefined, options);
-  }
-}
+const CLOCK = { hour: "2-digit", minute: "2-digit", second: "2-digit", hourCycle: "h23", timeZoneName: undefined };
+const fmtClock = (iso) => fmtTime(iso, CLOCK);
 const fmtDay = (iso) => (iso ? new Date(iso).toLocaleDateString() : "");
 
 function fmtDuration(start, end) {
