@@ -10,8 +10,12 @@ collector's CPU and memory, the spool backlog, the mode-to-row delay, and how
 long a GUI command (set parameters, issued through the database between two
 mode switches) takes to be carried out while the robot is this busy.
 
+The black box buffers the mode, GPS, TF and raw camera topics (9 MB/s) and
+writes a 6 s snapshot at every switch to ITO; ``--snapshot off`` runs without
+it, so the buffer's CPU cost is the difference of the two runs' collector CPU.
+
     FTT_DATABASE_URL=postgis://... .venv/bin/python benchmarks/collector_throughput.py \
-        [--seconds 60]
+        [--seconds 60] [--snapshot on|off]
 
 Uses a throw-away vehicle and test event in that database and deletes them
 afterwards.  Sets its own ROS domain (40-59) and loopback discovery.
@@ -20,11 +24,13 @@ afterwards.  Sets its own ROS domain (40-59) and loopback discovery.
 import argparse
 import os
 import re
+import shutil
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
+from datetime import UTC, datetime
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -45,7 +51,7 @@ from events.services import deletion, logs  # noqa: E402
 from rosbridge_app.collector import params as P  # noqa: E402
 from rosbridge_app.models import Collector, CollectorCommand  # noqa: E402
 from rosbridge_app.services.collectors import issue_command  # noqa: E402
-from telemetry.models import Image, LocalPose, MapImage, Pose  # noqa: E402
+from telemetry.models import Image, LocalPose, MapImage, Pose, Recording  # noqa: E402
 
 TICKS = os.sysconf("SC_CLK_TCK")
 
@@ -75,7 +81,17 @@ def main() -> None:
         action="store_true",
         help="Subscribe GPS and camera RELIABLE (params.sensor_reliable).",
     )
+    parser.add_argument("--snapshot", choices=("on", "off"), default="on")
+    parser.add_argument("--snapshot-after", type=float, default=1.0)
+    parser.add_argument(
+        "--buffer-only",
+        action="store_true",
+        help="Only the black box's own cost, in this process, without ROS or a database.",
+    )
     args = parser.parse_args()
+    buffer_cost()
+    if args.buffer_only:
+        return
 
     import rclpy
     from std_msgs.msg import Bool
@@ -87,7 +103,17 @@ def main() -> None:
     work = Path(tempfile.mkdtemp(prefix="ftt-bench-"))
     values = P.read_file(P.DEFAULT_FILE)
     values.update(
-        {"vehicle": key, "params.send_map_period": 1.0, "params.sensor_reliable": args.reliable}
+        {
+            "vehicle": key,
+            "params.send_map_period": 1.0,
+            "params.sensor_reliable": args.reliable,
+            "snapshot.enabled": args.snapshot == "on",
+            # The simulator's camera is raw rgb8 (the default list has the compressed one).
+            "snapshot.topics": "robot_mode, gps_fix, /tf, /tf_static, image",
+            # Mode switches come every 2 s: short windows keep the disk use of a run small.
+            "snapshot.before": 5.0,
+            "snapshot.after": args.snapshot_after,
+        }
     )
     P.write_file(work / "params.yaml", values)
     env = {
@@ -191,7 +217,14 @@ def main() -> None:
         "maps": MapImage.objects.filter(shift=leg.shift).count(),
         "images": Image.objects.filter(segment__leg=leg).count(),
         "master segments": Segment.objects.filter(leg=leg, parent__isnull=True).count(),
+        "snapshots": Recording.objects.filter(segment__leg=leg).count(),
     }
+    snapshots = list(Recording.objects.filter(segment__leg=leg))
+    snapshot_mb = sum(r.size for r in snapshots) / 2**20
+    in_snapshots: dict[str, int] = {}
+    for snapshot in snapshots:
+        for topic, info in snapshot.topics.items():
+            in_snapshots[topic] = in_snapshots.get(topic, 0) + info["count"]
     spool_left = record.pending
     qos = "RELIABLE" if args.reliable else "BEST_EFFORT"
     print(
@@ -210,6 +243,10 @@ def main() -> None:
             )
     print(f"rows written: {rows}")
     print(
+        f"black box {args.snapshot}: {rows['snapshots']} snapshots, {snapshot_mb:.0f} MB, "
+        f"messages {in_snapshots}"
+    )
+    print(
         f"collector CPU: mean {100 * statistics.mean(cpu_samples):.0f} % of one core, "
         f"max {100 * max(cpu_samples):.0f} %; total {cpu_total}"
     )
@@ -222,6 +259,54 @@ def main() -> None:
     deletion.delete(event)
     Collector.objects.filter(name=key).delete()
     deletion.delete(vehicle)
+
+
+def buffer_cost(seconds: int = 60) -> None:
+    """CPU of the black box for ``seconds`` of the benchmark robot's traffic (GPS
+    100 Hz, TF 50 Hz, mode 2 Hz, 640×480 camera 10 Hz, as JPEG and as raw rgb8),
+    fed straight into Blackbox.receive, and the time to write one 30 s window."""
+    from rosbridge_app.collector.blackbox import Blackbox
+
+    for camera, frame_bytes in (("JPEG", 60_000), ("raw rgb8", 640 * 480 * 3 + 60)):
+        values = {name: spec.default for name, spec in P.SPECS.items()}
+        written = []
+        box = Blackbox(written.append, values)
+        box.directory = Path(tempfile.mkdtemp(prefix="ftt-bench-box-"))
+        box.types = {
+            "/gps_fix": "sensor_msgs/msg/NavSatFix",
+            "/tf": "tf2_msgs/msg/TFMessage",
+            "/robot_mode": "std_msgs/msg/Bool",
+            "/image": "sensor_msgs/msg/CompressedImage",
+        }
+        traffic = [("/gps_fix", 100, 96), ("/tf", 50, 140), ("/robot_mode", 2, 8)]
+        traffic.append(("/image", 10, frame_bytes))
+        # Random bytes: as incompressible as JPEG data.
+        per_second = [
+            (topic, i * 1_000_000_000 // rate, os.urandom(size))
+            for topic, rate, size in traffic
+            for i in range(rate)
+        ]
+        start = time.time_ns() - seconds * 1_000_000_000
+        cpu0 = time.process_time()
+        for second in range(seconds):
+            at = start + second * 1_000_000_000
+            for topic, offset, data in per_second:
+                box.receive(topic, data, at + offset)
+        cpu = time.process_time() - cpu0
+        box.after = 0.0
+        box.trigger(datetime.fromtimestamp((start + seconds * 10**9) / 1e9, UTC), None, "bench")
+        wall0 = time.monotonic()
+        box.close()
+        write = time.monotonic() - wall0
+        mb = sum(p.stat().st_size for p in box.directory.glob("*.mcap")) / 2**20
+        shutil.rmtree(box.directory)
+        print(
+            f"black-box buffer, camera {camera}: {1000 * cpu / seconds:.2f} ms CPU per second "
+            f"of traffic ({100 * cpu / seconds:.2f} % of one core), "
+            f"{box.buffer.size / 2**20:.0f} MB buffered, {box.buffer.dropped} dropped for size; "
+            f"writing the {box.before:.0f} s snapshot ({mb:.0f} MB): {write:.2f} s "
+            f"in the writer thread"
+        )
 
 
 def timed_command(record: Collector) -> float:

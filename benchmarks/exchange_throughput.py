@@ -26,11 +26,11 @@ django.setup()
 
 from django.db import connection  # noqa: E402
 
-from events.exchange.archive import open_archive  # noqa: E402
-from events.exchange.export import export_events  # noqa: E402
-from events.exchange.importer import import_bundle  # noqa: E402
 from events.models import TestEvent, Vehicle  # noqa: E402
 from events.services import logs, segments  # noqa: E402
+from exchange.archive import open_archive  # noqa: E402
+from exchange.export import export_events  # noqa: E402
+from exchange.importer import import_bundle  # noqa: E402
 from telemetry.services import recording  # noqa: E402
 
 SEGMENTS = 20

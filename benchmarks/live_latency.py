@@ -20,7 +20,7 @@ import websockets
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from tests.e2e.conftest import Server  # noqa: E402
+from tests.support.browser import Server  # noqa: E402
 
 SETUP = """
 from django.contrib.auth.models import Group, User

@@ -155,6 +155,7 @@ def main():
     parser.add_argument("--segments", type=int, default=300)
     parser.add_argument("--poses", type=int, default=200_000)
     parser.add_argument("--skip-pdf", action="store_true")
+    parser.add_argument("--repeat", type=int, default=1, help="PDF runs (for a median)")
     args = parser.parse_args()
 
     from reports.selectors.statistics import event_statistics
@@ -183,12 +184,14 @@ def main():
             result = render_report(event, ReportOptions(no_tiles=True))
             out = Path(os.environ.get("FTT_DATA_DIR", "data")) / "benchmark-report.pdf"
             out.write_bytes(result.pdf)
-            return f"{len(result.pdf) / 2**20:.1f} MiB PDF: {out}"
+            stages = ", ".join(f"{name} {sec:.2f} s" for name, sec in result.stages.items())
+            return f"{len(result.pdf) / 2**20:.1f} MiB PDF: {out}\n    stages: {stages}"
 
         measure("statistics (selectors)", statistics)
         measure("statistics as API JSON", api_json)
         if not args.skip_pdf:
-            measure("full PDF report (no tiles)", pdf)
+            for _ in range(args.repeat):
+                measure("full PDF report (no tiles)", pdf)
     finally:
         connection.close()
         connection.creation.destroy_test_db(old_name, verbosity=0)

@@ -8,10 +8,10 @@ that call the service layer, and robot-recorded data is read-only.
 from django.contrib import admin, messages
 from django.core.exceptions import ValidationError
 from django.urls import reverse
-from django.utils.html import format_html, format_html_join
+from django.utils.html import format_html
 from leaflet.admin import LeafletGeoAdminMixin
 
-from events import roles
+from common import roles
 from events.models import (
     ItoReason,
     Leg,
@@ -37,10 +37,6 @@ def admin_link(obj, label=None):
         return "—"
     url = reverse(f"admin:{obj._meta.app_label}_{obj._meta.model_name}_change", args=[obj.pk])
     return format_html('<a href="{}">{}</a>', url, label or str(obj))
-
-
-def children_links(queryset):
-    return format_html_join(", ", "{}", ((admin_link(o),) for o in queryset)) or "—"
 
 
 class ServiceDeleteMixin:
@@ -111,19 +107,19 @@ class CatalogueAdmin(ServiceDeleteMixin, admin.ModelAdmin):
     # Refuses the keys the logging rules name (unassigned, ito, auto).
     delete_service = staticmethod(configuration.delete_configuration)
 
-    def _is_administrator(self, request):
-        return roles.has_role(request.user, roles.ADMINISTRATOR)
+    def _may_write(self, request):
+        return roles.may_write(request.user, self.model)
 
     def has_add_permission(self, request):
-        return self._is_administrator(request)
+        return self._may_write(request)
 
     def has_change_permission(self, request, obj=None):
-        return self._is_administrator(request)
+        return self._may_write(request)
 
     def has_delete_permission(self, request, obj=None):
         if obj is not None and configuration.is_used_by_rules(obj):
             return False
-        return self._is_administrator(request)
+        return self._may_write(request)
 
     def has_view_permission(self, request, obj=None):
         return roles.has_role(request.user, roles.VIEWER)
@@ -369,11 +365,21 @@ class NoteAdmin(ServiceDeleteMixin, admin.ModelAdmin):
     search_fields = ["text", "author__name"]
     list_select_related = ["author", "segment__segment_type"]
     readonly_fields = ["segment", "author", "created", "edited", "uid"]
-    delete_service = staticmethod(notes.delete_note)
 
     def has_add_permission(self, request):
         return False
 
+    def has_change_permission(self, request, obj=None):
+        allowed = super().has_change_permission(request, obj)
+        return allowed and (obj is None or notes.may_change_note(request.user, obj))
+
+    def has_delete_permission(self, request, obj=None):
+        allowed = super().has_delete_permission(request, obj)
+        return allowed and (obj is None or notes.may_change_note(request.user, obj))
+
+    def delete_model(self, request, obj):
+        notes.delete_note(obj, by=request.user)
+
     def save_model(self, request, obj, form, change):
         # The service stamps "edited" and tells the live map, as for API edits.
-        notes.edit_note(obj, text=form.cleaned_data["text"])
+        notes.edit_note(obj, text=form.cleaned_data["text"], by=request.user)

@@ -6,6 +6,11 @@ idempotent and takes an app registry (the migration's historical one or the
 live ``django.apps.apps``).
 """
 
+from django.apps import apps as global_apps
+from django.contrib.auth.management import create_permissions
+
+from common import roles
+
 WEATHER = [
     (
         "sunny",
@@ -119,7 +124,6 @@ SEGMENT_TYPES = [
 
 CONFIGURATION = ["personnel", "performer", "vehicle", "posesource"]
 CATALOGUES = ["weather", "itoreason", "segmenttype"]
-OPERATED = ["testevent", "shift", "leg", "segment", "note", "image"]
 
 
 def seed_catalogues(apps) -> None:
@@ -157,8 +161,6 @@ def seed_catalogues(apps) -> None:
 
 
 def create_roles(apps) -> None:
-    from django.contrib.auth.management import create_permissions
-
     # Permissions are normally made after all migrations; the groups need them now.
     for app_config in apps.get_app_configs():
         original = getattr(app_config, "models_module", None)
@@ -172,16 +174,20 @@ def create_roles(apps) -> None:
     viewer, _ = Group.objects.get_or_create(name="viewer")
     viewer.permissions.set(ftt.filter(codename__startswith="view_"))
     operator, _ = Group.objects.get_or_create(name="operator")
-    operated = [f"{action}_{model}" for model in OPERATED for action in ("add", "change", "delete")]
-    operator.permissions.set(
-        ftt.filter(codename__startswith="view_") | ftt.filter(codename__in=operated)
-    )
+    operated = Permission.objects.none()
+    for label in roles.written_by(roles.OPERATOR):
+        app_label, model = label.split(".")
+        operated |= Permission.objects.filter(
+            content_type__app_label=app_label,
+            codename__in=[f"{action}_{model}" for action in ("add", "change", "delete")],
+        )
+    operator.permissions.set(ftt.filter(codename__startswith="view_") | operated)
     administrator, _ = Group.objects.get_or_create(name="administrator")
     administrator.permissions.set(ftt | Permission.objects.filter(content_type__app_label="auth"))
 
 
 def ensure(apps=None) -> None:
     if apps is None:
-        from django.apps import apps
+        apps = global_apps
     seed_catalogues(apps)
     create_roles(apps)

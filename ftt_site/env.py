@@ -36,3 +36,20 @@ def env_int(name: str, default: int) -> int:
         return int(raw)
     except ValueError as exc:
         raise ImproperlyConfigured(f"{name} must be an integer, not {raw!r}") from exc
+
+
+def private_dir(path) -> None:
+    """Create ``path`` readable by FTT's user only (data, secrets, the SQLite file)."""
+    path.mkdir(mode=0o700, parents=True, exist_ok=True)
+    path.chmod(0o700)
+
+
+def private_file(path, content: str = "") -> None:
+    """Create ``path`` as 0600 holding ``content`` unless it exists: SQLite and the
+    key file then never exist, not even for a moment, with the umask's wider mode."""
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    except FileExistsError:
+        return
+    with os.fdopen(fd, "w") as out:
+        out.write(content)

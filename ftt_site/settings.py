@@ -4,7 +4,9 @@ Everything that differs between a laptop on the test field and a production
 server comes from ``FTT_*`` environment variables; README.md lists them.
 """
 
+from datetime import timedelta
 from pathlib import Path
+from urllib.parse import urlsplit
 
 from ftt_site import native_libs, sqlite_shim
 
@@ -12,15 +14,29 @@ sqlite_shim.install()
 native_libs.preload()
 
 import dj_database_url  # noqa: E402
+from csp.constants import NONE, SELF, UNSAFE_INLINE  # noqa: E402
 from django.core.management.utils import get_random_secret_key  # noqa: E402
 
-from ftt_site.env import env_bool, env_int, env_list, env_str  # noqa: E402
+from ftt_site.env import (  # noqa: E402
+    env_bool,
+    env_int,
+    env_list,
+    env_str,
+    private_dir,
+    private_file,
+)
 
 BASE_DIR = Path(__file__).resolve().parent.parent
 DATA_DIR = Path(env_str("FTT_DATA_DIR", str(BASE_DIR / "data")))
-DATA_DIR.mkdir(parents=True, exist_ok=True)
+# The database, the secret key and the media are for FTT's user only.
+private_dir(DATA_DIR)
 
 DEBUG = env_bool("FTT_DEBUG", False)
+
+
+def _origin(url: str) -> str:
+    parts = urlsplit(url)
+    return f"{parts.scheme}://{parts.netloc}" if parts.netloc else SELF
 
 
 def _secret_key() -> str:
@@ -30,9 +46,7 @@ def _secret_key() -> str:
     # An embedded install has nobody to invent a key, so we make one once and
     # keep it beside the database; sessions then survive restarts.
     key_file = DATA_DIR / "secret_key"
-    if not key_file.exists():
-        key_file.write_text(get_random_secret_key())
-        key_file.chmod(0o600)
+    private_file(key_file, get_random_secret_key())
     return key_file.read_text().strip()
 
 
@@ -48,7 +62,8 @@ SECURE_SSL_REDIRECT = HTTPS and env_bool("FTT_SSL_REDIRECT", True)
 SECURE_HSTS_SECONDS = env_int("FTT_HSTS_SECONDS", 31536000 if HTTPS else 0)
 SECURE_HSTS_INCLUDE_SUBDOMAINS = HTTPS
 SECURE_HSTS_PRELOAD = HTTPS
-if env_bool("FTT_BEHIND_PROXY", False):
+FTT_BEHIND_PROXY = env_bool("FTT_BEHIND_PROXY", False)
+if FTT_BEHIND_PROXY:
     SECURE_PROXY_SSL_HEADER = ("HTTP_X_FORWARDED_PROTO", "https")
 SECURE_CONTENT_TYPE_NOSNIFF = True
 SECURE_REFERRER_POLICY = "same-origin"
@@ -56,7 +71,7 @@ X_FRAME_OPTIONS = "DENY"
 
 INSTALLED_APPS = [
     "daphne",
-    "django.contrib.admin",
+    "ftt_site.admin_site.FttAdminConfig",
     "django.contrib.auth",
     "django.contrib.contenttypes",
     "django.contrib.sessions",
@@ -70,13 +85,18 @@ INSTALLED_APPS = [
     "drf_spectacular",
     "drf_spectacular_sidecar",
     "corsheaders",
+    "csp",
+    "axes",
     "leaflet",
     "channels",
     "ftt_site",
     "events",
     "telemetry",
+    "basemaps",
     "reports",
     "rosbridge_app",
+    "exchange",
+    "gui",
     # Last, so it sees every FileField and deletes files with their rows.
     "django_cleanup.apps.CleanupConfig",
 ]
@@ -91,7 +111,24 @@ MIDDLEWARE = [
     "django.contrib.auth.middleware.AuthenticationMiddleware",
     "django.contrib.messages.middleware.MessageMiddleware",
     "django.middleware.clickjacking.XFrameOptionsMiddleware",
+    "csp.middleware.CSPMiddleware",
+    # Last: turns a lockout on any login path into one answer (ftt_site.lockout).
+    "axes.middleware.AxesMiddleware",
 ]
+
+# Failed logins on every path (GUI, admin, /api/token/) are counted by
+# django-axes, per account and per address independently: guessing one
+# account's password and trying one password on many accounts both stop.
+AUTHENTICATION_BACKENDS = [
+    "axes.backends.AxesStandaloneBackend",
+    "django.contrib.auth.backends.ModelBackend",
+]
+AXES_FAILURE_LIMIT = env_int("FTT_LOGIN_FAILURE_LIMIT", 5)
+AXES_COOLOFF_TIME = timedelta(minutes=env_int("FTT_LOGIN_COOLOFF_MINUTES", 15))
+AXES_LOCKOUT_PARAMETERS = ["ip_address", "username"]
+AXES_RESET_ON_SUCCESS = True
+AXES_LOCKOUT_CALLABLE = "ftt_site.lockout.locked_out"
+AXES_CLIENT_IP_CALLABLE = "ftt_site.lockout.client_address"
 
 ROOT_URLCONF = "ftt_site.urls"
 WSGI_APPLICATION = "ftt_site.wsgi.application"
@@ -116,13 +153,29 @@ TEMPLATES = [
 def _databases() -> dict:
     url = env_str("FTT_DATABASE_URL")
     if url:
-        db = dj_database_url.parse(url, conn_max_age=env_int("FTT_DB_CONN_MAX_AGE", 60))
+        # Under ASGI every request runs in a thread of its own, so a persistent
+        # connection per thread grows with the load until PostgreSQL refuses
+        # ("too many clients"). Instead each process keeps one psycopg pool of
+        # FTT_DB_POOL_SIZE connections; a request waits up to FTT_DB_POOL_TIMEOUT
+        # seconds for one, then gets 503 with Retry-After. README states the budget.
+        pool_size = env_int("FTT_DB_POOL_SIZE", 8)
+        db = dj_database_url.parse(
+            url, conn_max_age=0 if pool_size else env_int("FTT_DB_CONN_MAX_AGE", 0)
+        )
         if db["ENGINE"] == "django.db.backends.postgresql":
             db["ENGINE"] = "django.contrib.gis.db.backends.postgis"
         if db["ENGINE"] != "django.contrib.gis.db.backends.postgis":
             raise ValueError("FTT_DATABASE_URL must be a postgis:// or postgres:// URL")
-        db["CONN_HEALTH_CHECKS"] = True
+        if pool_size:
+            db.setdefault("OPTIONS", {})["pool"] = {
+                "min_size": 1,
+                "max_size": pool_size,
+                "timeout": env_int("FTT_DB_POOL_TIMEOUT", 20),
+            }
+        else:
+            db["CONN_HEALTH_CHECKS"] = True
         return {"default": db}
+    private_file(DATA_DIR / "ftt.sqlite3")
     return {
         "default": {
             "ENGINE": "ftt_site.db_spatialite",
@@ -171,6 +224,15 @@ WHITENOISE_USE_FINDERS = True
 WHITENOISE_AUTOREFRESH = DEBUG
 FILE_UPLOAD_MAX_MEMORY_SIZE = 10 * 1024 * 1024
 DATA_UPLOAD_MAX_MEMORY_SIZE = 50 * 1024 * 1024
+# Checked by ftt_site.request_limits before a body is read: uploads of images,
+# maps and archives may be large; every other address takes small bodies only.
+FTT_MAX_REQUEST_BODY = env_int("FTT_MAX_REQUEST_BODY", DATA_UPLOAD_MAX_MEMORY_SIZE)
+FTT_MAX_UPLOAD_SIZE = env_int("FTT_MAX_UPLOAD_SIZE", 2 * 1024**3)
+FTT_UPLOAD_PATHS = ["/api/images/", "/api/maps/", "/api/archives/import/", "/import/", "/admin/"]
+# Requests running in the application at once per web process (each is a
+# thread); the rest wait up to FTT_REQUEST_QUEUE_TIMEOUT seconds, then 503.
+FTT_MAX_ACTIVE_REQUESTS = env_int("FTT_MAX_ACTIVE_REQUESTS", 8)
+FTT_REQUEST_QUEUE_TIMEOUT = env_int("FTT_REQUEST_QUEUE_TIMEOUT", 30)
 
 LOGIN_URL = "login"
 LOGIN_REDIRECT_URL = "/"
@@ -196,18 +258,30 @@ REST_FRAMEWORK = {
         "rest_framework.authentication.TokenAuthentication",
         "rest_framework.authentication.SessionAuthentication",
     ],
-    "DEFAULT_PERMISSION_CLASSES": ["events.api.permissions.RolePermission"],
-    "DEFAULT_PAGINATION_CLASS": "events.api.pagination.Pagination",
+    "DEFAULT_PERMISSION_CLASSES": ["common.api.permissions.RolePermission"],
+    "DEFAULT_PAGINATION_CLASS": "common.api.pagination.Pagination",
     "PAGE_SIZE": 100,
     "DEFAULT_FILTER_BACKENDS": ["django_filters.rest_framework.DjangoFilterBackend"],
     "DEFAULT_SCHEMA_CLASS": "drf_spectacular.openapi.AutoSchema",
-    "EXCEPTION_HANDLER": "events.api.errors.exception_handler",
+    "EXCEPTION_HANDLER": "common.api.errors.exception_handler",
     "DEFAULT_PARSER_CLASSES": [
-        "events.api.parsers.JSONParser",
+        "common.api.parsers.JSONParser",
         "rest_framework.parsers.FormParser",
         "rest_framework.parsers.MultiPartParser",
     ],
     "TEST_REQUEST_DEFAULT_FORMAT": "json",
+    # Beyond this a client gets 429 with Retry-After; a robot batches its points
+    # and stays far below.
+    "DEFAULT_THROTTLE_CLASSES": [
+        "rest_framework.throttling.AnonRateThrottle",
+        "rest_framework.throttling.UserRateThrottle",
+    ],
+    # Behind the proxy, the address it saw is the last X-Forwarded-For entry.
+    "NUM_PROXIES": 1 if FTT_BEHIND_PROXY else None,
+    "DEFAULT_THROTTLE_RATES": {
+        "anon": env_str("FTT_API_RATE_ANON", "120/min"),
+        "user": env_str("FTT_API_RATE_USER", "3000/min"),
+    },
 }
 SPECTACULAR_SETTINGS = {
     "TITLE": "Field Test Tool API",
@@ -239,12 +313,43 @@ FTT_TILE_URL = env_str("FTT_TILE_URL", "https://tile.openstreetmap.org/{z}/{x}/{
 # PDF reports: where map tiles are cached, and how requested reports run
 # ("thread" in the web process, or "subprocess": manage.py ftt_report --job ID).
 FTT_TILE_CACHE = Path(env_str("FTT_TILE_CACHE", str(DATA_DIR / "tile_cache")))
+# Basemaps (docs/basemaps.md): largest file an administrator may upload, and how
+# many tiles per second ``ftt_basemap fetch`` asks of a tile server.
+FTT_BASEMAP_MAX_UPLOAD_MB = env_int("FTT_BASEMAP_MAX_UPLOAD_MB", 2048)
+FTT_BASEMAP_FETCH_RATE = float(env_str("FTT_BASEMAP_FETCH_RATE", "2"))
 FTT_REPORT_WORKER = env_str("FTT_REPORT_WORKER", "thread")
 # Title-page logo of every report (PNG, JPEG or SVG); empty: FTT's own.
 FTT_REPORT_LOGO = env_str("FTT_REPORT_LOGO", "")
 # Behind nginx: the internal location that maps to MEDIA_ROOT. FTT still checks
 # the role, then hands the file transfer to nginx (X-Accel-Redirect).
 FTT_MEDIA_ACCEL_PREFIX = env_str("FTT_MEDIA_ACCEL_PREFIX", "")
+# Against decompression bombs: photos and maps with more pixels are refused.
+FTT_MAX_IMAGE_PIXELS = env_int("FTT_MAX_IMAGE_PIXELS", 40_000_000)
+# Archive import limits, checked while a member is decompressed (zip bombs).
+FTT_ARCHIVE_MAX_MEMBERS = env_int("FTT_ARCHIVE_MAX_MEMBERS", 100_000)
+FTT_ARCHIVE_MAX_MEMBER_BYTES = env_int("FTT_ARCHIVE_MAX_MEMBER_BYTES", 2 * 1024**3)
+FTT_ARCHIVE_MAX_TOTAL_BYTES = env_int("FTT_ARCHIVE_MAX_TOTAL_BYTES", 20 * 1024**3)
+FTT_ARCHIVE_MAX_RATIO = env_int("FTT_ARCHIVE_MAX_RATIO", 200)
+FTT_ARCHIVE_MAX_FILE_BYTES = env_int("FTT_ARCHIVE_MAX_FILE_BYTES", 256 * 1024**2)
+
+# Content-Security-Policy (django-csp) on every page: GUI, admin, API docs.
+# Scripts only from FTT's own static files, so a stored script never runs;
+# styles may be inline (Leaflet and the admin set style attributes); pictures
+# also from the tile server and any https tile server an operator picks.
+CONTENT_SECURITY_POLICY = {
+    "DIRECTIVES": {
+        "default-src": [SELF],
+        "script-src": [SELF],
+        "style-src": [SELF, UNSAFE_INLINE],
+        "img-src": [SELF, "data:", "blob:", "https:", _origin(FTT_TILE_URL)],
+        "connect-src": [SELF],
+        "font-src": [SELF],
+        "object-src": [NONE],
+        "base-uri": [SELF],
+        "form-action": [SELF],
+        "frame-ancestors": [NONE],
+    }
+}
 
 # django-leaflet ships Leaflet itself, so admin map widgets work offline; only
 # the tiles come from the network, and the widget still works without them.

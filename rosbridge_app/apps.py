@@ -1,6 +1,15 @@
 from django.apps import AppConfig
 
+from rosbridge_app import wakeup
+
 
 class RosbridgeAppConfig(AppConfig):
     name = "rosbridge_app"
     verbose_name = "Robot bridge"
+
+    def ready(self):
+        # Django's documented place for signal wiring: models load first.
+        from rosbridge_app.services import collectors  # noqa: PLC0415
+
+        wakeup.connect()
+        collectors.connect()

@@ -1,32 +1,48 @@
-"""Websocket side of the live outbox (see rosbridge_app.live).
+"""Websocket side of the live outbox (see events.feed).
 
 One poller per event loop reads new outbox rows every POLL_INTERVAL seconds,
 however many browsers are connected, and hands them to the consumers, which
-filter them by what each browser watches.  A browser that reconnects says
-which event it saw last and gets what it missed from the outbox.
+filter them by what each browser watches.  A commit wakes it at once
+(rosbridge_app.wakeup): on PostgreSQL it LISTENs on its own connection, with
+Redis the group message arrives, and writes of this process call it directly.
+A browser that reconnects says which event it saw last and gets what it missed
+from the outbox, which stays the source of truth.
 """
 
 import asyncio
 import logging
 import time
+from importlib import import_module
+from types import SimpleNamespace
 
 from channels.db import database_sync_to_async
 from channels.generic.websocket import AsyncJsonWebsocketConsumer
 from django.conf import settings
+from django.contrib import auth
+from django.db import connections
+from psycopg import AsyncConnection
+from psycopg.conninfo import make_conninfo
 
-from events import roles
-from rosbridge_app.live import GROUP, LOG_KINDS
-from rosbridge_app.models import Announcement
+from common import roles
+from events import feed
+from events.feed import LOG_KINDS
+from events.models import Announcement
+from rosbridge_app import wakeup
+from rosbridge_app.wakeup import GROUP
 
 logger = logging.getLogger(__name__)
 
 POLL_INTERVAL = 0.2
+# After a lost database connection the listener tries again this much later.
+LISTEN_RETRY = 2.0
 BATCH = 1000
 # Ids are taken when a transaction inserts and become visible when it commits;
 # on PostgreSQL a smaller id can therefore appear after a larger one.  A gap
 # is waited for this long before it is taken as a rolled-back insert.
 GAP_PATIENCE = 5.0
 CATCH_UP_LIMIT = 5000
+# How often an open websocket asks whether its session and role still hold.
+SESSION_CHECK_INTERVAL = 30.0
 
 
 def as_message(row: Announcement) -> dict:
@@ -44,14 +60,10 @@ def as_message(row: Announcement) -> dict:
 
 @database_sync_to_async
 def _rows_after(after: int, limit: int = BATCH) -> list[dict]:
-    return [as_message(e) for e in Announcement.objects.filter(id__gt=after)[:limit]]
+    return [as_message(e) for e in feed.after(after, limit)]
 
 
-@database_sync_to_async
-def _bounds() -> tuple[int, int]:
-    first = Announcement.objects.order_by("id").values_list("id", flat=True).first()
-    last = Announcement.objects.order_by("-id").values_list("id", flat=True).first()
-    return first or 0, last or 0
+_bounds = database_sync_to_async(feed.bounds)
 
 
 class OutboxPoller:
@@ -66,6 +78,8 @@ class OutboxPoller:
         self.gap_since: float | None = None
         self.wakeup = asyncio.Event()
         self.task: asyncio.Task | None = None
+        self.listener: asyncio.Task | None = None
+        self.wake_from_thread = None
 
     @classmethod
     def for_loop(cls) -> "OutboxPoller":
@@ -80,13 +94,22 @@ class OutboxPoller:
             self.floor = (await _bounds())[1]
         self.consumers.add(consumer)
         if self.task is None or self.task.done():
-            self.task = asyncio.get_running_loop().create_task(self._run())
+            loop = asyncio.get_running_loop()
+            self.task = loop.create_task(self._run())
+            self.wake_from_thread = lambda: loop.call_soon_threadsafe(self.wakeup.set)
+            wakeup.local_readers.add(self.wake_from_thread)
+            if connections["default"].vendor == "postgresql":
+                self.listener = loop.create_task(self._listen())
 
     def remove(self, consumer) -> None:
         self.consumers.discard(consumer)
         if not self.consumers and self.task is not None:
             self.task.cancel()
             self.task = None
+            if self.listener is not None:
+                self.listener.cancel()
+                self.listener = None
+            wakeup.local_readers.discard(self.wake_from_thread)
             self.floor = None
             self.seen.clear()
 
@@ -106,6 +129,22 @@ class OutboxPoller:
             except TimeoutError:
                 pass
             self.wakeup.clear()
+
+    async def _listen(self) -> None:
+        """Wake the poller on every NOTIFY of the feed (a commit in any process)."""
+        while True:
+            try:
+                async with await AsyncConnection.connect(_conninfo(), autocommit=True) as conn:
+                    await conn.execute(f"LISTEN {wakeup.CHANNEL}")
+                    # Rows committed while (re)connecting are found by this read.
+                    self.wakeup.set()
+                    async for _ in conn.notifies():
+                        self.wakeup.set()
+            except asyncio.CancelledError:
+                raise
+            except Exception as exc:  # noqa: BLE001 - polling goes on meanwhile
+                logger.warning("live listener lost its connection: %s", exc)
+            await asyncio.sleep(LISTEN_RETRY)
 
     async def poll_once(self) -> list[dict]:
         rows = [r for r in await _rows_after(self.floor) if r["id"] not in self.seen]
@@ -134,12 +173,38 @@ class OutboxPoller:
             self._advance_floor()
 
 
+def _conninfo() -> str:
+    db = connections["default"].settings_dict
+    return make_conninfo(
+        dbname=db["NAME"],
+        user=db.get("USER") or None,
+        password=db.get("PASSWORD") or None,
+        host=db.get("HOST") or None,
+        port=db.get("PORT") or None,
+    )
+
+
+@database_sync_to_async
+def _still_allowed(scope) -> bool:
+    """Read afresh whether the socket's user may still watch: a logout deletes the
+    session, an administrator may take the role away or deactivate the account."""
+    session = scope.get("session")
+    key = getattr(session, "session_key", None)
+    if key:
+        engine = import_module(settings.SESSION_ENGINE)
+        user = auth.get_user(SimpleNamespace(session=engine.SessionStore(key)))
+    else:
+        known = scope.get("user")
+        pk = getattr(known, "pk", None)
+        user = auth.get_user_model().objects.filter(pk=pk).first() if pk else None
+    return roles.has_role(user, roles.VIEWER)
+
+
 class LiveConsumer(AsyncJsonWebsocketConsumer):
     """ws/live/: the browser subscribes with the ids it shows and its last seen event id."""
 
     async def connect(self):
-        user = self.scope.get("user")
-        if not await database_sync_to_async(roles.has_role)(user, roles.VIEWER):
+        if not await _still_allowed(self.scope):
             await self.close(code=4403)
             return
         self.watch = {"test_event": None, "shift": None, "leg": None}
@@ -150,15 +215,44 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
         await self.poller.add(self)
         if getattr(settings, "REDIS_URL", "") and self.channel_layer is not None:
             await self.channel_layer.group_add(GROUP, self.channel_name)
+        self.guard = asyncio.get_running_loop().create_task(self._guard_session())
+
+    async def _guard_session(self) -> None:
+        while True:
+            await asyncio.sleep(SESSION_CHECK_INTERVAL)
+            if not await self._session_holds():
+                return
+
+    async def _session_holds(self) -> bool:
+        if await _still_allowed(self.scope):
+            return True
+        await self.send_json({"type": "error", "detail": "Your session has ended; sign in again."})
+        await self.close(code=4401)
+        return False
 
     async def disconnect(self, code):
+        guard = getattr(self, "guard", None)
+        if guard is not None and guard is not asyncio.current_task():
+            guard.cancel()
         poller = getattr(self, "poller", None)
         if poller is not None:
             poller.remove(self)
             if getattr(settings, "REDIS_URL", "") and self.channel_layer is not None:
                 await self.channel_layer.group_discard(GROUP, self.channel_name)
 
+    async def receive(self, text_data=None, bytes_data=None, **kwargs):
+        try:
+            content = await self.decode_json(text_data) if text_data else None
+        except ValueError:
+            content = None
+        if not isinstance(content, dict):
+            await self.send_json({"type": "error", "detail": "Send one JSON object."})
+            return
+        await self.receive_json(content, **kwargs)
+
     async def receive_json(self, content, **kwargs):
+        if not await self._session_holds():
+            return
         if content.get("type") != "subscribe":
             await self.send_json({"type": "error", "detail": "Unknown message."})
             return

@@ -4,10 +4,10 @@ A collector (``manage.py ftt_collect``) may run on the robot while the web
 server runs elsewhere, so everything they exchange is a row here:
 
 * :class:`Collector` is one collector's registration and heartbeat;
-* :class:`CollectorCommand` is an order from the GUI and, later, its result;
-* :class:`Announcement` is a transactional outbox: the collector adds a row in
-  the same transaction as the data it describes, and the web server tails the
-  table to push live updates to browsers.  See docs/collector.md.
+* :class:`CollectorCommand` is an order from the GUI and, later, its result.
+
+What the collector stored is announced through the change feed
+(:mod:`events.feed`), like every other write.
 """
 
 from django.conf import settings
@@ -58,6 +58,7 @@ class CollectorCommand(models.Model):
         STOP_LOGGING = "stop_logging", "stop logging"
         SET_PARAMETERS = "set_parameters", "set parameters"
         SAVE_PARAMETERS = "save_parameters", "save parameters"
+        SNAPSHOT = "snapshot", "black-box snapshot now"
 
     collector = models.ForeignKey(Collector, on_delete=models.CASCADE, related_name="commands")
     kind = models.CharField(max_length=32, choices=Kind.choices)
@@ -82,34 +83,3 @@ class CollectorCommand(models.Model):
 
     def __str__(self):
         return f"{self.kind} → {self.collector}"
-
-
-class Announcement(models.Model):
-    """One thing a browser may want to redraw; ids only grow, so a reader keeps
-    the last id it saw and asks for everything after it."""
-
-    class Kind(models.TextChoices):
-        COLLECTOR = "collector", "collector status"
-        LOG = "log", "test event, shift or leg"
-        DELETED = "deleted", "row deleted"
-        NOTE = "note", "note"
-        SEGMENT = "segment", "segment opened or closed"
-        POSES = "poses", "GPS poses"
-        LOCAL_POSES = "local_poses", "local poses"
-        IMAGE = "image", "image"
-        MAP = "map", "map"
-        COMMAND = "command", "command result"
-
-    kind = models.CharField(max_length=16, choices=Kind.choices)
-    created = models.DateTimeField(default=timezone.now, db_index=True)
-    collector = models.ForeignKey(
-        Collector, on_delete=models.CASCADE, null=True, blank=True, related_name="+"
-    )
-    leg = models.ForeignKey(Leg, on_delete=models.CASCADE, null=True, blank=True, related_name="+")
-    payload = models.JSONField(default=dict, blank=True)
-
-    class Meta:
-        ordering = ["id"]
-
-    def __str__(self):
-        return f"#{self.pk} {self.kind}"

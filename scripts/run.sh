@@ -1,11 +1,15 @@
 #!/usr/bin/env bash
 # README command 1: install what is missing (scripts/setup.sh), migrate the
 # database (SpatiaLite in data/ftt.sqlite3 unless FTT_DATABASE_URL is set),
-# make sure an administrator account exists, and serve FTT through Daphne's
-# ASGI runserver (HTTP and websockets) on http://127.0.0.1:8000.
+# make sure an administrator account exists, and serve FTT (HTTP and
+# websockets) on http://127.0.0.1:8000 with the production server: Gunicorn
+# supervising Uvicorn workers (ftt_site/gunicorn.conf.py; README, Production).
 #
 # Usage: bash scripts/run.sh [ADDRESS:PORT]     (default 127.0.0.1:8000)
 set -euo pipefail
+# Everything the server writes (database, secret key, media, reports) is for
+# FTT's user only; other local users read nothing.
+umask 077
 FTT_SCRIPT=run
 # shellcheck source=scripts/lib.sh
 source "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
@@ -23,8 +27,11 @@ ftt_phase "administrator account"
 ftt_phase_summary
 
 # Reload on code changes only when debugging; a field laptop runs it as is.
-reload=(--noreload)
+reload=()
 FTT_DEBUG=${FTT_DEBUG:-0}
-case "${FTT_DEBUG,,}" in 1 | true | yes | on) reload=() ;; esac
+case "${FTT_DEBUG,,}" in 1 | true | yes | on) reload=(--reload) ;; esac
+# One process suits the embedded database on a laptop; a server sets more.
+export FTT_WEB_WORKERS=${FTT_WEB_WORKERS:-1}
 ftt_log "FTT at http://$address/ (Django admin at /admin/); Ctrl-C stops it"
-exec "$py" manage.py runserver "${reload[@]}" "$address"
+exec "$py" -m gunicorn -c ftt_site/gunicorn.conf.py "${reload[@]}" --bind "$address" \
+    ftt_site.asgi:application

@@ -2,8 +2,9 @@
 # README command 2: install what is missing (scripts/setup.sh --test), bring
 # up PostgreSQL+PostGIS on loopback unless FTT_DATABASE_URL names a database,
 # make sure Redis answers, lint, and run the test suite:
+#   (lint: ruff, the import layers of pyproject.toml, ESLint for static/gui)
 #   a) everything but tests/e2e on PostGIS;
-#   b) the core suite (tests/events, tests/telemetry) on SpatiaLite;
+#   b) the core suite (tests/events, tests/telemetry, tests/ftt_site) on SpatiaLite;
 #   c) the browser tests in tests/e2e, in a pytest process of their own.
 # Exits non-zero when any step fails.
 #
@@ -168,6 +169,8 @@ fi
 
 step "ruff check" "$FTT_VENV/bin/ruff" check .
 step "ruff format --check" "$FTT_VENV/bin/ruff" format --check .
+step "import layers (lint-imports)" "$FTT_VENV/bin/lint-imports"
+step "eslint static/gui" npx --no-install eslint static/gui
 
 if [ -n "${FTT_DATABASE_URL:-}" ]; then
     step "pytest on PostGIS" "${pytest[@]}" -p no:playwright tests --ignore=tests/e2e
@@ -177,7 +180,7 @@ else
 fi
 
 core=()
-for dir in tests/events tests/telemetry; do
+for dir in tests/events tests/telemetry tests/ftt_site; do
     [ -d "$dir" ] && core+=("$dir")
 done
 if [ "${#core[@]}" -gt 0 ] && [ -n "${FTT_DATABASE_URL:-}" ]; then

@@ -1,6 +1,7 @@
 """Fixtures shared by every test package: configuration rows and an open log chain."""
 
 import pytest
+from django.core.cache import cache
 
 from events import seeds
 from events.models import Performer, Personnel, PoseSource, Vehicle
@@ -15,6 +16,12 @@ def _seeds_after_flush(request):
     if marker and marker.kwargs.get("transaction"):
         request.getfixturevalue("transactional_db")
         seeds.ensure()
+
+
+@pytest.fixture(autouse=True)
+def _fresh_throttles():
+    """API throttles count in the cache; each test starts with none used up."""
+    cache.clear()
 
 
 @pytest.fixture

@@ -7,7 +7,7 @@ import pytest
 from django.contrib.auth.models import User
 from django.core.management import call_command
 
-from events.roles import ADMINISTRATOR
+from common.roles import ADMINISTRATOR
 
 pytestmark = pytest.mark.django_db
 

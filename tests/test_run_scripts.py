@@ -119,7 +119,7 @@ def test_run_command_serves_ftt_with_an_administrator_on_spatialite(started):
     assert (ftt.data_dir / "ftt.sqlite3").exists()
     browser = ftt.login("admin", administrator_password(ftt))
     admin = browser.get(f"{ftt.url}/admin/", timeout=10)
-    assert admin.status_code == 200 and "Site administration" in admin.text
+    assert admin.status_code == 200 and "FTT administration" in admin.text
     assert browser.get(f"{ftt.url}/admin/events/vehicle/add/", timeout=10).status_code == 200
     gui = browser.get(f"{ftt.url}/", timeout=10)
     assert "Before the first shift" in gui.text  # the first-run hint for administrators

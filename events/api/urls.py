@@ -1,7 +1,7 @@
-from django.urls import include, path
-from rest_framework.authtoken.views import obtain_auth_token
+from django.urls import path
 from rest_framework.routers import SimpleRouter
 
+from common.api.tokens import obtain_token
 from events.api import views
 
 router = SimpleRouter()
@@ -19,10 +19,7 @@ router.register("ito-reasons", views.ItoReasonViewSet, basename="ito-reason")
 router.register("segment-types", views.SegmentTypeViewSet, basename="segment-type")
 
 urlpatterns = [
-    # Archive download/import and the backup (events.api.exchange, events.api.backup).
-    path("", include("events.api.exchange")),
-    path("", include("events.api.backup")),
     # POST username + password, get {"token": ...}; send it as "Authorization: Token <key>".
-    path("token/", obtain_auth_token, name="api-token"),
+    path("token/", obtain_token, name="api-token"),
     *router.urls,
 ]

@@ -7,7 +7,6 @@ from rest_framework import status
 from rest_framework.decorators import action
 from rest_framework.exceptions import NotFound
 
-from events import roles
 from events.api import serializers as s
 from events.api.filters import (
     BBoxFilter,
@@ -42,8 +41,6 @@ NO_BODY = {"request": None}
 
 
 class ConfigurationViewSet(ServiceViewSet):
-    write_role = roles.ADMINISTRATOR
-
     def create_with_service(self, data):
         return configuration.create_configuration(self.queryset.model, **data)
 
@@ -272,15 +269,18 @@ class NoteViewSet(ServiceViewSet):
     filterset_class = NoteFilter
 
     def create_with_service(self, data):
-        author = data.get("author") or getattr(self.request.user, "personnel", None)
         return notes.add_note(
-            data["segment"], text=data["text"], author=author, uid=data.get("uid")
+            data["segment"],
+            text=data["text"],
+            author=data.get("author"),
+            uid=data.get("uid"),
+            by=self.request.user,
         )
 
     def update_with_service(self, instance, data):
         if "text" not in data:
             return instance
-        return notes.edit_note(instance, text=data["text"])
+        return notes.edit_note(instance, text=data["text"], by=self.request.user)
 
     def delete_with_service(self, instance):
-        notes.delete_note(instance)
+        notes.delete_note(instance, by=self.request.user)

@@ -3,7 +3,7 @@
 from rest_framework import mixins, status, viewsets
 from rest_framework.response import Response
 
-from events import roles
+from common import roles
 from events.services import deletion
 
 
@@ -15,8 +15,8 @@ class ServiceBaseViewSet(
 ):
     """List, retrieve and delete; deletion goes through :meth:`delete_with_service`."""
 
+    # The role to write comes from common.roles.WRITERS for the queryset's model.
     read_role = roles.VIEWER
-    write_role = roles.OPERATOR
 
     def delete_with_service(self, instance) -> None:
         deletion.delete(instance)

@@ -1,9 +1,11 @@
 from events.models.catalogues import ItoReason, SegmentType, Weather
 from events.models.configuration import Performer, Personnel, PoseSource, Vehicle
+from events.models.feed import Announcement
 from events.models.hierarchy import Leg, Segment, Shift, TestEvent
 from events.models.notes import Note
 
 __all__ = [
+    "Announcement",
     "ItoReason",
     "Leg",
     "Note",

@@ -33,6 +33,9 @@ class SegmentType(Catalogue):
 
     color = models.CharField(max_length=11, validators=[rgb_validator])
 
+    class Meta(Catalogue.Meta):
+        verbose_name = "segment type"
+
 
 class ItoReason(Catalogue):
     UNASSIGNED = "unassigned"
@@ -42,3 +45,7 @@ class ItoReason(Catalogue):
         default=True,
         help_text="Counted as an intervention in reliability statistics (MCBI, MDBI).",
     )
+
+    class Meta(Catalogue.Meta):
+        verbose_name = "ITO reason"
+        verbose_name_plural = "ITO reasons"

@@ -48,6 +48,11 @@ class KeyedConfiguration(models.Model):
 
 
 class Vehicle(KeyedConfiguration):
+    key = models.SlugField(
+        max_length=64,
+        unique=True,
+        help_text="Name the collector is started with: ftt_collect --vehicle <key>.",
+    )
     institution = models.CharField(max_length=200, blank=True)
     configuration = models.TextField(blank=True)
 
@@ -56,5 +61,11 @@ class Vehicle(KeyedConfiguration):
 
 
 class PoseSource(KeyedConfiguration):
+    key = models.SlugField(
+        max_length=64,
+        unique=True,
+        help_text="Stable name of this source; archives refer to it by this key.",
+    )
+
     class Meta(KeyedConfiguration.Meta):
         pass

@@ -1,3 +1,4 @@
+from events import rules
 from events.models import Leg, Segment
 
 
@@ -11,4 +12,4 @@ def open_leg_for_vehicle(vehicle) -> Leg | None:
 
 
 def open_master(leg: Leg) -> Segment | None:
-    return Segment.objects.filter(leg=leg, parent__isnull=True, end__isnull=True).first()
+    return rules.open_masters_of_leg(leg.pk).first()

@@ -5,7 +5,7 @@ from datetime import datetime
 from django.db.models import Max, Model
 from django.utils import timezone
 
-from events.errors import RuleViolation
+from common.errors import RuleViolation
 
 
 def instant(at: datetime | None) -> datetime:

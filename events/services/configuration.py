@@ -4,7 +4,7 @@ and to the seeded catalogues."""
 from django.db import transaction
 from django.db.models import Model
 
-from events.errors import RuleViolation
+from common.errors import RuleViolation
 from events.models import ItoReason, SegmentType
 from events.services import deletion
 

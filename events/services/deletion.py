@@ -2,22 +2,11 @@
 removed by django-cleanup once the transaction commits); configuration rows
 that are still referenced are refused with a message saying where."""
 
-from collections import Counter
-
 from django.db import transaction
 from django.db.models import Model, ProtectedError, RestrictedError
 
-from events.errors import RuleViolation
-from rosbridge_app.live import announce_row
-
-
-def describe_protected(exc: ProtectedError | RestrictedError) -> str:
-    blockers = list(getattr(exc, "protected_objects", None) or exc.restricted_objects)
-    counts = Counter(type(obj)._meta.verbose_name_plural for obj in blockers)
-    examples = ", ".join(str(obj) for obj in blockers[:3])
-    where = ", ".join(f"{n} {name}" for name, n in counts.items())
-    more = "" if len(blockers) <= 3 else ", …"
-    return f"Still in use by {where} ({examples}{more}); change or delete those first."
+from common.errors import RuleViolation, describe_protected
+from events.feed import announce_row
 
 
 @transaction.atomic

@@ -4,8 +4,11 @@ import uuid
 from datetime import datetime
 
 from django.db import transaction
+from django.dispatch import Signal
 
-from events.errors import RuleViolation
+from common.errors import RuleViolation
+from events import rules
+from events.feed import announced
 from events.models import Leg, Segment, Shift, TestEvent, Vehicle
 from events.services.common import (
     apply_fields,
@@ -16,7 +19,6 @@ from events.services.common import (
     require_not_before,
     require_open,
 )
-from rosbridge_app.live import announced
 
 TEST_EVENT_FIELDS = ("location", "version", "time_zone", "note")
 SHIFT_FIELDS = (
@@ -31,6 +33,18 @@ SHIFT_FIELDS = (
     "note",
 )
 LEG_FIELDS = ("weather", "default_pose_source", "note", "recording")
+
+# Sent inside the closing transaction, before anything is closed, with the
+# legs that an explicit "end" closes (``legs``: a queryset of open legs).  The
+# collector link stops logging into them (rosbridge_app.services.collectors):
+# ending a level stops logging first, whoever ends it.  A leg closed because a
+# new one starts in the same shift is not announced: the collector follows
+# the vehicle's open leg.
+closing = Signal()
+
+
+def _announce_closing(legs) -> None:
+    closing.send(sender=Leg, legs=legs)
 
 
 def _existing(model, uid: uuid.UUID | None):
@@ -74,6 +88,7 @@ def close_test_event(event: TestEvent, at: datetime | None = None) -> TestEvent:
     at = instant(at)
     require_open(event, f"Test event '{event}'")
     require_not_before(event, at, f"Test event '{event}'")
+    _announce_closing(Leg.objects.filter(shift__test_event=event, end__isnull=True))
     # Top-down locks (event, shift, leg), the order the writers below use too.
     for shift in event.shifts.select_for_update().filter(end__isnull=True):
         _close_shift(shift, at)
@@ -114,7 +129,7 @@ def create_shift(
     at = instant(at)
     require_open(event, f"Test event '{event}'")
     require_not_before(event, at, f"Test event '{event}'")
-    for open_shift in Shift.objects.select_for_update().filter(vehicle=vehicle, end__isnull=True):
+    for open_shift in rules.open_shifts_of_vehicle(vehicle.pk).select_for_update():
         _close_shift(open_shift, max(at, open_shift.start))
     check_fields(fields, SHIFT_FIELDS)
     return _create(
@@ -135,7 +150,7 @@ def update_shift(shift: Shift, **fields) -> Shift:
         fields["vehicle"] = Vehicle.objects.get(pk=fields.pop("vehicle_id"))
     if "vehicle" in fields and fields["vehicle"] != shift.vehicle and shift.is_open:
         vehicle = lock(fields["vehicle"])
-        if Shift.objects.filter(vehicle=vehicle, end__isnull=True).exclude(pk=shift.pk).exists():
+        if rules.open_shifts_of_vehicle(vehicle.pk).exclude(pk=shift.pk).exists():
             raise RuleViolation(
                 {"vehicle": [f"Vehicle '{vehicle}' already has an open shift; end it first."]}
             )
@@ -150,6 +165,7 @@ def close_shift(shift: Shift, at: datetime | None = None) -> Shift:
     at = instant(at)
     require_open(shift, str(shift))
     require_not_before(shift, at, str(shift))
+    _announce_closing(shift.legs.filter(end__isnull=True))
     return announced(_close_shift(shift, at))
 
 
@@ -172,7 +188,7 @@ def create_leg(*, shift: Shift, uid=None, at: datetime | None = None, **fields) 
     at = instant(at)
     require_open(shift, str(shift))
     require_not_before(shift, at, str(shift))
-    for open_leg in Leg.objects.select_for_update().filter(shift=shift, end__isnull=True):
+    for open_leg in rules.open_legs_of_shift(shift.pk).select_for_update():
         _close_leg(open_leg, max(at, open_leg.start))
     check_fields(fields, LEG_FIELDS)
     return _create(Leg, uid, shift=shift, number=next_number(shift.legs), start=at, **fields)
@@ -192,6 +208,7 @@ def close_leg(leg: Leg, at: datetime | None = None) -> Leg:
     at = instant(at)
     require_open(leg, str(leg))
     require_not_before(leg, at, str(leg))
+    _announce_closing(Leg.objects.filter(pk=leg.pk))
     return announced(_close_leg(leg, at))
 
 

@@ -1,9 +1,13 @@
-from django.core.exceptions import ValidationError
+from django.core.exceptions import PermissionDenied, ValidationError
 from django.db import transaction
 from django.utils import timezone
 
+from common import roles
+from events.feed import announce_row, announced
 from events.models import Note, Personnel, Segment
-from rosbridge_app.live import announce_row, announced
+
+# ``by`` is the signed-in user a request acts for; None is FTT itself (imports,
+# seeds, the simulator), which writes what it was given.
 
 
 def _clean_text(text: str) -> str:
@@ -13,10 +17,35 @@ def _clean_text(text: str) -> str:
     return text
 
 
+def _person_of(user) -> Personnel | None:
+    return Personnel.objects.filter(user=user).first() if user is not None else None
+
+
+def may_change_note(user, note: Note) -> bool:
+    """A note is edited and deleted by its author and by administrators."""
+    if roles.has_role(user, roles.ADMINISTRATOR):
+        return True
+    person = _person_of(user)
+    return person is not None and note.author_id == person.pk
+
+
+def _check_may_change(by, note: Note) -> None:
+    if by is not None and not may_change_note(by, note):
+        raise PermissionDenied("Only its author and administrators may change or delete a note.")
+
+
 @transaction.atomic
-def add_note(segment: Segment, *, text: str, author: Personnel | None = None, uid=None) -> Note:
+def add_note(
+    segment: Segment, *, text: str, author: Personnel | None = None, uid=None, by=None
+) -> Note:
+    """The author is the person of ``by``; only administrators name someone else."""
     if uid is not None and (existing := Note.objects.filter(uid=uid).first()):
         return existing
+    if by is not None:
+        own = _person_of(by)
+        if author is not None and author != own and not roles.has_role(by, roles.ADMINISTRATOR):
+            raise PermissionDenied("Only administrators may write a note in someone else's name.")
+        author = author or own
     now = timezone.now()
     note = Note(segment=segment, author=author, text=_clean_text(text), created=now, edited=now)
     if uid is not None:
@@ -26,10 +55,11 @@ def add_note(segment: Segment, *, text: str, author: Personnel | None = None, ui
 
 
 @transaction.atomic
-def edit_note(note: Note, *, text: str) -> Note:
+def edit_note(note: Note, *, text: str, by=None) -> Note:
     # The author stays who wrote it; the original tool re-attributed notes to
     # whoever edited them last.
     note = Note.objects.select_for_update().get(pk=note.pk)
+    _check_may_change(by, note)
     note.text = _clean_text(text)
     note.edited = timezone.now()
     note.save(update_fields=["text", "edited"])
@@ -37,6 +67,7 @@ def edit_note(note: Note, *, text: str) -> Note:
 
 
 @transaction.atomic
-def delete_note(note: Note) -> None:
+def delete_note(note: Note, *, by=None) -> None:
+    _check_may_change(by, note)
     announce_row(note, deleted=True)
     note.delete()

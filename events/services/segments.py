@@ -14,7 +14,9 @@ from django.contrib.gis.geos import Point
 from django.db import transaction
 from django.utils import timezone
 
-from events.errors import RuleViolation
+from common.errors import RuleViolation
+from events import rules
+from events.feed import announced
 from events.models import ItoReason, Leg, Segment, SegmentType
 from events.services.common import (
     apply_fields,
@@ -23,7 +25,6 @@ from events.services.common import (
     require_not_before,
     require_open,
 )
-from rosbridge_app.live import announced
 
 MODES = (SegmentType.ITO, SegmentType.AUTO)
 
@@ -99,11 +100,7 @@ def _lock_with_leg(segment: Segment) -> Segment:
 
 
 def _open_master(leg: Leg) -> Segment | None:
-    return (
-        Segment.objects.select_for_update()
-        .filter(leg=leg, parent__isnull=True, end__isnull=True)
-        .first()
-    )
+    return rules.open_masters_of_leg(leg.pk).select_for_update().first()
 
 
 def _close(segment: Segment, at: datetime) -> None:

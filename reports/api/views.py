@@ -11,16 +11,18 @@ from rest_framework.exceptions import ValidationError
 from rest_framework.response import Response
 from rest_framework.views import APIView
 
-from events import roles
-from events.api.permissions import RolePermission
+from common import roles
+from common.api.permissions import RolePermission
 from events.models import TestEvent
 from reports.api.serializers import ReportRequestSerializer, ReportSerializer
 from reports.models import Report
 from reports.selectors import exports
+from reports.selectors.comparison import compare
 from reports.selectors.reports import reports_of
 from reports.selectors.statistics import event_statistics
-from reports.selectors.tracks import MODES
 from reports.services.generation import fail_stale_reports, request_report
+from reports.services.rendering import FULL, LEVELS
+from telemetry.selectors.tracks import MODES
 
 MODE_PARAM = OpenApiParameter("mode", str, enum=list(MODES), description="gps (default) or local")
 
@@ -42,6 +44,46 @@ class StatisticsView(APIView):
     def get(self, request, test_event_id: int):
         event = get_object_or_404(TestEvent, pk=test_event_id)
         return Response(event_statistics(event, _mode(request)).as_dict())
+
+
+class ComparisonView(APIView):
+    """Reliability of several test events side by side (?test_event=1&test_event=2)."""
+
+    permission_classes = [RolePermission]
+    read_role = roles.VIEWER
+
+    @extend_schema(
+        parameters=[OpenApiParameter("test_event", int, many=True), MODE_PARAM],
+        responses={200: dict},
+    )
+    def get(self, request):
+        ids = request.query_params.getlist("test_event")
+        if len(ids) < 2 or not all(i.isdigit() for i in ids):
+            raise ValidationError({"test_event": ["Give at least two test event ids (numbers)."]})
+        events = list(TestEvent.objects.filter(pk__in=ids))
+        missing = sorted(set(map(int, ids)) - {e.pk for e in events})
+        if missing:
+            raise ValidationError({"test_event": [f"No test event with id {missing[0]}."]})
+        return Response(compare(events, _mode(request)))
+
+
+class ReportChoicesView(APIView):
+    """The choices of the report dialog, so the GUI offers exactly what the server accepts."""
+
+    permission_classes = [RolePermission]
+    read_role = roles.VIEWER
+
+    @extend_schema(responses={200: dict})
+    def get(self, request):
+        return Response(
+            {
+                "level": {
+                    "default": FULL,
+                    "choices": [{"value": value, "label": text} for value, text in LEVELS],
+                },
+                "image_appendix": {"default": True},
+            }
+        )
 
 
 class ReportListView(APIView):

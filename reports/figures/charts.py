@@ -1,4 +1,8 @@
-"""Bar charts of the global statistics, one group per shift."""
+"""Bar charts of the global statistics, one group per shift.
+
+Charts are SVG with their text kept as text: typst sets it in the report's
+fonts, so titles and axis labels are sharp and searchable in the PDF.
+"""
 
 import matplotlib
 
@@ -20,6 +24,7 @@ def distance_chart(labels, auto, manual, path, dpi=150) -> str:
         share = f"{100 * a / (a + m):.1f} % auto" if a + m > 0 else "no distance"
         ax.text(i, a + m, f"{a + m:.0f} m\n{share}", ha="center", va="bottom", fontsize=6)
     ax.set_xticks(x, labels, fontsize=7)
+    ax.set_title("Distance per shift: autonomous and manual")
     ax.set_ylabel("distance [m]", fontsize=7)
     ax.margins(y=0.25)
     ax.legend(fontsize=7)
@@ -45,7 +50,8 @@ def reasons_chart(labels, counts_by_shift, reasons, path, dpi=150) -> str:
             label=catalogue.short_description if catalogue else key,
         )
     ax.set_xticks(x, labels, fontsize=7)
-    ax.set_ylabel("interventions", fontsize=7)
+    ax.set_title("Interventions per shift by reason")
+    ax.set_ylabel("interventions [count]", fontsize=7)
     ax.yaxis.get_major_locator().set_params(integer=True)
     if keys:
         ax.legend(fontsize=6, ncols=min(len(keys), 4))
@@ -56,22 +62,40 @@ def reasons_chart(labels, counts_by_shift, reasons, path, dpi=150) -> str:
     return path
 
 
-def mdbi_chart(labels, estimates, path, dpi=150) -> str:
-    """MDBI per shift with its 90 % bounds; censored shifts show their lower bound."""
-    fig, ax = plt.subplots(figsize=(7.0, 2.6), layout="constrained")
+def estimate_chart(labels, estimates, path, name, unit, scale=1.0, dpi=150) -> str:
+    """MDBI or MTBI per shift with its 90 % bounds as error bars, on a linear
+    axis; values are divided by ``scale`` (e.g. 3600 for hours).
+
+    A shift without interventions has no estimate: its lower bound is drawn
+    as an upward arrow from the bound ("at least").
+    """
+    fig, ax = plt.subplots(figsize=(7.0, 2.8), layout="constrained")
     for i, est in enumerate(estimates):
-        if est.lower is None:
-            continue
-        top = est.upper if est.upper is not None else est.exposure * 3
-        ax.plot([i, i], [est.lower, top], color="black", linewidth=1)
         if est.value is not None:
-            ax.plot(i, est.value, "o", color="#1f77b4")
-        else:
-            ax.plot(i, est.exposure, "^", color="#1f77b4")
+            value, lower, upper = est.value / scale, est.lower / scale, est.upper / scale
+            ax.errorbar(
+                i,
+                value,
+                yerr=[[value - lower], [upper - value]],
+                fmt="o",
+                color="#1f77b4",
+                capsize=4,
+            )
+        elif est.lower is not None:
+            lower = est.lower / scale
+            ax.plot(i, lower, "_", color="#1f77b4", markersize=12)
+            ax.annotate(
+                "",
+                xy=(i, lower * 1.6),
+                xytext=(i, lower),
+                arrowprops={"arrowstyle": "->", "color": "#1f77b4"},
+            )
     ax.set_xticks(range(len(labels)), labels, fontsize=7)
     ax.set_xlim(-0.5, len(labels) - 0.5)
-    ax.set_ylabel("MDBI [m]", fontsize=7)
-    ax.set_yscale("log")
+    ax.set_ylim(bottom=0)
+    ax.set_title(f"{name} per shift with 90 % bounds (arrow: no intervention, lower bound)")
+    ax.set_ylabel(f"{name} [{unit}]", fontsize=7)
+    ax.ticklabel_format(axis="y", style="plain", useOffset=False)
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
     return path

@@ -180,8 +180,8 @@ def _draw_lines(ax, lines: list[Line]):
 
 
 def _plain(ax, note: str) -> str:
+    # The note is printed once, under the map, by the report; not inside the image.
     ax.set_facecolor("#f2f1ec")
-    ax.text(0.01, 0.01, note, transform=ax.transAxes, fontsize=6, color="#555555")
     return note
 
 

@@ -29,3 +29,5 @@ def apply() -> None:
     logging.getLogger("matplotlib.font_manager").setLevel(logging.ERROR)
     matplotlib.rcParams["font.family"] = installed_families()
     matplotlib.rcParams["axes.titlesize"] = 9
+    # Text stays text in SVG charts (typst sets it), instead of outlines.
+    matplotlib.rcParams["svg.fonttype"] = "none"

@@ -1,9 +1,13 @@
-"""Slippy-map tiles for report maps: fetched politely, cached on disk.
+"""Slippy-map tiles for report maps: fetched politely, cached on disk, or drawn by FTT.
 
 Tiles are cached under ``<cache>/<hash of the URL template>/z/x/y.png`` and a
 cached tile is never fetched again.  The first tile that cannot be fetched
 because the server is unreachable marks the whole source unavailable for the
 rest of the report, so a report made offline does not wait on every tile.
+
+``LayerTiles`` draws the tiles of one of FTT's own basemap layers with the
+function the tile view uses, so the report needs neither network nor its own
+web server.
 """
 
 import hashlib
@@ -16,6 +20,9 @@ from pathlib import Path
 
 import numpy as np
 from PIL import Image
+
+from basemaps.models import BasemapLayer
+from basemaps.selectors.tiles import render_tile
 
 log = logging.getLogger(__name__)
 
@@ -121,3 +128,24 @@ class TileSource:
         w, n = tile_to_lonlat(x0, y0, zoom)
         e, s = tile_to_lonlat(x1 + 1, y1 + 1, zoom)
         return np.asarray(canvas), (w, s, e, n), zoom
+
+
+class LayerTiles(TileSource):
+    def __init__(self, layer: BasemapLayer, max_zoom: int = MAX_ZOOM):
+        super().__init__(None, Path(), max_zoom=min(max_zoom, layer.max_zoom))
+        self.layer = layer
+        # mosaic() and the report's credits read ``url``: name the layer instead.
+        self.url = f"basemap \u201c{layer.name}\u201d" + (
+            f" ({layer.attribution})" if layer.attribution else ""
+        )
+        self.available = True
+
+    def tile(self, zoom: int, x: int, y: int) -> Image.Image | None:
+        data = render_tile(self.layer, zoom, x, y)
+        if data is None:
+            return None
+        self.fetched += 1
+        # Outside the orthophoto the tile is transparent: white, like the page.
+        image = Image.open(io.BytesIO(data)).convert("RGBA")
+        page = Image.new("RGBA", image.size, "white")
+        return Image.alpha_composite(page, image).convert("RGB")

@@ -9,20 +9,21 @@
 * GPX 1.1: one track per master segment with its GPS fixes and their times.
 """
 
-import csv
 import io
 import json
 from collections import defaultdict
 from xml.etree import ElementTree as ET
 
+from common.spreadsheet import SafeWriter
 from events.models import ItoReason, Note, Segment, TestEvent
-from reports.selectors.statistics import event_runs
-from reports.selectors.tracks import GPS
+from reports.selectors.statistics import event_runs, segment_labels
+from telemetry.selectors.tracks import GPS
 
 CSV_COLUMNS = (
     "test_event",
     "shift",
     "leg",
+    "label",
     "segment_id",
     "master_id",
     "row",
@@ -77,9 +78,11 @@ def segments_csv(event: TestEvent, mode: str = GPS) -> str:
         "leg__shift__safety_officer",
     )
     out = io.StringIO()
-    writer = csv.writer(out)
+    writer = SafeWriter(out)
     writer.writerow(CSV_COLUMNS)
-    for seg in sorted(segments, key=lambda s: (s.leg.shift.start, s.leg.start, s.start, s.id)):
+    ordered = sorted(segments, key=lambda s: (s.leg.shift.start, s.leg.start, s.start, s.id))
+    labels = segment_labels(ordered)
+    for seg in ordered:
         master_id = seg.parent_id or seg.id
         run = runs.get(master_id)
         shift = seg.leg.shift
@@ -94,6 +97,7 @@ def segments_csv(event: TestEvent, mode: str = GPS) -> str:
                 event.pk,
                 shift.number,
                 seg.leg.number,
+                labels[seg.id],
                 seg.id,
                 master_id,
                 "master" if is_master else "reason",
@@ -144,6 +148,7 @@ def tracks_geojson(event: TestEvent) -> dict:
                 },
                 "properties": {
                     "segment_id": run.id,
+                    "label": run.label,
                     "type": run.kind,
                     "shift_id": run.shift_id,
                     "leg_id": run.leg_id,
@@ -176,7 +181,7 @@ def tracks_gpx(event: TestEvent) -> str:
         if run.track is None or not len(run.track):
             continue
         trk = ET.SubElement(root, f"{{{GPX_NS}}}trk")
-        ET.SubElement(trk, f"{{{GPX_NS}}}name").text = f"{run.kind.upper()} segment {run.id}"
+        ET.SubElement(trk, f"{{{GPX_NS}}}name").text = f"{run.label} ({run.kind.upper()})"
         ET.SubElement(trk, f"{{{GPX_NS}}}type").text = run.kind
         seg = ET.SubElement(trk, f"{{{GPX_NS}}}trkseg")
         for x, y, stamp in zip(run.track.x, run.track.y, run.track.stamps, strict=True):

@@ -8,14 +8,10 @@ Definitions (also printed in the report's methods appendix, see ``FORMULAS``):
 * Duration of a run = end - start (server clock).  An open run (no end yet)
   lasts until the latest thing known about it: its newest pose or reason.
   Statistics over open runs are *provisional*.
-* Distance of a run = length of the polyline
-  [start position] + its poses in time order + [start position of the next
-  master in the same leg].  GPS: geodesic on the WGS84 ellipsoid (pyproj
-  Geod, the same model as PostGIS geography); local: planar in map metres.
-  The joins make the distances of consecutive runs add up to the distance
-  driven, with no metre lost at a mode switch.  A run without poses
-  contributes the straight join from its start to the next start, if both
-  are known, and is listed as a data gap.
+* Distance of a run: see :mod:`telemetry.selectors.distances` (start
+  position + poses + next start).  A run without poses contributes the
+  straight join from its start to the next start, if both are known, and is
+  listed as a data gap.
 * An *intervention* is an ITO master with at least one reason (child) whose
   catalogue entry ``counts_as_intervention``.  A master with several counted
   reasons is one intervention overall and one under each of its reasons.
@@ -40,7 +36,9 @@ from datetime import datetime
 from scipy.stats import chi2
 
 from events.models import ItoReason, Segment, SegmentType, TestEvent
-from reports.selectors.tracks import GPS, Track, load_tracks, path_length
+from events.selectors.labels import label, numbers
+from telemetry.selectors.distances import measured_paths
+from telemetry.selectors.tracks import GPS, Track
 
 CONFIDENCE = 0.90
 
@@ -127,6 +125,8 @@ class Run:
     # The polyline the distance was measured on, joins included.
     path_x: list[float] = field(default_factory=list)
     path_y: list[float] = field(default_factory=list)
+    # The GUI's name of the segment ("Leg 2 · #7"), see events.selectors.labels.
+    label: str = ""
 
     @property
     def seconds(self) -> float:
@@ -243,15 +243,6 @@ def figures(runs: list[Run]) -> Figures:
     )
 
 
-def _start_point(segment: Segment, mode: str) -> tuple[float, float] | None:
-    if mode == GPS:
-        p = segment.start_position
-        return (p.x, p.y) if p is not None else None
-    if segment.start_local_x is None:
-        return None
-    return (segment.start_local_x, segment.start_local_y)
-
-
 def _effective_end(segment: Segment, track: Track | None, children: list[Segment]):
     if segment.end is not None:
         return segment.end
@@ -278,23 +269,13 @@ def event_runs(event: TestEvent, mode: str = GPS) -> list[Run]:
     for s in segments:
         if s.parent_id is not None:
             children[s.parent_id].append(s)
-    tracks = load_tracks([m.id for m in masters], mode)
+    paths = measured_paths(masters, mode)
+    labels = segment_labels(segments)
 
     runs = []
-    for i, master in enumerate(masters):
-        follower = masters[i + 1] if i + 1 < len(masters) else None
-        if follower is not None and follower.leg_id != master.leg_id:
-            follower = None
-        track = tracks.get(master.id)
-        xs, ys = ([], []) if track is None else (list(track.x), list(track.y))
-        start = _start_point(master, mode)
-        if start is not None:
-            xs.insert(0, start[0])
-            ys.insert(0, start[1])
-        after = _start_point(follower, mode) if follower is not None else None
-        if after is not None:
-            xs.append(after[0])
-            ys.append(after[1])
+    for master in masters:
+        path = paths[master.id]
+        track = path.track
         kids = children.get(master.id, [])
         end = _effective_end(master, track, kids)
         spans = [
@@ -320,17 +301,32 @@ def event_runs(event: TestEvent, mode: str = GPS) -> list[Run]:
                 start=master.start,
                 end=end,
                 is_open=master.end is None,
-                distance=path_length(xs, ys, mode),
+                distance=path.distance or 0.0,
                 pose_count=len(track) if track is not None else 0,
                 reasons=spans,
                 counted_reasons=[s.reason for s in spans if s.reason in counted],
                 track=track,
-                has_start_position=start is not None,
-                path_x=xs,
-                path_y=ys,
+                has_start_position=path.has_start_position,
+                path_x=path.x,
+                path_y=path.y,
+                label=labels[master.id],
             )
         )
     return runs
+
+
+def segment_labels(segments: list[Segment]) -> dict[int, str]:
+    """{segment id: "Leg 2 · #7"} for segments ordered by leg, then start and id."""
+    rows: dict[int, list[tuple[int, int | None]]] = defaultdict(list)
+    legs = {}
+    for s in segments:
+        rows[s.leg_id].append((s.id, s.parent_id))
+        legs[s.leg_id] = s.leg.number
+    return {
+        pk: label(legs[leg_id], number)
+        for leg_id, pairs in rows.items()
+        for pk, number in numbers(pairs).items()
+    }
 
 
 @dataclass
@@ -367,6 +363,19 @@ class EventStatistics:
             "shifts": {str(k): v.as_dict() for k, v in self.by_shift.items()},
             "legs": {str(k): v.as_dict() for k, v in self.by_leg.items()},
             "vehicles": {str(k): v.as_dict() for k, v in self.by_vehicle.items()},
+            "segments": [
+                {
+                    "id": run.id,
+                    "label": run.label,
+                    "type": run.kind,
+                    "shift": run.shift_id,
+                    "leg": run.leg_id,
+                    "distance": run.distance,
+                    "seconds": run.seconds,
+                    "intervention": run.is_intervention,
+                }
+                for run in self.runs
+            ],
         }
 
 

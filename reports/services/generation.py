@@ -26,7 +26,7 @@ from django.core.files.base import ContentFile
 from django.db import connection, transaction
 from django.utils import timezone
 
-from events.errors import RuleViolation
+from common.errors import RuleViolation
 from events.models import TestEvent
 from reports.models import Report
 from reports.services.rendering import ReportError, ReportOptions, check_reportable, render_report
@@ -71,6 +71,8 @@ REQUESTABLE = {
     "no_tiles": bool,
     "min_timeline_hours": float,
     "max_zoom": int,
+    "level": str,
+    "image_appendix": bool,
 }
 
 

@@ -6,6 +6,8 @@ character, from umlauts and CJK to ``#``, ``$``, ``\\`` or ``<b>``, appears as
 written.  All times are shown in the test event's time zone.
 """
 
+import hashlib
+import io
 import json
 import shutil
 import tempfile
@@ -22,11 +24,13 @@ from django.conf import settings
 from django.utils import timezone
 from PIL import Image as PILImage
 
+from basemaps.selectors.layers import default_layer
 from events.models import ItoReason, Note, Segment, TestEvent
 from reports import formatting as fmt
 from reports.figures import charts, style
 from reports.figures.maps import Background, Line, MapPainter
-from reports.figures.tiles import MAX_ZOOM, TileSource
+from reports.figures.sketch import track_sketch
+from reports.figures.tiles import MAX_ZOOM, LayerTiles, TileSource
 from reports.figures.timeline import draw_timeline
 from reports.selectors.statistics import (
     CONFIDENCE,
@@ -35,16 +39,33 @@ from reports.selectors.statistics import (
     Figures,
     event_statistics,
 )
-from reports.selectors.tracks import GAP_SECONDS, GPS, LOCAL
 from telemetry.models import Image
 from telemetry.selectors.maps import current_map
+from telemetry.selectors.recordings import recordings_by_master, summary
+from telemetry.selectors.tracks import GAP_SECONDS, GPS, LOCAL
 
 TEMPLATE_DIR = Path(__file__).resolve().parent.parent / "templates_typst"
 DEFAULT_LOGO = TEMPLATE_DIR / "logo.svg"
-FONT_NOTE = "DejaVu Sans with WenQuanYi Micro Hei or Noto CJK for Chinese, Japanese and Korean"
+FONT_NOTE = (
+    "DejaVu Sans with WenQuanYi Micro Hei or Noto CJK for Chinese, Japanese and Korean, "
+    "and Noto Color Emoji for emoji"
+)
 
 Progress = Callable[[float, str], None]
 MAX_TIMELINE_HOURS = 48
+
+# How much of each shift the report shows: the GUI dialog, the API and the
+# command offer these choices (value, what a person reads).
+SUMMARY, STANDARD, FULL = "summary", "standard", "full"
+LEVELS = (
+    (SUMMARY, "Summary: event and shift pages only"),
+    (STANDARD, "Standard: plus one compact block per intervention (ITO)"),
+    (FULL, "Full: every segment with its map"),
+)
+THUMBNAIL_PX = 480
+FULL_IMAGE_PX = 1600
+# Points: the size of a segment's map sketch.
+SKETCH_SIZE = (190.0, 135.0)
 
 
 class ReportError(Exception):
@@ -69,6 +90,10 @@ class ReportOptions:
     # The original's zoom_level, as an upper bound: the zoom is still fitted to
     # each track, but never closer than this (a tile server may stop at 17).
     max_zoom: int = MAX_ZOOM
+    level: str = FULL
+    # Camera frames appear as thumbnails; with this each links to a full-size
+    # copy in an appendix (without it the report stays shorter).
+    image_appendix: bool = True
 
     def problems(self) -> list[str]:
         """What is out of range, in words for the person who asked."""
@@ -79,6 +104,8 @@ class ReportOptions:
             )
         if not 1 <= self.max_zoom <= MAX_ZOOM:
             found.append(f"The maximum map zoom must be between 1 and {MAX_ZOOM}.")
+        if self.level not in dict(LEVELS):
+            found.append(f"The level must be one of {', '.join(dict(LEVELS))}.")
         return found
 
     @classmethod
@@ -98,6 +125,8 @@ class ReportResult:
     tiles_used: bool
     seconds: float
     warnings: list[str]
+    # Seconds per stage (statistics, figures, images, typst), for the benchmark.
+    stages: dict[str, float] = field(default_factory=dict)
 
 
 def _silent(_fraction: float, _message: str) -> None:
@@ -122,6 +151,7 @@ def render_report(
         builder = _Builder(event, options, Path(tmp), progress)
         data = builder.build()
         progress(0.95, "typesetting")
+        typesetting = time.perf_counter()
         shutil.copy(TEMPLATE_DIR / "report.typ", Path(tmp) / "report.typ")
         try:
             pdf = typst.compile(
@@ -131,6 +161,7 @@ def render_report(
             )
         except typst.TypstError as exc:  # a template bug, never user text
             raise ReportError(f"Typesetting failed: {exc}") from exc
+    builder.stages["typst"] = time.perf_counter() - typesetting
     progress(1.0, "done")
     return ReportResult(
         pdf=pdf,
@@ -139,6 +170,7 @@ def render_report(
         tiles_used=builder.tiles_used,
         seconds=time.perf_counter() - started,
         warnings=builder.warnings,
+        stages=builder.stages,
     )
 
 
@@ -163,14 +195,27 @@ class _Builder:
         self.warnings: list[str] = []
         self.tiles_used = False
         self.reasons = {r.key: r for r in ItoReason.objects.all()}
-        tile_url = None if options.no_tiles or self.mode == LOCAL else options.tile_url
-        if tile_url is None and not options.no_tiles and self.mode == GPS:
-            tile_url = settings.FTT_TILE_URL
-        cache = Path(getattr(settings, "FTT_TILE_CACHE", settings.DATA_DIR / "tile_cache"))
-        self.tiles = TileSource(tile_url, cache, max_zoom=options.max_zoom) if tile_url else None
+        self.tiles = self._tile_source(event, options)
         self.painter = MapPainter(tiles=self.tiles)
-        self.snippets = MapPainter(tiles=self.tiles, dpi=110)
         self.figure_count = 0
+        self.pictures: dict[str, tuple[str, str] | None] = {}  # content hash: (thumb, full)
+        self.appendix: list[dict] = []
+        self.stages: dict[str, float] = defaultdict(float)
+
+    def _tile_source(self, event, options: ReportOptions) -> TileSource | None:
+        """A tile URL given for this report, else the event's basemap, else the site's."""
+        if options.no_tiles or self.mode == LOCAL:
+            return None
+        tile_url = options.tile_url
+        if tile_url is None:
+            layer = default_layer(event.pk)
+            if layer is not None and layer.served_by_ftt:
+                return LayerTiles(layer, max_zoom=options.max_zoom)
+            tile_url = layer.url if layer is not None else settings.FTT_TILE_URL
+        if not tile_url:
+            return None
+        cache = Path(getattr(settings, "FTT_TILE_CACHE", settings.DATA_DIR / "tile_cache"))
+        return TileSource(tile_url, cache, max_zoom=options.max_zoom)
 
     # --- helpers ---------------------------------------------------------------------------
 
@@ -190,6 +235,13 @@ class _Builder:
         return "44,160,44" if kind == "auto" else "214,39,40"
 
     def _map(self, runs, shift, painter, size) -> tuple[str | None, str]:
+        clock = time.perf_counter()
+        try:
+            return self._draw_map(runs, shift, painter, size)
+        finally:
+            self.stages["figures: maps"] += time.perf_counter() - clock
+
+    def _draw_map(self, runs, shift, painter, size) -> tuple[str | None, str]:
         lines = self._lines(runs)
         if not lines:
             return None, "No positions recorded."
@@ -231,7 +283,9 @@ class _Builder:
     def build(self) -> dict:
         event = self.event
         self.progress(0.02, "statistics")
+        clock = time.perf_counter()
         stats = event_statistics(event, self.mode)
+        self.stages["statistics (queries and distances)"] = time.perf_counter() - clock
         shifts = list(
             event.shifts.select_related(
                 "vehicle",
@@ -247,6 +301,7 @@ class _Builder:
             self.legs[shift.id] = list(shift.legs.select_related("weather").order_by("start", "id"))
         self.notes = self._notes()
         self.images = self._images()
+        self.recordings = recordings_by_master(segment__leg__shift__test_event=self.event)
         runs_by_shift = stats.runs_by_shift()
         total_steps = 2 + len(shifts) + len(stats.runs)
         self.step = 0
@@ -268,6 +323,8 @@ class _Builder:
             "mode": "GPS (WGS84)" if self.mode == GPS else "local map frame",
             "global": global_section,
             "shifts": shift_sections,
+            "level": self.options.level,
+            "appendix": self.appendix,
             "methods": self._methods(stats, shifts),
         }
 
@@ -401,6 +458,7 @@ class _Builder:
             )
         present = [(lab, f) for lab, f, p in zip(labels, per_shift, has, strict=True) if p]
         charts_out = []
+        clock = time.perf_counter()
         if present:
             names = [label for label, _ in present]
             made = (
@@ -408,17 +466,27 @@ class _Builder:
                     names,
                     [f.auto_distance for _, f in present],
                     [f.manual_distance for _, f in present],
-                    str(self._file("distance")),
+                    str(self._file("distance", ".svg")),
                 ),
                 charts.reasons_chart(
                     names,
                     [f.interventions_by_reason for _, f in present],
                     self.reasons,
-                    str(self._file("reasons")),
+                    str(self._file("reasons", ".svg")),
                 ),
-                charts.mdbi_chart(names, [f.mdbi for _, f in present], str(self._file("mdbi"))),
+            ) + tuple(
+                charts.estimate_chart(
+                    names,
+                    [getattr(f, key) for _, f in present],
+                    str(self._file(key, ".svg")),
+                    key.upper(),
+                    unit,
+                    scale=scale,
+                )
+                for key, unit, scale in (("mdbi", "m", 1.0), ("mtbi", "h", 3600.0))
             )
             charts_out = [self._rel(path) for path in made]
+        self.stages["figures: charts"] += time.perf_counter() - clock
         return {
             "summary": self._figure_rows(o),
             "distance_rows": distance_rows,
@@ -469,6 +537,7 @@ class _Builder:
                 )
         overview, overview_note = self._map(runs, shift, self.painter, (6.5, 4.8))
         timeline = None
+        clock = time.perf_counter()
         if runs:
             weather_changes = [
                 (
@@ -488,11 +557,14 @@ class _Builder:
                     min_span=timedelta(hours=self.options.min_timeline_hours),
                 )
             )
+        self.stages["figures: timelines"] += time.perf_counter() - clock
         tick(f"shift {shift.number}")
         legs = {leg.id: leg for leg in self.legs[shift.id]}
         segments = []
+        level = self.options.level
         for index, run in enumerate(runs, start=1):
-            segments.append(self._segment(index, run, legs[run.leg_id], shift))
+            if level == FULL or (level == STANDARD and run.kind == "ito"):
+                segments.append(self._segment(run, legs[run.leg_id], full=level == FULL))
             tick(f"shift {shift.number}, segment {index}")
         return {
             "title": f"Shift {shift.number}: {fmt.timestamp(min(starts), tz)} – "
@@ -507,7 +579,7 @@ class _Builder:
             "segments": segments,
         }
 
-    def _segment(self, index, run, leg, shift) -> dict:
+    def _segment(self, run, leg, full: bool) -> dict:
         tz = self.tz
         spans = sorted(run.reasons, key=lambda s: (s.start, s.id))
 
@@ -522,19 +594,23 @@ class _Builder:
         )
         rows = _kv(
             [
-                ("Segment", f"{index} (id {run.id})"),
-                ("Leg", str(leg.number)),
+                ("Segment", run.label),
                 ("Type", run.kind.upper()),
                 ("Start", fmt.timestamp(run.start, tz)),
                 ("End", fmt.timestamp(run.end, tz) + (" (still open)" if run.is_open else "")),
                 ("Duration", fmt.duration(run.seconds)),
                 ("Distance", fmt.metres(run.distance)),
                 ("Poses", str(run.pose_count)),
+                ("Database id", str(run.id)),
                 ("Reason(s)", reasons or fmt.DASH),
                 ("Obstacle", joined("obstacle")),
                 ("Lighting", joined("lighting")),
                 ("Slope", joined("slope")),
                 ("Weather", leg.weather.short_description if leg.weather else "unknown"),
+            ]
+            + [
+                ("Snapshot", f"{summary(r)}, {fmt.clock(r.start, tz)}–{fmt.clock(r.end, tz)}")
+                for r in self.recordings.get(run.id, [])
             ]
         )
         notes = [
@@ -545,36 +621,72 @@ class _Builder:
             }
             for note in self.notes.get(run.id, [])
         ]
-        snippet, snippet_note = self._map([run], shift, self.snippets, (4.2, 3.0))
+        sketch = None
+        if full:
+            sketch = track_sketch(run.path_x, run.path_y, self.mode, *SKETCH_SIZE)
         images = []
-        for n, image in enumerate(self.images.get(run.id, []), start=1):
-            name = self._copy_image(image, f"seg{run.id}-img{n}")
-            if name:
-                images.append(
-                    {"path": name, "caption": image.description or "Camera image", "n": n}
+        for image in self.images.get(run.id, []):
+            picture = self._picture(image)
+            if picture is None:
+                continue
+            caption = image.description or "Camera image"
+            entry = {"thumb": picture[0], "caption": caption, "anchor": None}
+            if self.options.image_appendix:
+                entry["anchor"] = f"image-{len(self.appendix) + 1}"
+                self.appendix.append(
+                    {
+                        "anchor": entry["anchor"],
+                        "path": picture[1],
+                        "caption": f"{run.label}: {caption}",
+                        "segment": f"segment-{run.id}",
+                    }
                 )
+            images.append(entry)
         return {
             "anchor": f"segment-{run.id}",
-            "title": f"{run.kind.upper()} segment {index} at {fmt.clock(run.start, tz)}",
+            "title": f"{run.label} · {run.kind.upper()} at {fmt.clock(run.start, tz)}",
             "open": run.is_open,
             "rows": rows,
             "notes": notes,
-            "map": snippet,
-            "map_note": snippet_note,
+            "sketch": sketch,
+            "map_note": "" if sketch or not full else "No positions recorded.",
             "images": images,
         }
 
-    def _copy_image(self, image: Image, stem: str) -> str | None:
+    def _picture(self, image: Image) -> tuple[str, str] | None:
+        """(thumbnail, full-size) file names; each distinct picture is decoded once."""
         try:
             with image.image.open("rb") as fh:
-                picture = PILImage.open(fh)
-                picture.thumbnail((1600, 1600))
-                name = f"{stem}.jpg"
-                picture.convert("RGB").save(self.root / name, "JPEG", quality=85)
-            return name
-        except (OSError, ValueError) as exc:
+                content = fh.read()
+        except OSError as exc:
             self.warnings.append(f"Image {image.pk} unreadable ({exc}); left out.")
             return None
+        digest = hashlib.sha256(content).hexdigest()[:20]
+        if digest not in self.pictures:
+            clock = time.perf_counter()
+            self.pictures[digest] = self._encode(image.pk, content, digest)
+            self.stages["image encoding"] += time.perf_counter() - clock
+        return self.pictures[digest]
+
+    def _encode(self, pk: int, content: bytes, digest: str) -> tuple[str, str] | None:
+        try:
+            picture = PILImage.open(io.BytesIO(content))
+            picture.draft("RGB", (FULL_IMAGE_PX, FULL_IMAGE_PX))
+            picture = picture.convert("RGB")
+        except (OSError, ValueError) as exc:
+            self.warnings.append(f"Image {pk} unreadable ({exc}); left out.")
+            return None
+        names = []
+        sizes = [("thumb", THUMBNAIL_PX)]
+        if self.options.image_appendix:
+            sizes.append(("full", FULL_IMAGE_PX))
+        for kind, size in sizes:
+            copy = picture.copy()
+            copy.thumbnail((size, size))
+            name = f"img-{digest}-{kind}.jpg"
+            copy.save(self.root / name, "JPEG", quality=82)
+            names.append(name)
+        return names[0], names[-1]
 
     def _notes(self) -> dict[int, list[Note]]:
         grouped = defaultdict(list)
@@ -598,7 +710,7 @@ class _Builder:
         number = {s.id: s.number for s in shifts}
         runs = stats.runs
         without_poses = [
-            f"Shift {number[r.shift_id]}, {r.kind.upper()} segment id {r.id} "
+            f"Shift {number[r.shift_id]}, {r.label} ({r.kind.upper()}) "
             f"({fmt.timestamp(r.start, self.tz)})"
             for r in runs
             if r.pose_count == 0
@@ -611,14 +723,12 @@ class _Builder:
             no_fix += r.track.no_fix
             for a, b in r.track.gaps:
                 gaps.append(
-                    f"Shift {number[r.shift_id]}, segment id {r.id}: "
+                    f"Shift {number[r.shift_id]}, {r.label}: "
                     f"{fmt.timestamp(a, self.tz)} – {fmt.clock(b, self.tz)} "
                     f"({fmt.duration((b - a).total_seconds())})"
                 )
         no_start = [
-            f"Shift {number[r.shift_id]}, segment id {r.id}"
-            for r in runs
-            if not r.has_start_position
+            f"Shift {number[r.shift_id]}, {r.label}" for r in runs if not r.has_start_position
         ]
         counted = [
             self.reasons[k].short_description for k in stats.counted_reasons if k in self.reasons
@@ -640,6 +750,8 @@ class _Builder:
                     "Map tiles were unavailable (tile server unreachable): maps show a plain "
                     "background with a metric grid, scale bar and north arrow."
                 )
+            elif isinstance(self.tiles, LayerTiles):
+                tiles = f"Map: {self.tiles.url}, drawn by FTT from its own basemap file."
             else:
                 tiles = (
                     f"Map tiles: {self.tiles.url} ({self.tiles.fetched} fetched, "

@@ -59,7 +59,7 @@ def open_bag(path: Path) -> AnyReader:
     return AnyReader([path], default_typestore=get_typestore(Stores.ROS2_JAZZY))
 
 
-def _latched(connection) -> bool:
+def latched(connection) -> bool:
     ext = connection.ext
     if getattr(ext, "latching", None):
         return True
@@ -72,14 +72,14 @@ def _latched(connection) -> bool:
 def bag_messages(path: Path, topics: set[str] | None = None) -> Iterator[BagMessage]:
     with open_bag(path) as reader:
         connections = [c for c in reader.connections if topics is None or c.topic in topics]
-        latched = {c.id: _latched(c) for c in connections}
+        latched_ids = {c.id: latched(c) for c in connections}
         for connection, time_ns, raw in reader.messages(connections=connections):
             yield BagMessage(
                 connection.topic,
                 connection.msgtype,
                 time_ns,
                 reader.deserialize(raw, connection.msgtype),
-                latched[connection.id],
+                latched_ids[connection.id],
             )
 
 

@@ -13,6 +13,7 @@ import numpy as np
 from PIL import Image as PilImage
 
 from rosbridge_app.collector.tf_buffer import Transform, yaw_of
+from telemetry.models import MapImage
 
 # sensor_msgs/NavSatStatus
 STATUS_NO_FIX = -1
@@ -128,8 +129,6 @@ def grid_geometry(msg) -> dict | None:
 
 
 def grid_checksum(msg, geometry: dict) -> str:
-    from telemetry.models import MapImage  # lazily: this module imports without Django
-
     h = hashlib.sha256()
     h.update(memoryview(np.ascontiguousarray(np.asarray(msg.data, dtype=np.int8))).cast("B"))
     h.update(repr([geometry[k] for k in MapImage.PLACEMENT_FIELDS]).encode())

@@ -16,9 +16,12 @@ GPS = "gps"  # data: lon, lat, alt, status, accuracy, robot_stamp
 LOCAL = "local"  # data: x, y, yaw, frame, robot_stamp
 MAP = "map"  # data: frame, width, height, resolution, origin_*, robot_stamp, checksum; blob PNG
 IMAGE = "image"  # data: master (uid of the mode event), suffix, description, robot_stamp; blob
+# data: master (uid or None: the open one), reason, path of the pending MCAP file,
+# start, end (ISO), topics {topic: {type, count}}
+RECORDING = "recording"
 START = "start"
 STOP = "stop"
-KINDS = (MODE, GPS, LOCAL, MAP, IMAGE, START, STOP)
+KINDS = (MODE, GPS, LOCAL, MAP, IMAGE, RECORDING, START, STOP)
 
 _STAMP_KEYS = ("robot_stamp",)
 

@@ -26,8 +26,10 @@ from rclpy.qos import (
 )
 from std_srvs.srv import SetBool, Trigger
 
+from rosbridge_app.collector import events as ev
 from rosbridge_app.collector import params as P
-from rosbridge_app.collector.modes import message_type
+from rosbridge_app.collector.blackbox import Blackbox, message_class, snapshot_topics
+from rosbridge_app.collector.modes import ITO, message_type
 from rosbridge_app.collector.pipeline import SECOND_COPY, Pipeline
 
 log = logging.getLogger("ftt.collector")
@@ -106,7 +108,10 @@ class CollectorNode(Node):
             except P.InvalidParameter as exc:
                 log.warning("%s; using the default %r", exc, spec.default)
                 self.set_parameters([Parameter(name, value=spec.default)])
-        self.pipeline = Pipeline(sink, self.current_parameters())
+        self.blackbox = Blackbox(sink, self.current_parameters())
+        self._snapshot_subs: dict[str, object] = {}
+        self._master: str | None = None
+        self.pipeline = Pipeline(self._watch_modes(sink), self.current_parameters())
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._parameters_changed)
         self._make_services()
@@ -134,6 +139,8 @@ class CollectorNode(Node):
         try:
             changed = {p.name: p.value for p in parameters if p.name in P.SPECS}
             self.pipeline.update_params(changed)
+            if any(n.startswith("snapshot.") for n in changed):
+                self.blackbox.configure(self.current_parameters())
             if any(n.endswith("_service") for n in changed):
                 self._make_services()
             if any(
@@ -170,6 +177,9 @@ class CollectorNode(Node):
             ),
             "save": self.create_service(
                 Trigger, get("save_ftt_params_service").value, self._srv_save
+            ),
+            "snapshot": self.create_service(
+                Trigger, get("snapshot_ftt_service").value, self._srv_snapshot
             ),
         }
 
@@ -212,6 +222,65 @@ class CollectorNode(Node):
         response.success, response.message = self.save_parameters()
         return response
 
+    def _srv_snapshot(self, request, response):
+        response.success, response.message = self.snapshot_now()
+        return response
+
+    # --- black box ----------------------------------------------------------------------
+
+    def _watch_modes(self, sink):
+        def put(event):
+            sink(event)
+            if event.kind == ev.MODE:
+                self._master = str(event.uid)
+                if event.data["mode"] == ITO:
+                    self.blackbox.trigger(event.at, self._master, "switch to ITO")
+            elif event.kind == ev.STOP:
+                self._master = None
+
+        return put
+
+    def snapshot_now(self) -> tuple[bool, str]:
+        uid = self.blackbox.trigger(now(), self._master, "on request")
+        if uid is None:
+            return False, "Snapshots are off (snapshot.enabled)."
+        return True, (
+            f"Snapshot {uid} of {self.blackbox.before:g} s before and "
+            f"{self.blackbox.after:g} s after now; stored when the window has passed."
+        )
+
+    def _subscribe_snapshots(self) -> None:
+        graph = {t["name"]: t["types"] for t in self.topics}
+        # One process cannot subscribe to a topic with two types: on the
+        # collector's own topics the black box takes the collector's type.
+        graph.update({info["topic"]: [info["type"]] for info in self.inputs.values()})
+        wanted = {}
+        if self.blackbox.enabled:
+            wanted = snapshot_topics(self.current_parameters(), graph, self.resolve_topic_name)
+        gone = [t for t in self._snapshot_subs if self.blackbox.types.get(t) != wanted.get(t)]
+        for topic in gone:
+            self.destroy_subscription(self._snapshot_subs.pop(topic))
+            self.blackbox.types.pop(topic, None)
+        static = self.resolve_topic_name(self.get_parameter("topics.tf_static").value or "/")
+        for topic, typename in wanted.items():
+            if topic in self._snapshot_subs:
+                continue
+            latched = topic == static
+            try:
+                self._snapshot_subs[topic] = self.create_subscription(
+                    message_class(typename),
+                    topic,
+                    self._safe("snapshot", functools.partial(self.blackbox.receive, topic)),
+                    _qos(100, latched, latched=latched),
+                    raw=True,
+                )
+            except Exception as exc:
+                log.error("cannot subscribe to %s (%s) for snapshots: %s", topic, typename, exc)
+                continue
+            self.blackbox.types[topic] = typename
+            if latched:
+                self.blackbox.latched.add(topic)
+
     # --- subscriptions ------------------------------------------------------------------
 
     def _safe(self, name: str, fn):
@@ -249,9 +318,12 @@ class CollectorNode(Node):
         from nav_msgs.msg import OccupancyGrid
         from sensor_msgs.msg import CompressedImage, Image, NavSatFix
 
-        for sub in self._ftt_subs.values():
+        for sub in [*self._ftt_subs.values(), *self._snapshot_subs.values()]:
             self.destroy_subscription(sub)
         self._ftt_subs = {}
+        # Made again at the next tick, with the types subscribed here.
+        self._snapshot_subs = {}
+        self.blackbox.types.clear()
         get = lambda name: self.get_parameter(name).value  # noqa: E731
         reliable = get("params.sensor_reliable")
         mode_type = get("params.robot_mode_type")
@@ -343,6 +415,8 @@ class CollectorNode(Node):
         self.topics = [
             {"name": name, "types": types} for name, types in self.get_topic_names_and_types()
         ]
+        self._subscribe_snapshots()
+        self.blackbox.poll()
 
     # --- calls from other threads -------------------------------------------------------
 

@@ -17,16 +17,38 @@ import yaml
 from rosbridge_app.collector.modes import MODE_TYPES
 
 NODE_NAME = "ftt_collector"
+NAV_SAT_FIX = "sensor_msgs/msg/NavSatFix"
+COMPRESSED_IMAGE = "sensor_msgs/msg/CompressedImage"
+TF_MESSAGE = "tf2_msgs/msg/TFMessage"
+# The mode topic's message type for each params.robot_mode_type.
+ROBOT_MODE_TYPES = {
+    "bool": ("std_msgs/msg/Bool",),
+    "industrial": ("industrial_msgs/msg/RobotMode",),
+}
 DEFAULT_FILE = Path(__file__).resolve().parent.parent / "config" / "ftt_collect.yaml"
 
 
 @dataclass(frozen=True)
 class Spec:
+    """One parameter: the collector declares it, the web side checks and edits
+    it, the bag importer reads it; all from this table."""
+
     default: object
     description: str
     minimum: float | None = None
+    maximum: float | None = None
     choices: tuple | None = None
     topic: bool = False
+    # Message types a topic parameter takes, so the editor suggests only those.
+    message_types: tuple[str, ...] = ()
+
+    @property
+    def kind(self) -> str:
+        """bool, int, float or str: the type the value must have."""
+        for kind in (bool, int, float):
+            if isinstance(self.default, kind):
+                return kind.__name__
+        return "str"
 
 
 SPECS: dict[str, Spec] = {
@@ -34,21 +56,46 @@ SPECS: dict[str, Spec] = {
     "set_ftt_logging_service": Spec("/set_ftt_logging", "SetBool: start/stop logging."),
     "get_ftt_logging_service": Spec("/get_ftt_logging", "Trigger: success = logging."),
     "save_ftt_params_service": Spec("/save_ftt_params", "Trigger: write parameters to file."),
+    "snapshot_ftt_service": Spec("/ftt_snapshot", "Trigger: write a black-box snapshot now."),
+    # Its message type follows params.robot_mode_type (see ROBOT_MODE_TYPES).
     "topics.robot_mode": Spec("robot_mode", "Operating mode topic.", topic=True),
-    "topics.gps_fix": Spec("gps_fix", "sensor_msgs/NavSatFix topic.", topic=True),
+    "topics.gps_fix": Spec(
+        "gps_fix", "sensor_msgs/NavSatFix topic.", topic=True, message_types=(NAV_SAT_FIX,)
+    ),
     "topics.local_pose": Spec(
-        "local_pose", "geometry_msgs/PoseStamped (use_tf false).", topic=True
+        "local_pose",
+        "geometry_msgs/PoseStamped (use_tf false).",
+        topic=True,
+        message_types=("geometry_msgs/msg/PoseStamped",),
     ),
-    "topics.map": Spec("map", "nav_msgs/OccupancyGrid topic.", topic=True),
+    "topics.map": Spec(
+        "map",
+        "nav_msgs/OccupancyGrid topic.",
+        topic=True,
+        message_types=("nav_msgs/msg/OccupancyGrid",),
+    ),
     "topics.map_jpeg": Spec(
-        "", "sensor_msgs/CompressedImage of the same map; empty: off.", topic=True
+        "",
+        "sensor_msgs/CompressedImage of the same map; empty: off.",
+        topic=True,
+        message_types=(COMPRESSED_IMAGE,),
     ),
-    "topics.image": Spec("image", "sensor_msgs/Image camera topic; empty: off.", topic=True),
+    "topics.image": Spec(
+        "image",
+        "sensor_msgs/Image camera topic; empty: off.",
+        topic=True,
+        message_types=("sensor_msgs/msg/Image",),
+    ),
     "topics.image_compressed": Spec(
-        "", "sensor_msgs/CompressedImage camera; empty: off.", topic=True
+        "",
+        "sensor_msgs/CompressedImage camera; empty: off.",
+        topic=True,
+        message_types=(COMPRESSED_IMAGE,),
     ),
-    "topics.tf": Spec("/tf", "Dynamic transforms.", topic=True),
-    "topics.tf_static": Spec("/tf_static", "Static transforms.", topic=True),
+    "topics.tf": Spec("/tf", "Dynamic transforms.", topic=True, message_types=(TF_MESSAGE,)),
+    "topics.tf_static": Spec(
+        "/tf_static", "Static transforms.", topic=True, message_types=(TF_MESSAGE,)
+    ),
     "params.robot_mode_type": Spec(
         "bool",
         "bool (std_msgs/Bool, true = autonomous) or industrial (industrial_msgs/RobotMode).",
@@ -75,10 +122,35 @@ SPECS: dict[str, Spec] = {
         minimum=0.0,
     ),
     "params.send_map_period": Spec(2.0, "Minimum seconds between two stored maps.", minimum=0.0),
-    "params.image_buffer_size": Spec(3, "Camera frames kept for the next mode switch.", minimum=0),
+    "params.image_buffer_size": Spec(
+        3, "Camera frames kept for the next mode switch.", minimum=0, maximum=20
+    ),
     "params.image_buffer_step": Spec(1.0, "Minimum seconds between buffered frames.", minimum=0.0),
     "params.image_max_side": Spec(
-        1920, "Larger frames are scaled down to this (px); 0: never.", minimum=0
+        1920, "Larger frames are scaled down to this (px); 0: never.", minimum=0, maximum=16384
+    ),
+    "snapshot.enabled": Spec(
+        True, "Black box: write an MCAP snapshot of the last seconds at every switch to ITO."
+    ),
+    "snapshot.topics": Spec(
+        "",
+        "Comma-separated topics of any type for snapshots; empty: the mode, GPS, TF, "
+        "static TF and compressed camera topics above, plus odom and cmd_vel when published.",
+    ),
+    "snapshot.before": Spec(
+        20.0, "Snapshot: seconds before the trigger.", minimum=0.0, maximum=600.0
+    ),
+    "snapshot.after": Spec(
+        10.0, "Snapshot: seconds after the trigger.", minimum=0.0, maximum=600.0
+    ),
+    "snapshot.buffer_mb": Spec(
+        200, "Snapshot buffer size (MB); the oldest messages go first.", minimum=1, maximum=8192
+    ),
+    "snapshot.disk_budget_mb": Spec(
+        2000,
+        "Disk for snapshots not yet stored (MB); when full the oldest pending one is dropped.",
+        minimum=1,
+        maximum=1_000_000,
     ),
 }
 
@@ -92,6 +164,19 @@ def check(name: str, value) -> object:
     spec = SPECS.get(name)
     if spec is None:
         return value
+    return _checked(name, spec, value)
+
+
+def expected_types(name: str, values: dict) -> tuple[str, ...]:
+    """Message types topic parameter ``name`` takes, given the other values."""
+    if name == "topics.robot_mode":
+        mode_type = values.get("params.robot_mode_type", SPECS["params.robot_mode_type"].default)
+        return ROBOT_MODE_TYPES.get(mode_type, ())
+    spec = SPECS.get(name)
+    return spec.message_types if spec else ()
+
+
+def _checked(name: str, spec: Spec, value) -> object:
     default = spec.default
     if isinstance(default, bool):
         if not isinstance(value, bool):
@@ -109,6 +194,8 @@ def check(name: str, value) -> object:
         raise InvalidParameter(f"{name} must be a string")
     if spec.minimum is not None and value < spec.minimum:
         raise InvalidParameter(f"{name} must be >= {spec.minimum:g}")
+    if spec.maximum is not None and value > spec.maximum:
+        raise InvalidParameter(f"{name} must be <= {spec.maximum:g}")
     if spec.choices is not None and value not in spec.choices:
         raise InvalidParameter(f"{name} must be one of {', '.join(spec.choices)}")
     if name.endswith("_service") and not value:

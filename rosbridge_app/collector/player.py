@@ -13,7 +13,7 @@ from pathlib import Path
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from rosbridge_app.collector.bag import bag_messages, open_bag, rclpy_type, to_rclpy
+from rosbridge_app.collector.bag import bag_messages, latched, open_bag, rclpy_type, to_rclpy
 
 log = logging.getLogger("ftt.player")
 
@@ -76,6 +76,4 @@ class BagPlayer(Node):
 
 
 def _is_latched(connection) -> bool:
-    from rosbridge_app.collector.bag import _latched
-
-    return _latched(connection)
+    return latched(connection)

@@ -15,11 +15,13 @@ import copy
 import logging
 import uuid
 from collections.abc import Callable
+from datetime import datetime
+from pathlib import Path
 
 from django.db import InterfaceError, OperationalError, transaction
 from django.utils import timezone
 
-from events.errors import RuleViolation
+from common.errors import RuleViolation
 from events.models import Leg, Segment
 from events.selectors.logs import open_master
 from events.services.segments import (
@@ -34,6 +36,7 @@ from telemetry.services.recording import (
     GpsFix,
     MapPose,
     attach_image,
+    attach_recording,
     record_local_poses,
     record_map,
     record_poses,
@@ -73,8 +76,9 @@ class Recorder:
         saved = copy.copy(self.state), self.leg, self.skipped
         try:
             with transaction.atomic():
+                rest = self._stops_first(events)
                 self._sync()
-                self._apply_all(events)
+                self._apply_all(rest)
         except Exception as exc:
             self.state, self.leg, self.skipped = saved
             if _unavailable(exc):
@@ -116,6 +120,19 @@ class Recorder:
                     # be stored; the next leg must start in it, not in the old one.
                     self.state["logging"] = True
                     self.state["mode"] = dict(event.data)
+
+    def _stops_first(self, events: list[Event]) -> list[Event]:
+        """Apply the batch's leading stops in the leg they were meant for.
+
+        A stop was given while logging into the leg seen so far; if the operator
+        opened the next leg before the stop was stored, following that leg first
+        would start a segment in it only to close it again at once.
+        """
+        count = 0
+        while count < len(events) and events[count].kind == ev.STOP:
+            self._on_stop(events[count])
+            count += 1
+        return events[count:]
 
     def _sync(self) -> None:
         leg = self.leg_provider()
@@ -273,11 +290,33 @@ class Recorder:
         attach_image(
             master,
             content=event.blob,
-            filename=f"{event.uid}.{event.data.get('suffix', 'jpg')}",
             description=event.data.get("description", ""),
             robot_stamp=event.data.get("robot_stamp"),
             uid=event.uid,
         )
+
+    def _on_recording(self, event: Event) -> None:
+        d = event.data
+        path = Path(d["path"])
+        master = Segment.objects.filter(uid=d["master"]).first() if d.get("master") else None
+        master = master or self._master()
+        if master is None or not path.is_file():
+            # No segment to hang it on, or the file was dropped for the disk budget.
+            self.skipped += 1
+            why = "its file is gone" if master else "no segment"
+            log.warning("snapshot %s not stored: %s", path.name, why)
+            return
+        attach_recording(
+            master,
+            path=path,
+            start=datetime.fromisoformat(d["start"]),
+            end=datetime.fromisoformat(d["end"]),
+            topics=d["topics"],
+            reason=d.get("reason", ""),
+            uid=event.uid,
+        )
+        # The pending file goes only once the row holding its copy is committed.
+        transaction.on_commit(lambda: path.unlink(missing_ok=True))
 
 
 def record_events(leg: Leg, events: list[Event]) -> Recorder:

@@ -29,6 +29,7 @@ from django.utils import timezone
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.parameter import Parameter
 
+from events import feed
 from events.models import Vehicle
 from events.selectors.logs import open_leg_for_vehicle
 from rosbridge_app.collector.node import CollectorNode, Status
@@ -148,6 +149,7 @@ class CollectorRuntime:
         self.name = self.name or f"{self.host}/{self.vehicle_key or self.node.get_name()}"
         self.outbox = Outbox(self.spool_path or default_spool(self.name))
         self.recorder = Recorder(self._leg)
+        self.node.blackbox.directory = self.outbox.path.with_suffix(".snapshots")
         pending = len(self.outbox)
         log.info(
             "collector %s for vehicle '%s'; spool %s (%d records pending)",
@@ -214,7 +216,7 @@ class CollectorRuntime:
                     self._commands()
                     next_commands = t + COMMAND_POLL
                 if t >= next_prune:
-                    link.prune_announcements()
+                    feed.prune()
                     next_prune = t + 60
                 if self._write_batch():
                     continue
@@ -319,6 +321,7 @@ class CollectorRuntime:
             CollectorCommand.Kind.START_LOGGING: (node.set_logging, True),
             CollectorCommand.Kind.STOP_LOGGING: (node.set_logging, False),
             CollectorCommand.Kind.SAVE_PARAMETERS: (node.save_parameters,),
+            CollectorCommand.Kind.SNAPSHOT: (node.snapshot_now,),
             CollectorCommand.Kind.SET_PARAMETERS: (
                 node.set_parameter_values,
                 (command.arguments or {}).get("parameters") or {},
@@ -337,6 +340,7 @@ class CollectorRuntime:
     def _shutdown(self) -> None:
         log.info("stopping: spooling what is still in memory")
         self.executor.shutdown(timeout_sec=2)
+        self.node.blackbox.close()  # windows still open are written with what they have
         self.spooler.stop.set()
         self.spooler.join(10)
         deadline = time.monotonic() + EXIT_FLUSH_SECONDS

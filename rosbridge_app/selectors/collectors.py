@@ -1,10 +1,10 @@
 """Reads of the collector link, for the GUI (see docs/collector.md)."""
 
-from datetime import timedelta
+from datetime import datetime, timedelta
 
 from django.utils import timezone
 
-from rosbridge_app.models import Announcement, Collector, CollectorCommand
+from rosbridge_app.models import Collector, CollectorCommand
 
 # Collectors beat every second; three missed beats make one offline.
 OFFLINE_AFTER = timedelta(seconds=3)
@@ -43,8 +43,6 @@ def collector_status(collector: Collector, now=None) -> dict:
 
 
 def _parse(value: str):
-    from datetime import datetime
-
     return datetime.fromisoformat(value)
 
 
@@ -53,15 +51,14 @@ def collectors(vehicle=None):
     return qs.filter(vehicle=vehicle) if vehicle is not None else qs
 
 
-def announcements_after(last_id: int, limit: int = 500) -> list[Announcement]:
-    """Outbox rows newer than ``last_id``; a reader keeps the last id it saw."""
-    return list(Announcement.objects.filter(pk__gt=last_id).order_by("id")[:limit])
-
-
-def latest_announcement_id() -> int:
-    last = Announcement.objects.order_by("-id").values_list("id", flat=True).first()
-    return last or 0
-
-
 def command(pk: int) -> CollectorCommand | None:
     return CollectorCommand.objects.filter(pk=pk).first()
+
+
+def logging_into():
+    """Collectors logging into a leg now, most recently heard first, with their leg's levels."""
+    return (
+        Collector.objects.filter(logging=True, leg__isnull=False, stopped__isnull=True)
+        .select_related("vehicle", "leg__shift")
+        .order_by("-last_seen")
+    )

@@ -9,10 +9,13 @@ from datetime import timedelta
 from django.db import transaction
 from django.utils import timezone
 
-from events.errors import RuleViolation
-from rosbridge_app.models import Announcement, Collector, CollectorCommand
+from common.errors import RuleViolation
+from events import feed
+from events.models import Announcement, Leg
+from events.services.logs import closing
+from rosbridge_app.models import Collector, CollectorCommand
+from rosbridge_app.selectors.control import check_parameter_values, logging_control
 
-ANNOUNCEMENT_RETENTION = timedelta(hours=1)
 # A command nobody took within this time is answered as failed, so the GUI
 # never waits forever for an offline collector.
 COMMAND_EXPIRY = timedelta(seconds=30)
@@ -23,20 +26,72 @@ COMMAND_EXPIRY = timedelta(seconds=30)
 
 @transaction.atomic
 def issue_command(
-    collector: Collector, kind: str, arguments: dict | None = None, user=None
+    collector: Collector,
+    kind: str,
+    arguments: dict | None = None,
+    user=None,
+    leg: Leg | None = None,
 ) -> CollectorCommand:
+    """An order for the collector, refused at once when it cannot apply.
+
+    ``leg`` is the leg the person has selected; starting and stopping follow
+    :func:`rosbridge_app.selectors.control.logging_control`, parameter values
+    the collector's parameter schema.
+    """
     if kind not in CollectorCommand.Kind.values:
         raise RuleViolation({"kind": [f"Unknown command '{kind}'."]})
-    arguments = arguments or {}
-    if kind == CollectorCommand.Kind.SET_PARAMETERS:
+    arguments = dict(arguments or {})
+    if kind in (CollectorCommand.Kind.START_LOGGING, CollectorCommand.Kind.STOP_LOGGING):
+        allowed, reason = logging_control(collector, leg)
+        starting = kind == CollectorCommand.Kind.START_LOGGING
+        if not allowed:
+            raise RuleViolation(reason)
+        if starting == collector.logging:
+            raise RuleViolation("Logging is already on." if starting else "Logging is already off.")
+        if leg is not None:
+            arguments.setdefault("leg", leg.pk)
+    elif kind == CollectorCommand.Kind.SET_PARAMETERS:
         values = arguments.get("parameters")
         if not isinstance(values, dict) or not values:
             raise RuleViolation(
                 {"parameters": ["Give the parameters to set as a non-empty object."]}
             )
+        arguments["parameters"] = check_parameter_values(collector, values)
     return CollectorCommand.objects.create(
         collector=collector, kind=kind, arguments=arguments, issued_by=user
     )
+
+
+def stop_logging_into(legs) -> list[CollectorCommand]:
+    """Ending a leg, shift or test event stops logging into it first.
+
+    Connected to :data:`events.services.logs.closing`, so the REST API, the
+    GUI and Django admin all get it.  The stop order is stored in the same
+    transaction as the end; the collector carries it out at its next beat
+    (within a second), and until then the closed leg refuses its writes.
+    """
+    commands = []
+    for collector in Collector.objects.select_for_update().filter(logging=True, leg__in=legs):
+        pending = collector.commands.filter(
+            kind=CollectorCommand.Kind.STOP_LOGGING, done__isnull=True
+        ).exists()
+        if not pending:
+            commands.append(
+                CollectorCommand.objects.create(
+                    collector=collector,
+                    kind=CollectorCommand.Kind.STOP_LOGGING,
+                    arguments={"reason": "The leg it logged into was ended."},
+                )
+            )
+    return commands
+
+
+def _on_closing(sender, legs, **kwargs) -> None:
+    stop_logging_into(legs)
+
+
+def connect() -> None:
+    closing.connect(_on_closing, dispatch_uid="ftt-stop-logging-before-end")
 
 
 # --- collector side ---------------------------------------------------------------------
@@ -113,8 +168,8 @@ def _finish(command, success, message, result):
     command.message = message
     command.result = result
     command.save(update_fields=["done", "success", "message", "result"])
-    Announcement.objects.create(
-        kind=Announcement.Kind.COMMAND,
+    feed.record(
+        Announcement.Kind.COMMAND,
         collector_id=command.collector_id,
         payload={
             "command": command.pk,
@@ -127,15 +182,13 @@ def _finish(command, success, message, result):
 
 
 def announce(kind: str, collector: Collector | None, leg=None, payload: dict | None = None):
-    """Add to the outbox; call inside the transaction that stored the data."""
-    return Announcement.objects.create(
-        kind=kind, collector=collector, leg=leg, payload=payload or {}
+    """Add to the change feed; call inside the transaction that stored the data."""
+    return feed.record(
+        kind,
+        collector_id=collector.pk if collector else None,
+        leg_id=leg.pk if leg else None,
+        payload=payload,
     )
-
-
-def prune_announcements() -> int:
-    cutoff = timezone.now() - ANNOUNCEMENT_RETENTION
-    return Announcement.objects.filter(created__lt=cutoff).delete()[0]
 
 
 @transaction.atomic

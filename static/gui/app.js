@@ -26,19 +26,55 @@ function plainMessage(error) {
 }
 
 function showError(error, where) {
+  // Inside a dialog, field errors go next to their fields; the rest to the dialog's box.
+  if (where && error instanceof ApiError && showFieldErrors(error, where.closest("dialog"))) {
+    where.textContent = "Please correct the marked fields.";
+    where.hidden = false;
+    where.scrollIntoView({ block: "nearest" });
+    return;
+  }
   const box = where || $("#error");
   const text = plainMessage(error);
   if (box.id === "error") {
     $(".text", box).textContent = text;
   } else {
     box.textContent = text;
+    box.scrollIntoView({ block: "nearest" });
   }
   box.hidden = false;
+}
+
+/* Puts each server message under the field it names, in the field's own label. */
+function showFieldErrors(error, dialog) {
+  if (!dialog) return false;
+  $$(".field-error", dialog).forEach((el) => el.remove());
+  let shown = 0;
+  for (const [field, messages] of Object.entries(error.errors || {})) {
+    const input = dialog.querySelector(`[name="${CSS.escape(field)}"]`);
+    if (!input) continue;
+    const p = document.createElement("p");
+    p.className = "field-error error";
+    p.id = `error-${field}`;
+    const label = input.closest("label");
+    const name = label ? label.firstChild.textContent.trim() : field;
+    p.textContent = `${name}: ${[].concat(messages).join(" ")}`;
+    input.setAttribute("aria-invalid", "true");
+    input.setAttribute("aria-describedby", p.id);
+    input.after(p);
+    if (!shown) input.focus();
+    shown += 1;
+  }
+  return shown > 0;
 }
 
 function clearError(where) {
   const box = where || $("#error");
   box.hidden = true;
+  const dialog = where && where.closest("dialog");
+  if (dialog) {
+    $$(".field-error", dialog).forEach((el) => el.remove());
+    $$("[aria-invalid]", dialog).forEach((el) => el.removeAttribute("aria-invalid"));
+  }
 }
 
 $("#error .dismiss").addEventListener("click", () => clearError());
@@ -120,12 +156,29 @@ const LEVELS = {
   leg: { path: "legs/", label: "leg", parent: "shift", parentField: "shift", child: null },
 };
 
+/* Event, shift, leg and segment live in the address, so reload and shared links restore them. */
+const fromUrl = (() => {
+  const q = new URLSearchParams(location.search);
+  const n = (k) => (/^\d+$/.test(q.get(k) || "") ? Number(q.get(k)) : null);
+  return { event: n("event"), shift: n("shift"), leg: n("leg"), segment: n("segment") };
+})();
+
+function saveUrl() {
+  const q = new URLSearchParams();
+  for (const k of ["event", "shift", "leg"]) if (state.selected[k]) q.set(k, state.selected[k]);
+  if (state.segment) q.set("segment", state.segment);
+  const next = q.toString() ? `?${q}` : location.pathname;
+  if (next !== location.search) history.replaceState(null, "", next || location.pathname);
+}
+
 const state = {
   rows: { event: [], shift: [], leg: [] },
-  selected: { event: null, shift: null, leg: null },
+  selected: { event: fromUrl.event, shift: fromUrl.shift, leg: fromUrl.leg },
   segments: [],
   tracks: {},
+  labels: {}, // segment id -> "Leg 2 · #7", from the server
   shownLeg: undefined, // leg whose segments and tracks are drawn
+  basemapsOf: undefined, // test event whose basemaps the switcher offers
   segment: null, // selected segment id
   catalogue: {},
   lastEventId: null,
@@ -171,6 +224,8 @@ function rowLabel(level, row) {
 const byId = (rows, id) => rows.find((r) => r.id === id) || null;
 const current = (level) => byId(state.rows[level], state.selected[level]);
 const vehicleName = (id) => (byId(state.catalogue.vehicles || [], id) || {}).short_description || `vehicle ${id}`;
+const segmentLabel = (id) => state.labels[id] || `segment ${id}`;
+const shortLabel = (id) => (state.labels[id] || "").replace(/^Leg \d+ · /, "") || "…";
 const reasonName = (key) => {
   const r = (state.catalogue.reasons || []).find((x) => x.key === key);
   return r ? r.short_description : key || "";
@@ -209,6 +264,7 @@ async function loadLevel(level, keepSelection = true) {
   const changed = chosen !== state.selected[level];
   state.selected[level] = chosen;
   updateLevelState(level);
+  saveUrl();
   if (info.child) await loadLevel(info.child, keepSelection && !changed);
   else if (state.selected.leg !== state.shownLeg) await selectionChanged();
   else {
@@ -244,6 +300,7 @@ for (const level of Object.keys(LEVELS)) {
   $(`#pick-${level}`).addEventListener("change", async (e) => {
     state.selected[level] = e.target.value ? Number(e.target.value) : null;
     updateLevelState(level);
+    saveUrl();
     try {
       const child = LEVELS[level].child;
       if (child) {
@@ -262,36 +319,39 @@ function personnelOfUser() {
   return CONFIG.personnel;
 }
 
-function firstMatching(rows, institution) {
-  return rows.find((r) => institution && r.institution === institution) || rows[0];
-}
-
+/* Nothing is written until Save; Cancel leaves no empty entry behind.  Only
+ * unambiguous choices are prefilled: the user's own person, and a vehicle or
+ * pose source when exactly one exists. */
 async function createLevel(level) {
+  await catalogues; // a tap right after loading waits for the choices
   const c = state.catalogue;
-  let body = {};
+  const values = {};
   if (level === "shift") {
     if (!c.vehicles.length) throw new ApiError("Configure a vehicle first (Configuration → Vehicles).");
     const me = byId(c.personnel, personnelOfUser());
-    const institution = me ? me.institution : null;
-    body = {
-      test_event: state.selected.event,
-      vehicle: firstMatching(c.vehicles, institution).id,
-      performer: c.performers.length ? firstMatching(c.performers, institution).id : null,
-    };
-    if (me) Object.assign(body, { test_administrator: me.id, test_director: me.id, robot_operator: me.id, safety_officer: me.id });
-  } else if (level === "leg") {
-    body = {
-      shift: state.selected.shift,
-      weather: c.weather.length ? c.weather[0].key : null,
-      default_pose_source: c.poseSources.length ? c.poseSources[0].id : null,
-    };
+    if (c.vehicles.length === 1) values.vehicle = c.vehicles[0].id;
+    if (c.performers.length === 1) values.performer = c.performers[0].id;
+    else if (me) values.performer = (c.performers.find((p) => p.institution === me.institution) || {}).id;
+    if (me) Object.assign(values, { test_administrator: me.id, test_director: me.id, robot_operator: me.id, safety_officer: me.id });
+  } else if (level === "leg" && c.poseSources.length === 1) {
+    values.default_pose_source = c.poseSources[0].id;
   }
-  const row = await api("POST", LEVELS[level].path, body);
-  state.selected[level] = row.id;
-  const child = LEVELS[level].child;
-  if (child) state.selected[child] = null;
-  await loadLevel(level);
-  await editLevel(level);
+  const parent = LEVELS[level].parent;
+  formDialog({
+    title: `New ${LEVELS[level].label}`,
+    subtitle: "Created when you press Save.",
+    specs: fieldSpecs(level),
+    values,
+    save: async (body) => {
+      if (parent) body[LEVELS[level].parentField] = state.selected[parent];
+      const row = await api("POST", LEVELS[level].path, body);
+      state.selected[level] = row.id;
+      const child = LEVELS[level].child;
+      if (child) state.selected[child] = null;
+      await loadLevel(level);
+      notice(`${LEVELS[level].label.charAt(0).toUpperCase()}${LEVELS[level].label.slice(1)} created.`);
+    },
+  });
 }
 
 function fieldSpecs(level) {
@@ -376,7 +436,7 @@ function formDialog({ title, subtitle, specs, values, save }) {
   $(".title", dialog).textContent = title;
   $(".subtitle", dialog).textContent = subtitle || "";
   const errorBox = $(".dialog-error", dialog);
-  errorBox.hidden = true;
+  clearError(errorBox);
   $(".fields", dialog).replaceChildren(...specs.map((s) => buildField(s, values[s.name])));
   const readOnly = !CONFIG.canOperate;
   $$(".fields input, .fields select, .fields textarea", dialog).forEach((el) => (el.disabled = readOnly));
@@ -384,6 +444,7 @@ function formDialog({ title, subtitle, specs, values, save }) {
   form.onsubmit = async (e) => {
     e.preventDefault();
     const body = Object.fromEntries(specs.map((s) => [s.name, readField(s, form)]));
+    clearError(errorBox);
     try {
       await save(body);
       dialog.close();
@@ -396,6 +457,7 @@ function formDialog({ title, subtitle, specs, values, save }) {
 }
 
 async function editLevel(level) {
+  await catalogues;
   const row = current(level);
   if (!row) return;
   const name = level === "event" ? `Test event #${row.id}` : level === "shift" ? `Shift ${row.number}` : `Leg ${row.number}`;
@@ -407,13 +469,17 @@ async function editLevel(level) {
     save: async (body) => {
       await api("PATCH", `${LEVELS[level].path}${row.id}/`, body);
       await loadLevel(level);
+      notice("Saved.");
     },
   });
 }
 
-function confirmDialog(message) {
+function confirmDialog(message, { yes = "Delete", no = "Keep it", warn = true } = {}) {
   const dialog = $("#confirm-dialog");
   $(".message", dialog).textContent = message;
+  $(".undo-warning", dialog).hidden = !warn;
+  $('button[value="yes"]', dialog).textContent = yes;
+  $('button[value="no"]', dialog).textContent = no;
   dialog.returnValue = "";
   dialog.showModal();
   return new Promise((resolve) => dialog.addEventListener("close", () => resolve(dialog.returnValue === "yes"), { once: true }));
@@ -434,14 +500,14 @@ async function levelAction(level, action) {
     if (!(await confirmDialog(`Delete ${describe(level, row)}?`))) return;
     await api("DELETE", `${LEVELS[level].path}${row.id}/`);
     state.selected[level] = null;
-    return loadLevel(level, true);
+    await loadLevel(level, true);
+    return notice(`Deleted ${describe(level, row).split(" with ")[0]}.`);
   }
-  if (action === "end") {
-    await Collector.stopIfLogging();
-    await api("POST", `${LEVELS[level].path}${row.id}/close/`, {});
-  }
+  // The server stops logging into what ends (one rule, in its services).
+  if (action === "end") await api("POST", `${LEVELS[level].path}${row.id}/close/`, {});
   if (action === "reopen") await api("POST", `${LEVELS[level].path}${row.id}/reopen/`, {});
-  return loadLevel(level);
+  await loadLevel(level);
+  return notice(action === "end" ? `Ended ${describe(level, row).split(" with ")[0]}.` : "Re-opened.");
 }
 
 $$(".log-row [data-action]").forEach((b) =>
@@ -459,6 +525,53 @@ $$(".log-row [data-action]").forEach((b) =>
 
 const gpsMap = new FttMaps.GpsMap($("#gps-map"), $("#tile-message"));
 const localMap = new FttMaps.LocalMap($("#local-map"));
+for (const m of [gpsMap, localMap]) m.labelOf = (id) => segmentLabel(id);
+
+/* Follow the vehicle (pan to each new point) or show the whole track. */
+function setFollow(on) {
+  gpsMap.follow = localMap.follow = on;
+  $("#follow").checked = on;
+  localStorage.setItem("ftt.follow", on ? "1" : "0");
+}
+setFollow(localStorage.getItem("ftt.follow") !== "0");
+$("#follow").addEventListener("change", (e) => setFollow(e.target.checked));
+$("#fit-track").addEventListener("click", () => {
+  setFollow(false);
+  gpsMap.fitAll();
+  localMap.fitAll();
+});
+
+/* The leg's AUTO/ITO bars over time; ITO bars take their reason's colour. */
+const Timeline = {
+  render() {
+    const strip = $("#timeline");
+    if (!strip) return;
+    const masters = state.segments.filter((s) => s.parent === null).sort((a, b) => (a.start < b.start ? -1 : 1));
+    strip.hidden = masters.length === 0;
+    if (!masters.length) return strip.replaceChildren();
+    const now = Date.now();
+    const t0 = new Date(masters[0].start).getTime();
+    const t1 = Math.max(...masters.map((m) => (m.end ? new Date(m.end).getTime() : now)), t0 + 1000);
+    strip.replaceChildren(...masters.map((m) => {
+      const start = new Date(m.start).getTime();
+      const end = m.end ? new Date(m.end).getTime() : now;
+      const child = state.segments.find((c) => c.parent === m.id);
+      const target = child || m;
+      const b = document.createElement("button");
+      b.type = "button";
+      b.className = `bar ${m.segment_type}${[m.id, target.id].includes(state.segment) ? " selected" : ""}`;
+      b.style.left = `${((start - t0) / (t1 - t0)) * 100}%`;
+      b.style.width = `${Math.max(((end - start) / (t1 - t0)) * 100, 0.6)}%`;
+      const reason = child && (state.catalogue.reasons || []).find((r) => r.key === child.ito_reason);
+      if (reason && reason.color) b.style.background = `rgb(${reason.color})`;
+      const what = child ? `ITO, ${reasonName(child.ito_reason)}` : m.segment_type.toUpperCase();
+      b.setAttribute("aria-label", `${segmentLabel(target.id)}: ${what}, ${fmtDuration(m.start, m.end)}`);
+      b.title = b.getAttribute("aria-label");
+      b.addEventListener("click", () => selectSegment(target.id));
+      return b;
+    }));
+  },
+};
 
 function tileUrl() {
   const own = localStorage.getItem("ftt.tileUrl");
@@ -466,32 +579,52 @@ function tileUrl() {
 }
 gpsMap.setTiles(tileUrl(), CONFIG.tileAttribution);
 
+async function loadBasemaps() {
+  const event = state.selected.event;
+  if (state.basemapsOf === event) return;
+  state.basemapsOf = event;
+  const query = event ? `?event=${event}` : "";
+  const data = await api("GET", `basemaps/${query}`, undefined, { root: CONFIG.guiApiRoot });
+  gpsMap.setBasemaps(data.layers);
+}
+
 async function selectionChanged() {
   const leg = current("leg");
+  const restoring = state.shownLeg === undefined && fromUrl.leg === state.selected.leg ? fromUrl.segment : null;
   state.shownLeg = state.selected.leg;
   $("#segments-section").hidden = !leg;
   $("#maps-section").hidden = !leg;
+  $("#mode-panel").hidden = !leg;
   Live.subscribe();
   Collector.refresh();
   state.segment = null;
   state.segments = [];
   state.tracks = {};
+  state.labels = {};
   gpsMap.clear();
   localMap.clear();
   if (!leg) {
     renderSegments();
     return;
   }
-  await Promise.all([loadSegments(), loadTracks(), loadLocalMap()]);
+  await Promise.all([loadBasemaps(), loadSegments(), loadTracks(), loadLocalMap()]);
   gpsMap.invalidate();
   gpsMap.fitAll();
+  localMap.invalidate();
+  localMap.fitAll();
+  if (restoring && byId(state.segments, restoring)) selectSegment(restoring);
+  else saveUrl();
 }
 
 async function loadSegments() {
   const leg = state.selected.leg;
-  const rows = await list("segments/", { leg });
+  const [rows, named] = await Promise.all([
+    list("segments/", { leg }),
+    api("GET", `legs/${leg}/labels/`, undefined, { root: CONFIG.guiApiRoot }),
+  ]);
   if (leg !== state.selected.leg) return;
   state.segments = rows;
+  state.labels = named.labels;
   renderSegments();
 }
 
@@ -536,6 +669,9 @@ function visibleSegments() {
 }
 
 function renderSegments() {
+  renderMode();
+  updateSegmentButtons();
+  Timeline.render();
   const tbody = $("#segment-table tbody");
   const rows = visibleSegments();
   $("#segments-empty").hidden = rows.length > 0 || !state.selected.leg;
@@ -546,7 +682,7 @@ function renderSegments() {
     const master = s.parent === null ? s.id : s.parent;
     const track = state.tracks[master];
     const cells = [
-      s.id,
+      { text: shortLabel(s.id), title: `${segmentLabel(s.id)} (database id ${s.id})` },
       s.segment_type.toUpperCase(),
       s.parent === null ? "" : reasonName(s.ito_reason),
       { text: fmtClock(s.start), title: fmtTime(s.start) },
@@ -572,6 +708,9 @@ function renderSegments() {
 
 function selectSegment(id) {
   state.segment = id;
+  saveUrl();
+  updateSegmentButtons();
+  Timeline.render();
   $$("#segment-table tbody tr").forEach((tr) => tr.classList.toggle("selected", Number(tr.dataset.id) === id));
   const s = byId(state.segments, id);
   const master = s ? (s.parent === null ? s.id : s.parent) : null;
@@ -590,6 +729,33 @@ async function segmentAction(fn) {
   }
 }
 
+/* The mode now: the open master segment of the leg, big, with its duration. */
+function openMaster() {
+  return state.segments.find((s) => s.parent === null && s.is_open) || null;
+}
+
+function renderMode() {
+  const panel = $("#mode-panel");
+  const m = openMaster();
+  const mode = m ? m.segment_type : "none";
+  panel.dataset.mode = mode;
+  $("#mode-name").textContent = m ? mode.toUpperCase() : "No open segment";
+  $("#mode-since").textContent = m ? `for ${fmtDuration(m.start, null)} · ${segmentLabel(m.id)}` : "";
+}
+
+/* Reasons belong to take-overs: the buttons only work with an ITO row selected. */
+function updateSegmentButtons() {
+  const s = byId(state.segments, state.segment);
+  const ito = Boolean(s && s.parent !== null);
+  const why = s ? (ito ? "" : "Reasons can only be given to ITO rows.") : "Select an ITO row first.";
+  for (const b of $$("[data-quick], #reason-apply")) {
+    b.disabled = !CONFIG.canOperate || !ito;
+    b.title = why;
+  }
+  $("#segment-end").disabled = !CONFIG.canOperate || !(s && s.is_open);
+  $("#segment-edit").disabled = !s;
+}
+
 function requireSegment() {
   if (!state.segment) throw new ApiError("Select a segment in the list first.");
   return state.segment;
@@ -599,19 +765,27 @@ async function setReason(key) {
   const id = requireSegment();
   await api("PATCH", `segments/${id}/`, { ito_reason: key });
   await loadSegments();
-  notice(`Reason of segment ${id} set to ${reasonName(key)}.`);
+  notice(`Reason of ${segmentLabel(id)} set to ${reasonName(key)}.`);
 }
 
 $$("[data-quick]").forEach((b) => b.addEventListener("click", () => segmentAction(() => setReason(b.dataset.quick))));
 $("#reason-apply").addEventListener("click", () => segmentAction(() => setReason($("#reason-any").value)));
 $("#segment-new").addEventListener("click", () => segmentAction(async () => {
+  const m = openMaster();
+  if (m && m.segment_type === "auto") {
+    const ok = await confirmDialog("The robot is in AUTO. Record a take-over (ITO) now?", { yes: "Record take-over", no: "Cancel", warn: false });
+    if (!ok) return;
+  }
   const child = await api("POST", `legs/${state.selected.leg}/manual-segment/`, {});
   await loadSegments();
   if (child && child.id) selectSegment(child.id);
+  notice("Take-over recorded.");
 }));
 $("#segment-end").addEventListener("click", () => segmentAction(async () => {
-  await api("POST", `segments/${requireSegment()}/close/`, {});
+  const id = requireSegment();
+  await api("POST", `segments/${id}/close/`, {});
   await loadSegments();
+  notice(`Ended ${segmentLabel(id)}.`);
 }));
 $("#segment-edit").addEventListener("click", () => segmentAction(async () => openSegmentDialog(requireSegment())));
 
@@ -626,7 +800,7 @@ async function openSegmentDialog(id) {
   const errorBox = $(".dialog-error", segmentDialog);
   errorBox.hidden = true;
   const kind = s.segment_type === "ito" ? (s.parent === null ? "ITO (take-over)" : "ITO reason") : "AUTO";
-  $(".title", segmentDialog).textContent = `Segment ${s.id} · ${kind}`;
+  $(".title", segmentDialog).textContent = `${segmentLabel(s.id)} · ${kind}`;
   $(".subtitle", segmentDialog).textContent = `Start ${fmtTime(s.start)} · End ${s.end ? fmtTime(s.end) : "still open"}`;
   const form = $("#annotation-form");
   form.elements.ito_reason.replaceChildren(...state.catalogue.reasons.map((r) => new Option(r.short_description, r.key)));
@@ -664,7 +838,7 @@ $("#annotation-form").addEventListener("submit", dialogAction(async () => {
   const body = {};
   for (const f of ["ito_reason", "obstacle", "lighting", "slope"]) body[f] = form.elements[f].value;
   await api("PATCH", `segments/${dialogSegment.id}/`, body);
-  notice(`Segment ${dialogSegment.id} saved.`);
+  notice(`${segmentLabel(dialogSegment.id)} saved.`);
 }));
 
 async function loadNotes({ keepEditing = false } = {}) {
@@ -829,7 +1003,7 @@ async function loadLocalMap() {
   const message = $("#local-message");
   if (data.map) {
     localMap.setMapImage(data.map);
-    message.textContent = `Map "${data.map.frame}", ${data.map.width}×${data.map.height} cells of ${data.map.resolution} m.`;
+    message.textContent = `Map "${data.map.frame}", ${data.map.width}×${data.map.height} cells of ${roundFloat(data.map.resolution)} m.`;
     if (!$("#show-local").checked) {
       $("#show-local").checked = true;
       showMaps();
@@ -1046,6 +1220,7 @@ const Collector = {
     const box = $("#collector-status");
     const button = $("#logging-toggle");
     const shift = current("shift");
+    $("#collector").hidden = !shift;
     if (!shift) {
       this.vehicle = null;
       box.textContent = "Select a shift to see its robot.";
@@ -1079,7 +1254,10 @@ const Collector = {
       return;
     }
     const c = s.collector;
-    $("#collector-status").textContent = `Collector ${c.name}: ${c.online ? "online" : "offline"}, logging ${c.logging ? "on" : "off"}${c.state ? ` — ${c.state}` : ""}`;
+    const into = c.leg === state.selected.leg ? "this leg" : c.leg ? "another leg" : "no leg";
+    const doing = c.logging ? `logging into ${into}` : "not logging";
+    const queue = c.pending ? ` · ${c.pending} records not yet stored` : "";
+    $("#collector-status").textContent = `${vehicleName(current("shift").vehicle)} (collector ${c.name}): ${c.online ? "online" : "offline"}, ${doing}${queue}`;
     inputs.replaceChildren(...Object.entries(c.inputs || {}).map(([name, info]) => {
       const li = document.createElement("li");
       const age = info && typeof info.age === "number" ? `${info.age.toFixed(1)} s ago` : "no data yet";
@@ -1098,10 +1276,6 @@ const Collector = {
     await this.refresh();
     return result;
   },
-  async stopIfLogging() {
-    const c = this.status && this.status.collector;
-    if (c && c.logging) await this.command("stop_logging");
-  },
 };
 
 $("#logging-toggle").addEventListener("click", async () => {
@@ -1118,8 +1292,11 @@ $("#logging-toggle").addEventListener("click", async () => {
 
 $("#open-parameters").addEventListener("click", () => Parameters.open());
 
-/* Values are typed by what the parameter holds now; the server checks the
- * types again and the collector applies its own limits. */
+/* Rendered from the collector's parameter schema (type, bounds, choices,
+ * message types); the server checks every value against the same schema. */
+/* ROS floats are 32-bit: 0.10000000149011612 is shown as 0.1. */
+const roundFloat = (v) => (typeof v === "number" ? Number(v.toPrecision(7)) : v);
+
 const Parameters = {
   input(row) {
     let input;
@@ -1133,10 +1310,12 @@ const Parameters = {
       input.value = row.value;
     } else {
       input = document.createElement("input");
-      input.value = row.value;
+      input.value = row.type === "float" ? roundFloat(row.value) : row.value;
       if (row.type === "int" || row.type === "float") {
         input.type = "number";
         input.step = row.type === "int" ? "1" : "any";
+        if (row.minimum !== null) input.min = String(row.minimum);
+        if (row.maximum !== null) input.max = String(row.maximum);
       }
       if (row.suggestions.length) {
         const list = document.createElement("datalist");
@@ -1154,7 +1333,8 @@ const Parameters = {
   read(row, input) {
     if (row.type === "bool") return input.value === "true";
     if (row.type === "int") return Number.parseInt(input.value, 10);
-    if (row.type === "float") return Number.parseFloat(input.value);
+    // An untouched float keeps its exact value, not the rounded one shown.
+    if (row.type === "float") return input.value === String(roundFloat(row.value)) ? row.value : Number.parseFloat(input.value);
     return input.value;
   },
   open() {
@@ -1351,11 +1531,17 @@ const Reports = {
 
 /* ------------------------------------------------------------------ boot -- */
 
+let catalogues = null;
+
 async function boot() {
+  catalogues = loadCatalogues();
   if (!CONFIG.canOperate) $$(".op").forEach((b) => (b.disabled = true));
   Live.connect();
+  // Nothing in the address: offer the leg a collector is logging into.
+  if (!fromUrl.event && CONFIG.loggingLeg) Object.assign(state.selected, CONFIG.loggingLeg);
+  setInterval(renderMode, 1000);
   try {
-    await loadCatalogues();
+    await catalogues;
     await loadLevel("event");
   } catch (err) {
     showError(err);

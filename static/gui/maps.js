@@ -57,6 +57,8 @@ class TrackMap {
     this.markers = L.layerGroup().addTo(this.map);
     this.selectedId = null;
     this.fitted = false;
+    this.follow = false; // pan to each new point of the vehicle
+    this.labelOf = (id) => `Segment ${id}`;
   }
   clear() {
     for (const t of this.tracks.values()) t.line.remove();
@@ -73,7 +75,7 @@ class TrackMap {
     const latlngs = points.map(this.toLatLng);
     if (!t) {
       const line = L.polyline(latlngs, this.style(id, mode)).addTo(this.map);
-      line.bindTooltip(`Segment ${id} (${mode.toUpperCase()})`);
+      line.bindTooltip(() => `${this.labelOf(id)} (${mode.toUpperCase()})`);
       t = { line, mode };
       this.tracks.set(id, t);
     } else {
@@ -85,10 +87,11 @@ class TrackMap {
     const t = this.tracks.get(id) || this.setTrack(id, mode, []);
     for (const p of points) t.line.addLatLng(this.toLatLng(p));
     if (!this.fitted) this.fitAll();
+    else if (this.follow && points.length) this.map.panTo(this.toLatLng(points[points.length - 1]));
   }
   addTakeOver(id, point) {
     L.circleMarker(this.toLatLng(point), { radius: 7, color: COLORS.ito, weight: 2, fillOpacity: 0.2 })
-      .bindTooltip(`Take-over, segment ${id}`)
+      .bindTooltip(() => `Take-over, ${this.labelOf(id)}`)
       .addTo(this.markers);
   }
   select(id) {
@@ -127,6 +130,15 @@ class GpsMap extends TrackMap {
     this.overlay = null;
     this.layers = L.control.layers(null, null, { collapsed: true });
   }
+  /* For legs too big to send whole: load(zoom) fetches
+     gui/api/legs/{id}/tracks/?zoom={zoom} (docs/gui.md) and draws it with setTrack.
+     It runs now and after every zoom, so zooming in brings the finer detail. */
+  followZoom(load) {
+    if (this.zoomLoader) this.map.off("zoomend", this.zoomLoader);
+    this.zoomLoader = () => load(Math.round(this.map.getZoom()));
+    this.map.on("zoomend", this.zoomLoader);
+    this.zoomLoader();
+  }
   setTiles(url, attribution) {
     if (this.tileLayer) this.tileLayer.remove();
     this.tileLayer = null;
@@ -151,6 +163,37 @@ class GpsMap extends TrackMap {
       if (!this.tilesLoaded) this.noTiles("Map tiles are unavailable (the tile server cannot be reached). Tracks are still shown on a plain background.");
     });
     this.tileLayer.addTo(this.map);
+  }
+  /* The layer switcher: FTT's own basemaps, which work offline, next to the
+   * site's tile server; the test event's default basemap starts selected.
+   * One control holds the base layers and the local-map overlay. */
+  setBasemaps(specs) {
+    for (const layer of this.basemaps || []) {
+      this.layers.removeLayer(layer);
+      layer.remove();
+    }
+    if (this.tileLayer) this.layers.removeLayer(this.tileLayer);
+    this.basemaps = [];
+    if (!specs.length) return;
+    let chosen = null;
+    for (const spec of specs) {
+      const options = { attribution: spec.attribution, minZoom: spec.minZoom, maxZoom: 21, maxNativeZoom: spec.maxZoom };
+      if (spec.bounds) options.bounds = spec.bounds;
+      const layer = L.tileLayer(spec.url, options);
+      layer.on("tileload", () => {
+        this.element.classList.remove("no-tiles");
+        this.messageElement.hidden = true;
+      });
+      this.layers.addBaseLayer(layer, spec.name);
+      this.basemaps.push(layer);
+      if (spec.default) chosen = layer;
+    }
+    if (this.tileLayer) this.layers.addBaseLayer(this.tileLayer, "Tile server");
+    this.layers.addTo(this.map);
+    if (chosen) {
+      if (this.tileLayer) this.tileLayer.remove();
+      chosen.addTo(this.map);
+    }
   }
   noTiles(message) {
     this.element.classList.add("no-tiles");

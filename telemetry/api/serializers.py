@@ -1,14 +1,32 @@
 """Shapes of robot-recorded data; storing it is up to ``telemetry.services.recording``."""
 
+import uuid
+from typing import Annotated
+
+from pydantic import (
+    AwareDatetime,
+    BaseModel,
+    BeforeValidator,
+    Field,
+    Strict,
+    TypeAdapter,
+    ValidationError,
+)
 from rest_framework import serializers
 
 from events.api.serializers import ClientUidMixin, PrimaryKeyField, ServiceSerializer
 from events.models import PoseSource, Segment
-from telemetry.models import Image, LocalPose, MapImage, Pose
+from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 from telemetry.models.poses import FixStatus
 from telemetry.services.recording import GpsFix, MapPose
 
 MAX_BATCH = 5000
+
+
+def _segments():
+    # Everything storing a pose needs (master, leg, scope for the feed) in the one
+    # query that checks the id.
+    return Segment.objects.select_related("leg__shift", "parent__leg__shift")
 
 
 class PoseSerializer(ClientUidMixin, ServiceSerializer):
@@ -16,6 +34,9 @@ class PoseSerializer(ClientUidMixin, ServiceSerializer):
     longitude = serializers.FloatField(source="point.x", min_value=-180, max_value=180)
     latitude = serializers.FloatField(source="point.y", min_value=-90, max_value=90)
     fix_status = serializers.ChoiceField(choices=FixStatus.choices, default=FixStatus.FIX)
+    segment = PrimaryKeyField(
+        queryset=_segments(), help_text="Stored on the master when a child segment is given."
+    )
 
     class Meta:
         model = Pose
@@ -34,7 +55,6 @@ class PoseSerializer(ClientUidMixin, ServiceSerializer):
         ]
         read_only_fields = ["received"]
         extra_kwargs = {
-            "segment": {"help_text": "Stored on the master when a child segment is given."},
             "pose_source": {"help_text": "Defaults to the leg's default pose source."},
         }
 
@@ -73,7 +93,58 @@ def map_pose(data: dict) -> MapPose:
     return pose
 
 
+def _text(value):
+    if not isinstance(value, str):
+        raise ValueError("a date-time is written as text")
+    return value
+
+
+class _FastPoseItem(BaseModel):
+    """What PoseItemSerializer accepts, no more (a few inputs it also takes are left to it)."""
+
+    # An explicit null is refused, as by DRF; a missing uid gets one in gps_fix.
+    uid: uuid.UUID = Field(default=None)
+    longitude: float = Field(ge=-180, le=180, allow_inf_nan=False)
+    latitude: float = Field(ge=-90, le=90, allow_inf_nan=False)
+    altitude: float | None = Field(default=None, allow_inf_nan=False)
+    fix_status: Annotated[int, Strict()] = FixStatus.FIX
+    horizontal_accuracy: float | None = Field(default=None, allow_inf_nan=False)
+    # Aware only: DRF reads a naive time in the server's zone.
+    robot_stamp: Annotated[AwareDatetime, BeforeValidator(_text)] | None = None
+
+
+_FAST_POSES = TypeAdapter(list[_FastPoseItem])
+_FIX_STATUSES = frozenset(FixStatus.values)
+
+
+class PoseListSerializer(serializers.ListSerializer):
+    """Checks a batch of poses in one pass of pydantic's compiled validators, about
+    twenty times faster than field by field.  Any batch it does not accept whole
+    is checked again by DRF, so a wrong batch gets DRF's usual field messages."""
+
+    def to_internal_value(self, data):
+        if isinstance(data, list) and len(data) <= MAX_BATCH:
+            try:
+                items = _FAST_POSES.validate_python(data)
+            except ValidationError:
+                items = None
+            if items is not None and all(i.fix_status in _FIX_STATUSES for i in items):
+                return [_as_validated(item) for item in items]
+        return super().to_internal_value(data)
+
+
+def _as_validated(item: _FastPoseItem) -> dict:
+    # The shape PoseItemSerializer gives (see gps_fix): fields not sent are left out.
+    data = {"point": {"x": item.longitude, "y": item.latitude}, "fix_status": item.fix_status}
+    for name in ("uid", "altitude", "horizontal_accuracy", "robot_stamp"):
+        if name in item.model_fields_set:
+            data[name] = getattr(item, name)
+    return data
+
+
 class PoseItemSerializer(PoseSerializer):
+    segment = None  # the batch names it once
+
     class Meta(PoseSerializer.Meta):
         fields = [
             "uid",
@@ -84,6 +155,7 @@ class PoseItemSerializer(PoseSerializer):
             "horizontal_accuracy",
             "robot_stamp",
         ]
+        list_serializer_class = PoseListSerializer
 
 
 class BatchSerializer(serializers.Serializer):
@@ -95,7 +167,7 @@ class BatchSerializer(serializers.Serializer):
 
 
 class PoseBatchSerializer(BatchSerializer):
-    segment = PrimaryKeyField(queryset=Segment.objects.all())
+    segment = PrimaryKeyField(queryset=_segments())
     pose_source = PrimaryKeyField(
         queryset=PoseSource.objects.all(), required=False, allow_null=True
     )
@@ -162,3 +234,29 @@ class ImageSerializer(ClientUidMixin, ServiceSerializer):
         extra_kwargs = {
             "segment": {"help_text": "Stored on the master when a child segment is given."}
         }
+
+
+class RecordingSerializer(serializers.ModelSerializer):
+    """A black-box snapshot; ``file`` is the MCAP download (viewer role)."""
+
+    duration = serializers.FloatField(read_only=True, help_text="Seconds.")
+    name = serializers.CharField(source="__str__", read_only=True)
+
+    class Meta:
+        model = Recording
+        fields = [
+            "id",
+            "uid",
+            "segment",
+            "name",
+            "file",
+            "start",
+            "end",
+            "duration",
+            "topics",
+            "message_count",
+            "size",
+            "reason",
+            "received",
+        ]
+        read_only_fields = fields

@@ -10,15 +10,15 @@ from rest_framework.exceptions import NotFound
 from rest_framework.parsers import FormParser, MultiPartParser
 from rest_framework.response import Response
 
-from events import roles
+from common import roles
 from events.api.filters import BBoxFilter, IdFilter, TimeRangeFilterSet
 from events.api.serializers import PrimaryKeyField
 from events.api.viewsets import ServiceBaseViewSet, ServiceCreateMixin
 from events.models import Leg, Shift, TestEvent
 from telemetry.api import serializers as s
-from telemetry.models import Image, LocalPose, MapImage, Pose
+from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
+from telemetry.selectors import distances, tracks
 from telemetry.selectors import maps as map_selectors
-from telemetry.selectors import tracks
 from telemetry.services import recording
 
 # --- filters ------------------------------------------------------------------------------
@@ -56,6 +56,13 @@ class ImageFilter(SegmentDataFilter):
         time_fields = ["robot_stamp", "received"]
 
 
+class RecordingFilter(SegmentDataFilter):
+    class Meta:
+        model = Recording
+        fields = []
+        time_fields = ["start", "received"]
+
+
 class MapFilter(TimeRangeFilterSet):
     shift = IdFilter(field_name="shift_id")
     test_event = IdFilter(field_name="shift__test_event_id")
@@ -89,10 +96,13 @@ class PoseViewSet(RecordingViewSet):
     filter_backends = [DjangoFilterBackend, BBoxFilter]
     bbox_filter_field = "point"
 
-    def create_with_service(self, data):
-        fix = s.gps_fix(data)
-        recording.record_poses(data["segment"], [fix], data.get("pose_source"))
-        return self.stored_row(fix.uid)
+    def create(self, request, *args, **kwargs):
+        # No separate "is this uid known?" query: the service tells (one insert).
+        serializer = self.get_serializer(data=request.data)
+        serializer.is_valid(raise_exception=True)
+        data = serializer.validated_data
+        pose, new = recording.record_pose(data["segment"], s.gps_fix(data), data.get("pose_source"))
+        return self.respond(pose, code=status.HTTP_201_CREATED if new else status.HTTP_200_OK)
 
     @extend_schema(request=s.PoseBatchSerializer, responses={201: s.BatchResultSerializer})
     @action(detail=False, methods=["post"])
@@ -176,7 +186,6 @@ class ImageViewSet(RecordingViewSet):
         return recording.attach_image(
             data["segment"],
             content=upload.read(),
-            filename=upload.name or "image.jpg",
             description=data.get("description", ""),
             robot_stamp=data.get("robot_stamp"),
             uid=data.get("uid"),
@@ -184,6 +193,17 @@ class ImageViewSet(RecordingViewSet):
 
     def delete_with_service(self, instance):
         recording.delete_image(instance)
+
+
+class RecordingFileViewSet(ServiceBaseViewSet):
+    """Black-box snapshots (MCAP) of the collector; written by the collector only."""
+
+    queryset = Recording.objects.all()
+    serializer_class = s.RecordingSerializer
+    filterset_class = RecordingFilter
+
+    def delete_with_service(self, instance):
+        recording.delete_recording(instance)
 
 
 # --- tracks -------------------------------------------------------------------------------
@@ -235,7 +255,11 @@ class TrackViewSet(viewsets.ViewSet):
         left out); a master with a single point is a Point."""
         parent = _parent(request.query_params, PARENTS, required=True)
         features = []
-        for track in tracks.segment_tracks(tracks.masters(**parent), tracks.GPS):
+        # Whole legs: the distance rule needs each master's follower.
+        masters = list(tracks.masters(**parent))
+        loaded = tracks.load_tracks([m.pk for m in masters], tracks.GPS)
+        paths = distances.measured_paths(masters, tracks.GPS, loaded)
+        for track in tracks.segment_tracks(masters, tracks.GPS, loaded):
             coordinates = track.coordinates()
             geometry = (
                 {"type": "LineString", "coordinates": coordinates}
@@ -244,6 +268,7 @@ class TrackViewSet(viewsets.ViewSet):
             )
             properties = _segment_properties(track.segment)
             properties["point_count"] = len(coordinates)
+            properties["distance_m"] = paths[track.segment.pk].distance
             features.append(
                 {
                     "type": "Feature",
@@ -264,10 +289,18 @@ class LocalTrackViewSet(viewsets.ViewSet):
     def list(self, request):
         parent = _parent(request.query_params, PARENTS, required=True)
         result = []
-        for track in tracks.segment_tracks(tracks.masters(**parent), tracks.LOCAL):
+        # Whole legs: the distance rule needs each master's follower.
+        masters = list(tracks.masters(**parent))
+        loaded = tracks.load_tracks([m.pk for m in masters], tracks.LOCAL)
+        paths = distances.measured_paths(masters, tracks.LOCAL, loaded)
+        for track in tracks.segment_tracks(masters, tracks.LOCAL, loaded):
             item = _segment_properties(track.segment)
             item.update(
-                frame=track.frame, point_count=len(track), x=track.x.tolist(), y=track.y.tolist()
+                frame=track.frame,
+                point_count=len(track),
+                distance_m=paths[track.segment.pk].distance,
+                x=track.x.tolist(),
+                y=track.y.tolist(),
             )
             result.append(item)
         return Response({"tracks": result})

@@ -1,5 +1,6 @@
 from telemetry.models.images import Image
 from telemetry.models.maps import MapImage
 from telemetry.models.poses import LocalPose, Pose
+from telemetry.models.recordings import Recording
 
-__all__ = ["Image", "LocalPose", "MapImage", "Pose"]
+__all__ = ["Image", "LocalPose", "MapImage", "Pose", "Recording"]

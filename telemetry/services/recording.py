@@ -10,24 +10,35 @@ import math
 import uuid
 from dataclasses import dataclass, field
 from datetime import datetime
+from pathlib import Path
 
+from django.contrib.gis.geos import Point
+from django.core.files import File
 from django.core.files.base import ContentFile
-from django.db import transaction
+from django.db import connection, transaction
 from django.utils import timezone
 
-from events.errors import RuleViolation
+from common.errors import RuleViolation
+from events.feed import announce_row, announce_track, announced
 from events.models import PoseSource, Segment, Shift
 from events.services.segments import GpsPosition
-from rosbridge_app.live import announce_row, announce_track, announced
-from telemetry.models import Image, LocalPose, MapImage, Pose
+from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 from telemetry.models.poses import FixStatus
+from telemetry.pictures import MAP_FORMATS, checked_picture
 
 
 def master_of(segment: Segment) -> Segment:
-    """Data sent for an ITO reason (child) is stored on its master."""
+    """Data sent for an ITO reason (child) is stored on its master.
+
+    A segment fetched with ``select_related("parent")`` (the API does) costs no query.
+    """
     if segment.parent_id is None:
         return segment
-    return Segment.objects.get(pk=segment.parent_id)
+    return segment.parent
+
+
+# FixStatus.values builds a new list on every access; this check runs per pose.
+_FIX_STATUSES = frozenset(FixStatus.values)
 
 
 @dataclass
@@ -40,22 +51,30 @@ class GpsFix:
     robot_stamp: datetime | None = None
     uid: uuid.UUID = field(default_factory=uuid.uuid4)
 
-    def to_pose(self, segment: Segment, source: PoseSource | None, received) -> Pose:
-        position = GpsPosition(self.longitude, self.latitude)
+    def check(self) -> None:
+        """The rules every stored fix satisfies, whichever way it is stored."""
+        GpsPosition(self.longitude, self.latitude)
         for name in ("altitude", "horizontal_accuracy"):
             value = getattr(self, name)
             if value is not None and not math.isfinite(value):
                 raise RuleViolation({name: [f"{name.replace('_', ' ')} must be a finite number."]})
-        if self.fix_status not in FixStatus.values:
+        if self.fix_status not in _FIX_STATUSES:
             raise RuleViolation({"fix_status": [f"Unknown fix status {self.fix_status}."]})
+
+    def to_pose(self, segment: Segment, source: PoseSource | None, received) -> Pose:
+        """The checked, unsaved row (the archive import inserts these itself)."""
+        self.check()
+        return self.row(segment, source.pk if source is not None else None, received)
+
+    def row(self, segment: Segment, source_id: int | None, received) -> Pose:
         return Pose(
             uid=self.uid,
             segment=segment,
-            point=position.as_point(),
+            point=Point(self.longitude, self.latitude, srid=4326),
             altitude=self.altitude,
             fix_status=self.fix_status,
             horizontal_accuracy=self.horizontal_accuracy,
-            pose_source=source,
+            pose_source_id=source_id,
             robot_stamp=self.robot_stamp,
             received=received,
         )
@@ -89,34 +108,132 @@ class MapPose:
         )
 
 
-@transaction.atomic
 def record_poses(
     segment: Segment, fixes: list[GpsFix], pose_source: PoseSource | None = None
 ) -> int:
     """Store GPS fixes on the segment's master; returns how many were new."""
+    return len(store_poses(segment, fixes, pose_source))
+
+
+@transaction.atomic
+def store_poses(
+    segment: Segment, fixes: list[GpsFix], pose_source: PoseSource | None = None
+) -> dict[uuid.UUID, int]:
+    """Store GPS fixes on the segment's master; returns {uid: id} of the new rows
+    (known uids are skipped, so a retried batch stores nothing twice)."""
+    for fix in fixes:
+        fix.check()
+    if not fixes:
+        return {}
+    master, source_id = _destination(segment, pose_source)
+    return _store_fixes(master, source_id, fixes, timezone.now())
+
+
+@transaction.atomic
+def record_pose(
+    segment: Segment, fix: GpsFix, pose_source: PoseSource | None = None
+) -> tuple[Pose, bool]:
+    """One fix and its row (the API answers with it); a known uid gives the row stored
+    first and False.  A new fix costs three queries: the insert and the feed row,
+    plus the known uids on SQLite or the feed's NOTIFY on PostgreSQL."""
+    fix.check()
+    master, source_id = _destination(segment, pose_source)
+    row = fix.row(master, source_id, timezone.now())
+    new = _store_fixes(master, source_id, [fix], row.received)
+    if not new:
+        return Pose.objects.get(uid=fix.uid), False
+    row.pk = new[_as_uuid(fix.uid)]
+    return row, True
+
+
+def _destination(segment: Segment, pose_source: PoseSource | None) -> tuple[Segment, int | None]:
+    """The master and the pose source id a fix is stored with.  A segment fetched with
+    ``select_related("parent__leg__shift", "leg__shift")`` (the API does) costs no query."""
     master = master_of(segment)
-    if pose_source is None:
-        pose_source = master.leg.default_pose_source
-    now = timezone.now()
-    rows = [fix.to_pose(master, pose_source, now) for fix in fixes]
-    return _insert_new(Pose, rows)
+    if pose_source is not None:
+        return master, pose_source.pk
+    return master, master.leg.default_pose_source_id
+
+
+def _store_fixes(master, source_id, fixes, received) -> dict[uuid.UUID, int]:
+    if connection.vendor == "postgresql":
+        new = _insert_fixes_postgres(master, fixes, source_id, received)
+    else:
+        rows = [fix.row(master, source_id, received) for fix in fixes]
+        new = {row.uid: row.pk for row in _insert_new(Pose, rows)}
+    points = [(f.longitude, f.latitude) for f in fixes if _as_uuid(f.uid) in new]
+    announce_track(master, points, local=False)
+    return new
+
+
+# One statement with one array per column: its cost does not grow with the
+# batch on the client side (no per-row SQL text, no per-row geometry object),
+# and ON CONFLICT makes a concurrent retry of the same uid a no-op, not an error.
+_POSTGRES_INSERT = """
+INSERT INTO {table} (uid, segment_id, point, altitude, fix_status, horizontal_accuracy,
+                     pose_source_id, robot_stamp, received)
+SELECT u, %s, ST_SetSRID(ST_MakePoint(x, y), 4326), a, f, h, %s, r, %s
+FROM unnest(%s::uuid[], %s::float8[], %s::float8[], %s::float8[], %s::int2[],
+            %s::float8[], %s::timestamptz[]) AS t(u, x, y, a, f, h, r)
+ON CONFLICT (uid) DO NOTHING
+RETURNING uid, id
+"""
+
+
+def _insert_fixes_postgres(master, fixes, source_id, received) -> dict[uuid.UUID, int]:
+    columns = (
+        [f.uid for f in fixes],
+        [f.longitude for f in fixes],
+        [f.latitude for f in fixes],
+        [f.altitude for f in fixes],
+        [f.fix_status for f in fixes],
+        [f.horizontal_accuracy for f in fixes],
+        [f.robot_stamp for f in fixes],
+    )
+    with connection.cursor() as cursor:
+        cursor.execute(
+            _POSTGRES_INSERT.format(table=Pose._meta.db_table),
+            [master.pk, source_id, received, *columns],
+        )
+        return {_as_uuid(uid): pk for uid, pk in cursor.fetchall()}
+
+
+def _as_uuid(value) -> uuid.UUID:
+    # psycopg 3 returns UUID objects, psycopg2 strings.
+    return value if isinstance(value, uuid.UUID) else uuid.UUID(value)
 
 
 @transaction.atomic
 def record_local_poses(segment: Segment, poses: list[MapPose]) -> int:
     master = master_of(segment)
     now = timezone.now()
-    return _insert_new(LocalPose, [pose.to_local_pose(master, now) for pose in poses])
+    fresh = _insert_new(LocalPose, [pose.to_local_pose(master, now) for pose in poses])
+    announce_track(master, [(p.x, p.y) for p in fresh], local=True)
+    return len(fresh)
 
 
-def _insert_new(model, rows) -> int:
+def _insert_new(model, rows) -> list:
+    """The rows whose uid is not stored yet, inserted (with their ids set)."""
     if not rows:
-        return 0
+        return []
     known = set(model.objects.filter(uid__in=[r.uid for r in rows]).values_list("uid", flat=True))
     fresh = [r for r in rows if r.uid not in known]
     model.objects.bulk_create(fresh, batch_size=1000)
-    announce_track(rows[0].segment, fresh, local=model is LocalPose)
-    return len(fresh)
+    return fresh
+
+
+def check_map_placement(*, width, height, resolution, origin_x, origin_y, origin_yaw) -> None:
+    """What every stored map must satisfy, whoever stores it (collector, API, import)."""
+    for name, value in (
+        ("resolution", resolution),
+        ("origin_x", origin_x),
+        ("origin_y", origin_y),
+        ("origin_yaw", origin_yaw),
+    ):
+        if not isinstance(value, int | float) or not math.isfinite(value):
+            raise RuleViolation({name: ["Must be a finite number."]})
+    if resolution <= 0 or width <= 0 or height <= 0:
+        raise RuleViolation("A map needs a positive size and resolution.")
 
 
 @transaction.atomic
@@ -138,16 +255,15 @@ def record_map(
     """Store a map for the shift unless it equals the newest one; returns (map, stored)."""
     if uid is not None and (existing := MapImage.objects.filter(uid=uid).first()):
         return existing, False
-    for name, value in (
-        ("resolution", resolution),
-        ("origin_x", origin_x),
-        ("origin_y", origin_y),
-        ("origin_yaw", origin_yaw),
-    ):
-        if not math.isfinite(value):
-            raise RuleViolation({name: ["Must be a finite number."]})
-    if resolution <= 0 or width <= 0 or height <= 0:
-        raise RuleViolation("A map needs a positive size and resolution.")
+    check_map_placement(
+        width=width,
+        height=height,
+        resolution=resolution,
+        origin_x=origin_x,
+        origin_y=origin_y,
+        origin_yaw=origin_yaw,
+    )
+    checked_picture(png, MAP_FORMATS)
     Shift.objects.select_for_update().get(pk=shift.pk)
     checksum = checksum or hashlib.sha256(png).hexdigest()
     newest = shift.maps.order_by("-received", "-id").first()
@@ -182,7 +298,6 @@ def attach_image(
     segment: Segment,
     *,
     content: bytes,
-    filename: str = "image.jpg",
     description: str = "",
     robot_stamp: datetime | None = None,
     uid: uuid.UUID | None = None,
@@ -192,15 +307,55 @@ def attach_image(
         return existing
     if not content:
         raise RuleViolation({"image": ["The image is empty."]})
+    suffix = checked_picture(content)
     image = Image(segment=master_of(segment), description=description, robot_stamp=robot_stamp)
     if uid is not None:
         image.uid = uid
-    image.image.save(filename, ContentFile(content), save=False)
+    image.image.save(f"image.{suffix}", ContentFile(content), save=False)
     image.save()
     return announced(image)
+
+
+def attach_recording(
+    segment: Segment,
+    *,
+    path: Path,
+    start: datetime,
+    end: datetime,
+    topics: dict,
+    reason: str = "",
+    uid: uuid.UUID | None = None,
+) -> Recording:
+    """Store a black-box MCAP file (copied from ``path``) on the segment's master."""
+    if uid is not None and (existing := Recording.objects.filter(uid=uid).first()):
+        return existing
+    if end < start:
+        raise RuleViolation({"end": ["The window ends before it starts."]})
+    path = Path(path)
+    recording = Recording(
+        segment=master_of(segment),
+        start=start,
+        end=end,
+        topics=topics,
+        message_count=sum(int(t.get("count", 0)) for t in topics.values()),
+        size=path.stat().st_size,
+        reason=reason,
+    )
+    if uid is not None:
+        recording.uid = uid
+    with path.open("rb") as f:
+        recording.file.save(path.name, File(f), save=False)
+    recording.save()
+    return announced(recording)
 
 
 @transaction.atomic
 def delete_image(image: Image) -> None:
     announce_row(image, deleted=True)
     image.delete()
+
+
+@transaction.atomic
+def delete_recording(recording: Recording) -> None:
+    announce_row(recording, deleted=True)
+    recording.delete()

@@ -9,36 +9,14 @@ import io
 import os
 import shutil
 import signal
-import socket
-import subprocess
-import sys
-import textwrap
-import time
-from pathlib import Path
 
 import pytest
 from PIL import Image
 
+from tests.support.browser import ARTIFACTS, PASSWORD, Server, system_chromium
+
 # Playwright's sync API keeps an event loop in the test thread.
 os.environ.setdefault("DJANGO_ALLOW_ASYNC_UNSAFE", "true")
-
-ROOT = Path(__file__).resolve().parents[2]
-# Not under test-results/: pytest-playwright empties that folder when a session starts.
-ARTIFACTS = Path(os.environ.get("FTT_E2E_ARTIFACTS", ROOT / "test-artifacts" / "e2e"))
-PASSWORD = "field-test-2026"
-
-
-def system_chromium() -> str | None:
-    """The distribution's Chromium if it starts (the same test scripts/setup.sh
-    makes); None means Playwright's own build, which the setup then fetched."""
-    found = subprocess.run(
-        ["bash", "-c", f"source {ROOT}/scripts/lib.sh && ftt_working_chromium"],
-        capture_output=True,
-        text=True,
-    )
-    if found.returncode != 0:
-        return None
-    return found.stdout.strip()
 
 
 @pytest.fixture(scope="session")
@@ -58,98 +36,6 @@ def browser_type_launch_args(browser_type_launch_args):
             "--disable-quic",
         ],
     }
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-class Server:
-    """A daphne process plus a way to run Django code in other processes."""
-
-    def __init__(self, data_dir: Path, tile_url: str):
-        self.port = _free_port()
-        self.url = f"http://127.0.0.1:{self.port}"
-        self.env = {
-            k: v for k, v in os.environ.items() if not k.startswith(("FTT_", "DJANGO_ALLOW"))
-        }
-        self.env.update(
-            FTT_DATA_DIR=str(data_dir),
-            FTT_TILE_URL=tile_url,
-            FTT_ALLOWED_HOSTS="127.0.0.1,localhost",
-            DJANGO_SETTINGS_MODULE="ftt_site.settings",
-            PYTHONPATH=str(ROOT),
-        )
-        self.process = None
-
-    def manage(self, *args, timeout=120) -> str:
-        result = subprocess.run(
-            [sys.executable, "manage.py", *args],
-            cwd=ROOT,
-            env=self.env,
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-        )
-        assert result.returncode == 0, result.stderr[-3000:]
-        return result.stdout
-
-    def python(self, code: str) -> str:
-        """Run Django code in a separate process (the robot, an admin script)."""
-        return self.manage("shell", "-c", textwrap.dedent(code))
-
-    def spawn(self, code: str) -> subprocess.Popen:
-        return subprocess.Popen(
-            [sys.executable, "manage.py", "shell", "-c", textwrap.dedent(code)],
-            cwd=ROOT,
-            env=self.env,
-            stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-            bufsize=1,
-        )
-
-    def start(self):
-        self.manage("migrate", "--noinput", timeout=300)
-        ARTIFACTS.mkdir(parents=True, exist_ok=True)
-        self.log = open(ARTIFACTS / "daphne.log", "w")  # noqa: SIM115 - open while it runs
-        self.process = subprocess.Popen(
-            [
-                sys.executable,
-                "-m",
-                "daphne",
-                "-b",
-                "127.0.0.1",
-                "-p",
-                str(self.port),
-                "ftt_site.asgi:application",
-            ],
-            cwd=ROOT,
-            env=self.env,
-            # Kept as an artifact: when a page hangs, the server's side tells why.
-            stdout=self.log,
-            stderr=subprocess.STDOUT,
-        )
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline:
-            try:
-                with socket.create_connection(("127.0.0.1", self.port), timeout=0.5):
-                    return
-            except OSError:
-                time.sleep(0.2)
-        raise RuntimeError("daphne did not start")
-
-    def stop(self):
-        if self.process is not None:
-            self.process.terminate()
-            try:
-                self.process.wait(10)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
-            self.log.close()
 
 
 @pytest.hookimpl(wrapper=True)
@@ -220,9 +106,7 @@ def tiles(page):
     return png
 
 
-def login(page, server, username):
-    page.goto(f"{server.url}/login/")
-    page.get_by_label("User name").fill(username)
-    page.get_by_label("Password").fill(PASSWORD)
-    page.get_by_role("button", name="Sign in").click()
-    page.wait_for_url(f"{server.url}/")
+def pytest_collection_modifyitems(items):
+    """The field walk starts from a new installation (its first-run hint needs no
+    vehicle yet); the tests share one server, so it runs first."""
+    items.sort(key=lambda item: item.path.name != "test_field_walk.py")

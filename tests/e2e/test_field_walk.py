@@ -7,8 +7,7 @@ import pytest
 from PIL import Image as PILImage
 from playwright.sync_api import expect
 
-from tests.e2e.conftest import login
-from tests.e2e.robot import Robot
+from tests.support.browser import Robot, login
 
 pytestmark = pytest.mark.e2e
 

@@ -7,9 +7,8 @@ import time
 import pytest
 from playwright.sync_api import expect
 
-from tests.e2e.conftest import login
-from tests.e2e.robot import Robot
-from tests.reports.pdf_helpers import flat, pdf_text
+from tests.support.browser import Robot, login
+from tests.support.pdf import flat, pdf_text
 
 pytestmark = pytest.mark.e2e
 
@@ -127,9 +126,10 @@ def test_notes_can_be_edited_and_deleted(page, server, open_leg, shot):
     expect(confirm).to_contain_text("Delete this note")
     confirm.get_by_role("button", name="Delete").click()
     expect(dialog.locator(".notes li")).to_have_text(["No notes yet."])
-    # An empty note is refused with the server's words, inside the dialog.
+    # An empty note is refused with the server's words, next to the field and in its label.
     dialog.get_by_role("button", name="Add note").click()
-    expect(dialog.locator(".dialog-error")).to_contain_text("Text: This field may not be blank")
+    expect(dialog.locator(".field-error")).to_have_text("New note: This field may not be blank.")
+    expect(dialog.get_by_label("New note")).to_have_attribute("aria-invalid", "true")
     shot(page, "note-error")
 
 
@@ -140,7 +140,7 @@ def test_refused_edit_is_explained_in_the_dialog(page, server, open_leg, shot):
     dialog = page.locator("#form-dialog")
     dialog.get_by_label("Time zone").fill("Mars/Olympus")
     dialog.get_by_role("button", name="Save").click()
-    expect(dialog.locator(".dialog-error")).to_contain_text("time zone")
+    expect(dialog.locator(".field-error")).to_contain_text("Time zone: 'Mars/Olympus'")
     expect(dialog).to_be_visible()
     shot(page, "time-zone-refused")
     # Fields can be cleared, and text in any script is kept.

@@ -3,20 +3,12 @@
 from html.parser import HTMLParser
 
 import pytest
-from django.contrib.auth.models import Group, User
 from django.urls import reverse
 
 from events.models import ItoReason, Segment, SegmentType
 from events.services import segments
-from tests.pages import external_assets
-
-
-def staff_user(role):
-    user = User.objects.create_user(
-        f"{role}-staff", password="pw-not-used-elsewhere", is_staff=True
-    )
-    user.groups.add(Group.objects.get(name=role))
-    return user
+from tests.support.accounts import staff_user
+from tests.support.pages import external_assets
 
 
 @pytest.fixture

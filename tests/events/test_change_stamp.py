@@ -9,7 +9,7 @@ from django.urls import reverse
 
 from events.models import Segment, Shift
 from events.services import logs, segments
-from tests.events.test_admin import staff_user
+from tests.support.accounts import staff_user
 
 
 def _stamp(row):

@@ -6,7 +6,7 @@ from concurrent.futures import ThreadPoolExecutor
 import pytest
 from django.db import connection, connections
 
-from events.errors import RuleViolation
+from common.errors import RuleViolation
 from events.models import Leg, Segment, Shift
 from events.services import logs, segments
 

@@ -3,24 +3,19 @@
 import pytest
 from django.core.files.storage import default_storage
 
-from events.errors import RuleViolation
+from common.errors import RuleViolation
 from events.models import Leg, Note, Segment, Shift
 from events.services import deletion, notes, segments
 from telemetry.models import Image, MapImage, Pose
 from telemetry.services import recording
-
-PNG = (
-    b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\x00\x00\x00\x01\x00\x00\x00\x01\x08\x06\x00\x00\x00\x1f"
-    b"\x15\xc4\x89\x00\x00\x00\rIDATx\x9cc\xf8\xff\xff?\x00\x05\xfe\x02\xfe\xa7V\xbd\xfa\x00\x00"
-    b"\x00\x00IEND\xaeB`\x82"
-)
+from tests.support.images import PNG
 
 
 @pytest.fixture
 def recorded_leg(leg, person, media_root, django_capture_on_commit_callbacks):
     master = segments.report_mode(leg, "ito").master
     recording.record_poses(master, [recording.GpsFix(7.1, 50.6)])
-    image = recording.attach_image(master, content=PNG, filename="cam.png")
+    image = recording.attach_image(master, content=PNG)
     map_image, _ = recording.record_map(
         leg.shift,
         png=PNG,

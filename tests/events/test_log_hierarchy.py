@@ -6,7 +6,7 @@ import pytest
 from django.core.exceptions import ValidationError
 from django.utils import timezone
 
-from events.errors import RuleViolation
+from common.errors import RuleViolation
 from events.models import Leg, Segment, Shift
 from events.services import logs, segments
 

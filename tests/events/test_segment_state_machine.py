@@ -5,7 +5,7 @@ from datetime import timedelta
 import pytest
 from django.utils import timezone
 
-from events.errors import RuleViolation
+from common.errors import RuleViolation
 from events.models import Segment
 from events.services import segments
 from events.services.segments import GpsPosition, LocalPosition

@@ -6,7 +6,8 @@ from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 import pytest
 
-from tests.reports.scenario import build_open_scenario, build_scenario, png_bytes
+from tests.support.images import png
+from tests.support.scenario import build_open_scenario, build_scenario
 
 
 @pytest.fixture
@@ -20,7 +21,7 @@ def open_scenario(vehicle, performer, media_root):
 
 
 class _TileHandler(BaseHTTPRequestHandler):
-    tile = png_bytes((200, 230, 200), (256, 256))
+    tile = png((256, 256), (200, 230, 200))
     requests: list
 
     def do_GET(self):  # noqa: N802 - http.server's naming

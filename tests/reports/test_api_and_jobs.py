@@ -9,8 +9,8 @@ from django.db import connection
 from reports.models import Report
 from reports.services import generation
 from reports.services.generation import fail_stale_reports, request_report, run_job
-from tests.reports.pdf_helpers import flat, pdf_text
-from tests.reports.scenario import STEP_M
+from tests.support.pdf import flat, pdf_text
+from tests.support.scenario import STEP_M
 
 
 def test_statistics_endpoint_returns_the_selector_figures(scenario, api_client):
@@ -24,6 +24,9 @@ def test_statistics_endpoint_returns_the_selector_figures(scenario, api_client):
     s1 = str(scenario.shifts[0].pk)
     assert data["shifts"][s1]["auto_seconds"] == 340
     assert "MDBI" in data["formulas"]
+    labels = {row["id"]: row["label"] for row in data["segments"]}
+    assert labels[scenario.masters["I1"].id] == "Leg 1 · #2"
+    assert labels[scenario.masters["I3"].id] == "Leg 1 · #4"
 
 
 def test_statistics_need_a_role_and_a_valid_mode(scenario, api_client):
@@ -138,7 +141,7 @@ def test_reports_whose_worker_vanished_are_marked_failed(
 def test_background_thread_finishes_the_report(
     vehicle, other_vehicle, performer, media_root, tmp_path
 ):
-    from tests.reports.scenario import build_scenario
+    from tests.support.scenario import build_scenario
 
     scenario = build_scenario(vehicle, other_vehicle, performer)
     report = request_report(scenario.event, {"no_tiles": True})
@@ -165,7 +168,7 @@ def test_exports_over_the_api(scenario, api_client):
     csv_response = client.get(base + "segments.csv")
     assert csv_response.status_code == 200
     assert csv_response["Content-Type"].startswith("text/csv")
-    assert csv_response.content.decode().startswith("test_event,shift,leg,segment_id")
+    assert csv_response.content.decode().startswith("test_event,shift,leg,label,segment_id")
     geo = client.get(base + "tracks.geojson")
     assert geo.status_code == 200 and geo.json()["type"] == "FeatureCollection"
     gpx = client.get(base + "tracks.gpx")

@@ -10,7 +10,8 @@ from django.core.management import CommandError, call_command
 from pypdf import PdfReader
 
 from events.services import logs
-from tests.reports.scenario import HOSTILE, STEP_M, png_bytes
+from tests.support.images import png
+from tests.support.scenario import HOSTILE, STEP_M
 
 
 def test_command_writes_the_pdf(scenario, tmp_path, settings):
@@ -89,6 +90,8 @@ def test_exports_from_the_command(scenario, tmp_path):
     assert safety["robot_operator"] == scenario.people["operator"].name
     i1 = next(r for r in masters if int(r["segment_id"]) == scenario.masters["I1"].id)
     assert HOSTILE in i1["notes"]
+    # The GUI's numbering: I1 is the second master of its leg, safety its first reason.
+    assert i1["label"] == "Leg 1 · #2" and safety["label"] == "Leg 1 · #2.1"
 
     features = json.loads(paths["geojson"].read_text(encoding="utf-8"))["features"]
     assert len(features) == 7
@@ -111,7 +114,7 @@ class _Terminal(io.StringIO):
 
 
 def test_progress_bar_only_on_a_terminal():
-    from ftt_site.progress import ProgressBar
+    from common.progress import ProgressBar
 
     terminal, pipe = _Terminal(), io.StringIO()
     for stream in (terminal, pipe):
@@ -142,7 +145,7 @@ def test_site_logo_replaces_the_default(scenario, tmp_path, settings):
     from reports.services.rendering import ReportOptions, render_report
 
     logo = tmp_path / "kunde.png"
-    logo.write_bytes(png_bytes((250, 0, 250), (120, 60)))
+    logo.write_bytes(png((120, 60), (250, 0, 250)))
     settings.FTT_REPORT_LOGO = str(logo)
     pdf = render_report(scenario.event, ReportOptions(no_tiles=True)).pdf
     path = tmp_path / "r.pdf"

@@ -15,8 +15,8 @@ from reports.selectors.statistics import event_statistics
 from reports.services.rendering import ReportOptions, render_report
 from rosbridge_app.collector.bag import bag_events
 from rosbridge_app.collector.recorder import record_events
-from tests.fkie import FKIE_BAG
-from tests.reports.pdf_helpers import flat, pdf_text, save_pages
+from tests.support.fkie import FKIE_BAG
+from tests.support.pdf import flat, pdf_text, save_pages
 
 
 @pytest.fixture
@@ -45,7 +45,8 @@ def test_fkie_bag_gives_a_complete_report(fkie_event, tmp_path, settings):
     assert re.search(r"Shift 1: 2019-04-08 02:00:00 – 2019-04-08 16:1\d:\d\d", text)
     total = float(re.search(r"Total distance ([\d.]+) m", text).group(1))
     assert total == pytest.approx(stats.overall.total_distance, abs=0.01)
-    assert len(re.findall(r"(AUTO|ITO) segment \d at", text)) == 5
+    titles = re.findall(r"(Leg \d+ · #\d+) · (?:AUTO|ITO) at", text)
+    assert titles == [f"Leg 1 · #{n}" for n in range(1, 6)]
     # Counted: the bag's take-overs are 'unassigned', which counts.
     assert "Interventions 3" in text
     save_pages(result.pdf, "fkie-bag")

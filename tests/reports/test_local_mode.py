@@ -15,8 +15,8 @@ from reports.selectors.statistics import event_statistics
 from reports.services.rendering import ReportOptions, render_report
 from telemetry.services import recording
 from telemetry.services.recording import MapPose
-from tests.reports.pdf_helpers import flat, pdf_text, save_pages
-from tests.reports.scenario import T0
+from tests.support.pdf import flat, pdf_text, save_pages
+from tests.support.scenario import T0
 
 
 def _grid_png(width=40, height=30) -> bytes:

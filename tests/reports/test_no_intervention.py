@@ -10,8 +10,8 @@ import pytest
 from events.services import logs
 from reports.services.rendering import ReportOptions, render_report
 from telemetry.services import recording
-from tests.reports.pdf_helpers import has_row, pdf_text
-from tests.reports.scenario import CHI2_95, STEP_M, T0, _at, _fixes, _switch
+from tests.support.pdf import has_row, pdf_text
+from tests.support.scenario import CHI2_95, STEP_M, T0, _at, _fixes, _switch
 
 
 def m(steps: float) -> str:

@@ -9,10 +9,11 @@ import subprocess
 
 import pytest
 
+from events.selectors.labels import segment_label
 from reports.services.rendering import ReportOptions, render_report
 from telemetry.models import Pose
-from tests.reports.pdf_helpers import flat, has_row, page_count, pdf_text, save_pages
-from tests.reports.scenario import CHI2_05, CHI2_95, HOSTILE, STEP_M, T0
+from tests.support.pdf import flat, has_row, page_count, pdf_text, save_pages
+from tests.support.scenario import CHI2_05, CHI2_95, HOSTILE, STEP_M, T0
 
 
 def m(steps: float) -> str:
@@ -139,9 +140,10 @@ def test_hostile_and_non_ascii_text_renders_literally_in_every_field(report, rep
         f"Lighting {hostile}",
         f"Slope {hostile}",
         f"note {hostile}",
-        f"Figure 1: {hostile}",
     ):
-        assert field in table_text, field
+        assert field in table_text or field in report_flow_text, field
+    # The camera frame's caption under its thumbnail and in the image appendix.
+    assert f": {hostile} (back to the segment)" in report_flow_text
     # The title page's two columns read best one after the other.
     for field in (
         f"Report {hostile}",
@@ -170,7 +172,7 @@ def test_methods_appendix_lists_reasons_formulas_and_gaps(report, scenario):
     assert "MDBI = D_a / I" in text
     assert "lower = 2E / chi2(0.95; 2I + 2), upper = 2E / chi2(0.05; 2I)" in text
     i2 = scenario.masters["I2"]
-    assert f"Shift 2, ITO segment id {i2.id}" in text  # the segment without poses
+    assert f"Shift 2, {segment_label(i2)} (ITO)" in text  # the segment without poses
     # A3 has 20 s between its second and third pose (gap threshold 10 s).
     assert "11:00:20 – 11:00:40 (0:00:20)" in text
     assert "Map tiles: http://127.0.0.1" in text
@@ -199,7 +201,7 @@ def test_event_without_poses_still_reports_times_and_lists_the_gaps(scenario, tm
     text = flat(pdf_text(result.pdf, tmp_path))
     assert "Autonomous time 0:15:40" in text
     for name, seg in scenario.masters.items():
-        assert f"segment id {seg.id} (" in text, name
+        assert f"{segment_label(seg)} ({seg.segment_type_id.upper()}) (" in text, name
     assert "Positions without a GPS fix (left out): 0" in text
     save_pages(result.pdf, "no-poses")
 

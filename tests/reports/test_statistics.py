@@ -7,7 +7,7 @@ are checked against an independent source.
 import pytest
 
 from reports.selectors.statistics import event_statistics, poisson_estimate
-from tests.reports.scenario import CHI2_05, CHI2_95, STEP_M
+from tests.support.scenario import CHI2_05, CHI2_95, STEP_M
 
 D_A = 13 * STEP_M
 D_M = 4 * STEP_M

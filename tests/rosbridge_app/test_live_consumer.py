@@ -9,8 +9,9 @@ from channels.testing import WebsocketCommunicator
 from django.contrib.auth.models import AnonymousUser, Group, User
 from django.db import connections
 
+from events.models import Announcement
 from events.services import segments
-from rosbridge_app import consumers
+from rosbridge_app import consumers, wakeup
 from rosbridge_app.consumers import LiveConsumer
 from telemetry.services import recording
 
@@ -154,9 +155,29 @@ async def test_with_redis_a_commit_wakes_the_poller_at_once(viewer, leg, setting
         channel_layers.backends.clear()
 
 
-async def test_browser_away_longer_than_the_outbox_keeps_is_told_to_reload(viewer, leg):
-    from rosbridge_app.models import Announcement
+async def _only_the_wakeup_delivers(viewer, leg, monkeypatch):
+    # Polling alone would take an hour: only a wake-up can deliver the event in time.
+    monkeypatch.setattr(consumers, "POLL_INTERVAL", 3600.0)
+    communicator, _ = await connect(viewer, leg=leg.pk)
+    await asyncio.sleep(0.5)  # the first poll has passed; the poller now sleeps
+    await database_sync_to_async(segments.report_mode)(leg, "auto")
+    events = await next_events(communicator, timeout=5)
+    assert [e["kind"] for e in events] == ["segment"]
+    await communicator.disconnect()
 
+
+async def test_a_commit_in_this_process_wakes_the_poller_at_once(viewer, leg, monkeypatch):
+    await _only_the_wakeup_delivers(viewer, leg, monkeypatch)
+
+
+@pytest.mark.postgis_only
+async def test_on_postgresql_a_commit_anywhere_wakes_the_poller(viewer, leg, monkeypatch):
+    # As if the writer were another process (the collector): no local call, no Redis.
+    monkeypatch.setattr(wakeup, "_wake_local_readers", lambda: None)
+    await _only_the_wakeup_delivers(viewer, leg, monkeypatch)
+
+
+async def test_browser_away_longer_than_the_outbox_keeps_is_told_to_reload(viewer, leg):
     await database_sync_to_async(segments.report_mode)(leg, "auto")
     await database_sync_to_async(segments.report_mode)(leg, "ito")
     newest = await database_sync_to_async(lambda: Announcement.objects.order_by("-id")[0].pk)()

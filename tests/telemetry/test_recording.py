@@ -5,11 +5,11 @@ import uuid
 
 import pytest
 
-from events.errors import RuleViolation
+from common.errors import RuleViolation
 from events.services import segments
 from telemetry.models import Image, LocalPose, MapImage, Pose
 from telemetry.services import recording
-from tests.events.test_deletion import PNG
+from tests.support.images import PNG
 
 
 @pytest.fixture
@@ -63,7 +63,7 @@ def test_unchanged_map_is_not_stored_again_but_a_changed_one_is(leg, media_root)
 
 
 def test_images_are_files_in_media_storage_on_the_master(ito, media_root):
-    image = recording.attach_image(ito.children.get(), content=PNG, filename="x.png")
+    image = recording.attach_image(ito.children.get(), content=PNG)
     assert image.segment == ito
     assert (media_root / image.image.name).read_bytes() == PNG
     assert Image.objects.count() == 1

@@ -17,7 +17,7 @@ from django.contrib.auth.models import Group
 from django.core.management.base import BaseCommand
 from django.db import transaction
 
-from events.roles import ADMINISTRATOR
+from common.roles import ADMINISTRATOR
 
 PASSWORD_FILE = "admin_password.txt"
 

@@ -12,13 +12,14 @@ from pathlib import Path
 
 from django.core.management.base import BaseCommand, CommandError
 
+from common.progress import ProgressBar
 from events.models import TestEvent
-from ftt_site.progress import ProgressBar
 from reports.figures.tiles import MAX_ZOOM
 from reports.models import Report
 from reports.selectors import exports
+from reports.services.comparing import render_comparison
 from reports.services.generation import run_job
-from reports.services.rendering import ReportError, ReportOptions, render_report
+from reports.services.rendering import FULL, LEVELS, ReportError, ReportOptions, render_report
 
 
 class Command(BaseCommand):
@@ -60,6 +61,24 @@ class Command(BaseCommand):
             default=MAX_ZOOM,
             help=f"Never use map tiles closer than this zoom level (1-{MAX_ZOOM}).",
         )
+        parser.add_argument(
+            "--compare",
+            type=int,
+            nargs="+",
+            metavar="EVENT",
+            help="Compare these test events (at least two) in one PDF instead.",
+        )
+        parser.add_argument(
+            "--level",
+            choices=[value for value, _ in LEVELS],
+            default=FULL,
+            help="; ".join(text for _, text in LEVELS),
+        )
+        parser.add_argument(
+            "--no-image-appendix",
+            action="store_true",
+            help="Camera frames only as thumbnails, without full-size copies in an appendix.",
+        )
         parser.add_argument("--csv", help="Write the segments as CSV to this file.")
         parser.add_argument("--geojson", help="Write the GPS tracks as GeoJSON to this file.")
         parser.add_argument("--gpx", help="Write the GPS tracks as GPX to this file.")
@@ -67,6 +86,8 @@ class Command(BaseCommand):
     def handle(self, *args, **o):
         if o["job"] is not None:
             return self._job(o["job"])
+        if o["compare"]:
+            return self._compare(o)
         if o["test_event"] is None:
             raise CommandError("Give --test-event ID (or --job ID).")
         event = TestEvent.objects.filter(pk=o["test_event"]).first()
@@ -75,6 +96,20 @@ class Command(BaseCommand):
         exported = self._exports(event, o)
         if o["output"] or not exported:
             self._pdf(event, o)
+
+    def _compare(self, o):
+        ids = o["compare"]
+        events = list(TestEvent.objects.filter(pk__in=ids))
+        missing = sorted(set(ids) - {e.pk for e in events})
+        if missing:
+            raise CommandError(f"Test event {missing[0]} does not exist.")
+        try:
+            pdf = render_comparison(events, "local" if o["local"] else "gps")
+        except ReportError as exc:
+            raise CommandError(str(exc)) from exc
+        output = Path(o["output"] or "comparison.pdf")
+        output.write_bytes(pdf)
+        self.stdout.write(f"comparison of {len(events)} test events: {output}")
 
     def _job(self, report_id: int):
         if not Report.objects.filter(pk=report_id).exists():
@@ -112,6 +147,8 @@ class Command(BaseCommand):
             logo=o["logo"],
             min_timeline_hours=o["min_timeline"],
             max_zoom=o["max_zoom"],
+            level=o["level"],
+            image_appendix=not o["no_image_appendix"],
         )
         if problems := options.problems():
             raise CommandError(" ".join(problems))

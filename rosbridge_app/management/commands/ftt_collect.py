@@ -6,6 +6,7 @@ from pathlib import Path
 from django.core.management.base import BaseCommand
 
 from rosbridge_app.collector.params import DEFAULT_FILE
+from rosbridge_app.collector.runtime import CollectorRuntime
 
 
 class Command(BaseCommand):
@@ -42,8 +43,6 @@ class Command(BaseCommand):
         )
 
     def handle(self, *args, **opts):
-        from rosbridge_app.collector.runtime import CollectorRuntime
-
         params_file = opts["params_file"]
         ros_args = list(opts["ros_args"])
         if params_file is not None:

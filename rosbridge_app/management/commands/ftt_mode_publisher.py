@@ -8,7 +8,12 @@ published every ``--period`` seconds and at once when it changes.
 
 import time
 
+import rclpy
 from django.core.management.base import BaseCommand
+from geometry_msgs.msg import TwistStamped
+from rclpy.executors import ExternalShutdownException
+
+from rosbridge_app.collector.modes import ModeDecider, is_moving, make_message, message_type
 
 
 class Command(BaseCommand):
@@ -23,11 +28,6 @@ class Command(BaseCommand):
         parser.add_argument("--period", type=float, default=1.0)
 
     def handle(self, *args, **o):
-        import rclpy
-        from geometry_msgs.msg import TwistStamped
-        from rclpy.executors import ExternalShutdownException
-
-        from rosbridge_app.collector.modes import ModeDecider, is_moving, make_message, message_type
 
         rclpy.init()
         node = rclpy.create_node("ftt_mode_publisher")

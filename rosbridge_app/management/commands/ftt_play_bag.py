@@ -3,7 +3,11 @@
 import time
 from pathlib import Path
 
+import rclpy
 from django.core.management.base import BaseCommand
+from rclpy.executors import ExternalShutdownException
+
+from rosbridge_app.collector.player import BagPlayer
 
 
 class Command(BaseCommand):
@@ -34,10 +38,6 @@ class Command(BaseCommand):
         )
 
     def handle(self, *args, **o):
-        import rclpy
-        from rclpy.executors import ExternalShutdownException
-
-        from rosbridge_app.collector.player import BagPlayer
 
         rclpy.init()
         player = BagPlayer(o["bag"], rate=o["rate"], prefix=o["prefix"])

@@ -2,15 +2,20 @@
 
 import time
 
+import rclpy
 from django.core.management.base import BaseCommand
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+
+from events.models import Vehicle
+from events.selectors.logs import open_leg_for_vehicle
+from events.services import logs
+from rosbridge_app.collector.simulator import SimConfig, SimulatedRobot
 
 
 class Command(BaseCommand):
     help = "Publish a simulated drive: mode switches, GPS, TF, map and camera."
 
     def add_arguments(self, parser):
-        from rosbridge_app.collector.simulator import SimConfig
-
         d = SimConfig()
         a = parser.add_argument
         a("--latitude", type=float, default=d.latitude)
@@ -53,11 +58,6 @@ class Command(BaseCommand):
         )
 
     def handle(self, *args, **o):
-        import rclpy
-        from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-
-        from rosbridge_app.collector.simulator import SimConfig, SimulatedRobot
-
         width, height = (int(v) for v in o["camera_size"].lower().split("x"))
         config = SimConfig(
             latitude=o["latitude"],
@@ -100,10 +100,6 @@ class Command(BaseCommand):
 
 
 def ensure_open_leg(key: str) -> str:
-    from events.models import Vehicle
-    from events.selectors.logs import open_leg_for_vehicle
-    from events.services import logs
-
     vehicle, _ = Vehicle.objects.get_or_create(
         key=key, defaults={"short_description": "Simulated robot (ftt_simulate)"}
     )

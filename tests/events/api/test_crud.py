@@ -2,10 +2,10 @@
 
 import pytest
 
-from events import roles
+from common import roles
 from events.models import ItoReason, Note, Personnel, SegmentType, Weather
 from events.services import logs, notes, segments
-from tests.events.api.crud import CrudTests
+from tests.support.api import CrudTests, assert_error_shape
 
 
 class TestTestEvents(CrudTests):
@@ -82,8 +82,15 @@ class TestNotes(CrudTests):
     basename = "note"
 
     @pytest.fixture
-    def instance(self, leg):
-        return notes.add_note(segments.new_manual_segment(leg), text="Stopped at the gate")
+    def instance(self, leg, person):
+        segment = segments.new_manual_segment(leg)
+        return notes.add_note(segment, text="Stopped at the gate", author=person)
+
+    def writer(self, api_client, instance):
+        client = api_client(roles.OPERATOR)
+        instance.author.user = client.user
+        instance.author.save()
+        return client
 
     @pytest.fixture
     def create_data(self, instance):
@@ -103,6 +110,33 @@ class TestNotes(CrudTests):
         assert response.status_code == 201, response.content
         assert response.json()["author_name"] == person.name
         assert Note.objects.get(pk=response.json()["id"]).author == person
+
+    def test_an_operator_cannot_write_in_someone_elses_name(self, api_client, instance, person):
+        response = api_client(roles.OPERATOR).post(
+            self.list_url(),
+            {"segment": instance.segment_id, "text": "spoof", "author": person.pk},
+            format="json",
+        )
+        assert_error_shape(response, 403)
+        assert not Note.objects.filter(text="spoof").exists()
+
+    def test_an_administrator_may_name_the_author(self, api_client, instance, person):
+        response = api_client(roles.ADMINISTRATOR).post(
+            self.list_url(),
+            {"segment": instance.segment_id, "text": "for Ada", "author": person.pk},
+            format="json",
+        )
+        assert response.status_code == 201 and response.json()["author"] == person.pk
+
+    def test_only_the_author_and_administrators_change_a_note(self, api_client, instance):
+        other = api_client(roles.OPERATOR)
+        assert_error_shape(other.patch(self.detail_url(instance), {"text": "x"}), 403)
+        assert_error_shape(other.delete(self.detail_url(instance)), 403)
+        instance.refresh_from_db()
+        assert instance.text == "Stopped at the gate"
+        admin = api_client(roles.ADMINISTRATOR)
+        assert admin.patch(self.detail_url(instance), {"text": "fixed"}).status_code == 200
+        assert admin.delete(self.detail_url(instance)).status_code == 204
 
 
 class ConfigurationCrud(CrudTests):

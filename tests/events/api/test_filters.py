@@ -4,7 +4,7 @@ from datetime import timedelta
 
 import pytest
 
-from events import roles
+from common import roles
 from events.models import SegmentType
 from events.services import logs, segments
 from events.services.segments import GpsPosition

@@ -4,8 +4,8 @@ import json
 
 import pytest
 
-from events import roles
-from tests.events.api.crud import assert_error_shape
+from common import roles
+from tests.support.api import assert_error_shape
 
 
 @pytest.fixture

@@ -14,7 +14,7 @@ from events.models import (
     Weather,
 )
 from events.services import logs, notes, segments
-from tests.events.api.querycount import LIST_QUERIES, assert_constant_queries
+from tests.support.api import LIST_QUERIES, assert_constant_queries
 
 counter = itertools.count()
 

@@ -4,11 +4,11 @@ import uuid
 
 import pytest
 
-from events import roles
+from common import roles
 from events.models import Segment, SegmentType, Shift
 from events.models import TestEvent as TestEventModel
 from events.services import logs, segments
-from tests.events.api.crud import assert_error_shape
+from tests.support.api import assert_error_shape
 
 
 @pytest.fixture

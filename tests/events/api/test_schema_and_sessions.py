@@ -1,7 +1,7 @@
 """The OpenAPI schema and docs page, and the session (GUI) side of authentication."""
 
-from events import roles
-from tests.pages import asset_urls, external_assets
+from common import roles
+from tests.support.pages import asset_urls, external_assets
 
 
 def test_schema_lists_the_endpoints_and_the_docs_page_is_served_locally(client, db):

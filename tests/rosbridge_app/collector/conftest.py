@@ -8,7 +8,7 @@ import pytest
 from events.models import Vehicle
 from events.services import logs
 from rosbridge_app.models import Collector
-from tests.rosbridge_app.collector.rostools import (
+from tests.support.ros import (
     Processes,
     RosClient,
     copy_default_params,

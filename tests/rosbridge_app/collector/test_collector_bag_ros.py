@@ -4,8 +4,8 @@ import pytest
 
 from events.models import Segment
 from telemetry.models import Pose
-from tests.fkie import FKIE_BAG, full_rate_length, master_path_length
-from tests.rosbridge_app.collector.rostools import requires_ros, wait_for
+from tests.support.fkie import FKIE_BAG, full_rate_length, master_path_length
+from tests.support.ros import requires_ros, wait_for
 
 pytestmark = [
     pytest.mark.ros,

@@ -9,13 +9,14 @@ import pytest
 import yaml
 from PIL import Image as PilImage
 
-from events.models import Segment
+from common.errors import RuleViolation
+from events.models import Segment, Vehicle
 from events.services import logs
 from rosbridge_app.models import Collector, CollectorCommand
 from rosbridge_app.services.collectors import issue_command
 from telemetry.models import Image as StoredImage
 from telemetry.models import LocalPose, MapImage, Pose
-from tests.rosbridge_app.collector.rostools import requires_ros, wait_for
+from tests.support.ros import requires_ros, wait_for
 
 pytestmark = [pytest.mark.ros, requires_ros]
 
@@ -190,7 +191,7 @@ def test_parameters_services_and_gui_commands(ros, start_collector, robot_leg):
     # The GUI side: commands through the database. How fast they are answered is
     # measured by benchmarks/collector_throughput.py.
     record = Collector.objects.get(name="collector")
-    command = issue_command(record, CollectorCommand.Kind.START_LOGGING)
+    command = issue_command(record, CollectorCommand.Kind.START_LOGGING, leg=robot_leg)
     command = wait_for(
         lambda: CollectorCommand.objects.filter(pk=command.pk, done__isnull=False).first(),
         5,
@@ -215,37 +216,46 @@ def test_parameters_services_and_gui_commands(ros, start_collector, robot_leg):
     wait_for(lambda: LocalPose.objects.count() >= 4, what="local poses from PoseStamped")
     assert LocalPose.objects.first().yaw == pytest.approx(1.0)
 
-    # The operator closes the leg and opens the next one: followed without a restart.
+    # The operator ends the leg: logging stops first (the server orders it).
     logs.close_leg(robot_leg)
+    wait_for(lambda: not Collector.objects.get(pk=record.pk).logging, 5, what="logging stopped")
+    # The next leg is logged into once logging is started again.
     next_leg = logs.create_leg(shift=robot_leg.shift)
+    issue_command(record, CollectorCommand.Kind.START_LOGGING, leg=next_leg)
     followed = wait_for(lambda: masters(next_leg), 10, what="the mode in the new leg")
     assert followed[0].segment_type_id == "auto"
+    wait_for(lambda: Collector.objects.get(pk=record.pk).logging, 5, what="logging again")
 
-    bad = issue_command(record, "set_parameters", {"parameters": {"params.use_tf": "yes"}})
+    # A wrong value is refused before it reaches the robot.
+    with pytest.raises(RuleViolation, match="true or false"):
+        issue_command(record, "set_parameters", {"parameters": {"params.use_tf": "yes"}})
     good = issue_command(
         record, "set_parameters", {"parameters": {"params.pose_min_distance": 2.0}}
     )
-    stop = issue_command(record, CollectorCommand.Kind.STOP_LOGGING)
+    stop = issue_command(Collector.objects.get(pk=record.pk), CollectorCommand.Kind.STOP_LOGGING)
     wait_for(
         lambda: not CollectorCommand.objects.filter(done__isnull=True).exists(),
         5,
         what="the commands",
     )
-    bad, good, stop = (CollectorCommand.objects.get(pk=c.pk) for c in (bad, good, stop))
-    assert not bad.success and "true or false" in bad.message
+    good, stop = (CollectorCommand.objects.get(pk=c.pk) for c in (good, stop))
     assert good.success and good.result["parameters"]["params.pose_min_distance"] == 2.0
     assert stop.success
     wait_for(lambda: masters(next_leg)[0].end is not None, 5, what="the master closed")
 
     # Pointed at another vehicle while running, it logs into that vehicle's leg.
-    from events.models import Vehicle
-
     other = Vehicle.objects.create(key="second-bot", short_description="Second robot")
     other_leg = logs.create_leg(
         shift=logs.create_shift(test_event=robot_leg.shift.test_event, vehicle=other)
     )
     result = ros.await_future(params.set_parameters([Parameter("vehicle", value="second-bot")]))
     assert result.results[0].successful
+    # Started once the collector says which leg it now logs into, as the GUI shows.
+    wait_for(
+        lambda: Collector.objects.get(pk=record.pk).leg_id == other_leg.pk,
+        10,
+        what="the other vehicle's leg",
+    )
     assert ros.set_logging(True).success
     mode.publish(RobotMode(val=RobotMode.MANUAL))
     wait_for(

@@ -5,8 +5,9 @@ from datetime import timedelta
 import pytest
 from django.utils import timezone
 
-from events.errors import RuleViolation
-from rosbridge_app.models import Announcement, Collector, CollectorCommand
+from common.errors import RuleViolation
+from events.models import Announcement
+from rosbridge_app.models import Collector, CollectorCommand
 from rosbridge_app.selectors.collectors import collector_status, is_online
 from rosbridge_app.services.collectors import (
     finish_command,
@@ -45,13 +46,13 @@ def test_online_status_and_input_ages(vehicle):
     assert not is_online(collector) and collector.stopped is not None
 
 
-def test_commands_are_taken_once_and_answered(vehicle):
+def test_commands_are_taken_once_and_answered(vehicle, leg):
     collector = heartbeat("robot/husky", vehicle=vehicle)
     with pytest.raises(RuleViolation):
         issue_command(collector, "self_destruct")
     with pytest.raises(RuleViolation):
         issue_command(collector, CollectorCommand.Kind.SET_PARAMETERS, {"parameters": {}})
-    command = issue_command(collector, CollectorCommand.Kind.START_LOGGING)
+    command = issue_command(collector, CollectorCommand.Kind.START_LOGGING, leg=leg)
     assert take_commands(collector) == [command]
     assert take_commands(collector) == []
     finish_command(command, True, "Logging started.", {"logging": True})
@@ -61,7 +62,7 @@ def test_commands_are_taken_once_and_answered(vehicle):
 
 
 def test_commands_nobody_takes_fail_after_a_while(vehicle):
-    collector = heartbeat("robot/husky", vehicle=vehicle)
+    collector = heartbeat("robot/husky", vehicle=vehicle, logging=True)
     command = issue_command(collector, CollectorCommand.Kind.STOP_LOGGING)
     CollectorCommand.objects.filter(pk=command.pk).update(
         issued=timezone.now() - timedelta(minutes=5)

@@ -4,7 +4,7 @@ import time
 
 import pytest
 
-from tests.rosbridge_app.collector.rostools import requires_ros, wait_for
+from tests.support.ros import requires_ros, wait_for
 
 pytestmark = [pytest.mark.ros, requires_ros]
 

@@ -10,7 +10,7 @@ import pytest
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.bag import bag_events
 from rosbridge_app.collector.pipeline import Pipeline
-from tests.fkie import FKIE_BAG, full_rate_length, gps_path_length
+from tests.support.fkie import FKIE_BAG, full_rate_length, gps_path_length
 
 T0 = datetime(2026, 5, 4, 10, 0, tzinfo=UTC)
 

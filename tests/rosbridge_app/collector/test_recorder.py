@@ -13,7 +13,8 @@ from rosbridge_app.collector.bag import bag_events
 from rosbridge_app.collector.events import Event
 from rosbridge_app.collector.recorder import Recorder, record_events
 from telemetry.models import Image, MapImage, Pose
-from tests.fkie import FKIE_BAG, master_path_length
+from tests.support.fkie import FKIE_BAG, master_path_length
+from tests.support.images import grey_png, jpeg
 
 pytestmark = pytest.mark.django_db
 
@@ -60,7 +61,7 @@ def at(s):
 def test_follows_a_new_leg_and_gives_a_new_shift_its_map(leg, media_root):
     vehicle = leg.shift.vehicle
     recorder = Recorder(lambda: open_leg_for_vehicle(vehicle))
-    png = b"\x89PNG\r\n\x1a\n" + b"0" * 20
+    png = grey_png(10, size=(2, 2))
     grid = {
         "frame": "map",
         "width": 2,
@@ -94,18 +95,31 @@ def test_follows_a_new_leg_and_gives_a_new_shift_its_map(leg, media_root):
     assert MapImage.objects.filter(shift=new_shift, origin_yaw=0.3).count() == 1
 
 
+def test_a_stop_stored_after_the_next_leg_opened_starts_nothing_there(leg):
+    """Ending a leg stops logging; if the next leg opens before the stop is
+    stored, the stop still belongs to the leg it was given in."""
+    vehicle = leg.shift.vehicle
+    recorder = Recorder(lambda: open_leg_for_vehicle(vehicle))
+    recorder.apply([Event(ev.START, at(0)), Event(ev.MODE, at(1), {"mode": "auto"})])
+    logs.close_leg(leg)
+    next_leg = logs.create_leg(shift=leg.shift)
+    recorder.apply([Event(ev.STOP, at(2))])
+    assert not Segment.objects.filter(leg=next_leg).exists()
+    assert recorder.leg == next_leg and not recorder.state["logging"]
+
+
 def test_images_only_for_a_new_master_and_stop_closes(leg, media_root):
     recorder = Recorder(lambda: leg)
     auto = Event(ev.MODE, at(1), {"mode": "auto"})
     again = Event(ev.MODE, at(2), {"mode": "auto"})  # e.g. first message after a restart
-    jpeg = b"\xff\xd8\xff\xe0" + b"0" * 50
+    picture = jpeg(50)
     recorder.apply(
         [
             Event(ev.START, at(0)),
             auto,
-            Event(ev.IMAGE, at(1), {"master": str(auto.uid), "suffix": "jpg"}, blob=jpeg),
+            Event(ev.IMAGE, at(1), {"master": str(auto.uid), "suffix": "jpg"}, blob=picture),
             again,
-            Event(ev.IMAGE, at(2), {"master": str(again.uid), "suffix": "jpg"}, blob=jpeg),
+            Event(ev.IMAGE, at(2), {"master": str(again.uid), "suffix": "jpg"}, blob=picture),
             Event(ev.STOP, at(3)),
         ]
     )

@@ -5,12 +5,12 @@ import uuid
 
 import pytest
 
-from events import roles
+from common import roles
 from telemetry.models import LocalPose, MapImage, Pose
 from telemetry.services import recording
 from telemetry.services.recording import GpsFix, MapPose
-from tests.events.api.crud import CrudTests, assert_error_shape
-from tests.telemetry.api.conftest import png, upload
+from tests.support.api import CrudTests, assert_error_shape
+from tests.support.images import png, upload
 
 RECORDED = ("create", "delete")
 
@@ -221,7 +221,7 @@ class TestImages(CrudTests):
 
     @pytest.fixture
     def instance(self, auto_master, media_root):
-        return recording.attach_image(auto_master, content=png(fmt="JPEG"), filename="a.jpg")
+        return recording.attach_image(auto_master, content=png(fmt="JPEG"))
 
     @pytest.fixture
     def create_data(self, auto_master, media_root):

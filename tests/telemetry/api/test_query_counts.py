@@ -1,13 +1,16 @@
 """Robot-data lists and tracks run a fixed number of queries, however many rows."""
 
+import uuid
+
 import pytest
 
 from events.models import SegmentType
 from events.services import segments
+from telemetry.models import Pose
 from telemetry.services import recording
 from telemetry.services.recording import GpsFix, MapPose
-from tests.events.api.querycount import LIST_QUERIES, assert_constant_queries
-from tests.telemetry.api.conftest import png
+from tests.support.api import LIST_QUERIES, assert_constant_queries, post_counting_queries
+from tests.support.images import png
 
 
 def _poses(n, leg):
@@ -39,7 +42,7 @@ def _maps(n, leg):
 def _images(n, leg):
     master = segments.report_mode(leg, SegmentType.AUTO).master
     for _ in range(n):
-        recording.attach_image(master, content=png(fmt="JPEG"), filename="x.jpg")
+        recording.attach_image(master, content=png(fmt="JPEG"))
 
 
 CASES = {
@@ -68,3 +71,43 @@ def test_list_queries_do_not_grow_with_rows(
         lambda n: add(n, leg),
         most=most,
     )
+
+
+# Token + user, groups, the segment with its master and leg; then the transaction.
+AUTH_AND_SEGMENT = 3
+
+
+def test_a_single_pose_is_one_short_transaction(api_client, leg):
+    child = segments.new_manual_segment(leg)
+    master = child.parent
+    client = api_client("operator")
+    body = {"segment": child.pk, "longitude": 7.1, "latitude": 50.2, "uid": str(uuid.uuid4())}
+    response, every, in_transaction = post_counting_queries(client, "/api/poses/", body)
+    assert response.status_code == 201, response.content
+    # SQLite: the known uids, the insert, the feed row.  PostgreSQL folds the first
+    # two into one insert and adds the NOTIFY that wakes the live pages.
+    assert len(in_transaction) <= 3, in_transaction
+    assert len(every) == AUTH_AND_SEGMENT + len(in_transaction) + 2, every
+    stored = Pose.objects.get(uid=body["uid"])
+    assert (stored.segment_id, stored.point.x, stored.point.y) == (master.pk, 7.1, 50.2)
+    assert stored.pose_source_id == leg.default_pose_source_id
+    assert response.json()["id"] == stored.pk
+    assert response.json()["received"] is not None
+    assert response.json()["pose_source"] == leg.default_pose_source_id
+
+    again, _, _ = post_counting_queries(client, "/api/poses/", body)
+    assert again.status_code == 200 and again.json() == response.json()
+    assert Pose.objects.filter(uid=body["uid"]).count() == 1
+
+
+# SQLite splits long statements by its variable limit; PostgreSQL takes one array per column.
+@pytest.mark.postgis_only
+@pytest.mark.parametrize("size", [10, 1000])
+def test_a_batch_costs_the_same_queries_whatever_its_size(size, api_client, auto_master):
+    client = api_client("operator")
+    poses = [{"longitude": 7.0, "latitude": 50.0 + i * 1e-6} for i in range(size)]
+    body = {"segment": auto_master.pk, "poses": poses}
+    response, _, in_transaction = post_counting_queries(client, "/api/poses/batch/", body)
+    assert response.status_code == 201 and response.json() == {"stored": size}
+    assert len(in_transaction) == 3, in_transaction  # insert, feed row, NOTIFY
+    assert Pose.objects.filter(segment=auto_master).count() == size

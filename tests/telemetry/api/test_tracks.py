@@ -4,13 +4,13 @@ from datetime import UTC, datetime, timedelta
 
 import pytest
 
-from events import roles
+from common import roles
 from events.models import SegmentType
 from events.services import logs, segments
 from telemetry.models.poses import FixStatus
 from telemetry.services import recording
 from telemetry.services.recording import GpsFix, MapPose
-from tests.events.api.crud import assert_error_shape
+from tests.support.api import assert_error_shape
 
 # After the fixtures opened the leg "now": the services refuse times before a parent starts.
 T0 = datetime.now(UTC).replace(microsecond=0) + timedelta(hours=1)

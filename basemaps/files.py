@@ -1,0 +1,128 @@
+"""What a basemap file is: kind, bounds and zooms, read with the format's own library.
+
+``inspect_file`` refuses anything that is not a georeferenced raster or a raster
+tile archive, with a message for the person who uploaded it.
+"""
+
+import sqlite3
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import rasterio
+from django.core.exceptions import ValidationError
+from pmtiles.reader import MmapSource
+from pmtiles.reader import Reader as PMTilesReader
+from pmtiles.tile import TileType
+from rasterio.errors import NotGeoreferencedWarning, RasterioError
+from rio_tiler.errors import RioTilerError
+from rio_tiler.io import Reader as RasterReader
+
+from basemaps.models.layers import MAX_ZOOM, BasemapLayer
+
+SQLITE_MAGIC = b"SQLite format 3\x00"
+PMTILES_MAGIC = b"PMTiles"
+PMTILES_PARTS = ("root", "metadata", "leaf_directory", "tile_data")
+RASTER_TILE_TYPES = {TileType.PNG: "png", TileType.JPEG: "jpg", TileType.WEBP: "webp"}
+# Beyond its native resolution a raster is still drawn, enlarged, for a few zooms.
+OVERZOOM = 3
+
+
+@dataclass
+class FileFacts:
+    kind: str
+    bounds: tuple[float, float, float, float]  # west, south, east, north in degrees
+    min_zoom: int
+    max_zoom: int
+    tile_format: str = ""
+
+
+def refuse(message: str):
+    raise ValidationError(message, code="not_a_basemap")
+
+
+def inspect_file(path) -> FileFacts:
+    path = Path(path)
+    with path.open("rb") as f:
+        head = f.read(16)
+    if head.startswith(SQLITE_MAGIC):
+        return _mbtiles(path)
+    if head.startswith(PMTILES_MAGIC):
+        return _pmtiles(path)
+    return _raster(path)
+
+
+def _raster(path: Path) -> FileFacts:
+    try:
+        # A plain image is expected here and answered below; no warning in the log.
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", NotGeoreferencedWarning)
+            dataset = rasterio.open(path)
+        with dataset:
+            if dataset.crs is None or dataset.transform.is_identity:
+                refuse(
+                    "This image has no georeference (no coordinate system or position); "
+                    "export it as a GeoTIFF with its CRS."
+                )
+            if dataset.count not in (1, 3, 4):
+                refuse(f"Need 1 (grey), 3 (RGB) or 4 (RGBA) bands, not {dataset.count}.")
+            if set(dataset.dtypes) != {"uint8"}:
+                refuse(f"Need 8-bit bands, not {', '.join(sorted(set(dataset.dtypes)))}.")
+        with RasterReader(str(path)) as reader:
+            bounds = tuple(reader.get_geographic_bounds(reader.tms.rasterio_geographic_crs))
+            low, high = reader.minzoom, reader.maxzoom
+    except (RasterioError, RioTilerError) as exc:
+        refuse(
+            "Not a georeferenced raster (GeoTIFF) nor an MBTiles or PMTiles archive "
+            f"({str(exc).splitlines()[0][:200]})."
+        )
+    # Zoomed out, the orthophoto is still drawn (small, from its overviews), so a
+    # map of a whole test area shows it too; the file's own minimum is not a limit.
+    return FileFacts(BasemapLayer.RASTER, bounds, 0, min(MAX_ZOOM, max(high, low) + OVERZOOM))
+
+
+def _mbtiles(path: Path) -> FileFacts:
+    try:
+        with sqlite3.connect(f"{path.as_uri()}?mode=ro", uri=True) as db:
+            meta = dict(db.execute("SELECT name, value FROM metadata").fetchall())
+            zooms = db.execute("SELECT min(zoom_level), max(zoom_level) FROM tiles").fetchone()
+    except sqlite3.Error as exc:
+        refuse(f"An SQLite file, but not an MBTiles archive ({exc}).")
+    fmt = meta.get("format", "png").lower().replace("jpeg", "jpg")
+    if fmt not in ("png", "jpg", "webp"):
+        refuse(f"Only raster archives can be served; this one holds {fmt!r} tiles.")
+    if zooms[0] is None:
+        refuse("This MBTiles archive holds no tiles.")
+    try:
+        bounds = tuple(float(v) for v in meta["bounds"].split(","))
+    except (KeyError, ValueError):
+        refuse("This MBTiles archive has no bounds in its metadata.")
+    if len(bounds) != 4:
+        refuse("This MBTiles archive has malformed bounds in its metadata.")
+    return FileFacts(
+        BasemapLayer.MBTILES,
+        bounds,
+        int(meta.get("minzoom", zooms[0])),
+        int(meta.get("maxzoom", zooms[1])),
+        fmt,
+    )
+
+
+def _pmtiles(path: Path) -> FileFacts:
+    size = path.stat().st_size
+    try:
+        with path.open("rb") as f:
+            header = PMTilesReader(MmapSource(f)).header()
+    except Exception as exc:  # noqa: BLE001 - the library raises bare errors on bad files
+        refuse(f"A damaged PMTiles archive ({exc}).")
+    # A copy cut short still has a good header; its directories and tiles are missing.
+    ends = [header[f"{part}_offset"] + header[f"{part}_length"] for part in PMTILES_PARTS]
+    if max(ends) > size:
+        refuse(f"A damaged PMTiles archive: {size} bytes of the {max(ends)} it needs.")
+    fmt = RASTER_TILE_TYPES.get(header["tile_type"])
+    if fmt is None:
+        refuse(f"Only raster archives can be served; this one holds {header['tile_type'].name}.")
+    bounds = tuple(
+        header[k] / 1e7 for k in ("min_lon_e7", "min_lat_e7", "max_lon_e7", "max_lat_e7")
+    )
+    return FileFacts(BasemapLayer.PMTILES, bounds, header["min_zoom"], header["max_zoom"], fmt)

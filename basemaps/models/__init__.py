@@ -1,0 +1,3 @@
+from basemaps.models.layers import BasemapLayer, EventBasemap
+
+__all__ = ["BasemapLayer", "EventBasemap"]

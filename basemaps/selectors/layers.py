@@ -1,0 +1,38 @@
+"""Which layers there are and which one a test event starts on."""
+
+from django.urls import reverse
+
+from basemaps.models import BasemapLayer, EventBasemap
+
+
+def default_layer(test_event_id) -> BasemapLayer | None:
+    found = EventBasemap.objects.select_related("layer").filter(test_event_id=test_event_id).first()
+    return found.layer if found else None
+
+
+def tile_url_template(layer: BasemapLayer, fmt: str = "png") -> str:
+    if not layer.served_by_ftt:
+        return layer.url
+    base = reverse("basemap-tile", kwargs={"key": layer.key, "z": 0, "x": 0, "y": 0, "fmt": fmt})
+    return base.replace("/0/0/0.", "/{z}/{x}/{y}.")
+
+
+def layer_list(test_event_id=None) -> list[dict]:
+    """What the GUI's layer switcher offers; the event's default is marked."""
+    default = default_layer(test_event_id) if test_event_id else None
+    return [
+        {
+            "key": layer.key,
+            "name": layer.name,
+            "url": tile_url_template(layer),
+            "attribution": layer.attribution,
+            "minZoom": layer.min_zoom,
+            "maxZoom": layer.max_zoom,
+            # Leaflet wants [[south, west], [north, east]].
+            "bounds": [[layer.south, layer.west], [layer.north, layer.east]]
+            if layer.bounds
+            else None,
+            "default": default is not None and layer.pk == default.pk,
+        }
+        for layer in BasemapLayer.objects.all()
+    ]

@@ -1,0 +1,117 @@
+"""One Web Mercator tile of a layer, as PNG or WebP bytes.
+
+The tile view and the report both call ``render_tile``, so a map in the PDF is
+drawn from the same pixels the GUI shows, without an HTTP request to itself.
+"""
+
+import io
+import sqlite3
+import threading
+from collections import OrderedDict
+from pathlib import Path
+
+import morecantile
+from PIL import Image
+from pmtiles.reader import MmapSource
+from pmtiles.reader import Reader as PMTilesReader
+from rio_tiler.errors import TileOutsideBounds
+from rio_tiler.io import Reader as RasterReader
+
+from basemaps.models import BasemapLayer
+
+FORMATS = {"png": "PNG", "webp": "WEBP"}
+WEB_MERCATOR = morecantile.tms.get("WebMercatorQuad")
+OPEN_FILES = 8
+
+# Opening a GeoTIFF costs more than reading one tile from it, so each thread
+# keeps its last few files open; rasterio datasets must not be shared by threads.
+_local = threading.local()
+
+
+class _OpenFiles:
+    def __init__(self):
+        self.files: OrderedDict = OrderedDict()
+
+    def get(self, path: Path, opener):
+        key = (str(path), path.stat().st_mtime_ns)
+        handle = self.files.pop(key, None)
+        if handle is None:
+            handle = opener(path)
+        self.files[key] = handle
+        while len(self.files) > OPEN_FILES:
+            _, old = self.files.popitem(last=False)
+            old.close()
+        return handle
+
+
+def _open(path: Path, opener):
+    if not hasattr(_local, "files"):
+        _local.files = _OpenFiles()
+    return _local.files.get(path, opener)
+
+
+class _PMTiles:
+    def __init__(self, path: Path):
+        self.handle = path.open("rb")
+        self.reader = PMTilesReader(MmapSource(self.handle))
+
+    def get(self, z, x, y):
+        return self.reader.get(z, x, y)
+
+    def close(self):
+        self.handle.close()
+
+
+def _mbtiles(path: Path):
+    return sqlite3.connect(f"{path.as_uri()}?mode=ro", uri=True, check_same_thread=True)
+
+
+def _raster(path: Path):
+    return RasterReader(str(path))
+
+
+def tile_in_bounds(layer: BasemapLayer, z: int, x: int, y: int) -> bool:
+    if not (layer.min_zoom <= z <= layer.max_zoom and 0 <= x < 2**z and 0 <= y < 2**z):
+        return False
+    if layer.bounds is None:
+        return True
+    west, south, east, north = layer.bounds
+    box = WEB_MERCATOR.bounds(x, y, z)
+    return box.left < east and box.right > west and box.bottom < north and box.top > south
+
+
+def render_tile(layer: BasemapLayer, z: int, x: int, y: int, fmt: str = "png") -> bytes | None:
+    """The tile's image bytes, or None where the layer has nothing to show."""
+    if not layer.served_by_ftt or not layer.file or not tile_in_bounds(layer, z, x, y):
+        return None
+    path = Path(layer.file.path)
+    if layer.kind == BasemapLayer.RASTER:
+        reader = _open(path, _raster)
+        try:
+            image = reader.tile(x, y, z)
+        except TileOutsideBounds:
+            return None
+        # zlevel 1: tiles travel over the field LAN; encoding time matters more than
+        # the ~10 % of bytes the default level saves (benchmarks/basemap_tiles.py).
+        options = {"zlevel": 1} if fmt == "png" else {}
+        return image.render(img_format=FORMATS[fmt], **options)
+    if layer.kind == BasemapLayer.MBTILES:
+        row = (
+            _open(path, _mbtiles)
+            .execute(
+                "SELECT tile_data FROM tiles WHERE zoom_level=? AND tile_column=? AND tile_row=?",
+                # MBTiles count rows from the south (TMS), tile URLs from the north.
+                (z, x, 2**z - 1 - y),
+            )
+            .fetchone()
+        )
+        data = row[0] if row else None
+    else:
+        data = _open(path, _PMTiles).get(z, x, y)
+    if not data:
+        return None
+    if layer.tile_format == fmt:
+        return bytes(data)
+    out = io.BytesIO()
+    Image.open(io.BytesIO(data)).save(out, format=FORMATS[fmt])
+    return out.getvalue()

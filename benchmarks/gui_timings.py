@@ -1,0 +1,161 @@
+"""How fast the cockpit answers: page load to interactive and the main actions.
+
+Starts daphne on a fresh SpatiaLite file, makes a leg with --segments take-overs
+and GPS tracks, drives Chromium at the tablet size (1024x768, touch) and prints
+the median and the slowest of --repeat runs per action, measured from the tap
+until the page shows the result.  Target: page interactive <= 1.5 s, each
+action <= 300 ms.  Run: .venv/bin/python benchmarks/gui_timings.py [--repeat 5]
+"""
+
+import argparse
+import json
+import os
+import re
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+os.environ.setdefault("DJANGO_ALLOW_ASYNC_UNSAFE", "true")
+
+from playwright.sync_api import expect, sync_playwright  # noqa: E402
+
+from tests.support.browser import PASSWORD, Server, login, system_chromium  # noqa: E402
+
+SETUP = """
+import json
+from django.contrib.auth.models import Group, User
+from events.models import PoseSource, Vehicle
+from events.services import logs, segments
+from telemetry.services import recording
+u = User.objects.create_user("otto", password={password!r})
+u.groups.add(Group.objects.get(name="operator"))
+PoseSource.objects.get_or_create(key="gps", defaults={{"short_description": "GPS"}})
+v = Vehicle.objects.create(key="bench", short_description="Bench rover")
+e = logs.create_test_event(location="Bench field", time_zone="Europe/Berlin")
+s = logs.create_shift(test_event=e, vehicle=v)
+other = logs.create_leg(shift=s, weather_id="sunny")
+leg = logs.create_leg(shift=s, weather_id="sunny")
+for i in range({segments}):
+    auto = segments.report_mode(leg, "auto").master
+    fixes = [recording.GpsFix(7.0 + i * 1e-3, 50.0 + j * 1e-5) for j in range(200)]
+    recording.record_poses(auto, fixes)
+    segments.report_mode(leg, "ito")
+segments.report_mode(leg, "auto")
+print(json.dumps({{"event": e.pk, "shift": s.pk, "leg": leg.pk, "other": other.pk}}))
+"""
+
+
+def timed(action, check) -> float:
+    start = time.perf_counter()
+    action()
+    check()
+    return (time.perf_counter() - start) * 1000
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--segments", type=int, default=20)
+    args = parser.parse_args()
+    server = Server(Path(tempfile.mkdtemp()), "http://127.0.0.1:9/tiles/{z}/{x}/{y}.png")
+    server.start()
+    figures: dict[str, list[float]] = {}
+    try:
+        out = server.python(SETUP.format(password=PASSWORD, segments=args.segments))
+        ids = json.loads(out.strip().splitlines()[-1])
+        url = f"{server.url}/?event={ids['event']}&shift={ids['shift']}&leg={ids['leg']}"
+        with sync_playwright() as p:
+            exe = system_chromium()
+            browser = p.chromium.launch(
+                **({"executable_path": exe} if exe else {}), args=["--no-sandbox"]
+            )
+            page = browser.new_page(
+                viewport={"width": 1024, "height": 768}, has_touch=True, is_mobile=True
+            )
+            page.route("**/tiles/**", lambda r: r.fulfill(status=404))
+            login(page, server, "otto")
+            rows = page.locator("#segment-table tbody tr")
+            for _ in range(args.repeat):
+                figures.setdefault("page interactive (load, segments, map)", []).append(
+                    timed(
+                        lambda: page.goto(url),
+                        lambda: expect(page.locator("#gps-map path").first).to_be_attached(),
+                    )
+                )
+                expect(rows).to_have_count(2 * args.segments + 1)
+            for i in range(args.repeat):
+                row = page.locator("#segment-table tbody tr.child").nth(i)
+                figures.setdefault("select a segment (list, map, address)", []).append(
+                    timed(
+                        row.click,
+                        lambda row=row: expect(row).to_have_class(re.compile(r"\bselected\b")),
+                    )
+                )
+                figures.setdefault("quick reason", []).append(
+                    timed(
+                        lambda: page.locator("[data-quick='safety']").click(),
+                        lambda row=row: expect(row.locator("td").nth(2)).to_have_text("Safety"),
+                    )
+                )
+                count = rows.count()
+                figures.setdefault("New take-over (after the question)", []).append(
+                    timed(
+                        lambda: (
+                            page.locator("#segment-new").click(),
+                            page.get_by_role("button", name="Record take-over").click(),
+                        ),
+                        lambda count=count: expect(rows).to_have_count(count + 1),
+                    )
+                    if page.locator("#mode-name").text_content() == "AUTO"
+                    else timed(
+                        lambda: page.locator("#segment-new").click(),
+                        lambda count=count: expect(rows).to_have_count(count + 1),
+                    )
+                )
+                # New selected the take-over it recorded; End closes it.
+                chosen = page.locator("#segment-table tbody tr.selected td").nth(7)
+                expect(page.locator("#segment-end")).to_be_enabled()
+                figures.setdefault("End a segment", []).append(
+                    timed(
+                        lambda: page.locator("#segment-end").click(),
+                        lambda chosen=chosen: expect(chosen).to_have_text("CLOSED"),
+                    )
+                )
+                dialog = page.locator("#segment-dialog")
+                figures.setdefault("open the segment dialog", []).append(
+                    timed(
+                        lambda: page.locator("#segment-edit").click(),
+                        lambda dialog=dialog: expect(
+                            dialog.locator(".notes li").first
+                        ).to_be_visible(),
+                    )
+                )
+                dialog.get_by_role("button", name="Close").click()
+                for leg in ("other", "leg"):
+                    figures.setdefault("switch leg", []).append(
+                        timed(
+                            lambda leg=leg: page.select_option("#pick-leg", str(ids[leg])),
+                            lambda leg=leg: (
+                                expect(page).to_have_url(re.compile(f"leg={ids[leg]}")),
+                                expect(
+                                    page.locator("#segments-empty")
+                                    if leg == "other"
+                                    else rows.first
+                                ).to_be_visible(),
+                            ),
+                        )
+                    )
+            browser.close()
+    finally:
+        server.stop()
+    print(f"{'action':45} {'median ms':>10} {'max ms':>8}  (n, tablet 1024x768)")
+    for name, values in figures.items():
+        print(f"{name:45} {statistics.median(values):10.0f} {max(values):8.0f}  ({len(values)})")
+
+
+if __name__ == "__main__":
+    main()

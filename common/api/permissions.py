@@ -1,0 +1,19 @@
+from rest_framework.permissions import SAFE_METHODS, BasePermission
+
+from common import roles
+
+
+class RolePermission(BasePermission):
+    """Viewers read.  Writing needs the role :data:`common.roles.WRITERS` names
+    for the view's model; views without a model name it (``write_role``)."""
+
+    message = "Your account does not have the role needed for this."
+
+    def has_permission(self, request, view):
+        if request.method in SAFE_METHODS:
+            return roles.has_role(request.user, getattr(view, "read_role", roles.VIEWER))
+        role = getattr(view, "write_role", None)
+        if role is None:
+            queryset = getattr(view, "queryset", None)
+            role = roles.write_role(queryset.model) if queryset is not None else roles.OPERATOR
+        return roles.has_role(request.user, role)

@@ -1,0 +1,26 @@
+"""CSV that a spreadsheet opens as text, not as formulas (CSV injection).
+
+A cell that starts with ``= + - @``, a tab or a carriage return is run as a
+formula by Excel and LibreOffice (``=HYPERLINK(...)`` in a note).  Such text
+cells get a leading apostrophe, as OWASP recommends; numbers stay numbers.
+"""
+
+import csv
+
+_FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+
+
+def safe_cell(value):
+    if isinstance(value, str) and value.startswith(_FORMULA_START):
+        return "'" + value
+    return value
+
+
+class SafeWriter:
+    """csv.writer whose text cells are neutralised; use it for every CSV export."""
+
+    def __init__(self, out, **kwargs):
+        self._writer = csv.writer(out, **kwargs)
+
+    def writerow(self, row):
+        return self._writer.writerow([safe_cell(value) for value in row])

@@ -1,0 +1,113 @@
+"""The write side of the change feed (:class:`events.models.Announcement`).
+
+Every writer (services, collector, importers) calls :func:`announce` inside
+the transaction of its change: the feed shows the change exactly when it is
+committed, and a rolled-back change announces nothing.  The live link
+(:mod:`rosbridge_app.consumers`) reads the feed; it may also listen for new
+rows to wake up at once, but the feed never calls up to it.
+"""
+
+from datetime import timedelta
+
+from django.utils import timezone
+
+from events.models import Announcement, Leg, Segment, Shift, TestEvent
+
+# Kinds every subscriber gets, whatever it watches: the pickers and the
+# collector panel need them.
+LOG_KINDS = frozenset({"log", "deleted", "collector", "command"})
+# More points than this in one batch are not inlined; the browser re-reads the track.
+MAX_INLINE_POINTS = 2000
+PRUNE_EVERY = 500
+# A browser away for longer than this reloads instead of catching up.
+RETENTION = timedelta(hours=1)
+
+
+def _scope(obj) -> tuple[int | None, int | None, int | None]:
+    """(test event, shift, leg) ids of any hierarchy or telemetry row."""
+    if obj is None:
+        return None, None, None
+    if isinstance(obj, TestEvent):
+        return obj.pk, None, None
+    if isinstance(obj, Shift):
+        return obj.test_event_id, obj.pk, None
+    if isinstance(obj, Leg):
+        shift = obj.shift
+        return shift.test_event_id, shift.pk, obj.pk
+    if isinstance(obj, Segment):
+        return _scope(obj.leg)
+    if hasattr(obj, "segment"):  # notes, images, poses
+        return _scope(obj.segment)
+    if hasattr(obj, "shift"):  # maps
+        return _scope(obj.shift)
+    return None, None, None
+
+
+def announce(kind: str, obj=None, *, collector_id: int | None = None, **payload) -> Announcement:
+    test_event, shift, leg = _scope(obj)
+    # The scope travels in the payload too: a deleted leg takes its own
+    # announcements with it (foreign key), so "leg deleted" is kept leg-less.
+    payload.update(test_event=test_event, shift=shift, leg=leg)
+    leg_fk = None if kind == "deleted" else leg
+    return record(kind, leg_id=leg_fk, collector_id=collector_id, payload=payload)
+
+
+def record(kind: str, *, leg_id=None, collector_id=None, payload=None) -> Announcement:
+    """Add one row to the feed as given (the collector link states its own scope)."""
+    event = Announcement.objects.create(
+        kind=kind, leg_id=leg_id, collector_id=collector_id, payload=payload or {}
+    )
+    if event.pk % PRUNE_EVERY == 0:
+        prune()
+    return event
+
+
+def _label(obj) -> str:
+    return type(obj)._meta.model_name
+
+
+def announce_row(obj, *, deleted: bool = False) -> Announcement:
+    """A log level, segment, note, image or map was created, changed or deleted."""
+    kind = "deleted" if deleted else {"mapimage": "map"}.get(_label(obj), _label(obj))
+    if not deleted and isinstance(obj, TestEvent | Shift | Leg):
+        kind = "log"
+    payload = {"model": _label(obj), "id": obj.pk}
+    segment_id = getattr(obj, "segment_id", None)
+    if segment_id is not None:
+        payload["segment"] = segment_id
+    return announce(kind, obj, **payload)
+
+
+def announce_track(segment, points, *, local: bool) -> Announcement | None:
+    """New track points, given as (x, y) or (longitude, latitude) pairs: inlined so that
+    browsers append them without a fetch."""
+    if not points:
+        return None
+    payload = {"segment": segment.pk, "mode": segment.segment_type_id, "count": len(points)}
+    if len(points) <= MAX_INLINE_POINTS:
+        payload["points"] = [[x, y] for x, y in points]
+    return announce("local_poses" if local else "poses", segment, **payload)
+
+
+def prune() -> int:
+    """Drop rows no browser can still need (a browser away longer reloads)."""
+    cutoff = timezone.now() - RETENTION
+    return Announcement.objects.filter(created__lt=cutoff).delete()[0]
+
+
+def after(last_id: int, limit: int = 500) -> list[Announcement]:
+    """Rows newer than ``last_id``, oldest first."""
+    return list(Announcement.objects.filter(pk__gt=last_id).order_by("id")[:limit])
+
+
+def bounds() -> tuple[int, int]:
+    """(first, last) id still in the feed; (0, 0) when empty."""
+    first = Announcement.objects.order_by("id").values_list("id", flat=True).first()
+    last = Announcement.objects.order_by("-id").values_list("id", flat=True).first()
+    return first or 0, last or 0
+
+
+def announced(obj):
+    """``return announced(row)`` at the end of a service function."""
+    announce_row(obj)
+    return obj

@@ -1,0 +1,44 @@
+"""The change feed: one row per change a browser may want to redraw.
+
+Services add a row in the same transaction as the change it describes
+(:mod:`events.feed`), so the feed shows a change exactly when it is committed
+and a rolled-back write announces nothing.  The live link
+(:mod:`rosbridge_app.consumers`) tails it.
+"""
+
+from django.db import models
+from django.utils import timezone
+
+from events.models.hierarchy import Leg
+
+
+class Announcement(models.Model):
+    """One thing a browser may want to redraw; ids only grow, so a reader keeps
+    the last id it saw and asks for everything after it."""
+
+    class Kind(models.TextChoices):
+        COLLECTOR = "collector", "collector status"
+        LOG = "log", "test event, shift or leg"
+        DELETED = "deleted", "row deleted"
+        NOTE = "note", "note"
+        SEGMENT = "segment", "segment opened or closed"
+        POSES = "poses", "GPS poses"
+        LOCAL_POSES = "local_poses", "local poses"
+        IMAGE = "image", "image"
+        MAP = "map", "map"
+        COMMAND = "command", "command result"
+
+    kind = models.CharField(max_length=16, choices=Kind.choices)
+    created = models.DateTimeField(default=timezone.now, db_index=True)
+    # A plain id: the feed sits below the collector link and must not know it.
+    collector_id = models.BigIntegerField(null=True, blank=True)
+    leg = models.ForeignKey(Leg, on_delete=models.CASCADE, null=True, blank=True, related_name="+")
+    payload = models.JSONField(default=dict, blank=True)
+
+    class Meta:
+        # The table keeps the name it had when the feed lived in rosbridge_app.
+        db_table = "rosbridge_app_announcement"
+        ordering = ["id"]
+
+    def __str__(self):
+        return f"#{self.pk} {self.kind}"

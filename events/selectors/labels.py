@@ -1,0 +1,46 @@
+"""What a segment is called: the same words in the GUI, the report, the CSV and the API.
+
+Master segments are numbered per leg in driving order (start, then id), so
+the numbers stay readable however many legs a test event has: "Leg 2 · #7".
+An ITO reason (child) is numbered under its master: "Leg 2 · #7.1".  The
+database id stays a technical detail.
+"""
+
+from collections import defaultdict
+
+from events.models import Segment
+
+
+def leg_numbers(leg_id: int) -> dict[int, str]:
+    """{segment id: "7" or "7.1"} for every segment of one leg."""
+    rows = (
+        Segment.objects.filter(leg_id=leg_id).order_by("start", "id").values_list("id", "parent_id")
+    )
+    return numbers(rows)
+
+
+def numbers(rows) -> dict[int, str]:
+    """Numbers of one leg's segments from (id, parent id) pairs in driving order."""
+    result: dict[int, str] = {}
+    children: dict[int, int] = defaultdict(int)
+    masters = 0
+    pending = []
+    for pk, parent in rows:
+        if parent is None:
+            masters += 1
+            result[pk] = str(masters)
+        else:
+            pending.append((pk, parent))
+    for pk, parent in pending:
+        children[parent] += 1
+        result[pk] = f"{result.get(parent, '?')}.{children[parent]}"
+    return result
+
+
+def label(leg_number: int, number: str) -> str:
+    return f"Leg {leg_number} · #{number}"
+
+
+def segment_label(segment: Segment) -> str:
+    """The label of one segment (one query for its leg's numbering)."""
+    return label(segment.leg.number, leg_numbers(segment.leg_id)[segment.pk])

@@ -1,0 +1,116 @@
+"""Import a robot recording: ``manage.py ftt_import_bag BAG --vehicle KEY [--leg ID|UID]``."""
+
+import json
+import sys
+import uuid
+
+from django.core.management.base import BaseCommand, CommandError
+from django.db.models import Q
+
+from common.progress import ProgressBar
+from events.models import Leg, TestEvent, Vehicle
+from exchange.bag import BagImportError, import_bag
+from rosbridge_app.collector.modes import MODE_TYPES
+
+PHASES = {"reading": "Reading messages", "storing": "Storing events  "}
+
+
+def _pairs(values: list[str], prefix: str) -> dict:
+    out = {}
+    for item in values or []:
+        name, sep, raw = item.partition("=")
+        if not sep:
+            raise CommandError(f"'{item}' is not NAME=VALUE.")
+        try:
+            value = json.loads(raw)
+        except ValueError:
+            value = raw
+        out[name if name.startswith(prefix) else prefix + name] = value
+    return out
+
+
+def _lookup(model, ident: str | None):
+    if ident is None:
+        return None
+    try:
+        lookup = Q(pk=int(ident)) if ident.isdigit() else Q(uid=uuid.UUID(ident))
+        return model.objects.get(lookup)
+    except (model.DoesNotExist, ValueError):
+        raise CommandError(f"No {model._meta.verbose_name} with id or uid '{ident}'.") from None
+
+
+class Command(BaseCommand):
+    help = (
+        "Import a ROS 1 bag or a ROS 2 bag (sqlite3 or mcap) with the live collector's rules: "
+        "segments from the mode topic, GPS and local poses, maps and camera images. Without "
+        "--leg a new test event, shift and leg spanning the recording are made. Importing "
+        "the same bag again adds nothing."
+    )
+
+    def add_arguments(self, parser):
+        parser.add_argument("bag", help="A .bag file, or a ROS 2 bag directory / .db3 / .mcap.")
+        parser.add_argument("--vehicle", required=True, help="Key of the vehicle that recorded.")
+        parser.add_argument("--leg", help="Open leg (id or uid) to log into.")
+        parser.add_argument("--test-event", help="Open test event for the new shift.")
+        parser.add_argument(
+            "--mode-type",
+            choices=MODE_TYPES,
+            help="Type of the mode topic (collector default: bool).",
+        )
+        parser.add_argument(
+            "--topic",
+            action="append",
+            metavar="NAME=TOPIC",
+            help="Topic name as for the collector, e.g. robot_mode=/mode or gps_fix=/fix.",
+        )
+        parser.add_argument(
+            "--param",
+            action="append",
+            metavar="NAME=VALUE",
+            help="Collector parameter, e.g. pose_min_distance=1.0 or use_tf=false.",
+        )
+        parser.add_argument(
+            "--snapshots",
+            action="store_true",
+            help="Also cut the black box's window around every take-over into an MCAP "
+            "file on its ITO segment, as the live collector does.",
+        )
+        parser.add_argument(
+            "--snapshot",
+            action="append",
+            metavar="NAME=VALUE",
+            help="Snapshot parameter, e.g. before=30, after=5 or topics=/fix,/odom.",
+        )
+
+    def handle(
+        self, *args, bag, vehicle, leg, test_event, mode_type, topic, param, snapshot, **options
+    ):
+        try:
+            vehicle_row = Vehicle.objects.get(key=vehicle)
+        except Vehicle.DoesNotExist:
+            raise CommandError(f"No vehicle with key '{vehicle}'.") from None
+        params = _pairs(topic, "topics.") | _pairs(param, "params.") | _pairs(snapshot, "snapshot.")
+        if mode_type:
+            params["params.robot_mode_type"] = mode_type
+        self.stderr.write(f"Importing {bag}")
+        bar = ProgressBar(options.get("stderr") or sys.stderr)
+        try:
+            result = import_bag(
+                bag,
+                vehicle=vehicle_row,
+                leg=_lookup(Leg, leg),
+                test_event=_lookup(TestEvent, test_event),
+                params=params,
+                progress=lambda phase, done, total: bar.count(PHASES[phase], done, total),
+                snapshots=options["snapshots"],
+            )
+        except BagImportError as exc:
+            raise CommandError(str(exc)) from None
+        masters = result.leg.segments.filter(parent__isnull=True).count()
+        added = ", ".join(f"{n} {name}" for name, n in result.added.items())
+        self.stdout.write(
+            f"{result.events} events from the bag into {result.leg} of {result.leg.shift} "
+            f"({result.leg.shift.test_event}): {masters} master segments in the leg; "
+            f"added {added}; {result.skipped} event(s) stored nothing (already there, or "
+            f"outside an open segment)."
+        )

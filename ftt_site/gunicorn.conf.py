@@ -1,0 +1,40 @@
+"""Gunicorn settings for FTT's production server: ``gunicorn -c ftt_site/gunicorn.conf.py``.
+
+Gunicorn supervises the processes (restarts a crashed one, graceful reloads);
+each runs Uvicorn, which streams request bodies to the application with flow
+control instead of buffering them (Daphne reads a whole body into memory
+first). README's production section explains the choice and the budget.
+"""
+
+import os
+
+bind = os.environ.get("FTT_BIND", "127.0.0.1:8000")
+workers = int(os.environ.get("FTT_WEB_WORKERS", "2"))
+worker_class = "uvicorn_worker.UvicornWorker"
+# A worker that has not answered its supervisor for this long is replaced.
+timeout = 120
+graceful_timeout = 30
+# The websocket of an idle browser stays open; keep-alive for its API calls.
+keepalive = 5
+accesslog = os.environ.get("FTT_ACCESS_LOG") or None
+# Load Django once before forking: the address is bound only when the
+# application is ready (no connections accepted and left unanswered while a
+# worker imports), and the workers share the loaded code. Not when debugging:
+# scripts/run.sh then passes --reload, which needs the code loaded per worker.
+preload_app = os.environ.get("FTT_DEBUG", "0").lower() not in ("1", "true", "yes", "on")
+
+
+def on_starting(server):
+    """Runs after the preload, before the address is bound.
+
+    Django imports views and compiles templates on the first request; done here
+    the first page a user asks for comes as fast as the next ones.
+    """
+    if not server.cfg.preload_app:
+        return
+    # Imported here: this file is read before Django is set up.
+    from django.template.loader import get_template
+    from django.urls import resolve
+
+    resolve("/login/")
+    get_template("registration/login.html")

@@ -1,0 +1,30 @@
+"""Operator GUI pages and the few JSON reads only the GUI needs."""
+
+from django.contrib.auth import views as auth_views
+from django.urls import path, re_path
+
+from gui.views import archive_import, gui_api, media, pages
+
+urlpatterns = [
+    path("", pages.index, name="gui-index"),
+    path("favicon.ico", pages.favicon, name="favicon"),
+    path(
+        "login/",
+        auth_views.LoginView.as_view(redirect_authenticated_user=True),
+        name="login",
+    ),
+    path("logout/", auth_views.LogoutView.as_view(), name="logout"),
+    path("import/", archive_import.archive_import, name="gui-archive-import"),
+    path("gui/api/legs/<int:pk>/tracks/", gui_api.LegTracks.as_view(), name="gui-leg-tracks"),
+    path("gui/api/legs/<int:pk>/labels/", gui_api.LegLabels.as_view(), name="gui-leg-labels"),
+    path("gui/api/shifts/<int:pk>/local-map/", gui_api.ShiftLocalMap.as_view(), name="gui-map"),
+    path("gui/api/basemaps/", gui_api.Basemaps.as_view(), name="gui-basemaps"),
+    path("gui/api/collectors/", gui_api.CollectorStatus.as_view(), name="gui-collectors"),
+    path(
+        "gui/api/collectors/<int:pk>/commands/",
+        gui_api.CollectorCommands.as_view(),
+        name="gui-collector-commands",
+    ),
+    # Photos and maps are field data: only logged-in users with a role see them.
+    re_path(r"^media/(?P<path>.+)$", media.protected_media, name="gui-media"),
+]

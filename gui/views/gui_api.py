@@ -1,0 +1,177 @@
+"""Read-only JSON the GUI needs beyond the REST API: tracks of a leg drawn in
+one request, and the local map with its placement on the GPS map.
+
+Same authentication, roles and error shape as /api/ (DRF views with the
+project defaults); the numbers come from selectors, never from here.
+"""
+
+import numpy as np
+from django.shortcuts import get_object_or_404
+from django.utils.decorators import method_decorator
+from django.views.decorators.gzip import gzip_page
+from drf_spectacular.utils import extend_schema
+from rest_framework.exceptions import ValidationError
+from rest_framework.response import Response
+from rest_framework.views import APIView
+
+from basemaps.selectors.layers import layer_list
+from common import roles
+from events.models import Leg, SegmentType, Shift, Vehicle
+from events.selectors.labels import label, leg_numbers
+from rosbridge_app.models import Collector
+from rosbridge_app.selectors.collectors import collector_status, collectors
+from rosbridge_app.selectors.control import (
+    logging_control,
+    parameter_rows,
+)
+from rosbridge_app.services.collectors import issue_command
+from telemetry.selectors.distances import displayed_distances
+from telemetry.selectors.maps import current_map
+from telemetry.selectors.overlay import map_corners, overlay
+from telemetry.selectors.tracks import (
+    GPS,
+    LOCAL,
+    MAX_ZOOM,
+    load_tracks,
+    simplified,
+    zoom_tolerance,
+)
+
+
+@extend_schema(exclude=True)
+class GuiView(APIView):
+    """Internal to the GUI pages, so kept out of the documented /api/ schema."""
+
+
+# A leg's tracks are megabytes of repetitive digits; gzip shrinks them about
+# threefold.  They hold no secret next to user input, so BREACH does not apply.
+@method_decorator(gzip_page, name="dispatch")
+class LegTracks(GuiView):
+    """Every master segment's GPS and local track, with its driven distance, and
+    every segment's label ("Leg 2 · #7"), so the page names segments as the report does.
+
+    ``?zoom=Z`` (the GPS map's zoom level) thins each GPS track to what that zoom
+    can show (see docs/gui.md); distances are always those of the full tracks."""
+
+    def get(self, request, pk):
+        leg = get_object_or_404(Leg, pk=pk)
+        tolerance = _zoom_tolerance(request.query_params.get("zoom"))
+        masters = list(leg.segments.filter(parent__isnull=True).order_by("start", "id"))
+        ids = [m.pk for m in masters]
+        gps = load_tracks(ids, GPS)
+        local = load_tracks(ids, LOCAL)
+        distances = displayed_distances(masters, gps, local)
+        segments = {}
+        for master in masters:
+            segment_id, mode = master.pk, master.segment_type_id
+            g, lo = gps.get(segment_id), local.get(segment_id)
+            segments[segment_id] = {
+                "mode": mode,
+                "ito": mode == SegmentType.ITO,
+                # [lat, lon]: the order Leaflet takes.
+                "gps": [] if g is None else _pairs(*simplified(g.y, g.x, tolerance)),
+                "local": [] if lo is None else _pairs(lo.x, lo.y),
+                "distance_m": distances[segment_id],
+            }
+        body = {"leg": leg.pk, "segments": segments, "labels": leg_labels(leg)}
+        if tolerance:
+            body["tolerance_deg"] = tolerance
+        return Response(body)
+
+
+def _zoom_tolerance(zoom) -> float:
+    if zoom is None:
+        return 0.0
+    if not (zoom.isascii() and zoom.isdigit()) or int(zoom) > MAX_ZOOM:
+        raise ValidationError({"zoom": [f"Give a zoom level from 0 to {MAX_ZOOM}."]})
+    return zoom_tolerance(int(zoom))
+
+
+def _pairs(a, b) -> list[list[float]]:
+    # 1e-7 degrees is 1 cm; the 17 digits a float prints would triple the bytes.
+    return np.round(np.column_stack([a, b]), 7).tolist()
+
+
+def leg_labels(leg: Leg) -> dict[int, str]:
+    return {pk: label(leg.number, n) for pk, n in leg_numbers(leg.pk).items()}
+
+
+class LegLabels(GuiView):
+    """Every segment's label, read with the segment list so that new segments are named at once."""
+
+    def get(self, request, pk):
+        leg = get_object_or_404(Leg, pk=pk)
+        return Response({"leg": leg.pk, "labels": leg_labels(leg)})
+
+
+class ShiftLocalMap(GuiView):
+    """The shift's newest map, where its corners lie, and the GPS overlay if known."""
+
+    def get(self, request, pk):
+        shift = get_object_or_404(Shift, pk=pk)
+        image = current_map(shift)
+        data = None
+        if image is not None:
+            data = {
+                "id": image.pk,
+                "url": image.image.url,
+                "frame": image.frame,
+                "width": image.width,
+                "height": image.height,
+                "resolution": image.resolution,
+                "origin": [image.origin_x, image.origin_y, image.origin_yaw],
+                "corners": {k: list(v) for k, v in map_corners(image).items()},
+            }
+        return Response({"shift": shift.pk, "map": data, "overlay": overlay(shift, image)})
+
+
+class Basemaps(GuiView):
+    """The layers of the map's switcher; ``?event=`` marks that test event's default."""
+
+    def get(self, request):
+        event = request.query_params.get("event", "")
+        if event and not event.isdigit():
+            raise ValidationError({"event": ["Give the test event's id."]})
+        return Response({"layers": layer_list(int(event) if event else None)})
+
+
+class CollectorStatus(GuiView):
+    """The collector of a vehicle, and whether logging may be switched now."""
+
+    def get(self, request):
+        vehicle = request.query_params.get("vehicle")
+        leg_id = request.query_params.get("leg")
+        if not (vehicle or "").isdigit():
+            raise ValidationError({"vehicle": ["Give the vehicle id."]})
+        collector = (
+            collectors(Vehicle.objects.filter(pk=int(vehicle)).first())
+            .order_by("-last_seen")
+            .first()
+        )
+        leg = Leg.objects.filter(pk=int(leg_id)).first() if (leg_id or "").isdigit() else None
+        allowed, reason = logging_control(collector, leg)
+        return Response(
+            {
+                "collector": collector_status(collector) if collector else None,
+                "parameters": parameter_rows(collector) if collector else [],
+                "can_toggle": allowed,
+                "reason": reason,
+            }
+        )
+
+
+class CollectorCommands(GuiView):
+    """Start/stop logging and parameter changes, handed to the collector."""
+
+    write_role = roles.OPERATOR
+
+    def post(self, request, pk):
+        collector = get_object_or_404(Collector, pk=pk)
+        kind = request.data.get("kind")
+        arguments = request.data.get("arguments") or {}
+        if not isinstance(arguments, dict):
+            raise ValidationError({"arguments": ["Give the arguments as an object."]})
+        leg_id = request.data.get("leg")
+        leg = Leg.objects.filter(pk=leg_id).first() if isinstance(leg_id, int) else None
+        command = issue_command(collector, kind, arguments, user=request.user, leg=leg)
+        return Response({"id": command.pk, "kind": command.kind}, status=202)

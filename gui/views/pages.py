@@ -1,0 +1,74 @@
+"""The operator GUI: one page whose script talks to /api/ and to ws/live/.
+
+The page itself only carries what the script cannot ask the API for: who is
+logged in, which role they have and the site's map settings.
+"""
+
+from django.conf import settings
+from django.contrib.auth.decorators import login_required
+from django.shortcuts import redirect, render
+from django.templatetags.static import static
+from django.urls import reverse
+
+from common import roles
+from events.models import Performer, PoseSource, Vehicle
+from rosbridge_app.selectors.collectors import logging_into
+
+
+def missing_configuration() -> list[str]:
+    """What an administrator must add before the first shift can start."""
+    checks = (
+        (Performer, "a performer", "admin:events_performer_add"),
+        (Vehicle, "a vehicle", "admin:events_vehicle_add"),
+        (PoseSource, "a pose source", "admin:events_posesource_add"),
+    )
+    missing = []
+    for model, label, url_name in checks:
+        if not model.objects.exists():
+            try:
+                url = reverse(url_name)
+            except Exception:  # noqa: BLE001 - admin not registered yet: plain text
+                url = ""
+            missing.append({"label": label, "url": url})
+    return missing
+
+
+def logged_leg() -> dict | None:
+    """The leg a collector is logging into, offered when the address names none."""
+    collector = logging_into().first()
+    if collector is None:
+        return None
+    leg = collector.leg
+    return {"event": leg.shift.test_event_id, "shift": leg.shift_id, "leg": leg.pk}
+
+
+@login_required
+def index(request):
+    user = request.user
+    is_admin = roles.has_role(user, roles.ADMINISTRATOR)
+    personnel = getattr(user, "personnel", None)
+    context = {
+        "can_view": roles.has_role(user, roles.VIEWER),
+        "can_operate": roles.has_role(user, roles.OPERATOR),
+        "is_admin": is_admin,
+        "missing": missing_configuration() if is_admin else [],
+        "levels": [("event", "Test event"), ("shift", "Shift"), ("leg", "Leg")],
+        "gui_config": {
+            "tileUrl": settings.FTT_TILE_URL,
+            "tileAttribution": getattr(settings, "FTT_TILE_ATTRIBUTION", ""),
+            "canOperate": roles.has_role(user, roles.OPERATOR),
+            "isAdmin": is_admin,
+            "user": user.get_full_name() or user.get_username(),
+            "personnel": personnel.pk if personnel else None,
+            "loggingLeg": logged_leg(),
+            "wsPath": "/ws/live/",
+            "apiRoot": "/api/",
+            "guiApiRoot": "/gui/api/",
+        },
+    }
+    return render(request, "gui/index.html", context)
+
+
+def favicon(request):
+    # Browsers ask for /favicon.ico whatever the page links; the icon is a static SVG.
+    return redirect(static("gui/favicon.svg"), permanent=True)

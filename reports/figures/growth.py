@@ -1,0 +1,76 @@
+"""Figures of the comparison report: reliability growth and take-over hotspots."""
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from reports.figures.maps import _projection  # noqa: E402
+from reports.figures.style import rgb  # noqa: E402
+
+
+def growth_chart(points, total, fit, path) -> str:
+    """Cumulative interventions against cumulative autonomous distance (km),
+    with the Crow-AMSAA fit and its band when there is one."""
+    fig, ax = plt.subplots(figsize=(7.0, 3.2), layout="constrained")
+    km = [p["distance"] / 1000 for p in points]
+    ax.step(km, [p["interventions"] for p in points], where="post", color="black", label="observed")
+    ax.plot(km, [p["interventions"] for p in points], "o", color="black", markersize=3)
+    if fit is not None:
+        t = np.linspace(total / 200, total, 200)
+        n, beta = fit["interventions"], fit["beta"]
+        ax.plot(
+            t / 1000, n * (t / total) ** beta, color="#1f77b4", label=f"Crow-AMSAA, β = {beta:.2f}"
+        )
+        ax.fill_between(
+            t / 1000,
+            n * (t / total) ** fit["beta_upper"],
+            n * (t / total) ** fit["beta_lower"],
+            color="#1f77b4",
+            alpha=0.2,
+            label="90 % band",
+        )
+    ax.set_title("Reliability growth: cumulative interventions")
+    ax.set_xlabel("cumulative autonomous distance [km]", fontsize=7)
+    ax.set_ylabel("interventions [count]", fontsize=7)
+    ax.set_xlim(left=0)
+    ax.set_ylim(bottom=0)
+    ax.legend(fontsize=7)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def hotspot_chart(hotspots, reasons, path) -> str | None:
+    """Take-over start positions in metres around their centre, coloured by reason."""
+    if not hotspots:
+        return None
+    lon = np.array([h["x"] for h in hotspots])
+    lat = np.array([h["y"] for h in hotspots])
+    forward, _ = _projection(float(lon.mean()), float(lat.mean()))
+    x, y = forward.transform(lon, lat)
+    fig, ax = plt.subplots(figsize=(7.0, 4.5), layout="constrained")
+    keys = [h["reasons"][0] if h["reasons"] else "unassigned" for h in hotspots]
+    for key in sorted(set(keys)):
+        chosen = [i for i, k in enumerate(keys) if k == key]
+        reason = reasons.get(key)
+        ax.scatter(
+            np.asarray(x)[chosen],
+            np.asarray(y)[chosen],
+            s=25,
+            color=rgb(reason.color) if reason else "grey",
+            edgecolors="black",
+            linewidths=0.4,
+            label=reason.short_description if reason else key,
+        )
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_title("Take-over hotspots: where interventions started")
+    ax.set_xlabel("east [m]", fontsize=7)
+    ax.set_ylabel("north [m]", fontsize=7)
+    ax.grid(True, linewidth=0.4, alpha=0.6)
+    ax.legend(fontsize=7)
+    fig.savefig(path)
+    plt.close(fig)
+    return path

@@ -1,0 +1,90 @@
+"""The comparison report: several test events side by side, as a PDF.
+
+The figures are the comparison selector's; this only formats them and lets
+typst set them, with user text passed as JSON data, never as markup.
+"""
+
+import json
+import shutil
+import tempfile
+from pathlib import Path
+
+import typst
+
+from events.models import ItoReason, TestEvent
+from reports import formatting as fmt
+from reports.figures import style
+from reports.figures.growth import growth_chart, hotspot_chart
+from reports.selectors.comparison import compare
+from reports.selectors.statistics import Estimate
+from reports.services.rendering import TEMPLATE_DIR, ReportError
+from telemetry.selectors.tracks import GPS
+
+
+def _estimate(data: dict) -> Estimate:
+    return Estimate(**data)
+
+
+def _row(name: str, f: dict) -> list[str]:
+    mdbi, mtbi = _estimate(f["mdbi"]), _estimate(f["mtbi"])
+    return [
+        name,
+        str(f["interventions"]),
+        fmt.metres(f["auto_distance"]),
+        fmt.estimate(mdbi, fmt.metres),
+        fmt.bounds(mdbi, fmt.metres),
+        fmt.estimate(mtbi, fmt.duration),
+        fmt.bounds(mtbi, fmt.duration),
+        fmt.rate(f["interventions_per_km"]),
+        fmt.rate(f["interventions_per_hour"]),
+    ]
+
+
+def render_comparison(events: list[TestEvent], mode: str = GPS) -> bytes:
+    if len(events) < 2:
+        raise ReportError("A comparison needs at least two test events.")
+    data = compare(events, mode)
+    style.apply()
+    reasons = {r.key: r for r in ItoReason.objects.all()}
+    with tempfile.TemporaryDirectory(prefix="ftt-compare-") as tmp:
+        root = Path(tmp)
+        growth = data["growth"]
+        growth_chart(growth["points"], growth["total_distance"], growth["fit"], root / "growth.svg")
+        hotspots = hotspot_chart(data["hotspots"], reasons, root / "hotspots.svg")
+        fit = growth["fit"]
+        document = {
+            "events": [_row(f"{e['id']}: {e['name']}", e["figures"]) for e in data["test_events"]],
+            "versions": [_row(v["version"], v["figures"]) for v in data["versions"]],
+            "vehicles": [_row(v["name"], v["figures"]) for v in data["vehicles"]],
+            "growth": "growth.svg",
+            "fit": None
+            if fit is None
+            else [
+                ["Interventions n", str(fit["interventions"])],
+                ["Autonomous distance T", fmt.metres(fit["exposure"])],
+                [
+                    "β",
+                    f"{fit['beta']:.3f} (90 %: {fit['beta_lower']:.3f} – {fit['beta_upper']:.3f})",
+                ],
+                [
+                    "Growth parameter 1 − β",
+                    f"{fit['growth']:.3f} (90 %: {fit['growth_lower']:.3f} – "
+                    f"{fit['growth_upper']:.3f})",
+                ],
+            ],
+            "hotspots": "hotspots.svg" if hotspots else None,
+            "hotspot_rows": [
+                [str(h["test_event"]), h["label"], ", ".join(h["reasons"]) or fmt.DASH]
+                for h in data["hotspots"]
+            ],
+            "formulas": [[k, v] for k, v in data["formulas"].items()],
+        }
+        shutil.copy(TEMPLATE_DIR / "compare.typ", root / "compare.typ")
+        try:
+            return typst.compile(
+                str(root / "compare.typ"),
+                root=tmp,
+                sys_inputs={"data": json.dumps(document, ensure_ascii=False)},
+            )
+        except typst.TypstError as exc:
+            raise ReportError(f"Typesetting failed: {exc}") from exc

@@ -1,0 +1,37 @@
+"""What a stored picture may be, whoever stores it (API, collector, imports).
+
+A file's name or declared type says nothing: only what Pillow decodes counts,
+and the stored file gets the extension of the decoded format.  Other formats
+are refused because browsers and the report treat them differently (an
+``.html`` "photo" would be served as a page; EPS goes to Ghostscript).
+"""
+
+import io
+import warnings
+
+from django.conf import settings
+from django.core.exceptions import ValidationError
+from PIL import Image as PilImage
+
+PHOTO_FORMATS = {"JPEG": "jpg", "PNG": "png", "WEBP": "webp"}
+MAP_FORMATS = {"PNG": "png"}
+
+
+def checked_picture(content: bytes, formats: dict[str, str] = PHOTO_FORMATS) -> str:
+    """The extension to store ``content`` under; ValidationError unless it decodes
+    as one of ``formats`` within FTT_MAX_IMAGE_PIXELS."""
+    names = "/".join(formats)
+    limit = settings.FTT_MAX_IMAGE_PIXELS
+    try:
+        with warnings.catch_warnings():
+            # Our own pixel limit answers first; Pillow's warning would only add noise.
+            warnings.simplefilter("ignore", PilImage.DecompressionBombWarning)
+            with PilImage.open(io.BytesIO(content), formats=list(formats)) as picture:
+                if picture.width * picture.height > limit:
+                    raise ValidationError({"image": [f"The image has more than {limit} pixels."]})
+                picture.load()
+                return formats[picture.format]
+    except ValidationError:
+        raise
+    except (OSError, SyntaxError, ValueError, PilImage.DecompressionBombError, KeyError):
+        raise ValidationError({"image": [f"Not a readable {names} image."]}) from None

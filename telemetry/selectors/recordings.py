@@ -1,0 +1,23 @@
+"""Black-box snapshots, for the report and the GUI."""
+
+from collections import defaultdict
+
+from telemetry.models import Recording
+
+
+def recordings_by_master(**filters) -> dict[int, list[Recording]]:
+    """{master segment id: its snapshots in time order}, e.g.
+    ``recordings_by_master(segment__leg__shift__test_event=event)``."""
+    grouped = defaultdict(list)
+    for recording in Recording.objects.filter(**filters).order_by("start", "id"):
+        grouped[recording.segment_id].append(recording)
+    return grouped
+
+
+def summary(recording: Recording) -> str:
+    """One line a person reads: file, window, topics."""
+    topics = ", ".join(recording.topics) or "no topics"
+    return (
+        f"{recording} ({recording.duration:.0f} s, {recording.message_count} messages, "
+        f"{recording.size / 1e6:.1f} MB; {topics})"
+    )

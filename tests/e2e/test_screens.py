@@ -1,0 +1,195 @@
+"""The cockpit at the three screens it is used on: a laptop, a tablet held in one
+hand and a phone.  Nothing scrolls sideways, the main actions are big enough
+to tap, and on the tablet the mode, the reasons and the map share the first screen.
+
+Runs after test_field_walk.py (file order), whose first step needs a server
+without any vehicle."""
+
+import json
+
+import pytest
+from playwright.sync_api import expect
+
+from tests.support.browser import ROOT, login
+
+VIEWPORTS = {
+    "laptop": {"viewport": {"width": 1366, "height": 768}},
+    "tablet": {"viewport": {"width": 1024, "height": 768}, "has_touch": True, "is_mobile": True},
+    "phone": {"viewport": {"width": 390, "height": 844}, "has_touch": True, "is_mobile": True},
+}
+
+# Whatever sticks out of the window or scrolls sideways inside its box; the maps'
+# panes are clipped by Leaflet on purpose, and a long value scrolls in its input.
+OVERFLOWING = """() => {
+  const width = document.documentElement.clientWidth;
+  const out = [];
+  for (const el of document.querySelectorAll("body *")) {
+    if (el.closest(".leaflet-container, dialog:not([open])")) continue;
+    if (["INPUT", "SELECT", "TEXTAREA", "OPTION"].includes(el.tagName)) continue;
+    const r = el.getBoundingClientRect();
+    if (!r.width || !r.height) continue;
+    const style = getComputedStyle(el);
+    const clips = style.overflowX !== "visible";
+    if (r.right > width + 0.5 || r.left < -0.5 || (clips && el.scrollWidth > el.clientWidth + 1)) {
+      out.push(`${el.tagName.toLowerCase()}#${el.id}.${el.className}`);
+    }
+  }
+  if (document.documentElement.scrollWidth > width) out.push("page");
+  return out;
+}"""
+
+MAIN_ACTIONS = (
+    "#mode-panel .quick button, #mode-panel select, #segment-new, #segment-end, #segment-edit, "
+    "#logging-toggle, .log-row button, .log-row select, #segment-table tbody tr, label.switch, "
+    ".topbar nav a, .topbar nav button, #fit-track"
+)
+
+SMALL = """(selector) => Array.from(document.querySelectorAll(selector))
+  .filter((el) => el.getClientRects().length && !el.closest("[hidden]"))
+  .map((el) => [el.id || el.textContent.trim().slice(0, 20), el.getBoundingClientRect()])
+  .filter(([, r]) => r.height < 44 || r.width < 44)
+  .map(([name, r]) => `${name}: ${Math.round(r.width)}x${Math.round(r.height)}`)"""
+
+
+@pytest.fixture(scope="module")
+def driven_leg(server):
+    """A leg with an AUTO run, a take-over and AUTO again (open), with GPS points."""
+    out = server.python(
+        """
+        import json
+        from events.models import Performer, PoseSource, Vehicle
+        from events.services import logs, segments
+        from telemetry.services import recording
+        Performer.objects.get_or_create(institution="Fraunhofer FKIE")
+        PoseSource.objects.get_or_create(key="gps", defaults={"short_description": "GPS"})
+        v = Vehicle.objects.create(key="cockpit-rover", short_description="Cockpit Rover")
+        e = logs.create_test_event(location="Cockpit field", time_zone="Europe/Berlin")
+        s = logs.create_shift(test_event=e, vehicle=v)
+        leg = logs.create_leg(shift=s, weather_id="sunny")
+        first = segments.report_mode(leg, "auto").master
+        recording.record_poses(first, [recording.GpsFix(7.0, 50.0 + i * 1e-4) for i in range(20)])
+        ito = segments.report_mode(leg, "ito").master
+        recording.record_poses(ito, [recording.GpsFix(7.0 + i * 1e-4, 50.002) for i in range(5)])
+        segments.report_mode(leg, "auto")
+        child = ito.children.get()
+        print(json.dumps({"event": e.pk, "shift": s.pk, "leg": leg.pk, "child": child.pk}))
+        """
+    )
+    return json.loads(out.strip().splitlines()[-1])
+
+
+@pytest.mark.parametrize("screen", list(VIEWPORTS))
+def test_cockpit_fits_the_screen(browser, server, driven_leg, shot, screen):
+    page = browser.new_page(**VIEWPORTS[screen])
+    login(page, server, "otto")
+    ids = driven_leg
+    # A shared link restores event, shift, leg and the selected take-over.
+    page.goto(
+        f"{server.url}/?event={ids['event']}&shift={ids['shift']}&leg={ids['leg']}"
+        f"&segment={ids['child']}"
+    )
+    expect(page.locator("#pick-leg")).to_have_value(str(ids["leg"]))
+    selected = page.locator("#segment-table tbody tr.selected")
+    expect(selected).to_have_count(1)
+    expect(selected.locator("td").first).to_have_text("#2.1")
+    expect(page.locator("#mode-name")).to_have_text("AUTO")
+    expect(page.locator("#timeline .bar")).to_have_count(3)
+    expect(page.locator("#collector")).to_be_visible()
+    page.wait_for_timeout(300)  # the map's fit animation
+    shot(page, f"{screen}-cockpit")
+
+    assert page.evaluate(OVERFLOWING) == []
+    assert page.evaluate(SMALL, MAIN_ACTIONS) == []
+
+    if screen == "tablet":
+        height = page.viewport_size["height"]
+        for part in ("#mode-panel", "[data-quick='safety']", "#reason-apply", "#gps-map"):
+            box = page.locator(part).bounding_box()
+            assert box["y"] >= 0 and box["y"] + box["height"] <= height, part
+        for part in ("#segment-table tbody tr >> nth=0", "#collector"):
+            assert page.locator(part).bounding_box()["y"] < height, part
+
+    # Reasons apply to take-overs only: with an AUTO row selected they are off.
+    expect(page.locator("[data-quick='safety']")).to_be_enabled()
+    page.locator("#segment-table tbody tr.auto").first.click()
+    expect(page.locator("[data-quick='safety']")).to_be_disabled()
+    page.close()
+
+
+def test_dialogs_write_nothing_until_save(browser, server, driven_leg, shot):
+    page = browser.new_page(**VIEWPORTS["tablet"])
+    login(page, server, "otto")
+    ids = driven_leg
+    page.goto(f"{server.url}/?event={ids['event']}&shift={ids['shift']}&leg={ids['leg']}")
+    rows = page.locator("#segment-table tbody tr")
+    expect(rows).to_have_count(3)
+    legs = page.locator("#pick-leg option")
+    expect(legs).to_have_count(2)
+
+    # New leg: weather is "—" until chosen; Cancel leaves no leg behind.
+    page.locator('[data-action="new"][data-level="leg"]').click()
+    dialog = page.locator("#form-dialog")
+    expect(dialog.get_by_label("Weather")).to_have_value("")
+    expect(dialog.get_by_label("Weather").locator("option:checked")).to_have_text("—")
+    shot(page, "new-leg-dialog")
+    assert page.evaluate(OVERFLOWING) == []
+    dialog.get_by_role("button", name="Cancel").click()
+    expect(dialog).to_be_hidden()
+    expect(legs).to_have_count(2)
+
+    # New in AUTO asks first; Cancel records nothing.
+    page.locator("#segment-new").click()
+    confirm = page.locator("#confirm-dialog")
+    expect(confirm).to_contain_text("The robot is in AUTO")
+    expect(confirm.locator(".undo-warning")).to_be_hidden()
+    shot(page, "take-over-question")
+    confirm.get_by_role("button", name="Cancel").click()
+    expect(rows).to_have_count(3)
+    page.locator("#segment-new").click()
+    confirm.get_by_role("button", name="Record take-over").click()
+    expect(rows).to_have_count(4)
+    expect(page.locator("#notice")).to_have_text("Take-over recorded.")
+    expect(page.locator("#mode-name")).to_have_text("ITO")
+    shot(page, "take-over-recorded")
+    page.close()
+
+
+AXE = ROOT / "node_modules" / "axe-core" / "axe.min.js"
+
+SERIOUS = """async () => {
+  const result = await axe.run(document, { resultTypes: ["violations"] });
+  return result.violations
+    .filter((v) => ["serious", "critical"].includes(v.impact))
+    .map((v) => `${v.id}: ${v.nodes.map((n) => n.target.join(" ")).join(", ")}`);
+}"""
+
+
+def test_main_page_and_dialogs_have_no_serious_accessibility_problem(
+    browser, server, driven_leg, shot
+):
+    assert AXE.exists(), "run npm ci (scripts/setup.sh --test) for axe-core"
+    # The site's CSP rightly refuses injected scripts; axe is the test's own tool.
+    context = browser.new_context(bypass_csp=True, **VIEWPORTS["tablet"])
+    page = context.new_page()
+    login(page, server, "otto")
+    ids = driven_leg
+    page.goto(f"{server.url}/?event={ids['event']}&shift={ids['shift']}&leg={ids['leg']}")
+    expect(page.locator("#segment-table tbody tr")).not_to_have_count(0)
+    page.add_script_tag(path=str(AXE))
+    assert page.evaluate(SERIOUS) == [], "main page"
+    dialogs = {
+        "form-dialog": lambda: page.locator('[data-action="new"][data-level="leg"]').click(),
+        "confirm-dialog": lambda: page.locator('[data-action="delete"][data-level="leg"]').click(),
+        "segment-dialog": lambda: page.locator("#segment-table tbody tr").first.dblclick(),
+        "reports-dialog": lambda: page.get_by_role("button", name="Reports & exports").click(),
+        "map-settings-dialog": lambda: page.get_by_role("button", name="Map settings").click(),
+    }
+    for name, open_it in dialogs.items():
+        open_it()
+        dialog = page.locator(f"#{name}")
+        expect(dialog).to_be_visible()
+        page.wait_for_timeout(200)  # the dialog's lists arrive from the API
+        assert page.evaluate(SERIOUS) == [], name
+        page.keyboard.press("Escape")
+        expect(dialog).to_be_hidden()
+    context.close()

@@ -1,0 +1,91 @@
+"""The GUI's archive download, the administrators' import and backup endpoints."""
+
+import io
+import zipfile
+
+import pytest
+
+from events.models import TestEvent
+from telemetry.models import Pose
+from tests.support.api import download
+from tests.support.field_day import field_day
+from tests.support.snapshot import snapshot
+
+pytestmark = pytest.mark.django_db
+
+
+def test_viewer_downloads_an_archive_and_administrator_imports_it(api_client, media_root, wipe):
+    event = field_day()
+    data = download(api_client("viewer"), event)
+    assert "data/poses.jsonl" in zipfile.ZipFile(io.BytesIO(data)).namelist()
+    before = snapshot()
+    wipe()
+
+    admin = api_client("administrator")
+    dry = admin.post(
+        "/api/archives/import/",
+        {"archive": io.BytesIO(data), "dry_run": "true"},
+        format="multipart",
+    )
+    assert dry.status_code == 200 and dry.json()["counts"]["poses"]["added"] == 15
+    assert not Pose.objects.exists()
+
+    done = admin.post("/api/archives/import/", {"archive": io.BytesIO(data)}, format="multipart")
+    assert done.status_code == 200 and done.json()["changes"] > 0
+    assert snapshot() == before
+    again = admin.post("/api/archives/import/", {"archive": io.BytesIO(data)}, format="multipart")
+    assert again.json()["changes"] == 0
+
+
+def test_import_and_backup_are_for_administrators_only(api_client, media_root):
+    event = field_day()
+    data = download(api_client("viewer"), event)
+    operator = api_client("operator")
+    refused = operator.post(
+        "/api/archives/import/", {"archive": io.BytesIO(data)}, format="multipart"
+    )
+    assert refused.status_code == 403
+    assert operator.get("/api/backup/").status_code == 403
+    assert api_client(anonymous=True).get(f"/api/test-events/{event.pk}/archive/").status_code in (
+        401,
+        403,
+    )
+
+
+def test_damaged_upload_is_refused_with_a_message(api_client, media_root):
+    response = api_client("administrator").post(
+        "/api/archives/import/", {"archive": io.BytesIO(b"PK\x03\x04 rubbish")}, format="multipart"
+    )
+    assert response.status_code == 400
+    assert "not an FTT archive" in response.json()["detail"]
+    assert not TestEvent.objects.exists()
+
+
+def test_administrator_downloads_a_backup(api_client, media_root):
+    field_day()
+    response = api_client("administrator").get("/api/backup/")
+    assert response.status_code == 200
+    backup = zipfile.ZipFile(io.BytesIO(b"".join(response.streaming_content)))
+    names = backup.namelist()
+    assert any(n.startswith("database/") for n in names)
+    assert sum(n.startswith("media/") for n in names) == 2
+
+
+def test_import_that_conflicts_with_data_here_is_409_and_changes_nothing(
+    api_client, media_root, wipe
+):
+    from events.services import logs
+    from tests.support.field_day import T0, configuration
+
+    data = download(api_client("viewer"), field_day(close=False))
+    wipe()
+    vehicle, *_ = configuration()
+    logs.create_shift(test_event=logs.create_test_event(at=T0), vehicle=vehicle, at=T0)
+    before = snapshot()
+    response = api_client("administrator").post(
+        "/api/archives/import/", {"archive": io.BytesIO(data)}, format="multipart"
+    )
+    assert response.status_code == 409
+    assert "already has an open shift" in response.json()["detail"]
+    assert "Nothing was imported" in response.json()["detail"]
+    assert snapshot() == before

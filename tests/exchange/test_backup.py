@@ -1,0 +1,71 @@
+"""Whole-database backup, restored the way docs/data-exchange.md tells administrators."""
+
+import json
+import os
+import subprocess
+import zipfile
+
+import pytest
+from django.core.management import call_command
+from django.db import connection
+
+from exchange.backup import make_backup
+from tests.support.field_day import field_day
+from tests.support.sites import Site
+from tests.support.snapshot import snapshot
+
+# The backup reads the database from outside this test's connection, so the
+# data must be committed.
+pytestmark = pytest.mark.django_db(transaction=True)
+
+
+def unpack(backup, target):
+    with zipfile.ZipFile(backup) as z:
+        manifest = json.loads(z.read("manifest.json"))
+        assert manifest["format"] == "ftt-backup"
+        z.extractall(target)
+    return manifest
+
+
+@pytest.mark.skipif(connection.vendor != "sqlite", reason="SpatiaLite backup")
+def test_spatialite_backup_restores_to_an_equal_installation(tmp_path, media_root):
+    field_day()
+    before = json.loads(json.dumps(snapshot()))
+    call_command("ftt_backup", str(tmp_path / "backup.zip"), stdout=open(os.devnull, "w"))
+    manifest = unpack(tmp_path / "backup.zip", tmp_path / "unpacked")
+    assert manifest["counts"]["media_files"] == 2
+    restored = tmp_path / "restored"
+    restored.mkdir()
+    (tmp_path / "unpacked/database/ftt.sqlite3").rename(restored / "ftt.sqlite3")
+    (tmp_path / "unpacked/media").rename(restored / "media")
+    assert Site(restored).snapshot() == before
+
+
+@pytest.mark.postgis_only
+@pytest.mark.skipif(connection.vendor != "postgresql", reason="PostGIS backup")
+def test_postgis_backup_restores_with_pg_restore(tmp_path, media_root):
+    field_day()
+    before = json.loads(json.dumps(snapshot()))
+    make_backup(tmp_path / "backup.zip")
+    unpack(tmp_path / "backup.zip", tmp_path / "unpacked")
+    db = connection.settings_dict
+    target = "ftt_restore_xchg"
+    env = os.environ | {"PGPASSWORD": db["PASSWORD"]}
+    server = ["-h", db["HOST"], "-p", str(db["PORT"] or 5432), "-U", db["USER"]]
+    subprocess.run(["dropdb", "--if-exists", "--force", *server, target], env=env, check=True)
+    subprocess.run(["createdb", *server, target], env=env, check=True)
+    try:
+        subprocess.run(
+            ["pg_restore", "--no-owner", "--exit-on-error", *server, "-d", target,
+             str(tmp_path / "unpacked/database/database.pgdump")],
+            env=env, check=True, capture_output=True,
+        )  # fmt: skip
+        url = f"postgis://{db['USER']}:{db['PASSWORD']}@{db['HOST']}:{db['PORT'] or 5432}/{target}"
+        site = Site(
+            tmp_path / "site",
+            FTT_DATABASE_URL=url,
+            FTT_MEDIA_ROOT=str(tmp_path / "unpacked/media"),
+        )
+        assert site.snapshot() == before
+    finally:
+        subprocess.run(["dropdb", "--if-exists", "--force", *server, target], env=env)

@@ -1,0 +1,48 @@
+"""ftt_import_bag --snapshots cuts the black box's windows out of a recording."""
+
+import io
+from datetime import timedelta
+
+import pytest
+from django.core.management import call_command
+
+from events.models import Segment
+from rosbridge_app.collector.bag import bag_messages
+from telemetry.models import Recording
+from tests.support.fkie import FKIE_BAG
+from tests.support.mcap_files import read_mcap
+
+pytestmark = [
+    pytest.mark.django_db,
+    pytest.mark.skipif(not FKIE_BAG.exists(), reason="fkie_test.bag not available"),
+]
+
+
+def test_every_take_over_of_the_bag_gets_its_window_as_mcap(vehicle, media_root):
+    call_command(
+        "ftt_import_bag",
+        str(FKIE_BAG),
+        "--vehicle",
+        "husky",
+        "--snapshots",
+        "--snapshot",
+        "before=5",
+        "--snapshot",
+        "after=2",
+        stdout=io.StringIO(),
+        stderr=io.StringIO(),
+    )
+    itos = list(Segment.objects.filter(parent=None, segment_type_id="ito").order_by("start"))
+    assert len(itos) == 3
+    fixes = [(m.time_ns, m.msg.latitude) for m in bag_messages(FKIE_BAG, {"/gps_fix"})]
+    for ito in itos:
+        (recording,) = Recording.objects.filter(segment=ito)
+        assert recording.start == ito.start - timedelta(seconds=5)
+        assert recording.end == ito.start + timedelta(seconds=2)
+        back = read_mcap(recording.file.path)
+        lo, hi = (t.timestamp() * 1e9 for t in (recording.start, recording.end))
+        expected = [lat for t, lat in fixes if lo <= t <= hi]
+        got = [m.latitude for topic, _, m in back["messages"] if topic == "/gps_fix"]
+        assert got == expected and len(got) > 100
+        assert [m.val for topic, _, m in back["messages"] if topic == "/robot_mode"] == [1]
+        assert "int8 MANUAL" in back["schemas"]["industrial_msgs/msg/RobotMode"]

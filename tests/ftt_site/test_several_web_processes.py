@@ -1,0 +1,95 @@
+"""Two web processes behind one database and one Redis: a change reaches browsers on both."""
+
+import asyncio
+import json
+import os
+
+import pytest
+import requests
+import websockets
+
+from tests.support.drill import WebServer
+
+SESSION = """
+from django.contrib.auth.models import Group, User
+from django.contrib.sessions.backends.db import SessionStore
+from events.models import Vehicle
+from events.services import logs
+from rest_framework.authtoken.models import Token
+user = User.objects.create_user("watcher", password="x")
+user.groups.add(Group.objects.get(name="operator"))
+s = SessionStore()
+s["_auth_user_id"] = str(user.pk)
+s["_auth_user_backend"] = "django.contrib.auth.backends.ModelBackend"
+s["_auth_user_hash"] = user.get_session_auth_hash()
+s.create()
+leg = logs.create_leg(shift=logs.create_shift(
+    test_event=logs.create_test_event(),
+    vehicle=Vehicle.objects.create(key="two", short_description="two")))
+print("SESSION", s.session_key, Token.objects.create(user=user).key, leg.pk)
+"""
+
+
+@pytest.fixture
+def two_servers(tmp_path):
+    redis_url = os.environ.get("FTT_TEST_REDIS_URL")
+    if not redis_url:
+        pytest.skip("needs FTT_TEST_REDIS_URL")
+    env = {"FTT_DATA_DIR": str(tmp_path), "FTT_REDIS_URL": redis_url}
+    servers = []
+    try:
+        for name in ("a", "b"):
+            server = WebServer(env, log=tmp_path / f"server-{name}.log")
+            servers.append(server.start(migrate=not servers))
+        yield servers
+    finally:
+        for server in servers:
+            server.stop()
+
+
+async def first_change(url: str, cookie: str, leg: int, ready: asyncio.Event, timeout=20):
+    async with websockets.connect(
+        url, additional_headers={"Cookie": cookie, "Origin": "http://127.0.0.1"}
+    ) as ws:
+        await ws.send(json.dumps({"type": "subscribe", "leg": leg}))
+        async with asyncio.timeout(timeout):
+            while json.loads(await ws.recv())["type"] != "subscribed":
+                pass
+            ready.set()
+            while True:
+                message = json.loads(await ws.recv())
+                if message["type"] == "events":
+                    return [event["kind"] for event in message["events"]]
+
+
+def test_a_mode_report_on_one_process_reaches_browsers_on_both(two_servers):
+    a, b = two_servers
+    out = a.python(SESSION)
+    _, session, token, leg = next(
+        line for line in out.splitlines() if line.startswith("SESSION")
+    ).split()
+
+    async def drill():
+        ready = [asyncio.Event(), asyncio.Event()]
+        watchers = [
+            asyncio.create_task(
+                first_change(
+                    f"ws://127.0.0.1:{s.port}/ws/live/", f"sessionid={session}", int(leg), r
+                )
+            )
+            for s, r in zip(two_servers, ready, strict=True)
+        ]
+        await asyncio.gather(*(r.wait() for r in ready))
+        answer = await asyncio.to_thread(
+            requests.post,
+            f"{a.url}/api/legs/{leg}/mode/",
+            json={"mode": "auto"},
+            headers={"Authorization": f"Token {token}"},
+            timeout=30,
+        )
+        assert answer.status_code == 201, answer.text
+        return await asyncio.gather(*watchers)
+
+    seen_on_a, seen_on_b = asyncio.run(drill())
+    assert "segment" in seen_on_a
+    assert "segment" in seen_on_b

@@ -1,0 +1,207 @@
+"""The GUI page, login, protected media and the GUI's own JSON reads."""
+
+from urllib.parse import quote
+
+import pytest
+from django.contrib.auth.models import Group, User
+
+from events.models import Performer, PoseSource
+from events.services import segments
+from rosbridge_app.services import collectors
+from telemetry.services import recording
+from tests.support.images import PNG, jpeg
+from tests.support.pages import asset_urls, external_assets
+
+pytestmark = pytest.mark.django_db
+
+
+def member(client, name, role=None, **extra):
+    user = User.objects.create_user(name, password="pw", **extra)
+    if role:
+        user.groups.add(Group.objects.get(name=role))
+    client.force_login(user)
+    return user
+
+
+def test_page_needs_a_login(client):
+    response = client.get("/")
+    assert response.status_code == 302 and response["Location"].startswith("/login/")
+    assert "Sign in" in client.get("/login/").content.decode()
+
+
+def test_administrator_gets_first_run_hint_until_configured(client, vehicle):
+    member(client, "ada", "administrator")
+    page = client.get("/").content.decode()
+    assert "Before the first shift" in page
+    assert "Add a performer" in page and "Add a pose source" in page
+    assert "Add a vehicle" not in page
+    assert "/admin/" in page
+    Performer.objects.create(institution="FKIE")
+    PoseSource.objects.create(key="gps", short_description="GPS")
+    assert "Before the first shift" not in client.get("/").content.decode()
+
+
+def test_every_script_and_stylesheet_of_the_page_is_served_by_ftt_itself(client):
+    # Operators are often offline: Leaflet and our own code must come from this server.
+    member(client, "olga", "operator")
+    page = client.get("/").content.decode()
+    assert external_assets(page) == []
+    urls = asset_urls(page)
+    assert any(url.endswith("leaflet.js") for url in urls)
+    for url in urls:
+        response = client.get(url)
+        assert response.status_code == 200, url
+        assert b"".join(response.streaming_content if response.streaming else [response.content])
+
+
+def test_operator_gets_no_admin_link_and_account_without_role_is_told(client):
+    member(client, "otto", "operator")
+    page = client.get("/").content.decode()
+    assert 'href="/admin/"' not in page and "pick-event" in page
+    client.logout()
+    member(client, "nobody")
+    assert "has no role" in client.get("/").content.decode()
+
+
+def test_photos_are_only_served_to_users_with_a_role(client, leg, media_root):
+    master = segments.report_mode(leg, "ito").master
+    image = recording.attach_image(master, content=jpeg(1))
+    url = image.image.url
+    member(client, "nobody")
+    assert client.get(url).status_code == 403
+    client.logout()
+    member(client, "vera", "viewer")
+    response = client.get(url)
+    assert response.status_code == 200
+    assert b"".join(response.streaming_content) == jpeg(1)
+
+
+def test_behind_nginx_the_file_transfer_is_handed_to_the_proxy(client, leg, media_root, settings):
+    settings.FTT_MEDIA_ACCEL_PREFIX = "/protected-media/"
+    master = segments.report_mode(leg, "ito").master
+    image = recording.attach_image(master, content=jpeg(1))
+    url = image.image.url
+    member(client, "nobody")
+    refused = client.get(url)
+    assert refused.status_code == 403 and "X-Accel-Redirect" not in refused
+    client.logout()
+    member(client, "vera", "viewer")
+    response = client.get(url)
+    assert response.status_code == 200 and response.content == b""
+    assert response["Content-Type"] == "image/jpeg"
+    stored = image.image.name
+    assert response["X-Accel-Redirect"] == "/protected-media/" + quote(stored)
+    # Only existing files under the media root are ever named to the proxy.
+    for bad in ("../ftt.sqlite3", "images/missing.jpg", "%2e%2e/secret_key"):
+        answer = client.get(f"/media/{bad}")
+        assert answer.status_code == 404 and "X-Accel-Redirect" not in answer, bad
+
+
+def test_leg_tracks_carry_points_and_distance(client, leg):
+    member(client, "vera", "viewer")
+    master = segments.report_mode(leg, "auto").master
+    recording.record_poses(master, [recording.GpsFix(7.0, 50.0), recording.GpsFix(7.0, 50.001)])
+    data = client.get(f"/gui/api/legs/{leg.pk}/tracks/").json()
+    track = data["segments"][str(master.pk)]
+    assert track["gps"] == [[50.0, 7.0], [50.001, 7.0]]
+    assert track["distance_m"] == pytest.approx(111.2, abs=0.5)
+
+
+def test_local_map_endpoint_places_the_newest_map(client, shift, media_root):
+    member(client, "vera", "viewer")
+    assert client.get(f"/gui/api/shifts/{shift.pk}/local-map/").json()["map"] is None
+    recording.record_map(
+        shift,
+        png=PNG,
+        frame="map",
+        width=10,
+        height=20,
+        resolution=0.5,
+        origin_x=1.0,
+        origin_y=2.0,
+    )
+    data = client.get(f"/gui/api/shifts/{shift.pk}/local-map/").json()
+    assert data["map"]["corners"]["top_right"] == [6.0, 12.0]
+    assert data["overlay"]["available"] is False
+
+
+def collector_for(vehicle, **fields):
+    defaults = {
+        "vehicle": vehicle,
+        "parameters": {"params.use_tf": True, "params.pose_min_distance": 0.5},
+    }
+    return collectors.heartbeat("sim", **(defaults | fields))
+
+
+def test_logging_can_start_only_with_online_collector_and_open_levels(client, leg, vehicle):
+    member(client, "otto", "operator")
+    url = f"/gui/api/collectors/?vehicle={vehicle.pk}&leg={leg.pk}"
+    assert client.get(url).json() == {
+        "collector": None,
+        "parameters": [],
+        "can_toggle": False,
+        "reason": "No collector has reported for this vehicle.",
+    }
+    collector = collector_for(vehicle)
+    assert client.get(url).json()["can_toggle"] is True
+    start = {"kind": "start_logging", "leg": leg.pk}
+    response = client.post(
+        f"/gui/api/collectors/{collector.pk}/commands/", start, content_type="application/json"
+    )
+    assert response.status_code == 202
+    assert collector.commands.get().arguments == {"leg": leg.pk}
+    from events.services import logs
+
+    logs.close_leg(leg)
+    status = client.get(url).json()
+    assert status["can_toggle"] is False and "open test event" in status["reason"]
+
+
+def test_viewer_cannot_command_and_parameter_types_are_checked(client, leg, vehicle):
+    collector = collector_for(vehicle)
+    url = f"/gui/api/collectors/{collector.pk}/commands/"
+    member(client, "vera", "viewer")
+    body = {"kind": "set_parameters", "arguments": {"parameters": {"params.use_tf": "yes"}}}
+    assert client.post(url, body, content_type="application/json").status_code == 403
+    client.logout()
+    member(client, "otto", "operator")
+    response = client.post(url, body, content_type="application/json")
+    assert response.status_code == 409
+    assert response.json()["errors"] == {"params.use_tf": ["params.use_tf must be true or false"]}
+    body["arguments"]["parameters"] = {"params.use_tf": False, "params.pose_min_distance": 2}
+    assert client.post(url, body, content_type="application/json").status_code == 202
+    assert collector.commands.get().arguments["parameters"] == {
+        "params.use_tf": False,
+        "params.pose_min_distance": 2.0,
+    }
+
+
+def test_photos_open_for_token_clients_with_a_role(client, leg, media_root, role_user):
+    master = segments.report_mode(leg, "ito").master
+    url = recording.attach_image(master, content=jpeg(1)).image.url
+    viewer, nobody = role_user("viewer"), role_user(None)
+    assert client.get(url, HTTP_AUTHORIZATION=f"Token {nobody.auth_token.key}").status_code == 403
+    assert client.get(url, HTTP_AUTHORIZATION="Token not-a-token").status_code == 403
+    response = client.get(url, HTTP_AUTHORIZATION=f"Token {viewer.auth_token.key}")
+    assert response.status_code == 200
+
+
+def test_leg_tracks_name_segments_as_the_report_does(client, leg):
+    member(client, "vera", "viewer")
+    auto = segments.report_mode(leg, "auto").master
+    ito = segments.report_mode(leg, "ito").master
+    child = ito.children.get()
+    labels = client.get(f"/gui/api/legs/{leg.pk}/tracks/").json()["labels"]
+    assert client.get(f"/gui/api/legs/{leg.pk}/labels/").json()["labels"] == labels
+    number = leg.number
+    assert labels == {
+        str(auto.pk): f"Leg {number} · #1",
+        str(ito.pk): f"Leg {number} · #2",
+        str(child.pk): f"Leg {number} · #2.1",
+    }
+
+
+def test_favicon_is_served(client):
+    answer = client.get("/favicon.ico", follow=True)
+    assert answer.status_code == 200
+    assert b"<svg" in b"".join(answer.streaming_content if answer.streaming else [answer.content])

@@ -1,0 +1,74 @@
+"""The GUI's leg tracks thinned for the map's zoom, gzipped, with full-track distances."""
+
+import gzip
+import json
+
+import pytest
+from django.contrib.auth.models import Group, User
+
+from events.services import segments
+from telemetry.selectors.tracks import zoom_tolerance
+from telemetry.services import recording
+
+pytestmark = pytest.mark.django_db
+
+# A 2000-point drive north with a 20 m zigzag every 100 points: about 2.2 km.
+ZIGZAG = 2e-4
+
+
+@pytest.fixture
+def zigzag_leg(client, leg):
+    user = User.objects.create_user("vera", password="pw")
+    user.groups.add(Group.objects.get(name="viewer"))
+    client.force_login(user)
+    master = segments.report_mode(leg, "auto").master
+    fixes = [
+        recording.GpsFix(7.0 + (ZIGZAG if (i // 100) % 2 else 0.0), 50.0 + i * 1e-5)
+        for i in range(2000)
+    ]
+    recording.record_poses(master, fixes)
+    return leg, master
+
+
+def tracks(client, leg, **params):
+    response = client.get(f"/gui/api/legs/{leg.pk}/tracks/", params)
+    assert response.status_code == 200, response.content
+    return response.json()
+
+
+def test_zoomed_out_the_track_is_thin_and_keeps_its_ends(client, zigzag_leg):
+    leg, master = zigzag_leg
+    full = tracks(client, leg)["segments"][str(master.pk)]
+    far = tracks(client, leg, zoom=8)["segments"][str(master.pk)]
+    assert len(full["gps"]) == 2000
+    # At zoom 8 a pixel is 600 m: the 20 m zigzag vanishes, the ends stay.
+    assert len(far["gps"]) < 10
+    assert far["gps"][0] == full["gps"][0] and far["gps"][-1] == full["gps"][-1]
+    assert far["distance_m"] == full["distance_m"] > 2000
+
+
+def test_zoomed_in_every_visible_corner_stays(client, zigzag_leg):
+    leg, master = zigzag_leg
+    near = tracks(client, leg, zoom=18)
+    assert near["tolerance_deg"] == zoom_tolerance(18) < ZIGZAG / 10
+    points = near["segments"][str(master.pk)]["gps"]
+    # Two corners per step of the zigzag (20 steps), and the two ends.
+    assert 40 <= len(points) < 100
+    assert {round(lon, 7) for _, lon in points} == {7.0, 7.0 + ZIGZAG}
+
+
+def test_tracks_are_gzipped_for_a_browser_that_takes_gzip(client, zigzag_leg):
+    leg, _ = zigzag_leg
+    plain = client.get(f"/gui/api/legs/{leg.pk}/tracks/")
+    packed = client.get(f"/gui/api/legs/{leg.pk}/tracks/", HTTP_ACCEPT_ENCODING="gzip")
+    assert packed["Content-Encoding"] == "gzip"
+    assert len(packed.content) < len(plain.content) / 3
+    assert json.loads(gzip.decompress(packed.content)) == plain.json()
+
+
+@pytest.mark.parametrize("zoom", ["-1", "25", "x", "1.5"])
+def test_a_wrong_zoom_is_refused_with_a_field_message(client, zigzag_leg, zoom):
+    leg, _ = zigzag_leg
+    response = client.get(f"/gui/api/legs/{leg.pk}/tracks/", {"zoom": zoom})
+    assert response.status_code == 400
+    assert "zoom" in response.json()["errors"]

@@ -1,0 +1,87 @@
+"""One parameter schema: the collector, the web side and the editor read it.
+
+A wrong value is refused when the operator sends it, with a message under the
+parameter's name, not later by the robot.
+"""
+
+import pytest
+from django.utils import timezone
+
+from rosbridge_app.collector.params import SPECS
+from rosbridge_app.models import Collector, CollectorCommand
+
+pytestmark = pytest.mark.django_db
+
+
+@pytest.fixture
+def collector(vehicle):
+    return Collector.objects.create(
+        name="robot/husky",
+        vehicle=vehicle,
+        last_seen=timezone.now(),
+        parameters={name: spec.default for name, spec in SPECS.items()},
+        topics=[
+            {"name": "/fix", "types": ["sensor_msgs/msg/NavSatFix"]},
+            {"name": "/cam", "types": ["sensor_msgs/msg/Image"]},
+        ],
+    )
+
+
+def send(client, collector, parameters):
+    return client.post(
+        f"/gui/api/collectors/{collector.pk}/commands/",
+        {"kind": "set_parameters", "arguments": {"parameters": parameters}},
+        content_type="application/json",
+    )
+
+
+@pytest.fixture
+def operator(client, role_user):
+    client.force_login(role_user("operator"))
+    return client
+
+
+@pytest.mark.parametrize(
+    "name, value, message",
+    [
+        ("params.pose_min_distance", -1, "must be >= 0"),
+        ("params.image_buffer_size", 500, "must be <= 20"),
+        ("params.pose_min_period", "soon", "must be a number"),
+        ("params.robot_mode_type", "joystick", "must be one of bool, industrial"),
+        ("params.use_tf", 1, "must be true or false"),
+        ("no.such.parameter", 1, "no such parameter"),
+    ],
+)
+def test_a_wrong_value_is_refused_at_once_under_its_name(operator, collector, name, value, message):
+    response = send(operator, collector, {name: value})
+    assert response.status_code in (400, 409), response.content
+    assert message in " ".join(response.json()["errors"][name])
+    assert not CollectorCommand.objects.exists()
+
+
+def test_a_whole_number_is_taken_where_a_number_is_expected(operator, collector):
+    response = send(operator, collector, {"params.pose_min_distance": 2})
+    assert response.status_code == 202, response.content
+    command = CollectorCommand.objects.get()
+    assert command.arguments["parameters"] == {"params.pose_min_distance": 2.0}
+    assert isinstance(command.arguments["parameters"]["params.pose_min_distance"], float)
+
+
+def test_the_editor_rows_come_from_the_schema(operator, collector):
+    rows = {
+        r["name"]: r
+        for r in operator.get(f"/gui/api/collectors/?vehicle={collector.vehicle_id}").json()[
+            "parameters"
+        ]
+    }
+    assert rows["params.image_buffer_size"]["minimum"] == 0
+    assert rows["params.image_buffer_size"]["maximum"] == 20
+    assert rows["params.image_buffer_size"]["type"] == "int"
+    assert rows["params.robot_mode_type"]["choices"] == ["bool", "industrial"]
+    assert rows["topics.gps_fix"]["expects"] == ["sensor_msgs/msg/NavSatFix"]
+    assert rows["topics.gps_fix"]["suggestions"] == ["/fix"]
+    assert rows["topics.robot_mode"]["expects"] == ["std_msgs/msg/Bool"]
+    assert (
+        rows["params.pose_min_distance"]["description"]
+        == SPECS["params.pose_min_distance"].description
+    )

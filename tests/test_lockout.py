@@ -1,0 +1,80 @@
+"""Failed logins on every login path are throttled per account and per address,
+and the person locked out is told when to try again."""
+
+import pytest
+from django.contrib.auth.models import User
+from django.test import Client
+
+pytestmark = pytest.mark.django_db
+
+LOGINS = {
+    "gui": lambda c, user, pw: c.post("/login/", {"username": user, "password": pw}),
+    "admin": lambda c, user, pw: c.post("/admin/login/", {"username": user, "password": pw}),
+    "token": lambda c, user, pw: c.post("/api/token/", {"username": user, "password": pw}),
+}
+
+
+@pytest.fixture
+def ada(settings):
+    settings.AXES_FAILURE_LIMIT = 3
+    return User.objects.create_user("ada", password="right-password-1", is_staff=True)
+
+
+@pytest.mark.parametrize("path", LOGINS)
+def test_guessing_a_password_locks_the_account_and_says_when_to_retry(ada, path):
+    login = LOGINS[path]
+    codes = [login(Client(), "ada", "wrong").status_code for _ in range(3)]
+    assert codes[:2] in ([200, 200], [400, 400]) and codes[2] == 429
+    # Even the right password waits now, from another address too.
+    locked = login(Client(REMOTE_ADDR="10.0.0.9"), "ada", "right-password-1")
+    assert locked.status_code == 429
+    assert int(locked["Retry-After"]) == 15 * 60
+    assert "Try again in 15 minutes" in locked.content.decode()
+
+
+def test_one_address_trying_many_accounts_is_stopped(ada):
+    client = Client(REMOTE_ADDR="10.0.0.7")
+    for name in ("bob", "carl", "dora"):
+        LOGINS["token"](client, name, "123456")
+    locked = LOGINS["gui"](client, "ada", "right-password-1")
+    assert locked.status_code == 429
+    # Ada herself, elsewhere, still gets in.
+    assert LOGINS["token"](Client(), "ada", "right-password-1").status_code == 200
+
+
+def test_behind_the_proxy_each_browser_counts_on_its_own(ada, settings):
+    settings.FTT_BEHIND_PROXY = True
+    for _ in range(3):
+        Client(HTTP_X_FORWARDED_FOR="6.6.6.6, 10.0.0.5").post(
+            "/login/", {"username": "x", "password": "guess"}
+        )
+    # Same proxy, another browser: not locked.
+    other = Client(HTTP_X_FORWARDED_FOR="10.0.0.6").post(
+        "/login/", {"username": "ada", "password": "right-password-1"}
+    )
+    assert other.status_code == 302
+    again = Client(HTTP_X_FORWARDED_FOR="10.0.0.5").post(
+        "/login/", {"username": "y", "password": "guess"}
+    )
+    assert again.status_code == 429
+
+
+def test_api_clients_are_throttled_with_retry_after(api_client, settings):
+    from rest_framework.settings import api_settings
+    from rest_framework.throttling import SimpleRateThrottle
+
+    settings.REST_FRAMEWORK = {
+        **settings.REST_FRAMEWORK,
+        "DEFAULT_THROTTLE_RATES": {"anon": "2/min", "user": "2/min"},
+    }
+    api_settings.reload()
+    SimpleRateThrottle.THROTTLE_RATES = api_settings.DEFAULT_THROTTLE_RATES
+    try:
+        client = api_client("viewer")
+        codes = [client.get("/api/vehicles/").status_code for _ in range(3)]
+        assert codes == [200, 200, 429]
+        assert int(client.get("/api/vehicles/")["Retry-After"]) > 0
+    finally:
+        settings.REST_FRAMEWORK = {**settings.REST_FRAMEWORK}
+        api_settings.reload()
+        SimpleRateThrottle.THROTTLE_RATES = api_settings.DEFAULT_THROTTLE_RATES
