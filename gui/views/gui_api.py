@@ -23,6 +23,7 @@ from rosbridge_app.selectors.collectors import collector_status, collectors
 from rosbridge_app.selectors.control import (
     logging_control,
     parameter_rows,
+    snapshot_control,
 )
 from rosbridge_app.services.collectors import issue_command
 from telemetry.selectors.distances import displayed_distances
@@ -150,18 +151,21 @@ class CollectorStatus(GuiView):
         )
         leg = Leg.objects.filter(pk=int(leg_id)).first() if (leg_id or "").isdigit() else None
         allowed, reason = logging_control(collector, leg)
+        can_snapshot, snapshot_reason = snapshot_control(collector)
         return Response(
             {
                 "collector": collector_status(collector) if collector else None,
                 "parameters": parameter_rows(collector) if collector else [],
                 "can_toggle": allowed,
                 "reason": reason,
+                "can_snapshot": can_snapshot,
+                "snapshot_reason": snapshot_reason,
             }
         )
 
 
 class CollectorCommands(GuiView):
-    """Start/stop logging and parameter changes, handed to the collector."""
+    """Start/stop logging, parameter changes and snapshots, handed to the collector."""
 
     write_role = roles.OPERATOR
 

@@ -141,6 +141,8 @@ def test_logging_can_start_only_with_online_collector_and_open_levels(client, le
         "parameters": [],
         "can_toggle": False,
         "reason": "No collector has reported for this vehicle.",
+        "can_snapshot": False,
+        "snapshot_reason": "No collector has reported for this vehicle.",
     }
     collector = collector_for(vehicle)
     assert client.get(url).json()["can_toggle"] is True
@@ -155,6 +157,29 @@ def test_logging_can_start_only_with_online_collector_and_open_levels(client, le
     logs.close_leg(leg)
     status = client.get(url).json()
     assert status["can_toggle"] is False and "open test event" in status["reason"]
+
+
+def test_snapshot_now_is_offered_while_logging_and_refused_otherwise(client, leg, vehicle):
+    member(client, "otto", "operator")
+    snapshots = {"snapshot.enabled": True, "snapshot.before": 20.0, "snapshot.after": 10.0}
+    collector = collector_for(vehicle, parameters=snapshots)
+    url = f"/gui/api/collectors/?vehicle={vehicle.pk}&leg={leg.pk}"
+    status = client.get(url).json()
+    assert status["can_snapshot"] is False and "start logging" in status["snapshot_reason"]
+    commands = f"/gui/api/collectors/{collector.pk}/commands/"
+    body = {"kind": "snapshot", "leg": leg.pk}
+    refused = client.post(commands, body, content_type="application/json")
+    assert refused.status_code == 409 and "start logging" in str(refused.json())
+    collector_for(vehicle, parameters=snapshots, logging=True)
+    status = client.get(url).json()
+    assert status["can_snapshot"] is True
+    assert status["snapshot_reason"] == (
+        "Saves the robot's messages from 20 s before to 10 s after now."
+    )
+    assert client.post(commands, body, content_type="application/json").status_code == 202
+    assert collector.commands.get().kind == "snapshot"
+    names = [row["name"] for row in status["parameters"]]
+    assert {"snapshot.enabled", "snapshot.before", "snapshot.after"} <= set(names)
 
 
 def test_viewer_cannot_command_and_parameter_types_are_checked(client, leg, vehicle):
