@@ -1,27 +1,40 @@
 """What ftt_collect sustains on this machine, into the configured database.
 
 A simulated robot (ftt_simulate, its own process) publishes GPS at 100 Hz, TF
-at 50 Hz, a 640×480 rgb8 camera at 10 Hz and a 2000×2000 occupancy grid that
-changes every second; this script publishes a mode switch every 2 s and
-times each one from publish to its committed master row.  The collector runs
-as its own process with the shipped parameters (map stored at most once a
-second).  Prints what was published and received, rows written, the
-collector's CPU and memory, the spool backlog, the mode-to-row delay, and how
-long a GUI command (set parameters, issued through the database between two
-mode switches) takes to be carried out while the robot is this busy.
+at 50 Hz, a 640×480 camera at 10 Hz (JPEG of about 60 kB on image_compressed,
+or ``--camera raw`` rgb8 on image) and a 2000×2000 occupancy grid that changes
+every second; this script publishes a mode switch every 2 s and times each one
+from publish to its committed master row.  The collector runs as its own
+process with the shipped parameters (map stored at most once a second).
+Prints what was published and received, rows written, the collector's CPU and
+memory, the spool backlog, the mode-to-row delay, and how long a GUI command
+(set parameters, issued through the database between two mode switches) takes
+to be carried out while the robot is this busy.
 
-The black box buffers the mode, GPS, TF and raw camera topics (9 MB/s) and
-writes a 6 s snapshot at every switch to ITO; ``--snapshot off`` runs without
-it, so the buffer's CPU cost is the difference of the two runs' collector CPU.
+The black box (issue 15) runs with its default topics (mode, GPS, TF, static
+TF, compressed camera; the raw camera with ``--camera raw``) and the default
+20 s before; ``after`` is 2 s so that a run has many snapshots.  With
+``--snapshot alternate`` (default) it is switched on and off every ``--phase``
+seconds through the GUI command path, so the buffer's CPU share is the
+difference of the on and off phases of one run, measured under the same load
+of the shared machine.  In the on phases the switch that follows a take-over
+is published the moment the collector's writer thread has started a snapshot
+file (its ``.part`` file appears in the pending directory), so the mode-to-row
+delay is measured during snapshot writes as well as without.
 
     FTT_DATABASE_URL=postgis://... .venv/bin/python benchmarks/collector_throughput.py \
-        [--seconds 60] [--snapshot on|off]
+        [--seconds 200] [--snapshot alternate|on|off] [--phase 40] [--camera jpeg|raw] \
+        [--map-rate 1] [--ros-domain N]
+
+Also prints first the black box's own cost for 60 s of that traffic, fed
+straight into Blackbox.receive in this process (``--buffer-only``: only that).
 
 Uses a throw-away vehicle and test event in that database and deletes them
 afterwards.  Sets its own ROS domain (40-59) and loopback discovery.
 """
 
 import argparse
+import math
 import os
 import re
 import shutil
@@ -75,24 +88,49 @@ def percentile(values, q):
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seconds", type=float, default=60.0)
+    parser.add_argument("--seconds", type=float, default=200.0)
     parser.add_argument(
         "--reliable",
         action="store_true",
         help="Subscribe GPS and camera RELIABLE (params.sensor_reliable).",
     )
-    parser.add_argument("--snapshot", choices=("on", "off"), default="on")
-    parser.add_argument("--snapshot-after", type=float, default=1.0)
+    parser.add_argument("--camera", choices=("jpeg", "raw"), default="jpeg")
+    parser.add_argument(
+        "--map-rate",
+        type=float,
+        default=1.0,
+        help="Changed 2000×2000 maps per second (0: one latched map); rendering them "
+        "is most of the collector's CPU and of its spread.",
+    )
+    parser.add_argument("--snapshot", choices=("alternate", "on", "off"), default="alternate")
+    parser.add_argument(
+        "--phase",
+        type=float,
+        default=40.0,
+        help="Seconds per on/off phase; longer than before + after, so that most "
+        "snapshots have a full window.",
+    )
+    parser.add_argument("--snapshot-after", type=float, default=2.0)
+    parser.add_argument(
+        "--ros-domain",
+        type=int,
+        help="ROS domain of the run (default 40-59 from the pid; give your own on a "
+        "machine where others run this benchmark too).",
+    )
     parser.add_argument(
         "--buffer-only",
         action="store_true",
         help="Only the black box's own cost, in this process, without ROS or a database.",
     )
     args = parser.parse_args()
+    load_before = os.getloadavg()
     buffer_cost()
     if args.buffer_only:
+        print(f"load average (1, 5, 15 min): {load(load_before)}")
         return
 
+    if args.ros_domain is not None:
+        os.environ["ROS_DOMAIN_ID"] = str(args.ros_domain)
     import rclpy
     from std_msgs.msg import Bool
 
@@ -102,17 +140,19 @@ def main() -> None:
     leg = logs.create_leg(shift=logs.create_shift(test_event=event, vehicle=vehicle))
     work = Path(tempfile.mkdtemp(prefix="ftt-bench-"))
     values = P.read_file(P.DEFAULT_FILE)
+    camera = {
+        "jpeg": {"topics.image": "", "topics.image_compressed": "image_compressed"},
+        # The default snapshot list has the compressed camera only.
+        "raw": {"topics.image": "image", "snapshot.topics": "robot_mode, gps_fix, /tf, image"},
+    }[args.camera]
     values.update(
         {
             "vehicle": key,
             "params.send_map_period": 1.0,
             "params.sensor_reliable": args.reliable,
-            "snapshot.enabled": args.snapshot == "on",
-            # The simulator's camera is raw rgb8 (the default list has the compressed one).
-            "snapshot.topics": "robot_mode, gps_fix, /tf, /tf_static, image",
-            # Mode switches come every 2 s: short windows keep the disk use of a run small.
-            "snapshot.before": 5.0,
+            "snapshot.enabled": args.snapshot != "off",
             "snapshot.after": args.snapshot_after,
+            **camera,
         }
     )
     P.write_file(work / "params.yaml", values)
@@ -139,6 +179,7 @@ def main() -> None:
         stdout=open(work / "collector.log", "wb"),
         stderr=subprocess.STDOUT,
     )
+    writing = SnapshotWatch(work / "spool.snapshots")
     while not Collector.objects.filter(name=key).exists():
         time.sleep(0.2)
     robot = subprocess.Popen(
@@ -153,10 +194,12 @@ def main() -> None:
             "10",
             "--camera-size",
             "640x480",
+            "--camera-format",
+            args.camera,
             "--map-size",
             "2000",
             "--map-rate",
-            "1",
+            str(args.map_rate),
             "--mode-rate",
             "0",
             "--duration",
@@ -175,30 +218,58 @@ def main() -> None:
     mode = node.create_publisher(Bool, "robot_mode", 10)
     while mode.get_subscription_count() == 0:
         time.sleep(0.05)
-    delays, command_delays, cpu_samples, rss_max, pending_max = [], [], [], 0, 0
+    # The simulator takes seconds to start on a loaded machine: measure from
+    # its first messages on, or the first phase would lack its traffic.
+    while not Collector.objects.get(name=key).inputs.get("gps_fix", {}).get("count"):
+        time.sleep(0.1)
+    # Mode → row delays and collector CPU per second, by the black box's state.
+    delays: dict[str, list[float]] = {"off": [], "on": [], "write": []}
+    cpu_by_phase: dict[bool, list[float]] = {True: [], False: []}
+    command_delays, cpu_samples, rss_max, pending_max = [], [], 0, 0
     record = Collector.objects.get(name=key)
     cpu0, _ = proc_sample(collector.pid)
     t0 = time.monotonic()
     auto = False
+    enabled = args.snapshot != "off"
+    phase_start = next_toggle = t0
+    if args.snapshot == "alternate":
+        next_toggle = t0 + args.phase
     next_switch = t0 + 2.0
     last_cpu, last_t = cpu0, t0
     while robot.poll() is None:
         now = time.monotonic()
+        if args.snapshot == "alternate" and now >= next_toggle:
+            enabled = not enabled
+            timed_command(record, {"snapshot.enabled": enabled})
+            phase_start, next_toggle = now, now + args.phase
         if now >= next_switch and now - t0 < args.seconds - 3:
             auto = not auto
             before = Segment.objects.filter(leg=leg, parent__isnull=True).count()
             published = time.monotonic()
             mode.publish(Bool(data=auto))
+            during_write = writing.active()
             while Segment.objects.filter(leg=leg, parent__isnull=True).count() == before:
                 if time.monotonic() - published > 30:
                     break
+                during_write = writing.active() or during_write
                 time.sleep(0.005)
-            delays.append(time.monotonic() - published)
+            group = "write" if during_write else "on" if enabled else "off"
+            delays[group].append(time.monotonic() - published)
             next_switch = published + 2.0
             command_delays.append(timed_command(record))
+            if enabled and not auto:
+                # The take-over's window ends `after` seconds later and the
+                # collector's 1 s tick hands it to the writer: switch back the
+                # moment it writes.
+                writing.wait(published + args.snapshot_after + 2.5)
+                next_switch = time.monotonic()
         cpu, rss = proc_sample(collector.pid)
         if now - last_t >= 1.0:
-            cpu_samples.append((cpu - last_cpu) / (now - last_t))
+            sample = (cpu - last_cpu) / (now - last_t)
+            cpu_samples.append(sample)
+            # Subscribing and unsubscribing take up to a tick after a toggle.
+            if last_t - phase_start >= 2.0:
+                cpu_by_phase[enabled].append(sample)
             last_cpu, last_t = cpu, now
             record = Collector.objects.filter(name=key).first()
             pending_max = max(pending_max, record.pending if record else 0)
@@ -208,6 +279,7 @@ def main() -> None:
     published = robot.stdout.read()
     collector.send_signal(2)
     collector.wait(60)
+    load_after = os.getloadavg()
     cpu_total = proc_sample_safe(cpu0, elapsed, cpu_samples)
     record = Collector.objects.get(name=key)
     counts = {k: v["count"] for k, v in record.inputs.items()}
@@ -229,36 +301,94 @@ def main() -> None:
     qos = "RELIABLE" if args.reliable else "BEST_EFFORT"
     print(
         f"database: {connection.vendor} · {os.cpu_count()} cores · {elapsed:.0f} s run · "
-        f"sensor QoS {qos}"
+        f"sensor QoS {qos} · camera {args.camera} · black box {args.snapshot}"
     )
+    print(f"load average (1, 5, 15 min): before {load(load_before)}, after {load(load_after)}")
     print(f"published by the robot: {published.strip().splitlines()[-1]}")
     print(f"received by the collector: {counts}")
     match = re.search(r"\{.*\}", published)
+    image_topic = {"jpeg": "image_compressed", "raw": "image"}[args.camera]
     if match:
         sent = eval(match.group(0), {})  # our own simulator's printed dict
-        for name, topic in (("gps", "gps_fix"), ("tf", "tf"), ("image", "image"), ("map", "map")):
+        for name, topic in (
+            ("gps", "gps_fix"),
+            ("tf", "tf"),
+            ("image", image_topic),
+            ("map", "map"),
+        ):
             got = counts.get(topic, 0)
             print(
                 f"  {name:5s}: {got}/{sent[name]} received ({100 * got / max(1, sent[name]):.1f} %)"
             )
     print(f"rows written: {rows}")
     print(
-        f"black box {args.snapshot}: {rows['snapshots']} snapshots, {snapshot_mb:.0f} MB, "
-        f"messages {in_snapshots}"
+        f"black box: {rows['snapshots']} snapshots, {snapshot_mb:.0f} MB, "
+        f"{writing.seen} writes seen, messages {in_snapshots}"
     )
     print(
         f"collector CPU: mean {100 * statistics.mean(cpu_samples):.0f} % of one core, "
         f"max {100 * max(cpu_samples):.0f} %; total {cpu_total}"
     )
+    if len(cpu_by_phase[True]) > 1 and len(cpu_by_phase[False]) > 1:
+        on, off = (statistics.mean(cpu_by_phase[k]) for k in (True, False))
+        # 95 % interval of the difference of the means (the seconds as samples).
+        error = 1.96 * math.sqrt(
+            sum(statistics.variance(v) / len(v) for v in cpu_by_phase.values())
+        )
+        print(
+            f"collector CPU with the black box on: {100 * on:.1f} % "
+            f"(n={len(cpu_by_phase[True])} s), off: {100 * off:.1f} % "
+            f"(n={len(cpu_by_phase[False])} s); the black box adds {100 * (on - off):.1f} "
+            f"± {100 * error:.1f} % of one core (buffer, snapshot writing and storing); "
+            f"medians {100 * statistics.median(cpu_by_phase[True]):.1f} % and "
+            f"{100 * statistics.median(cpu_by_phase[False]):.1f} %"
+        )
     print(f"collector RSS: max {rss_max / 2**20:.0f} MB")
     print(f"spool backlog: max {pending_max} records, {spool_left} left after exit")
-    print(spread("mode message → committed master row", delays))
+    for group, label in (
+        ("off", "black box off"),
+        ("on", "black box on, no snapshot being written"),
+        ("write", "while a snapshot was being written"),
+    ):
+        print(spread(f"mode message → committed master row, {label}", delays[group]))
     print(spread("GUI command issued → carried out by the collector", command_delays))
     node.destroy_node()
     rclpy.try_shutdown()
     deletion.delete(event)
     Collector.objects.filter(name=key).delete()
     deletion.delete(vehicle)
+
+
+def load(averages) -> str:
+    return ", ".join(f"{a:.2f}" for a in averages)
+
+
+class SnapshotWatch:
+    """Sees the collector's writer thread at work: it writes each snapshot to a
+    ``.part`` file in the pending directory and renames it when complete."""
+
+    def __init__(self, directory: Path):
+        self.directory = directory
+        self.names: set[str] = set()
+
+    def active(self) -> bool:
+        try:
+            parts = {n for n in os.listdir(self.directory) if n.endswith(".part")}
+        except FileNotFoundError:
+            return False
+        self.names |= parts
+        return bool(parts)
+
+    @property
+    def seen(self) -> int:
+        return len(self.names)
+
+    def wait(self, deadline: float) -> bool:
+        while time.monotonic() < deadline:
+            if self.active():
+                return True
+            time.sleep(0.002)
+        return False
 
 
 def buffer_cost(seconds: int = 60) -> None:
@@ -309,13 +439,14 @@ def buffer_cost(seconds: int = 60) -> None:
         )
 
 
-def timed_command(record: Collector) -> float:
-    """Issue a harmless set-parameters command, as the GUI does, and time it."""
+def timed_command(record: Collector, parameters: dict | None = None) -> float:
+    """Issue a set-parameters command (by default a harmless one), as the GUI
+    does, and time it."""
     issued = time.monotonic()
     command = issue_command(
         record,
         CollectorCommand.Kind.SET_PARAMETERS,
-        {"parameters": {"params.send_map_period": 1.0}},
+        {"parameters": parameters or {"params.send_map_period": 1.0}},
     )
     while not CollectorCommand.objects.filter(pk=command.pk, done__isnull=False).exists():
         if time.monotonic() - issued > 30:

@@ -34,6 +34,12 @@ class Command(BaseCommand):
         a("--tf-rate", type=float, default=d.tf_rate)
         a("--camera-rate", type=float, default=d.camera_rate)
         a("--camera-size", default=f"{d.camera_width}x{d.camera_height}")
+        a(
+            "--camera-format",
+            choices=("raw", "jpeg"),
+            default=d.camera_format,
+            help="raw: sensor_msgs/Image on image; jpeg: CompressedImage on image_compressed.",
+        )
         a("--map-size", type=int, default=d.map_size, help="Cells per side.")
         a(
             "--map-rate",
@@ -72,6 +78,7 @@ class Command(BaseCommand):
             camera_rate=o["camera_rate"],
             camera_width=width,
             camera_height=height,
+            camera_format=o["camera_format"],
             map_size=o["map_size"],
             map_rate=o["map_rate"],
             prefix=o["prefix"],
