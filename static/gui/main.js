@@ -11,6 +11,7 @@ import { appendPoses, drawTakeOvers, loadSegments, refreshDistances, renderMode,
 import { loadLocalMap } from "./mapview.js";
 import { dialogSegment, loadImages, loadNotes } from "./segment-dialog.js";
 import { Collector } from "./collector.js";
+import { refreshSnapshots } from "./snapshots.js";
 import "./parameters.js";
 import "./reports.js";
 
@@ -21,7 +22,7 @@ Live.on("log", (e) => {
   if (e.test_event === state.selected.event) Live.later("segments");
 });
 Live.on("deleted", (e) => {
-  const what = { note: "notes", image: "images", segment: "segments", mapimage: "map" }[e.payload.model];
+  const what = { note: "notes", image: "images", segment: "segments", mapimage: "map", recording: "recordings" }[e.payload.model];
   Live.later(what || "logs");
 });
 Live.on("segment", (e) => {
@@ -29,6 +30,7 @@ Live.on("segment", (e) => {
 });
 Live.on("note", () => Live.later("notes"));
 Live.on("image", () => Live.later("images"));
+Live.on("recording", () => Live.later("recordings"));
 Live.on("poses", appendPoses);
 Live.on("local_poses", appendPoses);
 Live.on("map", (e) => {
@@ -57,6 +59,7 @@ Live.onRefresh(["notes"], async () => {
 Live.onRefresh(["images"], async () => {
   if (dialogSegment) await loadImages();
 });
+Live.onRefresh(["recordings"], refreshSnapshots);
 
 async function boot() {
   const catalogues = loadCatalogues();

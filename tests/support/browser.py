@@ -127,6 +127,30 @@ class Server:
             self.log.close()
 
 
+def open_leg_code(key: str) -> str:
+    """Django code for :meth:`Server.python`: vehicle ``key`` (``v``) with an open
+    test event "Gelände ``key``" (``e``), shift (``s``) and leg."""
+    return f"""
+from events.models import Performer, PoseSource, Vehicle
+from events.services import logs
+Performer.objects.get_or_create(institution="Fraunhofer FKIE")
+PoseSource.objects.get_or_create(key="gps", defaults={{"short_description": "GPS"}})
+v = Vehicle.objects.create(key="{key}", short_description="Rover {key}")
+e = logs.create_test_event(location="Gelände {key}", time_zone="Europe/Berlin")
+s = logs.create_shift(test_event=e, vehicle=v)
+logs.create_leg(shift=s, weather_id="sunny")
+"""
+
+
+def choose_event(page, key):
+    """Pick the test event made by :func:`open_leg_code`; its shift and leg follow."""
+    from playwright.sync_api import expect
+
+    option = page.locator("#pick-event option", has_text=f"Gelände {key}")
+    page.select_option("#pick-event", value=option.get_attribute("value"))
+    expect(page.locator("#segments-section")).to_be_visible()
+
+
 def login(page, server, username):
     page.goto(f"{server.url}/login/")
     page.get_by_label("User name").fill(username)
