@@ -17,10 +17,11 @@ TF, compressed camera; the raw camera with ``--camera raw``) and the default
 ``--snapshot alternate`` (default) it is switched on and off every ``--phase``
 seconds through the GUI command path, so the buffer's CPU share is the
 difference of the on and off phases of one run, measured under the same load
-of the shared machine.  In the on phases the switch that follows a take-over
-is published the moment the collector's writer thread has started a snapshot
-file (its ``.part`` file appears in the pending directory), so the mode-to-row
-delay is measured during snapshot writes as well as without.
+of the shared machine, with the same switches in both.  The window of a
+take-over is written about ``after`` seconds later, when the next switch comes:
+a switch whose publish-to-row time overlaps a write (the writer thread's
+``.part`` file exists in the pending directory) is counted apart, so the
+mode-to-row delay is shown during snapshot writes as well as without.
 
     FTT_DATABASE_URL=postgis://... .venv/bin/python benchmarks/collector_throughput.py \
         [--seconds 200] [--snapshot alternate|on|off] [--phase 40] [--camera jpeg|raw] \
@@ -257,12 +258,6 @@ def main() -> None:
             delays[group].append(time.monotonic() - published)
             next_switch = published + 2.0
             command_delays.append(timed_command(record))
-            if enabled and not auto:
-                # The take-over's window ends `after` seconds later and the
-                # collector's 1 s tick hands it to the writer: switch back the
-                # moment it writes.
-                writing.wait(published + args.snapshot_after + 2.5)
-                next_switch = time.monotonic()
         cpu, rss = proc_sample(collector.pid)
         if now - last_t >= 1.0:
             sample = (cpu - last_cpu) / (now - last_t)
@@ -382,13 +377,6 @@ class SnapshotWatch:
     @property
     def seen(self) -> int:
         return len(self.names)
-
-    def wait(self, deadline: float) -> bool:
-        while time.monotonic() < deadline:
-            if self.active():
-                return True
-            time.sleep(0.002)
-        return False
 
 
 def buffer_cost(seconds: int = 60) -> None:
