@@ -126,12 +126,13 @@ def main() -> None:
     args = parser.parse_args()
     load_before = os.getloadavg()
     buffer_cost()
+    if args.ros_domain is not None:
+        os.environ["ROS_DOMAIN_ID"] = str(args.ros_domain)
+    subscription_cost()
     if args.buffer_only:
         print(f"load average (1, 5, 15 min): {load(load_before)}")
         return
 
-    if args.ros_domain is not None:
-        os.environ["ROS_DOMAIN_ID"] = str(args.ros_domain)
     import rclpy
     from std_msgs.msg import Bool
 
@@ -425,6 +426,107 @@ def buffer_cost(seconds: int = 60) -> None:
             f"writing the {box.before:.0f} s snapshot ({mb:.0f} MB): {write:.2f} s "
             f"in the writer thread"
         )
+
+
+def subscription_cost(phase: float = 15.0, phases: int = 4) -> None:
+    """What the black box's raw subscriptions add to a process that already
+    subscribes the same topics the way the collector's inputs do (deserialized),
+    fed by ftt_simulate over DDS at the benchmark rates (GPS 100 Hz, TF 50 Hz,
+    JPEG camera 10 Hz, mode 1 Hz): DDS receive, rclpy's take, the callback and
+    the buffer.  Phases without and with them alternate; process CPU time, so
+    the figure hardly depends on what else the shared machine runs."""
+    import functools
+
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    from rosbridge_app.collector.blackbox import Blackbox, message_class
+
+    values = {name: spec.default for name, spec in P.SPECS.items()}
+    box = Blackbox(lambda event: None, values)
+    counts: dict[str, int] = {}
+
+    def receive(topic: str, data: bytes) -> None:
+        counts[topic] = counts.get(topic, 0) + 1
+        box.receive(topic, data)
+
+    topics = {
+        "/robot_mode": "std_msgs/msg/Bool",
+        "/gps_fix": "sensor_msgs/msg/NavSatFix",
+        "/tf": "tf2_msgs/msg/TFMessage",
+        "/image_compressed": "sensor_msgs/msg/CompressedImage",
+    }
+    robot = subprocess.Popen(
+        [sys.executable, str(ROOT / "manage.py"), "ftt_simulate", "--gps-rate", "100"]
+        + ["--tf-rate", "50", "--camera-rate", "10", "--camera-format", "jpeg"]
+        + ["--map-size", "10", "--switch-every", "5"]
+        + ["--duration", str(phase * phases + 90)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    rclpy.init()
+    node = rclpy.create_node("ftt_benchmark_blackbox")
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    qos = rclpy.qos.QoSProfile(
+        depth=100,
+        reliability=rclpy.qos.ReliabilityPolicy.BEST_EFFORT,
+        durability=rclpy.qos.DurabilityPolicy.VOLATILE,
+    )
+    inputs = {"n": 0}
+
+    def collector_input(msg) -> None:
+        inputs["n"] += 1
+
+    def spin(duration: float) -> float:
+        end = time.monotonic() + duration
+        cpu0 = time.process_time()
+        while time.monotonic() < end:
+            executor.spin_once(timeout_sec=0.1)
+        return time.process_time() - cpu0
+
+    cpu: dict[bool, list[float]] = {False: [], True: []}
+    try:
+        for topic, typename in topics.items():
+            node.create_subscription(message_class(typename), topic, collector_input, qos)
+        # Discovery and the simulator's start (seconds on a loaded machine).
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and inputs["n"] < 200:
+            executor.spin_once(timeout_sec=0.1)
+        raw = []
+        for i in range(phases):
+            with_box = i % 2 == 1
+            if with_box:
+                raw = [
+                    node.create_subscription(
+                        message_class(typename),
+                        topic,
+                        functools.partial(receive, topic),
+                        qos,
+                        raw=True,
+                    )
+                    for topic, typename in topics.items()
+                ]
+            spin(2.0)  # matching
+            counts.clear()
+            cpu[with_box].append(spin(phase) / phase)
+            received = sum(counts.values()) / phase if with_box else None
+            rates = {t: round(n / phase, 1) for t, n in counts.items()} if with_box else None
+            for sub in raw:
+                node.destroy_subscription(sub)
+            raw = []
+    finally:
+        robot.terminate()
+        robot.wait(30)
+        node.destroy_node()
+        rclpy.try_shutdown()
+    without, with_box = (statistics.mean(cpu[k]) for k in (False, True))
+    print(
+        f"black-box raw subscriptions beside collector-like ones (own process, over DDS "
+        f"from ftt_simulate): add {100 * (with_box - without):.1f} % of one core "
+        f"({100 * with_box:.1f} % with, {100 * without:.1f} % without, {phases} phases of "
+        f"{phase:.0f} s) for {received:.0f} messages/s, per topic {rates}"
+    )
 
 
 def timed_command(record: Collector, parameters: dict | None = None) -> float:
