@@ -9,7 +9,16 @@ GROUPS = (
     (
         "Configuration",
         "configuration",
-        ("Personnel", "Performer", "Vehicle", "PoseSource", "Weather", "ItoReason", "SegmentType"),
+        (
+            "Personnel",
+            "Performer",
+            "Vehicle",
+            "RobotAccount",
+            "PoseSource",
+            "Weather",
+            "ItoReason",
+            "SegmentType",
+        ),
     ),
     (
         "Recorded data",
