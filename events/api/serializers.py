@@ -36,6 +36,9 @@ class PrimaryKeyField(serializers.PrimaryKeyRelatedField):
             digits = isinstance(data, str) and data.isascii() and data.isdigit()
             if isinstance(data, bool) or not (isinstance(data, int) or digits):
                 self.fail("incorrect_type", data_type=type(data).__name__)
+        elif isinstance(data, str) and "\x00" in data:
+            # No key holds a NUL, and PostgreSQL refuses to even compare one.
+            self.fail("does_not_exist", pk_value=data)
         row = super().to_internal_value(data)
         request = self.context.get("request")
         if request is not None:
