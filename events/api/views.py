@@ -177,7 +177,8 @@ class ShiftViewSet(ServiceViewSet):
 
 
 class LegViewSet(ServiceViewSet):
-    queryset = Leg.objects.all()
+    # The shift tells a leg's vehicle (a robot account's check) without another query.
+    queryset = Leg.objects.select_related("shift")
     serializer_class = s.LegSerializer
     filterset_class = LegFilter
     robot_actions = ("retrieve", "mode")
