@@ -4,12 +4,23 @@ what is configured before a test apart from what the field test recorded."""
 from django.contrib import admin
 from django.contrib.admin.apps import AdminConfig
 
+from common import roles
+
 # Model names (object_name) per group; anything not named keeps Django's app grouping.
 GROUPS = (
     (
         "Configuration",
         "configuration",
-        ("Personnel", "Performer", "Vehicle", "PoseSource", "Weather", "ItoReason", "SegmentType"),
+        (
+            "Personnel",
+            "Performer",
+            "Vehicle",
+            "RobotAccount",
+            "PoseSource",
+            "Weather",
+            "ItoReason",
+            "SegmentType",
+        ),
     ),
     (
         "Recorded data",
@@ -33,6 +44,10 @@ class FttAdminSite(admin.AdminSite):
     site_header = "FTT administration"
     site_title = "FTT administration"
     index_title = "Set-up and records"
+
+    def has_permission(self, request):
+        # A robot account is never let in, even if someone ticked "staff status".
+        return super().has_permission(request) and not roles.is_robot(request.user)
 
     def get_app_list(self, request, app_label=None):
         apps = super().get_app_list(request, app_label)

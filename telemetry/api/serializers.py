@@ -74,6 +74,8 @@ def gps_fix(data: dict) -> GpsFix:
 
 
 class LocalPoseSerializer(ClientUidMixin, ServiceSerializer):
+    segment = PrimaryKeyField(queryset=_segments())
+
     class Meta:
         model = LocalPose
         fields = ["id", "uid", "segment", "frame", "x", "y", "yaw", "robot_stamp", "received"]
@@ -180,7 +182,7 @@ class LocalPoseItemSerializer(LocalPoseSerializer):
 
 
 class LocalPoseBatchSerializer(BatchSerializer):
-    segment = PrimaryKeyField(queryset=Segment.objects.all())
+    segment = PrimaryKeyField(queryset=_segments())
     poses = LocalPoseItemSerializer(many=True, max_length=MAX_BATCH)
 
 

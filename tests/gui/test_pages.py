@@ -230,3 +230,18 @@ def test_favicon_is_served(client):
     answer = client.get("/favicon.ico", follow=True)
     assert answer.status_code == 200
     assert b"<svg" in b"".join(answer.streaming_content if answer.streaming else [answer.content])
+
+
+def test_a_robot_token_opens_neither_photos_nor_the_guis_data(
+    client, leg, vehicle, media_root, robot_client
+):
+    """Even of its own vehicle: a robot writes, people look."""
+    master = segments.report_mode(leg, "ito").master
+    url = recording.attach_image(master, content=jpeg(1)).image.url
+    robot = robot_client(vehicle)
+    token = f"Token {robot.user.auth_token.key}"
+    assert client.get(url, HTTP_AUTHORIZATION=token).status_code == 403
+    assert robot.get(f"/gui/api/legs/{leg.pk}/tracks/").status_code == 403
+    client.force_login(robot.user)
+    assert "has no role" in client.get("/").content.decode()
+    assert client.get(f"/gui/api/legs/{leg.pk}/tracks/").status_code == 403
