@@ -34,6 +34,12 @@ from rosbridge_app.collector.pipeline import SECOND_COPY, Pipeline
 
 log = logging.getLogger("ftt.collector")
 
+# Positions may come at 1 kHz: the subscription's history holds 2 s of them, so
+# a moment in which this process's other threads hold the interpreter loses nothing.
+POSITION_DEPTH = 2000
+# The most messages one callback takes from its subscription besides its own.
+DRAIN = 200
+
 RELIABLE_LATCHED = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,
     depth=1,
@@ -267,7 +273,7 @@ class CollectorNode(Node):
                 continue
             latched = topic == static
             try:
-                self._snapshot_subs[topic] = self.create_subscription(
+                self._snapshot_subs[topic] = self._drained_subscription(
                     message_class(typename),
                     topic,
                     self._safe("snapshot", functools.partial(self.blackbox.receive, topic)),
@@ -313,6 +319,28 @@ class CollectorNode(Node):
 
         return self._safe(name, receive)
 
+    def _drained_subscription(self, msg_type, topic, callback, qos, raw=False):
+        """A subscription whose callback also takes the messages waiting behind
+        its own (at most DRAIN).
+
+        The executor builds a new wait set for every message it takes, which
+        in Python costs more than converting a fix; a 1 kHz GPS spent most of
+        the collector's time there and lost fixes when the CPU was busy.
+        """
+        subscription = None
+
+        def receive(msg):
+            callback(msg)
+            for _ in range(DRAIN):
+                with subscription.handle:
+                    taken = subscription.handle.take_message(msg_type, raw)
+                if taken is None:
+                    return
+                callback(taken[0])
+
+        subscription = self.create_subscription(msg_type, topic, receive, qos, raw=raw)
+        return subscription
+
     def _subscribe(self) -> None:
         from geometry_msgs.msg import PoseStamped
         from nav_msgs.msg import OccupancyGrid
@@ -336,7 +364,13 @@ class CollectorNode(Node):
                 _qos(50, True),
                 pipe.on_mode,
             ),
-            ("gps_fix", NavSatFix, get("topics.gps_fix"), _qos(200, reliable), pipe.on_fix),
+            (
+                "gps_fix",
+                NavSatFix,
+                get("topics.gps_fix"),
+                _qos(POSITION_DEPTH, reliable),
+                pipe.on_fix,
+            ),
             ("map", OccupancyGrid, get("topics.map"), RELIABLE_LATCHED, pipe.on_grid),
             (
                 "map_jpeg",
@@ -358,7 +392,7 @@ class CollectorNode(Node):
             from tf2_msgs.msg import TFMessage
 
             wanted += [
-                ("tf", TFMessage, get("topics.tf"), _qos(100, True), pipe.on_tf),
+                ("tf", TFMessage, get("topics.tf"), _qos(POSITION_DEPTH, True), pipe.on_tf),
                 (
                     "tf_static",
                     TFMessage,
@@ -373,7 +407,7 @@ class CollectorNode(Node):
                     "local_pose",
                     PoseStamped,
                     get("topics.local_pose"),
-                    _qos(100, reliable),
+                    _qos(POSITION_DEPTH, reliable),
                     pipe.on_pose,
                 )
             )
@@ -382,7 +416,7 @@ class CollectorNode(Node):
             if not topic:
                 continue
             try:
-                self._ftt_subs[name] = self.create_subscription(
+                self._ftt_subs[name] = self._drained_subscription(
                     msg_type, topic, self._input(name, handler), qos
                 )
             except Exception as exc:
@@ -405,7 +439,7 @@ class CollectorNode(Node):
             ("map_jpeg", CompressedImage, pipe.on_map_jpeg),
         ):
             if name in self._ftt_subs:
-                self._ftt_subs[f"{name} (volatile)"] = self.create_subscription(
+                self._ftt_subs[f"{name} (volatile)"] = self._drained_subscription(
                     msg_type, get(f"topics.{name}"), self._input(name, handler), _qos(1, True)
                 )
         self.inputs = inputs

@@ -115,6 +115,9 @@ def test_a_robot_adds_one_query_to_a_single_pose(api_client, robot_client, vehic
 
 # SQLite splits long statements by its variable limit; PostgreSQL takes one array per column.
 @pytest.mark.postgis_only
+# Committed for real: inside a test-wide transaction an earlier write of the
+# fixtures would already have sent this transaction's one NOTIFY.
+@pytest.mark.django_db(transaction=True)
 @pytest.mark.parametrize("size", [10, 1000])
 def test_a_batch_costs_the_same_queries_whatever_its_size(size, api_client, auto_master):
     client = api_client("operator")
