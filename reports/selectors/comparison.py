@@ -55,7 +55,7 @@ def compare(events: list[TestEvent], mode: str = GPS) -> dict:
         }
         for e in events
         for run in runs_of[e.pk]
-        if run.is_intervention and run.path_x
+        if run.is_intervention and len(run.path_x)
     ]
     return {
         "mode": mode,

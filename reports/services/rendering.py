@@ -228,7 +228,9 @@ class _Builder:
 
     def _lines(self, runs) -> list[Line]:
         return [
-            Line(run.path_x, run.path_y, self._type_color(run.kind)) for run in runs if run.path_x
+            Line(run.path_x, run.path_y, self._type_color(run.kind))
+            for run in runs
+            if len(run.path_x)
         ]
 
     def _type_color(self, kind: str) -> str:
