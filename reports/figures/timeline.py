@@ -9,7 +9,7 @@ matplotlib.use("Agg")
 import matplotlib.dates as mdates  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 
-from reports.figures import weather  # noqa: E402
+from reports.figures import style, weather  # noqa: E402
 from reports.figures.style import rgb  # noqa: E402
 
 MARKER_REASONS = ("goal", "end_shift")
@@ -36,7 +36,7 @@ def draw_timeline(
         reasons[key].short_description if key in reasons else key for key in reason_rows
     ]
     height = 1.2 + 0.28 * len(labels) + (0.3 if weather_changes else 0.0)
-    fig, ax = plt.subplots(figsize=(7.0, height), layout="constrained")
+    fig, ax = style.fixed_figure(7.0, height, style.label_width(labels) + 0.2, top=0.08)
     row_of = {key: 2 + i for i, key in enumerate(reason_rows)}
     for run in shift_runs:
         row = 0 if run.kind == "auto" else 1

@@ -9,6 +9,7 @@ from collections import defaultdict
 
 from events.models import TestEvent, Vehicle
 from reports.selectors.growth import GROWTH_FORMULAS, crow_amsaa
+from reports.selectors.hotspots import HOTSPOT_FORMULA, HOTSPOT_RADIUS_M, hotspots
 from reports.selectors.statistics import CONFIDENCE, FORMULAS, Run, event_runs, figures
 from telemetry.selectors.tracks import GPS
 
@@ -44,19 +45,6 @@ def compare(events: list[TestEvent], mode: str = GPS) -> dict:
     at, total = growth_points(every)
     fit = crow_amsaa(at, total)
     cumulative = [{"distance": d, "interventions": i + 1} for i, d in enumerate(at)]
-    hotspots = [
-        {
-            "test_event": e.pk,
-            "segment": run.id,
-            "label": run.label,
-            "x": run.path_x[0],
-            "y": run.path_y[0],
-            "reasons": sorted(set(run.counted_reasons)),
-        }
-        for e in events
-        for run in runs_of[e.pk]
-        if run.is_intervention and len(run.path_x)
-    ]
     return {
         "mode": mode,
         "confidence": CONFIDENCE,
@@ -82,6 +70,7 @@ def compare(events: list[TestEvent], mode: str = GPS) -> dict:
             "total_distance": total,
             "fit": fit.as_dict() if fit else None,
         },
-        "hotspots": hotspots,
-        "formulas": dict(FORMULAS + GROWTH_FORMULAS),
+        "hotspot_radius": HOTSPOT_RADIUS_M,
+        "hotspots": hotspots(runs_of, mode),
+        "formulas": dict(FORMULAS + GROWTH_FORMULAS + (HOTSPOT_FORMULA,)),
     }

@@ -40,6 +40,18 @@ def _row(name: str, f: dict) -> list[str]:
     ]
 
 
+def _hotspot_row(spot: dict, reasons: dict, names: dict) -> list[str]:
+    """Number, take-overs, reasons with counts, and each take-over's segment."""
+    reason_text = ", ".join(
+        f"{reasons[key].short_description if key in reasons else key} ({count})"
+        for key, count in spot["reasons"].items()
+    )
+    segments = "; ".join(
+        f"{names.get(m['test_event'], m['test_event'])}: {m['label']}" for m in spot["members"]
+    )
+    return [str(spot["number"]), str(spot["count"]), reason_text or fmt.DASH, segments]
+
+
 def render_comparison(events: list[TestEvent], mode: str = GPS) -> bytes:
     if len(events) < 2:
         raise ReportError("A comparison needs at least two test events.")
@@ -51,6 +63,7 @@ def render_comparison(events: list[TestEvent], mode: str = GPS) -> bytes:
         growth = data["growth"]
         growth_chart(growth["points"], growth["total_distance"], growth["fit"], root / "growth.svg")
         hotspots = hotspot_chart(data["hotspots"], reasons, root / "hotspots.svg")
+        names = {e["id"]: e["name"] for e in data["test_events"]}
         fit = growth["fit"]
         document = {
             "events": [_row(f"{e['id']}: {e['name']}", e["figures"]) for e in data["test_events"]],
@@ -73,10 +86,9 @@ def render_comparison(events: list[TestEvent], mode: str = GPS) -> bytes:
                 ],
             ],
             "hotspots": "hotspots.svg" if hotspots else None,
-            "hotspot_rows": [
-                [str(h["test_event"]), h["label"], ", ".join(h["reasons"]) or fmt.DASH]
-                for h in data["hotspots"]
-            ],
+            "hotspot_note": f"Take-overs at most {data['hotspot_radius']:g} m apart form "
+            "one hotspot (single linkage); numbers as on the map.",
+            "hotspot_rows": [_hotspot_row(spot, reasons, names) for spot in data["hotspots"]],
             "formulas": [[k, v] for k, v in data["formulas"].items()],
         }
         shutil.copy(TEMPLATE_DIR / "compare.typ", root / "compare.typ")

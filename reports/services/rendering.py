@@ -555,7 +555,8 @@ class _Builder:
                     self.reasons,
                     weather_changes,
                     tz,
-                    str(self._file("timeline")),
+                    # SVG: no rasterising and PNG encoding, and its text stays sharp.
+                    str(self._file("timeline", ".svg")),
                     min_span=timedelta(hours=self.options.min_timeline_hours),
                 )
             )
