@@ -1,4 +1,4 @@
-// ESLint (flat config) for the operator GUI's scripts, run by scripts/test.sh next to ruff.
+// ESLint (flat config) for the operator GUI's ES modules, run by scripts/test.sh next to ruff.
 const js = require("@eslint/js");
 const globals = require("globals");
 
@@ -8,9 +8,9 @@ module.exports = [
     files: ["static/gui/**/*.js"],
     languageOptions: {
       ecmaVersion: 2022,
-      sourceType: "script",
-      // Leaflet comes from django-leaflet's static files; FttMaps from maps.js.
-      globals: { ...globals.browser, L: "readonly", FttMaps: "writable" },
+      sourceType: "module",
+      // Leaflet comes from django-leaflet's static files as the global L.
+      globals: { ...globals.browser, L: "readonly" },
     },
     rules: {
       "no-unused-vars": ["error", { args: "none" }],

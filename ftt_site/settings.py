@@ -239,6 +239,9 @@ LOGIN_REDIRECT_URL = "/"
 LOGOUT_REDIRECT_URL = "login"
 
 REDIS_URL = env_str("FTT_REDIS_URL")
+# How often a web process reads the change feed when no wake-up arrives (a
+# commit normally wakes it at once: NOTIFY on PostgreSQL, Redis, or in-process).
+FTT_LIVE_POLL_MS = env_int("FTT_LIVE_POLL_MS", 200)
 if REDIS_URL:
     CHANNEL_LAYERS = {
         "default": {

@@ -1,6 +1,6 @@
 """Websocket side of the live outbox (see events.feed).
 
-One poller per event loop reads new outbox rows every POLL_INTERVAL seconds,
+One poller per event loop reads new outbox rows every FTT_LIVE_POLL_MS,
 however many browsers are connected, and hands them to the consumers, which
 filter them by what each browser watches.  A commit wakes it at once
 (rosbridge_app.wakeup): on PostgreSQL it LISTENs on its own connection, with
@@ -32,7 +32,7 @@ from rosbridge_app.wakeup import GROUP
 
 logger = logging.getLogger(__name__)
 
-POLL_INTERVAL = 0.2
+POLL_INTERVAL = settings.FTT_LIVE_POLL_MS / 1000
 # After a lost database connection the listener tries again this much later.
 LISTEN_RETRY = 2.0
 BATCH = 1000

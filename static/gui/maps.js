@@ -1,8 +1,7 @@
 /* Map drawing for the FTT GUI: a GPS map (tiles optional) and a local map in
  * map-frame metres.  Tracks are polylines that grow point by point, so live
- * updates never redraw what is already on screen. */
-"use strict";
-
+ * updates never redraw what is already on screen.  Leaflet is the page's global
+ * L (django-leaflet's static files, loaded before the modules). */
 const COLORS = { auto: "#1a9c3a", ito: "#d22020", selected: "#1f5fbf" };
 
 /* An image placed by three corners (top-left, top-right, bottom-left), so it
@@ -244,4 +243,4 @@ class LocalMap extends TrackMap {
   }
 }
 
-window.FttMaps = { GpsMap, LocalMap };
+export { GpsMap, LocalMap };

@@ -35,7 +35,8 @@ def two_servers(tmp_path):
     redis_url = os.environ.get("FTT_TEST_REDIS_URL")
     if not redis_url:
         pytest.skip("needs FTT_TEST_REDIS_URL")
-    env = {"FTT_DATA_DIR": str(tmp_path), "FTT_REDIS_URL": redis_url}
+    # Polling once an hour: a change can only arrive through Redis's wake-up.
+    env = {"FTT_DATA_DIR": str(tmp_path), "FTT_REDIS_URL": redis_url, "FTT_LIVE_POLL_MS": "3600000"}
     servers = []
     try:
         for name in ("a", "b"):

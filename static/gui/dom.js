@@ -1,0 +1,6 @@
+/* The page's settings (the template's json_script) and DOM shorthands, shared by
+ * every module of the operator GUI (see docs/gui.md). */
+
+export const CONFIG = JSON.parse(document.getElementById("gui-config").textContent);
+export const $ = (sel, root = document) => root.querySelector(sel);
+export const $$ = (sel, root = document) => Array.from(root.querySelectorAll(sel));

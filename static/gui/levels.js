@@ -1,0 +1,230 @@
+/* Test event, shift and leg: the pickers, and New, Edit, End, Re-open and
+ * Delete for each level.  Choosing a leg hands over to segments.js. */
+import { CONFIG, $, $$ } from "./dom.js";
+import { ApiError, api, list } from "./api.js";
+import { clearError, notice, showError } from "./feedback.js";
+import { LEVELS, byId, current, saveUrl, state, vehicleName } from "./state.js";
+import { fmtDay, fmtTime } from "./format.js";
+import { confirmDialog, formDialog } from "./dialogs.js";
+import { Live } from "./live.js";
+import { Collector } from "./collector.js";
+import { selectionChanged } from "./segments.js";
+
+function rowLabel(level, row) {
+  const status = row.is_open ? "open" : "closed";
+  if (level === "event") return `#${row.id} ${row.location || "(no location)"} · ${fmtDay(row.start)} · ${status}`;
+  if (level === "shift") return `Shift ${row.number} · ${vehicleName(row.vehicle)} · ${fmtTime(row.start)} · ${status}`;
+  return `Leg ${row.number} · ${fmtTime(row.start)} · ${status}`;
+}
+
+async function fetchCatalogues() {
+  const [reasons, weather, poseSources, vehicles, performers, personnel] = await Promise.all([
+    list("ito-reasons/"), list("weather/"), list("pose-sources/"), list("vehicles/"),
+    list("performers/"), list("personnel/"),
+  ]);
+  Object.assign(state.catalogue, { reasons, weather, poseSources, vehicles, performers, personnel });
+  const any = $("#reason-any");
+  any.replaceChildren(...reasons.map((r) => new Option(r.short_description, r.key)));
+}
+
+/* Loaded once at start; New and Edit wait for it, so a tap right after loading
+ * still gets the choices. */
+let catalogues = null;
+export function loadCatalogues() {
+  catalogues = fetchCatalogues();
+  return catalogues;
+}
+
+export async function loadLevel(level, keepSelection = true) {
+  const info = LEVELS[level];
+  const select = $(`#pick-${level}`);
+  let rows = [];
+  if (!info.parent) rows = await list(info.path);
+  else if (state.selected[info.parent]) rows = await list(info.path, { [info.parentField]: state.selected[info.parent] });
+  // Newest first, whatever order the server uses.
+  rows.sort((a, b) => (a.start < b.start ? 1 : a.start > b.start ? -1 : b.id - a.id));
+  state.rows[level] = rows;
+  let chosen = keepSelection && byId(rows, state.selected[level]) ? state.selected[level] : null;
+  if (chosen === null && rows.length === 1) chosen = rows[0].id; // one child: take it
+  const placeholder = new Option(rows.length ? `— choose a ${info.label} —` : `no ${info.label} yet`, "");
+  select.replaceChildren(placeholder, ...rows.map((r) => {
+    const o = new Option(rowLabel(level, r), r.id);
+    o.className = r.is_open ? "open-log" : "closed-log";
+    return o;
+  }));
+  select.value = chosen === null ? "" : String(chosen);
+  const changed = chosen !== state.selected[level];
+  state.selected[level] = chosen;
+  updateLevelState(level);
+  saveUrl();
+  if (info.child) await loadLevel(info.child, keepSelection && !changed);
+  else if (state.selected.leg !== state.shownLeg) await selectionChanged();
+  else {
+    // Same leg as before: only the labels and states changed, keep the drawing.
+    Live.subscribe();
+    Collector.refresh();
+  }
+}
+
+function updateLevelState(level) {
+  const row = current(level);
+  const badge = $(`[data-state="${level}"]`);
+  badge.textContent = row ? (row.is_open ? "open" : "closed") : "";
+  badge.className = "state" + (row ? (row.is_open ? " open" : " closed") : "");
+  const parentRow = LEVELS[level].parent ? current(LEVELS[level].parent) : true;
+  const can = CONFIG.canOperate;
+  const setBtn = (action, enabled, show = true) => {
+    const b = $(`[data-action="${action}"][data-level="${level}"]`);
+    if (!b) return;
+    b.hidden = !show;
+    // Viewers may open Edit to read every field; the dialog is read-only for them.
+    b.disabled = (action !== "edit" && !can) || !enabled;
+  };
+  setBtn("new", Boolean(parentRow));
+  setBtn("edit", Boolean(row));
+  setBtn("delete", Boolean(row));
+  const reopen = level === "event" && row && !row.is_open;
+  setBtn("end", Boolean(row && row.is_open), !reopen);
+  setBtn("reopen", Boolean(reopen), Boolean(reopen));
+}
+
+for (const level of Object.keys(LEVELS)) {
+  $(`#pick-${level}`).addEventListener("change", async (e) => {
+    state.selected[level] = e.target.value ? Number(e.target.value) : null;
+    updateLevelState(level);
+    saveUrl();
+    try {
+      const child = LEVELS[level].child;
+      if (child) {
+        state.selected[child] = null;
+        await loadLevel(child, false);
+      } else await selectionChanged();
+    } catch (err) {
+      showError(err);
+    }
+  });
+}
+
+function personnelOfUser() {
+  return CONFIG.personnel;
+}
+
+/* Nothing is written until Save; Cancel leaves no empty entry behind.  Only
+ * unambiguous choices are prefilled: the user's own person, and a vehicle or
+ * pose source when exactly one exists. */
+async function createLevel(level) {
+  await catalogues; // a tap right after loading waits for the choices
+  const c = state.catalogue;
+  const values = {};
+  if (level === "shift") {
+    if (!c.vehicles.length) throw new ApiError("Configure a vehicle first (Configuration → Vehicles).");
+    const me = byId(c.personnel, personnelOfUser());
+    if (c.vehicles.length === 1) values.vehicle = c.vehicles[0].id;
+    if (c.performers.length === 1) values.performer = c.performers[0].id;
+    else if (me) values.performer = (c.performers.find((p) => p.institution === me.institution) || {}).id;
+    if (me) Object.assign(values, { test_administrator: me.id, test_director: me.id, robot_operator: me.id, safety_officer: me.id });
+  } else if (level === "leg" && c.poseSources.length === 1) {
+    values.default_pose_source = c.poseSources[0].id;
+  }
+  const parent = LEVELS[level].parent;
+  formDialog({
+    title: `New ${LEVELS[level].label}`,
+    subtitle: "Created when you press Save.",
+    specs: fieldSpecs(level),
+    values,
+    save: async (body) => {
+      if (parent) body[LEVELS[level].parentField] = state.selected[parent];
+      const row = await api("POST", LEVELS[level].path, body);
+      state.selected[level] = row.id;
+      const child = LEVELS[level].child;
+      if (child) state.selected[child] = null;
+      await loadLevel(level);
+      notice(`${LEVELS[level].label.charAt(0).toUpperCase()}${LEVELS[level].label.slice(1)} created.`);
+    },
+  });
+}
+
+function fieldSpecs(level) {
+  const c = state.catalogue;
+  const people = c.personnel.map((p) => [p.id, p.institution ? `${p.name} (${p.institution})` : p.name]);
+  if (level === "event") {
+    return [
+      { name: "location", label: "Location" },
+      { name: "version", label: "Version" },
+      { name: "time_zone", label: "Time zone", list: "tz-list" },
+      { name: "note", label: "Note", type: "textarea" },
+    ];
+  }
+  if (level === "shift") {
+    return [
+      { name: "performer", label: "Performer", options: c.performers.map((p) => [p.id, p.institution]) },
+      { name: "test_director", label: "Test director", options: people },
+      { name: "test_administrator", label: "Test administrator", options: people },
+      { name: "robot_operator", label: "Robot operator", options: people },
+      { name: "safety_officer", label: "Safety officer", options: people },
+      { name: "test_intent", label: "Test intent" },
+      { name: "workspace", label: "Workspace" },
+      { name: "vehicle", label: "Vehicle", options: c.vehicles.map((v) => [v.id, v.short_description]), required: true },
+      { name: "note", label: "Note", type: "textarea" },
+    ];
+  }
+  return [
+    { name: "weather", label: "Weather", options: c.weather.map((w) => [w.key, w.short_description]) },
+    { name: "default_pose_source", label: "Pose source", options: c.poseSources.map((p) => [p.id, p.short_description]) },
+    { name: "note", label: "Note", type: "textarea" },
+  ];
+}
+
+async function editLevel(level) {
+  await catalogues;
+  const row = current(level);
+  if (!row) return;
+  const name = level === "event" ? `Test event #${row.id}` : level === "shift" ? `Shift ${row.number}` : `Leg ${row.number}`;
+  formDialog({
+    title: name,
+    subtitle: `Started ${fmtTime(row.start)}${row.end ? `, ended ${fmtTime(row.end)}` : ""}`,
+    specs: fieldSpecs(level),
+    values: row,
+    save: async (body) => {
+      await api("PATCH", `${LEVELS[level].path}${row.id}/`, body);
+      await loadLevel(level);
+      notice("Saved.");
+    },
+  });
+}
+
+function describe(level, row) {
+  if (level === "event") return `test event #${row.id} (${row.location || "no location"}) with all its shifts, legs, segments, notes and images`;
+  if (level === "shift") return `shift ${row.number} with all its legs, segments, notes, images and maps`;
+  return `leg ${row.number} with all its segments, notes and images`;
+}
+
+async function levelAction(level, action) {
+  const row = current(level);
+  if (action === "new") return createLevel(level);
+  if (action === "edit") return editLevel(level);
+  if (!row) return;
+  if (action === "delete") {
+    if (!(await confirmDialog(`Delete ${describe(level, row)}?`))) return;
+    await api("DELETE", `${LEVELS[level].path}${row.id}/`);
+    state.selected[level] = null;
+    await loadLevel(level, true);
+    return notice(`Deleted ${describe(level, row).split(" with ")[0]}.`);
+  }
+  // The server stops logging into what ends (one rule, in its services).
+  if (action === "end") await api("POST", `${LEVELS[level].path}${row.id}/close/`, {});
+  if (action === "reopen") await api("POST", `${LEVELS[level].path}${row.id}/reopen/`, {});
+  await loadLevel(level);
+  return notice(action === "end" ? `Ended ${describe(level, row).split(" with ")[0]}.` : "Re-opened.");
+}
+
+$$(".log-row [data-action]").forEach((b) =>
+  b.addEventListener("click", async () => {
+    clearError();
+    try {
+      await levelAction(b.dataset.level, b.dataset.action);
+    } catch (err) {
+      showError(err);
+    }
+  }),
+);

@@ -1,0 +1,82 @@
+/* FTT operator GUI, the entry point (templates/gui/index.html loads it as a
+ * module).  Every change goes through the REST API, which applies the rules;
+ * the modules only show state and forward taps.  This one starts the page and
+ * wires the change feed to the modules it concerns. */
+import { CONFIG, $, $$ } from "./dom.js";
+import { showError } from "./feedback.js";
+import { current, fromUrl, state } from "./state.js";
+import { Live, onSelectedLeg } from "./live.js";
+import { loadCatalogues, loadLevel } from "./levels.js";
+import { appendPoses, drawTakeOvers, loadSegments, refreshDistances, renderMode, renderSegments } from "./segments.js";
+import { loadLocalMap } from "./mapview.js";
+import { dialogSegment, loadImages, loadNotes } from "./segment-dialog.js";
+import { Collector } from "./collector.js";
+import "./parameters.js";
+import "./reports.js";
+
+/* What each kind of change-feed event changes on the page. */
+Live.on("log", (e) => {
+  Live.later("logs");
+  // Closing a level closes the segments below it.
+  if (e.test_event === state.selected.event) Live.later("segments");
+});
+Live.on("deleted", (e) => {
+  const what = { note: "notes", image: "images", segment: "segments", mapimage: "map" }[e.payload.model];
+  Live.later(what || "logs");
+});
+Live.on("segment", (e) => {
+  if (onSelectedLeg(e)) Live.later("segments");
+});
+Live.on("note", () => Live.later("notes"));
+Live.on("image", () => Live.later("images"));
+Live.on("poses", appendPoses);
+Live.on("local_poses", appendPoses);
+Live.on("map", (e) => {
+  if (e.shift === state.selected.shift) Live.later("map");
+});
+Live.on("command", (e) => Collector.commandAnswered(e));
+Live.on("collector", () => Collector.refresh());
+
+/* The refreshes, in this order: the pickers may change the leg the rest draws. */
+Live.onRefresh(["logs"], () => loadLevel("event"));
+Live.onRefresh(["segments"], async () => {
+  if (!state.selected.leg) return;
+  await loadSegments();
+  drawTakeOvers();
+});
+Live.onRefresh(["tracks", "distances"], async (what) => {
+  if (state.selected.leg) await refreshDistances(what.has("tracks"));
+});
+Live.onRefresh(["map"], async () => {
+  if (state.selected.leg) await loadLocalMap();
+});
+// A note being edited is not thrown away by somebody else's change.
+Live.onRefresh(["notes"], async () => {
+  if (dialogSegment) await loadNotes({ keepEditing: true });
+});
+Live.onRefresh(["images"], async () => {
+  if (dialogSegment) await loadImages();
+});
+
+async function boot() {
+  const catalogues = loadCatalogues();
+  if (!CONFIG.canOperate) $$(".op").forEach((b) => (b.disabled = true));
+  Live.connect();
+  // Nothing in the address: offer the leg a collector is logging into.
+  if (!fromUrl.event && CONFIG.loggingLeg) Object.assign(state.selected, CONFIG.loggingLeg);
+  setInterval(renderMode, 1000);
+  try {
+    await catalogues;
+    await loadLevel("event");
+  } catch (err) {
+    showError(err);
+  }
+  setInterval(() => {
+    // Open segments' durations keep growing between events.
+    if (state.segments.some((s) => s.is_open)) renderSegments();
+    if (current("shift")) Collector.refresh();
+  }, 5000);
+}
+
+if ($("#pick-event")) boot();
+window.FTT = { state, Live, Collector };

@@ -1,0 +1,96 @@
+/* The cockpit's two maps (GPS and local map frame): follow or fit, tiles and
+ * basemaps, the shift's local map image and its overlay on the GPS map. */
+import { CONFIG, $ } from "./dom.js";
+import { api } from "./api.js";
+import { segmentLabel, state } from "./state.js";
+import { roundFloat } from "./format.js";
+import { GpsMap, LocalMap } from "./maps.js";
+
+export const gpsMap = new GpsMap($("#gps-map"), $("#tile-message"));
+export const localMap = new LocalMap($("#local-map"));
+for (const m of [gpsMap, localMap]) m.labelOf = (id) => segmentLabel(id);
+
+/* Follow the vehicle (pan to each new point) or show the whole track. */
+function setFollow(on) {
+  gpsMap.follow = localMap.follow = on;
+  $("#follow").checked = on;
+  localStorage.setItem("ftt.follow", on ? "1" : "0");
+}
+setFollow(localStorage.getItem("ftt.follow") !== "0");
+$("#follow").addEventListener("change", (e) => setFollow(e.target.checked));
+$("#fit-track").addEventListener("click", () => {
+  setFollow(false);
+  gpsMap.fitAll();
+  localMap.fitAll();
+});
+
+function tileUrl() {
+  const own = localStorage.getItem("ftt.tileUrl");
+  return own !== null ? own : CONFIG.tileUrl;
+}
+gpsMap.setTiles(tileUrl(), CONFIG.tileAttribution);
+
+export async function loadBasemaps() {
+  const event = state.selected.event;
+  if (state.basemapsOf === event) return;
+  state.basemapsOf = event;
+  const query = event ? `?event=${event}` : "";
+  const data = await api("GET", `basemaps/${query}`, undefined, { root: CONFIG.guiApiRoot });
+  gpsMap.setBasemaps(data.layers);
+}
+
+export function showMaps() {
+  $("#gps-map").hidden = !$("#show-gps").checked;
+  $("#local-map").hidden = !$("#show-local").checked;
+  $("#local-message").hidden = !$("#show-local").checked || !$("#local-message").textContent;
+  gpsMap.invalidate();
+  localMap.invalidate();
+}
+$("#show-gps").addEventListener("change", showMaps);
+$("#show-local").addEventListener("change", showMaps);
+
+export async function loadLocalMap() {
+  const shift = state.selected.shift;
+  if (!shift) return;
+  const data = await api("GET", `shifts/${shift}/local-map/`, undefined, { root: CONFIG.guiApiRoot });
+  if (shift !== state.selected.shift) return;
+  const message = $("#local-message");
+  if (data.map) {
+    localMap.setMapImage(data.map);
+    message.textContent = `Map "${data.map.frame}", ${data.map.width}×${data.map.height} cells of ${roundFloat(data.map.resolution)} m.`;
+    if (!$("#show-local").checked) {
+      $("#show-local").checked = true;
+      showMaps();
+    }
+  } else {
+    localMap.removeMapImage();
+    message.textContent = "No map received for this shift yet.";
+  }
+  const o = data.overlay;
+  if (o.available && o.corners && data.map) {
+    gpsMap.setOverlay(data.map.url, o.corners);
+    $("#overlay-message").textContent = `Local map over GPS: fitted from ${o.pairs} segments, scale ${o.scale.toFixed(3)}, rotation ${o.rotation_deg.toFixed(1)}°, error ${o.rms_m.toFixed(2)} m.`;
+  } else {
+    gpsMap.removeOverlay();
+    $("#overlay-message").textContent = data.map ? o.detail || "" : "";
+  }
+  showMaps();
+}
+
+$("#open-map-settings").addEventListener("click", () => {
+  const d = $("#map-settings-dialog");
+  $("#site-tile-url").textContent = CONFIG.tileUrl || "(none)";
+  $("input[name=tileUrl]", d).value = localStorage.getItem("ftt.tileUrl") || "";
+  d.returnValue = "";
+  d.showModal();
+});
+$("#map-settings-dialog").addEventListener("close", (e) => {
+  const d = e.target;
+  if (d.returnValue === "save") {
+    const value = $("input[name=tileUrl]", d).value.trim();
+    if (value) localStorage.setItem("ftt.tileUrl", value);
+    else localStorage.removeItem("ftt.tileUrl");
+  } else if (d.returnValue === "reset") localStorage.removeItem("ftt.tileUrl");
+  else return;
+  gpsMap.setTiles(tileUrl(), CONFIG.tileAttribution);
+});

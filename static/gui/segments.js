@@ -1,0 +1,288 @@
+/* The selected leg: its segments (list, timeline strip, current mode), their
+ * tracks on the maps, and the segment actions (reasons, New, End, Edit). */
+import { CONFIG, $, $$ } from "./dom.js";
+import { ApiError, api, list } from "./api.js";
+import { clearError, notice, showError } from "./feedback.js";
+import { byId, current, fromUrl, reasonName, saveUrl, segmentLabel, shortLabel, state } from "./state.js";
+import { fmtClock, fmtDistance, fmtDuration, fmtTime } from "./format.js";
+import { confirmDialog } from "./dialogs.js";
+import { gpsMap, loadBasemaps, loadLocalMap, localMap, showMaps } from "./mapview.js";
+import { Live, onSelectedLeg } from "./live.js";
+import { Collector } from "./collector.js";
+import { openSegmentDialog } from "./segment-dialog.js";
+
+/* The leg's AUTO/ITO bars over time; ITO bars take their reason's colour. */
+const Timeline = {
+  render() {
+    const strip = $("#timeline");
+    if (!strip) return;
+    const masters = state.segments.filter((s) => s.parent === null).sort((a, b) => (a.start < b.start ? -1 : 1));
+    strip.hidden = masters.length === 0;
+    if (!masters.length) return strip.replaceChildren();
+    const now = Date.now();
+    const t0 = new Date(masters[0].start).getTime();
+    const t1 = Math.max(...masters.map((m) => (m.end ? new Date(m.end).getTime() : now)), t0 + 1000);
+    strip.replaceChildren(...masters.map((m) => {
+      const start = new Date(m.start).getTime();
+      const end = m.end ? new Date(m.end).getTime() : now;
+      const child = state.segments.find((c) => c.parent === m.id);
+      const target = child || m;
+      const b = document.createElement("button");
+      b.type = "button";
+      b.className = `bar ${m.segment_type}${[m.id, target.id].includes(state.segment) ? " selected" : ""}`;
+      b.style.left = `${((start - t0) / (t1 - t0)) * 100}%`;
+      b.style.width = `${Math.max(((end - start) / (t1 - t0)) * 100, 0.6)}%`;
+      const reason = child && (state.catalogue.reasons || []).find((r) => r.key === child.ito_reason);
+      if (reason && reason.color) b.style.background = `rgb(${reason.color})`;
+      const what = child ? `ITO, ${reasonName(child.ito_reason)}` : m.segment_type.toUpperCase();
+      b.setAttribute("aria-label", `${segmentLabel(target.id)}: ${what}, ${fmtDuration(m.start, m.end)}`);
+      b.title = b.getAttribute("aria-label");
+      b.addEventListener("click", () => selectSegment(target.id));
+      return b;
+    }));
+  },
+};
+
+export async function selectionChanged() {
+  const leg = current("leg");
+  const restoring = state.shownLeg === undefined && fromUrl.leg === state.selected.leg ? fromUrl.segment : null;
+  state.shownLeg = state.selected.leg;
+  $("#segments-section").hidden = !leg;
+  $("#maps-section").hidden = !leg;
+  $("#mode-panel").hidden = !leg;
+  Live.subscribe();
+  Collector.refresh();
+  state.segment = null;
+  state.segments = [];
+  state.tracks = {};
+  state.labels = {};
+  gpsMap.clear();
+  localMap.clear();
+  if (!leg) {
+    renderSegments();
+    return;
+  }
+  await Promise.all([loadBasemaps(), loadSegments(), loadTracks(), loadLocalMap()]);
+  gpsMap.invalidate();
+  gpsMap.fitAll();
+  localMap.invalidate();
+  localMap.fitAll();
+  if (restoring && byId(state.segments, restoring)) selectSegment(restoring);
+  else saveUrl();
+}
+
+export async function loadSegments() {
+  const leg = state.selected.leg;
+  const [rows, named] = await Promise.all([
+    list("segments/", { leg }),
+    api("GET", `legs/${leg}/labels/`, undefined, { root: CONFIG.guiApiRoot }),
+  ]);
+  if (leg !== state.selected.leg) return;
+  state.segments = rows;
+  state.labels = named.labels;
+  renderSegments();
+}
+
+async function loadTracks() {
+  const leg = state.selected.leg;
+  const data = await api("GET", `legs/${leg}/tracks/`, undefined, { root: CONFIG.guiApiRoot });
+  if (leg !== state.selected.leg) return;
+  state.tracks = data.segments;
+  for (const [id, t] of Object.entries(data.segments)) {
+    const sid = Number(id);
+    if (t.gps.length) gpsMap.setTrack(sid, t.mode, t.gps);
+    if (t.local.length) localMap.setTrack(sid, t.mode, t.local);
+  }
+  drawTakeOvers();
+  const anyLocal = Object.values(data.segments).some((t) => t.local.length);
+  if (anyLocal && !$("#show-local").checked) {
+    $("#show-local").checked = true;
+    showMaps();
+  }
+  renderSegments();
+}
+
+export function drawTakeOvers() {
+  gpsMap.markers.clearLayers();
+  localMap.markers.clearLayers();
+  for (const s of state.segments) {
+    if (s.parent !== null || s.segment_type !== "ito") continue;
+    const t = state.tracks[s.id];
+    const gps = s.start_position ? [s.start_position.coordinates[1], s.start_position.coordinates[0]] : t && t.gps[0];
+    if (gps) gpsMap.addTakeOver(s.id, gps);
+    const local = s.start_local_x !== null && s.start_local_x !== undefined ? [s.start_local_x, s.start_local_y] : t && t.local[0];
+    if (local) localMap.addTakeOver(s.id, local);
+  }
+}
+
+function visibleSegments() {
+  const itoOnly = $("#ito-only").checked;
+  // AUTO masters and ITO reasons (children); an ITO master is shown through its children.
+  return state.segments
+    .filter((s) => (s.parent === null ? s.segment_type === "auto" && !itoOnly : true))
+    .sort((a, b) => (a.start < b.start ? 1 : a.start > b.start ? -1 : b.id - a.id));
+}
+
+export function renderSegments() {
+  renderMode();
+  updateSegmentButtons();
+  Timeline.render();
+  const tbody = $("#segment-table tbody");
+  const rows = visibleSegments();
+  $("#segments-empty").hidden = rows.length > 0 || !state.selected.leg;
+  tbody.replaceChildren(...rows.map((s) => {
+    const tr = document.createElement("tr");
+    tr.dataset.id = s.id;
+    tr.className = `${s.segment_type} ${s.parent === null ? "master" : "child"}${s.id === state.segment ? " selected" : ""}`;
+    const master = s.parent === null ? s.id : s.parent;
+    const track = state.tracks[master];
+    const cells = [
+      { text: shortLabel(s.id), title: `${segmentLabel(s.id)} (database id ${s.id})` },
+      s.segment_type.toUpperCase(),
+      s.parent === null ? "" : reasonName(s.ito_reason),
+      { text: fmtClock(s.start), title: fmtTime(s.start) },
+      s.end ? { text: fmtClock(s.end), title: fmtTime(s.end) } : "—",
+      fmtDuration(s.start, s.end),
+      fmtDistance(track ? track.distance_m : null),
+      s.is_open ? "OPEN" : "CLOSED",
+    ];
+    tr.replaceChildren(...cells.map((c) => {
+      const td = document.createElement("td");
+      td.textContent = typeof c === "object" ? c.text : c;
+      if (typeof c === "object") td.title = c.title;
+      return td;
+    }));
+    tr.addEventListener("click", () => selectSegment(s.id === state.segment ? null : s.id));
+    tr.addEventListener("dblclick", () => {
+      selectSegment(s.id);
+      openSegmentDialog(s.id);
+    });
+    return tr;
+  }));
+}
+
+function selectSegment(id) {
+  state.segment = id;
+  saveUrl();
+  updateSegmentButtons();
+  Timeline.render();
+  $$("#segment-table tbody tr").forEach((tr) => tr.classList.toggle("selected", Number(tr.dataset.id) === id));
+  const s = byId(state.segments, id);
+  const master = s ? (s.parent === null ? s.id : s.parent) : null;
+  gpsMap.select(master);
+  localMap.select(master);
+}
+
+$("#ito-only").addEventListener("change", renderSegments);
+
+async function segmentAction(fn) {
+  clearError();
+  try {
+    await fn();
+  } catch (err) {
+    showError(err);
+  }
+}
+
+/* The mode now: the open master segment of the leg, big, with its duration. */
+function openMaster() {
+  return state.segments.find((s) => s.parent === null && s.is_open) || null;
+}
+
+export function renderMode() {
+  const panel = $("#mode-panel");
+  const m = openMaster();
+  const mode = m ? m.segment_type : "none";
+  panel.dataset.mode = mode;
+  $("#mode-name").textContent = m ? mode.toUpperCase() : "No open segment";
+  $("#mode-since").textContent = m ? `for ${fmtDuration(m.start, null)} · ${segmentLabel(m.id)}` : "";
+}
+
+/* Reasons belong to take-overs: the buttons only work with an ITO row selected. */
+function updateSegmentButtons() {
+  const s = byId(state.segments, state.segment);
+  const ito = Boolean(s && s.parent !== null);
+  const why = s ? (ito ? "" : "Reasons can only be given to ITO rows.") : "Select an ITO row first.";
+  for (const b of $$("[data-quick], #reason-apply")) {
+    b.disabled = !CONFIG.canOperate || !ito;
+    b.title = why;
+  }
+  $("#segment-end").disabled = !CONFIG.canOperate || !(s && s.is_open);
+  $("#segment-edit").disabled = !s;
+}
+
+function requireSegment() {
+  if (!state.segment) throw new ApiError("Select a segment in the list first.");
+  return state.segment;
+}
+
+async function setReason(key) {
+  const id = requireSegment();
+  await api("PATCH", `segments/${id}/`, { ito_reason: key });
+  await loadSegments();
+  notice(`Reason of ${segmentLabel(id)} set to ${reasonName(key)}.`);
+}
+
+$$("[data-quick]").forEach((b) => b.addEventListener("click", () => segmentAction(() => setReason(b.dataset.quick))));
+$("#reason-apply").addEventListener("click", () => segmentAction(() => setReason($("#reason-any").value)));
+$("#segment-new").addEventListener("click", () => segmentAction(async () => {
+  const m = openMaster();
+  if (m && m.segment_type === "auto") {
+    const ok = await confirmDialog("The robot is in AUTO. Record a take-over (ITO) now?", { yes: "Record take-over", no: "Cancel", warn: false });
+    if (!ok) return;
+  }
+  const child = await api("POST", `legs/${state.selected.leg}/manual-segment/`, {});
+  await loadSegments();
+  if (child && child.id) selectSegment(child.id);
+  notice("Take-over recorded.");
+}));
+$("#segment-end").addEventListener("click", () => segmentAction(async () => {
+  const id = requireSegment();
+  await api("POST", `segments/${id}/close/`, {});
+  await loadSegments();
+  notice(`Ended ${segmentLabel(id)}.`);
+}));
+$("#segment-edit").addEventListener("click", () => segmentAction(async () => openSegmentDialog(requireSegment())));
+// What was changed in the segment dialog shows in the list once it closes.
+$("#segment-dialog").addEventListener("close", () => loadSegments().catch(showError));
+
+/* Distances come from the server (geodesic); redrawing is only needed when a
+ * batch was too large to be sent inline. */
+export async function refreshDistances(redraw) {
+  const leg = state.selected.leg;
+  if (!leg) return;
+  if (refreshDistances.busy) return;
+  refreshDistances.busy = true;
+  try {
+    const data = await api("GET", `legs/${leg}/tracks/`, undefined, { root: CONFIG.guiApiRoot });
+    if (leg !== state.selected.leg) return;
+    for (const [id, t] of Object.entries(data.segments)) {
+      const sid = Number(id);
+      if (redraw || !state.tracks[id]) {
+        if (t.gps.length) gpsMap.setTrack(sid, t.mode, t.gps);
+        if (t.local.length) localMap.setTrack(sid, t.mode, t.local);
+      }
+    }
+    state.tracks = data.segments;
+    renderSegments();
+  } finally {
+    refreshDistances.busy = false;
+  }
+}
+
+/* A live batch of positions of the leg on screen: drawn at once; the distances
+ * follow from the server. */
+export function appendPoses(e) {
+  if (!onSelectedLeg(e)) return;
+  const p = e.payload;
+  if (!p.points) {
+    Live.later("tracks");
+    return;
+  }
+  const map = e.kind === "poses" ? gpsMap : localMap;
+  const pts = e.kind === "poses" ? p.points.map(([lon, lat]) => [lat, lon]) : p.points;
+  map.appendPoints(p.segment, p.mode, pts);
+  const t = state.tracks[p.segment] || (state.tracks[p.segment] = { mode: p.mode, gps: [], local: [], distance_m: null });
+  (e.kind === "poses" ? t.gps : t.local).push(...pts);
+  Live.later("distances");
+}

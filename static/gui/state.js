@@ -1,0 +1,46 @@
+/* The page's one state object: selection (also in the address), loaded rows,
+ * segments, tracks and catalogues, with the look-ups that read it. */
+
+export const LEVELS = {
+  event: { path: "test-events/", label: "test event", parent: null, child: "shift" },
+  shift: { path: "shifts/", label: "shift", parent: "event", parentField: "test_event", child: "leg" },
+  leg: { path: "legs/", label: "leg", parent: "shift", parentField: "shift", child: null },
+};
+
+/* Event, shift, leg and segment live in the address, so reload and shared links restore them. */
+export const fromUrl = (() => {
+  const q = new URLSearchParams(location.search);
+  const n = (k) => (/^\d+$/.test(q.get(k) || "") ? Number(q.get(k)) : null);
+  return { event: n("event"), shift: n("shift"), leg: n("leg"), segment: n("segment") };
+})();
+
+export function saveUrl() {
+  const q = new URLSearchParams();
+  for (const k of ["event", "shift", "leg"]) if (state.selected[k]) q.set(k, state.selected[k]);
+  if (state.segment) q.set("segment", state.segment);
+  const next = q.toString() ? `?${q}` : location.pathname;
+  if (next !== location.search) history.replaceState(null, "", next || location.pathname);
+}
+
+export const state = {
+  rows: { event: [], shift: [], leg: [] },
+  selected: { event: fromUrl.event, shift: fromUrl.shift, leg: fromUrl.leg },
+  segments: [],
+  tracks: {},
+  labels: {}, // segment id -> "Leg 2 · #7", from the server
+  shownLeg: undefined, // leg whose segments and tracks are drawn
+  basemapsOf: undefined, // test event whose basemaps the switcher offers
+  segment: null, // selected segment id
+  catalogue: {},
+  lastEventId: null,
+};
+
+export const byId = (rows, id) => rows.find((r) => r.id === id) || null;
+export const current = (level) => byId(state.rows[level], state.selected[level]);
+export const vehicleName = (id) => (byId(state.catalogue.vehicles || [], id) || {}).short_description || `vehicle ${id}`;
+export const segmentLabel = (id) => state.labels[id] || `segment ${id}`;
+export const shortLabel = (id) => (state.labels[id] || "").replace(/^Leg \d+ · /, "") || "…";
+export const reasonName = (key) => {
+  const r = (state.catalogue.reasons || []).find((x) => x.key === key);
+  return r ? r.short_description : key || "";
+};
