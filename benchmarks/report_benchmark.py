@@ -166,12 +166,18 @@ def measure(label: str, func) -> dict:
         try:
             if os.environ.get("BENCH_TRACEMALLOC") == "1":
                 tracemalloc.start()
+            before = resource.getrusage(resource.RUSAGE_SELF)
+            cpu_before = before.ru_utime + before.ru_stime
             started = time.perf_counter()
             note = func() or ""
             seconds = time.perf_counter() - started
             _, peak = tracemalloc.get_traced_memory()
-            rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-            out = {"seconds": seconds, "peak": peak / 2**20, "rss": rss, "note": note}
+            usage = resource.getrusage(resource.RUSAGE_SELF)
+            rss = usage.ru_maxrss / 1024
+            # CPU seconds of this process (not the database server's): on a shared
+            # machine they vary far less with the load than the wall time.
+            cpu = usage.ru_utime + usage.ru_stime - cpu_before
+            out = {"seconds": seconds, "cpu": cpu, "peak": peak / 2**20, "rss": rss, "note": note}
         except Exception as exc:  # report, do not hang the parent
             out = {"error": repr(exc)}
             code = 1
@@ -185,7 +191,8 @@ def measure(label: str, func) -> dict:
         print(f"{label:<28} failed: {out['error']}")
         return out
     print(
-        f"{label:<28} {out['seconds']:8.2f} s   peak Python alloc {out['peak']:7.1f} MiB"
+        f"{label:<28} {out['seconds']:8.2f} s (CPU {out['cpu']:6.2f} s)"
+        f"   peak Python alloc {out['peak']:7.1f} MiB"
         f"   peak RSS {out['rss']:7.1f} MiB   load average {os.getloadavg()[0]:.2f}"
         f"   {out['note']}"
     )

@@ -19,6 +19,7 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
 from matplotlib.transforms import Affine2D  # noqa: E402
 
@@ -154,15 +155,37 @@ def _padded_bounds(lines: list[Line], size) -> tuple[float, float, float, float]
 
 
 def _draw_lines(ax, lines: list[Line], tolerance: float):
-    for line in lines:
-        if not len(line.x):
-            continue
-        color = rgb(line.color)
+    """All tracks as one line collection and their starts as one scatter: a shift
+    has dozens of segments, and two artists per segment were most of a map's time."""
+    drawn = [line for line in lines if len(line.x)]
+    if not drawn:
+        return
+    paths = []
+    for line in drawn:
         # A shift's track has tens of thousands of points; those closer than
         # half a pixel to the line cannot be seen and only cost drawing time.
         x, y = simplified(np.asarray(line.x, float), np.asarray(line.y, float), tolerance)
-        ax.plot(x, y, "-", color=color, linewidth=line.width, zorder=2)
-        ax.plot(line.x[0], line.y[0], "o", color=color, markersize=4, zorder=3, mec="black")
+        paths.append(np.column_stack([x, y]))
+    colors = [rgb(line.color) for line in drawn]
+    ax.add_collection(
+        LineCollection(
+            paths,
+            colors=colors,
+            linewidths=[line.width for line in drawn],
+            zorder=2,
+            capstyle="round",
+            joinstyle="round",
+        )
+    )
+    ax.scatter(
+        [line.x[0] for line in drawn],
+        [line.y[0] for line in drawn],
+        s=16,
+        color=colors,
+        edgecolors="black",
+        linewidths=0.8,
+        zorder=3,
+    )
 
 
 def _plain(ax, note: str) -> str:
