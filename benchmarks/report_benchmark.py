@@ -256,8 +256,13 @@ def main():
             result = profiled("pdf", render_report, event, ReportOptions(no_tiles=True))
             out = Path(os.environ.get("FTT_DATA_DIR", "data")) / "benchmark-report.pdf"
             out.write_bytes(result.pdf)
-            stages = ", ".join(f"{name} {sec:.2f} s" for name, sec in result.stages.items())
-            return f"{len(result.pdf) / 2**20:.1f} MiB PDF: {out}\n    stages: {stages}"
+            rest = result.seconds - sum(result.stages.values())
+            rows = [
+                f"    {name:<38} {sec:6.2f} s (CPU {result.cpu_stages[name]:5.2f} s)"
+                for name, sec in result.stages.items()
+            ]
+            rows.append(f"    {'rest (segments, tables, JSON)':<38} {rest:6.2f} s")
+            return f"{len(result.pdf) / 2**20:.1f} MiB PDF: {out}\n" + "\n".join(rows)
 
         measure("statistics (selectors)", statistics)
         measure("statistics as API JSON", api_json)
