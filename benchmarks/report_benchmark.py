@@ -154,6 +154,22 @@ def build(shifts: int, segments: int, poses: int) -> TestEvent:
     return event
 
 
+def _database_cpu() -> float | None:
+    """CPU seconds the PostgreSQL backend of this connection has used so far (its
+    /proc entry; the server runs on this machine), None where that is unknown."""
+    if connection.vendor != "postgresql":
+        return None
+    with connection.cursor() as cursor:
+        cursor.execute("SELECT pg_backend_pid()")
+        pid = cursor.fetchone()[0]
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return None
+    # utime and stime are fields 14 and 15 of /proc/PID/stat, in clock ticks.
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def measure(label: str, func) -> dict:
     """Run ``func`` in a forked child: wall time, and the child's peak RSS and
     Python allocation peak, so one stage's memory does not hide the next's."""
@@ -166,6 +182,7 @@ def measure(label: str, func) -> dict:
         try:
             if os.environ.get("BENCH_TRACEMALLOC") == "1":
                 tracemalloc.start()
+            db_before = _database_cpu()
             before = resource.getrusage(resource.RUSAGE_SELF)
             cpu_before = before.ru_utime + before.ru_stime
             started = time.perf_counter()
@@ -177,7 +194,16 @@ def measure(label: str, func) -> dict:
             # CPU seconds of this process (not the database server's): on a shared
             # machine they vary far less with the load than the wall time.
             cpu = usage.ru_utime + usage.ru_stime - cpu_before
-            out = {"seconds": seconds, "cpu": cpu, "peak": peak / 2**20, "rss": rss, "note": note}
+            db_after = _database_cpu()
+            db = None if db_before is None or db_after is None else db_after - db_before
+            out = {
+                "seconds": seconds,
+                "cpu": cpu,
+                "db": db,
+                "peak": peak / 2**20,
+                "rss": rss,
+                "note": note,
+            }
         except Exception as exc:  # report, do not hang the parent
             out = {"error": repr(exc)}
             code = 1
@@ -191,7 +217,9 @@ def measure(label: str, func) -> dict:
         print(f"{label:<28} failed: {out['error']}")
         return out
     print(
-        f"{label:<28} {out['seconds']:8.2f} s (CPU {out['cpu']:6.2f} s)"
+        f"{label:<28} {out['seconds']:8.2f} s (CPU {out['cpu']:6.2f} s"
+        + ("" if out["db"] is None else f", database server CPU {out['db']:5.2f} s")
+        + ")"
         f"   peak Python alloc {out['peak']:7.1f} MiB"
         f"   peak RSS {out['rss']:7.1f} MiB   load average {os.getloadavg()[0]:.2f}"
         f"   {out['note']}"
