@@ -14,6 +14,7 @@ BENCH_TRACEMALLOC=1 adds the Python allocation peak (tracemalloc makes the code 
 """
 
 import argparse
+import cProfile
 import json
 import os
 import resource
@@ -32,6 +33,7 @@ import django  # noqa: E402
 
 django.setup()
 
+import numpy as np  # noqa: E402
 from django.contrib.gis.geos import Point  # noqa: E402
 from django.db import connection  # noqa: E402
 
@@ -41,10 +43,60 @@ from telemetry.models import Pose  # noqa: E402
 REASONS = ("safety", "planner", "unexpected", "goal", "maintenance")
 
 
+def _zigzag(count: int) -> np.ndarray:
+    """Cumulative latitude offsets of ``count`` one-second steps."""
+    p = np.arange(count)
+    return np.cumsum(0.000002 * ((p // 50) % 2 * 2 - 1))
+
+
+def _insert_poses(segments: list[tuple[int, int, float, float, datetime]]) -> None:
+    """One pose per second along each segment.  PostgreSQL gets them as arrays in
+    one INSERT ... SELECT unnest (seconds for a million rows instead of the
+    minutes bulk_create needs); SpatiaLite through bulk_create."""
+    ids, xs, ys, stamps = [], [], [], []
+    for pk, count, x0, y0, t0 in segments:
+        ids.append(np.full(count, pk, dtype=np.int64))
+        xs.append(x0 + 0.00001 * np.arange(1, count + 1))
+        ys.append(y0 + _zigzag(count))
+        stamps.append(t0.timestamp() + np.arange(1, count + 1, dtype=float))
+    if not ids:
+        return
+    ids, xs, ys, stamps = (np.concatenate(a) for a in (ids, xs, ys, stamps))
+    if connection.vendor == "postgresql":
+        with connection.cursor() as cursor:
+            cursor.execute(
+                f'INSERT INTO "{Pose._meta.db_table}" '
+                "(uid, segment_id, point, robot_stamp, received, fix_status) "
+                "SELECT gen_random_uuid(), s, ST_SetSRID(ST_MakePoint(x, y), 4326), "
+                "to_timestamp(t), to_timestamp(t), 0 "
+                "FROM unnest(%s::int8[], %s::float8[], %s::float8[], %s::float8[])"
+                " AS u(s, x, y, t)",
+                [ids.tolist(), xs.tolist(), ys.tolist(), stamps.tolist()],
+            )
+        return
+    Pose.objects.bulk_create(
+        (
+            Pose(
+                uid=uuid.uuid4(),
+                segment_id=int(pk),
+                point=Point(float(x), float(y), srid=4326),
+                robot_stamp=datetime.fromtimestamp(float(t), UTC),
+                received=datetime.fromtimestamp(float(t), UTC),
+            )
+            for pk, x, y, t in zip(ids, xs, ys, stamps, strict=True)
+        ),
+        batch_size=5000,
+    )
+
+
 def build(shifts: int, segments: int, poses: int) -> TestEvent:
     start = datetime(2026, 6, 1, 6, 0, tzinfo=UTC)
-    event = TestEvent.objects.create(location="benchmark", time_zone="Europe/Berlin", start=start)
-    vehicle = Vehicle.objects.create(key="bench", short_description="Bench vehicle")
+    event = TestEvent.objects.create(
+        location=_location(shifts, segments, poses), time_zone="Europe/Berlin", start=start
+    )
+    vehicle, _ = Vehicle.objects.get_or_create(
+        key="bench", defaults={"short_description": "Bench vehicle"}
+    )
     per_shift = segments // shifts
     index = 0
     lon, lat = 7.0, 50.0
@@ -71,10 +123,10 @@ def build(shifts: int, segments: int, poses: int) -> TestEvent:
                     start_position=Point(lon, lat, srid=4326),
                 )
             )
-            for p in range(per_segment):
-                lon += 0.00001  # about 0.7 m east per second
-                lat += 0.000002 * ((p // 50) % 2 * 2 - 1)
-                pose_rows.append((len(masters) - 1, lon, lat, t + timedelta(seconds=p + 1)))
+            pose_rows.append((len(masters) - 1, per_segment, lon, lat, t))
+            # about 0.7 m east per second, zig-zagging north and south every 50 s
+            lon += 0.00001 * per_segment
+            lat += _zigzag(per_segment)[-1] if per_segment else 0.0
             t += timedelta(seconds=seconds_per_segment)
         Segment.objects.bulk_create(masters, batch_size=500)
         children = [
@@ -90,18 +142,8 @@ def build(shifts: int, segments: int, poses: int) -> TestEvent:
             if m.segment_type_id == "ito"
         ]
         Segment.objects.bulk_create(children, batch_size=500)
-        Pose.objects.bulk_create(
-            (
-                Pose(
-                    uid=uuid.uuid4(),
-                    segment=masters[i],
-                    point=Point(x, y, srid=4326),
-                    robot_stamp=stamp,
-                    received=stamp,
-                )
-                for i, x, y, stamp in pose_rows
-            ),
-            batch_size=5000,
+        _insert_poses(
+            [(masters[i].pk, n, x0, y0, t0) for i, n, x0, y0, t0 in pose_rows],
         )
         pose_rows.clear()
         Shift.objects.filter(pk=shift.pk).update(end=t)
@@ -110,6 +152,22 @@ def build(shifts: int, segments: int, poses: int) -> TestEvent:
     TestEvent.objects.filter(pk=event.pk).update(end=t)
     event.refresh_from_db()
     return event
+
+
+def _database_cpu() -> float | None:
+    """CPU seconds the PostgreSQL backend of this connection has used so far (its
+    /proc entry; the server runs on this machine), None where that is unknown."""
+    if connection.vendor != "postgresql":
+        return None
+    with connection.cursor() as cursor:
+        cursor.execute("SELECT pg_backend_pid()")
+        pid = cursor.fetchone()[0]
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:
+        return None
+    # utime and stime are fields 14 and 15 of /proc/PID/stat, in clock ticks.
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 def measure(label: str, func) -> dict:
@@ -124,12 +182,28 @@ def measure(label: str, func) -> dict:
         try:
             if os.environ.get("BENCH_TRACEMALLOC") == "1":
                 tracemalloc.start()
+            db_before = _database_cpu()
+            before = resource.getrusage(resource.RUSAGE_SELF)
+            cpu_before = before.ru_utime + before.ru_stime
             started = time.perf_counter()
             note = func() or ""
             seconds = time.perf_counter() - started
             _, peak = tracemalloc.get_traced_memory()
-            rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-            out = {"seconds": seconds, "peak": peak / 2**20, "rss": rss, "note": note}
+            usage = resource.getrusage(resource.RUSAGE_SELF)
+            rss = usage.ru_maxrss / 1024
+            # CPU seconds of this process (not the database server's): on a shared
+            # machine they vary far less with the load than the wall time.
+            cpu = usage.ru_utime + usage.ru_stime - cpu_before
+            db_after = _database_cpu()
+            db = None if db_before is None or db_after is None else db_after - db_before
+            out = {
+                "seconds": seconds,
+                "cpu": cpu,
+                "db": db,
+                "peak": peak / 2**20,
+                "rss": rss,
+                "note": note,
+            }
         except Exception as exc:  # report, do not hang the parent
             out = {"error": repr(exc)}
             code = 1
@@ -143,8 +217,12 @@ def measure(label: str, func) -> dict:
         print(f"{label:<28} failed: {out['error']}")
         return out
     print(
-        f"{label:<28} {out['seconds']:8.2f} s   peak Python alloc {out['peak']:7.1f} MiB"
-        f"   peak RSS {out['rss']:7.1f} MiB   {out['note']}"
+        f"{label:<28} {out['seconds']:8.2f} s (CPU {out['cpu']:6.2f} s"
+        + ("" if out["db"] is None else f", database server CPU {out['db']:5.2f} s")
+        + ")"
+        f"   peak Python alloc {out['peak']:7.1f} MiB"
+        f"   peak RSS {out['rss']:7.1f} MiB   load average {os.getloadavg()[0]:.2f}"
+        f"   {out['note']}"
     )
     return out
 
@@ -156,36 +234,63 @@ def main():
     parser.add_argument("--poses", type=int, default=200_000)
     parser.add_argument("--skip-pdf", action="store_true")
     parser.add_argument("--repeat", type=int, default=1, help="PDF runs (for a median)")
+    parser.add_argument(
+        "--keepdb",
+        action="store_true",
+        help="keep the test database and reuse an event of the same size from an earlier run",
+    )
+    parser.add_argument("--profile", metavar="FILE", help="cProfile the PDF run into FILE")
     args = parser.parse_args()
 
     from reports.selectors.statistics import event_statistics
     from reports.services.rendering import ReportOptions, render_report
 
     backend = connection.vendor
-    old_name = connection.creation.create_test_db(verbosity=0, autoclobber=True, serialize=False)
+    old_name = connection.creation.create_test_db(
+        verbosity=0, autoclobber=True, serialize=False, keepdb=args.keepdb
+    )
     try:
         started = time.perf_counter()
-        event = build(args.shifts, args.segments, args.poses)
-        masters = Segment.objects.filter(parent=None).count()
+        location = _location(args.shifts, args.segments, args.poses)
+        event = TestEvent.objects.filter(location=location).first() if args.keepdb else None
+        if event is None:
+            event = build(args.shifts, args.segments, args.poses)
+        masters = Segment.objects.filter(parent=None, leg__shift__test_event=event).count()
+        poses = Pose.objects.filter(segment__leg__shift__test_event=event).count()
         print(
-            f"backend {backend}: {args.shifts} shifts, {masters} master segments,"
-            f" {Pose.objects.count()} poses"
+            f"load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}; "
+            f"backend {backend}: {args.shifts} shifts, {masters} master segments, {poses} poses"
             f" (bulk-created in {time.perf_counter() - started:.1f} s)"
         )
 
+        def profiled(stage, func, *a):
+            """``func(*a)``, with --profile its cProfile written to FILE.stage."""
+            if not args.profile:
+                return func(*a)
+            profiler = cProfile.Profile()
+            try:
+                return profiler.runcall(func, *a)
+            finally:
+                profiler.dump_stats(f"{args.profile}.{stage}")
+
         def statistics():
-            overall = event_statistics(event).overall
+            overall = profiled("statistics", event_statistics, event).overall
             return f"{overall.total_distance / 1000:.2f} km, {overall.interventions} interventions"
 
         def api_json():
             return f"{len(json.dumps(event_statistics(event).as_dict())) / 1024:.0f} KiB JSON"
 
         def pdf():
-            result = render_report(event, ReportOptions(no_tiles=True))
+            result = profiled("pdf", render_report, event, ReportOptions(no_tiles=True))
             out = Path(os.environ.get("FTT_DATA_DIR", "data")) / "benchmark-report.pdf"
             out.write_bytes(result.pdf)
-            stages = ", ".join(f"{name} {sec:.2f} s" for name, sec in result.stages.items())
-            return f"{len(result.pdf) / 2**20:.1f} MiB PDF: {out}\n    stages: {stages}"
+            rest = result.seconds - sum(result.stages.values())
+            rows = [
+                f"    {name:<38} {sec:6.2f} s (CPU {result.cpu_stages[name]:5.2f} s)"
+                for name, sec in result.stages.items()
+            ]
+            rows.append(f"    {'rest (segments, tables, JSON)':<38} {rest:6.2f} s")
+            return f"{len(result.pdf) / 2**20:.1f} MiB PDF: {out}\n" + "\n".join(rows)
 
         measure("statistics (selectors)", statistics)
         measure("statistics as API JSON", api_json)
@@ -194,7 +299,13 @@ def main():
                 measure("full PDF report (no tiles)", pdf)
     finally:
         connection.close()
-        connection.creation.destroy_test_db(old_name, verbosity=0)
+        if not args.keepdb:
+            connection.creation.destroy_test_db(old_name, verbosity=0)
+
+
+def _location(shifts: int, segments: int, poses: int) -> str:
+    """Names the event by its size, so --keepdb finds the one it built before."""
+    return f"benchmark {shifts} shifts, {segments} segments, {poses} poses"
 
 
 if __name__ == "__main__":

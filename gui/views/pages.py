@@ -69,6 +69,21 @@ def index(request):
     return render(request, "gui/index.html", context)
 
 
+@login_required
+def compare(request):
+    """Reliability of several test events side by side; the script asks
+    /api/reports/compare/ for the figures and /api/reports/ for the PDF."""
+    user = request.user
+    context = {
+        "can_view": roles.has_role(user, roles.VIEWER),
+        "gui_config": {
+            "canOperate": roles.has_role(user, roles.OPERATOR),
+            "apiRoot": "/api/",
+        },
+    }
+    return render(request, "gui/compare.html", context)
+
+
 def favicon(request):
     # Browsers ask for /favicon.ico whatever the page links; the icon is a static SVG.
     return redirect(static("gui/favicon.svg"), permanent=True)

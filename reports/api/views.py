@@ -20,7 +20,12 @@ from reports.selectors import exports
 from reports.selectors.comparison import compare
 from reports.selectors.reports import reports_of
 from reports.selectors.statistics import event_statistics
-from reports.services.generation import fail_stale_reports, request_report
+from reports.services.generation import (
+    COMPARE,
+    fail_stale_reports,
+    request_comparison,
+    request_report,
+)
 from reports.services.rendering import FULL, LEVELS
 from telemetry.selectors.tracks import MODES
 
@@ -60,11 +65,15 @@ class ComparisonView(APIView):
         ids = request.query_params.getlist("test_event")
         if len(ids) < 2 or not all(i.isdigit() for i in ids):
             raise ValidationError({"test_event": ["Give at least two test event ids (numbers)."]})
-        events = list(TestEvent.objects.filter(pk__in=ids))
-        missing = sorted(set(map(int, ids)) - {e.pk for e in events})
-        if missing:
-            raise ValidationError({"test_event": [f"No test event with id {missing[0]}."]})
-        return Response(compare(events, _mode(request)))
+        return Response(compare(_events([int(i) for i in ids], "test_event"), _mode(request)))
+
+
+def _events(ids: list[int], field: str) -> list[TestEvent]:
+    events = list(TestEvent.objects.filter(pk__in=ids))
+    missing = sorted(set(ids) - {e.pk for e in events})
+    if missing:
+        raise ValidationError({field: [f"No test event with id {missing[0]}."]})
+    return events
 
 
 class ReportChoicesView(APIView):
@@ -107,8 +116,13 @@ class ReportListView(APIView):
     def post(self, request):
         body = ReportRequestSerializer(data=request.data)
         body.is_valid(raise_exception=True)
-        event = get_object_or_404(TestEvent, pk=body.validated_data["test_event"])
-        report = request_report(event, body.validated_data["options"], user=request.user)
+        options = body.validated_data["options"]
+        if "compare" in body.validated_data:
+            events = _events(body.validated_data["compare"], "compare")
+            report = request_comparison(events, options, user=request.user)
+        else:
+            event = get_object_or_404(TestEvent, pk=body.validated_data["test_event"])
+            report = request_report(event, options, user=request.user)
         data = ReportSerializer(report, context={"request": request}).data
         return Response(data, status=status.HTTP_202_ACCEPTED)
 
@@ -130,7 +144,11 @@ class ReportPdfView(APIView):
     @extend_schema(responses={(200, "application/pdf"): bytes})
     def get(self, request, pk: int):
         report = get_object_or_404(Report, pk=pk, status=Report.Status.DONE)
-        name = f"ftt-report-test-event-{report.test_event_id}-{report.pk}.pdf"
+        compared = report.options.get(COMPARE)
+        if compared:
+            name = f"ftt-comparison-{'-'.join(map(str, compared))}-{report.pk}.pdf"
+        else:
+            name = f"ftt-report-test-event-{report.test_event_id}-{report.pk}.pdf"
         return FileResponse(report.pdf.open("rb"), as_attachment=True, filename=name)
 
 

@@ -11,12 +11,15 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from reports.figures.style import rgb  # noqa: E402
+from reports.figures.style import fixed_figure, rgb  # noqa: E402
+
+# Inches left of the axes: the y label and tick labels up to seven digits.
+CHART_LEFT = 0.75
 
 
 def distance_chart(labels, auto, manual, path, dpi=150) -> str:
     """Stacked autonomous and manual distance per shift, with the autonomy share."""
-    fig, ax = plt.subplots(figsize=(7.0, 3.0), layout="constrained")
+    fig, ax = fixed_figure(7.0, 3.0, CHART_LEFT)
     x = np.arange(len(labels))
     ax.bar(x, auto, color="#2ca02c", label="AUTO")
     ax.bar(x, manual, bottom=auto, color="#d62728", label="ITO (manual)")
@@ -36,7 +39,7 @@ def distance_chart(labels, auto, manual, path, dpi=150) -> str:
 def reasons_chart(labels, counts_by_shift, reasons, path, dpi=150) -> str:
     """Interventions per reason per shift; ``counts_by_shift``: [{key: n}]."""
     keys = sorted({k for counts in counts_by_shift for k in counts})
-    fig, ax = plt.subplots(figsize=(7.0, 3.0), layout="constrained")
+    fig, ax = fixed_figure(7.0, 3.0, CHART_LEFT)
     x = np.arange(len(labels))
     width = 0.8 / max(len(keys), 1)
     for i, key in enumerate(keys):
@@ -69,7 +72,7 @@ def estimate_chart(labels, estimates, path, name, unit, scale=1.0, dpi=150) -> s
     A shift without interventions has no estimate: its lower bound is drawn
     as an upward arrow from the bound ("at least").
     """
-    fig, ax = plt.subplots(figsize=(7.0, 2.8), layout="constrained")
+    fig, ax = fixed_figure(7.0, 2.8, CHART_LEFT)
     for i, est in enumerate(estimates):
         if est.value is not None:
             value, lower, upper = est.value / scale, est.lower / scale, est.upper / scale

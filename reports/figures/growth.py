@@ -7,8 +7,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from reports.figures.maps import _projection  # noqa: E402
-from reports.figures.style import rgb  # noqa: E402
+from reports.figures.style import fixed_figure, rgb  # noqa: E402
 
 
 def growth_chart(points, total, fit, path) -> str:
@@ -43,30 +42,44 @@ def growth_chart(points, total, fit, path) -> str:
     return path
 
 
-def hotspot_chart(hotspots, reasons, path) -> str | None:
-    """Take-over start positions in metres around their centre, coloured by reason."""
-    if not hotspots:
+def hotspot_chart(spots, reasons, path) -> str | None:
+    """Take-over start positions in metres around their centre, each coloured
+    by its (first) reason; every hotspot is circled and carries its number,
+    the number of the table below the map."""
+    members = [m for spot in spots for m in spot["members"]]
+    if not members:
         return None
-    lon = np.array([h["x"] for h in hotspots])
-    lat = np.array([h["y"] for h in hotspots])
-    forward, _ = _projection(float(lon.mean()), float(lat.mean()))
-    x, y = forward.transform(lon, lat)
-    fig, ax = plt.subplots(figsize=(7.0, 4.5), layout="constrained")
-    keys = [h["reasons"][0] if h["reasons"] else "unassigned" for h in hotspots]
+    fig, ax = fixed_figure(7.0, 4.5, 0.75)
+    keys = [m["reasons"][0] if m["reasons"] else "unassigned" for m in members]
+    east = np.array([m["east"] for m in members])
+    north = np.array([m["north"] for m in members])
     for key in sorted(set(keys)):
         chosen = [i for i, k in enumerate(keys) if k == key]
         reason = reasons.get(key)
         ax.scatter(
-            np.asarray(x)[chosen],
-            np.asarray(y)[chosen],
+            east[chosen],
+            north[chosen],
             s=25,
             color=rgb(reason.color) if reason else "grey",
             edgecolors="black",
             linewidths=0.4,
             label=reason.short_description if reason else key,
+            zorder=3,
+        )
+    for spot in spots:
+        ax.annotate(
+            str(spot["number"]),
+            (spot["east"], spot["north"]),
+            xytext=(6, 6),
+            textcoords="offset points",
+            fontsize=8,
+            fontweight="bold",
+            bbox={"boxstyle": "circle,pad=0.2", "facecolor": "white", "edgecolor": "black"},
+            zorder=4,
         )
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_title("Take-over hotspots: where interventions started")
+    ax.margins(0.15)
+    ax.set_title("Take-over hotspots: where interventions started (numbers: table below)")
     ax.set_xlabel("east [m]", fontsize=7)
     ax.set_ylabel("north [m]", fontsize=7)
     ax.grid(True, linewidth=0.4, alpha=0.6)

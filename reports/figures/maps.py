@@ -12,7 +12,6 @@ convention: the image's bottom-left pixel is the origin).
 """
 
 from dataclasses import dataclass, field
-from functools import lru_cache
 
 import matplotlib
 
@@ -20,11 +19,13 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
 from matplotlib.transforms import Affine2D  # noqa: E402
-from pyproj import Transformer  # noqa: E402
 
 from reports.figures.style import rgb  # noqa: E402
+from reports.projection import local_frame  # noqa: E402
+from telemetry.selectors.tracks import simplified  # noqa: E402
 
 PAD_FRACTION = 0.1
 PAD_MIN_M = 10.0
@@ -63,12 +64,11 @@ class MapPainter:
     tiles_used: set = field(default_factory=set)
 
     def gps_map(self, lines: list[Line], path: str, size=(6.0, 4.5)) -> MapResult | None:
-        points = [(x, y) for line in lines for x, y in zip(line.x, line.y, strict=True)]
-        if not points:
+        if not any(len(line.x) for line in lines):
             return None
-        lons = np.array([p[0] for p in points])
-        lats = np.array([p[1] for p in points])
-        forward, back = _projection(
+        lons = np.concatenate([np.asarray(line.x, dtype=float) for line in lines])
+        lats = np.concatenate([np.asarray(line.y, dtype=float) for line in lines])
+        forward, back = local_frame(
             float((lons.min() + lons.max()) / 2), float((lats.min() + lats.max()) / 2)
         )
         projected = [Line(*forward.transform(ln.x, ln.y), ln.color, ln.width) for ln in lines]
@@ -88,7 +88,7 @@ class MapPainter:
         note = (
             "" if tiles else _plain(ax, "Map tiles unavailable: plain background, grid in metres.")
         )
-        _finish(ax, projected, bounds, "east [m]", "north [m]")
+        _finish(ax, projected, bounds, "east [m]", "north [m]", self.dpi)
         _north_arrow(ax)
         _save(fig, path, self.dpi)
         return MapResult(path, tiles, note)
@@ -96,7 +96,7 @@ class MapPainter:
     def local_map(
         self, lines: list[Line], background: Background | None, path: str, size=(6.0, 4.5)
     ) -> MapResult | None:
-        if not any(line.x for line in lines):
+        if not any(len(line.x) for line in lines):
             return None
         bounds = _padded_bounds(lines, size)
         fig, ax = _figure(size)
@@ -121,25 +121,9 @@ class MapPainter:
             ax.plot([ox], [oy], "k+", markersize=8, zorder=4)
         else:
             note = _plain(ax, "No occupancy map recorded for this shift.")
-        _finish(ax, lines, bounds, "x [m] (map frame)", "y [m] (map frame)")
+        _finish(ax, lines, bounds, "x [m] (map frame)", "y [m] (map frame)", self.dpi)
         _save(fig, path, self.dpi)
         return MapResult(path, background is not None, note)
-
-
-@lru_cache(maxsize=64)
-def _aeqd(lon0: float, lat0: float):
-    crs = f"+proj=aeqd +lat_0={lat0} +lon_0={lon0} +datum=WGS84 +units=m"
-    return (
-        Transformer.from_crs("EPSG:4326", crs, always_xy=True),
-        Transformer.from_crs(crs, "EPSG:4326", always_xy=True),
-    )
-
-
-def _projection(lon: float, lat: float):
-    """The local frame around a point, shared by maps whose centres are within
-    about a kilometre: the frame's scale error there is below 1e-7, and making
-    a transformer costs as much as drawing a small map."""
-    return _aeqd(round(lon, 2), round(lat, 2))
 
 
 def _figure(size):
@@ -170,13 +154,38 @@ def _padded_bounds(lines: list[Line], size) -> tuple[float, float, float, float]
     return (x0, x1, y0, y1)
 
 
-def _draw_lines(ax, lines: list[Line]):
-    for line in lines:
-        if not len(line.x):
-            continue
-        color = rgb(line.color)
-        ax.plot(line.x, line.y, "-", color=color, linewidth=line.width, zorder=2)
-        ax.plot(line.x[0], line.y[0], "o", color=color, markersize=4, zorder=3, mec="black")
+def _draw_lines(ax, lines: list[Line], tolerance: float):
+    """All tracks as one line collection and their starts as one scatter: a shift
+    has dozens of segments, and two artists per segment were most of a map's time."""
+    drawn = [line for line in lines if len(line.x)]
+    if not drawn:
+        return
+    paths = []
+    for line in drawn:
+        # A shift's track has tens of thousands of points; those closer than
+        # half a pixel to the line cannot be seen and only cost drawing time.
+        x, y = simplified(np.asarray(line.x, float), np.asarray(line.y, float), tolerance)
+        paths.append(np.column_stack([x, y]))
+    colors = [rgb(line.color) for line in drawn]
+    ax.add_collection(
+        LineCollection(
+            paths,
+            colors=colors,
+            linewidths=[line.width for line in drawn],
+            zorder=2,
+            capstyle="round",
+            joinstyle="round",
+        )
+    )
+    ax.scatter(
+        [line.x[0] for line in drawn],
+        [line.y[0] for line in drawn],
+        s=16,
+        color=colors,
+        edgecolors="black",
+        linewidths=0.8,
+        zorder=3,
+    )
 
 
 def _plain(ax, note: str) -> str:
@@ -190,11 +199,12 @@ def _save(fig, path, dpi):
     plt.close(fig)
 
 
-def _finish(ax, lines, bounds, xlabel, ylabel):
+def _finish(ax, lines, bounds, xlabel, ylabel, dpi):
     """Grid, tracks, limits, labels and scale bar: what every map has."""
     ax.grid(True, color="#888888", linewidth=0.4, alpha=0.6)
-    _draw_lines(ax, lines)
     x0, x1, y0, y1 = bounds
+    pixels = ax.get_position().width * ax.figure.get_figwidth() * dpi
+    _draw_lines(ax, lines, (x1 - x0) / pixels / 2)
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
     ax.set_aspect("equal", adjustable="box")

@@ -9,7 +9,8 @@ overview map (with tiles) stays a matplotlib figure.
 
 import numpy as np
 
-from reports.figures.maps import _nice_length, _projection
+from reports.figures.maps import _nice_length
+from reports.projection import local_frame
 from telemetry.selectors.tracks import GPS
 
 # Enough points for a 4 cm sketch: more cannot be seen and only fill the PDF.
@@ -31,7 +32,7 @@ def track_sketch(x, y, mode: str, width_pt: float, height_pt: float) -> dict | N
     if not len(x):
         return None
     if mode == GPS:
-        forward, _ = _projection(float((x.min() + x.max()) / 2), float((y.min() + y.max()) / 2))
+        forward, _ = local_frame(float((x.min() + x.max()) / 2), float((y.min() + y.max()) / 2))
         x, y = forward.transform(x, y)
         x, y = np.asarray(x), np.asarray(y)
     x, y = _thinned(x, y)

@@ -3,7 +3,11 @@
 import logging
 
 import matplotlib
-from matplotlib import font_manager
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib import font_manager  # noqa: E402
 
 # Latin/Greek/Cyrillic first, then CJK fonts; matplotlib falls back glyph by
 # glyph along this list, so a reason or name in any of them renders.
@@ -31,3 +35,20 @@ def apply() -> None:
     matplotlib.rcParams["axes.titlesize"] = 9
     # Text stays text in SVG charts (typst sets it), instead of outlines.
     matplotlib.rcParams["svg.fonttype"] = "none"
+
+
+def fixed_figure(width: float, height: float, left: float, bottom: float = 0.45, top: float = 0.3):
+    """Figure and axes with margins in inches given by the caller.  A constrained
+    layout measures every text several times and was most of a chart's or
+    timeline's drawing time; each of ours knows its widest text in advance."""
+    fig = plt.figure(figsize=(width, height))
+    right = 0.15
+    ax = fig.add_axes(
+        (left / width, bottom / height, 1 - (left + right) / width, 1 - (bottom + top) / height)
+    )
+    return fig, ax
+
+
+def label_width(labels, size_pt: float = 7.0) -> float:
+    """Inches a column of labels needs: about 0.6 em per character."""
+    return max((len(label) for label in labels), default=0) * size_pt * 0.6 / 72

@@ -1,5 +1,6 @@
 """The mode timeline of a shift: AUTO and ITO runs, reasons, weather, goals."""
 
+from collections import defaultdict
 from datetime import timedelta
 
 import matplotlib
@@ -9,7 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.dates as mdates  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 
-from reports.figures import weather  # noqa: E402
+from reports.figures import style, weather  # noqa: E402
 from reports.figures.style import rgb  # noqa: E402
 
 MARKER_REASONS = ("goal", "end_shift")
@@ -36,19 +37,43 @@ def draw_timeline(
         reasons[key].short_description if key in reasons else key for key in reason_rows
     ]
     height = 1.2 + 0.28 * len(labels) + (0.3 if weather_changes else 0.0)
-    fig, ax = plt.subplots(figsize=(7.0, height), layout="constrained")
+    fig, ax = style.fixed_figure(7.0, height, style.label_width(labels) + 0.2, top=0.08)
     row_of = {key: 2 + i for i, key in enumerate(reason_rows)}
+    ax.xaxis_date(tz)
+    # Bars of one row, colour and hatch are one collection, markers of one colour one
+    # scatter: a shift has hundreds of runs, and an artist per run was most of the time.
+    bars: dict[tuple, list] = defaultdict(list)
+    markers: dict[tuple, list] = defaultdict(list)
     for run in shift_runs:
         row = 0 if run.kind == "auto" else 1
         color = "#2ca02c" if run.kind == "auto" else "#d62728"
-        _bar(ax, row, run.start, run.end, color, 0.6, hatch="//" if run.is_open else None)
+        bars[(row, color, 0.6, "//" if run.is_open else None)].append((run.start, run.end))
         for span in run.reasons:
             catalogue = reasons.get(span.reason)
             color = rgb(catalogue.color) if catalogue else (0.5, 0.5, 0.5)
             if span.end == span.start or span.reason in MARKER_REASONS:
-                ax.plot(span.start, row_of[span.reason], "o", color=color, mec="black")
+                markers[color].append((span.start, row_of[span.reason]))
             else:
-                _bar(ax, row_of[span.reason], span.start, span.end, color, 0.5)
+                bars[(row_of[span.reason], color, 0.5, None)].append((span.start, span.end))
+    for (row, color, height, hatch), spans in bars.items():
+        starts = mdates.date2num([start for start, _ in spans])
+        ends = mdates.date2num([end for _, end in spans])
+        ax.broken_barh(
+            list(zip(starts, ends - starts, strict=True)),
+            (row - height / 2, height),
+            facecolors=color,
+            edgecolor="black",
+            linewidth=0.3,
+            hatch=hatch,
+        )
+    for color, points in markers.items():
+        ax.scatter(
+            mdates.date2num([when for when, _ in points]),
+            [row for _, row in points],
+            color=color,
+            edgecolors="black",
+            zorder=3,
+        )
     first = min(run.start for run in shift_runs)
     last = max(run.end for run in shift_runs)
     ax.set_xlim(*time_axis(first, last, min_span))
@@ -75,16 +100,3 @@ def draw_timeline(
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
     return path
-
-
-def _bar(ax, row, start, end, color, height, hatch=None):
-    ax.barh(
-        row,
-        end - start,
-        left=start,
-        height=height,
-        color=color,
-        edgecolor="black",
-        linewidth=0.3,
-        hatch=hatch,
-    )

@@ -7,9 +7,18 @@ comparison never disagrees with the single-event report.
 
 from collections import defaultdict
 
-from events.models import TestEvent, Vehicle
+from events.models import ItoReason, TestEvent, Vehicle
+from reports import formatting as fmt
 from reports.selectors.growth import GROWTH_FORMULAS, crow_amsaa
-from reports.selectors.statistics import CONFIDENCE, FORMULAS, Run, event_runs, figures
+from reports.selectors.hotspots import HOTSPOT_FORMULA, HOTSPOT_RADIUS_M, hotspots
+from reports.selectors.statistics import (
+    CONFIDENCE,
+    FORMULAS,
+    Estimate,
+    Run,
+    event_runs,
+    figures,
+)
 from telemetry.selectors.tracks import GPS
 
 
@@ -29,6 +38,43 @@ def growth_points(runs: list[Run]) -> tuple[list[float], float]:
     return at, driven
 
 
+def shown(f: dict) -> dict[str, str]:
+    """A group's figures as the PDF writes them (reports.formatting), so the GUI
+    shows the same text without deciding any rounding or unit itself."""
+    mdbi, mtbi = Estimate(**f["mdbi"]), Estimate(**f["mtbi"])
+    return {
+        "interventions": str(f["interventions"]),
+        "auto_distance": fmt.metres(f["auto_distance"]),
+        "auto_time": fmt.duration(f["auto_seconds"]),
+        "mdbi": fmt.estimate(mdbi, fmt.metres),
+        "mdbi_bounds": fmt.bounds(mdbi, fmt.metres),
+        "mtbi": fmt.estimate(mtbi, fmt.duration),
+        "mtbi_bounds": fmt.bounds(mtbi, fmt.duration),
+        "per_km": fmt.rate(f["interventions_per_km"]),
+        "per_hour": fmt.rate(f["interventions_per_hour"]),
+    }
+
+
+def fit_rows(fit: dict | None) -> list[list[str]]:
+    """The growth fit as label/value rows (PDF and GUI); empty without a fit."""
+    if fit is None:
+        return []
+    return [
+        ["Interventions n", str(fit["interventions"])],
+        ["Autonomous distance T", fmt.metres(fit["exposure"])],
+        ["β", f"{fit['beta']:.3f} (90 %: {fit['beta_lower']:.3f} – {fit['beta_upper']:.3f})"],
+        [
+            "Growth parameter 1 − β",
+            f"{fit['growth']:.3f} (90 %: {fit['growth_lower']:.3f} – {fit['growth_upper']:.3f})",
+        ],
+    ]
+
+
+def _group(extra: dict, runs: list[Run]) -> dict:
+    data = figures(runs).as_dict()
+    return {**extra, "figures": data, "shown": shown(data)}
+
+
 def compare(events: list[TestEvent], mode: str = GPS) -> dict:
     """JSON-ready comparison of the given test events, oldest first."""
     events = sorted(events, key=lambda e: (e.start, e.pk))
@@ -44,44 +90,31 @@ def compare(events: list[TestEvent], mode: str = GPS) -> dict:
     at, total = growth_points(every)
     fit = crow_amsaa(at, total)
     cumulative = [{"distance": d, "interventions": i + 1} for i, d in enumerate(at)]
-    hotspots = [
-        {
-            "test_event": e.pk,
-            "segment": run.id,
-            "label": run.label,
-            "x": run.path_x[0],
-            "y": run.path_y[0],
-            "reasons": sorted(set(run.counted_reasons)),
-        }
-        for e in events
-        for run in runs_of[e.pk]
-        if run.is_intervention and run.path_x
-    ]
     return {
         "mode": mode,
         "confidence": CONFIDENCE,
         "test_events": [
-            {
-                "id": e.pk,
-                "name": str(e),
-                "version": e.version,
-                "figures": figures(runs_of[e.pk]).as_dict(),
-            }
+            _group(
+                {"id": e.pk, "name": str(e), "version": e.version, "start": e.start.isoformat()},
+                runs_of[e.pk],
+            )
             for e in events
         ],
-        "versions": [
-            {"version": version, "figures": figures(runs).as_dict()}
-            for version, runs in by_version.items()
-        ],
+        "versions": [_group({"version": version}, runs) for version, runs in by_version.items()],
         "vehicles": [
-            {"id": pk, "name": vehicles.get(pk, str(pk)), "figures": figures(runs).as_dict()}
+            _group({"id": pk, "name": vehicles.get(pk, str(pk))}, runs)
             for pk, runs in by_vehicle.items()
         ],
         "growth": {
             "points": cumulative,
             "total_distance": total,
             "fit": fit.as_dict() if fit else None,
+            "fit_rows": fit_rows(fit.as_dict() if fit else None),
         },
-        "hotspots": hotspots,
-        "formulas": dict(FORMULAS + GROWTH_FORMULAS),
+        "reasons": {
+            r.key: {"name": r.short_description, "color": r.color} for r in ItoReason.objects.all()
+        },
+        "hotspot_radius": HOTSPOT_RADIUS_M,
+        "hotspots": hotspots(runs_of, mode),
+        "formulas": dict(FORMULAS + GROWTH_FORMULAS + (HOTSPOT_FORMULA,)),
     }

@@ -33,6 +33,7 @@ from collections import defaultdict
 from dataclasses import asdict, dataclass, field
 from datetime import datetime
 
+import numpy as np
 from scipy.stats import chi2
 
 from events.models import ItoReason, Segment, SegmentType, TestEvent
@@ -123,8 +124,8 @@ class Run:
     track: Track | None = None
     has_start_position: bool = False
     # The polyline the distance was measured on, joins included.
-    path_x: list[float] = field(default_factory=list)
-    path_y: list[float] = field(default_factory=list)
+    path_x: np.ndarray = field(default_factory=lambda: np.empty(0))
+    path_y: np.ndarray = field(default_factory=lambda: np.empty(0))
     # The GUI's name of the segment ("Leg 2 · #7"), see events.selectors.labels.
     label: str = ""
 
@@ -259,6 +260,8 @@ def event_runs(event: TestEvent, mode: str = GPS) -> list[Run]:
     segments = list(
         Segment.objects.filter(leg__shift__test_event=event)
         .select_related("leg__shift")
+        # measured_paths reads start positions as plain floats
+        .defer("start_position")
         .order_by("leg__shift__start", "leg__shift_id", "leg__start", "leg_id", "start", "id")
     )
     counted = set(

@@ -16,28 +16,37 @@ from reports import formatting as fmt
 from reports.figures import style
 from reports.figures.growth import growth_chart, hotspot_chart
 from reports.selectors.comparison import compare
-from reports.selectors.statistics import Estimate
 from reports.services.rendering import TEMPLATE_DIR, ReportError
 from telemetry.selectors.tracks import GPS
 
 
-def _estimate(data: dict) -> Estimate:
-    return Estimate(**data)
-
-
-def _row(name: str, f: dict) -> list[str]:
-    mdbi, mtbi = _estimate(f["mdbi"]), _estimate(f["mtbi"])
-    return [
-        name,
-        str(f["interventions"]),
-        fmt.metres(f["auto_distance"]),
-        fmt.estimate(mdbi, fmt.metres),
-        fmt.bounds(mdbi, fmt.metres),
-        fmt.estimate(mtbi, fmt.duration),
-        fmt.bounds(mtbi, fmt.duration),
-        fmt.rate(f["interventions_per_km"]),
-        fmt.rate(f["interventions_per_hour"]),
+def _row(name: str, group: dict) -> list[str]:
+    shown = group["shown"]
+    return [name] + [
+        shown[key]
+        for key in (
+            "interventions",
+            "auto_distance",
+            "mdbi",
+            "mdbi_bounds",
+            "mtbi",
+            "mtbi_bounds",
+            "per_km",
+            "per_hour",
+        )
     ]
+
+
+def _hotspot_row(spot: dict, reasons: dict, names: dict) -> list[str]:
+    """Number, take-overs, reasons with counts, and each take-over's segment."""
+    reason_text = ", ".join(
+        f"{reasons[key].short_description if key in reasons else key} ({count})"
+        for key, count in spot["reasons"].items()
+    )
+    segments = "; ".join(
+        f"{names.get(m['test_event'], m['test_event'])}: {m['label']}" for m in spot["members"]
+    )
+    return [str(spot["number"]), str(spot["count"]), reason_text or fmt.DASH, segments]
 
 
 def render_comparison(events: list[TestEvent], mode: str = GPS) -> bytes:
@@ -51,32 +60,17 @@ def render_comparison(events: list[TestEvent], mode: str = GPS) -> bytes:
         growth = data["growth"]
         growth_chart(growth["points"], growth["total_distance"], growth["fit"], root / "growth.svg")
         hotspots = hotspot_chart(data["hotspots"], reasons, root / "hotspots.svg")
-        fit = growth["fit"]
+        names = {e["id"]: e["name"] for e in data["test_events"]}
         document = {
-            "events": [_row(f"{e['id']}: {e['name']}", e["figures"]) for e in data["test_events"]],
-            "versions": [_row(v["version"], v["figures"]) for v in data["versions"]],
-            "vehicles": [_row(v["name"], v["figures"]) for v in data["vehicles"]],
+            "events": [_row(f"{e['id']}: {e['name']}", e) for e in data["test_events"]],
+            "versions": [_row(v["version"], v) for v in data["versions"]],
+            "vehicles": [_row(v["name"], v) for v in data["vehicles"]],
             "growth": "growth.svg",
-            "fit": None
-            if fit is None
-            else [
-                ["Interventions n", str(fit["interventions"])],
-                ["Autonomous distance T", fmt.metres(fit["exposure"])],
-                [
-                    "β",
-                    f"{fit['beta']:.3f} (90 %: {fit['beta_lower']:.3f} – {fit['beta_upper']:.3f})",
-                ],
-                [
-                    "Growth parameter 1 − β",
-                    f"{fit['growth']:.3f} (90 %: {fit['growth_lower']:.3f} – "
-                    f"{fit['growth_upper']:.3f})",
-                ],
-            ],
+            "fit": growth["fit_rows"] or None,
             "hotspots": "hotspots.svg" if hotspots else None,
-            "hotspot_rows": [
-                [str(h["test_event"]), h["label"], ", ".join(h["reasons"]) or fmt.DASH]
-                for h in data["hotspots"]
-            ],
+            "hotspot_note": f"Take-overs at most {data['hotspot_radius']:g} m apart form "
+            "one hotspot (single linkage); numbers as on the map.",
+            "hotspot_rows": [_hotspot_row(spot, reasons, names) for spot in data["hotspots"]],
             "formulas": [[k, v] for k, v in data["formulas"].items()],
         }
         shutil.copy(TEMPLATE_DIR / "compare.typ", root / "compare.typ")

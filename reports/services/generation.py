@@ -29,7 +29,14 @@ from django.utils import timezone
 from common.errors import RuleViolation
 from events.models import TestEvent
 from reports.models import Report
-from reports.services.rendering import ReportError, ReportOptions, check_reportable, render_report
+from reports.services.comparing import render_comparison
+from reports.services.rendering import (
+    ReportError,
+    ReportOptions,
+    ReportResult,
+    check_reportable,
+    render_report,
+)
 
 log = logging.getLogger(__name__)
 
@@ -51,6 +58,36 @@ def request_report(
     report = Report.objects.create(
         test_event=test_event,
         options=opts.as_dict(),
+        requested_by=user if user is not None and user.is_authenticated else None,
+        message="waiting for the report worker",
+    )
+    transaction.on_commit(lambda: _start(report.pk))
+    return report
+
+
+COMPARE = "compare"  # the options key that makes a row a comparison of these test events
+
+
+def request_comparison(
+    test_events: list[TestEvent], options: dict | None = None, *, user=None
+) -> Report:
+    """Queue a comparison of several test events (a PDF like the others); the row
+    is kept with the first of them and lists all under ``options["compare"]``."""
+    options = options or {}
+    if not isinstance(options, dict):
+        raise ValidationError({"options": ["Options must be an object."]})
+    unknown = sorted(set(options) - {"local"})
+    errors = [f"Unknown or not requestable option '{key}' for a comparison." for key in unknown]
+    if "local" in options and not isinstance(options["local"], bool):
+        errors.append("Option 'local' must be true or false.")
+    if errors:
+        raise ValidationError({"options": errors})
+    if len({e.pk for e in test_events}) < 2:
+        raise ValidationError({"compare": ["Give at least two different test events."]})
+    events = sorted(test_events, key=lambda e: (e.start, e.pk))
+    report = Report.objects.create(
+        test_event=events[0],
+        options={COMPARE: [e.pk for e in events], "local": bool(options.get("local", False))},
         requested_by=user if user is not None and user.is_authenticated else None,
         message="waiting for the report worker",
     )
@@ -155,9 +192,7 @@ def run_job(report_id: int) -> Report:
             )
 
         try:
-            result = render_report(
-                report.test_event, ReportOptions.from_dict(report.options), progress
-            )
+            result = _render(report, progress)
         except ReportError as exc:
             return _fail(report_id, str(exc))
         except Exception as exc:  # a worker must record every failure on its row
@@ -173,6 +208,26 @@ def run_job(report_id: int) -> Report:
         report.error = "\n".join(result.warnings)
         report.save()
         return report
+
+
+def _render(report: Report, progress) -> ReportResult:
+    ids = report.options.get(COMPARE)
+    if not ids:
+        return render_report(report.test_event, ReportOptions.from_dict(report.options), progress)
+    events = list(TestEvent.objects.filter(pk__in=ids))
+    if len(events) < 2:
+        raise ReportError("A test event of this comparison was deleted; request it again.")
+    progress(0.1, "comparing test events")
+    started = time.perf_counter()
+    pdf = render_comparison(events, "local" if report.options.get("local") else "gps")
+    return ReportResult(
+        pdf=pdf,
+        pages_hint=0,
+        provisional=False,
+        tiles_used=False,
+        seconds=time.perf_counter() - started,
+        warnings=[],
+    )
 
 
 def _fail(report_id: int, message: str) -> Report:

