@@ -11,6 +11,7 @@ import { appendPoses, drawTakeOvers, loadSegments, refreshDistances, renderMode,
 import { loadLocalMap } from "./mapview.js";
 import { dialogSegment, loadImages, loadNotes } from "./segment-dialog.js";
 import { Collector } from "./collector.js";
+import { Fleet } from "./fleet.js";
 import "./parameters.js";
 import "./reports.js";
 
@@ -36,6 +37,12 @@ Live.on("map", (e) => {
 });
 Live.on("command", (e) => Collector.commandAnswered(e));
 Live.on("collector", () => Collector.refresh());
+// The fleet view hears every logging robot's mode and positions (it subscribes with fleet: true).
+for (const kind of ["segment", "poses", "collector", "log"]) {
+  Live.on(kind, () => {
+    if (Fleet.visible()) Live.later("fleet");
+  });
+}
 
 /* The refreshes, in this order: the pickers may change the leg the rest draws. */
 Live.onRefresh(["logs"], () => loadLevel("event"));
@@ -57,6 +64,7 @@ Live.onRefresh(["notes"], async () => {
 Live.onRefresh(["images"], async () => {
   if (dialogSegment) await loadImages();
 });
+Live.onRefresh(["fleet"], () => Fleet.refresh());
 
 async function boot() {
   const catalogues = loadCatalogues();
@@ -64,7 +72,11 @@ async function boot() {
   Live.connect();
   // Nothing in the address: offer the leg a collector is logging into.
   if (!fromUrl.event && CONFIG.loggingLeg) Object.assign(state.selected, CONFIG.loggingLeg);
-  setInterval(renderMode, 1000);
+  setInterval(() => {
+    renderMode();
+    Fleet.tick();
+  }, 1000);
+  if (state.view === "fleet") Fleet.show(true).catch(showError);
   try {
     await catalogues;
     await loadLevel("event");
@@ -75,8 +87,10 @@ async function boot() {
     // Open segments' durations keep growing between events.
     if (state.segments.some((s) => s.is_open)) renderSegments();
     if (current("shift")) Collector.refresh();
+    // Collectors that stop beating turn offline without a change-feed event.
+    Fleet.refresh().catch(showError);
   }, 5000);
 }
 
 if ($("#pick-event")) boot();
-window.FTT = { state, Live, Collector };
+window.FTT = { state, Live, Collector, Fleet };

@@ -205,3 +205,15 @@ def test_favicon_is_served(client):
     answer = client.get("/favicon.ico", follow=True)
     assert answer.status_code == 200
     assert b"<svg" in b"".join(answer.streaming_content if answer.streaming else [answer.content])
+
+
+def test_fleet_lists_logging_vehicles_to_anyone_with_a_role(client, leg, vehicle):
+    assert client.get("/gui/api/fleet/").status_code in (401, 403)
+    member(client, "vera", "viewer")
+    assert client.get("/gui/api/fleet/").json() == {"vehicles": []}
+    collector_for(vehicle, logging=True, leg=leg)
+    segments.report_mode(leg, "ito")
+
+    (entry,) = client.get("/gui/api/fleet/").json()["vehicles"]
+
+    assert (entry["vehicle"]["key"], entry["mode"], entry["leg"]["id"]) == ("husky", "ito", leg.pk)
