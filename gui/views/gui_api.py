@@ -18,6 +18,7 @@ from basemaps.selectors.layers import layer_list
 from common import roles
 from events.models import Leg, SegmentType, Shift, Vehicle
 from events.selectors.labels import label, leg_numbers
+from gui.forms import gui_forms
 from rosbridge_app.models import Collector
 from rosbridge_app.selectors.collectors import collector_status, collectors
 from rosbridge_app.selectors.control import (
@@ -25,6 +26,7 @@ from rosbridge_app.selectors.control import (
     parameter_rows,
     snapshot_control,
 )
+from rosbridge_app.selectors.fleet import fleet
 from rosbridge_app.services.collectors import issue_command
 from telemetry.selectors.distances import displayed_distances
 from telemetry.selectors.maps import current_map
@@ -162,6 +164,20 @@ class CollectorStatus(GuiView):
                 "snapshot_reason": snapshot_reason,
             }
         )
+
+
+class Forms(GuiView):
+    """The fields of the dialogs (test event, shift, leg, report), from serializers."""
+
+    def get(self, request):
+        return Response(gui_forms(getattr(request.user, "personnel", None)))
+
+
+class Fleet(GuiView):
+    """Every vehicle logging now: where it is, its mode, its last take-over, its leg."""
+
+    def get(self, request):
+        return Response({"vehicles": fleet()})
 
 
 class CollectorCommands(GuiView):

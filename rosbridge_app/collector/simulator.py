@@ -32,6 +32,7 @@ class SimConfig:
     radius: float = 20.0
     speed: float = 1.5
     switch_every: float = 20.0
+    first_mode: str = modes.ITO  # the mode it starts in (manual, as a robot leaves the depot)
     mode_type: str = modes.BOOL
     mode_rate: float = 1.0
     gps_rate: float = 10.0
@@ -105,7 +106,8 @@ class SimulatedRobot(Node):
 
     def mode(self) -> str:
         phase = int(self.elapsed() // self.c.switch_every) if self.c.switch_every > 0 else 0
-        return modes.ITO if phase % 2 == 0 else modes.AUTO
+        other = modes.AUTO if self.c.first_mode == modes.ITO else modes.ITO
+        return self.c.first_mode if phase % 2 == 0 else other
 
     def position(self, t: float | None = None) -> tuple[float, float, float]:
         """x, y (metres east/north of the circle's centre) and heading."""

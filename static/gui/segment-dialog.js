@@ -3,7 +3,7 @@
 import { CONFIG, $, $$ } from "./dom.js";
 import { api, list } from "./api.js";
 import { notice, showError } from "./feedback.js";
-import { segmentLabel, state } from "./state.js";
+import { byId, segmentLabel, state } from "./state.js";
 import { fmtTime } from "./format.js";
 import { confirmDialog } from "./dialogs.js";
 import { loadSnapshots } from "./snapshots.js";
@@ -12,7 +12,8 @@ const segmentDialog = $("#segment-dialog");
 export let dialogSegment = null;
 
 export async function openSegmentDialog(id) {
-  const s = await api("GET", `segments/${id}/`);
+  // The list's row is the same record (kept current by the change feed): no extra read.
+  const s = byId(state.segments, id) || (await api("GET", `segments/${id}/`));
   dialogSegment = s;
   const errorBox = $(".dialog-error", segmentDialog);
   errorBox.hidden = true;

@@ -10,7 +10,8 @@ import json
 import pytest
 from playwright.sync_api import expect
 
-from tests.support.browser import OVERFLOWING, ROOT, SMALL, VIEWPORTS, login
+from tests.support.browser import ROOT, login
+from tests.support.screens import OVERFLOWING, SMALL, VIEWPORTS
 
 MAIN_ACTIONS = (
     "#mode-panel .quick button, #mode-panel select, #segment-new, #segment-end, #segment-edit, "

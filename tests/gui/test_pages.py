@@ -245,3 +245,15 @@ def test_a_robot_token_opens_neither_photos_nor_the_guis_data(
     client.force_login(robot.user)
     assert "has no role" in client.get("/").content.decode()
     assert client.get(f"/gui/api/legs/{leg.pk}/tracks/").status_code == 403
+
+
+def test_fleet_lists_logging_vehicles_to_anyone_with_a_role(client, leg, vehicle):
+    assert client.get("/gui/api/fleet/").status_code in (401, 403)
+    member(client, "vera", "viewer")
+    assert client.get("/gui/api/fleet/").json() == {"vehicles": []}
+    collector_for(vehicle, logging=True, leg=leg)
+    segments.report_mode(leg, "ito")
+
+    (entry,) = client.get("/gui/api/fleet/").json()["vehicles"]
+
+    assert (entry["vehicle"]["key"], entry["mode"], entry["leg"]["id"]) == ("husky", "ito", leg.pk)

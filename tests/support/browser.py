@@ -15,6 +15,9 @@ import sys
 import textwrap
 import time
 from pathlib import Path
+from urllib.parse import unquote, urlsplit, urlunsplit
+
+import psycopg
 
 ROOT = Path(__file__).resolve().parents[2]
 # Not under test-results/: pytest-playwright empties that folder when a session starts.
@@ -44,7 +47,9 @@ def _free_port() -> int:
 class Server:
     """A daphne process plus a way to run Django code in other processes."""
 
-    def __init__(self, data_dir: Path, tile_url: str):
+    def __init__(self, data_dir: Path, tile_url: str, database_url: str = "", name: str = "daphne"):
+        """SpatiaLite in ``data_dir`` unless ``database_url`` names a PostgreSQL database."""
+        self.name = name
         self.port = _free_port()
         self.url = f"http://127.0.0.1:{self.port}"
         self.env = {
@@ -57,6 +62,8 @@ class Server:
             DJANGO_SETTINGS_MODULE="ftt_site.settings",
             PYTHONPATH=str(ROOT),
         )
+        if database_url:
+            self.env["FTT_DATABASE_URL"] = database_url
         self.process = None
 
     def manage(self, *args, timeout=120) -> str:
@@ -71,9 +78,9 @@ class Server:
         assert result.returncode == 0, result.stderr[-3000:]
         return result.stdout
 
-    def python(self, code: str) -> str:
+    def python(self, code: str, timeout: float = 120) -> str:
         """Run Django code in a separate process (the robot, an admin script)."""
-        return self.manage("shell", "-c", textwrap.dedent(code))
+        return self.manage("shell", "-c", textwrap.dedent(code), timeout=timeout)
 
     def spawn(self, code: str) -> subprocess.Popen:
         return subprocess.Popen(
@@ -90,7 +97,7 @@ class Server:
     def start(self):
         self.manage("migrate", "--noinput", timeout=300)
         ARTIFACTS.mkdir(parents=True, exist_ok=True)
-        self.log = open(ARTIFACTS / "daphne.log", "w")  # noqa: SIM115 - open while it runs
+        self.log = open(ARTIFACTS / f"{self.name}.log", "w")  # noqa: SIM115 - open while it runs
         self.process = subprocess.Popen(
             [
                 sys.executable,
@@ -151,39 +158,52 @@ def choose_event(page, key):
     expect(page.locator("#segments-section")).to_be_visible()
 
 
-# The three screens the GUI is used on: a laptop, a tablet held in one hand, a phone.
-VIEWPORTS = {
-    "laptop": {"viewport": {"width": 1366, "height": 768}},
-    "tablet": {"viewport": {"width": 1024, "height": 768}, "has_touch": True, "is_mobile": True},
-    "phone": {"viewport": {"width": 390, "height": 844}, "has_touch": True, "is_mobile": True},
-}
+USERS = f"""
+from django.contrib.auth.models import Group, User
+from events.models import Personnel
+def user(name, role, full):
+    u = User.objects.create_user(name, password={PASSWORD!r}, first_name=full)
+    u.groups.add(Group.objects.get(name=role))
+    return u
+admin = user("ada", "administrator", "Ada Admin")
+admin.is_staff = True
+admin.save()
+op = user("otto", "operator", "Otto Operator")
+Personnel.objects.create(name="Jörg Müller", institution="FKIE", user=op)
+user("vera", "viewer", "Vera Viewer")
+"""
 
-# Whatever sticks out of the window or scrolls sideways inside its box; the maps'
-# panes are clipped by Leaflet on purpose, and a long value scrolls in its input.
-OVERFLOWING = """() => {
-  const width = document.documentElement.clientWidth;
-  const out = [];
-  for (const el of document.querySelectorAll("body *")) {
-    if (el.closest(".leaflet-container, dialog:not([open])")) continue;
-    if (["INPUT", "SELECT", "TEXTAREA", "OPTION"].includes(el.tagName)) continue;
-    const r = el.getBoundingClientRect();
-    if (!r.width || !r.height) continue;
-    const style = getComputedStyle(el);
-    const clips = style.overflowX !== "visible";
-    if (r.right > width + 0.5 || r.left < -0.5 || (clips && el.scrollWidth > el.clientWidth + 1)) {
-      out.push(`${el.tagName.toLowerCase()}#${el.id}.${el.className}`);
-    }
-  }
-  if (document.documentElement.scrollWidth > width) out.push("page");
-  return out;
-}"""
 
-# Main actions smaller than a 44 px touch target (selector as argument).
-SMALL = """(selector) => Array.from(document.querySelectorAll(selector))
-  .filter((el) => el.getClientRects().length && !el.closest("[hidden]"))
-  .map((el) => [el.id || el.textContent.trim().slice(0, 20), el.getBoundingClientRect()])
-  .filter(([, r]) => r.height < 44 || r.width < 44)
-  .map(([name, r]) => `${name}: ${Math.round(r.width)}x${Math.round(r.height)}`)"""
+def _maintenance_connection(parts):
+    return psycopg.connect(
+        host=parts.hostname,
+        port=parts.port or 5432,
+        user=unquote(parts.username or ""),
+        password=unquote(parts.password or ""),
+        dbname="postgres",
+        autocommit=True,
+    )
+
+
+def fresh_database(url: str, suffix: str) -> str:
+    """An empty database next to the one ``url`` names (PostgreSQL); returns its URL."""
+    parts = urlsplit(url)
+    name = f"test_{parts.path.lstrip('/')}_{suffix}"
+    with _maintenance_connection(parts) as conn:
+        conn.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
+        conn.execute(f'CREATE DATABASE "{name}"')
+    return urlunsplit(parts._replace(path=f"/{name}"))
+
+
+def drop_database(url: str) -> None:
+    parts = urlsplit(url)
+    with _maintenance_connection(parts) as conn:
+        conn.execute(f'DROP DATABASE IF EXISTS "{parts.path.lstrip("/")}" WITH (FORCE)')
+
+
+def add_users(server) -> None:
+    """The browser tests' accounts: ada (administrator), otto (operator), vera (viewer)."""
+    server.python(USERS)
 
 
 def login(page, server, username):

@@ -9,6 +9,7 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from events.models import Vehicle
 from events.selectors.logs import open_leg_for_vehicle
 from events.services import logs
+from rosbridge_app.collector import modes
 from rosbridge_app.collector.simulator import SimConfig, SimulatedRobot
 
 
@@ -27,6 +28,12 @@ class Command(BaseCommand):
             type=float,
             default=d.switch_every,
             help="Seconds between mode switches (starts manual).",
+        )
+        a(
+            "--first-mode",
+            choices=(modes.ITO, modes.AUTO),
+            default=d.first_mode,
+            help="Mode to start in; with --switch-every 0 it stays in it.",
         )
         a("--mode-type", choices=("bool", "industrial"), default=d.mode_type)
         a("--mode-rate", type=float, default=d.mode_rate)
@@ -71,6 +78,7 @@ class Command(BaseCommand):
             radius=o["radius"],
             speed=o["speed"],
             switch_every=o["switch_every"],
+            first_mode=o["first_mode"],
             mode_type=o["mode_type"],
             mode_rate=o["mode_rate"],
             gps_rate=o["gps_rate"],
