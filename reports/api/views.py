@@ -20,7 +20,7 @@ from reports.selectors import exports
 from reports.selectors.comparison import compare
 from reports.selectors.reports import reports_of
 from reports.selectors.statistics import event_statistics
-from reports.services.generation import fail_stale_reports, request_report
+from reports.services.generation import request_report
 from reports.services.rendering import FULL, LEVELS
 from telemetry.selectors.tracks import MODES
 
@@ -96,7 +96,6 @@ class ReportListView(APIView):
         responses={200: ReportSerializer(many=True)},
     )
     def get(self, request):
-        fail_stale_reports()
         event_id = request.query_params.get("test_event")
         if event_id is not None and not event_id.isdigit():
             raise ValidationError({"test_event": ["A test event id is a number."]})
