@@ -27,31 +27,19 @@ import re
 import shutil
 import statistics
 import subprocess
-import sys
 import tempfile
 import time
 from datetime import UTC, datetime
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
-os.environ.setdefault("DJANGO_SETTINGS_MODULE", "ftt_site.settings")
-os.environ["ROS_DOMAIN_ID"] = str(40 + os.getpid() % 20)
-os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-os.environ.pop("RMW_IMPLEMENTATION", None)
+from collector_bench import Bench, load
+from django.db import connection
 
-import django  # noqa: E402
-
-django.setup()
-
-from django.db import connection  # noqa: E402
-
-from events.models import Segment, Vehicle  # noqa: E402
-from events.services import deletion, logs  # noqa: E402
-from rosbridge_app.collector import params as P  # noqa: E402
-from rosbridge_app.models import Collector, CollectorCommand  # noqa: E402
-from rosbridge_app.services.collectors import issue_command  # noqa: E402
-from telemetry.models import Image, LocalPose, MapImage, Pose, Recording  # noqa: E402
+from events.models import Segment
+from rosbridge_app.collector import params as P
+from rosbridge_app.models import Collector, CollectorCommand
+from rosbridge_app.services.collectors import issue_command
+from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 
 TICKS = os.sysconf("SC_CLK_TCK")
 
@@ -96,15 +84,9 @@ def main() -> None:
     import rclpy
     from std_msgs.msg import Bool
 
-    key = f"bench-{os.getpid()}"
-    vehicle = Vehicle.objects.create(key=key, short_description="collector benchmark")
-    event = logs.create_test_event(location="collector benchmark")
-    leg = logs.create_leg(shift=logs.create_shift(test_event=event, vehicle=vehicle))
-    work = Path(tempfile.mkdtemp(prefix="ftt-bench-"))
-    values = P.read_file(P.DEFAULT_FILE)
-    values.update(
-        {
-            "vehicle": key,
+    bench = Bench(
+        "throughput",
+        **{
             "params.send_map_period": 1.0,
             "params.sensor_reliable": args.reliable,
             "snapshot.enabled": args.snapshot == "on",
@@ -113,62 +95,13 @@ def main() -> None:
             # Mode switches come every 2 s: short windows keep the disk use of a run small.
             "snapshot.before": 5.0,
             "snapshot.after": args.snapshot_after,
-        }
+        },
     )
-    P.write_file(work / "params.yaml", values)
-    env = {
-        **os.environ,
-        "PYTHONUNBUFFERED": "1",
-        "FTT_DATA_DIR": str(work),
-        "FTT_MEDIA_ROOT": str(work / "media"),
-    }
-    manage = [sys.executable, str(ROOT / "manage.py")]
-    collector = subprocess.Popen(
-        [
-            *manage,
-            "ftt_collect",
-            "--params-file",
-            str(work / "params.yaml"),
-            "--name",
-            key,
-            "--spool",
-            str(work / "spool.sqlite3"),
-            "--start-logging",
-        ],
-        env=env,
-        stdout=open(work / "collector.log", "wb"),
-        stderr=subprocess.STDOUT,
-    )
+    key, leg = bench.key, bench.leg
+    collector = bench.collector(bench.work / "spool.sqlite3", bench.work / "collector.log")
     while not Collector.objects.filter(name=key).exists():
         time.sleep(0.2)
-    robot = subprocess.Popen(
-        [
-            *manage,
-            "ftt_simulate",
-            "--gps-rate",
-            "100",
-            "--tf-rate",
-            "50",
-            "--camera-rate",
-            "10",
-            "--camera-size",
-            "640x480",
-            "--map-size",
-            "2000",
-            "--map-rate",
-            "1",
-            "--mode-rate",
-            "0",
-            "--duration",
-            str(args.seconds),
-            "--wait-for-subscriber",
-            "20",
-        ],
-        env=env,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-    )
+    robot = bench.robot(args.seconds, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
 
     rclpy.init()
     node = rclpy.create_node("ftt_benchmark")
@@ -229,7 +162,7 @@ def main() -> None:
     qos = "RELIABLE" if args.reliable else "BEST_EFFORT"
     print(
         f"database: {connection.vendor} · {os.cpu_count()} cores · {elapsed:.0f} s run · "
-        f"sensor QoS {qos}"
+        f"sensor QoS {qos} · {load()}"
     )
     print(f"published by the robot: {published.strip().splitlines()[-1]}")
     print(f"received by the collector: {counts}")
@@ -256,9 +189,7 @@ def main() -> None:
     print(spread("GUI command issued → carried out by the collector", command_delays))
     node.destroy_node()
     rclpy.try_shutdown()
-    deletion.delete(event)
-    Collector.objects.filter(name=key).delete()
-    deletion.delete(vehicle)
+    bench.close()
 
 
 def buffer_cost(seconds: int = 60) -> None:

@@ -2,7 +2,7 @@
 what is configured before a test apart from what the field test recorded."""
 
 from django.contrib import admin
-from django.contrib.admin.apps import AdminConfig
+from django.contrib.admin.apps import SimpleAdminConfig
 
 # Model names (object_name) per group; anything not named keeps Django's app grouping.
 GROUPS = (
@@ -34,6 +34,12 @@ class FttAdminSite(admin.AdminSite):
     site_title = "FTT administration"
     index_title = "Set-up and records"
 
+    def check(self, app_configs):
+        # The admin modules load with the URLs (FttAdminConfig); the system
+        # checks may run before the URLs are loaded and must see them all.
+        admin.autodiscover()
+        return super().check(app_configs)
+
     def get_app_list(self, request, app_label=None):
         apps = super().get_app_list(request, app_label)
         if app_label is not None:
@@ -61,5 +67,10 @@ class FttAdminSite(admin.AdminSite):
         return grouped
 
 
-class FttAdminConfig(AdminConfig):
+class FttAdminConfig(SimpleAdminConfig):
+    """Admin modules are found when the URLs load (ftt_site/urls.py), not in
+    every process at start: the collector and the job worker never show the
+    admin, and the basemap admin alone brings in the raster libraries (seconds
+    of the collector's start-up)."""
+
     default_site = "ftt_site.admin_site.FttAdminSite"

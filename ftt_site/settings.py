@@ -69,8 +69,10 @@ SECURE_CONTENT_TYPE_NOSNIFF = True
 SECURE_REFERRER_POLICY = "same-origin"
 X_FRAME_OPTIONS = "DENY"
 
+# No "daphne" app: FTT is served by Gunicorn + Uvicorn (scripts/run.sh, README),
+# and the app would load Twisted into every process, the collector included
+# (about a second of its start-up on an idle machine).
 INSTALLED_APPS = [
-    "daphne",
     "ftt_site.admin_site.FttAdminConfig",
     "django.contrib.auth",
     "django.contrib.contenttypes",
