@@ -39,6 +39,10 @@ log = logging.getLogger("ftt.collector")
 POSITION_DEPTH = 2000
 # The most messages one callback takes from its subscription besides its own.
 DRAIN = 200
+# Inputs a robot publishes all the time while it runs; the mode and maps may
+# come only on a change, so their silence says nothing about the collector.
+STREAMS = ("gps_fix", "tf", "local_pose", "image", "image_compressed")
+DEAF = "robot publishes, collector hears nothing"
 
 RELIABLE_LATCHED = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,
@@ -90,12 +94,21 @@ class CollectorNode(Node):
         params_file: Path | None,
         status: Status | None = None,
         on_logging=None,
+        on_deaf=None,
+        on_first_message=None,
         overrides: dict | None = None,
     ):
         super().__init__(P.NODE_NAME)
         self.params_file = Path(params_file) if params_file else None
         self.status = status or Status()
         self.on_logging = on_logging or (lambda logging_on: None)
+        # Called (executor thread) when re-created subscriptions did not help either.
+        self.on_deaf = on_deaf or (lambda: None)
+        self.on_first_message = on_first_message
+        # Empty, or what the GUI shows while the collector hears nothing.
+        self.hearing = ""
+        self._heard = (0, time.monotonic())
+        self._deaf_steps = 0
         self.inputs: dict[str, dict] = {}
         self.topics: list = []
         self._errors: dict[str, float] = {}
@@ -307,6 +320,9 @@ class CollectorNode(Node):
     def _input(self, name: str, handler):
         def receive(msg):
             at = now()
+            if self.on_first_message is not None:
+                first, self.on_first_message = self.on_first_message, None
+                first()
             answer = None
             try:
                 answer = handler(msg, at)
@@ -451,6 +467,54 @@ class CollectorNode(Node):
         ]
         self._subscribe_snapshots()
         self.blackbox.poll()
+        self._watch_hearing(time.monotonic())
+
+    # --- hearing watchdog ---------------------------------------------------------------
+
+    def _watch_hearing(self, t: float) -> None:
+        """While logging: nothing heard for params.deaf_timeout seconds although
+        other nodes publish sensor topics we subscribe to means our side of DDS
+        is deaf (seen after a SIGKILL restart): re-create the subscriptions,
+        and if that does not help within another timeout, the collector."""
+        received = sum(info["count"] for info in self.inputs.values())
+        timeout = self.get_parameter("params.deaf_timeout").value
+        count, since = self._heard
+        if received != count or not timeout or not self.pipeline.logging:
+            if self.hearing and received != count:
+                log.warning("the collector hears its topics again")
+            self._heard = (received, t)
+            self.hearing, self._deaf_steps = "", 0
+            return
+        if t - since < timeout:
+            return
+        self._heard = (received, t)
+        publishing = self._published_streams()
+        if not publishing:  # the robot is quiet: nothing to hear
+            self.hearing, self._deaf_steps = "", 0
+            return
+        self._deaf_steps += 1
+        topics = ", ".join(publishing)
+        if self._deaf_steps == 1:
+            self.hearing = f"{DEAF} ({topics}) for {timeout:g} s: subscriptions re-created"
+            log.warning("%s", self.hearing)
+            self._subscribe()
+        else:
+            self.hearing = f"{DEAF} ({topics}) for {timeout * 2:g} s: the collector restarts"
+            log.warning("%s", self.hearing)
+            self._deaf_steps = 0  # if it stays, re-created subscriptions come first again
+            self.on_deaf()
+
+    def _published_streams(self) -> list[str]:
+        me = (self.get_name(), self.get_namespace())
+        found = []
+        for name in STREAMS:
+            info = self.inputs.get(name)
+            if info is None:
+                continue
+            publishers = self.get_publishers_info_by_topic(info["topic"])
+            if any((p.node_name, p.node_namespace) != me for p in publishers):
+                found.append(info["topic"])
+        return found
 
     # --- calls from other threads -------------------------------------------------------
 

@@ -51,7 +51,9 @@ export const Collector = {
     const into = c.leg === state.selected.leg ? "this leg" : c.leg ? "another leg" : "no leg";
     const doing = c.logging ? `logging into ${into}` : "not logging";
     const queue = c.pending ? ` · ${c.pending} records not yet stored` : "";
-    $("#collector-status").textContent = `${vehicleName(current("shift").vehicle)} (collector ${c.name}): ${c.online ? "online" : "offline"}, ${doing}${queue}`;
+    // Set by the collector's watchdog, e.g. "robot publishes, collector hears nothing (…)".
+    const hearing = c.online && c.hearing ? ` · ${c.hearing}` : "";
+    $("#collector-status").textContent = `${vehicleName(current("shift").vehicle)} (collector ${c.name}): ${c.online ? "online" : "offline"}, ${doing}${queue}${hearing}`;
     inputs.replaceChildren(...Object.entries(c.inputs || {}).map(([name, info]) => {
       const li = document.createElement("li");
       const age = info && typeof info.age === "number" ? `${info.age.toFixed(1)} s ago` : "no data yet";

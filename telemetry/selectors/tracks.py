@@ -274,7 +274,7 @@ def with_last_position(queryset: QuerySet, leg_field: str = "leg") -> QuerySet:
 
     def coordinate(function):
         point = Pose.objects.filter(pk=OuterRef("_last_fix"))
-        return Subquery(point.annotate(_v=_Coordinate("point", function=function)).values("_v")[:1])
+        return Subquery(point.annotate(_v=Coordinate("point", function=function)).values("_v")[:1])
 
     return queryset.annotate(_last_fix=Subquery(fix_of_leg)).annotate(
         last_lon=coordinate("ST_X"), last_lat=coordinate("ST_Y")

@@ -45,7 +45,8 @@ def _free_port() -> int:
 
 
 class Server:
-    """A daphne process plus a way to run Django code in other processes."""
+    """A daphne process and the job worker beside it (as scripts/run.sh starts
+    them), plus a way to run Django code in other processes."""
 
     def __init__(self, data_dir: Path, tile_url: str, database_url: str = "", name: str = "daphne"):
         """SpatiaLite in ``data_dir`` unless ``database_url`` names a PostgreSQL database."""
@@ -64,7 +65,7 @@ class Server:
         )
         if database_url:
             self.env["FTT_DATABASE_URL"] = database_url
-        self.process = None
+        self.process = self.worker = None
 
     def manage(self, *args, timeout=120) -> str:
         result = subprocess.run(
@@ -115,6 +116,13 @@ class Server:
             stdout=self.log,
             stderr=subprocess.STDOUT,
         )
+        self.worker = subprocess.Popen(
+            [sys.executable, "manage.py", "ftt_worker", "--interval", "0.5"],
+            cwd=ROOT,
+            env=self.env,
+            stdout=self.log,
+            stderr=subprocess.STDOUT,
+        )
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline:
             try:
@@ -125,12 +133,14 @@ class Server:
         raise RuntimeError("daphne did not start")
 
     def stop(self):
+        for process in (self.worker, self.process):
+            if process is not None:
+                process.terminate()
+                try:
+                    process.wait(10)
+                except subprocess.TimeoutExpired:
+                    process.kill()
         if self.process is not None:
-            self.process.terminate()
-            try:
-                self.process.wait(10)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
             self.log.close()
 
 
