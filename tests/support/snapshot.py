@@ -22,6 +22,7 @@ from events.models import (
     Performer,
     Personnel,
     PoseSource,
+    RobotAccount,
     Segment,
     SegmentType,
     Shift,
@@ -52,7 +53,9 @@ TABLES = {
 }
 
 # The change feed only tells open browsers what changed; it is not test data.
-NOT_RECORDED = {Announcement}
+# Robot accounts bind this installation's logins to vehicles, like the accounts
+# themselves they stay where they were made.
+NOT_RECORDED = {Announcement, RobotAccount}
 
 # Login accounts belong to one installation; archives do not carry them.
 LOCAL_COLUMNS = {(Personnel, "user")}
