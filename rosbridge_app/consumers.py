@@ -20,13 +20,16 @@ from channels.generic.websocket import AsyncJsonWebsocketConsumer
 from django.conf import settings
 from django.contrib import auth
 from django.db import connections
+from django.db.models import Q
 from psycopg import AsyncConnection
 from psycopg.conninfo import make_conninfo
 
 from common import roles
 from events import feed
+from events.api.serializers import SegmentSerializer
 from events.feed import FLEET_KINDS, LOG_KINDS
-from events.models import Announcement
+from events.models import Announcement, Leg, Segment
+from events.selectors.labels import label, leg_numbers
 from rosbridge_app import wakeup
 from rosbridge_app.wakeup import GROUP
 
@@ -60,7 +63,39 @@ def as_message(row: Announcement) -> dict:
 
 @database_sync_to_async
 def _rows_after(after: int, limit: int = BATCH) -> list[dict]:
-    return [as_message(e) for e in feed.after(after, limit)]
+    rows = [as_message(e) for e in feed.after(after, limit)]
+    _attach_segments([r for r in rows if r["kind"] == Announcement.Kind.SEGMENT])
+    return rows
+
+
+def _attach_segments(rows: list[dict]) -> None:
+    """Give each segment event the rows it changed, as the API shows them, with
+    their labels, so the page applies them instead of re-reading the list.
+
+    A mode switch announces only the new master, but it also closed the
+    previous master and its reasons (they end where the new one starts) and
+    opened a reason under it; closing a master closes its reasons.
+    """
+    ids = {r["payload"].get("id") for r in rows} - {None}
+    if not ids:
+        return
+    announced = {s.pk: s for s in Segment.objects.filter(pk__in=ids)}
+    numbers = {}
+    for row in rows:
+        segment = announced.get(row["payload"].get("id"))
+        if segment is None:
+            continue  # deleted since: the page re-reads
+        changed = Segment.objects.filter(leg_id=segment.leg_id).filter(
+            Q(pk=segment.pk) | Q(parent_id=segment.pk) | Q(end=segment.start)
+        )
+        if segment.leg_id not in numbers:
+            leg_number = Leg.objects.values_list("number", flat=True).get(pk=segment.leg_id)
+            numbers[segment.leg_id] = {
+                pk: label(leg_number, n) for pk, n in leg_numbers(segment.leg_id).items()
+            }
+        changed = list(changed)
+        row["segments"] = SegmentSerializer(changed, many=True).data
+        row["labels"] = {s.pk: numbers[segment.leg_id].get(s.pk) for s in changed}
 
 
 _bounds = database_sync_to_async(feed.bounds)

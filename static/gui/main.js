@@ -7,7 +7,7 @@ import { showError } from "./feedback.js";
 import { current, fromUrl, state } from "./state.js";
 import { Live, onSelectedLeg } from "./live.js";
 import { loadCatalogues, loadLevel } from "./levels.js";
-import { appendPoses, drawTakeOvers, loadSegments, refreshDistances, renderMode, renderSegments } from "./segments.js";
+import { appendPoses, applySegments, drawTakeOvers, loadSegments, refreshDistances, renderMode, renderSegments } from "./segments.js";
 import { loadLocalMap } from "./mapview.js";
 import { dialogSegment, loadImages, loadNotes } from "./segment-dialog.js";
 import { Collector } from "./collector.js";
@@ -27,7 +27,7 @@ Live.on("deleted", (e) => {
   Live.later(what || "logs");
 });
 Live.on("segment", (e) => {
-  if (onSelectedLeg(e)) Live.later("segments");
+  if (onSelectedLeg(e) && !applySegments(e)) Live.later("segments");
 });
 Live.on("note", () => Live.later("notes"));
 Live.on("image", () => Live.later("images"));

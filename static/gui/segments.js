@@ -83,6 +83,22 @@ export async function loadSegments() {
   renderSegments();
 }
 
+/* A segment event carries the rows it changed (rosbridge_app/consumers.py):
+ * they replace or join the list without reading it again.  False when the
+ * event did not carry them, and the caller re-reads. */
+export function applySegments(e) {
+  if (!e.segments || e.leg !== state.selected.leg) return false;
+  for (const row of e.segments) {
+    const i = state.segments.findIndex((s) => s.id === row.id);
+    if (i >= 0) state.segments[i] = row;
+    else state.segments.push(row);
+  }
+  Object.assign(state.labels, e.labels);
+  renderSegments();
+  drawTakeOvers();
+  return true;
+}
+
 async function loadTracks() {
   const leg = state.selected.leg;
   const data = await api("GET", `legs/${leg}/tracks/`, undefined, { root: CONFIG.guiApiRoot });

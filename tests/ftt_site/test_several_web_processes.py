@@ -8,26 +8,21 @@ import pytest
 import requests
 import websockets
 
+from tests.support.browser import session_code
 from tests.support.drill import WebServer
 
-SESSION = """
-from django.contrib.auth.models import Group, User
-from django.contrib.sessions.backends.db import SessionStore
+SESSION = (
+    session_code("watcher", "operator")
+    + """
 from events.models import Vehicle
 from events.services import logs
 from rest_framework.authtoken.models import Token
-user = User.objects.create_user("watcher", password="x")
-user.groups.add(Group.objects.get(name="operator"))
-s = SessionStore()
-s["_auth_user_id"] = str(user.pk)
-s["_auth_user_backend"] = "django.contrib.auth.backends.ModelBackend"
-s["_auth_user_hash"] = user.get_session_auth_hash()
-s.create()
 leg = logs.create_leg(shift=logs.create_shift(
     test_event=logs.create_test_event(),
     vehicle=Vehicle.objects.create(key="two", short_description="two")))
 print("SESSION", s.session_key, Token.objects.create(user=user).key, leg.pk)
 """
+)
 
 
 @pytest.fixture

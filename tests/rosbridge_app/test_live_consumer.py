@@ -73,6 +73,26 @@ async def test_new_segment_and_poses_arrive_without_asking(viewer, leg):
     await communicator.disconnect()
 
 
+async def test_a_mode_switch_brings_every_segment_it_changed(viewer, leg):
+    ito = (await database_sync_to_async(segments.report_mode)(leg, "ito")).master
+    communicator, _ = await connect(viewer, leg=leg.pk)
+    auto = (await database_sync_to_async(segments.report_mode)(leg, "auto")).master
+    (event,) = await next_events(communicator)
+    rows = {row["id"]: row for row in event["segments"]}
+    reason = await database_sync_to_async(lambda: ito.children.get().pk)()
+    # The new AUTO master, and the ITO master and its reason it closed.
+    assert set(rows) == {auto.pk, ito.pk, reason}
+    assert rows[auto.pk]["is_open"] and not rows[ito.pk]["is_open"]
+    assert rows[ito.pk]["end"] == rows[reason]["end"] == rows[auto.pk]["start"]
+    labels = {int(k): v for k, v in event["labels"].items()}
+    assert labels == {
+        ito.pk: f"Leg {leg.number} · #1",
+        reason: f"Leg {leg.number} · #1.1",
+        auto.pk: f"Leg {leg.number} · #2",
+    }
+    await communicator.disconnect()
+
+
 async def test_other_legs_poses_are_not_sent(viewer, leg, shift):
     from events.services import logs
 

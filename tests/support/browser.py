@@ -216,6 +216,22 @@ def add_users(server) -> None:
     server.python(USERS)
 
 
+def session_code(username: str, group: str) -> str:
+    """Django code for :meth:`Server.python`: a user of ``group`` (in ``user``) with a
+    signed-in session (in ``s``), for a client that cannot type a password."""
+    return f"""
+from django.contrib.auth.models import Group, User
+from django.contrib.sessions.backends.db import SessionStore
+user = User.objects.create_user({username!r}, password="x")
+user.groups.add(Group.objects.get(name={group!r}))
+s = SessionStore()
+s["_auth_user_id"] = str(user.pk)
+s["_auth_user_backend"] = "django.contrib.auth.backends.ModelBackend"
+s["_auth_user_hash"] = user.get_session_auth_hash()
+s.create()
+"""
+
+
 def login(page, server, username):
     page.goto(f"{server.url}/login/")
     page.get_by_label("User name").fill(username)
