@@ -162,6 +162,17 @@ SMALL = """(selector) => Array.from(document.querySelectorAll(selector))
   .map(([name, r]) => `${name}: ${Math.round(r.width)}x${Math.round(r.height)}`)"""
 
 
+# axe-core (npm) and the check of a page for serious or critical accessibility problems.
+AXE = ROOT / "node_modules" / "axe-core" / "axe.min.js"
+
+SERIOUS = """async () => {
+  const result = await axe.run(document, { resultTypes: ["violations"] });
+  return result.violations
+    .filter((v) => ["serious", "critical"].includes(v.impact))
+    .map((v) => `${v.id}: ${v.nodes.map((n) => n.target.join(" ")).join(", ")}`);
+}"""
+
+
 def login(page, server, username):
     page.goto(f"{server.url}/login/")
     page.get_by_label("User name").fill(username)
