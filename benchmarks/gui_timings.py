@@ -45,6 +45,8 @@ for i in range({segments}):
     recording.record_poses(auto, fixes)
     segments.report_mode(leg, "ito")
 segments.report_mode(leg, "auto")
+from rosbridge_app.services import collectors
+collectors.heartbeat("bench-collector", vehicle=v, logging=True, leg=leg)
 print(json.dumps({{"event": e.pk, "shift": s.pk, "leg": leg.pk, "other": other.pk}}))
 """
 
@@ -149,6 +151,30 @@ def main():
                             ),
                         )
                     )
+                dialog = page.locator("#form-dialog")
+                figures.setdefault("open the New leg dialog (fields from the server)", []).append(
+                    timed(
+                        lambda: page.locator('[data-action="new"][data-level="leg"]').click(),
+                        lambda d=dialog: expect(d.get_by_label("Weather")).to_be_visible(),
+                    )
+                )
+                dialog.get_by_role("button", name="Cancel").click()
+                vehicle = page.locator(".fleet-vehicle").first
+                figures.setdefault("open the fleet view", []).append(
+                    timed(
+                        lambda: page.locator("#toggle-fleet").click(),
+                        lambda vehicle=vehicle: expect(vehicle).to_be_visible(),
+                    )
+                )
+                figures.setdefault("open a vehicle's cockpit from the fleet", []).append(
+                    timed(
+                        vehicle.click,
+                        lambda: (
+                            expect(page.locator("#cockpit")).to_be_visible(),
+                            expect(rows.first).to_be_visible(),
+                        ),
+                    )
+                )
             browser.close()
     finally:
         server.stop()

@@ -1,13 +1,19 @@
-"""The three roles, as Django groups (created by migration events.0002).
+"""The roles, as Django groups (created by migrations events.0002 and 0007).
 
-Each role includes the ones below it: an administrator may do everything an
-operator may, an operator everything a viewer may.
+The people's roles are ordered, each including the ones below it: an
+administrator may do everything an operator may, an operator everything a
+viewer may.  ``robot`` stands apart: a robot account is bound to vehicles
+(``events.RobotAccount``) and writes what its robot records into their legs
+only (``events.rules.check_robot_target``).  It holds none of the people's
+roles, even when its account is also in their groups: a token lost with a
+robot must not carry an operator's rights.
 """
 
 VIEWER = "viewer"
 OPERATOR = "operator"
 ADMINISTRATOR = "administrator"
 ORDER = (VIEWER, OPERATOR, ADMINISTRATOR)
+ROBOT = "robot"
 
 # Who may write what: the lowest role that may add, change and delete rows of
 # each model ("app_label.modelname").  Every role reads everything.  The API's
@@ -35,6 +41,19 @@ WRITERS = {
     "events.segmenttype": ADMINISTRATOR,
 }
 
+# What a robot account writes besides, into legs of its own vehicles only:
+# segments by reporting its mode, and its telemetry.  The API views name the
+# actions that write them (``robot_actions``); the seeded robot group gets
+# these models' add permission.
+ROBOT_WRITES = (
+    "events.segment",
+    "telemetry.pose",
+    "telemetry.localpose",
+    "telemetry.mapimage",
+    "telemetry.image",
+    "telemetry.recording",
+)
+
 
 def write_role(model) -> str:
     """The role needed to write rows of ``model`` (a model class or its label)."""
@@ -47,18 +66,34 @@ def written_by(role: str) -> list[str]:
     return [label for label, writer in WRITERS.items() if ORDER.index(writer) <= ORDER.index(role)]
 
 
+def _active(user) -> bool:
+    return bool(user) and user.is_authenticated and user.is_active
+
+
+def _group_names(user) -> frozenset[str]:
+    # One query per request: the user object lives as long as the request.
+    cached = getattr(user, "_ftt_groups", None)
+    if cached is None:
+        cached = frozenset(user.groups.values_list("name", flat=True))
+        user._ftt_groups = cached
+    return cached
+
+
+def is_robot(user) -> bool:
+    """A robot account: in the robot group (a superuser never is one)."""
+    return _active(user) and not user.is_superuser and ROBOT in _group_names(user)
+
+
 def user_role_rank(user) -> int:
-    """-1 for no role, else the index of the highest role in ORDER."""
-    if not user or not user.is_authenticated or not user.is_active:
+    """-1 for no role (robot accounts too), else the index of the highest role in ORDER."""
+    if not _active(user):
         return -1
     if user.is_superuser:
         return len(ORDER) - 1
-    cached = getattr(user, "_ftt_role_rank", None)
-    if cached is None:
-        names = set(user.groups.values_list("name", flat=True))
-        cached = max((i for i, role in enumerate(ORDER) if role in names), default=-1)
-        user._ftt_role_rank = cached
-    return cached
+    names = _group_names(user)
+    if ROBOT in names:
+        return -1
+    return max((i for i, role in enumerate(ORDER) if role in names), default=-1)
 
 
 def has_role(user, role: str) -> bool:

@@ -6,6 +6,8 @@ that call the service layer, and robot-recorded data is read-only.
 """
 
 from django.contrib import admin, messages
+from django.contrib.auth import get_user_model
+from django.contrib.auth.admin import UserAdmin
 from django.core.exceptions import ValidationError
 from django.urls import reverse
 from django.utils.html import format_html
@@ -19,6 +21,7 @@ from events.models import (
     Performer,
     Personnel,
     PoseSource,
+    RobotAccount,
     Segment,
     SegmentType,
     Shift,
@@ -84,11 +87,64 @@ class PerformerAdmin(ServiceDeleteMixin, admin.ModelAdmin):
     search_fields = ["institution"]
 
 
+class RobotBindingInline(admin.TabularInline):
+    """On a vehicle's page: the robot accounts whose tokens log into its legs."""
+
+    model = RobotAccount.vehicles.through
+    extra = 0
+    autocomplete_fields = ["robotaccount"]
+    verbose_name = "robot account"
+    verbose_name_plural = "robot accounts logging for this vehicle (their tokens write here only)"
+
+
 @admin.register(Vehicle)
 class VehicleAdmin(ServiceDeleteMixin, admin.ModelAdmin):
     list_display = ["key", "short_description", "institution"]
     search_fields = ["key", "short_description", "long_description", "institution"]
     list_filter = ["institution"]
+    inlines = [RobotBindingInline]
+
+
+@admin.register(RobotAccount)
+class RobotAccountAdmin(admin.ModelAdmin):
+    """The login of a robot in the robot group and the vehicles it may log for;
+    ``manage.py ftt_robot_account`` makes one with a token in one step."""
+
+    list_display = ["user", "bound_vehicles", "in_robot_group"]
+    search_fields = ["user__username", "vehicles__key"]
+    autocomplete_fields = ["user"]
+    filter_horizontal = ["vehicles"]
+
+    def get_queryset(self, request):
+        queryset = super().get_queryset(request).select_related("user")
+        return queryset.prefetch_related("vehicles", "user__groups")
+
+    @admin.display(description="vehicles")
+    def bound_vehicles(self, obj):
+        return ", ".join(v.key for v in obj.vehicles.all()) or "— (writes nothing)"
+
+    @admin.display(description="in robot group", boolean=True)
+    def in_robot_group(self, obj):
+        # Without the group the binding does nothing: the login keeps its people's role.
+        return any(group.name == roles.ROBOT for group in obj.user.groups.all())
+
+
+class RobotAccountInline(admin.StackedInline):
+    """On a user's page: the vehicles this login may log for as a robot."""
+
+    model = RobotAccount
+    can_delete = True
+    filter_horizontal = ["vehicles"]
+    verbose_name = "robot account (vehicles it logs for)"
+
+
+User = get_user_model()
+admin.site.unregister(User)
+
+
+@admin.register(User)
+class FttUserAdmin(UserAdmin):
+    inlines = [*UserAdmin.inlines, RobotAccountInline]
 
 
 @admin.register(PoseSource)

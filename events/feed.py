@@ -16,6 +16,8 @@ from events.models import Announcement, Leg, Segment, Shift, TestEvent
 # Kinds every subscriber gets, whatever it watches: the pickers and the
 # collector panel need them.
 LOG_KINDS = frozenset({"log", "deleted", "collector", "command"})
+# Kinds a fleet view gets from every leg: each robot's mode and position.
+FLEET_KINDS = frozenset({"segment", "poses"})
 # More points than this in one batch are not inlined; the browser re-reads the track.
 MAX_INLINE_POINTS = 2000
 PRUNE_EVERY = 500

@@ -5,9 +5,12 @@ legacy importers write historical rows and refuse what would break a rule.
 Both ask the same questions here, so the rules exist once.
 """
 
+from django.core.exceptions import PermissionDenied
 from django.db.models import QuerySet
 
-from events.models import Leg, Segment, Shift
+from common import roles
+from events.models import Leg, Segment, Shift, Vehicle
+from events.selectors.robots import robot_vehicles
 
 
 def open_shifts_of_vehicle(vehicle_id: int) -> QuerySet[Shift]:
@@ -38,3 +41,48 @@ NESTING = (
 def open_under_closed(model, parent: str) -> QuerySet:
     """Entries of ``model`` still open inside a closed ``parent`` (must be none)."""
     return model.objects.filter(end__isnull=True, **{f"{parent}__end__isnull": False})
+
+
+def vehicle_id_of(entry) -> int | None:
+    """The vehicle a shift, leg or segment was logged for; None for rows of no vehicle
+    (catalogues, pose sources).  Rows below a segment (poses, images) are written
+    by naming their segment, and a map by naming its shift."""
+    if isinstance(entry, Vehicle):
+        return entry.pk
+    if isinstance(entry, Shift):
+        return entry.vehicle_id
+    if isinstance(entry, Leg):
+        return entry.shift.vehicle_id
+    if isinstance(entry, Segment):
+        return entry.leg.shift.vehicle_id
+    return None
+
+
+def check_robot_target(user, entry) -> None:
+    """A robot account reads and writes only its own vehicles and their shifts, legs
+    and segments; everyone else passes (their role decides).  Refuses with
+    PermissionDenied naming both vehicles."""
+    if not roles.is_robot(user):
+        return
+    vehicle_id = vehicle_id_of(entry)
+    if vehicle_id is None:
+        return
+    own = robot_vehicles(user)
+    if vehicle_id in own:
+        return
+    name = user.get_username()
+    if not own:
+        raise PermissionDenied(
+            f"Robot account '{name}' is bound to no vehicle, so it may not log anything; "
+            "an administrator binds it to its vehicle in Django admin."
+        )
+    bound = ", ".join(sorted(own.values()))
+    key = Vehicle.objects.filter(pk=vehicle_id).values_list("key", flat=True).first()
+    if isinstance(entry, Vehicle):
+        raise PermissionDenied(
+            f"Robot account '{name}' logs only for vehicle {bound}, not for vehicle {key}."
+        )
+    what = f"{entry._meta.verbose_name} {entry.pk}"
+    raise PermissionDenied(
+        f"Robot account '{name}' logs only for vehicle {bound}; {what} belongs to vehicle {key}."
+    )

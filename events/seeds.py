@@ -184,6 +184,14 @@ def create_roles(apps) -> None:
     operator.permissions.set(ftt.filter(codename__startswith="view_") | operated)
     administrator, _ = Group.objects.get_or_create(name="administrator")
     administrator.permissions.set(ftt | Permission.objects.filter(content_type__app_label="auth"))
+    robot, _ = Group.objects.get_or_create(name=roles.ROBOT)
+    robot_may = Permission.objects.none()
+    for label in roles.ROBOT_WRITES:
+        app_label, model = label.split(".")
+        robot_may |= Permission.objects.filter(
+            content_type__app_label=app_label, codename=f"add_{model}"
+        )
+    robot.permissions.set(robot_may)
 
 
 def ensure(apps=None) -> None:

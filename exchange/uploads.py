@@ -1,9 +1,27 @@
-"""Importing an archive that arrived as an upload (API or GUI form)."""
+"""Importing an archive that arrived as an upload (API or GUI form).
 
+A dry run answers at once. A real import is first tried as a dry run in the
+request, so a damaged or conflicting archive is refused with its reason right
+away, then queued as a job (common/jobs.py): the upload is kept in
+``FTT_DATA_DIR/job_files`` until ``manage.py ftt_worker`` has imported it. The
+import is one transaction, so a worker killed mid-import leaves nothing half
+done, and the job is simply run again (then failed with the reason).
+"""
+
+import shutil
 import tempfile
+import uuid
+from pathlib import Path
 
+from django.conf import settings
+from django.db import transaction
+from django.utils import timezone
+from django_tasks import task
+
+from common import jobs
 from exchange.archive import open_archive
 from exchange.importer import Plan, import_bundle
+from exchange.models import ArchiveImport
 
 
 def import_upload(upload, *, dry_run: bool) -> Plan:
@@ -11,8 +29,101 @@ def import_upload(upload, *, dry_run: bool) -> Plan:
     (conflicts with data here); in both cases nothing was written."""
     # The archive reader needs a seekable file on disk, not an upload stream.
     with tempfile.NamedTemporaryFile(suffix=".zip") as copy:
+        _copy(upload, copy)
+        return import_file(Path(copy.name), dry_run=dry_run)
+
+
+def import_file(path: Path, *, dry_run: bool) -> Plan:
+    with open_archive(str(path)) as bundle:
+        return import_bundle(bundle, dry_run=dry_run)
+
+
+def queue_import(upload, *, user=None) -> tuple[ArchiveImport, Plan]:
+    """Check the upload (dry run) and queue its import; returns the job and the preview.
+
+    Raises what :func:`import_upload` raises, and then queues nothing.
+    """
+    folder = Path(settings.DATA_DIR) / "job_files"
+    folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+    kept = folder / f"import-{uuid.uuid4().hex}.zip"
+    try:
+        with open(kept, "wb") as copy:
+            _copy(upload, copy)
+        preview = import_file(kept, dry_run=True)
+        with transaction.atomic():
+            job = ArchiveImport.objects.create(
+                filename=(getattr(upload, "name", "") or kept.name)[:255],
+                path=str(kept.resolve()),
+                message=_waiting(),
+                verdict=preview.verdict()[:200],
+                requested_by=user if user is not None and user.is_authenticated else None,
+            )
+            import_archive.enqueue(job.pk)
+    except BaseException:
+        kept.unlink(missing_ok=True)
+        raise
+    return job, preview
+
+
+def _copy(upload, target) -> None:
+    if hasattr(upload, "chunks"):
         for chunk in upload.chunks():
-            copy.write(chunk)
-        copy.flush()
-        with open_archive(copy.name) as bundle:
-            return import_bundle(bundle, dry_run=dry_run)
+            target.write(chunk)
+    else:
+        shutil.copyfileobj(upload, target)
+    target.flush()
+
+
+def _waiting() -> str:
+    if jobs.worker_running():
+        return "waiting for the job worker"
+    return "waiting: no job worker runs (start manage.py ftt_worker)"
+
+
+@task()
+def import_archive(job_id: int) -> str:
+    """The queued job: import a kept upload, record the outcome, delete the file."""
+    job = ArchiveImport.objects.get(pk=job_id)
+    if job.is_finished:
+        return job.status
+    ArchiveImport.objects.filter(pk=job_id).update(
+        status=ArchiveImport.Status.RUNNING, message="importing"
+    )
+    try:
+        plan = import_file(Path(job.path), dry_run=False)
+    except Exception as exc:  # refused, malformed or a file gone: the reason is the outcome
+        _finish(job, ArchiveImport.Status.FAILED, error=str(exc) or exc.__class__.__name__)
+        return ArchiveImport.Status.FAILED
+    _finish(
+        job,
+        ArchiveImport.Status.DONE,
+        verdict=plan.verdict()[:200],
+        changes=plan.changes(),
+        counts={table: dict(counts) for table, counts in plan.counts.items()},
+        lines=plan.lines(),
+    )
+    return ArchiveImport.Status.DONE
+
+
+@jobs.when_interrupted(import_archive)
+def _worker_stopped(job_id: int, *, retried: bool, reason: str) -> None:
+    if retried:
+        ArchiveImport.objects.filter(pk=job_id).update(
+            status=ArchiveImport.Status.QUEUED, message=f"queued again: {reason}"[:200]
+        )
+        return
+    job = ArchiveImport.objects.filter(pk=job_id).first()
+    if job is not None:
+        _finish(job, ArchiveImport.Status.FAILED, error=f"{reason} Nothing was imported.")
+
+
+def _finish(job: ArchiveImport, status: str, **fields) -> None:
+    if job.path:
+        Path(job.path).unlink(missing_ok=True)
+    ArchiveImport.objects.filter(pk=job.pk).update(
+        status=status,
+        message=status,
+        path="",
+        finished=timezone.now(),
+        **fields,
+    )

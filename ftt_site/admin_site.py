@@ -2,14 +2,25 @@
 what is configured before a test apart from what the field test recorded."""
 
 from django.contrib import admin
-from django.contrib.admin.apps import AdminConfig
+from django.contrib.admin.apps import SimpleAdminConfig
+
+from common import roles
 
 # Model names (object_name) per group; anything not named keeps Django's app grouping.
 GROUPS = (
     (
         "Configuration",
         "configuration",
-        ("Personnel", "Performer", "Vehicle", "PoseSource", "Weather", "ItoReason", "SegmentType"),
+        (
+            "Personnel",
+            "Performer",
+            "Vehicle",
+            "RobotAccount",
+            "PoseSource",
+            "Weather",
+            "ItoReason",
+            "SegmentType",
+        ),
     ),
     (
         "Recorded data",
@@ -33,6 +44,16 @@ class FttAdminSite(admin.AdminSite):
     site_header = "FTT administration"
     site_title = "FTT administration"
     index_title = "Set-up and records"
+
+    def has_permission(self, request):
+        # A robot account is never let in, even if someone ticked "staff status".
+        return super().has_permission(request) and not roles.is_robot(request.user)
+
+    def check(self, app_configs):
+        # The admin modules load with the URLs (FttAdminConfig); the system
+        # checks may run before the URLs are loaded and must see them all.
+        admin.autodiscover()
+        return super().check(app_configs)
 
     def get_app_list(self, request, app_label=None):
         apps = super().get_app_list(request, app_label)
@@ -61,5 +82,10 @@ class FttAdminSite(admin.AdminSite):
         return grouped
 
 
-class FttAdminConfig(AdminConfig):
+class FttAdminConfig(SimpleAdminConfig):
+    """Admin modules are found when the URLs load (ftt_site/urls.py), not in
+    every process at start: the collector and the job worker never show the
+    admin, and the basemap admin alone brings in the raster libraries (seconds
+    of the collector's start-up)."""
+
     default_site = "ftt_site.admin_site.FttAdminSite"

@@ -69,8 +69,10 @@ SECURE_CONTENT_TYPE_NOSNIFF = True
 SECURE_REFERRER_POLICY = "same-origin"
 X_FRAME_OPTIONS = "DENY"
 
+# No "daphne" app: FTT is served by Gunicorn + Uvicorn (scripts/run.sh, README),
+# and the app would load Twisted into every process, the collector included
+# (about a second of its start-up on an idle machine).
 INSTALLED_APPS = [
-    "daphne",
     "ftt_site.admin_site.FttAdminConfig",
     "django.contrib.auth",
     "django.contrib.contenttypes",
@@ -89,7 +91,10 @@ INSTALLED_APPS = [
     "axes",
     "leaflet",
     "channels",
+    "django_tasks",
+    "django_tasks_db",
     "ftt_site",
+    "common",
     "events",
     "telemetry",
     "basemaps",
@@ -320,7 +325,9 @@ FTT_TILE_CACHE = Path(env_str("FTT_TILE_CACHE", str(DATA_DIR / "tile_cache")))
 # many tiles per second ``ftt_basemap fetch`` asks of a tile server.
 FTT_BASEMAP_MAX_UPLOAD_MB = env_int("FTT_BASEMAP_MAX_UPLOAD_MB", 2048)
 FTT_BASEMAP_FETCH_RATE = float(env_str("FTT_BASEMAP_FETCH_RATE", "2"))
-FTT_REPORT_WORKER = env_str("FTT_REPORT_WORKER", "thread")
+# Background jobs (reports, archive imports) wait in FTT's own database until
+# ``manage.py ftt_worker`` runs them (common/jobs.py says why this queue).
+TASKS = {"default": {"BACKEND": "django_tasks_db.DatabaseBackend", "QUEUES": ["default"]}}
 # Title-page logo of every report (PNG, JPEG or SVG); empty: FTT's own.
 FTT_REPORT_LOGO = env_str("FTT_REPORT_LOGO", "")
 # Behind nginx: the internal location that maps to MEDIA_ROOT. FTT still checks

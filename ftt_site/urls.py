@@ -1,6 +1,9 @@
 from django.contrib import admin
 from django.urls import include, path
 
+# Here rather than at start-up: see ftt_site.admin_site.FttAdminConfig.
+admin.autodiscover()
+
 urlpatterns = [
     path("admin/", admin.site.urls),
     path("api/", include("ftt_site.api_urls")),

@@ -21,6 +21,8 @@ urlpatterns = [
     path("gui/api/shifts/<int:pk>/local-map/", gui_api.ShiftLocalMap.as_view(), name="gui-map"),
     path("gui/api/basemaps/", gui_api.Basemaps.as_view(), name="gui-basemaps"),
     path("gui/api/collectors/", gui_api.CollectorStatus.as_view(), name="gui-collectors"),
+    path("gui/api/fleet/", gui_api.Fleet.as_view(), name="gui-fleet"),
+    path("gui/api/forms/", gui_api.Forms.as_view(), name="gui-forms"),
     path(
         "gui/api/collectors/<int:pk>/commands/",
         gui_api.CollectorCommands.as_view(),

@@ -25,7 +25,7 @@ from psycopg.conninfo import make_conninfo
 
 from common import roles
 from events import feed
-from events.feed import LOG_KINDS
+from events.feed import FLEET_KINDS, LOG_KINDS
 from events.models import Announcement
 from rosbridge_app import wakeup
 from rosbridge_app.wakeup import GROUP
@@ -208,6 +208,7 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
             await self.close(code=4403)
             return
         self.watch = {"test_event": None, "shift": None, "leg": None}
+        self.fleet = False
         self.subscribed = False
         self.sent: set[int] = set()
         self.poller = OutboxPoller.for_loop()
@@ -259,6 +260,8 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
         for key in self.watch:
             value = content.get(key)
             self.watch[key] = value if isinstance(value, int) and value > 0 else None
+        # The fleet view watches every logging robot, not one leg.
+        self.fleet = content.get("fleet") is True
         last_id = content.get("last_id")
         first, last = await _bounds()
         if isinstance(last_id, int) and last_id < last:
@@ -275,7 +278,7 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
         await self.send_json({"type": "subscribed", "last_id": last})
 
     def wants(self, event: dict) -> bool:
-        if event["kind"] in LOG_KINDS:
+        if event["kind"] in LOG_KINDS or (self.fleet and event["kind"] in FLEET_KINDS):
             return True
         if event["leg"] is not None:
             return event["leg"] == self.watch["leg"]

@@ -41,6 +41,11 @@ class Collector(models.Model):
     pending = models.PositiveIntegerField(
         default=0, help_text="Records spooled on the robot, not yet in the database."
     )
+    hearing = models.CharField(
+        max_length=300,
+        blank=True,
+        help_text="Set while other nodes publish its topics and the collector hears nothing.",
+    )
     parameters = models.JSONField(default=dict, blank=True)
     topics = models.JSONField(default=list, blank=True)
     inputs = models.JSONField(default=dict, blank=True)

@@ -10,6 +10,7 @@ the collector's included); with Redis a message to the channel-layer group;
 and in the writing process itself a direct call to its readers.
 """
 
+import functools
 import logging
 from collections.abc import Callable
 
@@ -46,18 +47,36 @@ def _wake_local_readers() -> None:
             local_readers.discard(wake)
 
 
+def _after_commit(using: str) -> None:
+    if getattr(settings, "REDIS_URL", ""):
+        _wake_other_processes()
+    if local_readers:
+        _wake_local_readers()
+
+
+def _announced_in_this_transaction(connection) -> bool:
+    # Django keeps the on-commit callbacks per transaction and drops those of a
+    # rolled-back savepoint, whose NOTIFY PostgreSQL drops too: so "our callback
+    # is waiting" means exactly "this transaction has already notified".
+    return any(
+        getattr(func, "func", None) is _after_commit for _, func, *_ in connection.run_on_commit
+    )
+
+
 def _on_feed_row(sender, instance, created, using=None, **kwargs) -> None:
+    """One wake-up per transaction, however many feed rows it writes (a pose
+    batch, a collector batch with a mode switch and its track)."""
     if not created:
         return
-    connection = connections[using or "default"]
+    using = using or "default"
+    connection = connections[using]
+    if connection.in_atomic_block and _announced_in_this_transaction(connection):
+        return
     if connection.vendor == "postgresql":
-        # Notifications of one transaction are folded into one and sent at commit.
+        # Delivered by the database at commit, to every listening process.
         with connection.cursor() as cursor:
             cursor.execute(f"NOTIFY {CHANNEL}")
-    if getattr(settings, "REDIS_URL", ""):
-        transaction.on_commit(_wake_other_processes, using=using)
-    if local_readers:
-        transaction.on_commit(_wake_local_readers, using=using)
+    transaction.on_commit(functools.partial(_after_commit, using), using=using)
 
 
 def connect() -> None:

@@ -3,7 +3,9 @@
 # database (SpatiaLite in data/ftt.sqlite3 unless FTT_DATABASE_URL is set),
 # make sure an administrator account exists, and serve FTT (HTTP and
 # websockets) on http://127.0.0.1:8000 with the production server: Gunicorn
-# supervising Uvicorn workers (ftt_site/gunicorn.conf.py; README, Production).
+# supervising Uvicorn workers (ftt_site/gunicorn.conf.py; README, Production),
+# and beside it the job worker that makes requested reports and imports
+# (manage.py ftt_worker); Ctrl-C stops both.
 #
 # Usage: bash scripts/run.sh [ADDRESS:PORT]     (default 127.0.0.1:8000)
 set -euo pipefail
@@ -32,6 +34,15 @@ FTT_DEBUG=${FTT_DEBUG:-0}
 case "${FTT_DEBUG,,}" in 1 | true | yes | on) reload=(--reload) ;; esac
 # One process suits the embedded database on a laptop; a server sets more.
 export FTT_WEB_WORKERS=${FTT_WEB_WORKERS:-1}
+# Requested reports and imports are jobs in the database; this worker runs
+# them. A job it was running when stopped the hard way is retried by the next.
+"$py" manage.py ftt_worker --verbosity 0 &
+worker=$!
+stop_worker() {
+    kill -TERM "$worker" 2>/dev/null || true
+    wait "$worker" 2>/dev/null || true
+}
+trap stop_worker EXIT
 ftt_log "FTT at http://$address/ (Django admin at /admin/); Ctrl-C stops it"
-exec "$py" -m gunicorn -c ftt_site/gunicorn.conf.py "${reload[@]}" --bind "$address" \
+"$py" -m gunicorn -c ftt_site/gunicorn.conf.py "${reload[@]}" --bind "$address" \
     ftt_site.asgi:application

@@ -6,6 +6,7 @@ from django.core.cache import cache
 from events import seeds
 from events.models import Performer, Personnel, PoseSource, Vehicle
 from events.services import logs
+from events.services.robots import ensure_robot_account
 
 
 @pytest.fixture(autouse=True)
@@ -72,6 +73,13 @@ def leg(shift, pose_source):
     return logs.create_leg(shift=shift, default_pose_source=pose_source, weather_id="sunny")
 
 
+@pytest.fixture
+def other_leg(test_event, other_vehicle, pose_source):
+    """An open leg of the other vehicle, in the same test event."""
+    other_shift = logs.create_shift(test_event=test_event, vehicle=other_vehicle)
+    return logs.create_leg(shift=other_shift, default_pose_source=pose_source)
+
+
 # --- API users: one per role, each with a token (tests/events/api, tests/telemetry/api) ---
 
 
@@ -106,6 +114,25 @@ def api_client(role_user):
             user = role_user(role)
             client.credentials(HTTP_AUTHORIZATION=f"Token {user.auth_token.key}")
             client.user = user
+        return client
+
+    return make
+
+
+@pytest.fixture
+def robot_client(db):
+    """robot_client(vehicle, ...) -> a DRF client with the token of a robot account
+    bound to those vehicles (none: bound to no vehicle)."""
+    from rest_framework.test import APIClient
+
+    made = []
+
+    def make(*vehicles):
+        made.append(vehicles)
+        login = ensure_robot_account(f"robot-{len(made)}", list(vehicles))
+        client = APIClient()
+        client.credentials(HTTP_AUTHORIZATION=f"Token {login.token}")
+        client.user = login.account.user
         return client
 
     return make

@@ -1,7 +1,7 @@
 """The admin is branded and separates configuration from recorded data."""
 
 import pytest
-from django.contrib.auth.models import User
+from django.contrib.auth.models import Group, User
 
 pytestmark = pytest.mark.django_db
 
@@ -22,3 +22,16 @@ def test_vehicle_key_says_where_the_collector_uses_it(client):
     client.force_login(User.objects.create_superuser("root", password="pw"))
     page = client.get("/admin/events/vehicle/add/").content.decode()
     assert "ftt_collect --vehicle" in page
+
+
+def test_a_robot_account_is_kept_out_of_admin_even_as_staff(client, robot_client, vehicle):
+    robot = robot_client(vehicle).user
+    robot.is_staff = True
+    robot.save()
+    client.force_login(robot)
+    assert client.get("/admin/").status_code == 302
+    assert client.get("/admin/telemetry/pose/").status_code == 302
+    people = User.objects.create_user("op", password="pw", is_staff=True)
+    people.groups.add(Group.objects.get(name="operator"))
+    client.force_login(people)
+    assert client.get("/admin/").status_code == 200

@@ -39,6 +39,7 @@ class Started:
             if key not in {"FTT_DATABASE_URL", "FTT_ADMIN_PASSWORD", "DJANGO_SETTINGS_MODULE"}
         }
         environment.update(FTT_DATA_DIR=str(data_dir), **env)
+        self.environment = environment
         data_dir.mkdir(parents=True, exist_ok=True)
         self.process = subprocess.Popen(
             ["bash", f"scripts/{script}", f"127.0.0.1:{self.port}"],
@@ -51,6 +52,16 @@ class Started:
 
     def output(self) -> str:
         return self.log.read_text(errors="replace")
+
+    def manage(self, *args: str) -> str:
+        """A manage.py command on the same installation, as its administrator would type it."""
+        env = {**self.environment, "DJANGO_SETTINGS_MODULE": "ftt_site.settings"}
+        python = ROOT / ".venv" / "bin" / "python"
+        done = subprocess.run(
+            [str(python), "manage.py", *args], cwd=ROOT, env=env, capture_output=True, text=True
+        )
+        assert done.returncode == 0, done.stderr[-3000:]
+        return done.stdout
 
     def wait_until_serving(self, timeout: float = 180) -> None:
         deadline = time.monotonic() + timeout
@@ -123,6 +134,42 @@ def test_run_command_serves_ftt_with_an_administrator_on_spatialite(started):
     assert browser.get(f"{ftt.url}/admin/events/vehicle/add/", timeout=10).status_code == 200
     gui = browser.get(f"{ftt.url}/", timeout=10)
     assert "Before the first shift" in gui.text  # the first-run hint for administrators
+
+
+def test_run_command_also_runs_the_job_worker_that_makes_reports(started):
+    ftt = started("run.sh")
+    ftt.wait_until_serving()
+    event_id = ftt.manage(
+        "shell",
+        "-c",
+        "from datetime import UTC, datetime, timedelta\n"
+        "from events.models import Vehicle\n"
+        "from events.services import logs, segments\n"
+        "t = datetime(2026, 5, 4, 9, tzinfo=UTC)\n"
+        "v = Vehicle.objects.create(key='husky', short_description='Husky')\n"
+        "e = logs.create_test_event(location='Wachtberg', at=t)\n"
+        "leg = logs.create_leg(shift=logs.create_shift(test_event=e, vehicle=v, at=t), at=t)\n"
+        "segments.report_mode(leg, 'auto', at=t)\n"
+        "segments.report_mode(leg, 'ito', at=t + timedelta(minutes=5))\n"
+        "logs.close_test_event(e, at=t + timedelta(minutes=9))\n"
+        "print(e.pk)",
+    ).split()[-1]
+    browser = ftt.login("admin", administrator_password(ftt))
+    asked = browser.post(
+        f"{ftt.url}/api/reports/",
+        json={"test_event": int(event_id), "options": {"no_tiles": True}},
+        headers={"X-CSRFToken": browser.cookies["csrftoken"]},
+        timeout=30,
+    )
+    assert asked.status_code == 202, asked.text
+    deadline = time.monotonic() + 180
+    report = asked.json()
+    while time.monotonic() < deadline and report["status"] not in ("done", "failed"):
+        time.sleep(1)
+        report = browser.get(f"{ftt.url}/api/reports/{report['id']}/", timeout=10).json()
+    assert report["status"] == "done", (report, ftt.output())
+    pdf = browser.get(report["download"], timeout=30)
+    assert pdf.content[:4] == b"%PDF"
 
 
 @pytest.mark.ros

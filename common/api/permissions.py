@@ -2,14 +2,26 @@ from rest_framework.permissions import SAFE_METHODS, BasePermission
 
 from common import roles
 
+ROBOT_REFUSED = (
+    "A robot account only reports the mode and telemetry of its own vehicles and reads "
+    "what it logs with; it may not do this."
+)
+
 
 class RolePermission(BasePermission):
     """Viewers read.  Writing needs the role :data:`common.roles.WRITERS` names
-    for the view's model; views without a model name it (``write_role``)."""
+    for the view's model; views without a model name it (``write_role``).
+
+    A robot account may run only the actions a view names in ``robot_actions``;
+    which vehicle's rows it touches is checked by the view (events.api.permissions).
+    """
 
     message = "Your account does not have the role needed for this."
 
     def has_permission(self, request, view):
+        if roles.is_robot(request.user):
+            self.message = ROBOT_REFUSED
+            return getattr(view, "action", None) in getattr(view, "robot_actions", ())
         if request.method in SAFE_METHODS:
             return roles.has_role(request.user, getattr(view, "read_role", roles.VIEWER))
         role = getattr(view, "write_role", None)

@@ -8,6 +8,7 @@ from django.db.models import IntegerField
 from rest_framework import serializers
 from rest_framework_gis.fields import GeometryField
 
+from events import rules
 from events.models import (
     ItoReason,
     Leg,
@@ -28,14 +29,21 @@ from events.services.segments import MODES, GpsPosition, LocalPosition
 
 class PrimaryKeyField(serializers.PrimaryKeyRelatedField):
     """A reference by id. Integer ids must be integers: the database would quietly turn
-    1.5 or true into row 1."""
+    1.5 or true into row 1.  A robot account may only name rows of its own vehicles."""
 
     def to_internal_value(self, data):
         if isinstance(self.get_queryset().model._meta.pk, IntegerField):
             digits = isinstance(data, str) and data.isascii() and data.isdigit()
             if isinstance(data, bool) or not (isinstance(data, int) or digits):
                 self.fail("incorrect_type", data_type=type(data).__name__)
-        return super().to_internal_value(data)
+        elif isinstance(data, str) and "\x00" in data:
+            # No key holds a NUL, and PostgreSQL refuses to even compare one.
+            self.fail("does_not_exist", pk_value=data)
+        row = super().to_internal_value(data)
+        request = self.context.get("request")
+        if request is not None:
+            rules.check_robot_target(request.user, row)
+        return row
 
 
 class ServiceSerializer(serializers.ModelSerializer):

@@ -67,6 +67,8 @@ class VehicleViewSet(ConfigurationViewSet):
     queryset = Vehicle.objects.all()
     serializer_class = s.VehicleSerializer
     lookup_value_regex = "[-a-zA-Z0-9_]+"
+    # Its own vehicle only (RobotTargetPermission): where to log now.
+    robot_actions = ("retrieve", "current_leg")
 
     def get_object(self):
         value = self.kwargs[self.lookup_url_kwarg or self.lookup_field]
@@ -100,11 +102,13 @@ class VehicleViewSet(ConfigurationViewSet):
 class PoseSourceViewSet(ConfigurationViewSet):
     queryset = PoseSource.objects.all()
     serializer_class = s.PoseSourceSerializer
+    robot_actions = ("list", "retrieve")
 
 
 class CatalogueViewSet(ConfigurationViewSet):
     lookup_value_regex = "[-a-zA-Z0-9_]+"
     pagination_class = None
+    robot_actions = ("list", "retrieve")
 
 
 class WeatherViewSet(CatalogueViewSet):
@@ -157,6 +161,7 @@ class ShiftViewSet(ServiceViewSet):
     queryset = Shift.objects.all()
     serializer_class = s.ShiftSerializer
     filterset_class = ShiftFilter
+    robot_actions = ("retrieve",)
 
     def create_with_service(self, data):
         return logs.create_shift(**data)
@@ -172,9 +177,11 @@ class ShiftViewSet(ServiceViewSet):
 
 
 class LegViewSet(ServiceViewSet):
-    queryset = Leg.objects.all()
+    # The shift tells a leg's vehicle (a robot account's check) without another query.
+    queryset = Leg.objects.select_related("shift")
     serializer_class = s.LegSerializer
     filterset_class = LegFilter
+    robot_actions = ("retrieve", "mode")
 
     def create_with_service(self, data):
         return logs.create_leg(**data)
@@ -197,8 +204,7 @@ class LegViewSet(ServiceViewSet):
         """The robot reports its mode. A change closes the open master segment and opens
         one of the new mode (201); repeating the open mode changes nothing (200)."""
         leg = self.get_object()
-        payload = s.ModeReportSerializer(data=request.data)
-        payload.is_valid(raise_exception=True)
+        payload = self.payload(s.ModeReportSerializer)
         data = payload.validated_data
         outcome = segments.report_mode(
             leg,
@@ -218,8 +224,7 @@ class LegViewSet(ServiceViewSet):
         """An operator records a take-over: a new ITO reason, switching to ITO if needed.
         Answers with the new ITO child segment."""
         leg = self.get_object()
-        payload = s.ManualSegmentSerializer(data=request.data)
-        payload.is_valid(raise_exception=True)
+        payload = self.payload(s.ManualSegmentSerializer)
         child = segments.new_manual_segment(
             leg, reason=s.reason_key(payload.validated_data), **payload.positions()
         )
@@ -242,6 +247,7 @@ class SegmentViewSet(ServiceUpdateMixin, ServiceBaseViewSet):
     filter_backends = [DjangoFilterBackend, BBoxFilter]
     bbox_filter_field = "start_position"
     http_method_names = ["get", "patch", "post", "delete", "head", "options"]
+    robot_actions = ("retrieve",)
 
     def update_with_service(self, instance, data):
         return segments.annotate_segment(instance, **data)
@@ -257,8 +263,7 @@ class SegmentViewSet(ServiceUpdateMixin, ServiceBaseViewSet):
     def children(self, request, pk=None):
         """Add another take-over reason to an open ITO master."""
         master = self.get_object()
-        payload = s.ChildSerializer(data=request.data)
-        payload.is_valid(raise_exception=True)
+        payload = self.payload(s.ChildSerializer)
         child = segments.add_ito_child(master, reason=s.reason_key(payload.validated_data))
         return self.respond(child, s.SegmentSerializer, status.HTTP_201_CREATED)
 

@@ -4,6 +4,8 @@ from rest_framework import mixins, status, viewsets
 from rest_framework.response import Response
 
 from common import roles
+from common.api.permissions import RolePermission
+from events.api.permissions import RobotTargetPermission
 from events.services import deletion
 
 
@@ -17,12 +19,22 @@ class ServiceBaseViewSet(
 
     # The role to write comes from common.roles.WRITERS for the queryset's model.
     read_role = roles.VIEWER
+    permission_classes = [RolePermission, RobotTargetPermission]
+    # What a robot account may call here (common.roles.ROBOT); none by default.
+    robot_actions: tuple[str, ...] = ()
 
     def delete_with_service(self, instance) -> None:
         deletion.delete(instance)
 
     def perform_destroy(self, instance):
         self.delete_with_service(instance)
+
+    def payload(self, serializer_class):
+        """A request body checked by ``serializer_class``, with the request at hand, so
+        that the rows it names are checked against a robot's vehicles."""
+        serializer = serializer_class(data=self.request.data, context=self.get_serializer_context())
+        serializer.is_valid(raise_exception=True)
+        return serializer
 
     def respond(self, instance, serializer_class=None, code=status.HTTP_200_OK):
         serializer_class = serializer_class or self.get_serializer_class()

@@ -3,6 +3,7 @@ from events.models.configuration import Performer, Personnel, PoseSource, Vehicl
 from events.models.feed import Announcement
 from events.models.hierarchy import Leg, Segment, Shift, TestEvent
 from events.models.notes import Note
+from events.models.robots import RobotAccount
 
 __all__ = [
     "Announcement",
@@ -12,6 +13,7 @@ __all__ = [
     "Performer",
     "Personnel",
     "PoseSource",
+    "RobotAccount",
     "Segment",
     "SegmentType",
     "Shift",

@@ -1,7 +1,10 @@
 """Archive download for the GUI and archive import for administrators.
 
 GET  /api/test-events/{id}/archive/   one test event as an FTT archive (viewers)
-POST /api/archives/import/            multipart "archive" (+ "dry_run"), administrators
+POST /api/archives/import/            multipart "archive" (+ "dry_run"), administrators:
+                                      a dry run answers 200 with the plan; an import is
+                                      checked the same way, then queued (202)
+GET  /api/archives/imports/{id}/      a queued import and its outcome (administrators)
 """
 
 import os
@@ -24,7 +27,8 @@ from events.models import TestEvent
 from exchange.archive import ArchiveError
 from exchange.export import ExportError, export_events
 from exchange.importer import ImportRefused, MalformedRecord
-from exchange.uploads import import_upload
+from exchange.models import ArchiveImport
+from exchange.uploads import import_upload, queue_import
 
 
 def _error(message: str, status: int) -> Response:
@@ -78,6 +82,7 @@ class ArchiveImportView(APIView):
             )
         },
         responses={
+            202: OpenApiResponse(description="Checked and queued; 'job' tells where to follow it."),
             200: inline_serializer(
                 "ImportPlan",
                 {
@@ -97,19 +102,54 @@ class ArchiveImportView(APIView):
             return _error("Send the archive file in the form field 'archive'.", 400)
         dry_run = str(request.data.get("dry_run", "")).lower() in ("1", "true", "yes", "on")
         try:
-            plan = import_upload(upload, dry_run=dry_run)
+            if dry_run:
+                plan, job = import_upload(upload, dry_run=True), None
+            else:
+                job, plan = queue_import(upload, user=request.user)
         except (ArchiveError, MalformedRecord) as exc:
             return _error(str(exc), 400)
         except ImportRefused as exc:
             return _error(str(exc), 409)
-        return Response(
-            {
-                "detail": plan.verdict(),
-                "dry_run": dry_run,
-                "changes": plan.changes(),
-                "counts": {table: dict(counts) for table, counts in plan.counts.items()},
-            }
-        )
+        body = {
+            "detail": plan.verdict(),
+            "dry_run": dry_run,
+            "changes": plan.changes(),
+            "counts": _counts(plan.counts),
+        }
+        if job is None:
+            return Response(body)
+        body["detail"] = f"Import queued as job {job.pk}. {plan.verdict()}"
+        return Response({**body, **_job(job, request)}, status=202)
+
+
+def _counts(counts) -> dict:
+    return {table: dict(c) for table, c in counts.items()}
+
+
+def _job(job: ArchiveImport, request) -> dict:
+    return {
+        "job": {
+            "id": job.pk,
+            "status": job.status,
+            "message": job.message,
+            "filename": job.filename,
+            "detail": job.verdict,
+            "changes": job.changes,
+            "counts": job.counts,
+            "error": job.error,
+            "created": job.created,
+            "finished": job.finished,
+            "url": request.build_absolute_uri(f"/api/archives/imports/{job.pk}/"),
+        }
+    }
+
+
+class ArchiveImportJobView(APIView):
+    read_role = roles.ADMINISTRATOR
+
+    @extend_schema(summary="A queued archive import and its outcome", responses={200: dict})
+    def get(self, request, pk: int):
+        return Response(_job(get_object_or_404(ArchiveImport, pk=pk), request)["job"])
 
 
 urlpatterns = [
@@ -119,4 +159,5 @@ urlpatterns = [
         name="test-event-archive",
     ),
     path("archives/import/", ArchiveImportView.as_view(), name="archive-import"),
+    path("archives/imports/<int:pk>/", ArchiveImportJobView.as_view(), name="archive-import-job"),
 ]

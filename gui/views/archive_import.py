@@ -1,13 +1,21 @@
-"""The administrators' page for bringing an FTT archive into this installation."""
+"""The administrators' page for bringing an FTT archive into this installation.
+
+A preview (dry run) is shown at once. An import is checked the same way, then
+queued as a job; the page lists the recent imports with their outcome, so a
+reload (or coming back later) shows how it went.
+"""
 
 from django import forms
 from django.core.exceptions import PermissionDenied
-from django.shortcuts import render
+from django.shortcuts import redirect, render
 
 from common import roles
 from exchange.archive import ArchiveError
 from exchange.importer import ImportRefused
-from exchange.uploads import import_upload
+from exchange.models import ArchiveImport
+from exchange.uploads import import_upload, queue_import
+
+RECENT = 10
 
 
 class ArchiveImportForm(forms.Form):
@@ -21,12 +29,25 @@ def archive_import(request):
     plan = error = None
     form = ArchiveImportForm(request.POST or None, request.FILES or None)
     if request.method == "POST" and form.is_valid():
+        upload = form.cleaned_data["archive"]
         try:
-            plan = import_upload(form.cleaned_data["archive"], dry_run=form.cleaned_data["dry_run"])
+            if form.cleaned_data["dry_run"]:
+                plan = import_upload(upload, dry_run=True)
+            else:
+                queue_import(upload, user=request.user)
+                # After a POST, a reload must not send the archive again.
+                return redirect("gui-archive-import")
         except (ArchiveError, ImportRefused) as exc:
             error = f"Nothing was imported: {exc}"
+    imports = list(ArchiveImport.objects.all()[:RECENT])
     return render(
         request,
         "gui/archive_import.html",
-        {"form": form, "plan": plan, "error": error},
+        {
+            "form": form,
+            "plan": plan,
+            "error": error,
+            "imports": imports,
+            "pending": any(not job.is_finished for job in imports),
+        },
     )

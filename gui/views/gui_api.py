@@ -18,12 +18,15 @@ from basemaps.selectors.layers import layer_list
 from common import roles
 from events.models import Leg, SegmentType, Shift, Vehicle
 from events.selectors.labels import label, leg_numbers
+from gui.forms import gui_forms
 from rosbridge_app.models import Collector
 from rosbridge_app.selectors.collectors import collector_status, collectors
 from rosbridge_app.selectors.control import (
     logging_control,
     parameter_rows,
+    snapshot_control,
 )
+from rosbridge_app.selectors.fleet import fleet
 from rosbridge_app.services.collectors import issue_command
 from telemetry.selectors.distances import displayed_distances
 from telemetry.selectors.maps import current_map
@@ -150,18 +153,35 @@ class CollectorStatus(GuiView):
         )
         leg = Leg.objects.filter(pk=int(leg_id)).first() if (leg_id or "").isdigit() else None
         allowed, reason = logging_control(collector, leg)
+        can_snapshot, snapshot_reason = snapshot_control(collector)
         return Response(
             {
                 "collector": collector_status(collector) if collector else None,
                 "parameters": parameter_rows(collector) if collector else [],
                 "can_toggle": allowed,
                 "reason": reason,
+                "can_snapshot": can_snapshot,
+                "snapshot_reason": snapshot_reason,
             }
         )
 
 
+class Forms(GuiView):
+    """The fields of the dialogs (test event, shift, leg, report), from serializers."""
+
+    def get(self, request):
+        return Response(gui_forms(getattr(request.user, "personnel", None)))
+
+
+class Fleet(GuiView):
+    """Every vehicle logging now: where it is, its mode, its last take-over, its leg."""
+
+    def get(self, request):
+        return Response({"vehicles": fleet()})
+
+
 class CollectorCommands(GuiView):
-    """Start/stop logging and parameter changes, handed to the collector."""
+    """Start/stop logging, parameter changes and snapshots, handed to the collector."""
 
     write_role = roles.OPERATOR
 

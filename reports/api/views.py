@@ -22,7 +22,6 @@ from reports.selectors.reports import reports_of
 from reports.selectors.statistics import event_statistics
 from reports.services.generation import (
     COMPARE,
-    fail_stale_reports,
     request_comparison,
     request_report,
 )
@@ -105,7 +104,6 @@ class ReportListView(APIView):
         responses={200: ReportSerializer(many=True)},
     )
     def get(self, request):
-        fail_stale_reports()
         event_id = request.query_params.get("test_event")
         if event_id is not None and not event_id.isdigit():
             raise ValidationError({"test_event": ["A test event id is a number."]})

@@ -1,31 +1,27 @@
 """Reports requested from the GUI or the API: queued, made in the background, kept.
 
-:func:`request_report` stores a ``Report`` row and returns at once; a worker
-makes the PDF and records its progress on the row, so the GUI can poll it.
-Every report is kept with its test event for download later.
-
-The worker is a thread of the web process by default (works in every setup,
-including tests against a test database).  ``FTT_REPORT_WORKER=subprocess``
-runs ``manage.py ftt_report --job ID`` instead, which keeps matplotlib and
-typst out of the web process.  One report is made at a time per process: the
-machine is small and the figures are CPU-bound; the others wait as "queued".
+:func:`request_report` stores a ``Report`` row and, in the same transaction,
+enqueues the job that makes it (common/jobs.py: django-tasks in FTT's own
+database), so it returns at once and survives restarts. ``manage.py
+ftt_worker`` makes the PDF and records its progress on the row, so the GUI can
+poll it; a worker that dies mid-report has the report retried once, then
+failed with the reason. Every report is kept with its test event for download.
+One report is made at a time per worker: the machine is small and the figures
+are CPU-bound; the others wait as "queued".
 """
 
 import logging
 import math
-import subprocess
-import sys
 import threading
 import time
-from datetime import timedelta
-from pathlib import Path
 
-from django.conf import settings
 from django.core.exceptions import ValidationError
 from django.core.files.base import ContentFile
-from django.db import connection, transaction
+from django.db import transaction
 from django.utils import timezone
+from django_tasks import task
 
+from common import jobs
 from common.errors import RuleViolation
 from events.models import TestEvent
 from reports.models import Report
@@ -41,27 +37,26 @@ from reports.services.rendering import (
 log = logging.getLogger(__name__)
 
 _ONE_AT_A_TIME = threading.Semaphore(1)
-# A report whose row has not moved for this long lost its worker (server restart).
-STALE_AFTER = timedelta(minutes=15)
 PROGRESS_INTERVAL_S = 0.5
 
 
 def request_report(
     test_event: TestEvent, options: dict | ReportOptions | None = None, *, user=None
 ) -> Report:
-    """Queue a report of the test event and start making it; returns the new row."""
+    """Queue a report of the test event; returns the new row."""
     opts = options if isinstance(options, ReportOptions) else _checked_options(options or {})
     try:
         check_reportable(test_event)
     except ReportError as exc:
         raise RuleViolation(str(exc), code="empty") from None
-    report = Report.objects.create(
-        test_event=test_event,
-        options=opts.as_dict(),
-        requested_by=user if user is not None and user.is_authenticated else None,
-        message="waiting for the report worker",
-    )
-    transaction.on_commit(lambda: _start(report.pk))
+    with transaction.atomic():
+        report = Report.objects.create(
+            test_event=test_event,
+            options=opts.as_dict(),
+            requested_by=user if user is not None and user.is_authenticated else None,
+            message=QUEUED_MESSAGE if jobs.worker_running() else NO_WORKER_MESSAGE,
+        )
+        make_report.enqueue(report.pk)
     return report
 
 
@@ -85,14 +80,38 @@ def request_comparison(
     if len({e.pk for e in test_events}) < 2:
         raise ValidationError({"compare": ["Give at least two different test events."]})
     events = sorted(test_events, key=lambda e: (e.start, e.pk))
-    report = Report.objects.create(
-        test_event=events[0],
-        options={COMPARE: [e.pk for e in events], "local": bool(options.get("local", False))},
-        requested_by=user if user is not None and user.is_authenticated else None,
-        message="waiting for the report worker",
-    )
-    transaction.on_commit(lambda: _start(report.pk))
+    with transaction.atomic():
+        report = Report.objects.create(
+            test_event=events[0],
+            options={COMPARE: [e.pk for e in events], "local": bool(options.get("local", False))},
+            requested_by=user if user is not None and user.is_authenticated else None,
+            message=QUEUED_MESSAGE if jobs.worker_running() else NO_WORKER_MESSAGE,
+        )
+        make_report.enqueue(report.pk)
     return report
+
+
+QUEUED_MESSAGE = "waiting for the job worker"
+NO_WORKER_MESSAGE = "waiting: no job worker runs (start manage.py ftt_worker)"
+
+
+@task()
+def make_report(report_id: int) -> str:
+    """The queued job: make the PDF of a report row."""
+    return run_job(report_id).status
+
+
+@jobs.when_interrupted(make_report)
+def _worker_stopped(report_id: int, *, retried: bool, reason: str) -> None:
+    if retried:
+        Report.objects.filter(pk=report_id).update(
+            status=Report.Status.QUEUED,
+            progress=0.0,
+            message=f"queued again: {reason}"[:200],
+            updated=timezone.now(),
+        )
+    else:
+        _fail(report_id, f"{reason} Request the report again.")
 
 
 # A requested report reads no file and fetches no URL chosen by the requester:
@@ -148,29 +167,6 @@ def _is_a(value, kind) -> bool:
     return isinstance(value, kind)
 
 
-def _start(report_id: int) -> None:
-    mode = getattr(settings, "FTT_REPORT_WORKER", "thread")
-    if mode == "subprocess":
-        manage = Path(settings.BASE_DIR) / "manage.py"
-        subprocess.Popen(
-            [sys.executable, str(manage), "ftt_report", "--job", str(report_id)],
-            start_new_session=True,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-        )
-        return
-    threading.Thread(
-        target=_run_in_thread, args=(report_id,), daemon=True, name=f"report-{report_id}"
-    ).start()
-
-
-def _run_in_thread(report_id: int) -> None:
-    try:
-        run_job(report_id)
-    finally:
-        connection.close()
-
-
 def run_job(report_id: int) -> Report:
     """Make the PDF of a queued report row (worker side); never raises for bad data."""
     with _ONE_AT_A_TIME:
@@ -198,6 +194,9 @@ def run_job(report_id: int) -> Report:
         except Exception as exc:  # a worker must record every failure on its row
             log.exception("report %s failed", report_id)
             return _fail(report_id, f"Unexpected error: {exc.__class__.__name__}: {exc}")
+        except BaseException:  # the worker was told twice to stop: it drops the report
+            _fail(report_id, "The job worker was stopped while it made the report.")
+            raise
         report.refresh_from_db()
         report.pdf.save(f"report-{report.pk}.pdf", ContentFile(result.pdf), save=False)
         report.status = Report.Status.DONE
@@ -235,16 +234,3 @@ def _fail(report_id: int, message: str) -> Report:
         status=Report.Status.FAILED, error=message, message="failed", finished=timezone.now()
     )
     return Report.objects.get(pk=report_id)
-
-
-def fail_stale_reports(now=None) -> int:
-    """Mark reports whose worker vanished (no progress for STALE_AFTER) as failed."""
-    now = now or timezone.now()
-    return Report.objects.filter(
-        status__in=[Report.Status.QUEUED, Report.Status.RUNNING], updated__lt=now - STALE_AFTER
-    ).update(
-        status=Report.Status.FAILED,
-        error="The report worker stopped (server restart?). Request the report again.",
-        message="failed",
-        finished=now,
-    )

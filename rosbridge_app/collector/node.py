@@ -34,6 +34,16 @@ from rosbridge_app.collector.pipeline import SECOND_COPY, Pipeline
 
 log = logging.getLogger("ftt.collector")
 
+# Positions may come at 1 kHz: the subscription's history holds 2 s of them, so
+# a moment in which this process's other threads hold the interpreter loses nothing.
+POSITION_DEPTH = 2000
+# The most messages one callback takes from its subscription besides its own.
+DRAIN = 200
+# Inputs a robot publishes all the time while it runs; the mode and maps may
+# come only on a change, so their silence says nothing about the collector.
+STREAMS = ("gps_fix", "tf", "local_pose", "image", "image_compressed")
+DEAF = "robot publishes, collector hears nothing"
+
 RELIABLE_LATCHED = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,
     depth=1,
@@ -84,12 +94,21 @@ class CollectorNode(Node):
         params_file: Path | None,
         status: Status | None = None,
         on_logging=None,
+        on_deaf=None,
+        on_first_message=None,
         overrides: dict | None = None,
     ):
         super().__init__(P.NODE_NAME)
         self.params_file = Path(params_file) if params_file else None
         self.status = status or Status()
         self.on_logging = on_logging or (lambda logging_on: None)
+        # Called (executor thread) when re-created subscriptions did not help either.
+        self.on_deaf = on_deaf or (lambda: None)
+        self.on_first_message = on_first_message
+        # Empty, or what the GUI shows while the collector hears nothing.
+        self.hearing = ""
+        self._heard = (0, time.monotonic())
+        self._deaf_steps = 0
         self.inputs: dict[str, dict] = {}
         self.topics: list = []
         self._errors: dict[str, float] = {}
@@ -267,7 +286,7 @@ class CollectorNode(Node):
                 continue
             latched = topic == static
             try:
-                self._snapshot_subs[topic] = self.create_subscription(
+                self._snapshot_subs[topic] = self._drained_subscription(
                     message_class(typename),
                     topic,
                     self._safe("snapshot", functools.partial(self.blackbox.receive, topic)),
@@ -301,6 +320,9 @@ class CollectorNode(Node):
     def _input(self, name: str, handler):
         def receive(msg):
             at = now()
+            if self.on_first_message is not None:
+                first, self.on_first_message = self.on_first_message, None
+                first()
             answer = None
             try:
                 answer = handler(msg, at)
@@ -312,6 +334,28 @@ class CollectorNode(Node):
                     info["last_received"] = at.isoformat()
 
         return self._safe(name, receive)
+
+    def _drained_subscription(self, msg_type, topic, callback, qos, raw=False):
+        """A subscription whose callback also takes the messages waiting behind
+        its own (at most DRAIN).
+
+        The executor builds a new wait set for every message it takes, which
+        in Python costs more than converting a fix; a 1 kHz GPS spent most of
+        the collector's time there and lost fixes when the CPU was busy.
+        """
+        subscription = None
+
+        def receive(msg):
+            callback(msg)
+            for _ in range(DRAIN):
+                with subscription.handle:
+                    taken = subscription.handle.take_message(msg_type, raw)
+                if taken is None:
+                    return
+                callback(taken[0])
+
+        subscription = self.create_subscription(msg_type, topic, receive, qos, raw=raw)
+        return subscription
 
     def _subscribe(self) -> None:
         from geometry_msgs.msg import PoseStamped
@@ -336,7 +380,13 @@ class CollectorNode(Node):
                 _qos(50, True),
                 pipe.on_mode,
             ),
-            ("gps_fix", NavSatFix, get("topics.gps_fix"), _qos(200, reliable), pipe.on_fix),
+            (
+                "gps_fix",
+                NavSatFix,
+                get("topics.gps_fix"),
+                _qos(POSITION_DEPTH, reliable),
+                pipe.on_fix,
+            ),
             ("map", OccupancyGrid, get("topics.map"), RELIABLE_LATCHED, pipe.on_grid),
             (
                 "map_jpeg",
@@ -358,7 +408,7 @@ class CollectorNode(Node):
             from tf2_msgs.msg import TFMessage
 
             wanted += [
-                ("tf", TFMessage, get("topics.tf"), _qos(100, True), pipe.on_tf),
+                ("tf", TFMessage, get("topics.tf"), _qos(POSITION_DEPTH, True), pipe.on_tf),
                 (
                     "tf_static",
                     TFMessage,
@@ -373,7 +423,7 @@ class CollectorNode(Node):
                     "local_pose",
                     PoseStamped,
                     get("topics.local_pose"),
-                    _qos(100, reliable),
+                    _qos(POSITION_DEPTH, reliable),
                     pipe.on_pose,
                 )
             )
@@ -382,7 +432,7 @@ class CollectorNode(Node):
             if not topic:
                 continue
             try:
-                self._ftt_subs[name] = self.create_subscription(
+                self._ftt_subs[name] = self._drained_subscription(
                     msg_type, topic, self._input(name, handler), qos
                 )
             except Exception as exc:
@@ -405,7 +455,7 @@ class CollectorNode(Node):
             ("map_jpeg", CompressedImage, pipe.on_map_jpeg),
         ):
             if name in self._ftt_subs:
-                self._ftt_subs[f"{name} (volatile)"] = self.create_subscription(
+                self._ftt_subs[f"{name} (volatile)"] = self._drained_subscription(
                     msg_type, get(f"topics.{name}"), self._input(name, handler), _qos(1, True)
                 )
         self.inputs = inputs
@@ -417,6 +467,54 @@ class CollectorNode(Node):
         ]
         self._subscribe_snapshots()
         self.blackbox.poll()
+        self._watch_hearing(time.monotonic())
+
+    # --- hearing watchdog ---------------------------------------------------------------
+
+    def _watch_hearing(self, t: float) -> None:
+        """While logging: nothing heard for params.deaf_timeout seconds although
+        other nodes publish sensor topics we subscribe to means our side of DDS
+        is deaf (seen after a SIGKILL restart): re-create the subscriptions,
+        and if that does not help within another timeout, the collector."""
+        received = sum(info["count"] for info in self.inputs.values())
+        timeout = self.get_parameter("params.deaf_timeout").value
+        count, since = self._heard
+        if received != count or not timeout or not self.pipeline.logging:
+            if self.hearing and received != count:
+                log.warning("the collector hears its topics again")
+            self._heard = (received, t)
+            self.hearing, self._deaf_steps = "", 0
+            return
+        if t - since < timeout:
+            return
+        self._heard = (received, t)
+        publishing = self._published_streams()
+        if not publishing:  # the robot is quiet: nothing to hear
+            self.hearing, self._deaf_steps = "", 0
+            return
+        self._deaf_steps += 1
+        topics = ", ".join(publishing)
+        if self._deaf_steps == 1:
+            self.hearing = f"{DEAF} ({topics}) for {timeout:g} s: subscriptions re-created"
+            log.warning("%s", self.hearing)
+            self._subscribe()
+        else:
+            self.hearing = f"{DEAF} ({topics}) for {timeout * 2:g} s: the collector restarts"
+            log.warning("%s", self.hearing)
+            self._deaf_steps = 0  # if it stays, re-created subscriptions come first again
+            self.on_deaf()
+
+    def _published_streams(self) -> list[str]:
+        me = (self.get_name(), self.get_namespace())
+        found = []
+        for name in STREAMS:
+            info = self.inputs.get(name)
+            if info is None:
+                continue
+            publishers = self.get_publishers_info_by_topic(info["topic"])
+            if any((p.node_name, p.node_namespace) != me for p in publishers):
+                found.append(info["topic"])
+        return found
 
     # --- calls from other threads -------------------------------------------------------
 

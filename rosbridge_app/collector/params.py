@@ -121,6 +121,14 @@ SPECS: dict[str, Spec] = {
         "A segment's start position is the last one if it is at most this old (s).",
         minimum=0.0,
     ),
+    "params.deaf_timeout": Spec(
+        5.0,
+        "Seconds with nothing received on any input while other nodes publish the "
+        "collector's sensor topics (GPS, TF, local pose, camera), before the collector "
+        "re-creates its subscriptions, and if that does not help, itself; 0: off.",
+        minimum=0.0,
+        maximum=3600.0,
+    ),
     "params.send_map_period": Spec(2.0, "Minimum seconds between two stored maps.", minimum=0.0),
     "params.image_buffer_size": Spec(
         3, "Camera frames kept for the next mode switch.", minimum=0, maximum=20

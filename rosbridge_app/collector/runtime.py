@@ -12,12 +12,26 @@
 SIGINT/SIGTERM (rclpy's handlers) stop the ROS thread; then the queue is
 spooled, the outbox is written to the database if it can be, and the process
 exits.  A SIGKILL loses only what was still in memory (< ~0.1 s of data).
+
+A collector whose node hears nothing while others publish (node.py's hearing
+watchdog) and whose re-created subscriptions did not help either renews
+itself: the same clean stop, then the process executes itself again (same pid,
+new DDS participant), resuming its logging state from the spool.
+
+DDS transport: Fast DDS sends between processes of one host through shared
+memory by default. A collector killed with SIGKILL leaves its shared-memory
+port behind, and publishers that still hold the dead port keep writing into
+it: the restarted collector heard nothing for up to a minute (issue 16). The
+collector therefore receives over UDP only (``FASTDDS_BUILTIN_TRANSPORTS=UDPv4``
+unless set otherwise), which holds no state a crash can leave behind; on
+loopback it costs a little CPU, nothing a collector's rates notice.
 """
 
 import logging
 import os
 import queue
 import socket
+import sys
 import threading
 import time
 from pathlib import Path
@@ -47,6 +61,50 @@ COMMAND_POLL = 0.25
 SYNC = 1.0
 RETRY = 1.0
 EXIT_FLUSH_SECONDS = 10.0
+# A renewed collector that is deaf again renews no sooner than this: it keeps
+# re-creating its subscriptions instead of restarting in a loop.
+RENEW_AT_MOST_EVERY_S = 300.0
+RENEWED_ENV = "FTT_COLLECT_RENEWED_AT"
+
+
+def process_started() -> float:
+    """Wall-clock time this process was started (before the ROS wheels' re-exec)."""
+    try:
+        fields = Path("/proc/self/stat").read_text().rsplit(")", 1)[1].split()
+        boot = next(
+            float(line.split()[1])
+            for line in Path("/proc/stat").read_text().splitlines()
+            if line.startswith("btime")
+        )
+        return boot + int(fields[19]) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError, StopIteration):
+        return time.time()
+
+
+class StartupTimes:
+    """Where a collector's start-up goes, logged once with its first stored record
+    (benchmarks/collector_startup.py reads the line)."""
+
+    def __init__(self):
+        self.marks = [("process start", process_started())]
+        self.reported = False
+
+    def mark(self, label: str) -> None:
+        if not any(name == label for name, _ in self.marks):
+            self.marks.append((label, time.time()))
+
+    def line(self) -> str:
+        steps = [
+            f"{label} +{t - before:.2f} s"
+            for (_, before), (label, t) in zip(self.marks, self.marks[1:], strict=False)
+        ]
+        total = self.marks[-1][1] - self.marks[0][1]
+        return f"start-up {total:.2f} s: " + ", ".join(steps)
+
+
+def udp_only_transport(env=os.environ) -> None:
+    """Receive over UDP, not shared memory (see the module's docstring); before rclpy.init."""
+    env.setdefault("FASTDDS_BUILTIN_TRANSPORTS", "UDPv4")
 
 
 def default_spool(name: str) -> Path:
@@ -112,15 +170,33 @@ class CollectorRuntime:
         self._said_no_leg = None
         self._db_down_since = None
         self._last_mode_logged = None
+        self.renew = threading.Event()
+        self.startup = StartupTimes()
+        self.startup.mark("Python, Django and the command loaded")
 
     # --- setup --------------------------------------------------------------------------
 
     def run(self, ros_args: list[str]) -> int:
+        udp_only_transport()
         rclpy.init(args=["ftt_collect", "--ros-args", *ros_args])
+        self.startup.mark("rclpy.init")
         try:
-            return self._run()
+            code = self._run()
         finally:
             rclpy.try_shutdown()
+        if self.renew.is_set():
+            log.warning("renewing the collector: starting again in place")
+            os.environ[RENEWED_ENV] = str(time.time())
+            os.execv(sys.executable, sys.orig_argv)
+        return code
+
+    def _deaf(self) -> None:
+        """The node's hearing watchdog gave up on re-created subscriptions."""
+        renewed = float(os.environ.get(RENEWED_ENV) or 0.0)
+        if time.time() - renewed < RENEW_AT_MOST_EVERY_S:
+            log.warning("renewed %.0f s ago already: not again yet", time.time() - renewed)
+            return
+        self.renew.set()
 
     def _run(self) -> int:
         db = connections["default"]
@@ -142,7 +218,10 @@ class CollectorRuntime:
             params_file=self.params_file,
             status=self.status,
             on_logging=self._persist_logging,
+            on_deaf=self._deaf,
+            on_first_message=lambda: self.startup.mark("first message received"),
         )
+        self.startup.mark("node, subscriptions and services")
         if self.vehicle_key:
             self.node.set_parameters([Parameter("vehicle", value=self.vehicle_key)])
         self.vehicle_key = self.node.get_parameter("vehicle").value
@@ -203,7 +282,7 @@ class CollectorRuntime:
     def _write_loop(self) -> None:
         next_beat = next_commands = next_sync = next_prune = 0.0
         retry_at = 0.0
-        while self.ros_thread.is_alive():
+        while self.ros_thread.is_alive() and not self.renew.is_set():
             t = time.monotonic()
             if t < retry_at:
                 time.sleep(0.1)
@@ -236,6 +315,10 @@ class CollectorRuntime:
             return False
         self.recorder.apply([event for _, event in batch])
         self.outbox.remove([row_id for row_id, _ in batch])
+        if not self.startup.reported:
+            self.startup.mark("first record stored")
+            self.startup.reported = True
+            log.info("%s", self.startup.line())
         self._database_up()
         self._say_leg()
         return True
@@ -292,6 +375,7 @@ class CollectorRuntime:
             "parameters": self.node.current_parameters(),
             "topics": list(self.node.topics),
             "inputs": {k: dict(v) for k, v in self.node.inputs.items()},
+            "hearing": self.node.hearing,
             "stopped": None,
         }
         if self.collector is None:

@@ -3,19 +3,21 @@
 It drives around a circle near a configurable origin and publishes what a
 real robot would: the mode (switching between manual and autonomous every
 ``switch_every`` seconds), GPS fixes, TF map→odom→base_link (+ a static
-base_link→gps_link), a latched occupancy grid and camera frames.
+base_link→gps_link), a latched occupancy grid and camera frames (raw rgb8 on
+``image``, or JPEG on ``image_compressed``).
 """
 
 import math
 import time
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 from geometry_msgs.msg import TransformStamped
 from nav_msgs.msg import OccupancyGrid
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import Image, NavSatFix, NavSatStatus
+from sensor_msgs.msg import CompressedImage, Image, NavSatFix, NavSatStatus
 from tf2_msgs.msg import TFMessage
 
 from rosbridge_app.collector import modes
@@ -30,6 +32,7 @@ class SimConfig:
     radius: float = 20.0
     speed: float = 1.5
     switch_every: float = 20.0
+    first_mode: str = modes.ITO  # the mode it starts in (manual, as a robot leaves the depot)
     mode_type: str = modes.BOOL
     mode_rate: float = 1.0
     gps_rate: float = 10.0
@@ -37,6 +40,7 @@ class SimConfig:
     camera_rate: float = 5.0
     camera_width: int = 640
     camera_height: int = 480
+    camera_format: str = "raw"  # "raw": Image rgb8 on image; "jpeg": CompressedImage
     map_size: int = 400
     map_resolution: float = 0.1
     map_rate: float = 0.0  # 0: publish once (latched); else republish a changed map
@@ -66,7 +70,11 @@ class SimulatedRobot(Node):
         self.pub_tf = self.create_publisher(TFMessage, "/tf", 100)
         self.pub_tf_static = self.create_publisher(TFMessage, "/tf_static", latched)
         self.pub_map = self.create_publisher(OccupancyGrid, f"{p}/map", latched)
-        self.pub_image = self.create_publisher(Image, f"{p}/image", 5)
+        if config.camera_format == "jpeg":
+            self.pub_image = self.create_publisher(CompressedImage, f"{p}/image_compressed", 5)
+            self._jpegs = self._make_jpegs()
+        else:
+            self.pub_image = self.create_publisher(Image, f"{p}/image", 5)
         self.counts = {"mode": 0, "gps": 0, "tf": 0, "image": 0, "map": 0}
         self.map_version = 0
         self._grid = self._make_grid()
@@ -98,7 +106,8 @@ class SimulatedRobot(Node):
 
     def mode(self) -> str:
         phase = int(self.elapsed() // self.c.switch_every) if self.c.switch_every > 0 else 0
-        return modes.ITO if phase % 2 == 0 else modes.AUTO
+        other = modes.AUTO if self.c.first_mode == modes.ITO else modes.ITO
+        return self.c.first_mode if phase % 2 == 0 else other
 
     def position(self, t: float | None = None) -> tuple[float, float, float]:
         """x, y (metres east/north of the circle's centre) and heading."""
@@ -186,20 +195,41 @@ class SimulatedRobot(Node):
         self.pub_map.publish(msg)
         self.counts["map"] += 1
 
-    def publish_image(self) -> None:
+    def _picture(self, t: float) -> np.ndarray:
         w, h = self.c.camera_width, self.c.camera_height
-        t = self.elapsed()
         img = np.zeros((h, w, 3), dtype=np.uint8)
         img[:, :, 0] = 200  # red sky: lets a test check the colour order
         img[h // 2 :, :, 1] = 120
         img[h // 2 :, :, 0] = 60
         x = int((t * 50) % w)
         img[:, max(0, x - 5) : x + 5, 2] = 255
-        msg = Image()
+        return img
+
+    def _make_jpegs(self) -> list[bytes]:
+        # Encoded once: the robot's CPU should go to publishing, not to encoding.
+        # Sensor noise makes the files as large as a real camera's (~60 kB),
+        # which a flat synthetic picture would not be.
+        noise = np.random.default_rng(1).normal(
+            0, 4, (self.c.camera_height, self.c.camera_width, 3)
+        )
+        frames = []
+        for i in range(20):
+            img = np.clip(self._picture(i * 0.5) + noise, 0, 255).astype(np.uint8)
+            data = cv2.imencode(".jpg", cv2.cvtColor(img, cv2.COLOR_RGB2BGR))[1]
+            frames.append(data.tobytes())
+        return frames
+
+    def publish_image(self) -> None:
+        if self.c.camera_format == "jpeg":
+            msg = CompressedImage(format="jpeg")
+            msg.data = self._jpegs[self.counts["image"] % len(self._jpegs)]
+        else:
+            w, h = self.c.camera_width, self.c.camera_height
+            msg = Image()
+            msg.height, msg.width, msg.encoding = h, w, "rgb8"
+            msg.step = w * 3
+            msg.data = self._picture(self.elapsed()).tobytes()
         _stamp(msg.header.stamp, time.time())
         msg.header.frame_id = "camera"
-        msg.height, msg.width, msg.encoding = h, w, "rgb8"
-        msg.step = w * 3
-        msg.data = img.tobytes()
         self.pub_image.publish(msg)
         self.counts["image"] += 1

@@ -35,6 +35,7 @@ def collector_status(collector: Collector, now=None) -> dict:
         "logging": collector.logging,
         "leg": collector.leg_id,
         "state": collector.state,
+        "hearing": collector.hearing,
         "pending": collector.pending,
         "parameters": collector.parameters,
         "topics": collector.topics,

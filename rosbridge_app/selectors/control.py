@@ -1,8 +1,10 @@
-"""When the GUI may start or stop logging (the seeds' rule, kept in one place).
+"""When the GUI may start or stop logging (the seeds' rule, kept in one place),
+and when it may ask for a black-box snapshot.
 
 Starting needs an online collector and an open test event, shift and leg;
 stopping is always allowed while the collector logs, even when the levels
-were closed elsewhere in the meantime.
+were closed elsewhere in the meantime.  A snapshot on request needs an online,
+logging collector with snapshots on: it is stored on the open segment.
 """
 
 from common.errors import RuleViolation
@@ -28,6 +30,22 @@ def logging_control(collector: Collector | None, leg: Leg | None) -> tuple[bool,
     if shift.vehicle_id != collector.vehicle_id:
         return False, "This collector belongs to another vehicle."
     return True, ""
+
+
+def snapshot_control(collector: Collector | None) -> tuple[bool, str]:
+    """(may "Snapshot now" be pressed, why not / what it does)."""
+    if collector is None:
+        return False, "No collector has reported for this vehicle."
+    if not is_online(collector):
+        return False, "The collector is offline."
+    values = collector.parameters or {}
+    if not values.get("snapshot.enabled"):
+        return False, "Snapshots are off on this robot (snapshot.enabled)."
+    if not collector.logging:
+        return False, "A snapshot is stored on the open segment: start logging first."
+    before = values.get("snapshot.before", SPECS["snapshot.before"].default)
+    after = values.get("snapshot.after", SPECS["snapshot.after"].default)
+    return True, f"Saves the robot's messages from {before:g} s before to {after:g} s after now."
 
 
 def parameter_rows(collector: Collector) -> list[dict]:

@@ -14,7 +14,11 @@ from events import feed
 from events.models import Announcement, Leg
 from events.services.logs import closing
 from rosbridge_app.models import Collector, CollectorCommand
-from rosbridge_app.selectors.control import check_parameter_values, logging_control
+from rosbridge_app.selectors.control import (
+    check_parameter_values,
+    logging_control,
+    snapshot_control,
+)
 
 # A command nobody took within this time is answered as failed, so the GUI
 # never waits forever for an offline collector.
@@ -36,7 +40,7 @@ def issue_command(
 
     ``leg`` is the leg the person has selected; starting and stopping follow
     :func:`rosbridge_app.selectors.control.logging_control`, parameter values
-    the collector's parameter schema.
+    the collector's parameter schema, a snapshot ``snapshot_control``.
     """
     if kind not in CollectorCommand.Kind.values:
         raise RuleViolation({"kind": [f"Unknown command '{kind}'."]})
@@ -57,6 +61,10 @@ def issue_command(
                 {"parameters": ["Give the parameters to set as a non-empty object."]}
             )
         arguments["parameters"] = check_parameter_values(collector, values)
+    elif kind == CollectorCommand.Kind.SNAPSHOT:
+        allowed, reason = snapshot_control(collector)
+        if not allowed:
+            raise RuleViolation(reason)
     return CollectorCommand.objects.create(
         collector=collector, kind=kind, arguments=arguments, issued_by=user
     )

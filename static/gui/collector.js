@@ -1,5 +1,5 @@
 /* The robot panel: the shift's vehicle's collector (ftt_collect), its inputs,
- * and Start/Stop logging; commands go to the robot through /gui/api/. */
+ * Start/Stop logging and Snapshot now; commands go to the robot through /gui/api/. */
 import { CONFIG, $ } from "./dom.js";
 import { ApiError, api, plainMessage } from "./api.js";
 import { clearError, notice, showError } from "./feedback.js";
@@ -28,6 +28,7 @@ export const Collector = {
       this.status = null;
       box.textContent = err.status === 404 ? "Collector status is not available on this server." : plainMessage(err);
       button.disabled = true;
+      $("#snapshot-now").disabled = true;
       return;
     }
     this.render();
@@ -42,13 +43,17 @@ export const Collector = {
       button.disabled = true;
       button.textContent = "Start logging";
       $("#logging-why").textContent = "";
+      $("#snapshot-now").disabled = true;
+      $("#snapshot-why").textContent = "";
       return;
     }
     const c = s.collector;
     const into = c.leg === state.selected.leg ? "this leg" : c.leg ? "another leg" : "no leg";
     const doing = c.logging ? `logging into ${into}` : "not logging";
     const queue = c.pending ? ` · ${c.pending} records not yet stored` : "";
-    $("#collector-status").textContent = `${vehicleName(current("shift").vehicle)} (collector ${c.name}): ${c.online ? "online" : "offline"}, ${doing}${queue}`;
+    // Set by the collector's watchdog, e.g. "robot publishes, collector hears nothing (…)".
+    const hearing = c.online && c.hearing ? ` · ${c.hearing}` : "";
+    $("#collector-status").textContent = `${vehicleName(current("shift").vehicle)} (collector ${c.name}): ${c.online ? "online" : "offline"}, ${doing}${queue}${hearing}`;
     inputs.replaceChildren(...Object.entries(c.inputs || {}).map(([name, info]) => {
       const li = document.createElement("li");
       const age = info && typeof info.age === "number" ? `${info.age.toFixed(1)} s ago` : "no data yet";
@@ -58,6 +63,8 @@ export const Collector = {
     button.textContent = c.logging ? "Stop logging" : "Start logging";
     button.disabled = !CONFIG.canOperate || !s.can_toggle;
     $("#logging-why").textContent = s.reason || "";
+    $("#snapshot-now").disabled = !CONFIG.canOperate || !s.can_snapshot;
+    $("#snapshot-why").textContent = `Snapshot: ${s.snapshot_reason}`;
     $("#open-parameters").hidden = !CONFIG.canOperate || !c.online;
   },
   /* The robot's answer to a command, from the change feed. */
@@ -83,6 +90,18 @@ $("#logging-toggle").addEventListener("click", async () => {
   try {
     const c = Collector.status && Collector.status.collector;
     await Collector.command(c && c.logging ? "stop_logging" : "start_logging");
+  } catch (err) {
+    showError(err);
+  }
+});
+
+// The robot's answer (the snapshot's name, or why not) replaces this toast;
+// it may come before the request's own reply does.
+$("#snapshot-now").addEventListener("click", async () => {
+  clearError();
+  notice("Asking the robot for a snapshot…");
+  try {
+    await Collector.command("snapshot");
   } catch (err) {
     showError(err);
   }

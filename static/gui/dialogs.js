@@ -3,23 +3,28 @@
 import { CONFIG, $, $$ } from "./dom.js";
 import { clearError, showError } from "./feedback.js";
 
-function ensureTimeZoneList() {
-  if ($("#tz-list")) return;
-  const list = document.createElement("datalist");
-  list.id = "tz-list";
-  const zones = Intl.supportedValuesOf ? Intl.supportedValuesOf("timeZone") : ["UTC"];
-  list.append(...["UTC", ...zones].map((z) => new Option(z)));
-  document.body.append(list);
+/* Typed values with suggestions (time zones): one datalist per field name. */
+function suggestionList(spec) {
+  const id = `suggest-${spec.name}`;
+  if (!document.getElementById(id)) {
+    const list = document.createElement("datalist");
+    list.id = id;
+    list.append(...spec.suggestions.map((s) => new Option(s)));
+    document.body.append(list);
+  }
+  return id;
 }
 
+/* One field as the server describes it (gui/forms.py): name, label, type
+ * ("text", "textarea", "select", "number"), required, choices, help, suggestions. */
 export function buildField(spec, value) {
   const label = document.createElement("label");
   label.textContent = spec.label;
   let input;
-  if (spec.options) {
+  if (spec.type === "select") {
     input = document.createElement("select");
     if (!spec.required) input.append(new Option("—", ""));
-    input.append(...spec.options.map(([v, text]) => new Option(text, v)));
+    input.append(...spec.choices.map(([v, text]) => new Option(text, v)));
     input.value = value === null || value === undefined ? "" : String(value);
   } else if (spec.type === "textarea") {
     input = document.createElement("textarea");
@@ -28,22 +33,30 @@ export function buildField(spec, value) {
   } else {
     input = document.createElement("input");
     input.value = value ?? "";
-    if (spec.number) input.inputMode = "decimal";
-    if (spec.list) {
-      ensureTimeZoneList();
-      input.setAttribute("list", spec.list);
-    }
+    if (spec.type === "number") input.inputMode = "decimal";
+    if (spec.max_length) input.maxLength = spec.max_length;
+    if (spec.suggestions) input.setAttribute("list", suggestionList(spec));
   }
   input.name = spec.name;
   label.append(input);
+  if (spec.help) {
+    const help = document.createElement("small");
+    help.className = "help muted";
+    help.id = `help-${spec.name}`;
+    help.textContent = spec.help;
+    input.setAttribute("aria-describedby", help.id);
+    label.append(help);
+  }
   return label;
 }
 
 function readField(spec, form) {
   const raw = form.elements[spec.name].value;
-  if (!spec.options) return raw;
+  if (spec.type !== "select") return raw;
   if (raw === "") return null;
-  return /^\d+$/.test(raw) && typeof spec.options[0][0] === "number" ? Number(raw) : raw;
+  // Ids go back as numbers, catalogue keys ("sunny") as text.
+  const numeric = spec.choices.length && typeof spec.choices[0][0] === "number";
+  return numeric && /^\d+$/.test(raw) ? Number(raw) : raw;
 }
 
 /* A dialog whose Save runs `save`; it stays open and shows the server's words

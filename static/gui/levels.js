@@ -17,22 +17,12 @@ function rowLabel(level, row) {
   return `Leg ${row.number} · ${fmtTime(row.start)} · ${status}`;
 }
 
-async function fetchCatalogues() {
-  const [reasons, weather, poseSources, vehicles, performers, personnel] = await Promise.all([
-    list("ito-reasons/"), list("weather/"), list("pose-sources/"), list("vehicles/"),
-    list("performers/"), list("personnel/"),
-  ]);
-  Object.assign(state.catalogue, { reasons, weather, poseSources, vehicles, performers, personnel });
+export async function loadCatalogues() {
+  // Reasons name and colour segments; vehicles name shifts.  Dialogs read their own choices.
+  const [reasons, vehicles] = await Promise.all([list("ito-reasons/"), list("vehicles/")]);
+  Object.assign(state.catalogue, { reasons, vehicles });
   const any = $("#reason-any");
   any.replaceChildren(...reasons.map((r) => new Option(r.short_description, r.key)));
-}
-
-/* Loaded once at start; New and Edit wait for it, so a tap right after loading
- * still gets the choices. */
-let catalogues = null;
-export function loadCatalogues() {
-  catalogues = fetchCatalogues();
-  return catalogues;
 }
 
 export async function loadLevel(level, keepSelection = true) {
@@ -105,33 +95,24 @@ for (const level of Object.keys(LEVELS)) {
   });
 }
 
-function personnelOfUser() {
-  return CONFIG.personnel;
+/* The dialog of a level as the server defines it: fields, choices, and what a
+ * new entry starts with (only unambiguous choices).  Read at each opening, so a
+ * vehicle configured a minute ago is offered. */
+async function formOf(level) {
+  const forms = await api("GET", "forms/", undefined, { root: CONFIG.guiApiRoot });
+  return forms[level];
 }
 
-/* Nothing is written until Save; Cancel leaves no empty entry behind.  Only
- * unambiguous choices are prefilled: the user's own person, and a vehicle or
- * pose source when exactly one exists. */
+/* Nothing is written until Save; Cancel leaves no empty entry behind. */
 async function createLevel(level) {
-  await catalogues; // a tap right after loading waits for the choices
-  const c = state.catalogue;
-  const values = {};
-  if (level === "shift") {
-    if (!c.vehicles.length) throw new ApiError("Configure a vehicle first (Configuration → Vehicles).");
-    const me = byId(c.personnel, personnelOfUser());
-    if (c.vehicles.length === 1) values.vehicle = c.vehicles[0].id;
-    if (c.performers.length === 1) values.performer = c.performers[0].id;
-    else if (me) values.performer = (c.performers.find((p) => p.institution === me.institution) || {}).id;
-    if (me) Object.assign(values, { test_administrator: me.id, test_director: me.id, robot_operator: me.id, safety_officer: me.id });
-  } else if (level === "leg" && c.poseSources.length === 1) {
-    values.default_pose_source = c.poseSources[0].id;
-  }
+  const form = await formOf(level);
+  if (form.unavailable) throw new ApiError(form.unavailable);
   const parent = LEVELS[level].parent;
   formDialog({
     title: `New ${LEVELS[level].label}`,
     subtitle: "Created when you press Save.",
-    specs: fieldSpecs(level),
-    values,
+    specs: form.fields,
+    values: form.initial,
     save: async (body) => {
       if (parent) body[LEVELS[level].parentField] = state.selected[parent];
       const row = await api("POST", LEVELS[level].path, body);
@@ -144,46 +125,15 @@ async function createLevel(level) {
   });
 }
 
-function fieldSpecs(level) {
-  const c = state.catalogue;
-  const people = c.personnel.map((p) => [p.id, p.institution ? `${p.name} (${p.institution})` : p.name]);
-  if (level === "event") {
-    return [
-      { name: "location", label: "Location" },
-      { name: "version", label: "Version" },
-      { name: "time_zone", label: "Time zone", list: "tz-list" },
-      { name: "note", label: "Note", type: "textarea" },
-    ];
-  }
-  if (level === "shift") {
-    return [
-      { name: "performer", label: "Performer", options: c.performers.map((p) => [p.id, p.institution]) },
-      { name: "test_director", label: "Test director", options: people },
-      { name: "test_administrator", label: "Test administrator", options: people },
-      { name: "robot_operator", label: "Robot operator", options: people },
-      { name: "safety_officer", label: "Safety officer", options: people },
-      { name: "test_intent", label: "Test intent" },
-      { name: "workspace", label: "Workspace" },
-      { name: "vehicle", label: "Vehicle", options: c.vehicles.map((v) => [v.id, v.short_description]), required: true },
-      { name: "note", label: "Note", type: "textarea" },
-    ];
-  }
-  return [
-    { name: "weather", label: "Weather", options: c.weather.map((w) => [w.key, w.short_description]) },
-    { name: "default_pose_source", label: "Pose source", options: c.poseSources.map((p) => [p.id, p.short_description]) },
-    { name: "note", label: "Note", type: "textarea" },
-  ];
-}
-
 async function editLevel(level) {
-  await catalogues;
   const row = current(level);
   if (!row) return;
+  const form = await formOf(level);
   const name = level === "event" ? `Test event #${row.id}` : level === "shift" ? `Shift ${row.number}` : `Leg ${row.number}`;
   formDialog({
     title: name,
     subtitle: `Started ${fmtTime(row.start)}${row.end ? `, ended ${fmtTime(row.end)}` : ""}`,
-    specs: fieldSpecs(level),
+    specs: form.fields,
     values: row,
     save: async (body) => {
       await api("PATCH", `${LEVELS[level].path}${row.id}/`, body);

@@ -45,6 +45,7 @@ export const Live = {
       test_event: state.selected.event,
       shift: state.selected.shift,
       leg: state.selected.leg,
+      fleet: state.view === "fleet",
       last_id: state.lastEventId,
     }));
   },

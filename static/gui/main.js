@@ -11,6 +11,8 @@ import { appendPoses, drawTakeOvers, loadSegments, refreshDistances, renderMode,
 import { loadLocalMap } from "./mapview.js";
 import { dialogSegment, loadImages, loadNotes } from "./segment-dialog.js";
 import { Collector } from "./collector.js";
+import { refreshSnapshots } from "./snapshots.js";
+import { Fleet } from "./fleet.js";
 import "./parameters.js";
 import "./reports.js";
 
@@ -21,7 +23,7 @@ Live.on("log", (e) => {
   if (e.test_event === state.selected.event) Live.later("segments");
 });
 Live.on("deleted", (e) => {
-  const what = { note: "notes", image: "images", segment: "segments", mapimage: "map" }[e.payload.model];
+  const what = { note: "notes", image: "images", segment: "segments", mapimage: "map", recording: "recordings" }[e.payload.model];
   Live.later(what || "logs");
 });
 Live.on("segment", (e) => {
@@ -29,6 +31,7 @@ Live.on("segment", (e) => {
 });
 Live.on("note", () => Live.later("notes"));
 Live.on("image", () => Live.later("images"));
+Live.on("recording", () => Live.later("recordings"));
 Live.on("poses", appendPoses);
 Live.on("local_poses", appendPoses);
 Live.on("map", (e) => {
@@ -36,6 +39,12 @@ Live.on("map", (e) => {
 });
 Live.on("command", (e) => Collector.commandAnswered(e));
 Live.on("collector", () => Collector.refresh());
+// The fleet view hears every logging robot's mode and positions (it subscribes with fleet: true).
+for (const kind of ["segment", "poses", "collector", "log"]) {
+  Live.on(kind, () => {
+    if (Fleet.visible()) Live.later("fleet");
+  });
+}
 
 /* The refreshes, in this order: the pickers may change the leg the rest draws. */
 Live.onRefresh(["logs"], () => loadLevel("event"));
@@ -57,6 +66,8 @@ Live.onRefresh(["notes"], async () => {
 Live.onRefresh(["images"], async () => {
   if (dialogSegment) await loadImages();
 });
+Live.onRefresh(["recordings"], refreshSnapshots);
+Live.onRefresh(["fleet"], () => Fleet.refresh());
 
 async function boot() {
   const catalogues = loadCatalogues();
@@ -64,7 +75,11 @@ async function boot() {
   Live.connect();
   // Nothing in the address: offer the leg a collector is logging into.
   if (!fromUrl.event && CONFIG.loggingLeg) Object.assign(state.selected, CONFIG.loggingLeg);
-  setInterval(renderMode, 1000);
+  setInterval(() => {
+    renderMode();
+    Fleet.tick();
+  }, 1000);
+  if (state.view === "fleet") Fleet.show(true).catch(showError);
   try {
     await catalogues;
     await loadLevel("event");
@@ -75,8 +90,10 @@ async function boot() {
     // Open segments' durations keep growing between events.
     if (state.segments.some((s) => s.is_open)) renderSegments();
     if (current("shift")) Collector.refresh();
+    // Collectors that stop beating turn offline without a change-feed event.
+    Fleet.refresh().catch(showError);
   }, 5000);
 }
 
 if ($("#pick-event")) boot();
-window.FTT = { state, Live, Collector };
+window.FTT = { state, Live, Collector, Fleet };

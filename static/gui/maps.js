@@ -243,4 +243,4 @@ class LocalMap extends TrackMap {
   }
 }
 
-export { GpsMap, LocalMap };
+export { COLORS, GpsMap, LocalMap };

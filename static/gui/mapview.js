@@ -24,7 +24,7 @@ $("#fit-track").addEventListener("click", () => {
   localMap.fitAll();
 });
 
-function tileUrl() {
+export function tileUrl() {
   const own = localStorage.getItem("ftt.tileUrl");
   return own !== null ? own : CONFIG.tileUrl;
 }

@@ -8,17 +8,6 @@ import { buildField } from "./dialogs.js";
 
 $("#open-reports").addEventListener("click", () => Reports.open().catch(showError));
 
-const REPORT_FIELDS = [
-  { name: "name", label: "Report name" },
-  { name: "version", label: "Report version" },
-  { name: "recipient", label: "Recipient" },
-  { name: "recipient_address", label: "Recipient address", type: "textarea" },
-  { name: "creator", label: "Creator" },
-  { name: "creator_address", label: "Creator address", type: "textarea" },
-  { name: "local", label: "Positions", options: [["false", "GPS"], ["true", "Local (map frame)"]], required: true },
-  { name: "min_timeline_hours", label: "Timeline at least (hours, optional)", number: true },
-  { name: "max_zoom", label: "Closest map zoom (1–19, optional)", number: true },
-];
 const EXPORTS = [
   ["segments.csv", "Segments (CSV)"],
   ["tracks.geojson", "Tracks (GeoJSON)"],
@@ -41,7 +30,9 @@ const Reports = {
       p.textContent = "Select a test event first.";
       body.append(p);
     } else {
-      body.append(this.downloads(event), this.form(event), Object.assign(document.createElement("div"), { id: "report-list" }));
+      // The form's fields are the server's (gui/api/forms/, "report").
+      const forms = await api("GET", "forms/", undefined, { root: CONFIG.guiApiRoot });
+      body.append(this.downloads(event), this.form(event, forms.report), Object.assign(document.createElement("div"), { id: "report-list" }));
       await this.refresh(event);
     }
     if (!d.open) d.showModal();
@@ -59,12 +50,11 @@ const Reports = {
     }
     return p;
   },
-  form(event) {
+  form(event, { fields, initial }) {
     const form = document.createElement("form");
     form.id = "report-form";
     const saved = JSON.parse(localStorage.getItem("ftt.reportFields") || "{}");
-    const defaults = { version: "1.0", local: "false" };
-    for (const spec of REPORT_FIELDS) form.append(buildField(spec, saved[spec.name] ?? defaults[spec.name] ?? ""));
+    for (const spec of fields) form.append(buildField(spec, saved[spec.name] ?? initial[spec.name] ?? ""));
     const go = document.createElement("button");
     go.type = "submit";
     go.className = "primary";
@@ -75,21 +65,18 @@ const Reports = {
       e.preventDefault();
       const errorBox = $("#reports-dialog .dialog-error");
       errorBox.hidden = true;
-      const values = Object.fromEntries(REPORT_FIELDS.map((s) => [s.name, form.elements[s.name].value]));
+      const values = Object.fromEntries(fields.map((s) => [s.name, form.elements[s.name].value]));
       localStorage.setItem("ftt.reportFields", JSON.stringify(values));
-      const lines = (text) => text.split("\n").map((l) => l.trim()).filter(Boolean);
-      const options = {
-        ...values,
-        local: values.local === "true",
-        recipient_address: lines(values.recipient_address),
-        creator_address: lines(values.creator_address),
-      };
-      // Empty number fields mean "the server's default"; whatever else was typed
-      // goes to the server as a number or as text, and the server says what is wrong.
-      for (const spec of REPORT_FIELDS.filter((s) => s.number)) {
-        const raw = values[spec.name].trim();
-        if (raw === "") delete options[spec.name];
-        else options[spec.name] = Number.isFinite(Number(raw)) ? Number(raw) : raw;
+      const options = {};
+      for (const spec of fields) {
+        const raw = values[spec.name];
+        if (spec.type === "textarea") options[spec.name] = raw.split("\n").map((l) => l.trim()).filter(Boolean);
+        else if (spec.type === "select" && ["true", "false"].includes(raw)) options[spec.name] = raw === "true";
+        else if (spec.type === "number") {
+          // Empty means "the server's default"; whatever else was typed goes as a
+          // number or as text, and the server says what is wrong.
+          if (raw.trim() !== "") options[spec.name] = Number.isFinite(Number(raw)) ? Number(raw) : raw.trim();
+        } else options[spec.name] = raw;
       }
       try {
         await api("POST", "reports/", { test_event: event.id, options });

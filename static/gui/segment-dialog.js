@@ -1,16 +1,19 @@
-/* The segment dialog: annotation of a take-over reason, notes and images. */
+/* The segment dialog: annotation of a take-over reason, notes, images and
+ * black-box snapshots (snapshots.js). */
 import { CONFIG, $, $$ } from "./dom.js";
 import { api, list } from "./api.js";
 import { notice, showError } from "./feedback.js";
-import { segmentLabel, state } from "./state.js";
+import { byId, segmentLabel, state } from "./state.js";
 import { fmtTime } from "./format.js";
 import { confirmDialog } from "./dialogs.js";
+import { loadSnapshots } from "./snapshots.js";
 
 const segmentDialog = $("#segment-dialog");
 export let dialogSegment = null;
 
 export async function openSegmentDialog(id) {
-  const s = await api("GET", `segments/${id}/`);
+  // The list's row is the same record (kept current by the change feed): no extra read.
+  const s = byId(state.segments, id) || (await api("GET", `segments/${id}/`));
   dialogSegment = s;
   const errorBox = $(".dialog-error", segmentDialog);
   errorBox.hidden = true;
@@ -25,7 +28,7 @@ export async function openSegmentDialog(id) {
   form.hidden = s.parent === null;
   $$("input, select, button", form).forEach((el) => (el.disabled = !CONFIG.canOperate));
   $$(".op-block", segmentDialog).forEach((el) => (el.hidden = !CONFIG.canOperate));
-  await Promise.all([loadNotes(), loadImages()]);
+  await Promise.all([loadNotes(), loadImages(), loadSnapshots(masterOf(s))]);
   if (!segmentDialog.open) segmentDialog.showModal();
 }
 

@@ -216,10 +216,20 @@ function requireSegment() {
   return state.segment;
 }
 
+/* The server's answer is the changed row: shown at once, without reading the
+ * list again (the change feed brings the rest, e.g. for other browsers). */
+function showRow(row) {
+  const i = state.segments.findIndex((s) => s.id === row.id);
+  if (i < 0) return false;
+  state.segments[i] = row;
+  renderSegments();
+  return true;
+}
+
 async function setReason(key) {
   const id = requireSegment();
-  await api("PATCH", `segments/${id}/`, { ito_reason: key });
-  await loadSegments();
+  const row = await api("PATCH", `segments/${id}/`, { ito_reason: key });
+  if (!showRow(row)) await loadSegments();
   notice(`Reason of ${segmentLabel(id)} set to ${reasonName(key)}.`);
 }
 
@@ -238,8 +248,9 @@ $("#segment-new").addEventListener("click", () => segmentAction(async () => {
 }));
 $("#segment-end").addEventListener("click", () => segmentAction(async () => {
   const id = requireSegment();
-  await api("POST", `segments/${id}/close/`, {});
-  await loadSegments();
+  const row = await api("POST", `segments/${id}/close/`, {});
+  // Ending a master ends its reasons too: then the list is read again.
+  if (row.parent === null || !showRow(row)) await loadSegments();
   notice(`Ended ${segmentLabel(id)}.`);
 }));
 $("#segment-edit").addEventListener("click", () => segmentAction(async () => openSegmentDialog(requireSegment())));

@@ -7,17 +7,19 @@ export const LEVELS = {
   leg: { path: "legs/", label: "leg", parent: "shift", parentField: "shift", child: null },
 };
 
-/* Event, shift, leg and segment live in the address, so reload and shared links restore them. */
+/* Event, shift, leg, segment and the view live in the address, so reload and shared links restore them. */
 export const fromUrl = (() => {
   const q = new URLSearchParams(location.search);
   const n = (k) => (/^\d+$/.test(q.get(k) || "") ? Number(q.get(k)) : null);
-  return { event: n("event"), shift: n("shift"), leg: n("leg"), segment: n("segment") };
+  const view = q.get("view") === "fleet" ? "fleet" : null;
+  return { event: n("event"), shift: n("shift"), leg: n("leg"), segment: n("segment"), view };
 })();
 
 export function saveUrl() {
   const q = new URLSearchParams();
   for (const k of ["event", "shift", "leg"]) if (state.selected[k]) q.set(k, state.selected[k]);
   if (state.segment) q.set("segment", state.segment);
+  if (state.view) q.set("view", state.view);
   const next = q.toString() ? `?${q}` : location.pathname;
   if (next !== location.search) history.replaceState(null, "", next || location.pathname);
 }
@@ -31,6 +33,7 @@ export const state = {
   shownLeg: undefined, // leg whose segments and tracks are drawn
   basemapsOf: undefined, // test event whose basemaps the switcher offers
   segment: null, // selected segment id
+  view: fromUrl.view, // "fleet": every logging vehicle on one map; null: the cockpit
   catalogue: {},
   lastEventId: null,
 };

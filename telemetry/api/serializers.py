@@ -60,20 +60,24 @@ class PoseSerializer(ClientUidMixin, ServiceSerializer):
 
 
 def gps_fix(data: dict) -> GpsFix:
-    fix = GpsFix(
-        longitude=data["point"]["x"],
-        latitude=data["point"]["y"],
-        altitude=data.get("altitude"),
-        fix_status=data.get("fix_status", FixStatus.FIX),
-        horizontal_accuracy=data.get("horizontal_accuracy"),
-        robot_stamp=data.get("robot_stamp"),
-    )
+    point = data["point"]
+    fields = {
+        "longitude": point["x"],
+        "latitude": point["y"],
+        "altitude": data.get("altitude"),
+        "fix_status": data.get("fix_status", FixStatus.FIX),
+        "horizontal_accuracy": data.get("horizontal_accuracy"),
+        "robot_stamp": data.get("robot_stamp"),
+    }
+    # Only a fix sent without a uid gets a new one (uuid4 is a system call).
     if data.get("uid") is not None:
-        fix.uid = data["uid"]
-    return fix
+        fields["uid"] = data["uid"]
+    return GpsFix(**fields)
 
 
 class LocalPoseSerializer(ClientUidMixin, ServiceSerializer):
+    segment = PrimaryKeyField(queryset=_segments())
+
     class Meta:
         model = LocalPose
         fields = ["id", "uid", "segment", "frame", "x", "y", "yaw", "robot_stamp", "received"]
@@ -136,8 +140,9 @@ class PoseListSerializer(serializers.ListSerializer):
 def _as_validated(item: _FastPoseItem) -> dict:
     # The shape PoseItemSerializer gives (see gps_fix): fields not sent are left out.
     data = {"point": {"x": item.longitude, "y": item.latitude}, "fix_status": item.fix_status}
+    sent = item.__pydantic_fields_set__
     for name in ("uid", "altitude", "horizontal_accuracy", "robot_stamp"):
-        if name in item.model_fields_set:
+        if name in sent:
             data[name] = getattr(item, name)
     return data
 
@@ -180,7 +185,7 @@ class LocalPoseItemSerializer(LocalPoseSerializer):
 
 
 class LocalPoseBatchSerializer(BatchSerializer):
-    segment = PrimaryKeyField(queryset=Segment.objects.all())
+    segment = PrimaryKeyField(queryset=_segments())
     poses = LocalPoseItemSerializer(many=True, max_length=MAX_BATCH)
 
 

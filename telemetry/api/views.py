@@ -83,9 +83,7 @@ class RecordingViewSet(ServiceCreateMixin, ServiceBaseViewSet):
         return self.get_queryset().get(uid=uid)
 
     def store_batch(self, request, serializer_class, store):
-        payload = serializer_class(data=request.data)
-        payload.is_valid(raise_exception=True)
-        stored = store(**payload.validated_data)
+        stored = store(**self.payload(serializer_class).validated_data)
         return Response({"stored": stored}, status=status.HTTP_201_CREATED)
 
 
@@ -95,6 +93,7 @@ class PoseViewSet(RecordingViewSet):
     filterset_class = PoseFilter
     filter_backends = [DjangoFilterBackend, BBoxFilter]
     bbox_filter_field = "point"
+    robot_actions = ("create", "batch")
 
     def create(self, request, *args, **kwargs):
         # No separate "is this uid known?" query: the service tells (one insert).
@@ -121,6 +120,7 @@ class LocalPoseViewSet(RecordingViewSet):
     queryset = LocalPose.objects.all()
     serializer_class = s.LocalPoseSerializer
     filterset_class = LocalPoseFilter
+    robot_actions = ("create", "batch")
 
     def create_with_service(self, data):
         pose = s.map_pose(data)
@@ -147,6 +147,7 @@ class MapImageViewSet(RecordingViewSet):
     serializer_class = s.MapImageSerializer
     filterset_class = MapFilter
     parser_classes = [MultiPartParser, FormParser]
+    robot_actions = ("create",)
 
     def create(self, request, *args, **kwargs):
         serializer = self.get_serializer(data=request.data)
@@ -180,6 +181,7 @@ class ImageViewSet(RecordingViewSet):
     serializer_class = s.ImageSerializer
     filterset_class = ImageFilter
     parser_classes = [MultiPartParser, FormParser]
+    robot_actions = ("create",)
 
     def create_with_service(self, data):
         upload = data["image"]

@@ -11,7 +11,7 @@ from datetime import UTC, datetime
 import numpy as np
 import shapely
 from django.db import connection
-from django.db.models import F, FloatField, Func, QuerySet
+from django.db.models import F, FloatField, Func, OuterRef, QuerySet, Subquery
 from django.db.models.functions import Coalesce
 
 from events.models import Segment
@@ -249,3 +249,33 @@ def segment_tracks(
         for s in segments
         if s.pk in loaded and len(loaded[s.pk])
     ]
+
+
+def with_last_position(queryset: QuerySet, leg_field: str = "leg") -> QuerySet:
+    """``queryset`` (rows that name a leg in ``leg_field``) annotated with
+    ``last_lon``/``last_lat``: where the leg's GPS track ends now, or None.
+
+    Subqueries, so a list of any length stays one query.  The end is the newest
+    usable fix (by the robot's clock, else by arrival) of the newest master
+    segment that has one."""
+    newest_fix = (
+        Pose.objects.filter(segment=OuterRef("pk"))
+        .exclude(fix_status=FixStatus.NO_FIX)
+        .order_by(Coalesce("robot_stamp", "received").desc(), "-id")
+        .values("pk")[:1]
+    )
+    fix_of_leg = (
+        Segment.objects.filter(leg=OuterRef(leg_field), parent__isnull=True)
+        .annotate(_fix=Subquery(newest_fix))
+        .filter(_fix__isnull=False)
+        .order_by("-start", "-id")
+        .values("_fix")[:1]
+    )
+
+    def coordinate(function):
+        point = Pose.objects.filter(pk=OuterRef("_last_fix"))
+        return Subquery(point.annotate(_v=Coordinate("point", function=function)).values("_v")[:1])
+
+    return queryset.annotate(_last_fix=Subquery(fix_of_leg)).annotate(
+        last_lon=coordinate("ST_X"), last_lat=coordinate("ST_Y")
+    )

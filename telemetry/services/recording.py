@@ -169,6 +169,8 @@ def _store_fixes(master, source_id, fixes, received) -> dict[uuid.UUID, int]:
 # One statement with one array per column: its cost does not grow with the
 # batch on the client side (no per-row SQL text, no per-row geometry object),
 # and ON CONFLICT makes a concurrent retry of the same uid a no-op, not an error.
+# Each array is sent as one text literal: the driver quotes one string instead
+# of adapting every element, which was most of the client's time for a batch.
 _POSTGRES_INSERT = """
 INSERT INTO {table} (uid, segment_id, point, altitude, fix_status, horizontal_accuracy,
                      pose_source_id, robot_stamp, received)
@@ -180,15 +182,21 @@ RETURNING uid, id
 """
 
 
+def _array(values, text=str) -> str:
+    """A PostgreSQL array literal of uuids, numbers or aware datetimes (none of
+    whose text needs quoting inside an array); None is NULL."""
+    return "{" + ",".join("NULL" if v is None else text(v) for v in values) + "}"
+
+
 def _insert_fixes_postgres(master, fixes, source_id, received) -> dict[uuid.UUID, int]:
     columns = (
-        [f.uid for f in fixes],
-        [f.longitude for f in fixes],
-        [f.latitude for f in fixes],
-        [f.altitude for f in fixes],
-        [f.fix_status for f in fixes],
-        [f.horizontal_accuracy for f in fixes],
-        [f.robot_stamp for f in fixes],
+        _array([f.uid for f in fixes]),
+        _array([f.longitude for f in fixes], repr),
+        _array([f.latitude for f in fixes], repr),
+        _array([f.altitude for f in fixes], repr),
+        _array([f.fix_status for f in fixes]),
+        _array([f.horizontal_accuracy for f in fixes], repr),
+        _array([f.robot_stamp for f in fixes], datetime.isoformat),
     )
     with connection.cursor() as cursor:
         cursor.execute(

@@ -13,7 +13,14 @@ import signal
 import pytest
 from PIL import Image
 
-from tests.support.browser import ARTIFACTS, PASSWORD, Server, system_chromium
+from tests.support.browser import (
+    ARTIFACTS,
+    Server,
+    add_users,
+    drop_database,
+    fresh_database,
+    system_chromium,
+)
 
 # Playwright's sync API keeps an event loop in the test thread.
 os.environ.setdefault("DJANGO_ALLOW_ASYNC_UNSAFE", "true")
@@ -62,24 +69,33 @@ def server(tmp_path_factory):
     srv = Server(tmp_path_factory.mktemp("ftt-e2e"), _tile_url())
     srv.start()
     _running_server = srv
-    srv.python(
-        f"""
-        from django.contrib.auth.models import Group, User
-        from events.models import Personnel
-        def user(name, role, full):
-            u = User.objects.create_user(name, password={PASSWORD!r}, first_name=full)
-            u.groups.add(Group.objects.get(name=role))
-            return u
-        admin = user("ada", "administrator", "Ada Admin")
-        admin.is_staff = True
-        admin.save()
-        op = user("otto", "operator", "Otto Operator")
-        Personnel.objects.create(name="Jörg Müller", institution="FKIE", user=op)
-        user("vera", "viewer", "Vera Viewer")
-        """
-    )
+    add_users(srv)
     yield srv
     srv.stop()
+
+
+@pytest.fixture(scope="module")
+def postgres_server(tmp_path_factory):
+    """A server of its own on a fresh PostgreSQL database, for several writers at
+    once (collectors of a fleet): SpatiaLite lets one write at a time."""
+    global _running_server
+    url = os.environ.get("FTT_DATABASE_URL", "")
+    if not url.startswith(("postgis://", "postgres://", "postgresql://")):
+        pytest.skip("needs FTT_DATABASE_URL naming a PostgreSQL server (scripts/test.sh sets it)")
+    database = fresh_database(url, "e2e")
+    srv = Server(
+        tmp_path_factory.mktemp("ftt-e2e-postgres"),
+        _tile_url(),
+        database_url=database,
+        name="daphne-postgres",
+    )
+    srv.start()
+    before, _running_server = _running_server, srv
+    add_users(srv)
+    yield srv
+    srv.stop()
+    _running_server = before
+    drop_database(database)
 
 
 @pytest.fixture

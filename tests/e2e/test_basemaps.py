@@ -1,6 +1,7 @@
 """With the internet unplugged, the operator sees the event's orthophoto under the robot's track."""
 
 import io
+import textwrap
 import time
 
 import numpy as np
@@ -9,7 +10,7 @@ from PIL import Image
 from playwright.sync_api import expect
 
 from tests.support.basemaps import QUADRANTS
-from tests.support.browser import Robot, login
+from tests.support.browser import Robot, login, open_leg_code
 
 pytestmark = pytest.mark.e2e
 
@@ -21,23 +22,18 @@ TRACK_MIDDLE = (7.10025, 50.600125)
 def leg_on_orthophoto(server, tmp_path):
     key = f"ortho-{int(time.time() * 1000) % 1000000}"
     server.python(
-        f"""
+        open_leg_code(key)
+        + textwrap.dedent(
+            f"""
         from pathlib import Path
         from basemaps.services import layers
-        from events.models import Performer, PoseSource, Vehicle
-        from events.services import logs
         from tests.support.basemaps import quadrant_geotiff
-        Performer.objects.get_or_create(institution="Fraunhofer FKIE")
-        PoseSource.objects.get_or_create(key="gps", defaults={{"short_description": "GPS"}})
-        v = Vehicle.objects.create(key="{key}", short_description="Rover {key}")
-        e = logs.create_test_event(location="Gelände {key}", time_zone="Europe/Berlin")
-        s = logs.create_shift(test_event=e, vehicle=v)
-        logs.create_leg(shift=s, weather_id="sunny")
         tif = quadrant_geotiff(Path({str(tmp_path)!r}) / "ortho.tif", pixel_m=0.25,
                                centre={TRACK_MIDDLE!r})
         layer = layers.register_file(tif, name="Orthophoto {key}", key="{key}")
         layers.set_event_default(e, layer)
         """
+        )
     )
     robot = Robot(server, key)
     try:

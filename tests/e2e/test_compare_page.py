@@ -7,7 +7,8 @@ import json
 import pytest
 from playwright.sync_api import expect
 
-from tests.support.browser import AXE, OVERFLOWING, SERIOUS, SMALL, VIEWPORTS, login
+from tests.support.browser import login
+from tests.support.screens import AXE, OVERFLOWING, SERIOUS, SMALL, VIEWPORTS
 
 TARGETS = "#event-list label, #compare-run, #compare-pdf, #compare-mode, #hotspots a, a.download"
 

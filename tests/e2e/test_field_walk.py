@@ -1,4 +1,6 @@
-"""The whole field test as a new user does it, in a real browser."""
+"""The whole field test as a new user does it, in a real browser: the walk of
+the original's manual (§3.1-3.8) on the tablet held in one hand, with Cancel
+in every dialog, a reload while logging, and End right after Stop."""
 
 import io
 import time
@@ -8,6 +10,7 @@ from PIL import Image as PILImage
 from playwright.sync_api import expect
 
 from tests.support.browser import Robot, login
+from tests.support.screens import VIEWPORTS
 
 pytestmark = pytest.mark.e2e
 
@@ -44,6 +47,42 @@ def new_level(page, level, values, shot):
     expect(dialog).to_be_hidden()
 
 
+def cancel_new(page, level, values):
+    """Press New, type into the dialog, Cancel: no entry appears."""
+    options = page.locator(f"#pick-{level} option")
+    expect(options.first).to_be_attached()  # the picker has loaded (a placeholder at least)
+    before = options.count()
+    page.locator(f'[data-action="new"][data-level="{level}"]').click()
+    dialog = page.locator("#form-dialog")
+    expect(dialog).to_be_visible()
+    for label, value in values.items():
+        dialog.get_by_label(label).fill(value)
+    dialog.get_by_role("button", name="Cancel").click()
+    expect(dialog).to_be_hidden()
+    page.wait_for_timeout(300)  # a write would have answered by now
+    expect(options).to_have_count(before)
+
+
+def cancel_edit(page, level, label, value):
+    """Open Edit, change a field, Cancel: the entry keeps its value."""
+    edit = page.locator(f'[data-action="edit"][data-level="{level}"]')
+    dialog = page.locator("#form-dialog")
+    edit.click()
+    field = dialog.get_by_label(label)
+    kept = field.input_value()
+    field.fill(value)
+    dialog.get_by_role("button", name="Cancel").click()
+    expect(dialog).to_be_hidden()
+    edit.click()
+    expect(dialog.get_by_label(label)).to_have_value(kept)
+    dialog.get_by_role("button", name="Cancel").click()
+    expect(dialog).to_be_hidden()
+
+
+def selection(page):
+    return [page.locator(f"#pick-{level}").input_value() for level in ("event", "shift", "leg")]
+
+
 def wait_live(locator, committed_at, figures, label):
     # Appearing without a reload is asserted here; how fast is a figure for
     # benchmarks/live_latency.py, which the printed delays can be compared with.
@@ -73,18 +112,21 @@ def test_field_walk(browser, server, shot):
 
     robot = Robot(server, "husky-walk")
     try:
-        page = browser.new_page()
+        page = browser.new_page(**VIEWPORTS["tablet"])
         page.route("**/tiles/**", lambda r: r.fulfill(status=404))
         login(page, server, "otto")
         expect(page.locator("#live-status")).to_have_text("live")
 
-        # 2. The operator opens a test event, a shift and a leg.
+        # 2. The operator opens a test event, a shift and a leg; Cancel leaves none behind.
+        cancel_new(page, "event", {"Location": "Versehentlich"})
         new_level(
             page, "event", {"Location": "Köln-Wahn Übungsplatz", "Time zone": "Europe/Berlin"}, shot
         )
         expect(page.locator("#pick-event option:checked")).to_contain_text("Köln-Wahn Übungsplatz")
+        cancel_new(page, "shift", {"Test intent": "Versehentlich"})
         new_level(page, "shift", {"Vehicle": ("Husky Walk",), "Test intent": "Überlandfahrt"}, shot)
         expect(page.locator("#pick-shift option:checked")).to_contain_text("Husky Walk")
+        cancel_new(page, "leg", {"Note": "Versehentlich"})
         new_level(page, "leg", {}, shot)
         expect(page.locator("#segments-section")).to_be_visible()
         expect(page.locator("#segments-empty")).to_be_visible()
@@ -110,6 +152,16 @@ def test_field_walk(browser, server, shot):
         expect(page.locator("#gps-map .leaflet-tooltip-pane, #gps-map path")).not_to_have_count(0)
         shot(page, "live-segments")
 
+        # A reload while logging brings back the same leg, still logging.
+        chosen = selection(page)
+        page.reload()
+        expect(page.locator("#pick-leg")).to_have_value(chosen[2])
+        assert selection(page) == chosen
+        expect(toggle).to_have_text("Stop logging")
+        expect(ito_row).to_be_visible()
+        expect(page.locator("#mode-name")).to_have_text("ITO")
+        shot(page, "reloaded-while-logging")
+
         # 4. A quick reason, a note with umlauts and a photo.
         ito_row.click()
         page.get_by_role("button", name="Safety", exact=True).click()
@@ -130,21 +182,58 @@ def test_field_walk(browser, server, shot):
         expect(seg.locator(".images img")).to_have_count(1)
         expect(seg.locator(".images img")).to_have_js_property("complete", True)
         shot(page, "segment-dialog")
+        # Editing a note and cancelling keeps the note as it was.
+        note.get_by_role("button", name="Edit").click()
+        seg.get_by_label("Note text").fill("Verworfen")
+        seg.get_by_role("button", name="Cancel").click()
+        expect(seg.locator(".notes li .text")).to_have_text(NOTE)
         seg.get_by_role("button", name="Close").last.click()
         expect(seg).to_be_hidden()
 
-        # 5. Logging stops (closing the open segment), then the test event ends.
+        # Cancel in the other dialogs changes nothing: Edit, Delete, map settings.
+        cancel_edit(page, "shift", "Test intent", "Versehentlich geändert")
+        page.locator('[data-action="delete"][data-level="leg"]').click()
+        confirm = page.locator("#confirm-dialog")
+        confirm.get_by_role("button", name="Keep it").click()
+        expect(confirm).to_be_hidden()
+        expect(page.locator("#pick-leg option:checked")).to_contain_text("Leg 1")
+        expect(ito_row).to_be_visible()
+        page.locator("#open-map-settings").click()
+        settings = page.locator("#map-settings-dialog")
+        settings.get_by_label("Tile URL").fill("http://127.0.0.1:9/verworfen/{z}/{x}/{y}.png")
+        settings.get_by_role("button", name="Cancel").click()
+        expect(settings).to_be_hidden()
+        assert page.evaluate("localStorage.getItem('ftt.tileUrl')") is None
+
+        # 5. Logging stops and the test event is ended at once, without waiting
+        #    for the robot to confirm the stop: both go through.
         toggle.click()
-        expect(toggle).to_have_text("Start logging", timeout=5000)
-        expect(ito_row.locator("td").nth(7)).to_have_text("CLOSED", timeout=3000)
         page.locator('[data-action="end"][data-level="event"]').click()
         expect(page.locator('[data-state="event"]')).to_have_text("closed")
+        expect(page.locator("#notice")).to_contain_text("Ended test event")
+        expect(page.locator("#error")).to_be_hidden()
+        expect(toggle).to_have_text("Start logging", timeout=5000)
+        expect(ito_row.locator("td").nth(7)).to_have_text("CLOSED", timeout=3000)
         expect(page.locator('[data-action="reopen"][data-level="event"]')).to_be_visible()
         shot(page, "test-event-ended")
 
         # What the page showed survives a reload, Unicode included.
         page.reload()
         expect(page.locator("#pick-event option:checked")).to_contain_text("Köln-Wahn Übungsplatz")
+        assert selection(page)[0] != ""
+
+        # 8. Deleting: "Keep it" keeps the test event, Delete removes it with all below.
+        events = page.locator("#pick-event option")
+        count = events.count()
+        page.locator('[data-action="delete"][data-level="event"]').click()
+        confirm.get_by_role("button", name="Keep it").click()
+        expect(events).to_have_count(count)
+        page.locator('[data-action="delete"][data-level="event"]').click()
+        expect(confirm).to_contain_text("with all its shifts, legs, segments")
+        confirm.get_by_role("button", name="Delete").click()
+        expect(page.locator("#notice")).to_contain_text("Deleted test event")
+        expect(page.locator("#pick-event option").filter(has_text="Köln-Wahn")).to_have_count(0)
+        shot(page, "test-event-deleted")
         print("live delays (s):", {k: round(v, 3) for k, v in figures.items()})
     finally:
         robot.stop()

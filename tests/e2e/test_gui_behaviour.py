@@ -7,7 +7,7 @@ import time
 import pytest
 from playwright.sync_api import expect
 
-from tests.support.browser import Robot, login
+from tests.support.browser import Robot, choose_event, login, open_leg_code
 from tests.support.pdf import flat, pdf_text
 
 pytestmark = pytest.mark.e2e
@@ -19,26 +19,11 @@ _numbers = itertools.count(1)
 def open_leg(server):
     """A vehicle with an open test event, shift and leg, made in a separate process."""
     key = f"rover-{next(_numbers)}-{int(time.time() * 1000) % 100000}"
-    server.python(
-        f"""
-        from events.models import Performer, PoseSource, Vehicle
-        from events.services import logs
-        Performer.objects.get_or_create(institution="Fraunhofer FKIE")
-        PoseSource.objects.get_or_create(key="gps", defaults={{"short_description": "GPS"}})
-        v = Vehicle.objects.create(key="{key}", short_description="Rover {key}")
-        e = logs.create_test_event(location="Gelände {key}", time_zone="Europe/Berlin")
-        s = logs.create_shift(test_event=e, vehicle=v)
-        logs.create_leg(shift=s, weather_id="sunny")
-        """
-    )
+    server.python(open_leg_code(key))
     return key
 
 
-def choose(page, key):
-    """Pick the test event made for this test; the shift and leg follow by themselves."""
-    option = page.locator("#pick-event option", has_text=f"Gelände {key}")
-    page.select_option("#pick-event", value=option.get_attribute("value"))
-    expect(page.locator("#segments-section")).to_be_visible()
+choose = choose_event
 
 
 def test_viewer_sees_but_cannot_change_anything(page, server, open_leg, shot):

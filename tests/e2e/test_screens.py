@@ -10,7 +10,8 @@ import json
 import pytest
 from playwright.sync_api import expect
 
-from tests.support.browser import AXE, OVERFLOWING, SERIOUS, SMALL, VIEWPORTS, login
+from tests.support.browser import login
+from tests.support.screens import AXE, OVERFLOWING, SERIOUS, SMALL, VIEWPORTS
 
 MAIN_ACTIONS = (
     "#mode-panel .quick button, #mode-panel select, #segment-new, #segment-end, #segment-edit, "

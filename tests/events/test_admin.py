@@ -214,3 +214,40 @@ def test_each_level_can_be_added_from_its_admin_page(admin_client, vehicle, pose
     leg = Leg.objects.get()
     assert (event.location, shift.number, leg.number) == ("Übungsplatz Süd", 1, 1)
     assert leg.is_open and leg.default_pose_source == pose_source
+
+
+def test_admin_shows_and_edits_which_vehicles_a_robot_logs_for(
+    admin_client, robot_client, vehicle, other_vehicle
+):
+    robot = robot_client(vehicle).user
+    account = robot.robot_account
+    vehicle_page = admin_client.get(reverse("admin:events_vehicle_change", args=[vehicle.pk]))
+    assert vehicle_page.status_code == 200
+    html = vehicle_page.content.decode()
+    assert "robot accounts logging for this vehicle" in html.lower()
+    assert f'<option value="{account.pk}" selected>{robot.username}</option>' in html
+
+    user_page = admin_client.get(reverse("admin:auth_user_change", args=[robot.pk]))
+    assert user_page.status_code == 200
+    html = user_page.content.decode()
+    assert "robot account (vehicles it logs for)" in html.lower()
+    assert f'<option value="{vehicle.pk}" selected>' in html
+
+    listing = admin_client.get(reverse("admin:events_robotaccount_changelist")).content.decode()
+    assert robot.username in listing and vehicle.key in listing
+
+    url = reverse("admin:events_robotaccount_change", args=[account.pk])
+    saved = admin_client.post(url, {"user": robot.pk, "vehicles": [other_vehicle.pk]})
+    assert saved.status_code == 302, saved.content
+    assert list(account.vehicles.all()) == [other_vehicle]
+
+
+def test_operators_see_but_do_not_change_robot_bindings(client, robot_client, vehicle):
+    client.force_login(staff_user("operator"))
+    account = robot_client(vehicle).user.robot_account
+    url = reverse("admin:events_robotaccount_change", args=[account.pk])
+    page = client.get(url)
+    assert page.status_code == 200
+    assert b'name="vehicles"' not in page.content
+    client.post(url, {"user": account.user.pk, "vehicles": []})
+    assert list(account.vehicles.all()) == [vehicle]

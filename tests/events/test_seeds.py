@@ -33,3 +33,15 @@ def test_role_groups_exist_with_growing_rights(db):
     assert "change_vehicle" in perms["administrator"]
     assert "change_itoreason" in perms["administrator"]
     assert perms["viewer"] < perms["operator"] < perms["administrator"]
+
+
+def test_the_robot_group_may_only_add_what_a_robot_records(db):
+    robot = set(Group.objects.get(name="robot").permissions.values_list("codename", flat=True))
+    assert robot == {
+        "add_segment",
+        "add_pose",
+        "add_localpose",
+        "add_mapimage",
+        "add_image",
+        "add_recording",
+    }

@@ -1,6 +1,7 @@
 """The GUI's archive download, the administrators' import and backup endpoints."""
 
 import io
+import os
 import zipfile
 
 import pytest
@@ -9,6 +10,7 @@ from events.models import TestEvent
 from telemetry.models import Pose
 from tests.support.api import download
 from tests.support.field_day import field_day
+from tests.support.jobs import run_queued_jobs
 from tests.support.snapshot import snapshot
 
 pytestmark = pytest.mark.django_db
@@ -30,11 +32,42 @@ def test_viewer_downloads_an_archive_and_administrator_imports_it(api_client, me
     assert dry.status_code == 200 and dry.json()["counts"]["poses"]["added"] == 15
     assert not Pose.objects.exists()
 
-    done = admin.post("/api/archives/import/", {"archive": io.BytesIO(data)}, format="multipart")
-    assert done.status_code == 200 and done.json()["changes"] > 0
+    queued = admin.post("/api/archives/import/", {"archive": io.BytesIO(data)}, format="multipart")
+    assert queued.status_code == 202 and queued.json()["changes"] > 0
+    job = queued.json()["job"]
+    assert job["status"] == "queued" and not Pose.objects.exists()
+    assert run_queued_jobs() == 1  # what manage.py ftt_worker does
+    done = admin.get(job["url"]).json()
+    assert done["status"] == "done" and done["changes"] == queued.json()["changes"]
     assert snapshot() == before
     again = admin.post("/api/archives/import/", {"archive": io.BytesIO(data)}, format="multipart")
     assert again.json()["changes"] == 0
+    run_queued_jobs()
+    assert admin.get(again.json()["job"]["url"]).json()["changes"] == 0
+    assert api_client("operator").get(job["url"]).status_code == 403
+
+
+def test_an_import_that_fails_in_the_worker_records_why_and_deletes_the_upload(
+    api_client, media_root, wipe
+):
+    from events.services import logs
+    from exchange.models import ArchiveImport
+    from tests.support.field_day import T0, configuration
+
+    data = download(api_client("viewer"), field_day(close=False))
+    wipe()
+    admin = api_client("administrator")
+    queued = admin.post("/api/archives/import/", {"archive": io.BytesIO(data)}, format="multipart")
+    assert queued.status_code == 202
+    kept = ArchiveImport.objects.get().path
+    # Between the check and the worker, someone opens a shift the archive also has open.
+    vehicle, *_ = configuration()
+    logs.create_shift(test_event=logs.create_test_event(at=T0), vehicle=vehicle, at=T0)
+    run_queued_jobs()
+    job = admin.get(queued.json()["job"]["url"]).json()
+    assert job["status"] == "failed" and "already has an open shift" in job["error"]
+    assert not Pose.objects.exists()
+    assert not os.path.exists(kept)
 
 
 def test_import_and_backup_are_for_administrators_only(api_client, media_root):

@@ -7,6 +7,7 @@ from events.models import TestEvent
 from telemetry.models import Pose
 from tests.support.api import download
 from tests.support.field_day import field_day
+from tests.support.jobs import run_queued_jobs
 from tests.support.snapshot import snapshot
 
 pytestmark = pytest.mark.django_db
@@ -29,8 +30,14 @@ def test_administrator_previews_then_imports_an_archive(
     assert "dry run, nothing written" in preview.content.decode()
     assert not Pose.objects.exists()
 
-    done = client.post("/import/", {"archive": upload(data)}).content.decode()
+    queued = client.post("/import/", {"archive": upload(data)}, follow=True).content.decode()
+    # Queued for the job worker; a reload shows the list and sends nothing again.
+    assert "field-day.zip" in queued and "queued" in queued
+    assert 'http-equiv="refresh"' in queued
+    run_queued_jobs()
+    done = client.get("/import/").content.decode()
     assert "Changed" in done and "poses" in done
+    assert 'http-equiv="refresh"' not in done
     assert snapshot() == before
 
 

@@ -141,6 +141,8 @@ def test_logging_can_start_only_with_online_collector_and_open_levels(client, le
         "parameters": [],
         "can_toggle": False,
         "reason": "No collector has reported for this vehicle.",
+        "can_snapshot": False,
+        "snapshot_reason": "No collector has reported for this vehicle.",
     }
     collector = collector_for(vehicle)
     assert client.get(url).json()["can_toggle"] is True
@@ -155,6 +157,29 @@ def test_logging_can_start_only_with_online_collector_and_open_levels(client, le
     logs.close_leg(leg)
     status = client.get(url).json()
     assert status["can_toggle"] is False and "open test event" in status["reason"]
+
+
+def test_snapshot_now_is_offered_while_logging_and_refused_otherwise(client, leg, vehicle):
+    member(client, "otto", "operator")
+    snapshots = {"snapshot.enabled": True, "snapshot.before": 20.0, "snapshot.after": 10.0}
+    collector = collector_for(vehicle, parameters=snapshots)
+    url = f"/gui/api/collectors/?vehicle={vehicle.pk}&leg={leg.pk}"
+    status = client.get(url).json()
+    assert status["can_snapshot"] is False and "start logging" in status["snapshot_reason"]
+    commands = f"/gui/api/collectors/{collector.pk}/commands/"
+    body = {"kind": "snapshot", "leg": leg.pk}
+    refused = client.post(commands, body, content_type="application/json")
+    assert refused.status_code == 409 and "start logging" in str(refused.json())
+    collector_for(vehicle, parameters=snapshots, logging=True)
+    status = client.get(url).json()
+    assert status["can_snapshot"] is True
+    assert status["snapshot_reason"] == (
+        "Saves the robot's messages from 20 s before to 10 s after now."
+    )
+    assert client.post(commands, body, content_type="application/json").status_code == 202
+    assert collector.commands.get().kind == "snapshot"
+    names = [row["name"] for row in status["parameters"]]
+    assert {"snapshot.enabled", "snapshot.before", "snapshot.after"} <= set(names)
 
 
 def test_viewer_cannot_command_and_parameter_types_are_checked(client, leg, vehicle):
@@ -205,3 +230,30 @@ def test_favicon_is_served(client):
     answer = client.get("/favicon.ico", follow=True)
     assert answer.status_code == 200
     assert b"<svg" in b"".join(answer.streaming_content if answer.streaming else [answer.content])
+
+
+def test_a_robot_token_opens_neither_photos_nor_the_guis_data(
+    client, leg, vehicle, media_root, robot_client
+):
+    """Even of its own vehicle: a robot writes, people look."""
+    master = segments.report_mode(leg, "ito").master
+    url = recording.attach_image(master, content=jpeg(1)).image.url
+    robot = robot_client(vehicle)
+    token = f"Token {robot.user.auth_token.key}"
+    assert client.get(url, HTTP_AUTHORIZATION=token).status_code == 403
+    assert robot.get(f"/gui/api/legs/{leg.pk}/tracks/").status_code == 403
+    client.force_login(robot.user)
+    assert "has no role" in client.get("/").content.decode()
+    assert client.get(f"/gui/api/legs/{leg.pk}/tracks/").status_code == 403
+
+
+def test_fleet_lists_logging_vehicles_to_anyone_with_a_role(client, leg, vehicle):
+    assert client.get("/gui/api/fleet/").status_code in (401, 403)
+    member(client, "vera", "viewer")
+    assert client.get("/gui/api/fleet/").json() == {"vehicles": []}
+    collector_for(vehicle, logging=True, leg=leg)
+    segments.report_mode(leg, "ito")
+
+    (entry,) = client.get("/gui/api/fleet/").json()["vehicles"]
+
+    assert (entry["vehicle"]["key"], entry["mode"], entry["leg"]["id"]) == ("husky", "ito", leg.pk)

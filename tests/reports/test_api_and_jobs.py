@@ -1,15 +1,17 @@
 """Statistics, report jobs and exports over the API; background generation."""
 
-import threading
-import time
+import signal
 
 import pytest
-from django.db import connection
+from django_tasks.base import TaskResultStatus
+from django_tasks_db.models import DBTaskResult
 
 from reports.models import Report
 from reports.services import generation
-from reports.services.generation import fail_stale_reports, request_report, run_job
+from reports.services.generation import request_report, run_job
+from tests.support.jobs import run_queued_jobs, worker_processes
 from tests.support.pdf import flat, pdf_text
+from tests.support.ros import wait_for
 from tests.support.scenario import STEP_M
 
 
@@ -47,22 +49,24 @@ def test_viewer_cannot_request_a_report(scenario, api_client):
 
 
 def test_request_returns_at_once_and_the_worker_makes_a_downloadable_pdf(
-    scenario, api_client, django_capture_on_commit_callbacks, settings, tmp_path
+    scenario, api_client, settings, tmp_path
 ):
     settings.FTT_TILE_CACHE = tmp_path / "tiles"
     operator = api_client("operator")
-    with django_capture_on_commit_callbacks(execute=False) as callbacks:
-        response = operator.post(
-            "/api/reports/",
-            {"test_event": scenario.event.pk, "options": {"name": "Bericht", "no_tiles": True}},
-            format="json",
-        )
+    response = operator.post(
+        "/api/reports/",
+        {"test_event": scenario.event.pk, "options": {"name": "Bericht", "no_tiles": True}},
+        format="json",
+    )
     assert response.status_code == 202
     body = response.json()
     assert body["status"] == "queued" and body["download"] is None
-    assert len(callbacks) == 1  # the worker starts only once the row is committed
+    # Nobody runs jobs in this test, and the report says so.
+    assert "no job worker runs" in body["message"]
+    assert DBTaskResult.objects.get().status == TaskResultStatus.READY
 
-    report = run_job(body["id"])  # what the worker thread does
+    assert run_queued_jobs() == 1  # what manage.py ftt_worker does
+    report = Report.objects.get(pk=body["id"])
     assert report.status == Report.Status.DONE and report.progress == 1.0
     listed = api_client("viewer").get(f"/api/reports/?test_event={scenario.event.pk}").json()
     assert [r["id"] for r in listed] == [body["id"]]
@@ -73,14 +77,10 @@ def test_request_returns_at_once_and_the_worker_makes_a_downloadable_pdf(
     assert "Bericht" in text and scenario.event.location in text
 
 
-def test_every_report_is_kept_per_test_event(
-    scenario, django_capture_on_commit_callbacks, tmp_path
-):
-    with django_capture_on_commit_callbacks(execute=False):
-        first = request_report(scenario.event, {"no_tiles": True})
-        second = request_report(scenario.event, {"no_tiles": True, "name": "zwei"})
-    run_job(first.pk)
-    run_job(second.pk)
+def test_every_report_is_kept_per_test_event(scenario, tmp_path):
+    request_report(scenario.event, {"no_tiles": True})
+    second = request_report(scenario.event, {"no_tiles": True, "name": "zwei"})
+    assert run_queued_jobs() == 2
     kept = Report.objects.filter(test_event=scenario.event, status="done")
     assert kept.count() == 2
     assert len({r.pdf.name for r in kept}) == 2
@@ -110,56 +110,60 @@ def test_bad_requests_are_refused_before_queueing(scenario, api_client, db):
     assert Report.objects.count() == 0
 
 
-def test_failures_are_recorded_on_the_row(
-    scenario, monkeypatch, django_capture_on_commit_callbacks
-):
+def test_failures_are_recorded_on_the_row(scenario, monkeypatch):
     def explode(*args, **kwargs):
         raise RuntimeError("disk full")
 
     monkeypatch.setattr(generation, "render_report", explode)
-    with django_capture_on_commit_callbacks(execute=False):
-        report = request_report(scenario.event, {})
-    report = run_job(report.pk)
+    report = run_job(request_report(scenario.event, {}).pk)
     assert report.status == Report.Status.FAILED
     assert "disk full" in report.error
 
 
-def test_reports_whose_worker_vanished_are_marked_failed(
-    scenario, django_capture_on_commit_callbacks
-):
-    from django.utils import timezone
-
-    with django_capture_on_commit_callbacks(execute=False):
-        report = request_report(scenario.event, {})
-    later = timezone.now() + generation.STALE_AFTER * 2
-    assert fail_stale_reports(now=later) == 1
-    report.refresh_from_db()
-    assert report.status == Report.Status.FAILED and "Request the report again" in report.error
-
-
+@pytest.mark.postgis_only
 @pytest.mark.django_db(transaction=True)
-def test_background_thread_finishes_the_report(
+def test_a_report_whose_worker_is_killed_is_retried_then_failed_with_the_reason(
     vehicle, other_vehicle, performer, media_root, tmp_path
 ):
     from tests.support.scenario import build_scenario
 
     scenario = build_scenario(vehicle, other_vehicle, performer)
-    report = request_report(scenario.event, {"no_tiles": True})
-    # The request answers with a queued row; the PDF is made afterwards.
-    assert report.status == Report.Status.QUEUED and not report.pdf
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline:
-        report.refresh_from_db()
-        if report.is_finished:
-            break
-        time.sleep(0.5)
-    assert report.status == Report.Status.DONE, report.error
-    assert scenario.event.location in flat(pdf_text(report.pdf.read(), tmp_path))
-    report.pdf.close()
-    for thread in threading.enumerate():
-        if thread.name.startswith("report-"):
-            thread.join(timeout=10)
-    connection.close()
+    workers = worker_processes(tmp_path, media_root)
+    try:
+        first = request_report(scenario.event, {"no_tiles": True})
+        _kill_during_attempt(workers.start("worker-1"), first, 1)
+        # The next worker finds the job of the dead one at once (same machine)
+        # and makes the report after all.
+        assert workers.start("worker-2", "--batch").popen.wait(180) == 0
+        first.refresh_from_db()
+        assert first.status == Report.Status.DONE, first.error
+        assert scenario.event.location in flat(pdf_text(first.pdf.read(), tmp_path))
+        first.pdf.close()
+
+        second = request_report(scenario.event, {"no_tiles": True})
+        _kill_during_attempt(workers.start("worker-3"), second, 1)
+        _kill_during_attempt(workers.start("worker-4"), second, 2)
+        assert workers.start("worker-5", "--batch").popen.wait(180) == 0
+        second.refresh_from_db()
+        assert second.status == Report.Status.FAILED
+        assert "stopped during attempt 2 of 2" in second.error
+        assert "Request the report again" in second.error
+        assert not DBTaskResult.objects.filter(status=TaskResultStatus.RUNNING).exists()
+    finally:
+        workers.stop_all()
+
+
+def _kill_during_attempt(worker, report, attempt):
+    def making_it():
+        job = DBTaskResult.objects.filter(args_kwargs__args=[report.pk]).first()
+        return (
+            job.status == TaskResultStatus.RUNNING
+            and len(job.worker_ids) == attempt
+            and Report.objects.filter(pk=report.pk, status=Report.Status.RUNNING).exists()
+        )
+
+    wait_for(making_it, 120, 0.1, f"attempt {attempt} of report {report.pk}")
+    worker.stop(signal.SIGKILL)
 
 
 def test_exports_over_the_api(scenario, api_client):

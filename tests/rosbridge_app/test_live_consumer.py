@@ -86,6 +86,33 @@ async def test_other_legs_poses_are_not_sent(viewer, leg, shift):
     await communicator.disconnect()
 
 
+async def test_fleet_view_hears_every_legs_mode_and_gps_but_not_its_local_poses(
+    viewer, leg, other_vehicle, test_event
+):
+    from events.services import logs
+
+    other = await database_sync_to_async(
+        lambda: logs.create_leg(
+            shift=logs.create_shift(test_event=test_event, vehicle=other_vehicle)
+        )
+    )()
+    communicator, _ = await connect(viewer, fleet=True)
+    for robot_leg in (leg, other):
+        master = (await database_sync_to_async(segments.report_mode)(robot_leg, "ito")).master
+        await database_sync_to_async(recording.record_poses)(master, [recording.GpsFix(7.0, 50.0)])
+    received = []
+    while len(received) < 4:
+        received += await next_events(communicator)
+    assert sorted((e["leg"], e["kind"]) for e in received) == sorted(
+        (robot_leg.pk, kind) for robot_leg in (leg, other) for kind in ("segment", "poses")
+    )
+    await database_sync_to_async(recording.record_local_poses)(
+        master, [recording.MapPose(1.0, 2.0, "map")]
+    )
+    assert await communicator.receive_nothing(timeout=0.8)
+    await communicator.disconnect()
+
+
 async def test_reconnecting_browser_gets_what_it_missed(viewer, leg):
     communicator, last_id = await connect(viewer, leg=leg.pk)
     await communicator.disconnect()

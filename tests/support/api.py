@@ -229,8 +229,8 @@ def post_counting_queries(client, url, body):
     with CaptureQueriesContext(connection) as captured:
         response = client.post(url, body, format="json")
     sql = [q["sql"] for q in captured.captured_queries]
-    opened = [i for i, q in enumerate(sql) if q.startswith("SAVEPOINT")]
-    closed = [i for i, q in enumerate(sql) if q.startswith("RELEASE SAVEPOINT")]
+    opened = [i for i, q in enumerate(sql) if q.startswith(("SAVEPOINT", "BEGIN"))]
+    closed = [i for i, q in enumerate(sql) if q.startswith(("RELEASE SAVEPOINT", "COMMIT"))]
     assert len(opened) == len(closed) == 1, sql
     return response, sql, sql[opened[0] + 1 : closed[0]]
 

@@ -15,6 +15,9 @@ import sys
 import textwrap
 import time
 from pathlib import Path
+from urllib.parse import unquote, urlsplit, urlunsplit
+
+import psycopg
 
 ROOT = Path(__file__).resolve().parents[2]
 # Not under test-results/: pytest-playwright empties that folder when a session starts.
@@ -42,9 +45,12 @@ def _free_port() -> int:
 
 
 class Server:
-    """A daphne process plus a way to run Django code in other processes."""
+    """A daphne process and the job worker beside it (as scripts/run.sh starts
+    them), plus a way to run Django code in other processes."""
 
-    def __init__(self, data_dir: Path, tile_url: str):
+    def __init__(self, data_dir: Path, tile_url: str, database_url: str = "", name: str = "daphne"):
+        """SpatiaLite in ``data_dir`` unless ``database_url`` names a PostgreSQL database."""
+        self.name = name
         self.port = _free_port()
         self.url = f"http://127.0.0.1:{self.port}"
         self.env = {
@@ -57,7 +63,9 @@ class Server:
             DJANGO_SETTINGS_MODULE="ftt_site.settings",
             PYTHONPATH=str(ROOT),
         )
-        self.process = None
+        if database_url:
+            self.env["FTT_DATABASE_URL"] = database_url
+        self.process = self.worker = None
 
     def manage(self, *args, timeout=120) -> str:
         result = subprocess.run(
@@ -71,9 +79,9 @@ class Server:
         assert result.returncode == 0, result.stderr[-3000:]
         return result.stdout
 
-    def python(self, code: str) -> str:
+    def python(self, code: str, timeout: float = 120) -> str:
         """Run Django code in a separate process (the robot, an admin script)."""
-        return self.manage("shell", "-c", textwrap.dedent(code))
+        return self.manage("shell", "-c", textwrap.dedent(code), timeout=timeout)
 
     def spawn(self, code: str) -> subprocess.Popen:
         return subprocess.Popen(
@@ -90,7 +98,7 @@ class Server:
     def start(self):
         self.manage("migrate", "--noinput", timeout=300)
         ARTIFACTS.mkdir(parents=True, exist_ok=True)
-        self.log = open(ARTIFACTS / "daphne.log", "w")  # noqa: SIM115 - open while it runs
+        self.log = open(ARTIFACTS / f"{self.name}.log", "w")  # noqa: SIM115 - open while it runs
         self.process = subprocess.Popen(
             [
                 sys.executable,
@@ -108,6 +116,13 @@ class Server:
             stdout=self.log,
             stderr=subprocess.STDOUT,
         )
+        self.worker = subprocess.Popen(
+            [sys.executable, "manage.py", "ftt_worker", "--interval", "0.5"],
+            cwd=ROOT,
+            env=self.env,
+            stdout=self.log,
+            stderr=subprocess.STDOUT,
+        )
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline:
             try:
@@ -118,59 +133,87 @@ class Server:
         raise RuntimeError("daphne did not start")
 
     def stop(self):
+        for process in (self.worker, self.process):
+            if process is not None:
+                process.terminate()
+                try:
+                    process.wait(10)
+                except subprocess.TimeoutExpired:
+                    process.kill()
         if self.process is not None:
-            self.process.terminate()
-            try:
-                self.process.wait(10)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
             self.log.close()
 
 
-# The three screens the GUI is used on: a laptop, a tablet held in one hand, a phone.
-VIEWPORTS = {
-    "laptop": {"viewport": {"width": 1366, "height": 768}},
-    "tablet": {"viewport": {"width": 1024, "height": 768}, "has_touch": True, "is_mobile": True},
-    "phone": {"viewport": {"width": 390, "height": 844}, "has_touch": True, "is_mobile": True},
-}
-
-# Whatever sticks out of the window or scrolls sideways inside its box; the maps'
-# panes are clipped by Leaflet on purpose, and a long value scrolls in its input.
-OVERFLOWING = """() => {
-  const width = document.documentElement.clientWidth;
-  const out = [];
-  for (const el of document.querySelectorAll("body *")) {
-    if (el.closest(".leaflet-container, dialog:not([open])")) continue;
-    if (["INPUT", "SELECT", "TEXTAREA", "OPTION"].includes(el.tagName)) continue;
-    const r = el.getBoundingClientRect();
-    if (!r.width || !r.height) continue;
-    const style = getComputedStyle(el);
-    const clips = style.overflowX !== "visible";
-    if (r.right > width + 0.5 || r.left < -0.5 || (clips && el.scrollWidth > el.clientWidth + 1)) {
-      out.push(`${el.tagName.toLowerCase()}#${el.id}.${el.className}`);
-    }
-  }
-  if (document.documentElement.scrollWidth > width) out.push("page");
-  return out;
-}"""
-
-# Main actions smaller than a 44 px touch target (selector as argument).
-SMALL = """(selector) => Array.from(document.querySelectorAll(selector))
-  .filter((el) => el.getClientRects().length && !el.closest("[hidden]"))
-  .map((el) => [el.id || el.textContent.trim().slice(0, 20), el.getBoundingClientRect()])
-  .filter(([, r]) => r.height < 44 || r.width < 44)
-  .map(([name, r]) => `${name}: ${Math.round(r.width)}x${Math.round(r.height)}`)"""
+def open_leg_code(key: str) -> str:
+    """Django code for :meth:`Server.python`: vehicle ``key`` (``v``) with an open
+    test event "Gelände ``key``" (``e``), shift (``s``) and leg."""
+    return f"""
+from events.models import Performer, PoseSource, Vehicle
+from events.services import logs
+Performer.objects.get_or_create(institution="Fraunhofer FKIE")
+PoseSource.objects.get_or_create(key="gps", defaults={{"short_description": "GPS"}})
+v = Vehicle.objects.create(key="{key}", short_description="Rover {key}")
+e = logs.create_test_event(location="Gelände {key}", time_zone="Europe/Berlin")
+s = logs.create_shift(test_event=e, vehicle=v)
+logs.create_leg(shift=s, weather_id="sunny")
+"""
 
 
-# axe-core (npm) and the check of a page for serious or critical accessibility problems.
-AXE = ROOT / "node_modules" / "axe-core" / "axe.min.js"
+def choose_event(page, key):
+    """Pick the test event made by :func:`open_leg_code`; its shift and leg follow."""
+    from playwright.sync_api import expect
 
-SERIOUS = """async () => {
-  const result = await axe.run(document, { resultTypes: ["violations"] });
-  return result.violations
-    .filter((v) => ["serious", "critical"].includes(v.impact))
-    .map((v) => `${v.id}: ${v.nodes.map((n) => n.target.join(" ")).join(", ")}`);
-}"""
+    option = page.locator("#pick-event option", has_text=f"Gelände {key}")
+    page.select_option("#pick-event", value=option.get_attribute("value"))
+    expect(page.locator("#segments-section")).to_be_visible()
+
+
+USERS = f"""
+from django.contrib.auth.models import Group, User
+from events.models import Personnel
+def user(name, role, full):
+    u = User.objects.create_user(name, password={PASSWORD!r}, first_name=full)
+    u.groups.add(Group.objects.get(name=role))
+    return u
+admin = user("ada", "administrator", "Ada Admin")
+admin.is_staff = True
+admin.save()
+op = user("otto", "operator", "Otto Operator")
+Personnel.objects.create(name="Jörg Müller", institution="FKIE", user=op)
+user("vera", "viewer", "Vera Viewer")
+"""
+
+
+def _maintenance_connection(parts):
+    return psycopg.connect(
+        host=parts.hostname,
+        port=parts.port or 5432,
+        user=unquote(parts.username or ""),
+        password=unquote(parts.password or ""),
+        dbname="postgres",
+        autocommit=True,
+    )
+
+
+def fresh_database(url: str, suffix: str) -> str:
+    """An empty database next to the one ``url`` names (PostgreSQL); returns its URL."""
+    parts = urlsplit(url)
+    name = f"test_{parts.path.lstrip('/')}_{suffix}"
+    with _maintenance_connection(parts) as conn:
+        conn.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
+        conn.execute(f'CREATE DATABASE "{name}"')
+    return urlunsplit(parts._replace(path=f"/{name}"))
+
+
+def drop_database(url: str) -> None:
+    parts = urlsplit(url)
+    with _maintenance_connection(parts) as conn:
+        conn.execute(f'DROP DATABASE IF EXISTS "{parts.path.lstrip("/")}" WITH (FORCE)')
+
+
+def add_users(server) -> None:
+    """The browser tests' accounts: ada (administrator), otto (operator), vera (viewer)."""
+    server.python(USERS)
 
 
 def login(page, server, username):

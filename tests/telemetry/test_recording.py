@@ -2,8 +2,10 @@
 
 import math
 import uuid
+from datetime import UTC, datetime
 
 import pytest
+from django.utils import timezone
 
 from common.errors import RuleViolation
 from events.services import segments
@@ -29,6 +31,25 @@ def test_pose_keeps_altitude_fix_quality_accuracy_and_default_pose_source(ito, p
     pose = Pose.objects.get()
     assert (pose.altitude, pose.fix_status, pose.horizontal_accuracy) == (123.4, 2, 0.02)
     assert pose.pose_source == pose_source
+
+
+def test_a_batch_keeps_every_value_exactly_including_the_missing_ones(ito):
+    plus_two = timezone.get_fixed_timezone(120)
+    fixes = [
+        recording.GpsFix(-0.1234567890123, -45.987654321, altitude=-12.5, horizontal_accuracy=1e-9),
+        recording.GpsFix(179.9999999, 89.9999999, altitude=None, horizontal_accuracy=None),
+        recording.GpsFix(
+            7.0, 50.0, fix_status=-1, robot_stamp=datetime(2026, 5, 4, 12, 0, 1, 250001, plus_two)
+        ),
+        recording.GpsFix(7.0, 50.0, robot_stamp=datetime(1999, 12, 31, 23, 59, 59, 999999, UTC)),
+    ]
+    recording.record_poses(ito, fixes)
+    stored = {p.uid: p for p in Pose.objects.all()}
+    for fix in fixes:
+        pose = stored[fix.uid]
+        assert (pose.point.x, pose.point.y) == (fix.longitude, fix.latitude)
+        assert (pose.altitude, pose.horizontal_accuracy) == (fix.altitude, fix.horizontal_accuracy)
+        assert (pose.fix_status, pose.robot_stamp) == (fix.fix_status, fix.robot_stamp)
 
 
 def test_retried_points_are_stored_once(ito):

@@ -11,6 +11,9 @@ from rosbridge_app.collector.runtime import CollectorRuntime
 
 class Command(BaseCommand):
     help = "Record robot mode, positions, map and camera from ROS 2 into the open leg."
+    # The system checks load every URL, view and admin module: seconds of a
+    # collector's start-up for nothing it uses (migrate and the server run them).
+    requires_system_checks = []
 
     def add_arguments(self, parser):
         parser.add_argument("--vehicle", default="", help="Vehicle key (else the parameter).")

@@ -9,6 +9,7 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from events.models import Vehicle
 from events.selectors.logs import open_leg_for_vehicle
 from events.services import logs
+from rosbridge_app.collector import modes
 from rosbridge_app.collector.simulator import SimConfig, SimulatedRobot
 
 
@@ -28,12 +29,24 @@ class Command(BaseCommand):
             default=d.switch_every,
             help="Seconds between mode switches (starts manual).",
         )
+        a(
+            "--first-mode",
+            choices=(modes.ITO, modes.AUTO),
+            default=d.first_mode,
+            help="Mode to start in; with --switch-every 0 it stays in it.",
+        )
         a("--mode-type", choices=("bool", "industrial"), default=d.mode_type)
         a("--mode-rate", type=float, default=d.mode_rate)
         a("--gps-rate", type=float, default=d.gps_rate)
         a("--tf-rate", type=float, default=d.tf_rate)
         a("--camera-rate", type=float, default=d.camera_rate)
         a("--camera-size", default=f"{d.camera_width}x{d.camera_height}")
+        a(
+            "--camera-format",
+            choices=("raw", "jpeg"),
+            default=d.camera_format,
+            help="raw: sensor_msgs/Image on image; jpeg: CompressedImage on image_compressed.",
+        )
         a("--map-size", type=int, default=d.map_size, help="Cells per side.")
         a(
             "--map-rate",
@@ -65,6 +78,7 @@ class Command(BaseCommand):
             radius=o["radius"],
             speed=o["speed"],
             switch_every=o["switch_every"],
+            first_mode=o["first_mode"],
             mode_type=o["mode_type"],
             mode_rate=o["mode_rate"],
             gps_rate=o["gps_rate"],
@@ -72,6 +86,7 @@ class Command(BaseCommand):
             camera_rate=o["camera_rate"],
             camera_width=width,
             camera_height=height,
+            camera_format=o["camera_format"],
             map_size=o["map_size"],
             map_rate=o["map_rate"],
             prefix=o["prefix"],

@@ -45,6 +45,7 @@ def test_broken_json_is_a_400(operator, leg, body):
         ("/api/shifts/", {"test_event": True, "vehicle": 1}, "test_event"),
         ("/api/legs/", {"shift": None}, "shift"),
         ("/api/legs/", {"shift": {"id": 1}}, "shift"),
+        ("/api/legs/", {"shift": 1, "weather": "sun\x00ny"}, "weather"),
         ("/api/test-events/", {"location": "x" * 501}, "location"),
         ("/api/test-events/", {"location": "nul\x00byte"}, "location"),
         ("/api/test-events/", {"time_zone": "Mars/Olympus"}, "time_zone"),

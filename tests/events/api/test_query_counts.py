@@ -14,7 +14,7 @@ from events.models import (
     Weather,
 )
 from events.services import logs, notes, segments
-from tests.support.api import LIST_QUERIES, assert_constant_queries
+from tests.support.api import LIST_QUERIES, assert_constant_queries, post_counting_queries
 
 counter = itertools.count()
 
@@ -83,3 +83,19 @@ def test_list_queries_do_not_grow_with_rows(url, api_client, django_assert_max_n
         lambda n: CASES[url](n, leg),
         most=LIST_QUERIES,
     )
+
+
+def test_a_robots_mode_report_costs_one_query_more_than_an_operators(
+    api_client, robot_client, vehicle, leg
+):
+    """The robot's vehicles, once; the leg's vehicle comes with the leg."""
+    segments.report_mode(leg, SegmentType.AUTO)  # each client switches AUTO -> ITO -> AUTO
+    counts = {}
+    for name, client in (("operator", api_client("operator")), ("robot", robot_client(vehicle))):
+        for mode in (SegmentType.ITO, SegmentType.AUTO):
+            body = {"mode": mode}
+            response, every, _ = post_counting_queries(client, f"/api/legs/{leg.pk}/mode/", body)
+            assert response.status_code == 201, response.content
+            counts[name, mode] = len(every)
+    for mode in (SegmentType.ITO, SegmentType.AUTO):
+        assert counts["robot", mode] == counts["operator", mode] + 1, counts

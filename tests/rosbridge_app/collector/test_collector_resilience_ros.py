@@ -81,6 +81,111 @@ def test_sigkill_and_restart_continue_the_segment_without_duplicates(
     assert Collector.objects.get(name="collector").logging
 
 
+def test_ten_sigkills_during_a_drive_each_restart_hears_within_10_s_and_stores_every_fix_once(
+    ros, start_collector, robot_leg
+):
+    collector = start_collector(params=EVERY_FIX, args=["--start-logging"])
+    drive = Drive(ros)
+    drive.start()
+    try:
+        wait_for(lambda: Pose.objects.count() > 10, 60, what="poses before the first kill")
+        for kill in range(1, 11):
+            collector.stop(signal.SIGKILL)
+            # No fastdds_clean(): whatever a SIGKILL leaves behind stays, as on a robot.
+            collector = start_collector()  # back once it has beaten
+            ready = _aware(time.time())
+            wait_for(
+                lambda ready=ready: Pose.objects.filter(robot_stamp__gt=ready).exists(),
+                10,
+                0.2,
+                f"a fix stored within 10 s of restart {kill}",
+            )
+            # It logs on for a moment before the next kill.
+            wait_for(
+                lambda ready=ready: Pose.objects.filter(robot_stamp__gt=ready).count() >= 5,
+                30,
+                0.2,
+                f"more fixes after restart {kill}",
+            )
+    finally:
+        drive.stop()
+    time.sleep(1.5)
+    latitudes = [p.y for p in Pose.objects.values_list("point", flat=True)]
+    assert len(set(latitudes)) == len(latitudes), "a fix was stored twice"
+    sent = {round(lat, 7) for _, lat in drive.sent}
+    assert {round(lat, 7) for lat in latitudes} <= sent, "a stored fix was never sent"
+    masters = list(Segment.objects.filter(leg=robot_leg, parent__isnull=True))
+    assert len(masters) == 1 and masters[0].end is None
+
+
+def test_a_collector_that_hears_nothing_while_the_robot_publishes_recovers_by_itself(
+    ros, start_collector, robot_leg
+):
+    from rclpy.qos import qos_profile_sensor_data
+    from sensor_msgs.msg import NavSatFix
+
+    from rosbridge_app.collector.node import DEAF
+
+    collector = start_collector(
+        params={**EVERY_FIX, "params.deaf_timeout": 3.0, "params.sensor_reliable": True},
+        args=["--start-logging"],
+    )
+    pid = collector.popen.pid
+    # A best-effort GPS never matches the collector's reliable subscription: the
+    # ROS graph shows the publisher, and nothing arrives; a deaf collector.
+    unheard = ros.publisher(NavSatFix, "/gps_fix", qos_profile_sensor_data)
+    heard = None
+    halt = threading.Event()
+
+    def publish():
+        i = 0
+        while not halt.is_set():
+            i += 1
+            for pub in (unheard, heard):
+                if pub is not None:
+                    pub.publish(NavSatFix(latitude=50.0 + i * 1e-6, longitude=7.0))
+            time.sleep(0.1)
+
+    publisher = threading.Thread(target=publish, daemon=True)
+    publisher.start()
+    try:
+        record = wait_for(
+            lambda: Collector.objects.filter(name="collector", hearing__contains=DEAF).first(),
+            40,
+            0.3,
+            "the collector to say it hears nothing",
+        )
+        assert "/gps_fix" in record.hearing and "subscriptions re-created" in record.hearing
+        # Re-created subscriptions do not help here, so it renews itself in place.
+        wait_for(lambda: "renewing the collector" in collector.output(), 40, 0.3, "a renewal")
+        renewed = wait_for(
+            lambda: Collector.objects.filter(
+                name="collector", started__gt=record.started, stopped=None
+            ).first(),
+            60,
+            0.3,
+            "the renewed collector's heartbeat",
+        )
+        assert collector.alive() and collector.popen.pid == pid == renewed.pid
+        assert renewed.logging  # it resumed what it was doing
+        heard = ros.publisher(NavSatFix, "/gps_fix", 10)
+        wait_for(
+            lambda: (
+                Collector.objects.filter(name="collector", hearing="")
+                .exclude(inputs__gps_fix__count=0)
+                .exists()
+            ),
+            40,
+            0.3,
+            "the collector to hear the GPS again",
+        )
+        # Deaf again after a renewal, it does not restart in a loop.
+        assert collector.output().count("renewing the collector") == 1
+    finally:
+        halt.set()
+        publisher.join(5)
+
+
 def test_sigterm_stores_everything_received_before_exiting(ros, start_collector, robot_leg):
     collector = start_collector(params=EVERY_FIX, args=["--start-logging"])
     drive = Drive(ros, rate=150.0)

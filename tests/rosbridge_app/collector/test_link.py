@@ -85,3 +85,22 @@ def test_commands_taken_by_a_collector_that_died_are_answered_on_restart(vehicle
     assert command.done is not None and command.success is False
     assert "stopped before carrying this out" in command.message
     assert Announcement.objects.filter(kind="command", payload__command=command.pk).exists()
+
+
+def test_a_snapshot_is_asked_for_only_when_the_collector_can_store_one(vehicle):
+    on = {"snapshot.enabled": True, "snapshot.before": 20.0, "snapshot.after": 10.0}
+    collector = heartbeat("robot/husky", vehicle=vehicle, logging=False, parameters=on)
+    with pytest.raises(RuleViolation, match="start logging first"):
+        issue_command(collector, CollectorCommand.Kind.SNAPSHOT)
+    off = {**on, "snapshot.enabled": False}
+    collector = heartbeat("robot/husky", vehicle=vehicle, logging=True, parameters=off)
+    with pytest.raises(RuleViolation, match="Snapshots are off"):
+        issue_command(collector, CollectorCommand.Kind.SNAPSHOT)
+    collector = heartbeat("robot/husky", vehicle=vehicle, logging=True, parameters=on)
+    command = issue_command(collector, CollectorCommand.Kind.SNAPSHOT)
+    assert take_commands(collector) == [command]
+    Collector.objects.filter(pk=collector.pk).update(
+        last_seen=timezone.now() - timedelta(seconds=10)
+    )
+    with pytest.raises(RuleViolation, match="offline"):
+        issue_command(Collector.objects.get(pk=collector.pk), CollectorCommand.Kind.SNAPSHOT)

@@ -100,8 +100,24 @@ def test_a_single_pose_is_one_short_transaction(api_client, leg):
     assert Pose.objects.filter(uid=body["uid"]).count() == 1
 
 
+def test_a_robot_adds_one_query_to_a_single_pose(api_client, robot_client, vehicle, leg):
+    """The robot's vehicles, read once per request; the segment's vehicle comes with it."""
+    master = segments.report_mode(leg, SegmentType.AUTO).master
+    counts = {}
+    for name, client in (("operator", api_client("operator")), ("robot", robot_client(vehicle))):
+        body = {"segment": master.pk, "longitude": 7.1, "latitude": 50.2}
+        response, every, in_transaction = post_counting_queries(client, "/api/poses/", body)
+        assert response.status_code == 201, response.content
+        counts[name] = (len(every), len(in_transaction))
+    assert counts["robot"][1] == counts["operator"][1]
+    assert counts["robot"][0] == counts["operator"][0] + 1, counts
+
+
 # SQLite splits long statements by its variable limit; PostgreSQL takes one array per column.
 @pytest.mark.postgis_only
+# Committed for real: inside a test-wide transaction an earlier write of the
+# fixtures would already have sent this transaction's one NOTIFY.
+@pytest.mark.django_db(transaction=True)
 @pytest.mark.parametrize("size", [10, 1000])
 def test_a_batch_costs_the_same_queries_whatever_its_size(size, api_client, auto_master):
     client = api_client("operator")

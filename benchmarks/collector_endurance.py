@@ -1,0 +1,236 @@
+"""The collector over long times: a database outage, and a soak at full rate.
+
+The benchmark robot (``ftt_simulate``: GPS 100 Hz, TF 50 Hz, 640×480 rgb8
+camera 10 Hz, a 2000×2000 occupancy grid changing every second) drives while
+the collector logs with the shipped parameters (default thinning).
+
+``outage``: the collector reaches PostgreSQL through a TCP relay in this
+process; the relay is cut for ``--minutes`` (every connection dropped, new
+ones refused), as when the robot's link to the base station goes, then
+restored. Prints how the spool grows (records and bytes per minute,
+extrapolated to 2 hours), the replay rate after the outage (records written
+per second; the robot keeps driving meanwhile) and how long a mode switch
+published during the replay waits until it is stored.
+
+``soak``: ``--minutes`` at full rate; prints the collector's RSS every minute
+and the growth over the second half.
+
+    FTT_DATABASE_URL=postgis://... .venv/bin/python benchmarks/collector_endurance.py \\
+        outage|soak [--minutes N]
+
+Issue 16's targets: a 2-hour outage with a documented spool size and replay at
+>= 5 000 records/s; RSS flat over 1 hour. The load average is printed with
+every figure (shared machine). PostGIS only (an embedded database has no
+outage). Uses a throw-away vehicle and test event and deletes them afterwards.
+"""
+
+import argparse
+import os
+import socket
+import sqlite3
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+from urllib.parse import urlsplit, urlunsplit
+
+from collector_bench import Bench, load
+from django.db import connection
+
+from events.models import Segment
+from rosbridge_app.models import Collector
+
+PAGE = os.sysconf("SC_PAGE_SIZE")
+
+
+def rss_mb(pid: int) -> float:
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return int(fields[21]) * PAGE / 2**20
+
+
+class Relay(threading.Thread):
+    """A TCP relay to the database that can be cut and restored."""
+
+    def __init__(self, target: tuple[str, int]):
+        super().__init__(daemon=True)
+        self.target = target
+        self.server = socket.create_server(("127.0.0.1", 0))
+        self.port = self.server.getsockname()[1]
+        self.up = True
+        self.sockets: set[socket.socket] = set()
+        self.lock = threading.Lock()
+
+    def run(self):
+        while True:
+            client, _ = self.server.accept()
+            if not self.up:
+                client.close()
+                continue
+            try:
+                upstream = socket.create_connection(self.target, timeout=5)
+            except OSError:
+                client.close()
+                continue
+            with self.lock:
+                self.sockets.update((client, upstream))
+            for a, b in ((client, upstream), (upstream, client)):
+                threading.Thread(target=self._pump, args=(a, b), daemon=True).start()
+
+    def _pump(self, source, sink):
+        try:
+            while data := source.recv(65536):
+                sink.sendall(data)
+        except OSError:
+            pass
+        for s in (source, sink):
+            try:
+                s.close()
+            except OSError:
+                pass
+
+    def cut(self):
+        self.up = False
+        with self.lock:
+            for s in self.sockets:
+                try:
+                    s.shutdown(socket.SHUT_RDWR)
+                except OSError:
+                    pass
+            self.sockets.clear()
+
+    def restore(self):
+        self.up = True
+
+
+class Spool:
+    def __init__(self, path: Path):
+        self.path = path
+
+    def records(self) -> int:
+        try:
+            with sqlite3.connect(f"file:{self.path}?mode=ro", uri=True, timeout=5) as db:
+                return db.execute("SELECT count(*) FROM event").fetchone()[0]
+        except sqlite3.Error:
+            return -1
+
+    def megabytes(self) -> float:
+        files = [self.path, Path(f"{self.path}-wal")]
+        return sum(f.stat().st_size for f in files if f.exists()) / 2**20
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("drill", choices=("outage", "soak"))
+    parser.add_argument("--minutes", type=float, default=None, help="outage 120, soak 60")
+    args = parser.parse_args()
+    minutes = args.minutes or (120.0 if args.drill == "outage" else 60.0)
+    if connection.vendor != "postgresql":
+        sys.exit("needs FTT_DATABASE_URL=postgis://...")
+    bench = Bench(args.drill, **{"snapshot.enabled": False})
+    env = {}
+    relay = None
+    if args.drill == "outage":
+        url = urlsplit(os.environ["FTT_DATABASE_URL"])
+        relay = Relay((url.hostname or "127.0.0.1", url.port or 5432))
+        relay.start()
+        netloc = f"{url.username}:{url.password}@127.0.0.1:{relay.port}"
+        env["FTT_DATABASE_URL"] = urlunsplit(url._replace(netloc=netloc))
+    spool = Spool(bench.work / "spool.sqlite3")
+    collector = bench.collector(spool.path, bench.work / "collector.log", env)
+    while not Collector.objects.filter(name=bench.key).exists():
+        time.sleep(0.2)
+    seconds = minutes * 60 + (90 if args.drill == "outage" else 0)
+    robot = bench.robot(seconds, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
+    print(f"database: {connection.vendor} · {os.cpu_count()} cores · {load()}")
+    try:
+        if args.drill == "outage":
+            outage(relay, spool, minutes, bench.leg)
+        else:
+            soak(collector, robot, minutes)
+    finally:
+        robot.terminate()
+        robot.wait(30)
+        collector.send_signal(2)
+        collector.wait(120)
+        bench.close()
+
+
+def outage(relay, spool, minutes, leg) -> None:
+    import rclpy
+    from std_msgs.msg import Bool
+
+    time.sleep(20)  # the robot is found and the first records are stored
+    base = spool.records()
+    relay.cut()
+    cut_at = time.monotonic()
+    print(f"outage begins: spool {base} records ({load()})")
+    while time.monotonic() - cut_at < minutes * 60:
+        time.sleep(min(60.0, minutes * 60 - (time.monotonic() - cut_at)))
+        elapsed = (time.monotonic() - cut_at) / 60
+        print(
+            f"  after {elapsed:5.1f} min: spool {spool.records()} records, "
+            f"{spool.megabytes():.1f} MB ({load()})"
+        )
+    grown, megabytes = spool.records() - base, spool.megabytes()
+    per_minute = grown / minutes
+    print(
+        f"spool grows {per_minute:.0f} records/min, {megabytes / minutes:.2f} MB/min; "
+        f"2 h: {per_minute * 120:.0f} records, {megabytes / minutes * 120:.0f} MB (extrapolated)"
+    )
+    rclpy.init()
+    node = rclpy.create_node("ftt_endurance")
+    mode = node.create_publisher(Bool, "robot_mode", 10)
+    relay.restore()
+    restored = time.monotonic()
+    peak = spool.records()
+    # A switch while the backlog is replayed: when is it in the database?
+    before = Segment.objects.filter(leg=leg, parent__isnull=True).count()
+    time.sleep(2)
+    mode.publish(Bool(data=False))
+    published = time.monotonic()
+    switch_stored = None
+    samples = []
+    while time.monotonic() - restored < 1800:
+        left = spool.records()
+        samples.append((time.monotonic() - restored, left))
+        if switch_stored is None and (
+            Segment.objects.filter(leg=leg, parent__isnull=True).count() > before
+        ):
+            switch_stored = time.monotonic() - published
+        if 0 <= left < 1000 and switch_stored is not None:
+            break
+        time.sleep(0.2)
+    took = samples[-1][0]
+    inflow = grown / (minutes * 60)
+    written = peak - samples[-1][1] + inflow * took
+    print(
+        f"replay: {peak} spooled records down to {samples[-1][1]} in {took:.1f} s while the "
+        f"robot drove on: {written / took:.0f} records/s written ({load()})"
+    )
+    if switch_stored is not None:
+        print(f"a mode switch published during the replay was stored after {switch_stored:.1f} s")
+    else:
+        print("a mode switch published during the replay was not stored in 30 min")
+    node.destroy_node()
+    rclpy.try_shutdown()
+
+
+def soak(collector, robot, minutes) -> None:
+    start = time.monotonic()
+    curve = []
+    while robot.poll() is None and time.monotonic() - start < minutes * 60:
+        curve.append(((time.monotonic() - start) / 60, rss_mb(collector.pid)))
+        print(f"  {curve[-1][0]:5.1f} min: collector RSS {curve[-1][1]:.0f} MB ({load()})")
+        time.sleep(60 if minutes > 5 else 10)
+    curve.append(((time.monotonic() - start) / 60, rss_mb(collector.pid)))
+    half = [rss for t, rss in curve if t >= curve[-1][0] / 2]
+    print(
+        f"RSS: start {curve[0][1]:.0f} MB, max {max(r for _, r in curve):.0f} MB, "
+        f"end {curve[-1][1]:.0f} MB; second half {half[0]:.0f} → {half[-1]:.0f} MB "
+        f"({load()})"
+    )
+
+
+if __name__ == "__main__":
+    main()

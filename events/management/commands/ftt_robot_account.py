@@ -1,0 +1,49 @@
+"""Create a robot account for the HTTP API, bound to its vehicles, and print its token.
+
+    manage.py ftt_robot_account husky-robot --vehicle husky
+    manage.py ftt_robot_account husky-robot --vehicle husky --new-token
+
+Only the token goes to standard output, so that a script can keep it:
+``TOKEN=$(manage.py ftt_robot_account husky-robot --vehicle husky)``.  Running it
+again prints the same token and adds the vehicles named to those bound.
+"""
+
+from django.core.exceptions import ValidationError
+from django.core.management.base import BaseCommand, CommandError
+
+from events.models import Vehicle
+from events.services.robots import ensure_robot_account
+
+
+class Command(BaseCommand):
+    help = "Create (or extend) a robot account bound to vehicles and print its API token."
+
+    def add_arguments(self, parser):
+        parser.add_argument("name", help="User name of the robot's account, e.g. husky-robot.")
+        parser.add_argument(
+            "--vehicle",
+            action="append",
+            required=True,
+            metavar="KEY",
+            help="Key of a vehicle the robot logs for; repeat for several.",
+        )
+        parser.add_argument(
+            "--new-token",
+            action="store_true",
+            help="Replace the account's token (the old one stops working).",
+        )
+
+    def handle(self, *args, name, vehicle, new_token, **options):
+        found = {v.key: v for v in Vehicle.objects.filter(key__in=vehicle)}
+        missing = [key for key in vehicle if key not in found]
+        if missing:
+            known = ", ".join(Vehicle.objects.values_list("key", flat=True)) or "none yet"
+            raise CommandError(f"No vehicle with key {', '.join(missing)} (known: {known}).")
+        try:
+            login = ensure_robot_account(name, list(found.values()), new_token=new_token)
+        except ValidationError as exc:
+            raise CommandError(" ".join(exc.messages)) from exc
+        bound = ", ".join(login.account.vehicles.values_list("key", flat=True))
+        state = "Created" if login.created else "Updated"
+        self.stderr.write(f"{state} robot account {name!r}, bound to: {bound}.")
+        self.stdout.write(login.token)

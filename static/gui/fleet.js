@@ -1,0 +1,185 @@
+/* The fleet view: every vehicle that is logging, on one map, for a test
+ * director running several robots.  What is shown comes from one read,
+ * /gui/api/fleet/; one tap on a vehicle opens its cockpit. */
+import { CONFIG, $ } from "./dom.js";
+import { api } from "./api.js";
+import { showError } from "./feedback.js";
+import { saveUrl, state } from "./state.js";
+import { fmtDuration } from "./format.js";
+import { COLORS, GpsMap } from "./maps.js";
+import { gpsMap, localMap, showMaps, tileUrl } from "./mapview.js";
+import { Live } from "./live.js";
+import { loadLevel } from "./levels.js";
+
+const NO_MODE = "#6b7785";
+// Positions arrive several times a second per robot; the fleet is read at most this often.
+const MIN_INTERVAL_MS = 1000;
+
+export const Fleet = {
+  map: null,
+  tiles: undefined,
+  vehicles: [],
+  markers: new Map(), // vehicle id -> circle marker
+  fitted: new Set(), // vehicle ids the view was last fitted to
+  lastRead: 0,
+  timer: null,
+
+  visible() {
+    return state.view === "fleet";
+  },
+
+  ensureMap() {
+    if (!this.map) {
+      this.map = new GpsMap($("#fleet-map"), $("#fleet-tile-message"));
+      api("GET", "basemaps/", undefined, { root: CONFIG.guiApiRoot })
+        .then((data) => this.map.setBasemaps(data.layers))
+        .catch(showError);
+    }
+    if (this.tiles !== tileUrl()) {
+      this.tiles = tileUrl();
+      this.map.setTiles(this.tiles, CONFIG.tileAttribution);
+    }
+  },
+
+  /* Switches between the fleet and the cockpit; the choice is kept in the address. */
+  async show(on) {
+    state.view = on ? "fleet" : null;
+    saveUrl();
+    $("#fleet-view").hidden = !on;
+    $("#cockpit").hidden = on;
+    // The button names where it leads.
+    const toggle = $("#toggle-fleet");
+    toggle.textContent = on ? "Cockpit" : "Fleet";
+    toggle.title = on ? "Back to the selected leg" : "Every vehicle that is logging, on one map";
+    Live.subscribe();
+    if (!on) {
+      // The cockpit's maps were measured (and fitted) while hidden.
+      showMaps();
+      gpsMap.fitAll();
+      localMap.fitAll();
+      return;
+    }
+    this.ensureMap();
+    this.map.invalidate();
+    await this.refresh({ now: true });
+  },
+
+  async refresh({ now = false } = {}) {
+    if (!this.visible()) return;
+    const wait = this.lastRead + MIN_INTERVAL_MS - Date.now();
+    if (!now && wait > 0) {
+      if (!this.timer) this.timer = setTimeout(() => this.refresh().catch(showError), wait);
+      return;
+    }
+    clearTimeout(this.timer);
+    this.timer = null;
+    this.lastRead = Date.now();
+    const data = await api("GET", "fleet/", undefined, { root: CONFIG.guiApiRoot });
+    this.vehicles = data.vehicles;
+    this.render();
+  },
+
+  color(v) {
+    return COLORS[v.mode] || NO_MODE;
+  },
+
+  describe(v) {
+    const mode = v.mode ? v.mode.toUpperCase() : "no open segment";
+    const takeover = v.last_takeover ? `last take-over ${fmtDuration(v.last_takeover, null)} ago` : "no take-over yet";
+    const leg = `${v.leg.location || `Test event #${v.leg.test_event}`} · Shift ${v.leg.shift_number} · Leg ${v.leg.number}`;
+    return { mode, takeover, leg };
+  },
+
+  render() {
+    if (!this.map) return;
+    const seen = new Set();
+    for (const v of this.vehicles) {
+      const id = v.vehicle.id;
+      seen.add(id);
+      let marker = this.markers.get(id);
+      if (!v.position) {
+        if (marker) marker.remove();
+        this.markers.delete(id);
+        continue;
+      }
+      const style = { radius: 11, color: "#fff", weight: 3, fillColor: this.color(v), fillOpacity: 1, className: `fleet-marker vehicle-${id}` };
+      if (!marker) {
+        marker = L.circleMarker(v.position, style).addTo(this.map.map);
+        marker.bindTooltip(v.vehicle.name, { permanent: true, direction: "right", offset: [10, 0] });
+        marker.on("click", () => this.open(marker.vehicle));
+        this.markers.set(id, marker);
+      } else {
+        marker.setLatLng(v.position);
+        marker.setStyle(style);
+      }
+      marker.vehicle = v;
+      marker.getElement()?.setAttribute("data-mode", v.mode || "none");
+    }
+    for (const [id, marker] of this.markers) {
+      if (seen.has(id)) continue;
+      marker.remove();
+      this.markers.delete(id);
+    }
+    // A new vehicle on the map is brought into view; otherwise the view stays where it was put.
+    const ids = new Set(this.markers.keys());
+    if ([...ids].some((id) => !this.fitted.has(id))) this.fitAll();
+    this.renderList();
+  },
+
+  fitAll() {
+    const points = [...this.markers.values()].map((m) => m.getLatLng());
+    this.fitted = new Set(this.markers.keys());
+    if (!points.length) return;
+    this.map.map.fitBounds(L.latLngBounds(points), { maxZoom: 18, padding: [40, 40] });
+  },
+
+  renderList() {
+    const list = $("#fleet-list");
+    $("#fleet-empty").hidden = this.vehicles.length > 0;
+    list.replaceChildren(...this.vehicles.map((v) => {
+      const { mode, takeover, leg } = this.describe(v);
+      const b = document.createElement("button");
+      b.type = "button";
+      b.className = "fleet-vehicle";
+      b.dataset.vehicle = v.vehicle.id;
+      b.dataset.mode = v.mode || "none";
+      const dot = document.createElement("span");
+      dot.className = "dot";
+      dot.style.background = this.color(v);
+      const name = document.createElement("strong");
+      name.textContent = v.vehicle.name;
+      const modeWord = document.createElement("span");
+      modeWord.className = "mode-word";
+      modeWord.textContent = mode;
+      const details = document.createElement("span");
+      details.className = "details";
+      const where = v.position ? "" : " · no position yet";
+      const offline = v.collector.online ? "" : " · collector offline";
+      details.textContent = `${takeover} · ${leg}${where}${offline}`;
+      b.append(dot, name, modeWord, details);
+      b.setAttribute("aria-label", `${v.vehicle.name}, ${mode}, ${takeover}, ${leg}: open its cockpit`);
+      b.addEventListener("click", () => this.open(v));
+      const li = document.createElement("li");
+      li.append(b);
+      return li;
+    }));
+  },
+
+  /* The durations grow between reads. */
+  tick() {
+    if (this.visible() && this.vehicles.length) this.renderList();
+  },
+
+  /* The vehicle's cockpit: its test event, shift and leg, as a shared link would give. */
+  async open(v) {
+    state.selected.event = v.leg.test_event;
+    state.selected.shift = v.leg.shift;
+    state.selected.leg = v.leg.id;
+    state.segment = null;
+    await this.show(false);
+    await loadLevel("event");
+  },
+};
+
+$("#toggle-fleet")?.addEventListener("click", () => Fleet.show(!Fleet.visible()).catch(showError));
+$("#fleet-fit")?.addEventListener("click", () => Fleet.fitAll());
