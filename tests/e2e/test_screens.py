@@ -10,8 +10,8 @@ import json
 import pytest
 from playwright.sync_api import expect
 
-from tests.support.browser import ROOT, login
-from tests.support.screens import OVERFLOWING, SMALL, VIEWPORTS
+from tests.support.browser import login
+from tests.support.screens import AXE, OVERFLOWING, SERIOUS, SMALL, VIEWPORTS
 
 MAIN_ACTIONS = (
     "#mode-panel .quick button, #mode-panel select, #segment-new, #segment-end, #segment-edit, "
@@ -121,16 +121,6 @@ def test_dialogs_write_nothing_until_save(browser, server, driven_leg, shot):
     expect(page.locator("#mode-name")).to_have_text("ITO")
     shot(page, "take-over-recorded")
     page.close()
-
-
-AXE = ROOT / "node_modules" / "axe-core" / "axe.min.js"
-
-SERIOUS = """async () => {
-  const result = await axe.run(document, { resultTypes: ["violations"] });
-  return result.violations
-    .filter((v) => ["serious", "critical"].includes(v.impact))
-    .map((v) => `${v.id}: ${v.nodes.map((n) => n.target.join(" ")).join(", ")}`);
-}"""
 
 
 def test_main_page_and_dialogs_have_no_serious_accessibility_problem(

@@ -1,5 +1,8 @@
 """The three screens the GUI is used on, and what the browser tests check on each:
-nothing sticks out sideways and every main action is big enough to tap."""
+nothing sticks out sideways, every main action is big enough to tap, and axe
+finds no serious accessibility problem."""
+
+from tests.support.browser import ROOT
 
 VIEWPORTS = {
     "laptop": {"viewport": {"width": 1366, "height": 768}},
@@ -32,3 +35,13 @@ SMALL = """(selector) => Array.from(document.querySelectorAll(selector))
   .map((el) => [el.id || el.textContent.trim().slice(0, 20), el.getBoundingClientRect()])
   .filter(([, r]) => r.height < 44 || r.width < 44)
   .map(([name, r]) => `${name}: ${Math.round(r.width)}x${Math.round(r.height)}`)"""
+
+# axe-core from npm (scripts/setup.sh --test).
+AXE = ROOT / "node_modules" / "axe-core" / "axe.min.js"
+
+SERIOUS = """async () => {
+  const result = await axe.run(document, { resultTypes: ["violations"] });
+  return result.violations
+    .filter((v) => ["serious", "critical"].includes(v.impact))
+    .map((v) => `${v.id}: ${v.nodes.map((n) => n.target.join(" ")).join(", ")}`);
+}"""
