@@ -15,8 +15,13 @@ published during the replay waits until it is stored.
 ``soak``: ``--minutes`` at full rate; prints the collector's RSS every minute
 and the growth over the second half.
 
+``replay``: the writer alone, without ROS traffic: a spool of ``--records``
+GPS fixes and local poses interleaved as the robot sends them (what a long
+outage leaves, apart from the maps) is written by a starting collector;
+prints records per second.
+
     FTT_DATABASE_URL=postgis://... .venv/bin/python benchmarks/collector_endurance.py \\
-        outage|soak [--minutes N]
+        outage|soak [--minutes N] | replay [--records N]
 
 Issue 16's targets: a 2-hour outage with a documented spool size and replay at
 >= 5 000 records/s; RSS flat over 1 hour. The load average is printed with
@@ -121,13 +126,20 @@ class Spool:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("drill", choices=("outage", "soak"))
+    parser.add_argument("drill", choices=("outage", "soak", "replay"))
+    parser.add_argument("--records", type=int, default=100_000, help="replay: spooled records")
     parser.add_argument("--minutes", type=float, default=None, help="outage 120, soak 60")
     args = parser.parse_args()
     minutes = args.minutes or (120.0 if args.drill == "outage" else 60.0)
     if connection.vendor != "postgresql":
         sys.exit("needs FTT_DATABASE_URL=postgis://...")
     bench = Bench(args.drill, **{"snapshot.enabled": False})
+    if args.drill == "replay":
+        try:
+            replay(bench, args.records)
+        finally:
+            bench.close()
+        return
     env = {}
     relay = None
     if args.drill == "outage":
@@ -144,8 +156,9 @@ def main() -> None:
     robot = bench.robot(seconds, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
     print(f"database: {connection.vendor} · {os.cpu_count()} cores · {load()}")
     try:
+        mode = robot_mode(bench.leg)
         if args.drill == "outage":
-            outage(relay, spool, minutes, bench.leg)
+            outage(relay, spool, minutes, bench.leg, mode)
         else:
             soak(collector, robot, minutes)
     finally:
@@ -156,11 +169,27 @@ def main() -> None:
         bench.close()
 
 
-def outage(relay, spool, minutes, leg) -> None:
+def robot_mode(leg):
+    """AUTO until the collector has opened its segment (the simulator sends no mode)."""
     import rclpy
     from std_msgs.msg import Bool
 
-    time.sleep(20)  # the robot is found and the first records are stored
+    rclpy.init()
+    node = rclpy.create_node("ftt_endurance")
+    mode = node.create_publisher(Bool, "robot_mode", 10)
+    started = time.monotonic()
+    while not Segment.objects.filter(leg=leg, parent__isnull=True).exists():
+        if time.monotonic() - started > 120:
+            sys.exit("the collector opened no segment in 2 minutes")
+        mode.publish(Bool(data=True))
+        time.sleep(0.5)
+    return mode
+
+
+def outage(relay, spool, minutes, leg, mode) -> None:
+    from std_msgs.msg import Bool
+
+    time.sleep(10)  # the robot is found and the first records are stored
     base = spool.records()
     relay.cut()
     cut_at = time.monotonic()
@@ -178,9 +207,6 @@ def outage(relay, spool, minutes, leg) -> None:
         f"spool grows {per_minute:.0f} records/min, {megabytes / minutes:.2f} MB/min; "
         f"2 h: {per_minute * 120:.0f} records, {megabytes / minutes * 120:.0f} MB (extrapolated)"
     )
-    rclpy.init()
-    node = rclpy.create_node("ftt_endurance")
-    mode = node.create_publisher(Bool, "robot_mode", 10)
     relay.restore()
     restored = time.monotonic()
     peak = spool.records()
@@ -212,8 +238,53 @@ def outage(relay, spool, minutes, leg) -> None:
         print(f"a mode switch published during the replay was stored after {switch_stored:.1f} s")
     else:
         print("a mode switch published during the replay was not stored in 30 min")
-    node.destroy_node()
-    rclpy.try_shutdown()
+
+
+def replay(bench, records: int) -> None:
+    from datetime import UTC, datetime, timedelta
+
+    from rosbridge_app.collector import events as ev
+    from rosbridge_app.collector.outbox import Outbox
+
+    spool = Spool(bench.work / "spool.sqlite3")
+    outbox = Outbox(spool.path)
+    t0 = datetime.now(UTC) - timedelta(hours=2)
+    at = lambda i: t0 + timedelta(seconds=i * 0.1)  # noqa: E731
+    events = [
+        ev.Event(ev.START, t0),
+        ev.Event(ev.MODE, t0, {"mode": "auto", "robot_stamp": None, "gps": None, "local": None}),
+    ]
+    for i in range(records):
+        if i % 2:
+            data = {"x": i * 0.01, "y": 0.0, "yaw": 0.0, "frame": "map", "robot_stamp": at(i)}
+            events.append(ev.Event(ev.LOCAL, at(i), data))
+        else:
+            data = {"lon": 7.0, "lat": 50.0 + i * 1e-7, "alt": None, "status": 0}
+            events.append(ev.Event(ev.GPS, at(i), {**data, "accuracy": None, "robot_stamp": at(i)}))
+    for start in range(0, len(events), 5000):
+        outbox.append(events[start : start + 5000])
+    outbox.close()
+    print(f"spooled {spool.records()} records, {spool.megabytes():.1f} MB ({load()})")
+    started = time.monotonic()
+    collector = bench.collector(spool.path, bench.work / "collector.log")
+    first = None
+    while spool.records() > 0 and time.monotonic() - started < 1800:
+        left = spool.records()
+        if first is None and 0 <= left < records:
+            first = (time.monotonic(), left)
+        time.sleep(0.1)
+    done = time.monotonic()
+    collector.send_signal(2)
+    collector.wait(60)
+    if first is None:
+        print("nothing was replayed")
+        return
+    took = done - first[0]
+    print(
+        f"replay: {first[1]} records written in {took:.1f} s after the first batch: "
+        f"{first[1] / took:.0f} records/s ({load()}); collector started "
+        f"{first[0] - started:.1f} s before the first batch was written"
+    )
 
 
 def soak(collector, robot, minutes) -> None:

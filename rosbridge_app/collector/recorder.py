@@ -154,20 +154,22 @@ class Recorder:
         return open_master(self.leg) if self.leg is not None else None
 
     def _apply_all(self, events: list[Event]) -> None:
+        # GPS fixes and local poses go to two tables and never change the
+        # segment, so a run of them, interleaved as a robot sends them, is
+        # stored with one bulk insert per table; anything else ends the run
+        # (a mode event opens another segment). Flushed at every change of
+        # kind, a replayed spool cost one insert per record.
         fixes: list[Event] = []
         locals_: list[Event] = []
         for event in events:
-            if event.kind != ev.GPS and fixes:
-                self._store_fixes(fixes)
-                fixes = []
-            if event.kind != ev.LOCAL and locals_:
-                self._store_locals(locals_)
-                locals_ = []
             if event.kind == ev.GPS:
                 fixes.append(event)
             elif event.kind == ev.LOCAL:
                 locals_.append(event)
             else:
+                self._store_fixes(fixes)
+                self._store_locals(locals_)
+                fixes, locals_ = [], []
                 getattr(self, f"_on_{event.kind}")(event)
         self._store_fixes(fixes)
         self._store_locals(locals_)

@@ -56,6 +56,9 @@ log = logging.getLogger("ftt.collector")
 
 SPOOL_INTERVAL = 0.05
 BATCH = 500
+# Records the writer takes from the outbox per transaction: a backlog after an
+# outage is replayed in few large bulk inserts (benchmarks/collector_endurance.py).
+WRITE_BATCH = 2000
 HEARTBEAT = 1.0
 COMMAND_POLL = 0.25
 SYNC = 1.0
@@ -309,7 +312,7 @@ class CollectorRuntime:
                 retry_at = time.monotonic() + RETRY
 
     def _write_batch(self) -> bool:
-        batch = self.outbox.peek(BATCH)
+        batch = self.outbox.peek(WRITE_BATCH)
         self.status.pending = len(self.outbox) if batch else 0
         if not batch:
             return False

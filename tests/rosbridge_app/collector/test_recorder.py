@@ -155,3 +155,27 @@ def test_a_mode_that_failed_to_store_is_the_mode_the_next_leg_starts_in(
     recorder.sync()
     master = Segment.objects.get(leg=new_leg, parent__isnull=True)
     assert master.segment_type_id == "ito" and master.end is None
+
+
+def test_interleaved_fixes_and_local_poses_land_in_the_segment_of_their_time(leg):
+    """A robot sends GPS and TF turn about; a replayed backlog stores each
+    position once, on the master that was open when it was received."""
+    recorder = Recorder(lambda: open_leg_for_vehicle(leg.shift.vehicle))
+
+    def positions(start, n):
+        out = []
+        for i in range(n):
+            t = at(start + i * 0.1)
+            out.append(Event(ev.GPS, t, {"lon": 7.0, "lat": 50.0 + (start * 100 + i) * 1e-6}))
+            out.append(Event(ev.LOCAL, t, {"x": start * 100 + i, "y": 0.0, "frame": "map"}))
+        return out
+
+    batch = [Event(ev.START, at(0)), Event(ev.MODE, at(1), {"mode": "auto"})]
+    batch += positions(2, 30)
+    batch.append(Event(ev.MODE, at(10), {"mode": "ito"}))
+    batch += positions(11, 20)
+    recorder.apply(batch)
+    auto, ito = Segment.objects.filter(leg=leg, parent__isnull=True).order_by("start")
+    assert (auto.poses.count(), auto.local_poses.count()) == (30, 30)
+    assert (ito.poses.count(), ito.local_poses.count()) == (20, 20)
+    assert {round(x) for x in ito.local_poses.values_list("x", flat=True)} == set(range(1100, 1120))
