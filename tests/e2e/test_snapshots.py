@@ -11,23 +11,12 @@ from playwright.sync_api import expect
 
 from tests.support.browser import choose_event, login, open_leg_code
 from tests.support.ros import DOMAIN_ID, Processes, copy_default_params, requires_ros
+from tests.support.screens import SMALL, VIEWPORTS
 
 pytestmark = [pytest.mark.e2e, requires_ros]
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
-VIEWPORTS = {
-    "laptop": {"width": 1366, "height": 768},
-    "tablet": {"width": 1024, "height": 768},
-    "phone": {"width": 390, "height": 844},
-}
 _numbers = itertools.count(1)
-
-# Buttons narrower or lower than a fingertip (44 px), in the given element.
-SMALL = """(root) => Array.from(root.querySelectorAll("button, a.button"))
-  .filter((el) => el.getClientRects().length)
-  .map((el) => [el.textContent.trim(), el.getBoundingClientRect()])
-  .filter(([, r]) => r.height < 44 || r.width < 44)
-  .map(([name, r]) => `${name}: ${Math.round(r.width)}x${Math.round(r.height)}`)"""
 
 
 def open_take_over(page):
@@ -70,7 +59,8 @@ def leg_with_snapshot(server):
 
 
 def test_the_segment_dialog_lists_snapshots_for_download(browser, server, leg_with_snapshot, shot):
-    for name, viewport in VIEWPORTS.items():
+    for name, screen in VIEWPORTS.items():
+        viewport = screen["viewport"]
         page = browser.new_page(viewport=viewport)
         login(page, server, "vera")  # viewers may download, as images
         choose_event(page, leg_with_snapshot)
@@ -83,7 +73,7 @@ def test_the_segment_dialog_lists_snapshots_for_download(browser, server, leg_wi
         expect(row).to_contain_text("/gps_fix (3)")
         expect(row).to_contain_text(" kB")
         link = row.get_by_role("link", name="Download")
-        assert page.evaluate(SMALL, row.element_handle()) == []
+        assert page.evaluate(SMALL, ".snapshots li button, .snapshots li a.button") == []
         assert page.evaluate("document.documentElement.scrollWidth") <= viewport["width"]
         shot(page, f"snapshots-{name}")
         # The browser's own session fetches the file, as the link would.
@@ -163,13 +153,14 @@ def test_snapshot_now_asks_the_collector_and_the_snapshot_appears(page, server, 
     button.click()
     expect(page.locator("#notice")).to_contain_text("Robot: Snapshot", timeout=30_000)
     panel = page.locator("#collector")
-    for name, viewport in VIEWPORTS.items():
+    for name, screen in VIEWPORTS.items():
+        viewport = screen["viewport"]
         page.set_viewport_size(viewport)
         panel.scroll_into_view_if_needed()
-        assert page.evaluate(SMALL, panel.element_handle()) == []
+        assert page.evaluate(SMALL, "#collector button, #collector a.button") == []
         assert page.evaluate("document.documentElement.scrollWidth") <= viewport["width"]
         shot(page, f"snapshot-requested-{name}")
-    page.set_viewport_size(VIEWPORTS["laptop"])
+    page.set_viewport_size(VIEWPORTS["laptop"]["viewport"])
     dialog = open_take_over(page)
     # Stored once its window (1 s after) has passed and the outbox is written.
     row = dialog.locator(".snapshots li", has_text="on request")
