@@ -93,8 +93,11 @@ class StartupTimes:
         self.reported = False
 
     def mark(self, label: str) -> None:
-        if not any(name == label for name, _ in self.marks):
+        if not self.has(label):
             self.marks.append((label, time.time()))
+
+    def has(self, label: str) -> bool:
+        return any(name == label for name, _ in self.marks)
 
     def line(self) -> str:
         steps = [
@@ -318,8 +321,8 @@ class CollectorRuntime:
             return False
         self.recorder.apply([event for _, event in batch])
         self.outbox.remove([row_id for row_id, _ in batch])
-        if not self.startup.reported:
-            self.startup.mark("first record stored")
+        if not self.startup.reported and self.startup.has("first message received"):
+            self.startup.mark("first record stored after it")
             self.startup.reported = True
             log.info("%s", self.startup.line())
         self._database_up()
