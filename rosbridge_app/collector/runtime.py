@@ -46,6 +46,7 @@ from rclpy.parameter import Parameter
 from events import feed
 from events.models import Vehicle
 from events.selectors.logs import open_leg_for_vehicle
+from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.node import CollectorNode, Status
 from rosbridge_app.collector.outbox import Outbox
 from rosbridge_app.collector.recorder import DatabaseUnavailable, Recorder
@@ -118,11 +119,17 @@ def default_spool(name: str) -> Path:
     return Path(settings.DATA_DIR) / "collector" / f"{safe}.spool.sqlite3"
 
 
+# What an operator waits to see: spooled at once, not after the batching window.
+_URGENT = frozenset({ev.MODE, ev.START, ev.STOP})
+
+
 class Spooler(threading.Thread):
     def __init__(self, events: queue.Queue, outbox: Outbox):
         super().__init__(name="ftt-spool", daemon=True)
         self.events, self.outbox = events, outbox
         self.stop = threading.Event()
+        # Set after every append: the writer waits on it instead of sleeping.
+        self.spooled = threading.Event()
         self.dropped = 0
 
     def run(self) -> None:
@@ -130,6 +137,8 @@ class Spooler(threading.Thread):
             self.spool_once(timeout=SPOOL_INTERVAL)
 
     def spool_once(self, timeout: float) -> int:
+        """Positions wait up to ``timeout`` to share one append; a mode switch,
+        start or stop ends the wait, so it reaches the database without it."""
         batch = []
         deadline = time.monotonic() + timeout
         while len(batch) < BATCH:
@@ -142,6 +151,8 @@ class Spooler(threading.Thread):
             except Exception as exc:
                 self.dropped += 1
                 log.warning("dropped a %s that cannot be converted: %s", event.kind, exc)
+            if event.kind in _URGENT:
+                deadline = 0.0  # take only what is already queued
         if batch:
             while True:
                 try:
@@ -151,6 +162,7 @@ class Spooler(threading.Thread):
                     # The disk is our last resort: keep trying rather than drop.
                     log.exception("cannot write the spool %s; retrying", self.outbox.path)
                     time.sleep(1.0)
+            self.spooled.set()
         return len(batch)
 
 
@@ -309,7 +321,8 @@ class CollectorRuntime:
                     self.recorder.sync()
                     self._say_leg()
                     next_sync = t + SYNC
-                time.sleep(0.05)
+                self.spooler.spooled.wait(0.05)
+                self.spooler.spooled.clear()
             except (DatabaseUnavailable, OperationalError, InterfaceError) as exc:
                 self._database_down(exc)
                 retry_at = time.monotonic() + RETRY
