@@ -50,31 +50,20 @@ import re
 import shutil
 import statistics
 import subprocess
-import sys
 import tempfile
 import time
 from datetime import UTC, datetime
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
-os.environ.setdefault("DJANGO_SETTINGS_MODULE", "ftt_site.settings")
-os.environ["ROS_DOMAIN_ID"] = str(40 + os.getpid() % 20)
-os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
-os.environ.pop("RMW_IMPLEMENTATION", None)
+# collector_bench sets the ROS domain and discovery range and sets Django up.
+from collector_bench import MANAGE, Bench
+from django.db import connection
 
-import django  # noqa: E402
-
-django.setup()
-
-from django.db import connection  # noqa: E402
-
-from events.models import Segment, Vehicle  # noqa: E402
-from events.services import deletion, logs  # noqa: E402
-from rosbridge_app.collector import params as P  # noqa: E402
-from rosbridge_app.models import Collector, CollectorCommand  # noqa: E402
-from rosbridge_app.services.collectors import issue_command  # noqa: E402
-from telemetry.models import Image, LocalPose, MapImage, Pose, Recording  # noqa: E402
+from events.models import Segment
+from rosbridge_app.collector import params as P
+from rosbridge_app.models import Collector, CollectorCommand
+from rosbridge_app.services.collectors import issue_command
+from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 
 TICKS = os.sysconf("SC_CLK_TCK")
 
@@ -151,23 +140,23 @@ def main() -> None:
     import rclpy
     from std_msgs.msg import Bool
 
-    key, vehicle, event, leg, work, values = bench_leg("collector benchmark")
     camera = {
         "jpeg": {"topics.image": "", "topics.image_compressed": "image_compressed"},
         # The default snapshot list has the compressed camera only.
         "raw": {"topics.image": "image", "snapshot.topics": "robot_mode, gps_fix, /tf, image"},
     }[args.camera]
-    values.update(
-        {
+    bench, collector = start_bench(
+        "throughput",
+        **{
             "params.send_map_period": 1.0,
             "params.sensor_reliable": args.reliable,
             "snapshot.enabled": args.snapshot != "off",
             "snapshot.after": args.snapshot_after,
             **camera,
-        }
+        },
     )
-    env, collector = start_collector(key, work, values)
-    manage = [sys.executable, str(ROOT / "manage.py")]
+    key, leg, work, env = bench.key, bench.leg, bench.work, bench.env
+    manage = MANAGE
     writing = SnapshotWatch(work / "spool.snapshots")
     robot = subprocess.Popen(
         [
@@ -335,9 +324,7 @@ def main() -> None:
     print(spread("GUI command issued → carried out by the collector", command_delays))
     node.destroy_node()
     rclpy.try_shutdown()
-    deletion.delete(event)
-    Collector.objects.filter(name=key).delete()
-    deletion.delete(vehicle)
+    bench.close()
 
 
 def load(averages) -> str:
@@ -442,7 +429,7 @@ def subscription_cost(phase: float = 15.0, phases: int = 4) -> None:
         "/image_compressed": "sensor_msgs/msg/CompressedImage",
     }
     robot = subprocess.Popen(
-        [sys.executable, str(ROOT / "manage.py"), "ftt_simulate", "--gps-rate", "100"]
+        [*MANAGE, "ftt_simulate", "--gps-rate", "100"]
         + ["--tf-rate", "50", "--camera-rate", "10", "--camera-format", "jpeg"]
         + ["--map-size", "10", "--switch-every", "5"]
         + ["--duration", str(phase * phases + 90)],
@@ -514,49 +501,16 @@ def subscription_cost(phase: float = 15.0, phases: int = 4) -> None:
     )
 
 
-def bench_leg(location: str):
-    """A throw-away vehicle with an open leg, a work directory, and the shipped
-    parameters pointed at that vehicle."""
-    key = f"bench-{os.getpid()}"
-    vehicle = Vehicle.objects.create(key=key, short_description="collector benchmark")
-    event = logs.create_test_event(location=location)
-    leg = logs.create_leg(shift=logs.create_shift(test_event=event, vehicle=vehicle))
-    values = P.read_file(P.DEFAULT_FILE)
-    values["vehicle"] = key
-    return key, vehicle, event, leg, Path(tempfile.mkdtemp(prefix="ftt-bench-")), values
-
-
-def start_collector(key: str, work: Path, values: dict) -> tuple[dict, subprocess.Popen]:
-    """ftt_collect with these parameters, logging, once it has beaten."""
-    P.write_file(work / "params.yaml", values)
-    env = {
-        **os.environ,
-        "PYTHONUNBUFFERED": "1",
-        "FTT_DATA_DIR": str(work),
-        "FTT_MEDIA_ROOT": str(work / "media"),
-    }
-    collector = subprocess.Popen(
-        [
-            sys.executable,
-            str(ROOT / "manage.py"),
-            "ftt_collect",
-            "--params-file",
-            str(work / "params.yaml"),
-            "--name",
-            key,
-            "--spool",
-            str(work / "spool.sqlite3"),
-            "--start-logging",
-        ],
-        env=env,
-        stdout=open(work / "collector.log", "wb"),
-        stderr=subprocess.STDOUT,
-    )
-    while not Collector.objects.filter(name=key).exists():
+def start_bench(label: str, **parameters) -> tuple[Bench, subprocess.Popen]:
+    """A throw-away leg and ftt_collect logging into it, once it has beaten."""
+    bench = Bench(label, **parameters)
+    log = bench.work / "collector.log"
+    collector = bench.collector(bench.work / "spool.sqlite3", log)
+    while not Collector.objects.filter(name=bench.key).exists():
         if collector.poll() is not None:
-            raise SystemExit((work / "collector.log").read_text()[-3000:])
+            raise SystemExit(log.read_text()[-3000:])
         time.sleep(0.2)
-    return env, collector
+    return bench, collector
 
 
 def lossless_gps(hz: float, count: int, depth: int) -> None:
@@ -570,15 +524,15 @@ def lossless_gps(hz: float, count: int, depth: int) -> None:
     from sensor_msgs.msg import NavSatFix
     from std_msgs.msg import Bool
 
-    key, vehicle, event, leg, work, values = bench_leg("collector GPS benchmark")
-    values.update(
-        {
+    bench, collector = start_bench(
+        "gps",
+        **{
             "params.sensor_reliable": True,
             "params.pose_min_distance": 0.0,
             "params.pose_min_period": 0.0,
-        }
+        },
     )
-    _, collector = start_collector(key, work, values)
+    key, leg = bench.key, bench.leg
     try:
         rclpy.init()
         node = rclpy.create_node("ftt_gps_benchmark")
@@ -653,10 +607,7 @@ def lossless_gps(hz: float, count: int, depth: int) -> None:
     finally:
         if collector.poll() is None:
             collector.kill()
-        deletion.delete(event)
-        Collector.objects.filter(name=key).delete()
-        deletion.delete(vehicle)
-        shutil.rmtree(work, ignore_errors=True)
+        bench.close()
 
 
 def timed_command(record: Collector, parameters: dict | None = None) -> float:
