@@ -166,7 +166,8 @@ def test_snapshot_now_asks_the_collector_and_the_snapshot_appears(page, server, 
     row = dialog.locator(".snapshots li", has_text="on request")
     expect(row).to_have_count(1, timeout=60_000)
     expect(row).to_contain_text("/gps_fix")
-    row.scroll_into_view_if_needed()
+    # The list stays, its rows are redrawn on every change the feed brings.
+    dialog.locator(".snapshots").scroll_into_view_if_needed()
     shot(page, "snapshot-listed")
     count = server.python(
         f"""
