@@ -14,7 +14,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 os.environ.setdefault("DJANGO_SETTINGS_MODULE", "ftt_site.settings")
-os.environ["ROS_DOMAIN_ID"] = str(40 + os.getpid() % 20)
+os.environ["ROS_DOMAIN_ID"] = os.environ.get("FTT_ROS_DOMAIN_ID") or str(40 + os.getpid() % 20)
 os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
 os.environ.pop("RMW_IMPLEMENTATION", None)
 

@@ -158,7 +158,7 @@ def robot(count: int, database_url: str | None) -> None:
     from rosbridge_app.collector import params as P
     from tests.support.browser import system_chromium
 
-    os.environ["ROS_DOMAIN_ID"] = str(60 + os.getpid() % 20)
+    os.environ["ROS_DOMAIN_ID"] = os.environ.get("FTT_ROS_DOMAIN_ID") or str(60 + os.getpid() % 20)
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     tag = str(os.getpid())
     work = Path(tempfile.mkdtemp(prefix="ftt-bench-"))

@@ -28,7 +28,8 @@ export DJANGO_SETTINGS_MODULE=ftt_site.settings
 # ROS 2: stay on this host, on a domain of our own (0-101 keeps the DDS ports
 # below the ephemeral range), with the only RMW the PyPI wheels have.
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
-export ROS_DOMAIN_ID=$((10 + $$ % 92))
+# FTT_ROS_DOMAIN_ID pins it when several suites share a machine.
+export ROS_DOMAIN_ID=${FTT_ROS_DOMAIN_ID:-$((10 + $$ % 92))}
 unset RMW_IMPLEMENTATION ROS_LOCALHOST_ONLY
 
 as_postgres() { # run a command as the postgres user, from a directory it can read

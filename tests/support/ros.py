@@ -16,7 +16,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-DOMAIN_ID = 40 + os.getpid() % 20
+# FTT_ROS_DOMAIN_ID pins the domain when several suites share a machine.
+DOMAIN_ID = int(os.environ.get("FTT_ROS_DOMAIN_ID") or 40 + os.getpid() % 20)
 
 # Set for this process before rclpy loads (in-process publishers) and inherited
 # by the processes the tests start.
