@@ -3,8 +3,9 @@
 One poller per event loop reads new outbox rows every FTT_LIVE_POLL_MS,
 however many browsers are connected, and hands them to the consumers, which
 filter them by what each browser watches.  A commit wakes it at once
-(rosbridge_app.wakeup): on PostgreSQL it LISTENs on its own connection, with
-Redis the group message arrives, and writes of this process call it directly.
+(rosbridge_app.wakeup): on PostgreSQL it LISTENs on its own connection, on
+SQLite a datagram arrives on its socket, with Redis the group message arrives,
+and writes of this process call it directly.
 A browser that reconnects says which event it saw last and gets what it missed
 from the outbox, which stays the source of truth.
 """
@@ -114,6 +115,7 @@ class OutboxPoller:
         self.wakeup = asyncio.Event()
         self.task: asyncio.Task | None = None
         self.listener: asyncio.Task | None = None
+        self.sqlite_listener: wakeup.SqliteListener | None = None
         self.wake_from_thread = None
 
     @classmethod
@@ -135,6 +137,7 @@ class OutboxPoller:
             wakeup.local_readers.add(self.wake_from_thread)
             if connections["default"].vendor == "postgresql":
                 self.listener = loop.create_task(self._listen())
+            self._listen_sqlite(loop)
 
     def remove(self, consumer) -> None:
         self.consumers.discard(consumer)
@@ -145,6 +148,10 @@ class OutboxPoller:
                 self.listener.cancel()
                 self.listener = None
             wakeup.local_readers.discard(self.wake_from_thread)
+            if self.sqlite_listener is not None:
+                self.sqlite_loop.remove_reader(self.sqlite_listener)
+                self.sqlite_listener.close()
+                self.sqlite_listener = None
             self.floor = None
             self.seen.clear()
 
@@ -180,6 +187,23 @@ class OutboxPoller:
             except Exception as exc:  # noqa: BLE001 - polling goes on meanwhile
                 logger.warning("live listener lost its connection: %s", exc)
             await asyncio.sleep(LISTEN_RETRY)
+
+    def _listen_sqlite(self, loop) -> None:
+        folder = wakeup.socket_folder()
+        if folder is None:
+            return
+        try:
+            listener = wakeup.SqliteListener(folder)
+        except OSError as exc:  # polling goes on without it
+            logger.warning("live wake-up socket not opened: %s", exc)
+            return
+
+        def woken():
+            listener.drain()
+            self.wakeup.set()
+
+        loop.add_reader(listener, woken)
+        self.sqlite_listener, self.sqlite_loop = listener, loop
 
     async def poll_once(self) -> list[dict]:
         rows = [r for r in await _rows_after(self.floor) if r["id"] not in self.seen]

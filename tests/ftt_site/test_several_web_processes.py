@@ -1,4 +1,9 @@
-"""Two web processes behind one database and one Redis: a change reaches browsers on both."""
+"""A change committed in one process reaches browsers served by another.
+
+Two web processes behind one database and one Redis; and on the embedded
+SQLite default, a writer in its own process (as the collector is) and a web
+process, with no Redis and no PostgreSQL NOTIFY to carry the wake-up.
+"""
 
 import asyncio
 import json
@@ -58,12 +63,17 @@ async def first_change(url: str, cookie: str, leg: int, ready: asyncio.Event, ti
                     return [event["kind"] for event in message["events"]]
 
 
-def test_a_mode_report_on_one_process_reaches_browsers_on_both(two_servers):
-    a, b = two_servers
-    out = a.python(SESSION)
+def signed_in(server) -> tuple[str, str, str]:
+    out = server.python(SESSION)
     _, session, token, leg = next(
         line for line in out.splitlines() if line.startswith("SESSION")
     ).split()
+    return session, token, leg
+
+
+def test_a_mode_report_on_one_process_reaches_browsers_on_both(two_servers):
+    a, b = two_servers
+    session, token, leg = signed_in(a)
 
     async def drill():
         ready = [asyncio.Event(), asyncio.Event()]
@@ -89,3 +99,45 @@ def test_a_mode_report_on_one_process_reaches_browsers_on_both(two_servers):
     seen_on_a, seen_on_b = asyncio.run(drill())
     assert "segment" in seen_on_a
     assert "segment" in seen_on_b
+
+
+@pytest.fixture
+def sqlite_server(tmp_path):
+    # No FTT_DATABASE_URL and no Redis: the embedded default. Polling once an
+    # hour: a change can only arrive through the wake-up socket.
+    server = WebServer(
+        {"FTT_DATA_DIR": str(tmp_path), "FTT_LIVE_POLL_MS": "3600000"},
+        log=tmp_path / "server.log",
+    )
+    try:
+        yield server.start()
+    finally:
+        server.stop()
+
+
+def test_on_sqlite_a_write_in_another_process_reaches_the_browser_at_once(sqlite_server):
+    session, _, leg = signed_in(sqlite_server)
+
+    async def drill():
+        ready = asyncio.Event()
+        watcher = asyncio.create_task(
+            first_change(
+                f"ws://127.0.0.1:{sqlite_server.port}/ws/live/",
+                f"sessionid={session}",
+                int(leg),
+                ready,
+            )
+        )
+        await ready.wait()
+        # A process of its own, like ftt_collect beside the web server.
+        await asyncio.to_thread(
+            sqlite_server.python,
+            f"""
+from events.models import Leg
+from events.services import segments
+segments.report_mode(Leg.objects.get(pk={leg}), "auto")
+""",
+        )
+        return await watcher
+
+    assert "segment" in asyncio.run(drill())

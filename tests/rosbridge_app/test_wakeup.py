@@ -1,4 +1,6 @@
-"""A transaction that writes many feed rows wakes the readers once."""
+"""Wake-ups: one per transaction, and across processes on SQLite."""
+
+import socket
 
 import pytest
 from django.db import connection, transaction
@@ -59,3 +61,23 @@ def test_a_rolled_back_transaction_wakes_nobody(woken):
         feed.record("poses")
         raise RuntimeError("undo")
     assert woken == []
+
+
+def test_sqlite_readers_are_woken_and_dead_ones_forgotten(tmp_path):
+    folder = tmp_path / "ftt.sqlite3.wake"
+    alive = wakeup.SqliteListener(folder)
+    # A reader killed before it could clean up leaves its socket file behind.
+    dead = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+    dead.bind(str(folder / "dead"))
+    dead.close()
+    try:
+        wakeup._wake_sqlite_readers(folder)
+        wakeup._wake_sqlite_readers(folder)
+        assert alive.socket.recv(16) == b"!"
+        alive.drain()
+        with pytest.raises(BlockingIOError):
+            alive.socket.recv(16)
+        assert sorted(p.name for p in folder.iterdir()) == [alive.path.name]
+    finally:
+        alive.close()
+    assert not alive.path.exists()
