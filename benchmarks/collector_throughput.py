@@ -19,16 +19,22 @@ seconds through the GUI command path, so the buffer's CPU share is the
 difference of the on and off phases of one run, measured under the same load
 of the shared machine, with the same switches in both.  The window of a
 take-over is written about ``after`` seconds later, when the next switch comes:
-a switch whose publish-to-row time overlaps a write (the writer thread's
+a switch whose publish-to-row time overlaps a write (the writer process's
 ``.part`` file exists in the pending directory) is counted apart, so the
-mode-to-row delay is shown during snapshot writes as well as without.
+mode-to-row delay is shown during snapshot writes as well as without.  So is
+the pose delay: each GPS row the collector stores, from the fix's stamp (the
+simulator's publish time) to the moment this script sees the row.  The last
+lines put off / on / during a write side by side with the target of issue 15:
+writing a snapshot does not delay mode or pose recording ("during a write" no
+slower than "on" beyond the spread).
 
     FTT_DATABASE_URL=postgis://... .venv/bin/python benchmarks/collector_throughput.py \
         [--seconds 200] [--snapshot alternate|on|off] [--phase 40] [--camera jpeg|raw] \
-        [--map-rate 1] [--ros-domain N]
+        [--map-rate 1] [--ros-domain N] [--latency-only]
 
 Also prints first the black box's own cost for 60 s of that traffic, fed
-straight into Blackbox.receive in this process (``--buffer-only``: only that).
+straight into Blackbox.receive in this process (``--buffer-only``: only that;
+``--latency-only`` skips it).
 
 ``--gps-hz 1000`` measures something else: GPS alone at that rate with
 thinning off and RELIABLE QoS (everything else as shipped, the black box
@@ -58,6 +64,7 @@ from pathlib import Path
 # collector_bench sets the ROS domain and discovery range and sets Django up.
 from collector_bench import MANAGE, Bench
 from django.db import connection
+from django.db.models import Max
 
 from events.models import Segment
 from rosbridge_app.collector import params as P
@@ -121,6 +128,11 @@ def main() -> None:
         action="store_true",
         help="Only the black box's own cost, in this process, without ROS or a database.",
     )
+    parser.add_argument(
+        "--latency-only",
+        action="store_true",
+        help="Skip the black box's own cost (two minutes): only the run with the collector.",
+    )
     parser.add_argument("--gps-hz", type=float, default=0.0)
     parser.add_argument("--gps-count", type=int, default=30_000)
     parser.add_argument("--publisher-depth", type=int, default=1000)
@@ -129,10 +141,11 @@ def main() -> None:
     if args.gps_hz:
         lossless_gps(args.gps_hz, args.gps_count, args.publisher_depth)
         return
-    buffer_cost()
     if args.ros_domain is not None:
         os.environ["ROS_DOMAIN_ID"] = str(args.ros_domain)
-    subscription_cost()
+    if not args.latency_only:
+        buffer_cost()
+        subscription_cost()
     if args.buffer_only:
         print(f"load average (1, 5, 15 min): {load(load_before)}")
         return
@@ -212,8 +225,11 @@ def main() -> None:
         next_toggle = t0 + args.phase
     next_switch = t0 + 2.0
     last_cpu, last_t = cpu0, t0
+    poses = PoseDelays(leg, writing)
     while robot.poll() is None:
         now = time.monotonic()
+        writing.active()
+        poses.poll(enabled)
         if args.snapshot == "alternate" and now >= next_toggle:
             enabled = not enabled
             timed_command(record, {"snapshot.enabled": enabled})
@@ -228,6 +244,7 @@ def main() -> None:
                 if time.monotonic() - published > 30:
                     break
                 during_write = writing.active() or during_write
+                poses.poll(enabled)
                 time.sleep(0.005)
             group = "write" if during_write else "on" if enabled else "off"
             delays[group].append(time.monotonic() - published)
@@ -321,7 +338,9 @@ def main() -> None:
         ("write", "while a snapshot was being written"),
     ):
         print(spread(f"mode message → committed master row, {label}", delays[group]))
+        print(spread(f"GPS fix stamp → its pose row seen, {label}", poses.delays[group]))
     print(spread("GUI command issued → carried out by the collector", command_delays))
+    print(side_by_side({"mode message → master row": delays, "GPS fix → pose row": poses.delays}))
     node.destroy_node()
     rclpy.try_shutdown()
     bench.close()
@@ -332,12 +351,13 @@ def load(averages) -> str:
 
 
 class SnapshotWatch:
-    """Sees the collector's writer thread at work: it writes each snapshot to a
+    """Sees the collector's snapshot writer at work: it writes each snapshot to a
     ``.part`` file in the pending directory and renames it when complete."""
 
     def __init__(self, directory: Path):
         self.directory = directory
         self.names: set[str] = set()
+        self.last_active = 0.0  # wall clock
 
     def active(self) -> bool:
         try:
@@ -345,11 +365,67 @@ class SnapshotWatch:
         except FileNotFoundError:
             return False
         self.names |= parts
+        if parts:
+            self.last_active = time.time()
         return bool(parts)
 
     @property
     def seen(self) -> int:
         return len(self.names)
+
+
+class PoseDelays:
+    """GPS fix stamped (the simulator stamps with its publish time, same clock) →
+    its pose row seen by this script; polled every 50 ms, so up to 50 ms late.
+    A row counts as "during a write" when a write was seen between the two."""
+
+    def __init__(self, leg, writing: SnapshotWatch):
+        self.leg, self.writing = leg, writing
+        self.last_id = Pose.objects.filter(segment__leg=leg).aggregate(m=Max("id"))["m"] or 0
+        self.next_poll = 0.0
+        self.delays: dict[str, list[float]] = {"off": [], "on": [], "write": []}
+
+    def poll(self, enabled: bool) -> None:
+        if time.monotonic() < self.next_poll:
+            return
+        self.next_poll = time.monotonic() + 0.05
+        rows = list(
+            Pose.objects.filter(segment__leg=self.leg, id__gt=self.last_id).values_list(
+                "id", "robot_stamp"
+            )
+        )
+        seen = time.time()
+        for pk, stamp in rows:
+            self.last_id = max(self.last_id, pk)
+            if stamp is None:
+                continue
+            at = stamp.timestamp()
+            group = "write" if self.writing.last_active >= at else "on" if enabled else "off"
+            self.delays[group].append(seen - at)
+
+
+def side_by_side(measures: dict[str, dict[str, list[float]]]) -> str:
+    """Medians and p95 of off / on / during a write, and the target of issue 15."""
+    lines = [
+        "writing a snapshot must not delay mode or pose recording "
+        "(target: during a write no slower than on, beyond the spread):",
+        f"  {'':28s} {'off':>16s} {'on':>16s} {'during a write':>16s}   write/on (median)",
+    ]
+    for label, groups in measures.items():
+        cells = []
+        for group in ("off", "on", "write"):
+            values = groups[group]
+            cells.append(
+                f"{1000 * statistics.median(values):5.0f}/{1000 * percentile(values, 0.95):5.0f}"
+                f" n={len(values):<3d}"
+                if values
+                else f"{'-':>16s}"
+            )
+        on, write = groups["on"], groups["write"]
+        ratio = statistics.median(write) / statistics.median(on) if on and write else math.nan
+        lines.append(f"  {label:28s} {cells[0]:>16s} {cells[1]:>16s} {cells[2]:>16s}   {ratio:.2f}")
+    lines.append("  (median/p95 in ms)")
+    return "\n".join(lines)
 
 
 def buffer_cost(seconds: int = 60) -> None:
