@@ -213,6 +213,9 @@ def main() -> None:
         time.sleep(0.1)
     # Mode → row delays and collector CPU per second, by the black box's state.
     delays: dict[str, list[float]] = {"off": [], "on": [], "write": []}
+    # The same by the state when the switch was published: a slow switch overlaps
+    # a write more often just because it is slow, this grouping does not favour that.
+    at_start: dict[str, list[float]] = {"off": [], "on": [], "write": []}
     cpu_by_phase: dict[bool, list[float]] = {True: [], False: []}
     command_delays, cpu_samples, rss_max, pending_max = [], [], 0, 0
     record = Collector.objects.get(name=key)
@@ -239,15 +242,16 @@ def main() -> None:
             before = Segment.objects.filter(leg=leg, parent__isnull=True).count()
             published = time.monotonic()
             mode.publish(Bool(data=auto))
-            during_write = writing.active()
+            at_publish = during_write = writing.active()
             while Segment.objects.filter(leg=leg, parent__isnull=True).count() == before:
                 if time.monotonic() - published > 30:
                     break
                 during_write = writing.active() or during_write
                 poses.poll(enabled)
                 time.sleep(0.005)
-            group = "write" if during_write else "on" if enabled else "off"
-            delays[group].append(time.monotonic() - published)
+            delay = time.monotonic() - published
+            delays["write" if during_write else "on" if enabled else "off"].append(delay)
+            at_start[group_at(at_publish, enabled)].append(delay)
             next_switch = published + 2.0
             command_delays.append(timed_command(record))
         cpu, rss = proc_sample(collector.pid)
@@ -340,7 +344,12 @@ def main() -> None:
         print(spread(f"mode message → committed master row, {label}", delays[group]))
         print(spread(f"GPS fix stamp → its pose row seen, {label}", poses.delays[group]))
     print(spread("GUI command issued → carried out by the collector", command_delays))
+    print("grouped by whether a write overlapped the delay:")
     print(side_by_side({"mode message → master row": delays, "GPS fix → pose row": poses.delays}))
+    print("grouped by whether a write was going on when the message was published:")
+    print(
+        side_by_side({"mode message → master row": at_start, "GPS fix → pose row": poses.at_start})
+    )
     node.destroy_node()
     rclpy.try_shutdown()
     bench.close()
@@ -358,6 +367,7 @@ class SnapshotWatch:
         self.directory = directory
         self.names: set[str] = set()
         self.last_active = 0.0  # wall clock
+        self.spans: list[list[float]] = []  # [first, last] time a write was seen
 
     def active(self) -> bool:
         try:
@@ -366,8 +376,17 @@ class SnapshotWatch:
             return False
         self.names |= parts
         if parts:
-            self.last_active = time.time()
+            now = time.time()
+            if self.spans and now - self.spans[-1][1] < 0.25:
+                self.spans[-1][1] = now
+            else:
+                self.spans.append([now, now])
+            self.last_active = now
         return bool(parts)
+
+    def during(self, t: float) -> bool:
+        """Was a write seen going on at wall-clock time ``t`` (± one poll)?"""
+        return any(start - 0.05 <= t <= end + 0.05 for start, end in self.spans)
 
     @property
     def seen(self) -> int:
@@ -384,6 +403,7 @@ class PoseDelays:
         self.last_id = Pose.objects.filter(segment__leg=leg).aggregate(m=Max("id"))["m"] or 0
         self.next_poll = 0.0
         self.delays: dict[str, list[float]] = {"off": [], "on": [], "write": []}
+        self.at_start: dict[str, list[float]] = {"off": [], "on": [], "write": []}
 
     def poll(self, enabled: bool) -> None:
         if time.monotonic() < self.next_poll:
@@ -402,6 +422,11 @@ class PoseDelays:
             at = stamp.timestamp()
             group = "write" if self.writing.last_active >= at else "on" if enabled else "off"
             self.delays[group].append(seen - at)
+            self.at_start[group_at(self.writing.during(at), enabled)].append(seen - at)
+
+
+def group_at(writing: bool, enabled: bool) -> str:
+    return "write" if writing else "on" if enabled else "off"
 
 
 def side_by_side(measures: dict[str, dict[str, list[float]]]) -> str:

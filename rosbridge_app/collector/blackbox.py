@@ -185,14 +185,22 @@ def write_mcap(path: Path, messages: list, types: dict[str, str], definitions) -
 _definitions = MessageDefinitions()
 
 
-def _start_writer() -> None:
+def _start_writer(collector: int) -> None:
     """Runs first in the writer process.  Ctrl-C and SIGTERM reach the whole
     process group: the collector decides when its writer ends (it writes the
-    open windows at exit); without a collector the writer ends by itself (its
-    pipe closes)."""
+    open windows at exit)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    threading.Thread(target=_end_with, args=(collector,), daemon=True).start()
     _definitions.load()  # at the trigger, not when the window has passed
+
+
+def _end_with(collector: int) -> None:
+    """A killed collector closes no pipe the writer would notice (the writer
+    holds both ends of its work queue): it would wait for work for ever."""
+    while os.getppid() == collector:
+        time.sleep(1.0)
+    os._exit(0)
 
 
 def _write_in_writer(path: str, messages: list, types: dict[str, str]) -> dict:
@@ -219,7 +227,10 @@ class WriterProcess:
         with self._lock:
             if self._pool is None:
                 self._pool = ProcessPoolExecutor(
-                    1, mp_context=multiprocessing.get_context("spawn"), initializer=_start_writer
+                    1,
+                    mp_context=multiprocessing.get_context("spawn"),
+                    initializer=_start_writer,
+                    initargs=(os.getpid(),),
                 )
                 self._pool.submit(os.getpid).add_done_callback(self._started)
             return self._pool
@@ -237,7 +248,7 @@ class WriterProcess:
                 return pool.submit(_write_in_writer, str(path), messages, types).result()
             except BrokenProcessPool:
                 log.error(
-                    "the snapshot writer process (pid %s) died while writing %s; %s",
+                    "the snapshot writer process (pid %s) died before it finished %s; %s",
                     self.pid,
                     path.name,
                     "starting a new one to try again" if attempt == 1 else "snapshot lost",
@@ -355,6 +366,9 @@ class Blackbox:
         if self.directory is None:
             return
         self.directory.mkdir(parents=True, exist_ok=True)
+        # Left by a writer that died with its collector (this thread writes one at a time).
+        for part in self.directory.glob(".snapshot-*.part"):
+            part.unlink(missing_ok=True)
         messages = [m for m in snap.messages if m[1] in types]
         if not self._make_room(snap.size):
             log.warning(
