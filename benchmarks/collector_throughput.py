@@ -145,6 +145,7 @@ def main() -> None:
         os.environ["ROS_DOMAIN_ID"] = str(args.ros_domain)
     if not args.latency_only:
         buffer_cost()
+        writer_stall()
         subscription_cost()
     if args.buffer_only:
         print(f"load average (1, 5, 15 min): {load(load_before)}")
@@ -499,6 +500,78 @@ def buffer_cost(seconds: int = 60) -> None:
             f"writing the {box.before:.0f} s snapshot ({mb:.0f} MB): {write:.2f} s "
             f"in the writer thread"
         )
+
+
+def writer_stall(rounds: int = 3) -> None:
+    """What writing a 20 s / 12 MB window (the benchmark robot's traffic, JPEG
+    camera) does to the other threads of the process that asks for it: a thread
+    sleeping 1 ms at a time (as the ROS executor waits for messages) measures how
+    late it wakes, while the file is written by a thread of this process (as
+    before issue 15's writer process) and by the writer process, alternately, at
+    the same load."""
+    import threading
+
+    from rosbridge_app.collector.blackbox import MessageDefinitions, WriterProcess, write_mcap
+
+    traffic = [
+        ("/gps_fix", 100, 96),
+        ("/tf", 50, 140),
+        ("/robot_mode", 2, 8),
+        ("/image", 10, 60_000),
+    ]
+    types = {
+        "/gps_fix": "sensor_msgs/msg/NavSatFix",
+        "/tf": "tf2_msgs/msg/TFMessage",
+        "/robot_mode": "std_msgs/msg/Bool",
+        "/image": "sensor_msgs/msg/CompressedImage",
+    }
+    messages = sorted(
+        (second * 10**9 + i * 10**9 // rate, topic, os.urandom(size))
+        for second in range(20)
+        for topic, rate, size in traffic
+        for i in range(rate)
+    )
+    directory = Path(tempfile.mkdtemp(prefix="ftt-bench-writer-"))
+    writer, definitions = WriterProcess(), MessageDefinitions()
+    writer.start()
+    while writer.pid is None:
+        time.sleep(0.05)
+
+    def stalls(write) -> str:
+        late, stop = [], threading.Event()
+
+        def wake() -> None:
+            while not stop.is_set():
+                t = time.perf_counter()
+                time.sleep(0.001)
+                late.append(time.perf_counter() - t - 0.001)
+
+        probe = threading.Thread(target=wake)
+        probe.start()
+        cpu0, wall0 = time.process_time(), time.perf_counter()
+        write()
+        cpu, wall = time.process_time() - cpu0, time.perf_counter() - wall0
+        stop.set()
+        probe.join()
+        return (
+            f"{wall:.2f} s, {1000 * cpu:.0f} ms CPU here, wake-ups late median "
+            f"{1000 * statistics.median(late):.2f} ms, p95 {1000 * percentile(late, 0.95):.1f} ms, "
+            f"max {1000 * max(late):.1f} ms"
+        )
+
+    for i in range(rounds):
+        # The first round's thread also builds the ROS 2 type store, as a
+        # collector's first snapshot did; the writer process built it at its start.
+        thread = stalls(
+            lambda i=i: write_mcap(directory / f"t{i}.mcap", messages, types, definitions)
+        )
+        child = stalls(lambda i=i: writer.write(directory / f"p{i}.mcap", messages, types))
+        print(
+            f"writing a 12 MB snapshot [load {load(os.getloadavg())}]: in a thread {thread}; "
+            f"by the writer process {child}"
+        )
+    writer.close()
+    shutil.rmtree(directory)
 
 
 def subscription_cost(phase: float = 15.0, phases: int = 4) -> None:

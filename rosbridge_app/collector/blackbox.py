@@ -44,6 +44,8 @@ from rosbridge_app.collector.events import Event
 log = logging.getLogger("ftt.collector")
 
 MB = 1024 * 1024
+# Messages handed to the snapshot writer process at a time.
+PIECE = 8 * MB
 # Added to the snapshot topics when they are published (common names on most robots).
 OPTIONAL_TOPICS = ("odom", "cmd_vel")
 DEFAULT_TOPIC_PARAMETERS = ("robot_mode", "gps_fix", "tf", "tf_static", "image_compressed")
@@ -148,35 +150,62 @@ def part_path(path: Path) -> Path:
     return path.with_name(f".{path.name}.part")
 
 
-def write_mcap(path: Path, messages: list, types: dict[str, str], definitions) -> dict:
-    """Write messages (t_ns, topic, bytes) to an MCAP file; {topic: {type, count}}."""
-    counts: dict[str, int] = {}
-    tmp = part_path(path)
-    with open(tmp, "wb") as f:
-        writer = Writer(f, compression=CompressionType.LZ4)
-        writer.start(profile="ros2", library="ftt_collect")
-        schemas: dict[str, int] = {}
-        channels: dict[str, int] = {}
+class McapFile:
+    """An MCAP file being written from messages (t_ns, topic, bytes), in as many
+    pieces as wanted; it gets its name only when :meth:`finish` has completed it."""
+
+    def __init__(self, path: Path, types: dict[str, str], definitions):
+        self.path, self.types, self.definitions = path, types, definitions
+        self.counts: dict[str, int] = {}
+        self.schemas: dict[str, int] = {}
+        self.channels: dict[str, int] = {}
+        self.file = open(part_path(path), "wb")  # noqa: SIM115 - closed by finish/abandon
+        self.writer = Writer(self.file, compression=CompressionType.LZ4)
+        self.writer.start(profile="ros2", library="ftt_collect")
+
+    def add(self, messages: list) -> None:
+        writer, counts, channels = self.writer, self.counts, self.channels
         for t_ns, topic, data in messages:
             channel = channels.get(topic)
             if channel is None:
-                typename = types[topic]
-                if typename not in schemas:
-                    schemas[typename] = writer.register_schema(
-                        name=typename,
-                        encoding="ros2msg",
-                        data=definitions.text(typename).encode(),
-                    )
-                channel = channels[topic] = writer.register_channel(
-                    topic=topic, message_encoding="cdr", schema_id=schemas[typename]
-                )
+                channel = channels[topic] = self._channel(topic)
             counts[topic] = counts.get(topic, 0) + 1
             writer.add_message(
                 channel, log_time=t_ns, data=data, publish_time=t_ns, sequence=counts[topic]
             )
-        writer.finish()
-    os.replace(tmp, path)
-    return {topic: {"type": types[topic], "count": n} for topic, n in sorted(counts.items())}
+
+    def _channel(self, topic: str) -> int:
+        typename = self.types[topic]
+        if typename not in self.schemas:
+            self.schemas[typename] = self.writer.register_schema(
+                name=typename, encoding="ros2msg", data=self.definitions.text(typename).encode()
+            )
+        return self.writer.register_channel(
+            topic=topic, message_encoding="cdr", schema_id=self.schemas[typename]
+        )
+
+    def finish(self) -> dict:
+        """Complete and name the file; {topic: {type, count}}."""
+        with self.file:
+            self.writer.finish()
+        os.replace(part_path(self.path), self.path)
+        counts = sorted(self.counts.items())
+        return {topic: {"type": self.types[topic], "count": n} for topic, n in counts}
+
+    def abandon(self) -> None:
+        self.file.close()
+        part_path(self.path).unlink(missing_ok=True)
+
+
+def write_mcap(path: Path, messages: list, types: dict[str, str], definitions) -> dict:
+    """Write messages (t_ns, topic, bytes) to an MCAP file; {topic: {type, count}}."""
+    mcap = McapFile(path, types, definitions)
+    try:
+        mcap.add(messages)
+        return mcap.finish()
+    except BaseException:
+        mcap.abandon()
+        raise
 
 
 # --- the writer process ---------------------------------------------------------------
@@ -203,8 +232,39 @@ def _end_with(collector: int) -> None:
     os._exit(0)
 
 
-def _write_in_writer(path: str, messages: list, types: dict[str, str]) -> dict:
-    return write_mcap(Path(path), messages, types, _definitions)
+# The file the writer process is writing: the window comes in pieces, so that
+# neither process holds a second copy of a whole large window.
+_file: McapFile | None = None
+
+
+def _begin(path: str, types: dict[str, str]) -> None:
+    global _file
+    if _file is not None:  # the collector gave up on it (it cannot happen otherwise)
+        _file.abandon()
+    _file = McapFile(Path(path), types, _definitions)
+
+
+def _add(messages: list) -> None:
+    _file.add(messages)
+
+
+def _finish() -> dict:
+    global _file
+    mcap, _file = _file, None
+    return mcap.finish()
+
+
+def pieces(messages: list, size: int) -> list[list]:
+    """Consecutive slices of messages (t_ns, topic, bytes) of about ``size`` bytes."""
+    out, start, total = [], 0, 0
+    for i, message in enumerate(messages):
+        total += len(message[2])
+        if total >= size:
+            out.append(messages[start : i + 1])
+            start, total = i + 1, 0
+    if start < len(messages):
+        out.append(messages[start:])
+    return out
 
 
 class WriterDied(Exception):
@@ -245,7 +305,10 @@ class WriterProcess:
         for attempt in (1, 2):
             pool = self.start()
             try:
-                return pool.submit(_write_in_writer, str(path), messages, types).result()
+                pool.submit(_begin, str(path), types).result()
+                for piece in pieces(messages, PIECE):
+                    pool.submit(_add, piece).result()
+                return pool.submit(_finish).result()
             except BrokenProcessPool:
                 log.error(
                     "the snapshot writer process (pid %s) died before it finished %s; %s",
