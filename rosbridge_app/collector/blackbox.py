@@ -388,7 +388,10 @@ class Blackbox:
         snap = Snapshot(uuid.uuid4(), master, reason, start, end, repeated + messages)
         snap.size = sum(len(m[2]) for m in snap.messages)
         self.pending.append(snap)
-        self.writer.start()  # ready when the window has passed
+        try:
+            self.writer.start()  # ready when the window has passed
+        except Exception:  # the write tries again; a trigger is called in ROS callbacks
+            log.exception("could not start the snapshot writer process")
         return snap.uid
 
     def poll(self) -> None:

@@ -1,5 +1,8 @@
 """Black-box snapshots over real ROS 2: publishers → ftt_collect → MCAP files on the segment."""
 
+import os
+import re
+import signal
 import time
 from datetime import timedelta
 
@@ -33,6 +36,19 @@ def wait_for_subscribers(publisher, count):
         15,
         what=f"{count} subscriptions on {publisher.topic_name}",
     )
+
+
+def take_over_snapshot(leg):
+    """The ITO master of the leg and the snapshot attached to it, once stored."""
+    ito = wait_for(
+        lambda: Segment.objects.filter(leg=leg, parent=None, segment_type_id="ito").first(),
+        10,
+        what="the ITO master",
+    )
+    recording = wait_for(
+        lambda: Recording.objects.filter(segment=ito).first(), 20, what="the take-over snapshot"
+    )
+    return ito, recording
 
 
 def test_a_take_over_and_requests_give_snapshots_with_the_robots_messages(
@@ -89,14 +105,7 @@ def test_a_take_over_and_requests_give_snapshots_with_the_robots_messages(
             status.publish(message)
             sent["/robot_status"].append((at, i))
 
-    ito = wait_for(
-        lambda: Segment.objects.filter(leg=robot_leg, parent=None, segment_type_id="ito").first(),
-        10,
-        what="the ITO master",
-    )
-    recording = wait_for(
-        lambda: Recording.objects.filter(segment=ito).first(), 15, what="the take-over snapshot"
-    )
+    ito, recording = take_over_snapshot(robot_leg)
     # The window: from BEFORE seconds before the switch to AFTER seconds after it.
     assert abs(recording.start - (ito.start - timedelta(seconds=BEFORE))) < timedelta(
         milliseconds=1
@@ -157,3 +166,55 @@ def test_a_take_over_and_requests_give_snapshots_with_the_robots_messages(
     for r in requested:
         assert r.end - r.start == timedelta(seconds=BEFORE + AFTER)
         assert read_mcap(r.file.path)["messages"]  # the tail of the drive
+
+
+def test_a_killed_snapshot_writer_is_replaced_and_the_collector_goes_on(
+    ros, start_collector, robot_leg
+):
+    from sensor_msgs.msg import NavSatFix
+    from std_msgs.msg import Bool
+
+    mode = ros.publisher(Bool, "/robot_mode")
+    fix = ros.publisher(NavSatFix, "/gps_fix", 100)
+    collector = start_collector(
+        params={
+            "snapshot.before": 5.0,
+            "snapshot.after": 2.0,
+            "snapshot.topics": "robot_mode, gps_fix",
+        }
+    )
+    wait_for_subscribers(mode, 2)
+    wait_for_subscribers(fix, 2)
+    assert ros.set_logging(True).success
+    mode.publish(Bool(data=True))
+    latitudes = [40.0 + i * 1e-4 for i in range(20)]
+    for latitude in latitudes:  # one second before the take-over, in its window
+        fix.publish(NavSatFix(latitude=latitude, longitude=9.0))
+        time.sleep(0.05)
+    mode.publish(Bool(data=False))  # the take-over starts the snapshot writer
+    started = wait_for(
+        lambda: re.search(r"snapshot writer process started \(pid (\d+)\)", collector.output()),
+        20,
+        what="the snapshot writer",
+    )
+    writer = int(started.group(1))
+    os.kill(writer, signal.SIGKILL)  # before or while it writes the take-over's window
+
+    ito, recording = take_over_snapshot(robot_leg)
+    assert f"snapshot writer process (pid {writer}) died" in collector.output()
+    back = read_mcap(recording.file.path)  # written whole by the writer's successor
+    assert len(back["messages"]) == recording.message_count
+    assert [m.latitude for t, _, m in back["messages"] if t == "/gps_fix"] == pytest.approx(
+        latitudes
+    )
+    mode.publish(Bool(data=True))  # and the collector still records
+    wait_for(
+        lambda: (
+            Segment.objects.filter(leg=robot_leg, parent=None, start__gt=ito.start)
+            .filter(segment_type_id="auto")
+            .exists()
+        ),
+        10,
+        what="the next AUTO master",
+    )
+    assert collector.alive()
