@@ -191,14 +191,20 @@ def _binding_cursor():
     return connection._prepare_cursor(psycopg.Cursor(connection.connection))
 
 
+def _floats(values) -> list[float | None]:
+    # psycopg picks one binary type per list from its elements: a fix given as
+    # whole degrees (an int) beside fractional ones must not make it an int list.
+    return [None if v is None else float(v) for v in values]
+
+
 def _insert_fixes_postgres(master, fixes, source_id, received) -> dict[uuid.UUID, int]:
     columns = (
         [_as_uuid(f.uid) for f in fixes],
-        [f.longitude for f in fixes],
-        [f.latitude for f in fixes],
-        [f.altitude for f in fixes],
-        [f.fix_status for f in fixes],
-        [f.horizontal_accuracy for f in fixes],
+        _floats(f.longitude for f in fixes),
+        _floats(f.latitude for f in fixes),
+        _floats(f.altitude for f in fixes),
+        [int(f.fix_status) for f in fixes],
+        _floats(f.horizontal_accuracy for f in fixes),
         [f.robot_stamp for f in fixes],
     )
     with _binding_cursor() as cursor:
