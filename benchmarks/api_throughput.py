@@ -1,31 +1,41 @@
-"""How fast the REST API serves tracks and takes pose batches, on the configured database.
+"""How fast the REST API serves tracks and takes poses, on the configured database.
 
 Builds a throw-away test event with one leg of N GPS poses (default 100 000) over
 20 master segments, then times:
   * GET /api/tracks/?leg=ID (one LineString per master),
-  * GET /api/poses/?leg=ID&page_size=5000 (one page of rows),
   * GET /gui/api/legs/ID/tracks/ whole and with ?zoom=16, gzipped (bytes printed),
-  * POST /api/poses/batch/ with 1000 new poses, and the same batch again (all known).
-Everything is deleted afterwards. Prints seconds and rates.
+  * GET /api/poses/?leg=ID&page_size=5000 (one page of rows),
+  * POST /api/poses/batch/ with batches of 1 000 and 5 000 new poses, and each
+    batch again (all known), in process; medians beside the target of 20 000/s.
+Everything is deleted afterwards.
 
 With ``--clients 1,4,16`` it then starts a web server on loopback (``--server
-daphne`` or ``gunicorn``, 2 sync workers) and lets that many clients POST single
-poses to /api/poses/ for ``--seconds`` each; the stored rows are counted in the
-database.  ``--original PATH`` (the original FTT's ``ftt_server/scripts/api.py``)
-starts that server too, posts the same load to its ``/pose`` and counts rows in
-``--original-db`` (its PostgreSQL, with an open master segment), then prints the
-ratios against the target of 3x.
+production``, the default, is Gunicorn with 2 Uvicorn workers as scripts/run.sh
+starts it; ``daphne`` and ``gunicorn`` with 2 sync workers for comparison) and
+lets that many clients POST single poses to /api/poses/ for ``--seconds`` each;
+the stored rows are counted in the database and must equal the answered requests.
+
+``--original PATH`` (the original FTT's ``ftt_server/scripts/api.py``, from
+github.com/fkie/field_test_tool) starts that server too, unchanged, as it ships
+(Flask's threaded server) with ``--original-python`` (a venv with flask,
+flask-restful, flask-cors, psycopg2, lxml), connected to ``--original-db`` (a
+database made from its ftt_schema.sql and setup_queries.sql; docs/api.md, Speed).
+It gets the same load on its ``/pose``; rows are counted in its database, and
+the ratios are printed against the target of 3x.
 
     FTT_DATABASE_URL=postgis://... .venv/bin/python benchmarks/api_throughput.py [--poses N]
-        [--clients 1,4,16 --seconds 10 --server gunicorn]
-        [--original .../ftt_server/scripts/api.py --original-db postgresql://...]
+        [--clients 1,4,16 --seconds 10] [--original .../ftt_server/scripts/api.py
+         --original-python /work/orig-venv/bin/python --original-db postgresql://...]
 """
 
 import argparse
+import gc
 import http.client
 import json
 import os
+import signal
 import socket
+import statistics
 import subprocess
 import sys
 import threading
@@ -66,6 +76,7 @@ def timed(label, func, rows=None):
 
 
 TARGET_RATIO = 3.0
+BATCH_TARGET = 20_000  # poses/s through POST /api/poses/batch/ on PostGIS
 
 
 def free_port() -> int:
@@ -88,21 +99,80 @@ def wait_for(port, process, seconds=60):
 
 
 def start(command, port, env=None):
+    # A session of its own: the original's debug reloader runs the server in a
+    # child process, which must go down with it.
     process = subprocess.Popen(
-        command, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+        command,
+        cwd=ROOT,
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,
     )
     wait_for(port, process)
     return process
 
 
-def ftt_server(kind, port):
-    if kind == "gunicorn":
+def stop(process):
+    os.killpg(process.pid, signal.SIGTERM)
+    process.wait()
+
+
+def ftt_server(kind, port, workers):
+    env = os.environ.copy()
+    if kind == "production":
+        # What scripts/run.sh starts: Gunicorn supervising Uvicorn workers.
+        env["FTT_WEB_WORKERS"] = str(workers)
+        command = [
+            *("gunicorn", "-c", "ftt_site/gunicorn.conf.py", "-b", f"127.0.0.1:{port}"),
+            "ftt_site.asgi:application",
+        ]
+    elif kind == "gunicorn":
         # A long timeout: on a busy machine the first request (imports) can exceed 30 s.
         command = ["gunicorn", "-w", "2", "-t", "300", "-b", f"127.0.0.1:{port}", "ftt_site.wsgi"]
     else:
         command = ["daphne", "-b", "127.0.0.1", "-p", str(port), "ftt_site.asgi:application"]
     bin_dir = Path(sys.executable).parent
-    return start([str(bin_dir / command[0]), *command[1:]], port, env=os.environ.copy())
+    return start([str(bin_dir / command[0]), *command[1:]], port, env=env)
+
+
+# The original's api.py connects to dbname 'ftt' as postgres/postgres, fixed in
+# its code.  Its code is run unchanged; only psycopg2.connect is pointed at the
+# database given (argv[1]) before api.py runs as __main__.
+ORIGINAL_LAUNCHER = """
+import runpy, sys
+import psycopg2
+dsn, path = sys.argv[1], sys.argv[2]
+connect = psycopg2.connect
+psycopg2.connect = lambda *args, **kwargs: connect(dsn)
+sys.argv = [path, *sys.argv[3:]]
+runpy.run_path(path, run_name="__main__")
+"""
+
+
+def psql(dsn, query) -> str:
+    out = subprocess.run(["psql", dsn, "-Atqc", query], capture_output=True, text=True, check=True)
+    return out.stdout.strip()
+
+
+def prepare_original(dsn) -> None:
+    """An open master segment to post to, as the original's GUI would leave it
+    (its schema seeds no pose source, though its ROS node sends id 1)."""
+    psql(
+        dsn,
+        """
+        INSERT INTO pose_source (id, key, short_description) VALUES (1, 'gps', 'GPS')
+            ON CONFLICT DO NOTHING;
+        WITH e AS (INSERT INTO test_event (starttime_secs, location)
+                   VALUES (extract(epoch FROM now()), 'benchmark') RETURNING id),
+             s AS (INSERT INTO shift (test_event_id, starttime_secs, number)
+                   SELECT id, extract(epoch FROM now()), 1 FROM e RETURNING id),
+             l AS (INSERT INTO leg (shift_id, starttime_secs, number, default_pose_source_id)
+                   SELECT id, extract(epoch FROM now()), 1, 1 FROM s RETURNING id)
+        INSERT INTO segment (leg_id, segment_type_id, starttime_secs)
+            SELECT id, 2, extract(epoch FROM now()) FROM l;
+        """,
+    )
 
 
 def hammer(port, path, body_for, headers, clients, seconds) -> int:
@@ -139,17 +209,14 @@ def hammer(port, path, body_for, headers, clients, seconds) -> int:
 
 
 def original_rows(dsn) -> int:
-    out = subprocess.run(
-        ["psql", dsn, "-Atc", "SELECT count(*) FROM pose"], capture_output=True, text=True
-    )
-    return int(out.stdout.strip())
+    return int(psql(dsn, "SELECT count(*) FROM pose"))
 
 
 def concurrency(args, master, user):
     counts = [int(c) for c in args.clients.split(",")]
     token, _ = Token.objects.get_or_create(user=user)
     port = free_port()
-    server = ftt_server(args.server, port)
+    server = ftt_server(args.server, port, args.workers)
     headers = {"Content-Type": "application/json", "Authorization": f"Token {token.key}"}
     results = {}
     try:
@@ -163,17 +230,17 @@ def concurrency(args, master, user):
             before = Pose.objects.filter(segment=master).count()
             answered = hammer(port, "/api/poses/", ftt_body, headers, clients, args.seconds)
             stored = Pose.objects.filter(segment=master).count() - before
+            # Every answered pose is stored once, and nothing unanswered is.
             assert stored == answered, (stored, answered)
             results[clients] = [stored / args.seconds]
     finally:
-        server.terminate()
-        server.wait()
+        stop(server)
     if args.original:
+        prepare_original(args.original_db)
         port = free_port()
-        original = start(
-            [sys.executable, args.original, "--server_ip", "127.0.0.1", "--server_port", str(port)],
-            port,
-        )
+        launcher = [args.original_python, "-c", ORIGINAL_LAUNCHER, args.original_db]
+        server_args = ["--server_ip", "127.0.0.1", "--server_port", str(port)]
+        original = start([*launcher, args.original, *server_args], port)
         try:
 
             def original_body():
@@ -186,20 +253,28 @@ def concurrency(args, master, user):
                 }
 
             plain = {"Content-Type": "application/json"}
+            hammer(port, "/pose", original_body, plain, 2, 3)
             for clients in counts:
                 before = original_rows(args.original_db)
                 answered = hammer(port, "/pose", original_body, plain, clients, args.seconds)
                 stored = original_rows(args.original_db) - before
-                assert stored == answered, (stored, answered)
+                if stored != answered:
+                    # Its one connection, shared by the request threads, loses rows
+                    # (upstream's KNOWN_ISSUES); only stored rows count.
+                    print(f"  original, {clients} clients: {answered} answered, {stored} stored")
                 results[clients].append(stored / args.seconds)
         finally:
-            original.terminate()
-            original.wait()
-    print(f"\nPOST /api/poses/ single pose, stored poses/s ({args.server}, {args.seconds} s each)")
+            stop(original)
+    load = os.getloadavg()[0]
+    print(
+        f"\nPOST single poses, stored poses/s ({args.server} server, {args.workers} workers, "
+        f"{args.seconds:g} s per "
+        f"concurrency, load average {load:.1f})"
+    )
     print(f"{'clients':>8} {'FTT':>10} {'original':>10} {'ratio':>7} {'target':>7}")
     for clients, rates in results.items():
         if len(rates) == 2:
-            ratio = f"{rates[0] / rates[1]:.2f}x"
+            ratio = f"{rates[0] / rates[1]:.2f}x" if rates[1] else "inf"
             print(
                 f"{clients:>8} {rates[0]:>10.0f} {rates[1]:>10.0f} {ratio:>7} {TARGET_RATIO:>6.1f}x"
             )
@@ -207,13 +282,58 @@ def concurrency(args, master, user):
             print(f"{clients:>8} {rates[0]:>10.0f} {'-':>10} {'-':>7} {TARGET_RATIO:>6.1f}x")
 
 
+def batches(client, master, t0, rounds):
+    """Batches of 1 000 and of 5 000 full poses (as the collector sends them), each
+    posted twice: the second time every uid is known and nothing is stored."""
+    print(f"POST /api/poses/batch/, median of {rounds}, poses/s (target {BATCH_TARGET:,})")
+    sent = 0
+    for size in (1000, 5000):
+        new, known = [], []
+        for _ in range(rounds):
+            body = {
+                "segment": master.pk,
+                "poses": [
+                    {
+                        "uid": str(uuid.uuid4()),
+                        "longitude": 8.0,
+                        "latitude": 50.0 + i * 1e-6,
+                        "altitude": 120.0,
+                        "fix_status": 0,
+                        "horizontal_accuracy": 0.03,
+                        "robot_stamp": (t0 + timedelta(seconds=sent + i)).isoformat(),
+                    }
+                    for i in range(size)
+                ],
+            }
+            sent += size
+            for stored, rates in ((size, new), (0, known)):
+                begin = time.perf_counter()
+                answer = client.post("/api/poses/batch/", body, format="json")
+                rates.append(size / (time.perf_counter() - begin))
+                assert answer.json() == {"stored": stored}, answer.content[:200]
+        print(
+            f"  {size:>5} per batch: new {statistics.median(new):>8,.0f}"
+            f"   known {statistics.median(known):>8,.0f}"
+            f"   (load average {os.getloadavg()[0]:.1f})"
+        )
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--poses", type=int, default=100_000)
     parser.add_argument("--clients", help="e.g. 1,4,16: single-pose POSTs through a server")
     parser.add_argument("--seconds", type=float, default=10.0)
-    parser.add_argument("--server", choices=["daphne", "gunicorn"], default="daphne")
+    parser.add_argument("--batches", type=int, default=5, help="rounds per batch size")
+    parser.add_argument(
+        "--server", choices=["production", "daphne", "gunicorn"], default="production"
+    )
+    parser.add_argument("--workers", type=int, default=2, help="Uvicorn workers (production)")
     parser.add_argument("--original", help="path of the original FTT's api.py")
+    parser.add_argument(
+        "--original-python",
+        default=sys.executable,
+        help="the interpreter with the original's Flask, flask-restful, flask-cors, psycopg2",
+    )
     parser.add_argument("--original-db", help="the original's PostgreSQL, to count its rows")
     args = parser.parse_args()
     if args.original and not args.original_db:
@@ -245,6 +365,8 @@ def main():
         client.force_authenticate(user)
         # The first request imports every view module (reports pull in matplotlib); not timed.
         client.get("/api/tracks/")
+        # As the production server does once loaded (ftt_site/gunicorn.conf.py).
+        gc.freeze()
 
         tracks = timed(
             "GET /api/tracks/?leg", lambda: client.get("/api/tracks/", {"leg": leg.pk}), n
@@ -266,18 +388,7 @@ def main():
             5000,
         )
         assert page.status_code == 200
-        batch = {
-            "segment": master.pk,
-            "poses": [
-                {"uid": str(uuid.uuid4()), "longitude": 8.0, "latitude": 50.0 + i * 1e-6}
-                for i in range(1000)
-            ],
-        }
-        post = lambda: client.post("/api/poses/batch/", batch, format="json")  # noqa: E731
-        first = timed("POST /api/poses/batch/ (1000 new)", post, 1000)
-        again = timed("POST /api/poses/batch/ (1000 known)", post, 1000)
-        assert first.json() == {"stored": 1000} and again.json() == {"stored": 0}
-        print(f"{'  target for new batches':<48} {'':8}   20,000 rows/s")
+        batches(client, master, t0, args.batches)
         if args.clients:
             concurrency(args, master, user)
     finally:

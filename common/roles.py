@@ -70,6 +70,11 @@ def _active(user) -> bool:
     return bool(user) and user.is_authenticated and user.is_active
 
 
+def remember_groups(user, names) -> None:
+    """The user's group names, read along with the login (common.api.authentication)."""
+    user._ftt_groups = frozenset(names)
+
+
 def _group_names(user) -> frozenset[str]:
     # One query per request: the user object lives as long as the request.
     cached = getattr(user, "_ftt_groups", None)

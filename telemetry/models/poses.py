@@ -25,8 +25,14 @@ class TrackPoint(models.Model):
         abstract = True
 
 
+# Every index is paid for by each stored pose (a 20 000-pose batch spends most of
+# its time in PostgreSQL).  The segment key needs no index of its own: the
+# composite segment+time index below serves the track reads and the cascade
+# from a deleted segment.
 class Pose(TrackPoint):
-    segment = models.ForeignKey(Segment, on_delete=models.CASCADE, related_name="poses")
+    segment = models.ForeignKey(
+        Segment, on_delete=models.CASCADE, related_name="poses", db_index=False
+    )
     point = models.PointField(srid=4326)
     altitude = models.FloatField(null=True, blank=True)
     fix_status = models.SmallIntegerField(choices=FixStatus.choices, default=FixStatus.FIX)
@@ -41,6 +47,9 @@ class Pose(TrackPoint):
         null=True,
         blank=True,
         related_name="poses",
+        # Nothing reads poses by source; only deleting a source looks (PROTECT),
+        # a rare admin action that may scan the table rather than slow every insert.
+        db_index=False,
     )
 
     class Meta:
@@ -51,7 +60,10 @@ class Pose(TrackPoint):
 
 
 class LocalPose(TrackPoint):
-    segment = models.ForeignKey(Segment, on_delete=models.CASCADE, related_name="local_poses")
+    # Covered by the composite index, as for Pose.
+    segment = models.ForeignKey(
+        Segment, on_delete=models.CASCADE, related_name="local_poses", db_index=False
+    )
     frame = models.CharField(max_length=200)
     x = models.FloatField()
     y = models.FloatField()

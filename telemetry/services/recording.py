@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
 
+import psycopg
 from django.contrib.gis.geos import Point
 from django.core.files import File
 from django.core.files.base import ContentFile
@@ -169,41 +170,49 @@ def _store_fixes(master, source_id, fixes, received) -> dict[uuid.UUID, int]:
 # One statement with one array per column: its cost does not grow with the
 # batch on the client side (no per-row SQL text, no per-row geometry object),
 # and ON CONFLICT makes a concurrent retry of the same uid a no-op, not an error.
-# Each array is sent as one text literal: the driver quotes one string instead
-# of adapting every element, which was most of the client's time for a batch.
+# The arrays travel as binary parameters (%b): psycopg packs a list of floats,
+# uuids or datetimes in C, about three times faster than writing each element
+# as text, which was most of the client's time for a big batch.
 _POSTGRES_INSERT = """
 INSERT INTO {table} (uid, segment_id, point, altitude, fix_status, horizontal_accuracy,
                      pose_source_id, robot_stamp, received)
-SELECT u, %s, ST_SetSRID(ST_MakePoint(x, y), 4326), a, f, h, %s, r, %s
-FROM unnest(%s::uuid[], %s::float8[], %s::float8[], %s::float8[], %s::int2[],
-            %s::float8[], %s::timestamptz[]) AS t(u, x, y, a, f, h, r)
+SELECT u, %b, ST_SetSRID(ST_MakePoint(x, y), 4326), a, f, h, %b, r, %b
+FROM unnest(%b::uuid[], %b::float8[], %b::float8[], %b::float8[], %b::int2[],
+            %b::float8[], %b::timestamptz[]) AS t(u, x, y, a, f, h, r)
 ON CONFLICT (uid) DO NOTHING
 RETURNING uid, id
 """
 
 
-def _array(values, text=str) -> str:
-    """A PostgreSQL array literal of uuids, numbers or aware datetimes (none of
-    whose text needs quoting inside an array); None is NULL."""
-    return "{" + ",".join("NULL" if v is None else text(v) for v in values) + "}"
+def _binding_cursor():
+    """A cursor on Django's connection (same transaction, same query logging) that
+    sends parameters apart from the SQL; Django's own binds them into the text."""
+    connection.ensure_connection()
+    return connection._prepare_cursor(psycopg.Cursor(connection.connection))
+
+
+def _floats(values) -> list[float | None]:
+    # psycopg picks one binary type per list from its elements: a fix given as
+    # whole degrees (an int) beside fractional ones must not make it an int list.
+    return [None if v is None else float(v) for v in values]
 
 
 def _insert_fixes_postgres(master, fixes, source_id, received) -> dict[uuid.UUID, int]:
     columns = (
-        _array([f.uid for f in fixes]),
-        _array([f.longitude for f in fixes], repr),
-        _array([f.latitude for f in fixes], repr),
-        _array([f.altitude for f in fixes], repr),
-        _array([f.fix_status for f in fixes]),
-        _array([f.horizontal_accuracy for f in fixes], repr),
-        _array([f.robot_stamp for f in fixes], datetime.isoformat),
+        [_as_uuid(f.uid) for f in fixes],
+        _floats(f.longitude for f in fixes),
+        _floats(f.latitude for f in fixes),
+        _floats(f.altitude for f in fixes),
+        [int(f.fix_status) for f in fixes],
+        _floats(f.horizontal_accuracy for f in fixes),
+        [f.robot_stamp for f in fixes],
     )
-    with connection.cursor() as cursor:
+    with _binding_cursor() as cursor:
         cursor.execute(
             _POSTGRES_INSERT.format(table=Pose._meta.db_table),
             [master.pk, source_id, received, *columns],
         )
-        return {_as_uuid(uid): pk for uid, pk in cursor.fetchall()}
+        return dict(cursor.fetchall())
 
 
 def _as_uuid(value) -> uuid.UUID:

@@ -52,6 +52,19 @@ def test_a_batch_keeps_every_value_exactly_including_the_missing_ones(ito):
         assert (pose.fix_status, pose.robot_stamp) == (fix.fix_status, fix.robot_stamp)
 
 
+def test_whole_degrees_beside_fractional_ones_are_stored_as_given(ito):
+    fixes = [
+        recording.GpsFix(7, 50, altitude=3, horizontal_accuracy=1),
+        recording.GpsFix(7.5, 50.25, altitude=3.5, horizontal_accuracy=0.5),
+    ]
+    recording.record_poses(ito, fixes)
+    stored = {p.uid: p for p in Pose.objects.all()}
+    for fix in fixes:
+        pose = stored[fix.uid]
+        assert (pose.point.x, pose.point.y) == (fix.longitude, fix.latitude)
+        assert (pose.altitude, pose.horizontal_accuracy) == (fix.altitude, fix.horizontal_accuracy)
+
+
 def test_retried_points_are_stored_once(ito):
     fixes = [recording.GpsFix(7.0 + i * 1e-5, 50.0, uid=uuid.uuid4()) for i in range(5)]
     assert recording.record_poses(ito, fixes) == 5

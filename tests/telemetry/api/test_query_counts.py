@@ -73,8 +73,8 @@ def test_list_queries_do_not_grow_with_rows(
     )
 
 
-# Token + user, groups, the segment with its master and leg; then the transaction.
-AUTH_AND_SEGMENT = 3
+# Token with its user and groups, the segment with its master and leg; then the transaction.
+AUTH_AND_SEGMENT = 2
 
 
 def test_a_single_pose_is_one_short_transaction(api_client, leg):
