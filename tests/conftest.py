@@ -2,11 +2,17 @@
 
 import pytest
 from django.core.cache import cache
+from django.db import connection
 
 from events import seeds
 from events.models import Performer, Personnel, PoseSource, Vehicle
 from events.services import logs
 from events.services.robots import ensure_robot_account
+
+
+def pytest_runtest_setup(item):
+    if item.get_closest_marker("postgis_only") and connection.vendor != "postgresql":
+        pytest.skip("needs PostgreSQL (row locks, parallel writers)")
 
 
 @pytest.fixture(autouse=True)
