@@ -124,6 +124,21 @@ def quiet_mark(page, script, arg):
     raise TimeoutError(f"the maps never showed {arg} points (last mark {last})")
 
 
+def shots(context, url, folder: Path):
+    """The cockpit with the big leg at the laptop, tablet and phone sizes."""
+    folder.mkdir(parents=True, exist_ok=True)
+    page = context.new_page()
+    for width, height in ((1366, 768), (1024, 768), (390, 844)):
+        page.set_viewport_size({"width": width, "height": height})
+        page.goto(url, wait_until="commit", timeout=120_000)
+        page.wait_for_function(
+            "document.querySelector('#gps-map').dataset.trackPoints > 0", timeout=120_000
+        )
+        page.wait_for_timeout(1000)
+        page.screenshot(path=str(folder / f"cockpit-{width}x{height}.png"), full_page=True)
+    page.close()
+
+
 def percentile(values, share):
     ordered = sorted(values)
     return ordered[max(0, round(len(ordered) * share) - 1)]
@@ -137,6 +152,7 @@ def main():
     parser.add_argument("--database-url", default=os.environ.get("FTT_DATABASE_URL", ""))
     parser.add_argument("--keep", action="store_true", help="keep the leg (prints its ids)")
     parser.add_argument("--reuse", help="event,shift,leg of a kept leg: skip building")
+    parser.add_argument("--screenshots", help="folder for the cockpit at three sizes, to look at")
     args = parser.parse_args()
     tag = str(os.getpid())
     server = Server(
@@ -171,7 +187,7 @@ def main():
                 page.on(
                     "requestfinished", lambda r, seen=seen: "/tracks/" in r.url and seen.append(r)
                 )
-                page.goto(url, wait_until="commit")
+                page.goto(url, wait_until="commit", timeout=120_000)
                 while not seen:
                     page.wait_for_timeout(20)
                 overview = seen[0]
@@ -207,6 +223,8 @@ def main():
                     f"{len(detail)} detail request(s)"
                 )
                 page.close()
+            if args.screenshots:
+                shots(context, url, Path(args.screenshots))
             browser.close()
     finally:
         if ids is not None and args.database_url and not (args.keep or args.reuse):
