@@ -132,7 +132,7 @@ def shots(context, url, folder: Path):
         page.set_viewport_size({"width": width, "height": height})
         page.goto(url, wait_until="commit", timeout=120_000)
         page.wait_for_function(
-            "document.querySelector('#gps-map').dataset.trackPoints > 0", timeout=120_000
+            "() => document.querySelector('#gps-map').dataset.trackPoints > 0", timeout=120_000
         )
         page.wait_for_timeout(1000)
         page.screenshot(path=str(folder / f"cockpit-{width}x{height}.png"), full_page=True)
@@ -211,10 +211,10 @@ def main():
                 )
                 zooms.append(mark[1] - clicked)
                 detail = [r for r in seen[before:] if "map=gps" in r.url]
-                if detail:
-                    requests.append(
-                        ("detail", detail[-1], json.loads(detail[-1].response().body()), None)
-                    )
+                resources = page.evaluate(RESOURCES)
+                requests.extend(resources)
+                for name, start, first, end, packed, plain in resources:
+                    print(f"  {start:6.0f} {first:6.0f} {end:6.0f} {packed:9d} {plain:9d}  {name}")
                 print(
                     f"run {run + 1}: drawn {loads[-1]:.0f} ms after navigation "
                     f"(GPS {gps_at} ms, local {local_at} ms, {want[0]} + {want[1]} points); "
@@ -242,9 +242,14 @@ def main():
     ):
         median, p95 = statistics.median(values), percentile(values, 0.95)
         print(f"{what:44} {median:9.0f} {p95:7.0f}  {target}")
-    print("tracks requests (ms since navigation: start, first byte, end; bytes gzip / JSON):")
-    for name, start, first, end, packed, plain in requests:
-        print(f"  {start:6.0f} {first:6.0f} {end:6.0f} {packed:9d} {plain:9d}  {name}")
+    for kind, mark in (("whole leg (fit=)", "fit="), ("area in view (map=gps)", "map=gps")):
+        chosen = [r for r in requests if mark in r[0]]
+        if chosen:
+            took = statistics.median(end - start for _, start, _, end, _, _ in chosen)
+            print(
+                f"request {kind}: median {took:.0f} ms, {chosen[0][4]} bytes gzipped, "
+                f"{chosen[0][5]} bytes JSON"
+            )
 
 
 if __name__ == "__main__":

@@ -15,9 +15,10 @@ for (const m of [gpsMap, localMap]) m.labelOf = (id) => segmentLabel(id);
  * the same), so a 200 000-point leg crosses the wire as a few thousand points.
  * Zoomed in, each map fetches the area in view in detail (TrackMap.followView). */
 export async function loadLegTracks(leg) {
-  const size = gpsMap.map.getSize();
-  // fitAll pads by 20 px on each side.
-  const fit = size.x > 40 && size.y > 40 ? `${size.x - 40},${size.y - 40}` : "800,600";
+  // The element's size: Leaflet's getSize() still holds the size from before the
+  // maps section was shown.  fitAll pads by 20 px on each side.
+  const shown = [gpsMap, localMap].map((m) => m.element).find((e) => e.clientWidth > 40 && e.clientHeight > 40);
+  const fit = shown ? `${shown.clientWidth - 40},${shown.clientHeight - 40}` : "800,600";
   return api("GET", `legs/${leg}/tracks/?fit=${fit}`, undefined, { root: CONFIG.guiApiRoot });
 }
 
