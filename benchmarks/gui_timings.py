@@ -85,7 +85,9 @@ def main():
                 figures.setdefault("page interactive (load, segments, map)", []).append(
                     timed(
                         lambda: page.goto(url),
-                        lambda: expect(page.locator("#gps-map path").first).to_be_attached(),
+                        lambda: expect(
+                            page.locator("#gps-map[data-tracks]:not([data-tracks='0'])")
+                        ).to_be_attached(),
                     )
                 )
                 expect(rows).to_have_count(2 * args.segments + 1)

@@ -29,8 +29,8 @@ from common import roles
 from events import feed
 from events.api.serializers import SegmentSerializer
 from events.feed import FLEET_KINDS, LOG_KINDS
-from events.models import Announcement, Leg, Segment
-from events.selectors.labels import label, leg_numbers
+from events.models import Announcement, Segment
+from events.selectors.labels import legs_labels
 from rosbridge_app import wakeup
 from rosbridge_app.wakeup import GROUP
 
@@ -75,28 +75,37 @@ def _attach_segments(rows: list[dict]) -> None:
 
     A mode switch announces only the new master, but it also closed the
     previous master and its reasons (they end where the new one starts) and
-    opened a reason under it; closing a master closes its reasons.
+    opened a reason under it; closing a master closes its reasons.  Three
+    queries however many events the batch holds.
     """
     ids = {r["payload"].get("id") for r in rows} - {None}
     if not ids:
         return
     announced = {s.pk: s for s in Segment.objects.filter(pk__in=ids)}
-    numbers = {}
+    if not announced:
+        return  # deleted since: the page re-reads
+    legs = {s.leg_id for s in announced.values()}
+    candidates = list(
+        Segment.objects.filter(leg_id__in=legs).filter(
+            Q(pk__in=list(announced))
+            | Q(parent_id__in=list(announced))
+            | Q(end__in=[s.start for s in announced.values()])
+        )
+    )
+    labels = legs_labels(legs)
     for row in rows:
         segment = announced.get(row["payload"].get("id"))
         if segment is None:
-            continue  # deleted since: the page re-reads
-        changed = Segment.objects.filter(leg_id=segment.leg_id).filter(
-            Q(pk=segment.pk) | Q(parent_id=segment.pk) | Q(end=segment.start)
-        )
-        if segment.leg_id not in numbers:
-            leg_number = Leg.objects.values_list("number", flat=True).get(pk=segment.leg_id)
-            numbers[segment.leg_id] = {
-                pk: label(leg_number, n) for pk, n in leg_numbers(segment.leg_id).items()
-            }
-        changed = list(changed)
+            continue
+        changed = [c for c in candidates if _changed_with(c, segment)]
         row["segments"] = SegmentSerializer(changed, many=True).data
-        row["labels"] = {s.pk: numbers[segment.leg_id].get(s.pk) for s in changed}
+        row["labels"] = {c.pk: labels.get(c.pk) for c in changed}
+
+
+def _changed_with(row: Segment, announced: Segment) -> bool:
+    return row.leg_id == announced.leg_id and (
+        row.pk == announced.pk or row.parent_id == announced.pk or row.end == announced.start
+    )
 
 
 _bounds = database_sync_to_async(feed.bounds)

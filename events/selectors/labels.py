@@ -19,6 +19,23 @@ def leg_numbers(leg_id: int) -> dict[int, str]:
     return numbers(rows)
 
 
+def legs_labels(leg_ids) -> dict[int, str]:
+    """{segment id: label} for every segment of the given legs, in one query."""
+    rows = (
+        Segment.objects.filter(leg_id__in=leg_ids)
+        .order_by("leg_id", "start", "id")
+        .values_list("leg_id", "leg__number", "id", "parent_id")
+    )
+    by_leg: dict[tuple[int, int], list] = defaultdict(list)
+    for leg_id, leg_number, pk, parent in rows:
+        by_leg[(leg_id, leg_number)].append((pk, parent))
+    return {
+        pk: label(leg_number, n)
+        for (_, leg_number), pairs in by_leg.items()
+        for pk, n in numbers(pairs).items()
+    }
+
+
 def numbers(rows) -> dict[int, str]:
     """Numbers of one leg's segments from (id, parent id) pairs in driving order."""
     result: dict[int, str] = {}

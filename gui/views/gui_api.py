@@ -10,6 +10,7 @@ from django.shortcuts import get_object_or_404
 from django.utils.decorators import method_decorator
 from django.views.decorators.gzip import gzip_page
 from drf_spectacular.utils import extend_schema
+from rest_framework import serializers
 from rest_framework.exceptions import ValidationError
 from rest_framework.response import Response
 from rest_framework.views import APIView
@@ -35,15 +36,61 @@ from telemetry.selectors.tracks import (
     GPS,
     LOCAL,
     MAX_ZOOM,
+    MIN_LOCAL_ZOOM,
+    drawn,
+    fit_zoom,
     load_tracks,
-    simplified,
-    zoom_tolerance,
+    tolerance,
 )
 
 
 @extend_schema(exclude=True)
 class GuiView(APIView):
     """Internal to the GUI pages, so kept out of the documented /api/ schema."""
+
+
+class TrackQuery(serializers.Serializer):
+    """What part of a leg's tracks the map asks for, and how finely (docs/gui.md, Big tracks)."""
+
+    zoom = serializers.IntegerField(required=False, min_value=MIN_LOCAL_ZOOM, max_value=MAX_ZOOM)
+    local_zoom = serializers.IntegerField(
+        required=False, min_value=MIN_LOCAL_ZOOM, max_value=MAX_ZOOM
+    )
+    fit = serializers.CharField(required=False)
+    map = serializers.ChoiceField(choices=[GPS, LOCAL], required=False)
+    bbox = serializers.CharField(required=False)
+    bbox_zoom = serializers.IntegerField(
+        required=False, min_value=MIN_LOCAL_ZOOM, max_value=MAX_ZOOM
+    )
+
+    def validate_fit(self, value):
+        parts = value.split(",")
+        if len(parts) != 2 or not all(p.isdigit() and 0 < int(p) <= 20000 for p in parts):
+            raise serializers.ValidationError("Give the map's size in pixels as width,height.")
+        return tuple(int(p) for p in parts)
+
+    def validate_bbox(self, value):
+        try:
+            box = tuple(float(p) for p in value.split(","))
+        except ValueError:
+            box = ()
+        if len(box) != 4 or not all(np.isfinite(box)) or box[0] > box[2] or box[1] > box[3]:
+            raise serializers.ValidationError("Give the area in view as xmin,ymin,xmax,ymax.")
+        return box
+
+    def validate(self, attrs):
+        # Only the local map zooms below 0: ``zoom`` is the GPS map's unless map=local.
+        for name in () if attrs.get("map") == LOCAL else ("zoom", "bbox_zoom"):
+            if attrs.get(name, 0) < 0:
+                message = f"Give a zoom level from 0 to {MAX_ZOOM}."
+                raise serializers.ValidationError({name: message})
+        detail = ("map", "bbox", "bbox_zoom")
+        missing = [name for name in detail if name not in attrs]
+        if missing and len(missing) < len(detail):
+            raise serializers.ValidationError(
+                {missing[0]: "The area in view needs map, bbox and bbox_zoom together."}
+            )
+        return attrs
 
 
 # A leg's tracks are megabytes of repetitive digits; gzip shrinks them about
@@ -53,16 +100,26 @@ class LegTracks(GuiView):
     """Every master segment's GPS and local track, with its driven distance, and
     every segment's label ("Leg 2 · #7"), so the page names segments as the report does.
 
-    ``?zoom=Z`` (the GPS map's zoom level) thins each GPS track to what that zoom
-    can show (see docs/gui.md); distances are always those of the full tracks."""
+    ``?zoom=Z`` / ``?local_zoom=Z`` thin each track to what that zoom of its map
+    can show, ``?fit=W,H`` to what a map of that size shows of the whole leg;
+    ``?map=gps&bbox=...&bbox_zoom=Z`` answers one map's tracks only, finer in the
+    area in view (see docs/gui.md).  Distances are always those of the full tracks."""
 
     def get(self, request, pk):
         leg = get_object_or_404(Leg, pk=pk)
-        tolerance = _zoom_tolerance(request.query_params.get("zoom"))
+        query = TrackQuery(data=request.query_params)
+        query.is_valid(raise_exception=True)
+        q = query.validated_data
         masters = list(leg.segments.filter(parent__isnull=True).order_by("start", "id"))
         ids = [m.pk for m in masters]
+        if "map" in q:
+            return Response(_in_view(leg, ids, q))
         gps = load_tracks(ids, GPS)
         local = load_tracks(ids, LOCAL)
+        zooms = {GPS: q.get("zoom"), LOCAL: q.get("local_zoom")}
+        for mode, loaded in ((GPS, gps), (LOCAL, local)):
+            if zooms[mode] is None and "fit" in q:
+                zooms[mode] = fit_zoom(mode, list(loaded.values()), *q["fit"])
         distances = displayed_distances(masters, gps, local)
         segments = {}
         for master in masters:
@@ -72,27 +129,43 @@ class LegTracks(GuiView):
                 "mode": mode,
                 "ito": mode == SegmentType.ITO,
                 # [lat, lon]: the order Leaflet takes.
-                "gps": [] if g is None else _pairs(*simplified(g.y, g.x, tolerance)),
-                "local": [] if lo is None else _pairs(lo.x, lo.y),
+                "gps": [] if g is None else _drawn(g, GPS, zooms[GPS]),
+                "local": [] if lo is None else _drawn(lo, LOCAL, zooms[LOCAL]),
                 "distance_m": distances[segment_id],
             }
         body = {"leg": leg.pk, "segments": segments, "labels": leg_labels(leg)}
-        if tolerance:
-            body["tolerance_deg"] = tolerance
+        body.update(zoom=zooms[GPS], local_zoom=zooms[LOCAL])
+        if zooms[GPS] is not None:
+            body["tolerance_deg"] = tolerance(GPS, zooms[GPS])
         return Response(body)
 
 
-def _zoom_tolerance(zoom) -> float:
-    if zoom is None:
-        return 0.0
-    if not (zoom.isascii() and zoom.isdigit()) or int(zoom) > MAX_ZOOM:
-        raise ValidationError({"zoom": [f"Give a zoom level from 0 to {MAX_ZOOM}."]})
-    return zoom_tolerance(int(zoom))
+def _in_view(leg, ids, q) -> dict:
+    """One map's tracks, at ``bbox_zoom`` in the area in view and at ``zoom`` (or
+    in full without it) elsewhere; segments without points are left out."""
+    mode = q["map"]
+    box = q["bbox"]
+    segments = {}
+    for segment_id, track in load_tracks(ids, mode).items():
+        if len(track):
+            segments[segment_id] = _drawn(track, mode, q.get("zoom"), box, q["bbox_zoom"])
+    return {
+        "leg": leg.pk,
+        "map": mode,
+        "zoom": q.get("zoom"),
+        "bbox_zoom": q["bbox_zoom"],
+        "segments": segments,
+    }
 
 
-def _pairs(a, b) -> list[list[float]]:
+def _drawn(track, mode, zoom, box=None, box_zoom=None) -> list[list[float]]:
+    outside = 0.0 if zoom is None else tolerance(mode, zoom)
+    inside = 0.0 if box_zoom is None else tolerance(mode, box_zoom)
+    x, y = drawn(track.x, track.y, outside, box, inside)
     # 1e-7 degrees is 1 cm; the 17 digits a float prints would triple the bytes.
-    return np.round(np.column_stack([a, b]), 7).tolist()
+    # GPS points go as [lat, lon], the order Leaflet takes.
+    pairs = np.column_stack([y, x] if mode == GPS else [x, y])
+    return np.round(pairs, 7).tolist()
 
 
 def leg_labels(leg: Leg) -> dict[int, str]:

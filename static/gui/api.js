@@ -49,7 +49,7 @@ function describeErrors(data) {
   return parts.length ? parts.join(" ") : data.detail;
 }
 
-export async function api(method, path, body, { root = CONFIG.apiRoot } = {}) {
+export async function api(method, path, body, { root = CONFIG.apiRoot, signal } = {}) {
   const headers = { Accept: "application/json" };
   let payload;
   if (body instanceof FormData) {
@@ -59,7 +59,7 @@ export async function api(method, path, body, { root = CONFIG.apiRoot } = {}) {
     payload = JSON.stringify(body);
   }
   if (method !== "GET") headers["X-CSRFToken"] = csrfToken();
-  const response = await fetch(root + path, { method, headers, body: payload, credentials: "same-origin" });
+  const response = await fetch(root + path, { method, headers, body: payload, credentials: "same-origin", signal });
   if (response.status === 204) return null;
   let data = null;
   const type = response.headers.get("Content-Type") || "";

@@ -46,52 +46,156 @@ const AffineImage = L.Layer.extend({
   },
 });
 
+/* Zoomed in this far beyond the zoom the tracks were thinned for, the thinned
+ * line is a pixel off: the area in view is fetched in detail. */
+const DETAIL_AFTER_ZOOMS = 1;
+// Panning and zooming settle for this long before the detail is asked for.
+const DETAIL_DELAY_MS = 250;
+
 class TrackMap {
-  /* toLatLng turns a stored point into a Leaflet position for this map. */
-  constructor(element, options, toLatLng) {
+  /* toLatLngs turns stored points into positions Leaflet takes for this map. */
+  constructor(element, options, toLatLngs) {
     this.element = element;
     this.map = L.map(element, options);
-    this.toLatLng = toLatLng;
-    this.tracks = new Map(); // master segment id -> {line, mode}
+    this.toLatLngs = toLatLngs;
+    // One canvas for every track and take-over: a polyline of thousands of
+    // points is one SVG path the browser lays out again on every change.
+    this.renderer = L.canvas({ padding: 0.5 });
+    this.renderer.on("update", () => this.markDrawn());
+    this.tracks = new Map(); // master segment id -> {line, mode, overview, live}
     this.markers = L.layerGroup().addTo(this.map);
     this.selectedId = null;
     this.fitted = false;
     this.follow = false; // pan to each new point of the vehicle
     this.labelOf = (id) => `Segment ${id}`;
+    this.overviewZoom = null; // the zoom the server thinned the whole tracks for
+    this.detail = null; // {zoom, controller, shown}: the area in view in detail
   }
   clear() {
     for (const t of this.tracks.values()) t.line.remove();
     this.tracks.clear();
     this.markers.clearLayers();
     this.fitted = false;
+    this.dropDetail();
+    this.markDrawn();
   }
   style(id, mode) {
     const selected = id === this.selectedId;
-    return { color: selected ? COLORS.selected : COLORS[mode] || "#666", weight: selected ? 6 : 3, opacity: 0.9 };
+    return { color: selected ? COLORS.selected : COLORS[mode] || "#666", weight: selected ? 6 : 3, opacity: 0.9, renderer: this.renderer };
   }
+  /* The whole track as the server thinned it for this.overviewZoom. */
   setTrack(id, mode, points) {
     let t = this.tracks.get(id);
-    const latlngs = points.map(this.toLatLng);
     if (!t) {
-      const line = L.polyline(latlngs, this.style(id, mode)).addTo(this.map);
+      const line = L.polyline(this.toLatLngs(points), this.style(id, mode)).addTo(this.map);
       line.bindTooltip(() => `${this.labelOf(id)} (${mode.toUpperCase()})`);
-      t = { line, mode };
+      t = { line, mode, overview: points.slice(), live: [] };
       this.tracks.set(id, t);
     } else {
-      t.line.setLatLngs(latlngs);
+      t.overview = points.slice();
+      t.line.setLatLngs(this.toLatLngs(points));
+    }
+    this.markDrawn();
+    if (this.detail) {
+      // The new overview replaced this line's detail: fetch it again.
+      this.detail.controller.abort();
+      this.detail = null;
+      this.scheduleDetail();
     }
     return t;
   }
   appendPoints(id, mode, points) {
     const t = this.tracks.get(id) || this.setTrack(id, mode, []);
-    for (const p of points) t.line.addLatLng(this.toLatLng(p));
+    t.overview.push(...points);
+    // A detail answer on its way was read before these points: they follow it.
+    if (this.detail && !this.detail.shown) t.live.push(...points);
+    for (const p of this.toLatLngs(points)) t.line.addLatLng(p);
+    this.markDrawn();
     if (!this.fitted) this.fitAll();
-    else if (this.follow && points.length) this.map.panTo(this.toLatLng(points[points.length - 1]));
+    else if (this.follow && points.length) this.map.panTo(this.toLatLngs(points.slice(-1))[0]);
   }
   addTakeOver(id, point) {
-    L.circleMarker(this.toLatLng(point), { radius: 7, color: COLORS.ito, weight: 2, fillOpacity: 0.2 })
+    L.circleMarker(this.toLatLngs([point])[0], { radius: 7, color: COLORS.ito, weight: 2, fillOpacity: 0.2, renderer: this.renderer })
       .bindTooltip(() => `Take-over, ${this.labelOf(id)}`)
       .addTo(this.markers);
+    this.markDrawn();
+  }
+  /* What the canvas shows, on the map element for tests and benchmarks:
+   * tracks, their points, take-overs, the detail zoom and when it was drawn.
+   * Set in an animation frame requested after the renderer's own, so it
+   * runs once the canvas holds these lines. */
+  markDrawn() {
+    if (this.markPending) return;
+    this.markPending = true;
+    requestAnimationFrame(() => {
+      this.markPending = false;
+      let lines = 0, points = 0;
+      for (const t of this.tracks.values()) {
+        const n = t.line.getLatLngs().length;
+        if (n) lines += 1;
+        points += n;
+      }
+      const d = this.element.dataset;
+      d.tracks = lines;
+      d.trackPoints = points;
+      d.takeOvers = this.markers.getLayers().length;
+      d.detailZoom = this.detail && this.detail.shown ? this.detail.zoom : "";
+      d.drawnAt = Math.round(performance.now());
+    });
+  }
+  /* load(bbox, zoom, signal) answers {segment id: points} for the area in
+   * view, finer inside bbox ([xmin, ymin, xmax, ymax] in the map's own
+   * coordinates).  It runs after the map settles zoomed in beyond the
+   * overview; zoomed back out, the overview lines return.  A failed load
+   * leaves the overview and goes to onError. */
+  followView(load, onError) {
+    this.detailLoader = load;
+    this.detailError = onError;
+    this.map.on("moveend", () => this.scheduleDetail());
+  }
+  scheduleDetail() {
+    clearTimeout(this.viewTimer);
+    this.viewTimer = setTimeout(() => this.viewChanged().catch((err) => {
+      this.dropDetail();
+      this.detailError(err);
+    }), DETAIL_DELAY_MS);
+  }
+  dropDetail() {
+    if (!this.detail) return;
+    this.detail.controller.abort();
+    if (this.detail.shown) {
+      for (const t of this.tracks.values()) t.line.setLatLngs(this.toLatLngs(t.overview));
+    }
+    this.detail = null;
+    this.markDrawn();
+  }
+  async viewChanged() {
+    const zoom = this.map.getZoom();
+    if (!this.detailLoader || this.overviewZoom === null || zoom < this.overviewZoom + DETAIL_AFTER_ZOOMS || !this.tracks.size) {
+      this.dropDetail();
+      return;
+    }
+    const previous = this.detail;
+    if (previous) previous.controller.abort();
+    const detail = { zoom: Math.ceil(zoom), controller: new AbortController(), shown: false };
+    this.detail = detail;
+    for (const t of this.tracks.values()) t.live = [];
+    const b = this.map.getBounds().pad(0.25);
+    const bbox = [b.getWest(), b.getSouth(), b.getEast(), b.getNorth()];
+    let pieces;
+    try {
+      pieces = await this.detailLoader(bbox, detail.zoom, detail.controller.signal);
+    } catch (err) {
+      if (err.name === "AbortError") return;
+      throw err;
+    }
+    if (this.detail !== detail) return;
+    for (const [id, points] of Object.entries(pieces)) {
+      const t = this.tracks.get(Number(id));
+      if (t) t.line.setLatLngs(this.toLatLngs(points.concat(t.live)));
+    }
+    detail.shown = true;
+    this.markDrawn();
   }
   select(id) {
     const previous = this.selectedId;
@@ -122,21 +226,13 @@ class TrackMap {
 
 class GpsMap extends TrackMap {
   constructor(element, messageElement) {
-    super(element, { center: [50.6, 7.2], zoom: 3, maxZoom: 21, zoomControl: true }, (p) => L.latLng(p[0], p[1]));
+    // Points come as [lat, lon], which Leaflet takes as they are.
+    super(element, { center: [50.6, 7.2], zoom: 3, maxZoom: 21, zoomControl: true }, (points) => points);
     this.maxFocusZoom = 19;
     this.messageElement = messageElement;
     this.tileLayer = null;
     this.overlay = null;
     this.layers = L.control.layers(null, null, { collapsed: true });
-  }
-  /* For legs too big to send whole: load(zoom) fetches
-     gui/api/legs/{id}/tracks/?zoom={zoom} (docs/gui.md) and draws it with setTrack.
-     It runs now and after every zoom, so zooming in brings the finer detail. */
-  followZoom(load) {
-    if (this.zoomLoader) this.map.off("zoomend", this.zoomLoader);
-    this.zoomLoader = () => load(Math.round(this.map.getZoom()));
-    this.map.on("zoomend", this.zoomLoader);
-    this.zoomLoader();
   }
   setTiles(url, attribution) {
     if (this.tileLayer) this.tileLayer.remove();
@@ -221,7 +317,7 @@ class GpsMap extends TrackMap {
 class LocalMap extends TrackMap {
   constructor(element) {
     // Map-frame metres: Leaflet's "lat" is y and "lng" is x.
-    super(element, { crs: L.CRS.Simple, center: [0, 0], zoom: 2, minZoom: -5, maxZoom: 8, zoomSnap: 0.25 }, (p) => L.latLng(p[1], p[0]));
+    super(element, { crs: L.CRS.Simple, center: [0, 0], zoom: 2, minZoom: -5, maxZoom: 8, zoomSnap: 0.25 }, (points) => points.map((p) => [p[1], p[0]]));
     this.maxFocusZoom = 6;
     this.image = null;
   }

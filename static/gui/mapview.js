@@ -2,6 +2,7 @@
  * basemaps, the shift's local map image and its overlay on the GPS map. */
 import { CONFIG, $ } from "./dom.js";
 import { api } from "./api.js";
+import { showError } from "./feedback.js";
 import { segmentLabel, state } from "./state.js";
 import { roundFloat } from "./format.js";
 import { GpsMap, LocalMap } from "./maps.js";
@@ -9,6 +10,39 @@ import { GpsMap, LocalMap } from "./maps.js";
 export const gpsMap = new GpsMap($("#gps-map"), $("#tile-message"));
 export const localMap = new LocalMap($("#local-map"));
 for (const m of [gpsMap, localMap]) m.labelOf = (id) => segmentLabel(id);
+
+/* The leg's tracks thinned for the GPS map's size (the local map is laid out
+ * the same), so a 200 000-point leg crosses the wire as a few thousand points.
+ * Zoomed in, each map fetches the area in view in detail (TrackMap.followView). */
+export async function loadLegTracks(leg) {
+  // The element's size: Leaflet's getSize() still holds the size from before the
+  // maps section was shown.  fitAll pads by 20 px on each side.
+  const shown = [gpsMap, localMap].map((m) => m.element).find((e) => e.clientWidth > 40 && e.clientHeight > 40);
+  const fit = shown ? `${shown.clientWidth - 40},${shown.clientHeight - 40}` : "800,600";
+  return api("GET", `legs/${leg}/tracks/?fit=${fit}`, undefined, { root: CONFIG.guiApiRoot });
+}
+
+/* Draws the answer of loadLegTracks; only the segments not drawn yet unless redraw. */
+export function drawLegTracks(data, redraw = true) {
+  gpsMap.overviewZoom = data.zoom;
+  localMap.overviewZoom = data.local_zoom;
+  for (const [id, t] of Object.entries(data.segments)) {
+    if (!redraw && state.tracks[id]) continue;
+    const sid = Number(id);
+    if (t.gps.length) gpsMap.setTrack(sid, t.mode, t.gps);
+    if (t.local.length) localMap.setTrack(sid, t.mode, t.local);
+  }
+}
+
+for (const [map, name] of [[gpsMap, "gps"], [localMap, "local"]]) {
+  map.followView(async (bbox, zoom, signal) => {
+    const leg = state.selected.leg;
+    const query = new URLSearchParams({ map: name, bbox: bbox.map((v) => v.toFixed(7)).join(","), bbox_zoom: zoom });
+    if (map.overviewZoom !== null) query.set("zoom", map.overviewZoom);
+    const data = await api("GET", `legs/${leg}/tracks/?${query}`, undefined, { root: CONFIG.guiApiRoot, signal });
+    return data && data.leg === state.selected.leg ? data.segments : {};
+  }, showError);
+}
 
 /* Follow the vehicle (pan to each new point) or show the whole track. */
 function setFollow(on) {

@@ -6,7 +6,7 @@ import { clearError, notice, showError } from "./feedback.js";
 import { byId, current, fromUrl, reasonName, saveUrl, segmentLabel, shortLabel, state } from "./state.js";
 import { fmtClock, fmtDistance, fmtDuration, fmtTime } from "./format.js";
 import { confirmDialog } from "./dialogs.js";
-import { gpsMap, loadBasemaps, loadLocalMap, localMap, showMaps } from "./mapview.js";
+import { drawLegTracks, gpsMap, loadBasemaps, loadLegTracks, loadLocalMap, localMap, showMaps } from "./mapview.js";
 import { Live, onSelectedLeg } from "./live.js";
 import { Collector } from "./collector.js";
 import { openSegmentDialog } from "./segment-dialog.js";
@@ -101,14 +101,10 @@ export function applySegments(e) {
 
 async function loadTracks() {
   const leg = state.selected.leg;
-  const data = await api("GET", `legs/${leg}/tracks/`, undefined, { root: CONFIG.guiApiRoot });
+  const data = await loadLegTracks(leg);
   if (leg !== state.selected.leg) return;
+  drawLegTracks(data);
   state.tracks = data.segments;
-  for (const [id, t] of Object.entries(data.segments)) {
-    const sid = Number(id);
-    if (t.gps.length) gpsMap.setTrack(sid, t.mode, t.gps);
-    if (t.local.length) localMap.setTrack(sid, t.mode, t.local);
-  }
   drawTakeOvers();
   const anyLocal = Object.values(data.segments).some((t) => t.local.length);
   if (anyLocal && !$("#show-local").checked) {
@@ -281,15 +277,9 @@ export async function refreshDistances(redraw) {
   if (refreshDistances.busy) return;
   refreshDistances.busy = true;
   try {
-    const data = await api("GET", `legs/${leg}/tracks/`, undefined, { root: CONFIG.guiApiRoot });
+    const data = await loadLegTracks(leg);
     if (leg !== state.selected.leg) return;
-    for (const [id, t] of Object.entries(data.segments)) {
-      const sid = Number(id);
-      if (redraw || !state.tracks[id]) {
-        if (t.gps.length) gpsMap.setTrack(sid, t.mode, t.gps);
-        if (t.local.length) localMap.setTrack(sid, t.mode, t.local);
-      }
-    }
+    drawLegTracks(data, redraw);
     state.tracks = data.segments;
     renderSegments();
   } finally {

@@ -79,6 +79,86 @@ def zoom_tolerance(zoom: int) -> float:
     return 360.0 / (256 * 2**zoom) / 2
 
 
+# The local map (Leaflet's CRS.Simple) shows one map-frame metre as 2**zoom pixels;
+# it zooms out further than the GPS map.
+MIN_LOCAL_ZOOM = -10
+
+
+def local_zoom_tolerance(zoom: int) -> float:
+    """Half a screen pixel at a local-map zoom level, in map-frame metres."""
+    return 0.5 / 2**zoom
+
+
+def tolerance(mode: str, zoom: int) -> float:
+    """What a track may be thinned by at ``zoom`` of its map without a visible change."""
+    return zoom_tolerance(zoom) if mode == GPS else local_zoom_tolerance(zoom)
+
+
+def _mercator(latitude: np.ndarray) -> np.ndarray:
+    # Web Mercator y in degrees-of-longitude units, so it compares with longitudes.
+    return np.degrees(np.log(np.tan(np.pi / 4 + np.radians(latitude) / 2)))
+
+
+def fit_zoom(mode: str, tracks: list[Track], width: int, height: int) -> int | None:
+    """The largest whole zoom at which every point of ``tracks`` fits a map of
+    ``width`` x ``height`` pixels (what the map picks when it shows the whole
+    leg); None without points."""
+    xs = [t.x for t in tracks if len(t)]
+    if not xs:
+        return None
+    x = np.concatenate(xs)
+    y = np.concatenate([t.y for t in tracks if len(t)])
+    if mode == GPS:
+        y = _mercator(y)
+    # A track of one point (or a straight line) still gets a finite zoom.
+    span_x = max(float(x.max() - x.min()), 1e-12)
+    span_y = max(float(y.max() - y.min()), 1e-12)
+    if mode == GPS:
+        pixels_per_unit = min(width / span_x, height / span_y) * 360 / 256
+        low = 0
+    else:
+        pixels_per_unit = min(width / span_x, height / span_y)
+        low = MIN_LOCAL_ZOOM
+    return int(min(max(np.floor(np.log2(pixels_per_unit)), low), MAX_ZOOM))
+
+
+def drawn(
+    x: np.ndarray,
+    y: np.ndarray,
+    tolerance: float,
+    bbox: tuple[float, float, float, float] | None = None,
+    bbox_tolerance: float = 0.0,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The track as a map draws it: thinned by ``tolerance``, and inside ``bbox``
+    (xmin, ymin, xmax, ymax: the area in view) by the finer ``bbox_tolerance``.
+
+    The track is cut into runs inside and outside the box; neighbouring runs
+    share their end point, which Douglas-Peucker keeps, so the pieces join
+    without a gap.  A point just outside the box belongs to the run inside, so
+    the line leaves the view at full detail."""
+    if bbox is None or len(x) < 3:
+        return simplified(x, y, tolerance)
+    xmin, ymin, xmax, ymax = bbox
+    inside = (x >= xmin) & (x <= xmax) & (y >= ymin) & (y <= ymax)
+    near = inside.copy()
+    near[1:] |= inside[:-1]
+    near[:-1] |= inside[1:]
+    cuts = np.flatnonzero(near[1:] != near[:-1]) + 1
+    starts = np.concatenate([[0], cuts])
+    ends = np.concatenate([cuts, [len(x)]])
+    xs, ys = [], []
+    for first, stop in zip(starts, ends, strict=True):
+        # Each run but the last reaches into the next one's first point.
+        last = min(stop + 1, len(x))
+        fine = bbox_tolerance if near[first] else tolerance
+        px, py = simplified(x[first:last], y[first:last], fine)
+        if stop < len(x):
+            px, py = px[:-1], py[:-1]
+        xs.append(px)
+        ys.append(py)
+    return np.concatenate(xs), np.concatenate(ys)
+
+
 def simplified(x: np.ndarray, y: np.ndarray, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
     """The polyline with fewer points, none further than ``tolerance`` from the original
     (Douglas-Peucker, GEOS via shapely); the first and last points are kept.
@@ -150,28 +230,53 @@ def _gps_tracks_postgis(segment_ids: list[int]) -> dict[int, Track]:
         f"count(*) FILTER (WHERE fix_status = {no_fix}) "
         f'FROM "{table}" WHERE segment_id = ANY(%s) GROUP BY segment_id'
     )
+    return _packed_tracks(query, segment_ids, _PACKED_POINT, "no_fix")
+
+
+def _packed_tracks(query: str, segment_ids: list[int], dtype, extra: str) -> dict[int, Track]:
+    """Runs a query answering (segment id, packed points, ``extra`` of Track) rows."""
     with connection.cursor() as cursor:
         cursor.execute(query, [segment_ids])
         rows = cursor.fetchall()
     tracks = {}
-    for seg, packed, no_fix_count in rows:
-        points = np.frombuffer(packed or b"", dtype=_PACKED_POINT)
+    for seg, packed, value in rows:
+        points = np.frombuffer(packed or b"", dtype=dtype)
         tracks[seg] = Track(
             segment_id=seg,
             x=points["x"].astype(float),
             y=points["y"].astype(float),
             t=points["t"].astype(float),
-            no_fix=no_fix_count,
+            **{extra: value},
         )
     return tracks
+
+
+# One local point as _local_tracks_postgres packs it: x, y, time (float8send, big-endian).
+_PACKED_LOCAL = np.dtype([("x", ">f8"), ("y", ">f8"), ("t", ">f8")])
+
+
+def _local_tracks_postgres(segment_ids: list[int]) -> dict[int, Track]:
+    """Local tracks packed like _gps_tracks_postgis: one byte string per segment,
+    and the frame of its first point."""
+    table = LocalPose._meta.db_table
+    order = "ORDER BY robot_stamp ASC NULLS LAST, received, id"
+    query = (
+        "SELECT segment_id, string_agg("
+        "float8send(x) || float8send(y) || "
+        "float8send(date_part('epoch', COALESCE(robot_stamp, received))), "
+        f"''::bytea {order}), COALESCE((array_agg(frame {order}))[1], '') "
+        f'FROM "{table}" WHERE segment_id = ANY(%s) GROUP BY segment_id'
+    )
+    return _packed_tracks(query, segment_ids, _PACKED_LOCAL, "frame")
 
 
 def load_tracks(segment_ids: list[int], mode: str = GPS) -> dict[int, Track]:
     """Tracks of the given master segments; segments without points are absent."""
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}")
-    if mode == GPS and connection.vendor == "postgresql":
-        return _gps_tracks_postgis([int(pk) for pk in segment_ids])
+    if connection.vendor == "postgresql":
+        packed = _gps_tracks_postgis if mode == GPS else _local_tracks_postgres
+        return packed([int(pk) for pk in segment_ids])
     buckets: dict[int, tuple[list, list, list, list]] = {}
     no_fix: dict[int, int] = {}
     for seg, x, y, t, extra in _rows(list(segment_ids), mode):

@@ -143,13 +143,12 @@ def test_field_walk(browser, server, shot):
         at = robot.do("auto")
         wait_live(rows.filter(has_text="AUTO"), at, figures, "AUTO segment")
         at = robot.do("poses")
-        track = page.locator("#gps-map path.leaflet-interactive")
-        expect(track.first).to_be_attached(timeout=3000)
+        expect(page.locator("#gps-map")).to_have_attribute("data-tracks", "1", timeout=3000)
         figures["poses"] = time.time() - at
         at = robot.do("ito")
         ito_row = rows.filter(has_text="ITO")
         wait_live(ito_row, at, figures, "ITO segment")
-        expect(page.locator("#gps-map .leaflet-tooltip-pane, #gps-map path")).not_to_have_count(0)
+        expect(page.locator("#gps-map")).to_have_attribute("data-take-overs", "1")
         shot(page, "live-segments")
 
         # A reload while logging brings back the same leg, still logging.

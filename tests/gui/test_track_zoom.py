@@ -72,3 +72,59 @@ def test_a_wrong_zoom_is_refused_with_a_field_message(client, zigzag_leg, zoom):
     response = client.get(f"/gui/api/legs/{leg.pk}/tracks/", {"zoom": zoom})
     assert response.status_code == 400
     assert "zoom" in response.json()["errors"]
+
+
+def test_fit_thins_for_the_zoom_that_shows_the_whole_leg_and_says_which(client, zigzag_leg):
+    leg, master = zigzag_leg
+    # 2.2 km north in 700 x 500 pixels: zoom 14 (about 10 m a pixel), the 20 m zigzag stays.
+    body = tracks(client, leg, fit="700,500")
+    assert body["zoom"] == 14
+    assert body["local_zoom"] is None  # no local track
+    assert body["tolerance_deg"] == zoom_tolerance(14)
+    points = body["segments"][str(master.pk)]["gps"]
+    assert 40 <= len(points) < 100
+
+
+def test_the_area_in_view_comes_in_detail_and_the_rest_thinned(client, zigzag_leg):
+    leg, master = zigzag_leg
+    # The southern quarter in view at zoom 18, the rest at zoom 8.
+    box = "6.999,49.999,7.001,50.005"
+    body = tracks(client, leg, map="gps", zoom=8, bbox=box, bbox_zoom=18)
+    assert body["map"] == "gps" and body["bbox_zoom"] == 18
+    points = body["segments"][str(master.pk)]
+    in_view = [p for p in points if p[0] <= 50.005]
+    outside = [p for p in points if p[0] > 50.005]
+    # Five zigzag steps in view keep their corners; outside, a few points only.
+    assert len(in_view) >= 10
+    assert {round(lon, 7) for _, lon in in_view} == {7.0, 7.0 + ZIGZAG}
+    assert len(outside) < 5
+    assert points[-1] == [50.0 + 1999 * 1e-5, 7.0 + ZIGZAG]
+
+
+@pytest.mark.parametrize(
+    "params, field",
+    [
+        ({"fit": "0,500"}, "fit"),
+        ({"fit": "700"}, "fit"),
+        ({"map": "gps", "bbox": "7,50,6,51", "bbox_zoom": 18}, "bbox"),
+        ({"map": "gps", "bbox": "7,50,x,51", "bbox_zoom": 18}, "bbox"),
+        ({"map": "gps", "bbox_zoom": 18}, "bbox"),
+        ({"map": "gps", "bbox": "7,50,8,51", "bbox_zoom": -2}, "bbox_zoom"),
+        ({"map": "moon", "bbox": "7,50,8,51", "bbox_zoom": 2}, "map"),
+    ],
+)
+def test_a_wrong_view_is_refused_with_a_field_message(client, zigzag_leg, params, field):
+    leg, _ = zigzag_leg
+    response = client.get(f"/gui/api/legs/{leg.pk}/tracks/", params)
+    assert response.status_code == 400
+    assert field in response.json()["errors"]
+
+
+def test_the_local_map_zooms_below_zero(client, zigzag_leg):
+    leg, master = zigzag_leg
+    recording.record_local_poses(
+        master, [recording.MapPose(float(i), 0.0, "map") for i in range(50)]
+    )
+    body = tracks(client, leg, map="local", zoom=-3, bbox="0,-1,10,1", bbox_zoom=-1)
+    # A straight line keeps its ends and the point past the view where its detail ends.
+    assert body["segments"][str(master.pk)] == [[0.0, 0.0], [12.0, 0.0], [49.0, 0.0]]

@@ -14,7 +14,7 @@ from events.services import segments
 from events.services.segments import GpsPosition
 from telemetry.models import Pose
 from telemetry.models.poses import FixStatus
-from telemetry.selectors.tracks import load_tracks
+from telemetry.selectors.tracks import GPS, LOCAL, Track, drawn, fit_zoom, load_tracks
 from telemetry.services import recording
 from telemetry.services.recording import GpsFix
 
@@ -58,3 +58,49 @@ def test_points_are_ordered_by_robot_clock_and_no_fix_points_are_counted_apart(l
     i = tracks[i1.pk]
     assert len(i) == 0 and i.no_fix == 1
     assert load_tracks([]) == {}
+
+
+def test_local_points_come_in_driving_order_with_their_frame(leg):
+    master = segments.report_mode(leg, SegmentType.AUTO).master
+    recording.record_local_poses(
+        master,
+        [
+            recording.MapPose(3.0, 30.0, "map", robot_stamp=_at(30)),
+            recording.MapPose(1.0, 10.0, "map", robot_stamp=_at(10)),
+            recording.MapPose(2.0, 20.0, "map", robot_stamp=_at(20)),
+        ],
+    )
+    track = load_tracks([master.pk], LOCAL)[master.pk]
+    assert track.x.tolist() == [1.0, 2.0, 3.0] and track.y.tolist() == [10.0, 20.0, 30.0]
+    assert np.allclose(track.t, [_at(s).timestamp() for s in (10, 20, 30)], atol=1e-3)
+    assert track.frame == "map"
+
+
+# A zigzag of 1 unit every 10 points along x from 0 to 1000.
+ZIG_X = np.arange(1001, dtype=float)
+ZIG_Y = np.where((np.arange(1001) // 10) % 2 == 1, 1.0, 0.0)
+
+
+def test_the_area_in_view_keeps_its_detail_and_the_rest_is_thinned():
+    coarse_x, _ = drawn(ZIG_X, ZIG_Y, 5.0)
+    assert coarse_x.tolist() == [0.0, 1000.0]
+    x, y = drawn(ZIG_X, ZIG_Y, 5.0, bbox=(400.0, -1.0, 600.0, 2.0), bbox_tolerance=0.1)
+    inside = (x >= 400) & (x <= 600)
+    # Every corner in view: a step up or down at each multiple of 10, both ends of it.
+    assert set(x[inside].tolist()) >= {float(v) for v in range(410, 600, 10)}
+    assert len(x[~inside]) <= 4
+    # Still one line from end to end, in order, through the area in view.
+    assert x[0] == 0.0 and x[-1] == 1000.0 and np.all(np.diff(x) > 0)
+    assert y[inside].max() == 1.0 and y[inside].min() == 0.0
+
+
+def test_fit_zoom_is_the_zoom_a_map_of_that_size_shows_the_whole_leg_at():
+    # 0.01 degrees of longitude (about 700 m at 50 N) across 700 pixels needs zoom 16.6:
+    # the whole leg shows at 16; twice the pixels take one zoom more.
+    track = Track(1, np.array([7.0, 7.01]), np.array([50.0, 50.0]), np.zeros(2))
+    assert fit_zoom(GPS, [track], 700, 500) == 16
+    assert fit_zoom(GPS, [track], 1400, 1000) == 17
+    # 100 m of map frame in 800 pixels: 8 pixels a metre, zoom 3 (2**3).
+    local = Track(1, np.array([0.0, 100.0]), np.array([0.0, 50.0]), np.zeros(2))
+    assert fit_zoom(LOCAL, [local], 800, 800) == 3
+    assert fit_zoom(GPS, [], 800, 600) is None
