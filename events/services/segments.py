@@ -95,12 +95,12 @@ def _lock_with_leg(segment: Segment) -> Segment:
     # Leg before segment is the order every writer takes, so closing a leg
     # waits for (or is waited on by) additions to its segments: no deadlock,
     # and no segment opened under a leg that has just been closed.
-    Leg.objects.select_for_update().filter(pk=segment.leg_id).first()
+    Leg.objects.select_for_update(no_key=True).filter(pk=segment.leg_id).first()
     return lock(segment)
 
 
 def _open_master(leg: Leg) -> Segment | None:
-    return rules.open_masters_of_leg(leg.pk).select_for_update().first()
+    return rules.open_masters_of_leg(leg.pk).select_for_update(no_key=True).first()
 
 
 def _close(segment: Segment, at: datetime) -> None:

@@ -1,14 +1,29 @@
-"""SpatiaLite backend that survives newer SQLite builds.
+"""SpatiaLite backend that survives newer SQLite builds and keeps its busy timeout.
 
 With SQLite >= 3.4x and SpatiaLite 5.0, Django's lazy ``InitSpatialMetaData``
 runs too late and ``migrate`` fails inside the ISO metadata triggers (Django
 ticket #32935).  Initialising the metadata tables up front avoids that.
+
+Loading ``mod_spatialite`` sets the connection's busy timeout to SpatiaLite's
+own 5 s, replacing the one Django gave ``sqlite3.connect`` (``OPTIONS["timeout"]``).
+Under 200 concurrent clients a writer then gave up after 5 s in the queue for
+the write lock ("database is locked", 503) although the settings promise a
+longer wait; the timeout is set again once the extension is in.
 """
 
 from django.contrib.gis.db.backends.spatialite import base
 
+# What sqlite3.connect uses when OPTIONS has no "timeout".
+SQLITE_DEFAULT_TIMEOUT = 5.0
+
 
 class DatabaseWrapper(base.DatabaseWrapper):
+    def get_new_connection(self, conn_params):
+        conn = super().get_new_connection(conn_params)
+        timeout = conn_params.get("timeout", SQLITE_DEFAULT_TIMEOUT)
+        conn.execute(f"PRAGMA busy_timeout = {round(timeout * 1000)}")
+        return conn
+
     def prepare_database(self):
         with self.cursor() as cursor:
             cursor.execute(

@@ -207,6 +207,30 @@ def test_ros_parameters_are_typed_and_suggest_matching_topics(page, server, open
         robot.stop()
 
 
+BACKLOG = """
+from events.models import Leg
+from rosbridge_app.services import collectors
+leg = Leg.objects.get(shift__vehicle__key="{key}")
+collectors.heartbeat(
+    "spool-{key}", vehicle=leg.shift.vehicle, logging=True, leg=leg,
+    state="logging; {pending} records waiting", pending={pending},
+)
+"""
+
+
+def test_robot_panel_shows_the_collectors_backlog_until_it_is_replayed(page, server, open_leg):
+    # What a collector reports when the database is back after an outage: the
+    # records still in its spool. The operator must see that data is on its way.
+    server.python(BACKLOG.format(key=open_leg, pending=3356))
+    login(page, server, "otto")
+    choose(page, open_leg)
+    status = page.locator("#collector-status")
+    expect(status).to_contain_text("logging into this leg · 3356 records not yet stored")
+    server.python(BACKLOG.format(key=open_leg, pending=0))
+    expect(status).not_to_contain_text("not yet stored", timeout=8000)
+    expect(status).to_contain_text("logging into this leg")
+
+
 def test_local_map_and_overlay_appear_live(page, server, open_leg, shot):
     login(page, server, "otto")
     choose(page, open_leg)
