@@ -202,8 +202,8 @@ class WeatherAdmin(CatalogueAdmin):
 
 @admin.register(ItoReason)
 class ItoReasonAdmin(CatalogueAdmin):
-    list_display = ["key", "short_description", colour_swatch, "counts_as_intervention"]
-    list_filter = ["counts_as_intervention"]
+    list_display = ["key", "short_description", colour_swatch, "counts_as_intervention", "quick"]
+    list_filter = ["counts_as_intervention", "quick"]
 
 
 @admin.register(SegmentType)

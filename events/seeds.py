@@ -117,6 +117,9 @@ ITO_REASONS = [
     ),
 ]
 
+# The cockpit's one-tap reasons: the original's four most used take-overs.
+QUICK_REASONS = ["unexpected", "planner", "safety", "manual_transit"]
+
 SEGMENT_TYPES = [
     ("ito", "ITO", "ITO - inhabited take over (manual mode).", "255,0,0"),
     ("auto", "AUTO", "Autonomous.", "0,255,0"),
@@ -198,4 +201,10 @@ def ensure(apps=None) -> None:
     if apps is None:
         apps = global_apps
     seed_catalogues(apps)
+    mark_quick_reasons(apps)
     create_roles(apps)
+
+
+def mark_quick_reasons(apps) -> None:
+    ItoReason = apps.get_model("events", "ItoReason")
+    ItoReason.objects.filter(key__in=QUICK_REASONS).update(quick=True)

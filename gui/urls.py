@@ -17,7 +17,12 @@ urlpatterns = [
     path("logout/", auth_views.LogoutView.as_view(), name="logout"),
     path("import/", archive_import.archive_import, name="gui-archive-import"),
     path("gui/api/legs/<int:pk>/tracks/", gui_api.LegTracks.as_view(), name="gui-leg-tracks"),
-    path("gui/api/legs/<int:pk>/labels/", gui_api.LegLabels.as_view(), name="gui-leg-labels"),
+    path("gui/api/legs/<int:pk>/segments/", gui_api.LegSegments.as_view(), name="gui-segments"),
+    path(
+        "gui/api/segments/<int:pk>/attachments/",
+        gui_api.SegmentAttachments.as_view(),
+        name="gui-segment-attachments",
+    ),
     path("gui/api/shifts/<int:pk>/local-map/", gui_api.ShiftLocalMap.as_view(), name="gui-map"),
     path("gui/api/basemaps/", gui_api.Basemaps.as_view(), name="gui-basemaps"),
     path("gui/api/collectors/", gui_api.CollectorStatus.as_view(), name="gui-collectors"),

@@ -119,6 +119,7 @@ class ItoReasonSerializer(ServiceSerializer):
             "long_description",
             "color",
             "counts_as_intervention",
+            "quick",
         ]
         create_only_fields = ["key"]
 

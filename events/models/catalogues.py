@@ -45,6 +45,10 @@ class ItoReason(Catalogue):
         default=True,
         help_text="Counted as an intervention in reliability statistics (MCBI, MDBI).",
     )
+    quick = models.BooleanField(
+        default=False,
+        help_text="Offered as a one-tap button in the cockpit (the others are in its list).",
+    )
 
     class Meta(Catalogue.Meta):
         verbose_name = "ITO reason"

@@ -17,7 +17,8 @@ from rest_framework.views import APIView
 
 from basemaps.selectors.layers import layer_list
 from common import roles
-from events.models import Leg, SegmentType, Shift, Vehicle
+from events.api.serializers import NoteSerializer, SegmentSerializer
+from events.models import Leg, Note, Segment, SegmentType, Shift, Vehicle
 from events.selectors.labels import label, leg_numbers
 from gui.forms import gui_forms
 from rosbridge_app.models import Collector
@@ -29,6 +30,8 @@ from rosbridge_app.selectors.control import (
 )
 from rosbridge_app.selectors.fleet import fleet
 from rosbridge_app.services.collectors import issue_command
+from telemetry.api.serializers import ImageSerializer, RecordingSerializer
+from telemetry.models import Image, Recording
 from telemetry.selectors.distances import displayed_distances
 from telemetry.selectors.maps import current_map
 from telemetry.selectors.overlay import map_corners, overlay
@@ -172,12 +175,39 @@ def leg_labels(leg: Leg) -> dict[int, str]:
     return {pk: label(leg.number, n) for pk, n in leg_numbers(leg.pk).items()}
 
 
-class LegLabels(GuiView):
-    """Every segment's label, read with the segment list so that new segments are named at once."""
+class LegSegments(GuiView):
+    """The leg's segments as ``/api/segments/?leg=`` lists them, with their labels:
+    one request where the page needs both to draw its list."""
 
     def get(self, request, pk):
         leg = get_object_or_404(Leg, pk=pk)
-        return Response({"leg": leg.pk, "labels": leg_labels(leg)})
+        rows = SegmentSerializer(Segment.objects.filter(leg=leg), many=True).data
+        return Response({"leg": leg.pk, "segments": rows, "labels": leg_labels(leg)})
+
+
+class SegmentAttachments(GuiView):
+    """What the segment dialog shows beside the annotation, in one request: the
+    segment's notes, and the images and snapshots of its master (a reason shares
+    its master's), each as the REST list of that kind shows them."""
+
+    def get(self, request, pk):
+        segment = get_object_or_404(Segment, pk=pk)
+        master = segment.parent_id or segment.pk
+        context = {"request": request}
+        notes = Note.objects.select_related("author").filter(segment=segment)
+        return Response(
+            {
+                "segment": segment.pk,
+                "master": master,
+                "notes": NoteSerializer(notes, many=True, context=context).data,
+                "images": ImageSerializer(
+                    Image.objects.filter(segment_id=master), many=True, context=context
+                ).data,
+                "recordings": RecordingSerializer(
+                    Recording.objects.filter(segment_id=master), many=True, context=context
+                ).data,
+            }
+        )
 
 
 class ShiftLocalMap(GuiView):

@@ -11,7 +11,7 @@ from django.templatetags.static import static
 from django.urls import reverse
 
 from common import roles
-from events.models import Performer, PoseSource, Vehicle
+from events.models import ItoReason, Performer, PoseSource, Vehicle
 from rosbridge_app.selectors.collectors import logging_into
 
 
@@ -53,6 +53,8 @@ def index(request):
         "is_admin": is_admin,
         "missing": missing_configuration() if is_admin else [],
         "levels": [("event", "Test event"), ("shift", "Shift"), ("leg", "Leg")],
+        # The catalogue says which reasons get a button (ItoReason.quick, set in admin).
+        "quick_reasons": ItoReason.objects.filter(quick=True).order_by("short_description"),
         "gui_config": {
             "tileUrl": settings.FTT_TILE_URL,
             "tileAttribution": getattr(settings, "FTT_TILE_ATTRIBUTION", ""),

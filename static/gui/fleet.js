@@ -105,7 +105,9 @@ export const Fleet = {
       const style = { radius: 11, color: "#fff", weight: 3, fillColor: this.color(v), fillOpacity: 1, className: `fleet-marker vehicle-${id}` };
       if (!marker) {
         marker = L.circleMarker(v.position, style).addTo(this.map.map);
-        marker.bindTooltip(v.vehicle.name, { permanent: true, direction: "right", offset: [10, 0] });
+        // "auto": right of a dot in the map's left half, left of it in the right half, so a
+        // dot near the edge (on a phone every dot is) keeps its name on the map.
+        marker.bindTooltip(v.vehicle.name, { permanent: true, direction: "auto", offset: [10, 0] });
         marker.on("click", () => this.open(marker.vehicle));
         this.markers.set(id, marker);
       } else {

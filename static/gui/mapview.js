@@ -88,6 +88,7 @@ export async function loadLocalMap() {
   if (!shift) return;
   const data = await api("GET", `shifts/${shift}/local-map/`, undefined, { root: CONFIG.guiApiRoot });
   if (shift !== state.selected.shift) return;
+  state.localMapOf = shift;
   const message = $("#local-message");
   if (data.map) {
     localMap.setMapImage(data.map);

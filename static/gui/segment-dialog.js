@@ -6,7 +6,7 @@ import { notice, showError } from "./feedback.js";
 import { byId, segmentLabel, state } from "./state.js";
 import { fmtTime } from "./format.js";
 import { confirmDialog } from "./dialogs.js";
-import { loadSnapshots } from "./snapshots.js";
+import { showSnapshots } from "./snapshots.js";
 
 const segmentDialog = $("#segment-dialog");
 export let dialogSegment = null;
@@ -28,7 +28,12 @@ export async function openSegmentDialog(id) {
   form.hidden = s.parent === null;
   $$("input, select, button", form).forEach((el) => (el.disabled = !CONFIG.canOperate));
   $$(".op-block", segmentDialog).forEach((el) => (el.hidden = !CONFIG.canOperate));
-  await Promise.all([loadNotes(), loadImages(), loadSnapshots(masterOf(s))]);
+  // One read for notes, images and snapshots: three would queue one behind the other.
+  const data = await api("GET", `segments/${s.id}/attachments/`, undefined, { root: CONFIG.guiApiRoot });
+  if (dialogSegment !== s) return;
+  showNotes(data.notes);
+  showImages(data.images);
+  showSnapshots(data.master, data.recordings);
   if (!segmentDialog.open) segmentDialog.showModal();
 }
 
@@ -62,9 +67,13 @@ $("#annotation-form").addEventListener("submit", dialogAction(async () => {
 export async function loadNotes({ keepEditing = false } = {}) {
   if (!dialogSegment) return;
   const notes = await list("notes/", { segment: dialogSegment.id });
-  const ul = $(".notes", segmentDialog);
   // Checked after the fetch: the operator may have started editing meanwhile.
-  if (keepEditing && $("textarea", ul)) return;
+  if (keepEditing && $("textarea", $(".notes", segmentDialog))) return;
+  showNotes(notes);
+}
+
+function showNotes(notes) {
+  const ul = $(".notes", segmentDialog);
   if (!notes.length) {
     const li = document.createElement("li");
     li.className = "muted";
@@ -146,7 +155,10 @@ function masterOf(s) {
 
 export async function loadImages() {
   if (!dialogSegment) return;
-  const images = await list("images/", { segment: masterOf(dialogSegment) });
+  showImages(await list("images/", { segment: masterOf(dialogSegment) }));
+}
+
+function showImages(images) {
   const box = $(".images", segmentDialog);
   if (!images.length) {
     const p = document.createElement("p");

@@ -1,7 +1,7 @@
 /* The selected leg: its segments (list, timeline strip, current mode), their
  * tracks on the maps, and the segment actions (reasons, New, End, Edit). */
 import { CONFIG, $, $$ } from "./dom.js";
-import { ApiError, api, list } from "./api.js";
+import { ApiError, api } from "./api.js";
 import { clearError, notice, showError } from "./feedback.js";
 import { byId, current, fromUrl, reasonName, saveUrl, segmentLabel, shortLabel, state } from "./state.js";
 import { fmtClock, fmtDistance, fmtDuration, fmtTime } from "./format.js";
@@ -62,7 +62,9 @@ export async function selectionChanged() {
     renderSegments();
     return;
   }
-  await Promise.all([loadBasemaps(), loadSegments(), loadTracks(), loadLocalMap()]);
+  // The list first: it is what the operator waits for; the tracks follow.
+  const local = state.localMapOf === state.selected.shift ? null : loadLocalMap();
+  await Promise.all([loadSegments(), loadBasemaps(), loadTracks(), local]);
   gpsMap.invalidate();
   gpsMap.fitAll();
   localMap.invalidate();
@@ -73,13 +75,11 @@ export async function selectionChanged() {
 
 export async function loadSegments() {
   const leg = state.selected.leg;
-  const [rows, named] = await Promise.all([
-    list("segments/", { leg }),
-    api("GET", `legs/${leg}/labels/`, undefined, { root: CONFIG.guiApiRoot }),
-  ]);
+  // Rows and their labels in one read: the server works on one request at a time per page.
+  const data = await api("GET", `legs/${leg}/segments/`, undefined, { root: CONFIG.guiApiRoot });
   if (leg !== state.selected.leg) return;
-  state.segments = rows;
-  state.labels = named.labels;
+  state.segments = data.segments;
+  state.labels = data.labels;
   renderSegments();
 }
 

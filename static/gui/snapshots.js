@@ -44,7 +44,11 @@ function snapshotItem(r) {
 export async function loadSnapshots(master) {
   shownMaster = master;
   const rows = await list("recordings/", { segment: master });
-  if (master !== shownMaster) return;
+  if (master === shownMaster) showSnapshots(master, rows);
+}
+
+export function showSnapshots(master, rows) {
+  shownMaster = master;
   if (!rows.length) {
     const li = document.createElement("li");
     li.className = "muted";

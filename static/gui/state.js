@@ -32,6 +32,7 @@ export const state = {
   labels: {}, // segment id -> "Leg 2 · #7", from the server
   shownLeg: undefined, // leg whose segments and tracks are drawn
   basemapsOf: undefined, // test event whose basemaps the switcher offers
+  localMapOf: undefined, // shift whose map image and overlay are shown
   segment: null, // selected segment id
   view: fromUrl.view, // "fleet": every logging vehicle on one map; null: the cockpit
   catalogue: {},

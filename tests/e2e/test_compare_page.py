@@ -10,7 +10,10 @@ from playwright.sync_api import expect
 from tests.support.browser import login
 from tests.support.screens import AXE, OVERFLOWING, SERIOUS, SMALL, VIEWPORTS
 
-TARGETS = "#event-list label, #compare-run, #compare-pdf, #compare-mode, #hotspots a, a.download"
+TARGETS = (
+    "#event-list label, #compare-run, #compare-pdf, #compare-mode, #hotspots a, a.download, "
+    ".topbar nav a, .topbar nav button"
+)
 
 
 @pytest.fixture(scope="module")

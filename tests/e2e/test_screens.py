@@ -152,3 +152,48 @@ def test_main_page_and_dialogs_have_no_serious_accessibility_problem(
         page.keyboard.press("Escape")
         expect(dialog).to_be_hidden()
     context.close()
+
+
+# Every vehicle name on the fleet map, with how far it sticks out of the map (px).
+LABELS_OUTSIDE = """() => {
+  const map = document.querySelector("#fleet-map").getBoundingClientRect();
+  return Array.from(document.querySelectorAll("#fleet-map .leaflet-tooltip")).map((t) => {
+    const r = t.getBoundingClientRect();
+    const out = Math.max(
+      map.left - r.left, r.right - map.right, map.top - r.top, r.bottom - map.bottom);
+    return [t.textContent, Math.round(out)];
+  });
+}"""
+
+
+def test_fleet_names_stay_on_the_map_on_a_phone(browser, server, shot):
+    """Two robots side by side east-west: fitted, each dot is near an edge of the
+    phone's narrow map, and each name must still be readable on the map."""
+    server.python(
+        """
+        from events.models import Vehicle
+        from events.services import logs, segments
+        from rosbridge_app.services import collectors
+        from telemetry.services import recording
+        for name, lon in (("West", 7.20), ("East", 7.21)):
+            v = Vehicle.objects.create(key=f"edge-{name}", short_description=f"Edge rover {name}")
+            e = logs.create_test_event(location=f"Edge field {name}")
+            leg = logs.create_leg(shift=logs.create_shift(test_event=e, vehicle=v))
+            auto = segments.report_mode(leg, "auto").master
+            recording.record_poses(auto, [recording.GpsFix(lon, 50.3)])
+            collectors.heartbeat(f"edge-{name}", vehicle=v, logging=True, leg=leg)
+        """
+    )
+    page = browser.new_page(**VIEWPORTS["phone"])
+    login(page, server, "otto")
+    page.goto(f"{server.url}/?view=fleet")
+    for name in ("West", "East"):
+        expect(
+            page.locator("#fleet-map .leaflet-tooltip", has_text=f"Edge rover {name}")
+        ).to_be_visible()
+    page.wait_for_timeout(300)  # the fit animation
+    shot(page, "phone-fleet")
+    labels = page.evaluate(LABELS_OUTSIDE)
+    assert {name for name, _ in labels} >= {"Edge rover West", "Edge rover East"}
+    assert [name for name, out in labels if out > 0] == []
+    page.close()

@@ -1,11 +1,12 @@
 """The GUI page, login, protected media and the GUI's own JSON reads."""
 
+import re
 from urllib.parse import quote
 
 import pytest
 from django.contrib.auth.models import Group, User
 
-from events.models import Performer, PoseSource
+from events.models import ItoReason, Performer, PoseSource
 from events.services import segments
 from rosbridge_app.services import collectors
 from telemetry.services import recording
@@ -61,6 +62,26 @@ def test_operator_gets_no_admin_link_and_account_without_role_is_told(client):
     client.logout()
     member(client, "nobody")
     assert "has no role" in client.get("/").content.decode()
+
+
+def quick_buttons(page: str) -> list[str]:
+    return re.findall(r'data-quick="([^"]+)">([^<]+)<', page)
+
+
+def test_quick_reason_buttons_are_the_catalogues_quick_reasons(client):
+    member(client, "otto", "operator")
+    assert quick_buttons(client.get("/").content.decode()) == [
+        ("manual_transit", "Manual transit"),
+        ("planner", "Planner"),
+        ("safety", "Safety"),
+        ("unexpected", "Unexpected"),
+    ]
+    # An administrator changes which reasons get a button: no template or script to edit.
+    ItoReason.objects.filter(key="planner").update(quick=False)
+    ItoReason.objects.filter(key="goal").update(quick=True)
+    page = client.get("/").content.decode()
+    assert ("goal", "Goal reached") in quick_buttons(page)
+    assert "planner" not in dict(quick_buttons(page))
 
 
 def test_photos_are_only_served_to_users_with_a_role(client, leg, media_root):
@@ -217,7 +238,7 @@ def test_leg_tracks_name_segments_as_the_report_does(client, leg):
     ito = segments.report_mode(leg, "ito").master
     child = ito.children.get()
     labels = client.get(f"/gui/api/legs/{leg.pk}/tracks/").json()["labels"]
-    assert client.get(f"/gui/api/legs/{leg.pk}/labels/").json()["labels"] == labels
+    assert client.get(f"/gui/api/legs/{leg.pk}/segments/").json()["labels"] == labels
     number = leg.number
     assert labels == {
         str(auto.pk): f"Leg {number} · #1",
