@@ -64,18 +64,15 @@ def _steps(x: np.ndarray, y: np.ndarray, mode: str, inside: np.ndarray | None = 
     return steps
 
 
-def _path_lengths(paths: list[tuple[np.ndarray, np.ndarray]], mode: str) -> list[float | None]:
-    """``path_length`` of many polylines at once: their points laid end to end
-    in one array, so numpy measures a million steps in a few calls instead of
-    a few calls per segment.  None for a polyline of fewer than two points."""
-    sizes = np.array([len(x) for x, _ in paths], dtype=np.int64)
-    if not len(paths) or sizes.sum() < 2:
-        return [None] * len(paths)
-    x = np.concatenate([x for x, _ in paths])
-    y = np.concatenate([y for _, y in paths])
+def _path_lengths(x: np.ndarray, y: np.ndarray, sizes: np.ndarray, mode: str) -> list[float | None]:
+    """``path_length`` of many polylines at once, given laid end to end (``sizes``
+    points each), so numpy measures a million steps in a few calls instead of a
+    few calls per segment.  None for a polyline of fewer than two points."""
     ends = np.cumsum(sizes)
+    if len(x) < 2:
+        return [None] * len(sizes)
     inside = np.ones(len(x) - 1, dtype=bool)
-    # The step from a path's last point to the next path's first is no step.
+    # The step from a polyline's last point to the next one's first is no step.
     inside[ends[(sizes > 0) & (ends < len(x))] - 1] = False
     steps = _steps(x, y, mode, inside)
     return [
@@ -138,15 +135,20 @@ def start_points(masters: list[Segment], mode: str) -> dict[int, tuple[float, fl
         if m.pk not in deferred and m.start_position is not None
     }
     if deferred:
+        # By leg, not by id: a statistics run names ten legs instead of a thousand
+        # ids, whose quoting took longer than the query.
         rows = (
-            Segment.objects.filter(pk__in=deferred, start_position__isnull=False)
+            Segment.objects.filter(
+                leg__in={m.leg_id for m in masters if m.pk in deferred},
+                start_position__isnull=False,
+            )
             .annotate(
                 _x=Coordinate("start_position", function="ST_X"),
                 _y=Coordinate("start_position", function="ST_Y"),
             )
             .values_list("pk", "_x", "_y")
         )
-        found.update((pk, (x, y)) for pk, x, y in rows)
+        found.update((pk, (x, y)) for pk, x, y in rows if pk in deferred)
     return found
 
 
@@ -163,7 +165,7 @@ def measured_paths(
     if tracks is None:
         tracks = load_tracks([m.pk for m in masters], mode)
     starts = start_points(masters, mode)
-    joined = []
+    parts = []
     for i, master in enumerate(masters):
         follower = masters[i + 1] if i + 1 < len(masters) else None
         if follower is not None and follower.leg_id != master.leg_id:
@@ -171,32 +173,45 @@ def measured_paths(
         track = tracks.get(master.pk)
         start = starts.get(master.pk)
         after = starts.get(follower.pk) if follower is not None else None
-        xs = _joined(start, track.x if track is not None else None, after, 0)
-        ys = _joined(start, track.y if track is not None else None, after, 1)
-        joined.append((master, track, start is not None, xs, ys))
-    lengths = _path_lengths([(xs, ys) for *_, xs, ys in joined], mode)
-    return {
-        master.pk: MeasuredPath(
+        parts.append((master, track, start, after))
+    sizes = np.array(
+        [
+            (start is not None) + (len(track) if track is not None else 0) + (after is not None)
+            for _, track, start, after in parts
+        ],
+        dtype=np.int64,
+    )
+    # Every polyline is written once into one pair of arrays; each path keeps a view.
+    x = np.empty(int(sizes.sum()))
+    y = np.empty(len(x))
+    paths = {}
+    end = 0
+    for (master, track, start, after), size in zip(parts, sizes.tolist(), strict=True):
+        begin, end = end, end + size
+        _fill(x[begin:end], y[begin:end], start, track, after)
+        paths[master.pk] = MeasuredPath(
             segment_id=master.pk,
-            distance=distance,
+            distance=None,
             track=track,
-            has_start_position=has_start,
-            x=xs,
-            y=ys,
+            has_start_position=start is not None,
+            x=x[begin:end],
+            y=y[begin:end],
         )
-        for (master, track, has_start, xs, ys), distance in zip(joined, lengths, strict=True)
-    }
+    for path, distance in zip(paths.values(), _path_lengths(x, y, sizes, mode), strict=True):
+        path.distance = distance
+    return paths
 
 
-def _joined(start, middle, after, axis: int) -> np.ndarray:
-    parts = []
+def _fill(x: np.ndarray, y: np.ndarray, start, track: Track | None, after) -> None:
+    """[start] + the track + [after] into ``x``/``y``, which have room for them."""
+    first = 0 if start is None else 1
     if start is not None:
-        parts.append([start[axis]])
-    if middle is not None:
-        parts.append(middle)
+        x[0], y[0] = start
     if after is not None:
-        parts.append([after[axis]])
-    return np.concatenate(parts).astype(float) if parts else np.empty(0)
+        x[-1], y[-1] = after
+    if track is not None and len(track):
+        x[first : first + len(track)] = track.x
+        y[first : first + len(track)] = track.y
 
 
 def displayed_distances(

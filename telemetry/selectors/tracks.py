@@ -173,8 +173,13 @@ def _gps_tracks_postgis(segment_ids: list[int]) -> dict[int, Track]:
     with transaction.atomic():
         with connection.cursor() as cursor:
             cursor.execute("SET LOCAL jit = off")
-        with psycopg.Cursor(connection.connection) as cursor:
-            cursor.execute(gps_tracks_sql(), [segment_ids], binary=True)
+        # A cursor that binds on the server, which can return binary, wrapped like
+        # Django's own so the query is logged and counted like every other.
+        raw = psycopg.Cursor(connection.connection)
+        raw.format = psycopg.pq.Format.BINARY
+        wrap = connection.make_debug_cursor if connection.queries_logged else connection.make_cursor
+        with wrap(raw) as cursor:
+            cursor.execute(gps_tracks_sql(), [segment_ids])
             rows = cursor.fetchall()
     tracks = {}
     for seg, points, stamps, no_fix_count in rows:
