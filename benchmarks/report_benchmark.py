@@ -11,6 +11,11 @@ BENCH_TRACEMALLOC=1 adds the Python allocation peak (tracemalloc makes the code 
 
     .venv/bin/python benchmarks/report_benchmark.py [--shifts 10] [--segments 300]
                                                     [--poses 200000] [--skip-pdf]
+                                                    [--repeat N] [--keepdb] [--explain]
+
+The statistics of a million poses (``--segments 1000 --poses 1000000 --skip-pdf``)
+have a target of 1 s; the tracks query is timed apart from the whole, and
+``--explain`` prints PostgreSQL's plan of that query as it ran.
 """
 
 import argparse
@@ -39,6 +44,10 @@ from django.db import connection  # noqa: E402
 
 from events.models import Leg, Segment, Shift, TestEvent, Vehicle  # noqa: E402
 from telemetry.models import Pose  # noqa: E402
+from telemetry.selectors.tracks import GPS, gps_tracks_sql, load_tracks  # noqa: E402
+
+# Seconds: issue 14's target for the statistics of a million poses.
+STATISTICS_TARGET = 1.0
 
 REASONS = ("safety", "planner", "unexpected", "goal", "maintenance")
 
@@ -233,7 +242,12 @@ def main():
     parser.add_argument("--segments", type=int, default=300)
     parser.add_argument("--poses", type=int, default=200_000)
     parser.add_argument("--skip-pdf", action="store_true")
-    parser.add_argument("--repeat", type=int, default=1, help="PDF runs (for a median)")
+    parser.add_argument(
+        "--repeat", type=int, default=1, help="runs of each stage (for the best and the median)"
+    )
+    parser.add_argument(
+        "--explain", action="store_true", help="print the plan of the tracks query (PostgreSQL)"
+    )
     parser.add_argument(
         "--keepdb",
         action="store_true",
@@ -262,6 +276,18 @@ def main():
             f"backend {backend}: {args.shifts} shifts, {masters} master segments, {poses} poses"
             f" (bulk-created in {time.perf_counter() - started:.1f} s)"
         )
+        if backend == "postgresql":
+            # What autovacuum does to a table that has stopped growing; until then
+            # an index-only scan still visits the table pages written last.
+            started = time.perf_counter()
+            with connection.cursor() as cursor:
+                cursor.execute(f'VACUUM ANALYZE "{Pose._meta.db_table}"')
+            print(f"VACUUM ANALYZE of the poses in {time.perf_counter() - started:.1f} s")
+        master_ids = list(
+            Segment.objects.filter(parent=None, leg__shift__test_event=event).values_list(
+                "pk", flat=True
+            )
+        )
 
         def profiled(stage, func, *a):
             """``func(*a)``, with --profile its cProfile written to FILE.stage."""
@@ -276,6 +302,10 @@ def main():
         def statistics():
             overall = profiled("statistics", event_statistics, event).overall
             return f"{overall.total_distance / 1000:.2f} km, {overall.interventions} interventions"
+
+        def tracks():
+            loaded = profiled("tracks", load_tracks, master_ids, GPS)
+            return f"{sum(len(t) for t in loaded.values())} points of {len(loaded)} segments"
 
         def api_json():
             return f"{len(json.dumps(event_statistics(event).as_dict())) / 1024:.0f} KiB JSON"
@@ -292,15 +322,46 @@ def main():
             rows.append(f"    {'rest (segments, tables, JSON)':<38} {rest:6.2f} s")
             return f"{len(result.pdf) / 2**20:.1f} MiB PDF: {out}\n" + "\n".join(rows)
 
-        measure("statistics (selectors)", statistics)
+        if args.explain:
+            explain(master_ids)
+        runs = [measure("statistics (selectors)", statistics) for _ in range(args.repeat)]
+        summarise("statistics", runs, STATISTICS_TARGET if args.poses >= 1_000_000 else None)
+        tracks_runs = [measure("  of which tracks query", tracks) for _ in range(args.repeat)]
+        summarise("tracks query", tracks_runs)
         measure("statistics as API JSON", api_json)
         if not args.skip_pdf:
-            for _ in range(args.repeat):
-                measure("full PDF report (no tiles)", pdf)
+            summarise(
+                "full PDF", [measure("full PDF report (no tiles)", pdf) for _ in range(args.repeat)]
+            )
     finally:
         connection.close()
         if not args.keepdb:
             connection.creation.destroy_test_db(old_name, verbosity=0)
+
+
+def summarise(label: str, runs: list[dict], target: float | None = None) -> None:
+    """Best and median of repeated measurements (wall, own CPU, database CPU)."""
+    runs = [r for r in runs if "error" not in r]
+    if len(runs) < 2:
+        return
+    parts = []
+    for key, name in (("seconds", "wall"), ("cpu", "CPU"), ("db", "database CPU")):
+        values = [r[key] for r in runs if r.get(key) is not None]
+        if values:
+            parts.append(f"{name} best {min(values):.2f} s, median {np.median(values):.2f} s")
+    goal = "" if target is None else f"   (target <= {target:.0f} s wall)"
+    print(f"{label} over {len(runs)} runs: " + "; ".join(parts) + goal)
+
+
+def explain(master_ids: list[int]) -> None:
+    """PostgreSQL's plan of the tracks query, run once with EXPLAIN ANALYZE."""
+    if connection.vendor != "postgresql":
+        return
+    with connection.cursor() as cursor:
+        cursor.execute("SET jit = off")
+        cursor.execute("EXPLAIN (ANALYZE, BUFFERS) " + gps_tracks_sql(), [master_ids])
+        print("\n".join(row[0][:160] for row in cursor.fetchall()))
+        cursor.execute("RESET jit")
 
 
 def _location(shifts: int, segments: int, poses: int) -> str:

@@ -255,13 +255,33 @@ def _effective_end(segment: Segment, track: Track | None, children: list[Segment
     return max(known)
 
 
+RUN_FIELDS = (
+    "parent",
+    "segment_type",
+    "ito_reason",
+    "start",
+    "end",
+    "obstacle",
+    "lighting",
+    "slope",
+    "start_local_x",
+    "start_local_y",
+    "leg",
+    "leg__number",
+    "leg__shift",
+    "leg__shift__vehicle",
+)
+
+
 def event_runs(event: TestEvent, mode: str = GPS) -> list[Run]:
     """All master segments of a test event as runs, ordered by leg and time."""
     segments = list(
         Segment.objects.filter(leg__shift__test_event=event)
         .select_related("leg__shift")
-        # measured_paths reads start positions as plain floats
-        .defer("start_position")
+        # Only what a run needs: parsing the other timestamps of 1 000 segments, their
+        # legs and shifts took longer than measuring their million steps.  Start
+        # positions stay deferred: measured_paths reads them as plain floats.
+        .only(*RUN_FIELDS)
         .order_by("leg__shift__start", "leg__shift_id", "leg__start", "leg_id", "start", "id")
     )
     counted = set(

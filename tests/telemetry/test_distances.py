@@ -17,6 +17,8 @@ from events.services import segments
 from events.services.segments import GpsPosition
 from reports.selectors.exports import segments_csv
 from reports.selectors.statistics import event_runs
+from telemetry.selectors.distances import measured_paths, path_length
+from telemetry.selectors.tracks import GPS, masters
 from telemetry.services import recording
 from telemetry.services.recording import GpsFix
 
@@ -88,3 +90,55 @@ def test_a_segment_with_nothing_measured_shows_no_distance(leg, client, role_use
     client.force_login(role_user("viewer"))
     gui = client.get(f"/gui/api/legs/{leg.pk}/tracks/").json()["segments"]
     assert gui[str(master.pk)]["distance_m"] is None
+
+
+def test_many_segments_measured_at_once_match_the_geodesic_step_by_step(leg):
+    """measured_paths lays every segment's points end to end and measures them
+    together; each distance must still be its own polyline's geodesic length,
+    with nothing leaking across the segments' borders: an empty segment first,
+    single points, a track over the antimeridian, a jump to the pole."""
+    leg.start = T0 - timedelta(minutes=1)
+    leg.save(update_fields=["start"])
+
+    def run(kind, at, start=None, poses=()):
+        gps = GpsPosition(*start) if start is not None else None
+        master = segments.report_mode(leg, kind, at=_at(at), gps=gps).master
+        fixes = [
+            GpsFix(lon, lat, robot_stamp=_at(at + 1 + i)) for i, (lon, lat) in enumerate(poses)
+        ]
+        if fixes:
+            recording.record_poses(master, fixes)
+        return master
+
+    empty = run(SegmentType.AUTO, 0)
+    lone_pose = run(SegmentType.ITO, 10, poses=[(179.999, 10.0)])
+    antimeridian = run(
+        SegmentType.AUTO, 20, (179.9995, 10.0), [(-179.9995, 10.0001), (-179.999, 10.0002)]
+    )
+    no_poses = run(SegmentType.ITO, 30, (-179.998, 10.0))
+    polar = run(SegmentType.AUTO, 40, (0.0, 89.95), [(10.0, 89.96), (100.0, 89.96)])
+    last_lone_pose = run(SegmentType.ITO, 50, poses=[(0.0, -0.5)])
+    expected = {
+        empty: None,
+        lone_pose: [(179.999, 10.0), (179.9995, 10.0)],
+        antimeridian: [
+            (179.9995, 10.0),
+            (-179.9995, 10.0001),
+            (-179.999, 10.0002),
+            (-179.998, 10.0),
+        ],
+        no_poses: [(-179.998, 10.0), (0.0, 89.95)],
+        polar: [(0.0, 89.95), (10.0, 89.96), (100.0, 89.96)],
+        last_lone_pose: None,
+    }
+
+    paths = measured_paths(list(masters(leg=leg)), GPS)
+
+    for master, points in expected.items():
+        if points is None:
+            assert paths[master.pk].distance is None, master
+            continue
+        lons, lats = zip(*points, strict=True)
+        _, _, steps = GEOD.inv(lons[:-1], lats[:-1], lons[1:], lats[1:])
+        assert paths[master.pk].distance == pytest.approx(sum(steps), rel=1e-9, abs=1e-6), master
+        assert paths[master.pk].distance == path_length(lons, lats, GPS)
