@@ -9,12 +9,12 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 
 import numpy as np
-import psycopg
 import shapely
 from django.db import connection, transaction
 from django.db.models import F, FloatField, Func, OuterRef, QuerySet, Subquery
 from django.db.models.functions import Coalesce
 
+from common.sql import bound_cursor
 from events.models import Segment
 from telemetry.models import LocalPose, Pose
 from telemetry.models.poses import FixStatus
@@ -253,12 +253,7 @@ def _gps_tracks_postgis(segment_ids: list[int]) -> dict[int, Track]:
     with transaction.atomic():
         with connection.cursor() as cursor:
             cursor.execute("SET LOCAL jit = off")
-        # A cursor that binds on the server, which can return binary, wrapped like
-        # Django's own so the query is logged and counted like every other.
-        raw = psycopg.Cursor(connection.connection)
-        raw.format = psycopg.pq.Format.BINARY
-        wrap = connection.make_debug_cursor if connection.queries_logged else connection.make_cursor
-        with wrap(raw) as cursor:
+        with bound_cursor(binary_results=True) as cursor:
             cursor.execute(gps_tracks_sql(), [segment_ids])
             rows = cursor.fetchall()
     tracks = {}

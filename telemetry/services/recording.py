@@ -12,7 +12,6 @@ from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
 
-import psycopg
 from django.contrib.gis.geos import Point
 from django.core.files import File
 from django.core.files.base import ContentFile
@@ -20,6 +19,7 @@ from django.db import connection, transaction
 from django.utils import timezone
 
 from common.errors import RuleViolation
+from common.sql import bound_cursor
 from events.feed import announce_row, announce_track, announced
 from events.models import PoseSource, Segment, Shift
 from events.services.segments import GpsPosition
@@ -184,13 +184,6 @@ RETURNING uid, id
 """
 
 
-def _binding_cursor():
-    """A cursor on Django's connection (same transaction, same query logging) that
-    sends parameters apart from the SQL; Django's own binds them into the text."""
-    connection.ensure_connection()
-    return connection._prepare_cursor(psycopg.Cursor(connection.connection))
-
-
 def _floats(values) -> list[float | None]:
     # psycopg picks one binary type per list from its elements: a fix given as
     # whole degrees (an int) beside fractional ones must not make it an int list.
@@ -207,7 +200,7 @@ def _insert_fixes_postgres(master, fixes, source_id, received) -> dict[uuid.UUID
         _floats(f.horizontal_accuracy for f in fixes),
         [f.robot_stamp for f in fixes],
     )
-    with _binding_cursor() as cursor:
+    with bound_cursor() as cursor:
         cursor.execute(
             _POSTGRES_INSERT.format(table=Pose._meta.db_table),
             [master.pk, source_id, received, *columns],
