@@ -21,7 +21,6 @@ from channels.generic.websocket import AsyncJsonWebsocketConsumer
 from django.conf import settings
 from django.contrib import auth
 from django.db import connections
-from django.db.models import Q
 from psycopg import AsyncConnection
 from psycopg.conninfo import make_conninfo
 
@@ -29,7 +28,8 @@ from common import roles
 from events import feed
 from events.api.serializers import SegmentSerializer
 from events.feed import FLEET_KINDS, LOG_KINDS
-from events.models import Announcement, Segment
+from events.models import Announcement
+from events.selectors import segments
 from events.selectors.labels import legs_labels
 from rosbridge_app import wakeup
 from rosbridge_app.wakeup import GROUP
@@ -72,40 +72,17 @@ def _rows_after(after: int, limit: int = BATCH) -> list[dict]:
 def _attach_segments(rows: list[dict]) -> None:
     """Give each segment event the rows it changed, as the API shows them, with
     their labels, so the page applies them instead of re-reading the list.
-
-    A mode switch announces only the new master, but it also closed the
-    previous master and its reasons (they end where the new one starts) and
-    opened a reason under it; closing a master closes its reasons.  Three
-    queries however many events the batch holds.
-    """
-    ids = {r["payload"].get("id") for r in rows} - {None}
-    if not ids:
-        return
-    announced = {s.pk: s for s in Segment.objects.filter(pk__in=ids)}
-    if not announced:
+    Three queries however many events the batch holds."""
+    touched = segments.touched_by({r["payload"].get("id") for r in rows} - {None})
+    if not touched:
         return  # deleted since: the page re-reads
-    legs = {s.leg_id for s in announced.values()}
-    candidates = list(
-        Segment.objects.filter(leg_id__in=legs).filter(
-            Q(pk__in=list(announced))
-            | Q(parent_id__in=list(announced))
-            | Q(end__in=[s.start for s in announced.values()])
-        )
-    )
-    labels = legs_labels(legs)
+    labels = legs_labels({c.leg_id for changed in touched.values() for c in changed})
     for row in rows:
-        segment = announced.get(row["payload"].get("id"))
-        if segment is None:
+        changed = touched.get(row["payload"].get("id"))
+        if changed is None:
             continue
-        changed = [c for c in candidates if _changed_with(c, segment)]
         row["segments"] = SegmentSerializer(changed, many=True).data
         row["labels"] = {c.pk: labels.get(c.pk) for c in changed}
-
-
-def _changed_with(row: Segment, announced: Segment) -> bool:
-    return row.leg_id == announced.leg_id and (
-        row.pk == announced.pk or row.parent_id == announced.pk or row.end == announced.start
-    )
 
 
 _bounds = database_sync_to_async(feed.bounds)
