@@ -6,10 +6,10 @@ from django.conf import settings
 from django.core.exceptions import PermissionDenied
 from django.http import Http404, HttpResponse
 from django.views.static import serve
-from rest_framework.authentication import TokenAuthentication
 from rest_framework.exceptions import AuthenticationFailed
 
 from common import roles
+from common.api.authentication import TokenAuthentication
 
 # What /media/ shows in the browser: photos, maps and reports.  Anything else
 # (recordings, or a file that got in some other way) is only downloaded, so a

@@ -45,3 +45,23 @@ def test_pictures_and_reports_are_shown_with_their_type(viewer, media_root, name
     response = viewer.get(_put(media_root, f"x/{name}", b"data"))
     assert response["Content-Type"] == content_type
     assert not response.get("Content-Disposition", "").startswith("attachment")
+
+
+def test_a_script_with_a_token_opens_a_picture_in_one_query(
+    api_client, media_root, django_assert_num_queries
+):
+    url = _put(media_root, "images/x/a.png", b"data")
+    client = api_client("viewer")
+    # The token, its account and the account's roles come back together.
+    with django_assert_num_queries(1):
+        response = client.get(url)
+    assert response.status_code == 200
+    assert response["Content-Type"] == "image/png"
+
+
+def test_a_wrong_or_missing_token_sees_no_picture(api_client, media_root):
+    url = _put(media_root, "images/x/a.png", b"data")
+    anonymous = api_client(anonymous=True)
+    assert anonymous.get(url).status_code == 403
+    anonymous.credentials(HTTP_AUTHORIZATION="Token not-a-token")
+    assert anonymous.get(url).status_code == 403
