@@ -59,6 +59,30 @@ class PoseSerializer(ClientUidMixin, ServiceSerializer):
         }
 
 
+class _SentId(serializers.Field):
+    """A row id as a client sent it, not looked up: PrimaryKeyField's type check only."""
+
+    default_error_messages = {"invalid": "Not a row id."}
+
+    def to_internal_value(self, data):
+        digits = isinstance(data, str) and data.isascii() and data.isdigit()
+        if isinstance(data, bool) or not (isinstance(data, int) or digits):
+            self.fail("invalid")
+        value = int(data)
+        if not 0 < value < 2**63:
+            self.fail("invalid")
+        return value
+
+
+class PoseByIdSerializer(PoseSerializer):
+    """A single pose whose segment and pose source the storing statement looks up
+    (telemetry.services.recording.record_pose_at); a request it refuses is checked
+    again by PoseSerializer, whose messages answer."""
+
+    segment = _SentId()
+    pose_source = _SentId(required=False, allow_null=True)
+
+
 def gps_fix(data: dict) -> GpsFix:
     point = data["point"]
     fields = {
