@@ -102,13 +102,15 @@ class PoseViewSet(RecordingViewSet):
         if quick.is_valid():
             data = quick.validated_data
             stored = recording.record_pose_at(
-                data["segment"], s.gps_fix(data), data.get("pose_source"), writer=request.user
+                data["segment_id"],
+                s.gps_fix(data),
+                data.get("pose_source_id"),
+                writer=request.user,
             )
             if stored is not None:
                 pose, new = stored
-                return self.respond(
-                    pose, code=status.HTTP_201_CREATED if new else status.HTTP_200_OK
-                )
+                code = status.HTTP_201_CREATED if new else status.HTTP_200_OK
+                return self.respond(pose, s.PoseByIdSerializer, code=code)
         serializer = self.get_serializer(data=request.data)
         serializer.is_valid(raise_exception=True)
         data = serializer.validated_data
