@@ -16,7 +16,7 @@ from common.memo import Expiring
 # A token deleted, an account deactivated or a role changed through this
 # process is forgotten at once (common.apps connects clear to those changes);
 # through another process it is honoured within this many seconds.
-known_tokens = Expiring(getattr(settings, "FTT_TOKEN_CACHE_SECONDS", 5.0))
+known_tokens = Expiring(settings.FTT_TOKEN_CACHE_SECONDS)
 
 
 class TokenAuthentication(authentication.TokenAuthentication):

@@ -8,7 +8,7 @@ from events.models import Vehicle
 # user id -> {vehicle id: key}, across the requests of a robot that posts many
 # times a second.  Binding changes through this process clear it at once
 # (events.apps); through another process they count within these seconds.
-_bindings = Expiring(getattr(settings, "FTT_TOKEN_CACHE_SECONDS", 5.0))
+_bindings = Expiring(settings.FTT_TOKEN_CACHE_SECONDS)
 
 
 def robot_vehicles(user) -> dict[int, str]:
