@@ -1,6 +1,21 @@
 from django.apps import AppConfig
+from django.db.models.signals import m2m_changed, post_delete, post_save
 
 
 class CommonConfig(AppConfig):
     name = "common"
     verbose_name = "Shared plumbing"
+
+    def ready(self):
+        from django.contrib.auth import get_user_model
+        from django.contrib.auth.models import Group
+        from rest_framework.authtoken.models import Token
+
+        from common.api.authentication import known_tokens
+
+        # Whatever may revoke or change what a kept token grants.
+        user = get_user_model()
+        for sender in (Token, user, Group):
+            post_save.connect(known_tokens.clear, sender=sender, weak=False)
+            post_delete.connect(known_tokens.clear, sender=sender, weak=False)
+        m2m_changed.connect(known_tokens.clear, sender=user.groups.through, weak=False)

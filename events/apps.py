@@ -1,4 +1,5 @@
 from django.apps import AppConfig
+from django.db.models.signals import m2m_changed, post_delete, post_save
 
 
 class EventsConfig(AppConfig):
@@ -6,4 +7,17 @@ class EventsConfig(AppConfig):
     verbose_name = "Test events"
 
     def ready(self):
+        from django.contrib.auth import get_user_model
+
         from events import checks  # noqa: F401  (registers system checks)
+        from events.models import RobotAccount, Segment, Vehicle
+        from events.selectors.robots import forget_bindings
+        from events.selectors.segments import forget_pose_targets
+
+        # What a robot may write into, kept per process for a few seconds.
+        for sender in (RobotAccount, Vehicle, get_user_model()):
+            post_save.connect(forget_bindings, sender=sender, weak=False)
+            post_delete.connect(forget_bindings, sender=sender, weak=False)
+        m2m_changed.connect(forget_bindings, sender=RobotAccount.vehicles.through, weak=False)
+        post_save.connect(forget_pose_targets, sender=Segment, weak=False)
+        post_delete.connect(forget_pose_targets, sender=Segment, weak=False)

@@ -9,6 +9,7 @@ rows to wake up at once, but the feed never calls up to it.
 
 from datetime import timedelta
 
+from django.db.models.signals import post_save
 from django.utils import timezone
 
 from events.models import Announcement, Leg, Segment, Shift, TestEvent
@@ -23,6 +24,9 @@ MAX_INLINE_POINTS = 2000
 PRUNE_EVERY = 500
 # A browser away for longer than this reloads instead of catching up.
 RETENTION = timedelta(hours=1)
+# PostgreSQL's LISTEN/NOTIFY channel: a trigger on the feed's table notifies it
+# for every new row (events migration 0009), so no writer spends a round trip.
+CHANNEL = "ftt_live"
 
 
 def _scope(obj) -> tuple[int | None, int | None, int | None]:
@@ -46,19 +50,48 @@ def _scope(obj) -> tuple[int | None, int | None, int | None]:
 
 
 def announce(kind: str, obj=None, *, collector_id: int | None = None, **payload) -> Announcement:
+    return _saved(unsaved(kind, obj, collector_id=collector_id, **payload))
+
+
+def unsaved(kind: str, obj=None, *, collector_id: int | None = None, **payload) -> Announcement:
+    """The row :func:`announce` saves, for a writer that inserts it in its own
+    statement and then calls :func:`inserted`."""
     test_event, shift, leg = _scope(obj)
     # The scope travels in the payload too: a deleted leg takes its own
     # announcements with it (foreign key), so "leg deleted" is kept leg-less.
     payload.update(test_event=test_event, shift=shift, leg=leg)
     leg_fk = None if kind == "deleted" else leg
-    return record(kind, leg_id=leg_fk, collector_id=collector_id, payload=payload)
+    return Announcement(kind=kind, leg_id=leg_fk, collector_id=collector_id, payload=payload)
 
 
 def record(kind: str, *, leg_id=None, collector_id=None, payload=None) -> Announcement:
     """Add one row to the feed as given (the collector link states its own scope)."""
-    event = Announcement.objects.create(
-        kind=kind, leg_id=leg_id, collector_id=collector_id, payload=payload or {}
+    return _saved(
+        Announcement(kind=kind, leg_id=leg_id, collector_id=collector_id, payload=payload or {})
     )
+
+
+def _saved(event: Announcement) -> Announcement:
+    event.save(force_insert=True)
+    return _pruned(event)
+
+
+def inserted(event: Announcement, pk: int, using: str = "default") -> Announcement:
+    """``event`` was inserted by its writer's own SQL as row ``pk``: it wakes the
+    readers as a saved row does (post_save) and prunes in its turn."""
+    event.pk = pk
+    post_save.send(
+        sender=Announcement,
+        instance=event,
+        created=True,
+        update_fields=None,
+        raw=False,
+        using=using,
+    )
+    return _pruned(event)
+
+
+def _pruned(event: Announcement) -> Announcement:
     if event.pk % PRUNE_EVERY == 0:
         prune()
     return event
@@ -85,10 +118,15 @@ def announce_track(segment, points, *, local: bool) -> Announcement | None:
     browsers append them without a fetch."""
     if not points:
         return None
+    return _saved(track_announcement(segment, points, local=local))
+
+
+def track_announcement(segment, points, *, local: bool) -> Announcement:
+    """The unsaved row of :func:`announce_track` (see :func:`unsaved`)."""
     payload = {"segment": segment.pk, "mode": segment.segment_type_id, "count": len(points)}
     if len(points) <= MAX_INLINE_POINTS:
         payload["points"] = [[x, y] for x, y in points]
-    return announce("local_poses" if local else "poses", segment, **payload)
+    return unsaved("local_poses" if local else "poses", segment, **payload)
 
 
 def prune() -> int:

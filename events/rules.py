@@ -58,18 +58,24 @@ def vehicle_id_of(entry) -> int | None:
     return None
 
 
+def may_reach(user, entry) -> bool:
+    """Whether :func:`check_robot_target` lets ``user`` at ``entry``, without its
+    message (no query when the entry's shift is loaded and the robot's vehicles
+    are known)."""
+    if not roles.is_robot(user):
+        return True
+    vehicle_id = vehicle_id_of(entry)
+    return vehicle_id is None or vehicle_id in robot_vehicles(user)
+
+
 def check_robot_target(user, entry) -> None:
     """A robot account reads and writes only its own vehicles and their shifts, legs
     and segments; everyone else passes (their role decides).  Refuses with
     PermissionDenied naming both vehicles."""
-    if not roles.is_robot(user):
+    if may_reach(user, entry):
         return
     vehicle_id = vehicle_id_of(entry)
-    if vehicle_id is None:
-        return
     own = robot_vehicles(user)
-    if vehicle_id in own:
-        return
     name = user.get_username()
     if not own:
         raise PermissionDenied(

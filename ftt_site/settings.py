@@ -131,6 +131,9 @@ AUTHENTICATION_BACKENDS = [
 AXES_FAILURE_LIMIT = env_int("FTT_LOGIN_FAILURE_LIMIT", 5)
 AXES_COOLOFF_TIME = timedelta(minutes=env_int("FTT_LOGIN_COOLOFF_MINUTES", 15))
 AXES_LOCKOUT_PARAMETERS = ["ip_address", "username"]
+# How long a web process keeps an API token (with its account's roles) and a
+# robot account's vehicles after reading them (common.api.authentication).
+FTT_TOKEN_CACHE_SECONDS = env_int("FTT_TOKEN_CACHE_SECONDS", 5)
 AXES_RESET_ON_SUCCESS = True
 AXES_LOCKOUT_CALLABLE = "ftt_site.lockout.locked_out"
 AXES_CLIENT_IP_CALLABLE = "ftt_site.lockout.client_address"

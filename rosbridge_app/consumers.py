@@ -163,7 +163,7 @@ class OutboxPoller:
         while True:
             try:
                 async with await AsyncConnection.connect(_conninfo(), autocommit=True) as conn:
-                    await conn.execute(f"LISTEN {wakeup.CHANNEL}")
+                    await conn.execute(f"LISTEN {feed.CHANNEL}")
                     # Rows committed while (re)connecting are found by this read.
                     self.wakeup.set()
                     async for _ in conn.notifies():

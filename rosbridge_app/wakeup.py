@@ -4,9 +4,9 @@ Only a shortcut: the readers poll the feed anyway, so a lost wake-up costs at
 most one poll interval.  It listens to the feed's rows (a post_save signal)
 instead of being called by the writers, which sit in lower layers.
 
-Four ways, whichever apply: on PostgreSQL a NOTIFY in the writer's own
-transaction (delivered by the database at commit, to every listening process,
-the collector's included); with Redis a message to the channel-layer group;
+Four ways, whichever apply: on PostgreSQL a NOTIFY from a trigger on the
+feed's table (events.feed.CHANNEL; delivered by the database at commit, to
+every listening process, the collector's included); with Redis a message to the channel-layer group;
 on SQLite a datagram to every reader's socket in a folder beside the database
 file (the collector and the web server are separate processes that share
 nothing else); and in the writing process itself a direct call to its readers.
@@ -28,8 +28,6 @@ from django.db.models.signals import post_save
 logger = logging.getLogger(__name__)
 
 GROUP = "ftt-live"
-# PostgreSQL's LISTEN/NOTIFY channel.
-CHANNEL = "ftt_live"
 
 # Readers in this process (one per event loop); each is thread-safe to call.
 local_readers: set[Callable[[], None]] = set()
@@ -128,8 +126,8 @@ def _after_commit(using: str) -> None:
 
 def _announced_in_this_transaction(connection) -> bool:
     # Django keeps the on-commit callbacks per transaction and drops those of a
-    # rolled-back savepoint, whose NOTIFY PostgreSQL drops too: so "our callback
-    # is waiting" means exactly "this transaction has already notified".
+    # rolled-back savepoint: so "our callback is waiting" means exactly "this
+    # transaction will wake the readers".
     return any(
         getattr(func, "func", None) is _after_commit for _, func, *_ in connection.run_on_commit
     )
@@ -144,10 +142,7 @@ def _on_feed_row(sender, instance, created, using=None, **kwargs) -> None:
     connection = connections[using]
     if connection.in_atomic_block and _announced_in_this_transaction(connection):
         return
-    if connection.vendor == "postgresql":
-        # Delivered by the database at commit, to every listening process.
-        with connection.cursor() as cursor:
-            cursor.execute(f"NOTIFY {CHANNEL}")
+    # PostgreSQL's listeners hear the table's trigger; these are the other ways.
     transaction.on_commit(functools.partial(_after_commit, using), using=using)
 
 

@@ -4,6 +4,7 @@ import pytest
 from django.core.cache import cache
 from django.db import connection
 
+from common import memo
 from events import seeds
 from events.models import Performer, Personnel, PoseSource, Vehicle
 from events.services import logs
@@ -29,6 +30,13 @@ def _seeds_after_flush(request):
 def _fresh_throttles():
     """API throttles count in the cache; each test starts with none used up."""
     cache.clear()
+
+
+@pytest.fixture(autouse=True)
+def _fresh_memos():
+    """Tokens, robot bindings and segments kept per process (common.memo) belong
+    to one test: ids are reused after a rolled-back test on SQLite."""
+    memo.clear_all()
 
 
 @pytest.fixture

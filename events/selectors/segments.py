@@ -1,8 +1,39 @@
-"""Which segment rows one change touched, for readers that redraw only those."""
+"""Which segment rows one change touched, for readers that redraw only those, and
+where a single pose goes."""
 
 from django.db.models import Q
 
+from common.memo import Expiring
 from events.models import Segment
+
+# segment id -> its master, with the master's leg and shift.  What is used of
+# them does not change while the segment exists (a master's parent, leg, shift,
+# test event, vehicle and mode are set when it opens); a deleted segment is
+# noticed by the writer, whose statement finds no row.  Kept a minute in case
+# an administrator edits a mode by hand in another process.
+_pose_targets = Expiring(60.0)
+
+
+def pose_target(segment_id: int) -> Segment | None:
+    """The master segment a pose sent to ``segment_id`` is stored on, with its leg
+    and shift loaded; None for an unknown id.  Kept per process (one query per
+    segment, not per pose)."""
+    master = _pose_targets.get(segment_id)
+    if master is None:
+        segment = (
+            Segment.objects.select_related("leg__shift", "parent__leg__shift")
+            .filter(pk=segment_id)
+            .first()
+        )
+        if segment is None:
+            return None
+        master = segment.parent if segment.parent_id is not None else segment
+        _pose_targets.put(segment_id, master)
+    return master
+
+
+def forget_pose_targets(*args, **kwargs) -> None:
+    _pose_targets.clear()
 
 
 def touched_by(segment_ids) -> dict[int, list[Segment]]:

@@ -59,6 +59,46 @@ class PoseSerializer(ClientUidMixin, ServiceSerializer):
         }
 
 
+class _SentId(serializers.Field):
+    """A row id as a client sent it, not looked up: PrimaryKeyField's type check only
+    (writing only; the serializer gives the ids it answers with)."""
+
+    default_error_messages = {"invalid": "Not a row id."}
+
+    def to_internal_value(self, data):
+        digits = isinstance(data, str) and data.isascii() and data.isdigit()
+        if isinstance(data, bool) or not (isinstance(data, int) or digits):
+            self.fail("invalid")
+        value = int(data)
+        if not 0 < value < 2**63:
+            self.fail("invalid")
+        return value
+
+    def to_representation(self, value):
+        return value
+
+
+class PoseByIdSerializer(serializers.Serializer):
+    """A single pose whose segment and pose source the storing statement looks up
+    (telemetry.services.recording.record_pose_at); a request it refuses is checked
+    again by PoseSerializer, whose messages answer.  Its fields are PoseSerializer's,
+    declared once here: a ModelSerializer builds them from the model on every
+    request, a third of a single pose's time in Python.  It also answers with the
+    stored pose, in PoseSerializer's shape."""
+
+    id = serializers.IntegerField(read_only=True)
+    uid = serializers.UUIDField(required=False)
+    segment = _SentId(source="segment_id")
+    longitude = serializers.FloatField(source="point.x", min_value=-180, max_value=180)
+    latitude = serializers.FloatField(source="point.y", min_value=-90, max_value=90)
+    altitude = serializers.FloatField(required=False, allow_null=True)
+    fix_status = serializers.ChoiceField(choices=FixStatus.choices, default=FixStatus.FIX)
+    horizontal_accuracy = serializers.FloatField(required=False, allow_null=True)
+    pose_source = _SentId(source="pose_source_id", required=False, allow_null=True)
+    robot_stamp = serializers.DateTimeField(required=False, allow_null=True)
+    received = serializers.DateTimeField(read_only=True)
+
+
 def gps_fix(data: dict) -> GpsFix:
     point = data["point"]
     fields = {

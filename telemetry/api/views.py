@@ -96,7 +96,21 @@ class PoseViewSet(RecordingViewSet):
     robot_actions = ("create", "batch")
 
     def create(self, request, *args, **kwargs):
-        # No separate "is this uid known?" query: the service tells (one insert).
+        # Ids as sent, checked by the service in the statement that stores the pose;
+        # anything it cannot answer alone gets the full check and its messages.
+        quick = s.PoseByIdSerializer(data=request.data)
+        if quick.is_valid():
+            data = quick.validated_data
+            stored = recording.record_pose_at(
+                data["segment_id"],
+                s.gps_fix(data),
+                data.get("pose_source_id"),
+                writer=request.user,
+            )
+            if stored is not None:
+                pose, new = stored
+                code = status.HTTP_201_CREATED if new else status.HTTP_200_OK
+                return self.respond(pose, s.PoseByIdSerializer, code=code)
         serializer = self.get_serializer(data=request.data)
         serializer.is_valid(raise_exception=True)
         data = serializer.validated_data

@@ -52,3 +52,33 @@ def test_an_inactive_account_or_a_wrong_token_is_refused(role_user):
     wrong = APIClient()
     wrong.credentials(HTTP_AUTHORIZATION="Token " + "0" * 40)
     assert wrong.get(URL).status_code == 401
+
+
+def test_a_kept_token_costs_no_query_on_the_next_request(role_user):
+    client = _client(role_user(roles.VIEWER))
+    assert client.get(URL).status_code == 200
+    with CaptureQueriesContext(connection) as captured:
+        assert client.get(URL).status_code == 200
+    assert not [q for q in captured.captured_queries if "authtoken_token" in q["sql"]]
+
+
+def test_a_kept_token_is_revoked_at_once_by_the_changes_of_this_process(role_user):
+    operator = role_user(roles.OPERATOR)
+    client = _client(operator)
+    assert client.post(URL, {"location": "x"}, format="json").status_code == 201
+    operator.groups.remove(Group.objects.get(name=roles.OPERATOR))
+    operator.groups.add(Group.objects.get(name=roles.VIEWER))
+    assert client.post(URL, {"location": "y"}, format="json").status_code == 403
+
+    viewer = role_user(roles.VIEWER)
+    client = _client(viewer)
+    assert client.get(URL).status_code == 200
+    viewer.is_active = False
+    viewer.save()
+    assert client.get(URL).status_code == 401
+
+    other = role_user(roles.VIEWER)
+    client = _client(other)
+    assert client.get(URL).status_code == 200
+    other.auth_token.delete()
+    assert client.get(URL).status_code == 401

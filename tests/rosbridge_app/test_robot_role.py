@@ -13,6 +13,7 @@ from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.events import Event
 from rosbridge_app.collector.recorder import Recorder
 from telemetry.models import Pose
+from telemetry.services.recording import COPY_FROM
 
 pytestmark = [pytest.mark.postgis_only, pytest.mark.django_db]
 
@@ -42,6 +43,14 @@ def test_the_robot_role_records_a_drive_and_cannot_read_accounts(leg, as_robot):
     master = Segment.objects.get(leg=leg, parent__isnull=True)
     assert master.segment_type_id == "auto"
     assert Pose.objects.filter(segment=master).count() == 2
+    # A burst big enough to be copied through a temporary table (COPY_FROM).
+    Recorder(lambda: leg).apply(
+        [
+            Event(ev.GPS, AT + timedelta(seconds=4, milliseconds=i), {"lon": 7.1, "lat": 50.6})
+            for i in range(COPY_FROM)
+        ]
+    )
+    assert Pose.objects.filter(segment=master).count() == 2 + COPY_FROM
     for table in ("auth_user", "authtoken_token", "django_session"):
         with pytest.raises(DatabaseError, match="permission denied"), transaction.atomic():
             with connection.cursor() as cursor:

@@ -5,7 +5,7 @@ import uuid
 import pytest
 
 from common import roles
-from events.models import SegmentType
+from events.models import RobotAccount, SegmentType
 from events.services import segments
 from telemetry.models import Image, LocalPose, MapImage, Pose
 from tests.support.api import assert_error_shape
@@ -116,3 +116,14 @@ def test_operators_write_telemetry_into_every_vehicles_leg(
         response = operator.post("/api/poses/", _pose(master), format="json")
         assert response.status_code == 201, response.content
     assert Pose.objects.count() == 2
+
+
+def test_a_robot_unbound_from_its_vehicle_is_refused_at_once(robot_client, vehicle, leg):
+    """Its vehicles are kept between requests, but not past a change of its binding."""
+    client = robot_client(vehicle)
+    master = segments.report_mode(leg, SegmentType.AUTO).master
+    assert client.post("/api/poses/", _pose(master), format="json").status_code == 201
+    RobotAccount.objects.get(user=client.user).vehicles.remove(vehicle)
+    response = client.post("/api/poses/", _pose(master), format="json")
+    assert_error_shape(response, 403)
+    assert Pose.objects.filter(segment=master).count() == 1
