@@ -48,3 +48,9 @@ export const reasonName = (key) => {
   const r = (state.catalogue.reasons || []).find((x) => x.key === key);
   return r ? r.short_description : key || "";
 };
+/* A segment row as the server answered it replaces the listed one, or joins the list. */
+export function putSegment(row) {
+  const i = state.segments.findIndex((s) => s.id === row.id);
+  if (i >= 0) state.segments[i] = row;
+  else state.segments.push(row);
+}
