@@ -180,9 +180,12 @@ class LegSegments(GuiView):
     one request where the page needs both to draw its list."""
 
     def get(self, request, pk):
-        leg = get_object_or_404(Leg, pk=pk)
-        rows = SegmentSerializer(Segment.objects.filter(leg=leg), many=True).data
-        return Response({"leg": leg.pk, "segments": rows, "labels": leg_labels(leg)})
+        return Response(leg_segments(get_object_or_404(Leg, pk=pk)))
+
+
+def leg_segments(leg: Leg) -> dict:
+    rows = SegmentSerializer(Segment.objects.filter(leg=leg), many=True).data
+    return {"leg": leg.pk, "segments": rows, "labels": leg_labels(leg)}
 
 
 class SegmentWrite(GuiView):

@@ -51,7 +51,6 @@ export async function selectionChanged() {
   $("#maps-section").hidden = !leg;
   $("#mode-panel").hidden = !leg;
   Live.subscribe();
-  Collector.refresh();
   state.segment = null;
   state.segments = [];
   state.tracks = {};
@@ -59,18 +58,30 @@ export async function selectionChanged() {
   gpsMap.clear();
   localMap.clear();
   if (!leg) {
+    Collector.refresh();
     renderSegments();
     return;
   }
-  // The list first: it is what the operator waits for; the tracks follow.
-  const local = state.localMapOf === state.selected.shift ? null : loadLocalMap();
-  await Promise.all([loadSegments(), loadBasemaps(), loadTracks(), local]);
+  // The server answers a page's requests one after the other: the list first (it
+  // is what the operator waits for; on a page load it came with the page), the
+  // tracks next, and what the first screen does not need waits for both.
+  try {
+    await Promise.all([loadSegments(), loadTracks()]);
+  } finally {
+    Collector.refresh();
+  }
   gpsMap.invalidate();
   gpsMap.fitAll();
   localMap.invalidate();
   localMap.fitAll();
   if (restoring && byId(state.segments, restoring)) selectSegment(restoring);
   else saveUrl();
+  // The map image and overlay belong to the shift: kept when only the leg changes.
+  const local = state.localMapOf === state.selected.shift ? null : loadLocalMap();
+  await Promise.all([loadBasemaps(), local]);
+  // A map image just received may have shown the local map.
+  localMap.invalidate();
+  if (local) localMap.fitAll();
 }
 
 export async function loadSegments() {

@@ -129,6 +129,34 @@ def test_new_take_over_and_end_show_every_changed_row_without_reading_the_list(
     assert reads == []
 
 
+def test_a_reload_shows_the_list_without_reading_it_again(page, server, open_leg, shot):
+    robot = Robot(server, open_leg)
+    try:
+        robot.do("auto")
+        robot.do("poses")
+        robot.do("ito")
+    finally:
+        robot.stop()
+    login(page, server, "otto")
+    choose(page, open_leg)
+    expect(page.locator("#segment-table tbody tr")).to_have_count(2)
+    reads = []
+    page.on("request", lambda r: r.method == "GET" and "/api/" in r.url and reads.append(r.url))
+    page.reload()
+    rows = page.locator("#segment-table tbody tr")
+    expect(rows).to_have_count(2)
+    expect(rows.filter(has_text="ITO")).to_have_count(1)
+    expect(page.locator("#mode-name")).to_have_text("ITO")
+    expect(page.locator("#gps-map")).to_have_attribute("data-tracks", "1")
+    expect(page.locator("#collector-status")).not_to_contain_text("Asking")
+    shot(page, "reloaded")
+    # Catalogues, pickers and the list came with the page; the map's tracks are asked for.
+    asked = {re.sub(r"[?].*|\d+", "", url.split("/api/", 1)[1]) for url in reads}
+    assert "legs//tracks/" in asked
+    assert not asked & {"ito-reasons/", "vehicles/", "test-events/", "shifts/", "legs/"}
+    assert "legs//segments/" not in asked
+
+
 def test_notes_can_be_edited_and_deleted(page, server, open_leg, shot):
     login(page, server, "otto")
     choose(page, open_leg)
