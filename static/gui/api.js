@@ -50,8 +50,14 @@ function describeErrors(data) {
 }
 
 /* The page carries the answers of its first reads (gui/views/pages.py,
- * first_answers): each is taken once, later reads ask the server. */
+ * first_answers): each is taken once while the page starts, later reads ask
+ * the server. */
 const answers = new Map(Object.entries(CONFIG.answers || {}));
+
+/* Once the page has started, an answer not taken would be out of date. */
+export function forgetAnswers() {
+  answers.clear();
+}
 
 export async function api(method, path, body, { root = CONFIG.apiRoot, signal } = {}) {
   if (method === "GET" && answers.has(root + path)) {
