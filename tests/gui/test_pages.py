@@ -7,7 +7,7 @@ from urllib.parse import quote
 import pytest
 from django.contrib.auth.models import Group, User
 
-from events.models import ItoReason, Performer, PoseSource
+from events.models import Announcement, ItoReason, Performer, PoseSource
 from events.services import segments
 from rosbridge_app.services import collectors
 from telemetry.services import recording
@@ -281,9 +281,13 @@ def test_fleet_lists_logging_vehicles_to_anyone_with_a_role(client, leg, vehicle
     assert (entry["vehicle"]["key"], entry["mode"], entry["leg"]["id"]) == ("husky", "ito", leg.pk)
 
 
-def _answers(page: str) -> dict:
+def _config(page: str) -> dict:
     config = re.search(r'<script id="gui-config" type="application/json">(.*?)</script>', page)
-    return json.loads(config.group(1))["answers"]
+    return json.loads(config.group(1))
+
+
+def _answers(page: str) -> dict:
+    return _config(page)["answers"]
 
 
 def test_the_page_carries_its_first_reads_as_the_api_answers_them(client, leg, other_leg):
@@ -304,6 +308,9 @@ def test_the_page_carries_its_first_reads_as_the_api_answers_them(client, leg, o
     for path, answer in answers.items():
         assert answer == client.get(path).json(), path
     assert len(answers[f"/gui/api/legs/{leg.pk}/segments/"]["segments"]) == 3
+    # The change feed's newest event then: the page's subscription catches up from it.
+    newest = Announcement.objects.latest("id").pk
+    assert _config(client.get(url).content.decode())["lastEventId"] == newest
 
 
 def test_without_an_address_the_page_carries_the_logging_legs_reads(client, leg, vehicle):
