@@ -3,6 +3,7 @@
 from django.contrib.auth import views as auth_views
 from django.urls import path, re_path
 
+from events.api.views import LegViewSet, SegmentViewSet
 from gui.views import archive_import, gui_api, media, pages
 
 urlpatterns = [
@@ -18,6 +19,16 @@ urlpatterns = [
     path("import/", archive_import.archive_import, name="gui-archive-import"),
     path("gui/api/legs/<int:pk>/tracks/", gui_api.LegTracks.as_view(), name="gui-leg-tracks"),
     path("gui/api/legs/<int:pk>/segments/", gui_api.LegSegments.as_view(), name="gui-segments"),
+    path(
+        "gui/api/legs/<int:pk>/manual-segment/",
+        gui_api.SegmentWrite.as_view(rest_view=LegViewSet.as_view({"post": "manual_segment"})),
+        name="gui-manual-segment",
+    ),
+    path(
+        "gui/api/segments/<int:pk>/close/",
+        gui_api.SegmentWrite.as_view(rest_view=SegmentViewSet.as_view({"post": "close"})),
+        name="gui-segment-close",
+    ),
     path(
         "gui/api/segments/<int:pk>/attachments/",
         gui_api.SegmentAttachments.as_view(),

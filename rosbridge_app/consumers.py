@@ -26,11 +26,9 @@ from psycopg.conninfo import make_conninfo
 
 from common import roles
 from events import feed
-from events.api.serializers import SegmentSerializer
+from events.api.serializers import touched_rows
 from events.feed import FLEET_KINDS, LOG_KINDS
 from events.models import Announcement
-from events.selectors import segments
-from events.selectors.labels import legs_labels
 from rosbridge_app import wakeup
 from rosbridge_app.wakeup import GROUP
 
@@ -72,17 +70,11 @@ def _rows_after(after: int, limit: int = BATCH) -> list[dict]:
 def _attach_segments(rows: list[dict]) -> None:
     """Give each segment event the rows it changed, as the API shows them, with
     their labels, so the page applies them instead of re-reading the list.
-    Three queries however many events the batch holds."""
-    touched = segments.touched_by({r["payload"].get("id") for r in rows} - {None})
-    if not touched:
-        return  # deleted since: the page re-reads
-    labels = legs_labels({c.leg_id for changed in touched.values() for c in changed})
+    Three queries however many events the batch holds; a segment deleted since
+    gets none, and the page re-reads."""
+    touched = touched_rows({r["payload"].get("id") for r in rows} - {None})
     for row in rows:
-        changed = touched.get(row["payload"].get("id"))
-        if changed is None:
-            continue
-        row["segments"] = SegmentSerializer(changed, many=True).data
-        row["labels"] = {c.pk: labels.get(c.pk) for c in changed}
+        row.update(touched.get(row["payload"].get("id"), {}))
 
 
 _bounds = database_sync_to_async(feed.bounds)

@@ -23,6 +23,8 @@ from events.models import (
     Vehicle,
     Weather,
 )
+from events.selectors.labels import legs_labels
+from events.selectors.segments import touched_by
 from events.services import logs
 from events.services.segments import MODES, GpsPosition, LocalPosition
 
@@ -223,7 +225,25 @@ class SegmentSerializer(ServiceSerializer):
             "end",
             "robot_stamp",
         ]
+
         extra_kwargs = {"ito_reason": {"allow_null": False}}
+
+
+def touched_rows(segment_ids) -> dict[int, dict]:
+    """{changed segment id: {"segments": the rows that change touched, as the API
+    shows them, "labels": their labels}}, for readers that redraw only those rows
+    (the live feed, and the GUI's writes that answer with them).  Three queries."""
+    touched = touched_by(segment_ids)
+    if not touched:
+        return {}
+    labels = legs_labels({c.leg_id for rows in touched.values() for c in rows})
+    return {
+        pk: {
+            "segments": SegmentSerializer(rows, many=True).data,
+            "labels": {c.pk: labels.get(c.pk) for c in rows},
+        }
+        for pk, rows in touched.items()
+    }
 
 
 class NoteSerializer(ClientUidMixin, ServiceSerializer):

@@ -17,7 +17,7 @@ from rest_framework.views import APIView
 
 from basemaps.selectors.layers import layer_list
 from common import roles
-from events.api.serializers import NoteSerializer, SegmentSerializer
+from events.api.serializers import NoteSerializer, SegmentSerializer, touched_rows
 from events.models import Leg, Note, Segment, SegmentType, Shift, Vehicle
 from events.selectors.labels import label, leg_numbers
 from gui.forms import gui_forms
@@ -180,9 +180,37 @@ class LegSegments(GuiView):
     one request where the page needs both to draw its list."""
 
     def get(self, request, pk):
-        leg = get_object_or_404(Leg, pk=pk)
-        rows = SegmentSerializer(Segment.objects.filter(leg=leg), many=True).data
-        return Response({"leg": leg.pk, "segments": rows, "labels": leg_labels(leg)})
+        return Response(leg_segments(get_object_or_404(Leg, pk=pk)))
+
+
+def leg_segments(leg: Leg) -> dict:
+    rows = SegmentSerializer(Segment.objects.filter(leg=leg), many=True).data
+    return {"leg": leg.pk, "segments": rows, "labels": leg_labels(leg)}
+
+
+class SegmentWrite(GuiView):
+    """A segment write of the REST API (the same view: rules, roles, errors), answered
+    with the row it wrote and every row that change touched, with their labels, so the
+    page redraws them without reading the list again:
+    ``{"segment": row, "segments": [rows], "labels": {id: label}}``."""
+
+    write_role = roles.OPERATOR
+    rest_view = None
+
+    def post(self, request, pk):
+        # The body is still unread here: the REST view parses and checks it.
+        answer = self.rest_view(request._request, pk=pk)
+        if answer.status_code >= 300:
+            return answer
+        row = answer.data
+        # A new reason under a new master: the master's change closed the previous
+        # master, the reason's closed its sibling; each id brings what it touched.
+        rows, labels = {}, {}
+        for changed in touched_rows({row["id"], row["parent"]} - {None}).values():
+            rows.update((r["id"], r) for r in changed["segments"])
+            labels.update(changed["labels"])
+        body = {"segment": row, "segments": list(rows.values()), "labels": labels}
+        return Response(body, status=answer.status_code)
 
 
 class SegmentAttachments(GuiView):

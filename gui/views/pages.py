@@ -1,7 +1,8 @@
 """The operator GUI: one page whose script talks to /api/ and to ws/live/.
 
-The page itself only carries what the script cannot ask the API for: who is
-logged in, which role they have and the site's map settings.
+The page carries what the script cannot ask the API for: who is logged in,
+which role they have and the site's map settings; and, so that the first screen
+does not wait for a chain of requests, the answers of the script's first reads.
 """
 
 from django.conf import settings
@@ -11,8 +12,19 @@ from django.templatetags.static import static
 from django.urls import reverse
 
 from common import roles
-from events.models import ItoReason, Performer, PoseSource, Vehicle
+from events import feed
+from events.api import serializers as s
+from events.models import ItoReason, Leg, Performer, PoseSource, Shift, TestEvent, Vehicle
+from gui.views.gui_api import leg_segments
 from rosbridge_app.selectors.collectors import logging_into
+
+# How static/gui/api.js's list() asks for a whole list.
+WHOLE_LIST = "?page_size=5000"
+# The modules main.js imports, named in the page so that the browser fetches them
+# at once rather than one import level after the other.
+MODULES = sorted(
+    p.name for p in (settings.BASE_DIR / "static" / "gui").glob("*.js") if p.name != "compare.js"
+)
 
 
 def missing_configuration() -> list[str]:
@@ -42,13 +54,57 @@ def logged_leg() -> dict | None:
     return {"event": leg.shift.test_event_id, "shift": leg.shift_id, "leg": leg.pk}
 
 
+def _chosen(request, name: str) -> int | None:
+    value = request.GET.get(name, "")
+    return int(value) if value.isdigit() else None
+
+
+def first_answers(request, logging: dict | None) -> dict[str, object]:
+    """{URL the page's script reads first: its answer}: the catalogues, the pickers
+    down to the leg in the address (or the leg a collector logs into) and that leg's
+    segments, each as its REST or /gui/api/ read answers it.  The script takes each
+    once instead of asking (static/gui/api.js); later reads go to the server."""
+    chosen = {k: _chosen(request, k) for k in ("event", "shift", "leg")}
+    if chosen["event"] is None and logging:
+        chosen = logging
+    context = {"request": request}
+
+    def rows(serializer, queryset):
+        data = serializer(queryset, many=True, context=context).data
+        # One page, as common.api.pagination answers WHOLE_LIST (lists are far shorter).
+        return {"count": len(data), "next": None, "previous": None, "results": data}
+
+    answers = {
+        "/api/ito-reasons/" + WHOLE_LIST: s.ItoReasonSerializer(
+            ItoReason.objects.all(), many=True, context=context
+        ).data,
+        "/api/vehicles/" + WHOLE_LIST: rows(s.VehicleSerializer, Vehicle.objects.all()),
+        "/api/test-events/" + WHOLE_LIST: rows(s.TestEventSerializer, TestEvent.objects.all()),
+    }
+    event, shift, leg = chosen["event"], chosen["shift"], chosen["leg"]
+    if event is not None:
+        shifts = Shift.objects.filter(test_event_id=event)
+        answers[f"/api/shifts/{WHOLE_LIST}&test_event={event}"] = rows(s.ShiftSerializer, shifts)
+    if shift is not None:
+        legs = list(Leg.objects.select_related("shift").filter(shift_id=shift))
+        answers[f"/api/legs/{WHOLE_LIST}&shift={shift}"] = rows(s.LegSerializer, legs)
+        shown = next((r for r in legs if r.pk == leg), None)
+        if shown is not None:
+            answers[f"/gui/api/legs/{leg}/segments/"] = leg_segments(shown)
+    return answers
+
+
 @login_required
 def index(request):
     user = request.user
     is_admin = roles.has_role(user, roles.ADMINISTRATOR)
     personnel = getattr(user, "personnel", None)
+    logging = logged_leg()
+    can_view = roles.has_role(user, roles.VIEWER)
+    # Before the answers are read: what is announced meanwhile reaches the page live.
+    last_event = feed.bounds()[1]
     context = {
-        "can_view": roles.has_role(user, roles.VIEWER),
+        "can_view": can_view,
         "can_operate": roles.has_role(user, roles.OPERATOR),
         "is_admin": is_admin,
         "missing": missing_configuration() if is_admin else [],
@@ -62,11 +118,14 @@ def index(request):
             "isAdmin": is_admin,
             "user": user.get_full_name() or user.get_username(),
             "personnel": personnel.pk if personnel else None,
-            "loggingLeg": logged_leg(),
+            "loggingLeg": logging,
             "wsPath": "/ws/live/",
             "apiRoot": "/api/",
             "guiApiRoot": "/gui/api/",
+            "lastEventId": last_event,
+            "answers": first_answers(request, logging) if can_view else {},
         },
+        "modules": MODULES,
     }
     return render(request, "gui/index.html", context)
 

@@ -10,6 +10,7 @@ export const Live = {
   socket: null,
   retry: 500,
   pending: new Set(),
+  seen: new Set(), // ids of the events applied
   timer: null,
   connect() {
     const scheme = location.protocol === "https:" ? "wss:" : "ws:";
@@ -62,6 +63,10 @@ export const Live = {
     }
     if (message.type !== "events") return;
     for (const e of message.events) {
+      // Each subscription catches up from lastEventId: two in flight bring the same events.
+      if (this.seen.has(e.id)) continue;
+      this.seen.add(e.id);
+      if (this.seen.size > 10000) this.seen.delete(this.seen.values().next().value);
       if (e.id > (state.lastEventId || 0)) state.lastEventId = e.id;
       this.apply(e);
     }

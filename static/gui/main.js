@@ -3,6 +3,7 @@
  * the modules only show state and forward taps.  This one starts the page and
  * wires the change feed to the modules it concerns. */
 import { CONFIG, $, $$ } from "./dom.js";
+import { forgetAnswers } from "./api.js";
 import { showError } from "./feedback.js";
 import { current, fromUrl, state } from "./state.js";
 import { Live, onSelectedLeg } from "./live.js";
@@ -85,6 +86,8 @@ async function boot() {
     await loadLevel("event");
   } catch (err) {
     showError(err);
+  } finally {
+    forgetAnswers();
   }
   setInterval(() => {
     // Open segments' durations keep growing between events.

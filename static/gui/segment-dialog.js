@@ -3,7 +3,7 @@
 import { CONFIG, $, $$ } from "./dom.js";
 import { api, list } from "./api.js";
 import { notice, showError } from "./feedback.js";
-import { byId, segmentLabel, state } from "./state.js";
+import { byId, putSegment, segmentLabel, state } from "./state.js";
 import { fmtTime } from "./format.js";
 import { confirmDialog } from "./dialogs.js";
 import { showSnapshots } from "./snapshots.js";
@@ -38,7 +38,7 @@ export async function openSegmentDialog(id) {
 }
 
 $(".close", segmentDialog).addEventListener("click", () => segmentDialog.close());
-// segments.js reloads the list when the dialog closes.
+// segments.js redraws the list when the dialog closes.
 segmentDialog.addEventListener("close", () => {
   dialogSegment = null;
 });
@@ -60,7 +60,7 @@ $("#annotation-form").addEventListener("submit", dialogAction(async () => {
   const form = $("#annotation-form");
   const body = {};
   for (const f of ["ito_reason", "obstacle", "lighting", "slope"]) body[f] = form.elements[f].value;
-  await api("PATCH", `segments/${dialogSegment.id}/`, body);
+  putSegment(await api("PATCH", `segments/${dialogSegment.id}/`, body));
   notice(`${segmentLabel(dialogSegment.id)} saved.`);
 }));
 

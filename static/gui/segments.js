@@ -3,7 +3,7 @@
 import { CONFIG, $, $$ } from "./dom.js";
 import { ApiError, api } from "./api.js";
 import { clearError, notice, showError } from "./feedback.js";
-import { byId, current, fromUrl, reasonName, saveUrl, segmentLabel, shortLabel, state } from "./state.js";
+import { byId, current, fromUrl, putSegment, reasonName, saveUrl, segmentLabel, shortLabel, state } from "./state.js";
 import { fmtClock, fmtDistance, fmtDuration, fmtTime } from "./format.js";
 import { confirmDialog } from "./dialogs.js";
 import { drawLegTracks, gpsMap, loadBasemaps, loadLegTracks, loadLocalMap, localMap, showMaps } from "./mapview.js";
@@ -51,7 +51,6 @@ export async function selectionChanged() {
   $("#maps-section").hidden = !leg;
   $("#mode-panel").hidden = !leg;
   Live.subscribe();
-  Collector.refresh();
   state.segment = null;
   state.segments = [];
   state.tracks = {};
@@ -59,18 +58,30 @@ export async function selectionChanged() {
   gpsMap.clear();
   localMap.clear();
   if (!leg) {
+    Collector.refresh();
     renderSegments();
     return;
   }
-  // The list first: it is what the operator waits for; the tracks follow.
-  const local = state.localMapOf === state.selected.shift ? null : loadLocalMap();
-  await Promise.all([loadSegments(), loadBasemaps(), loadTracks(), local]);
+  // The server answers a page's requests one after the other: the list first (it
+  // is what the operator waits for; on a page load it came with the page), the
+  // tracks next, and what the first screen does not need waits for both.
+  try {
+    await Promise.all([loadSegments(), loadTracks()]);
+  } finally {
+    Collector.refresh();
+  }
   gpsMap.invalidate();
   gpsMap.fitAll();
   localMap.invalidate();
   localMap.fitAll();
   if (restoring && byId(state.segments, restoring)) selectSegment(restoring);
   else saveUrl();
+  // The map image and overlay belong to the shift: kept when only the leg changes.
+  const local = state.localMapOf === state.selected.shift ? null : loadLocalMap();
+  await Promise.all([loadBasemaps(), local]);
+  // A map image just received may have shown the local map.
+  localMap.invalidate();
+  if (local) localMap.fitAll();
 }
 
 export async function loadSegments() {
@@ -83,20 +94,29 @@ export async function loadSegments() {
   renderSegments();
 }
 
-/* A segment event carries the rows it changed (rosbridge_app/consumers.py):
- * they replace or join the list without reading it again.  False when the
- * event did not carry them, and the caller re-reads. */
+/* A segment event, and the answer of a segment write, carry the rows the change
+ * touched (events.api.serializers.touched_rows): they replace or join the list
+ * without reading it again.  False when the event did not carry them, and the
+ * caller re-reads. */
 export function applySegments(e) {
   if (!e.segments || e.leg !== state.selected.leg) return false;
-  for (const row of e.segments) {
-    const i = state.segments.findIndex((s) => s.id === row.id);
-    if (i >= 0) state.segments[i] = row;
-    else state.segments.push(row);
-  }
-  Object.assign(state.labels, e.labels);
+  applyRows(e.segments, e.labels);
+  return true;
+}
+
+function applyRows(rows, labels) {
+  rows.forEach(putSegment);
+  Object.assign(state.labels, labels);
   renderSegments();
   drawTakeOvers();
-  return true;
+}
+
+/* A write through /gui/api/ answers with the row it wrote and every row it touched. */
+async function segmentWrite(path) {
+  const leg = state.selected.leg;
+  const answer = await api("POST", path, {}, { root: CONFIG.guiApiRoot });
+  if (leg === state.selected.leg) applyRows(answer.segments, answer.labels);
+  return answer.segment;
 }
 
 async function loadTracks() {
@@ -228,20 +248,11 @@ function requireSegment() {
   return state.segment;
 }
 
-/* The server's answer is the changed row: shown at once, without reading the
- * list again (the change feed brings the rest, e.g. for other browsers). */
-function showRow(row) {
-  const i = state.segments.findIndex((s) => s.id === row.id);
-  if (i < 0) return false;
-  state.segments[i] = row;
-  renderSegments();
-  return true;
-}
-
 async function setReason(key) {
   const id = requireSegment();
-  const row = await api("PATCH", `segments/${id}/`, { ito_reason: key });
-  if (!showRow(row)) await loadSegments();
+  // The answer is the changed row (an annotation touches no other): no re-read.
+  putSegment(await api("PATCH", `segments/${id}/`, { ito_reason: key }));
+  renderSegments();
   notice(`Reason of ${segmentLabel(id)} set to ${reasonName(key)}.`);
 }
 
@@ -253,21 +264,19 @@ $("#segment-new").addEventListener("click", () => segmentAction(async () => {
     const ok = await confirmDialog("The robot is in AUTO. Record a take-over (ITO) now?", { yes: "Record take-over", no: "Cancel", warn: false });
     if (!ok) return;
   }
-  const child = await api("POST", `legs/${state.selected.leg}/manual-segment/`, {});
-  await loadSegments();
-  if (child && child.id) selectSegment(child.id);
+  const child = await segmentWrite(`legs/${state.selected.leg}/manual-segment/`);
+  selectSegment(child.id);
   notice("Take-over recorded.");
 }));
 $("#segment-end").addEventListener("click", () => segmentAction(async () => {
   const id = requireSegment();
-  const row = await api("POST", `segments/${id}/close/`, {});
-  // Ending a master ends its reasons too: then the list is read again.
-  if (row.parent === null || !showRow(row)) await loadSegments();
+  // Ending a master ends its reasons too: the answer brings them all.
+  await segmentWrite(`segments/${id}/close/`);
   notice(`Ended ${segmentLabel(id)}.`);
 }));
 $("#segment-edit").addEventListener("click", () => segmentAction(async () => openSegmentDialog(requireSegment())));
-// What was changed in the segment dialog shows in the list once it closes.
-$("#segment-dialog").addEventListener("close", () => loadSegments().catch(showError));
+// The dialog's saves put their answers into the list (segment-dialog.js): shown once it closes.
+$("#segment-dialog").addEventListener("close", renderSegments);
 
 /* Distances come from the server (geodesic); redrawing is only needed when a
  * batch was too large to be sent inline. */

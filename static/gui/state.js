@@ -1,6 +1,8 @@
 /* The page's one state object: selection (also in the address), loaded rows,
  * segments, tracks and catalogues, with the look-ups that read it. */
 
+import { CONFIG } from "./dom.js";
+
 export const LEVELS = {
   event: { path: "test-events/", label: "test event", parent: null, child: "shift" },
   shift: { path: "shifts/", label: "shift", parent: "event", parentField: "test_event", child: "leg" },
@@ -36,7 +38,9 @@ export const state = {
   segment: null, // selected segment id
   view: fromUrl.view, // "fleet": every logging vehicle on one map; null: the cockpit
   catalogue: {},
-  lastEventId: null,
+  // The change feed's newest event when the page's first answers were read: the
+  // subscription brings what came after.
+  lastEventId: CONFIG.lastEventId ?? null,
 };
 
 export const byId = (rows, id) => rows.find((r) => r.id === id) || null;
@@ -48,3 +52,9 @@ export const reasonName = (key) => {
   const r = (state.catalogue.reasons || []).find((x) => x.key === key);
   return r ? r.short_description : key || "";
 };
+/* A segment row as the server answered it replaces the listed one, or joins the list. */
+export function putSegment(row) {
+  const i = state.segments.findIndex((s) => s.id === row.id);
+  if (i >= 0) state.segments[i] = row;
+  else state.segments.push(row);
+}

@@ -91,6 +91,72 @@ def test_reconnecting_browser_catches_up(page, server, open_leg, shot):
     shot(page, "caught-up")
 
 
+def test_new_take_over_and_end_show_every_changed_row_without_reading_the_list(
+    page, server, open_leg, shot
+):
+    robot = Robot(server, open_leg)
+    try:
+        robot.do("auto")
+    finally:
+        robot.stop()
+    login(page, server, "otto")
+    choose(page, open_leg)
+    rows = page.locator("#segment-table tbody tr")
+    expect(rows).to_have_count(1)
+    expect(page.locator("#live-status")).to_have_text("live")
+    # The change feed stays away: only the writes' answers can change the list.
+    page.evaluate("FTT.Live.retry = 60000; FTT.Live.socket.close()")
+    expect(page.locator("#live-status")).to_have_text("reconnecting…")
+    reads = []
+    page.on("request", lambda r: r.method == "GET" and "segments" in r.url and reads.append(r.url))
+    page.locator("#segment-new").click()
+    page.get_by_role("button", name="Record take-over").click()
+    expect(rows).to_have_count(2)
+    auto = page.locator("#segment-table tbody tr.auto")
+    reason = page.locator("#segment-table tbody tr.child")
+    expect(auto.locator("td").nth(0)).to_have_text("#1")
+    expect(auto.locator("td").nth(7)).to_have_text("CLOSED")
+    expect(reason).to_have_class(re.compile(r"\bselected\b"))
+    expect(reason.locator("td").nth(0)).to_have_text("#2.1")
+    expect(reason.locator("td").nth(1)).to_have_text("ITO")
+    expect(reason.locator("td").nth(7)).to_have_text("OPEN")
+    expect(page.locator("#mode-name")).to_have_text("ITO")
+    expect(page.locator("#notice")).to_contain_text("Take-over recorded")
+    page.locator("#segment-end").click()
+    expect(reason.locator("td").nth(7)).to_have_text("CLOSED")
+    expect(page.locator("#notice")).to_have_text(re.compile(r"Ended Leg \d+ · #2\.1"))
+    shot(page, "take-over-ended")
+    assert reads == []
+
+
+def test_a_reload_shows_the_list_without_reading_it_again(page, server, open_leg, shot):
+    robot = Robot(server, open_leg)
+    try:
+        robot.do("auto")
+        robot.do("poses")
+        robot.do("ito")
+    finally:
+        robot.stop()
+    login(page, server, "otto")
+    choose(page, open_leg)
+    expect(page.locator("#segment-table tbody tr")).to_have_count(2)
+    reads = []
+    page.on("request", lambda r: r.method == "GET" and "/api/" in r.url and reads.append(r.url))
+    page.reload()
+    rows = page.locator("#segment-table tbody tr")
+    expect(rows).to_have_count(2)
+    expect(rows.filter(has_text="ITO")).to_have_count(1)
+    expect(page.locator("#mode-name")).to_have_text("ITO")
+    expect(page.locator("#gps-map")).to_have_attribute("data-tracks", "1")
+    expect(page.locator("#collector-status")).not_to_contain_text("Asking")
+    shot(page, "reloaded")
+    # Catalogues, pickers and the list came with the page; the map's tracks are asked for.
+    asked = {re.sub(r"[?].*|\d+", "", url.split("/api/", 1)[1]) for url in reads}
+    assert "legs//tracks/" in asked
+    assert not asked & {"ito-reasons/", "vehicles/", "test-events/", "shifts/", "legs/"}
+    assert "legs//segments/" not in asked
+
+
 def test_notes_can_be_edited_and_deleted(page, server, open_leg, shot):
     login(page, server, "otto")
     choose(page, open_leg)

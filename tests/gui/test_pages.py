@@ -1,12 +1,13 @@
 """The GUI page, login, protected media and the GUI's own JSON reads."""
 
+import json
 import re
 from urllib.parse import quote
 
 import pytest
 from django.contrib.auth.models import Group, User
 
-from events.models import ItoReason, Performer, PoseSource
+from events.models import Announcement, ItoReason, Performer, PoseSource
 from events.services import segments
 from rosbridge_app.services import collectors
 from telemetry.services import recording
@@ -278,3 +279,47 @@ def test_fleet_lists_logging_vehicles_to_anyone_with_a_role(client, leg, vehicle
     (entry,) = client.get("/gui/api/fleet/").json()["vehicles"]
 
     assert (entry["vehicle"]["key"], entry["mode"], entry["leg"]["id"]) == ("husky", "ito", leg.pk)
+
+
+def _config(page: str) -> dict:
+    config = re.search(r'<script id="gui-config" type="application/json">(.*?)</script>', page)
+    return json.loads(config.group(1))
+
+
+def _answers(page: str) -> dict:
+    return _config(page)["answers"]
+
+
+def test_the_page_carries_its_first_reads_as_the_api_answers_them(client, leg, other_leg):
+    segments.report_mode(leg, "auto")
+    segments.new_manual_segment(leg)
+    member(client, "otto", "operator")
+    shift = leg.shift
+    url = f"/?event={shift.test_event_id}&shift={shift.pk}&leg={leg.pk}"
+    answers = _answers(client.get(url).content.decode())
+    assert set(answers) == {
+        "/api/ito-reasons/?page_size=5000",
+        "/api/vehicles/?page_size=5000",
+        "/api/test-events/?page_size=5000",
+        f"/api/shifts/?page_size=5000&test_event={shift.test_event_id}",
+        f"/api/legs/?page_size=5000&shift={shift.pk}",
+        f"/gui/api/legs/{leg.pk}/segments/",
+    }
+    for path, answer in answers.items():
+        assert answer == client.get(path).json(), path
+    assert len(answers[f"/gui/api/legs/{leg.pk}/segments/"]["segments"]) == 3
+    # The change feed's newest event then: the page's subscription catches up from it.
+    newest = Announcement.objects.latest("id").pk
+    assert _config(client.get(url).content.decode())["lastEventId"] == newest
+
+
+def test_without_an_address_the_page_carries_the_logging_legs_reads(client, leg, vehicle):
+    collectors.heartbeat("field-1", vehicle=vehicle, logging=True, leg=leg)
+    member(client, "vera", "viewer")
+    answers = _answers(client.get("/").content.decode())
+    assert f"/gui/api/legs/{leg.pk}/segments/" in answers
+    # A leg that is not the shift's is not answered: the page asks, and gets its 404.
+    wrong = _answers(client.get(f"/?event=1&shift={leg.shift_id}&leg=999999").content.decode())
+    assert not any("/gui/api/legs/" in path for path in wrong)
+    member(client, "nobody")
+    assert _answers(client.get("/").content.decode()) == {}

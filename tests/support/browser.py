@@ -9,6 +9,7 @@ it to on stdin.  After each write has committed it prints "DONE <unix time>".
 """
 
 import os
+import re
 import socket
 import subprocess
 import sys
@@ -164,7 +165,11 @@ def choose_event(page, key):
     from playwright.sync_api import expect
 
     option = page.locator("#pick-event option", has_text=f"Gelände {key}")
-    page.select_option("#pick-event", value=option.get_attribute("value"))
+    value = option.get_attribute("value")
+    page.select_option("#pick-event", value=value)
+    # The page may have opened another leg (one a collector logs into): wait until
+    # this event's shift and leg are chosen, not only for a leg to be shown.
+    expect(page).to_have_url(re.compile(rf"[?&]event={value}&shift=\d+&leg=\d+"))
     expect(page.locator("#segments-section")).to_be_visible()
 
 

@@ -1,0 +1,81 @@
+"""The cockpit's segment writes answer with every row the change touched, as the
+REST list shows them, so the page redraws without reading the list again; the
+rules, roles and refusals are the REST actions' own."""
+
+import pytest
+
+from events.models import Segment, SegmentType
+from events.services import segments
+
+pytestmark = pytest.mark.django_db
+
+
+def by_id(rows):
+    return {r["id"]: r for r in rows}
+
+
+def listed(client, leg):
+    return by_id(client.get(f"/gui/api/legs/{leg.pk}/segments/").json()["segments"])
+
+
+def test_a_take_over_in_auto_answers_the_closed_auto_and_the_new_ito_rows(api_client, leg):
+    auto = segments.report_mode(leg, SegmentType.AUTO).master
+    client = api_client("operator")
+    answer = client.post(f"/gui/api/legs/{leg.pk}/manual-segment/", {}, format="json")
+    assert answer.status_code == 201, answer.content
+    body = answer.json()
+    reason = Segment.objects.get(pk=body["segment"]["id"])
+    master = reason.parent
+    rows = by_id(body["segments"])
+    assert set(rows) == {auto.pk, master.pk, reason.pk}
+    # Each row as the list now shows it: the AUTO closed where the take-over began.
+    now = listed(client, leg)
+    assert all(rows[pk] == now[pk] for pk in rows)
+    assert rows[auto.pk]["is_open"] is False and rows[auto.pk]["end"] == rows[master.pk]["start"]
+    assert rows[reason.pk]["segment_type"] == "ito" and rows[reason.pk]["is_open"] is True
+    labels = client.get(f"/gui/api/legs/{leg.pk}/tracks/").json()["labels"]
+    assert body["labels"] == {str(pk): labels[str(pk)] for pk in rows}
+    assert body["labels"][str(reason.pk)] == f"Leg {leg.number} · #2.1"
+
+
+def test_a_take_over_in_ito_answers_its_new_reason_under_the_open_master(api_client, leg):
+    first = segments.new_manual_segment(leg)
+    client = api_client("operator")
+    body = client.post(f"/gui/api/legs/{leg.pk}/manual-segment/", {}, format="json").json()
+    rows = by_id(body["segments"])
+    assert body["segment"]["parent"] == first.parent_id
+    assert {body["segment"]["id"], first.parent_id} <= set(rows)
+    now = listed(client, leg)
+    assert rows == {pk: now[pk] for pk in rows}
+
+
+def test_ending_a_master_answers_its_reasons_closed_too(api_client, leg):
+    reason = segments.new_manual_segment(leg)
+    client = api_client("operator")
+    answer = client.post(f"/gui/api/segments/{reason.parent_id}/close/", {}, format="json")
+    assert answer.status_code == 200, answer.content
+    body = answer.json()
+    rows = by_id(body["segments"])
+    assert body["segment"]["id"] == reason.parent_id
+    assert {reason.pk, reason.parent_id} <= set(rows)
+    assert not rows[reason.pk]["is_open"] and not rows[reason.parent_id]["is_open"]
+    assert rows == {pk: row for pk, row in listed(client, leg).items() if pk in rows}
+
+
+def test_refusals_are_the_rest_actions_and_write_nothing(api_client, leg):
+    reason = segments.new_manual_segment(leg)
+    segments.close_segment(reason)
+    client = api_client("operator")
+    close = f"segments/{reason.pk}/close/"
+    again = client.post(f"/gui/api/{close}", {}, format="json")
+    assert again.status_code == 409
+    assert again.json() == client.post(f"/api/{close}", {}, format="json").json()
+    viewer = api_client("viewer")
+    count = Segment.objects.count()
+    refused = viewer.post(f"/gui/api/legs/{leg.pk}/manual-segment/", {}, format="json")
+    assert refused.status_code == 403
+    new = f"/gui/api/legs/{leg.pk}/manual-segment/"
+    wrong = client.post(new, {"reason": "nope"}, format="json")
+    assert wrong.status_code == 400 and "reason" in wrong.json()["errors"]
+    assert client.post("/gui/api/segments/999999/close/", {}, format="json").status_code == 404
+    assert Segment.objects.count() == count
