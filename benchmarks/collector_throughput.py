@@ -533,9 +533,9 @@ def writer_stall(rounds: int = 3) -> None:
     )
     directory = Path(tempfile.mkdtemp(prefix="ftt-bench-writer-"))
     writer, definitions = WriterProcess(), MessageDefinitions()
-    writer.start()
-    while writer.pid is None:
-        time.sleep(0.05)
+    # Started and ready (its type store loaded), as a collector's writer is by
+    # the time a window has passed.
+    writer.write(directory / "warm.mcap", messages[:10], types, 120.0)
 
     def stalls(write) -> str:
         late, stop = [], threading.Event()
@@ -565,7 +565,7 @@ def writer_stall(rounds: int = 3) -> None:
         thread = stalls(
             lambda i=i: write_mcap(directory / f"t{i}.mcap", messages, types, definitions)
         )
-        child = stalls(lambda i=i: writer.write(directory / f"p{i}.mcap", messages, types))
+        child = stalls(lambda i=i: writer.write(directory / f"p{i}.mcap", messages, types, 120.0))
         print(
             f"writing a 12 MB snapshot [load {load(os.getloadavg())}]: in a thread {thread}; "
             f"by the writer process {child}"
