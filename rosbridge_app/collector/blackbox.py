@@ -331,7 +331,7 @@ class WriterProcess:
         with self._lock:
             old = self._child
             if old is not None and not old.process.is_alive():
-                log.warning("snapshot writer process (pid %d) gone; starting another", old.pid)
+                log.error("the snapshot writer process (pid %d) died; starting a new one", old.pid)
                 old.close(wait=0)
                 self._child = None
             if self._child is None:
