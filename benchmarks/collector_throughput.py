@@ -507,7 +507,7 @@ class Switches:
         if stage:
             self.stages[stage] += 1
         if kind == "write":
-            self.by_stage.setdefault(stage, []).append(delay)
+            self.by_stage.setdefault(stage or "ending", []).append(delay)
 
     def _await_write(self, sample) -> bool:
         """Until a write begins (False if none is due)."""
