@@ -16,21 +16,26 @@ TF, compressed camera; the raw camera with ``--camera raw``) and the default
 20 s before; ``after`` is 2 s so that a run has many snapshots.  With
 ``--snapshot alternate`` (default) it is switched on and off every ``--phase``
 seconds through the GUI command path, so the buffer's CPU share is the
-difference of the on and off phases of one run, measured under the same load
-of the shared machine, with the same switches in both.  The window of a
-take-over is written about ``after`` seconds later, when the next switch comes:
-a switch whose publish-to-row time overlaps a write (the writer process's
-``.part`` file exists in the pending directory) is counted apart, so the
-mode-to-row delay is shown during snapshot writes as well as without.  So is
-the pose delay: each GPS row the collector stores, from the fix's stamp (the
-simulator's publish time) to the moment this script sees the row.  The last
-lines put off / on / during a write side by side with the target of issue 15:
-writing a snapshot does not delay mode or pose recording ("during a write" no
-slower than "on" beyond the spread).
+difference of the on and off phases of one run, under the same load of the
+shared machine, with the same switches in both.
+
+Whether writing a snapshot delays mode or pose recording: a thread watches the
+pending directory every 5 ms (the writer process's ``.part`` file, then the
+finished file until the database writer has stored it: one "write").  Each
+mode switch is published at a chosen moment: with the black box on,
+alternately between writes ("on, idle") and just as a write begins, the file
+being built or the finished file about to be stored ("during a write"),
+balanced by the direction of the switch (each switch to ITO starts the
+snapshot written ``after`` seconds later); with it off, every 0.3 s.  GPS
+fixes are grouped the same way by their stamp (the simulator's publish time).
+Off, idle and write samples are interleaved in one run, so they share the
+machine's load.  The last lines print p50 and p95 per group and the verdicts:
+during a write, p50 and p95 within 25 % (+ 20 ms) of on-idle; the black box's
+CPU (95 % bound) at most 10 % of one core.
 
     FTT_DATABASE_URL=postgis://... .venv/bin/python benchmarks/collector_throughput.py \
         [--seconds 200] [--snapshot alternate|on|off] [--phase 40] [--camera jpeg|raw] \
-        [--map-rate 1] [--ros-domain N] [--latency-only]
+        [--map-rate 1] [--ros-domain N] [--latency-only] [--code OTHER_CHECKOUT]
 
 Also prints first the black box's own cost for 60 s of that traffic, fed
 straight into Blackbox.receive in this process (``--buffer-only``: only that;
@@ -56,12 +61,15 @@ import re
 import shutil
 import statistics
 import subprocess
+import sys
 import tempfile
+import threading
 import time
 from datetime import UTC, datetime
 from pathlib import Path
 
 # collector_bench sets the ROS domain and discovery range and sets Django up.
+import collector_bench
 from collector_bench import MANAGE, Bench
 from django.db import connection
 from django.db.models import Max
@@ -133,6 +141,11 @@ def main() -> None:
         action="store_true",
         help="Skip the black box's own cost (two minutes): only the run with the collector.",
     )
+    parser.add_argument(
+        "--code",
+        type=Path,
+        help="Run ftt_collect from this checkout (A/B against other code, same database).",
+    )
     parser.add_argument("--gps-hz", type=float, default=0.0)
     parser.add_argument("--gps-count", type=int, default=30_000)
     parser.add_argument("--publisher-depth", type=int, default=1000)
@@ -143,6 +156,8 @@ def main() -> None:
         return
     if args.ros_domain is not None:
         os.environ["ROS_DOMAIN_ID"] = str(args.ros_domain)
+    if args.code is not None:
+        collector_bench.MANAGE = [sys.executable, str(args.code.resolve() / "manage.py")]
     if not args.latency_only:
         buffer_cost()
         writer_stall()
@@ -212,61 +227,50 @@ def main() -> None:
     # its first messages on, or the first phase would lack its traffic.
     while not Collector.objects.get(name=key).inputs.get("gps_fix", {}).get("count"):
         time.sleep(0.1)
-    # Mode → row delays and collector CPU per second, by the black box's state.
-    delays: dict[str, list[float]] = {"off": [], "on": [], "write": []}
-    # The same by the state when the switch was published: a slow switch overlaps
-    # a write more often just because it is slow, this grouping does not favour that.
-    at_start: dict[str, list[float]] = {"off": [], "on": [], "write": []}
+    writing.start()
+    phases = Phases(args.snapshot, args.phase)
+    switches = Switches(leg, writing, phases, args.snapshot_after)
+    poses = PoseDelays(leg, writing, phases)
+    poses.start()
     cpu_by_phase: dict[bool, list[float]] = {True: [], False: []}
     command_delays, cpu_samples, rss_max, pending_max = [], [], 0, 0
     record = Collector.objects.get(name=key)
     cpu0, _ = proc_sample(collector.pid)
     t0 = time.monotonic()
-    auto = False
-    enabled = args.snapshot != "off"
-    phase_start = next_toggle = t0
-    if args.snapshot == "alternate":
-        next_toggle = t0 + args.phase
-    next_switch = t0 + 2.0
     last_cpu, last_t = cpu0, t0
-    poses = PoseDelays(leg, writing)
-    while robot.poll() is None:
+
+    def sample() -> None:
+        nonlocal last_cpu, last_t, record, pending_max, rss_max
         now = time.monotonic()
-        writing.active()
-        poses.poll(enabled)
-        if args.snapshot == "alternate" and now >= next_toggle:
-            enabled = not enabled
-            timed_command(record, {"snapshot.enabled": enabled})
-            phase_start, next_toggle = now, now + args.phase
-        if now >= next_switch and now - t0 < args.seconds - 3:
-            auto = not auto
-            before = Segment.objects.filter(leg=leg, parent__isnull=True).count()
-            published = time.monotonic()
-            mode.publish(Bool(data=auto))
-            at_publish = during_write = writing.active()
-            while Segment.objects.filter(leg=leg, parent__isnull=True).count() == before:
-                if time.monotonic() - published > 30:
-                    break
-                during_write = writing.active() or during_write
-                poses.poll(enabled)
-                time.sleep(0.005)
-            delay = time.monotonic() - published
-            delays["write" if during_write else "on" if enabled else "off"].append(delay)
-            at_start[group_at(at_publish, enabled)].append(delay)
-            next_switch = published + 2.0
-            command_delays.append(timed_command(record))
         cpu, rss = proc_sample(collector.pid)
+        rss_max = max(rss_max, rss)
         if now - last_t >= 1.0:
-            sample = (cpu - last_cpu) / (now - last_t)
-            cpu_samples.append(sample)
+            share = (cpu - last_cpu) / (now - last_t)
+            cpu_samples.append(share)
             # Subscribing and unsubscribing take up to a tick after a toggle.
-            if last_t - phase_start >= 2.0:
-                cpu_by_phase[enabled].append(sample)
+            if phases.settled(time.time() - (now - last_t)):
+                cpu_by_phase[phases.enabled].append(share)
             last_cpu, last_t = cpu, now
             record = Collector.objects.filter(name=key).first()
             pending_max = max(pending_max, record.pending if record else 0)
-        rss_max = max(rss_max, rss)
-        time.sleep(0.05)
+
+    try:
+        while robot.poll() is None:
+            sample()
+            if phases.due():
+                timed_command(record, {"snapshot.enabled": not phases.enabled})
+                phases.toggle()
+            elif time.monotonic() - t0 < args.seconds - 5:
+                switches.next(mode, sample)
+                command_delays.append(timed_command(record))
+            else:
+                time.sleep(0.05)
+        writing.stop()
+        poses.stop()
+    except BaseException:
+        for process in (robot, collector):
+            process.kill()
+        raise
     elapsed = time.monotonic() - t0
     published = robot.stdout.read()
     collector.send_signal(2)
@@ -335,21 +339,24 @@ def main() -> None:
             f"medians {100 * statistics.median(cpu_by_phase[True]):.1f} % and "
             f"{100 * statistics.median(cpu_by_phase[False]):.1f} %"
         )
+        worst = 100 * (on - off + error)
+        print(
+            f"VERDICT black-box CPU: adds {100 * (on - off):.1f} % of one core, at most "
+            f"{worst:.1f} % (95 %) — target ≤ 10 %: {'MET' if worst <= 10 else 'NOT MET'}"
+        )
     print(f"collector RSS: max {rss_max / 2**20:.0f} MB")
     print(f"spool backlog: max {pending_max} records, {spool_left} left after exit")
-    for group, label in (
-        ("off", "black box off"),
-        ("on", "black box on, no snapshot being written"),
-        ("write", "while a snapshot was being written"),
-    ):
-        print(spread(f"mode message → committed master row, {label}", delays[group]))
-        print(spread(f"GPS fix stamp → its pose row seen, {label}", poses.delays[group]))
     print(spread("GUI command issued → carried out by the collector", command_delays))
-    print("grouped by whether a write overlapped the delay:")
-    print(side_by_side({"mode message → master row": delays, "GPS fix → pose row": poses.delays}))
-    print("grouped by whether a write was going on when the message was published:")
     print(
-        side_by_side({"mode message → master row": at_start, "GPS fix → pose row": poses.at_start})
+        f"mode switches published while a snapshot was being built / stored: "
+        f"{switches.stages['building']} / {switches.stages['storing']}; "
+        f"published between writes but one began before the row: {len(switches.delays['mixed'])}"
+    )
+    for stage, values in sorted(switches.by_stage.items()):
+        print(spread(f"  mode message → master row, published while {stage}", values))
+    print(f"load average (1, 5, 15 min) at the end: {load(os.getloadavg())}")
+    print(
+        verdict({"mode message → master row": switches.delays, "GPS fix → pose row": poses.delays})
     )
     node.destroy_node()
     rclpy.try_shutdown()
@@ -360,56 +367,224 @@ def load(averages) -> str:
     return ", ".join(f"{a:.2f}" for a in averages)
 
 
-class SnapshotWatch:
-    """Sees the collector's snapshot writer at work: it writes each snapshot to a
-    ``.part`` file in the pending directory and renames it when complete."""
+class SnapshotWatch(threading.Thread):
+    """Sees the collector's snapshot path at work, every 5 ms: the writer process
+    builds each file as a ``.part`` in the pending directory and renames it when
+    complete; the database writer stores it into media storage and removes the
+    pending file after the commit.  From the first to the last of these is one
+    span "during a write"."""
 
     def __init__(self, directory: Path):
+        super().__init__(daemon=True)
         self.directory = directory
         self.names: set[str] = set()
-        self.last_active = 0.0  # wall clock
-        self.spans: list[list[float]] = []  # [first, last] time a write was seen
+        self.spans: list[list[float]] = []  # [start, end] wall clock
+        self.stage = ""  # "building", "storing" or ""
+        self.changed = threading.Condition()
+        self._halt = threading.Event()
 
-    def active(self) -> bool:
-        try:
-            parts = {n for n in os.listdir(self.directory) if n.endswith(".part")}
-        except FileNotFoundError:
-            return False
-        self.names |= parts
-        if parts:
+    def run(self) -> None:
+        while not self._halt.wait(0.005):
+            try:
+                names = os.listdir(self.directory)
+            except FileNotFoundError:
+                names = []
+            parts = {n for n in names if n.endswith(".part")}
+            done = [n for n in names if n.startswith("snapshot-") and n.endswith(".mcap")]
+            self.names |= parts
+            stage = "building" if parts else "storing" if done else ""
             now = time.time()
-            if self.spans and now - self.spans[-1][1] < 0.25:
-                self.spans[-1][1] = now
-            else:
-                self.spans.append([now, now])
-            self.last_active = now
-        return bool(parts)
+            if stage:
+                if self.stage:
+                    self.spans[-1][1] = now
+                else:
+                    self.spans.append([now, now])
+            if stage != self.stage:
+                with self.changed:
+                    self.stage = stage
+                    self.changed.notify_all()
+
+    def stop(self) -> None:
+        self._halt.set()
+
+    def wait_for(self, stages: tuple[str, ...], timeout: float) -> bool:
+        with self.changed:
+            return self.changed.wait_for(lambda: self.stage in stages, timeout)
+
+    def since(self, t: float) -> bool:
+        """Has a write been going on at some time from ``t`` until now?"""
+        return bool(self.spans) and self.spans[-1][1] >= t - 0.005
 
     def during(self, t: float) -> bool:
-        """Was a write seen going on at wall-clock time ``t`` (± one poll)?"""
-        return any(start - 0.05 <= t <= end + 0.05 for start, end in self.spans)
+        """Was a write going on at wall-clock time ``t``?"""
+        return any(start - 0.005 <= t <= end + 0.005 for start, end in self.spans[-50:])
+
+    def overlaps(self, t0: float, t1: float) -> bool:
+        return any(start <= t1 and end >= t0 for start, end in self.spans[-50:])
 
     @property
     def seen(self) -> int:
         return len(self.names)
 
 
-class PoseDelays:
+class Phases:
+    """The black box switched on and off every ``seconds`` (``alternate``)."""
+
+    def __init__(self, how: str, seconds: float):
+        self.how, self.seconds = how, seconds
+        self.enabled = how != "off"
+        self.toggles = [(time.time(), self.enabled)]
+
+    def due(self) -> bool:
+        return self.how == "alternate" and time.time() - self.toggles[-1][0] >= self.seconds
+
+    def toggle(self) -> None:
+        self.enabled = not self.enabled
+        self.toggles.append((time.time(), self.enabled))
+
+    def at(self, t: float) -> bool | None:
+        """On or off at wall-clock time ``t``; None within 2 s after a toggle
+        (subscribing, unsubscribing)."""
+        state = None
+        for start, enabled in self.toggles:
+            if t >= start:
+                state = enabled if t >= start + 2.0 or start == self.toggles[0][0] else None
+        return state
+
+    def settled(self, t: float) -> bool:
+        return self.at(t) is not None
+
+
+def group(writing: SnapshotWatch, phases: Phases, published: float, done: float) -> str | None:
+    """off, idle (on, no write from publishing to the row), write (published while
+    a write was going on), mixed (published between writes, one began before the
+    row), or None (around a toggle)."""
+    enabled = phases.at(published)
+    if enabled is None:
+        return None
+    if not enabled:
+        return "off"
+    if writing.during(published):
+        return "write"
+    return "mixed" if writing.overlaps(published, done) else "idle"
+
+
+def new_groups() -> dict[str, list[float]]:
+    return {"off": [], "idle": [], "write": [], "mixed": []}
+
+
+class Switches:
+    """Mode switches, each timed from publishing to its committed master row and
+    published at a chosen moment: with the black box on, alternately between
+    writes and just as a write begins (the file being built, or the finished
+    file about to be stored), balanced by the direction of the switch.  Every
+    switch to ITO starts a snapshot whose write begins ``after`` seconds later."""
+
+    def __init__(self, leg, writing: SnapshotWatch, phases: Phases, after: float):
+        self.leg, self.writing, self.phases, self.after = leg, writing, phases, after
+        self.auto = False
+        self.ito_at: float | None = None  # last switch to ITO whose write has not begun
+        self.delays = new_groups()
+        self.counts = {(d, g): 0 for d in (True, False) for g in ("idle", "write")}
+        self.stages = {"building": 0, "storing": 0}
+        self.by_stage: dict[str, list[float]] = {}
+
+    def next(self, mode, sample) -> None:
+        auto = not self.auto
+        target = "off"
+        if self.phases.enabled:
+            target = min(("write", "idle"), key=lambda g: self.counts[(auto, g)])
+        if self.ito_at is not None and self.writing.since(self.ito_at):
+            self.ito_at = None  # its write began meanwhile
+        if target == "write" and not self._await_write(sample):
+            target = "idle"
+        if target == "idle":
+            self._await_quiet(sample)
+        elif target == "off":
+            time.sleep(0.3)
+        stage = self.writing.stage
+        kind, delay = self._publish(mode, auto, sample)
+        if stage:
+            self.stages[stage] += 1
+        if kind == "write":
+            self.by_stage.setdefault(stage or "ending", []).append(delay)
+
+    def _await_write(self, sample) -> bool:
+        """Until a write begins (False if none is due)."""
+        if self.writing.stage:
+            return True
+        if self.ito_at is None:
+            return False
+        storing = sum(self.stages.values()) % 2 == 1
+        deadline = self.ito_at + self.after + 10.0
+        while time.time() < deadline:
+            sample()
+            if self.writing.wait_for(("storing",) if storing else ("building", "storing"), 0.05):
+                self.ito_at = None
+                return True
+        return False
+
+    def _await_quiet(self, sample) -> None:
+        """Until no write goes on or is due within a second, and none ended in
+        the last 0.3 s."""
+        while True:
+            sample()
+            now = time.time()
+            due = self.ito_at is not None and self.ito_at + self.after - now < 1.0
+            recent = self.writing.spans and now - self.writing.spans[-1][1] < 0.3
+            if not (self.writing.stage or due or recent):
+                return
+            if self.ito_at is not None and self.writing.since(self.ito_at):
+                self.ito_at = None
+            time.sleep(0.01)
+
+    def _publish(self, mode, auto: bool, sample) -> None:
+        from std_msgs.msg import Bool
+
+        segments = Segment.objects.filter(leg=self.leg, parent__isnull=True)
+        before = segments.count()
+        published = time.time()
+        mode.publish(Bool(data=auto))
+        self.auto = auto
+        if not auto and self.phases.enabled:
+            self.ito_at = published
+        while segments.count() == before and time.time() - published < 30:
+            sample()
+            time.sleep(0.005)
+        done = time.time()
+        kind = group(self.writing, self.phases, published, done)
+        if kind is not None:
+            self.delays[kind].append(done - published)
+            if (auto, kind) in self.counts:
+                self.counts[(auto, kind)] += 1
+        return kind, done - published
+
+
+class PoseDelays(threading.Thread):
     """GPS fix stamped (the simulator stamps with its publish time, same clock) →
-    its pose row seen by this script; polled every 50 ms, so up to 50 ms late.
-    A row counts as "during a write" when a write was seen between the two."""
+    its pose row seen by this script, which looks every 20 ms in a thread of its
+    own (so up to 20 ms late, whatever the main loop waits for).  Grouped like the
+    mode switches, by the moment the fix was published."""
 
-    def __init__(self, leg, writing: SnapshotWatch):
-        self.leg, self.writing = leg, writing
+    def __init__(self, leg, writing: SnapshotWatch, phases: Phases):
+        super().__init__(daemon=True)
+        self.leg, self.writing, self.phases = leg, writing, phases
         self.last_id = Pose.objects.filter(segment__leg=leg).aggregate(m=Max("id"))["m"] or 0
-        self.next_poll = 0.0
-        self.delays: dict[str, list[float]] = {"off": [], "on": [], "write": []}
-        self.at_start: dict[str, list[float]] = {"off": [], "on": [], "write": []}
+        self.delays = new_groups()
+        self._halt = threading.Event()
 
-    def poll(self, enabled: bool) -> None:
-        if time.monotonic() < self.next_poll:
-            return
-        self.next_poll = time.monotonic() + 0.05
+    def run(self) -> None:
+        try:
+            while not self._halt.wait(0.02):
+                self.poll()
+        finally:
+            connection.close()
+
+    def stop(self) -> None:
+        self._halt.set()
+        self.join()
+
+    def poll(self) -> None:
         rows = list(
             Pose.objects.filter(segment__leg=self.leg, id__gt=self.last_id).values_list(
                 "id", "robot_stamp"
@@ -420,37 +595,63 @@ class PoseDelays:
             self.last_id = max(self.last_id, pk)
             if stamp is None:
                 continue
-            at = stamp.timestamp()
-            group = "write" if self.writing.last_active >= at else "on" if enabled else "off"
-            self.delays[group].append(seen - at)
-            self.at_start[group_at(self.writing.during(at), enabled)].append(seen - at)
+            kind = group(self.writing, self.phases, stamp.timestamp(), seen)
+            if kind is not None:
+                self.delays[kind].append(seen - stamp.timestamp())
 
 
-def group_at(writing: bool, enabled: bool) -> str:
-    return "write" if writing else "on" if enabled else "off"
+# Issue 15: "writing a snapshot does not delay mode or pose recording".  Met when
+# the delays of messages published during a write are, at the median and at
+# p95, within 25 % (+ 20 ms for the 20 ms polling of this script) of those
+# published between writes with the black box on, in the same run.
+RATIO, SLACK = 1.25, 0.020
 
 
-def side_by_side(measures: dict[str, dict[str, list[float]]]) -> str:
-    """Medians and p95 of off / on / during a write, and the target of issue 15."""
+def verdict(measures: dict[str, dict[str, list[float]]]) -> str:
+    """p50/p95 per group side by side and the target, as figures and a verdict;
+    off against idle (which differ by the buffer only) shows the spread of the
+    machine at the time."""
     lines = [
-        "writing a snapshot must not delay mode or pose recording "
-        "(target: during a write no slower than on, beyond the spread):",
-        f"  {'':28s} {'off':>16s} {'on':>16s} {'during a write':>16s}   write/on (median)",
+        "delays by the black box's state when the message was published (p50 / p95 ms, n):",
+        f"  {'':27s} {'off':>17s} {'on, idle':>17s} {'during a write':>17s} "
+        f"{'(published idle, write began)':>29s}",
     ]
+    met = []
     for label, groups in measures.items():
         cells = []
-        for group in ("off", "on", "write"):
-            values = groups[group]
+        for name in ("off", "idle", "write", "mixed"):
+            values = groups[name]
             cells.append(
-                f"{1000 * statistics.median(values):5.0f}/{1000 * percentile(values, 0.95):5.0f}"
-                f" n={len(values):<3d}"
+                f"{1000 * percentile(values, 0.5):4.0f} / {1000 * percentile(values, 0.95):4.0f} "
+                f"n={len(values):<3d}"
                 if values
-                else f"{'-':>16s}"
+                else "-"
             )
-        on, write = groups["on"], groups["write"]
-        ratio = statistics.median(write) / statistics.median(on) if on and write else math.nan
-        lines.append(f"  {label:28s} {cells[0]:>16s} {cells[1]:>16s} {cells[2]:>16s}   {ratio:.2f}")
-    lines.append("  (median/p95 in ms)")
+        lines.append(
+            f"  {label:27s} {cells[0]:>17s} {cells[1]:>17s} {cells[2]:>17s} {cells[3]:>29s}"
+        )
+        idle, write, off = groups["idle"], groups["write"], groups["off"]
+        for q, name in ((0.5, "p50"), (0.95, "p95")):
+            if len(idle) < 5 or len(write) < 5:
+                lines.append(f"    {name}: too few samples")
+                met.append(False)
+                continue
+            w, i = percentile(write, q), percentile(idle, q)
+            limit = RATIO * i + SLACK
+            ok = w <= limit
+            met.append(ok)
+            spread_ratio = percentile(off, q) / i if off else math.nan
+            lines.append(
+                f"    {name}: during a write {1000 * w:.0f} ms, limit {1000 * limit:.0f} ms "
+                f"(on-idle {1000 * i:.0f} ms × {RATIO} + {1000 * SLACK:.0f}): write/idle "
+                f"{w / i:.2f} [{'ok' if ok else 'over'}]; off/idle {spread_ratio:.2f} "
+                f"(the machine's spread)"
+            )
+    lines.append(
+        f"VERDICT writing a snapshot does not delay mode or pose recording "
+        f"(during-a-write p50 and p95 ≤ on-idle × {RATIO} + {1000 * SLACK:.0f} ms): "
+        f"{'MET' if all(met) else 'NOT MET'}"
+    )
     return "\n".join(lines)
 
 
@@ -533,9 +734,9 @@ def writer_stall(rounds: int = 3) -> None:
     )
     directory = Path(tempfile.mkdtemp(prefix="ftt-bench-writer-"))
     writer, definitions = WriterProcess(), MessageDefinitions()
-    writer.start()
-    while writer.pid is None:
-        time.sleep(0.05)
+    # Started and ready (its type store loaded), as a collector's writer is by
+    # the time a window has passed.
+    writer.write(directory / "warm.mcap", messages[:10], types, 120.0)
 
     def stalls(write) -> str:
         late, stop = [], threading.Event()
@@ -565,7 +766,7 @@ def writer_stall(rounds: int = 3) -> None:
         thread = stalls(
             lambda i=i: write_mcap(directory / f"t{i}.mcap", messages, types, definitions)
         )
-        child = stalls(lambda i=i: writer.write(directory / f"p{i}.mcap", messages, types))
+        child = stalls(lambda i=i: writer.write(directory / f"p{i}.mcap", messages, types, 120.0))
         print(
             f"writing a 12 MB snapshot [load {load(os.getloadavg())}]: in a thread {thread}; "
             f"by the writer process {child}"

@@ -15,9 +15,12 @@ with the message definitions at the first one) is Python work: in a thread of
 the collector it held the interpreter lock that the executor and the database
 writer need, for up to seconds on a loaded machine.  So a child process
 (:class:`WriterProcess`) builds the files, and the collector's writer thread
-only hands it the messages (bytes that are already there) and waits.
+only hands it the messages (bytes that are already there, in small pieces over
+a pipe) and waits, for a bounded time (``snapshot.write_timeout``): a writer
+that is alive but stuck is killed and replaced like one that died.
 """
 
+import atexit
 import importlib
 import logging
 import multiprocessing
@@ -26,10 +29,10 @@ import signal
 import sys
 import threading
 import time
+import traceback
 import uuid
 from collections import deque
-from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
-from concurrent.futures.process import BrokenProcessPool
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -44,8 +47,15 @@ from rosbridge_app.collector.events import Event
 log = logging.getLogger("ftt.collector")
 
 MB = 1024 * 1024
-# Messages handed to the snapshot writer process at a time.
-PIECE = 8 * MB
+# Messages handed to the snapshot writer process at a time: pickling a piece
+# holds the collector's interpreter lock, so pieces are small.
+PIECE = 1 * MB
+# Added to snapshot.write_timeout per MB of the window.
+WRITE_SECONDS_PER_MB = 1.0
+# A new writer process must be ready (interpreter, mcap, type store) within this;
+# a few seconds on a loaded machine.
+START_TIMEOUT = 120.0
+WRITER_NICE = 10
 # Added to the snapshot topics when they are published (common names on most robots).
 OPTIONAL_TOPICS = ("odom", "cmd_vel")
 DEFAULT_TOPIC_PARAMETERS = ("robot_mode", "gps_fix", "tf", "tf_static", "image_compressed")
@@ -214,44 +224,42 @@ def write_mcap(path: Path, messages: list, types: dict[str, str], definitions) -
 _definitions = MessageDefinitions()
 
 
-def _start_writer(collector: int) -> None:
-    """Runs first in the writer process.  Ctrl-C and SIGTERM reach the whole
-    process group: the collector decides when its writer ends (it writes the
-    open windows at exit)."""
+def _serve(conn) -> None:
+    """The writer process: files from requests on ``conn`` until the collector
+    closes it or is gone (end of file either way).  Ctrl-C and SIGTERM reach the
+    whole process group: the collector decides when its writer ends (it writes
+    the open windows at exit).  Niced: on a busy machine the collector's own
+    threads come first, a file may well be written a second later."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
-    threading.Thread(target=_end_with, args=(collector,), daemon=True).start()
+    os.nice(WRITER_NICE)
     _definitions.load()  # at the trigger, not when the window has passed
-
-
-def _end_with(collector: int) -> None:
-    """A killed collector closes no pipe the writer would notice (the writer
-    holds both ends of its work queue): it would wait for work for ever."""
-    while os.getppid() == collector:
-        time.sleep(1.0)
-    os._exit(0)
-
-
-# The file the writer process is writing: the window comes in pieces, so that
-# neither process holds a second copy of a whole large window.
-_file: McapFile | None = None
-
-
-def _begin(path: str, types: dict[str, str]) -> None:
-    global _file
-    if _file is not None:  # the collector gave up on it (it cannot happen otherwise)
-        _file.abandon()
-    _file = McapFile(Path(path), types, _definitions)
-
-
-def _add(messages: list) -> None:
-    _file.add(messages)
-
-
-def _finish() -> dict:
-    global _file
-    mcap, _file = _file, None
-    return mcap.finish()
+    conn.send(("ready", None))
+    mcap, failed = None, None
+    while True:
+        try:
+            op, arg = conn.recv()
+        except EOFError:
+            return
+        try:
+            if op == "begin":
+                if mcap is not None:  # the collector gave up on it
+                    mcap.abandon()
+                failed, mcap = None, None
+                mcap = McapFile(Path(arg[0]), arg[1], _definitions)
+            elif op == "add" and failed is None:
+                mcap.add(arg)
+            elif op == "finish":
+                if failed is not None:
+                    conn.send(("error", failed))
+                else:
+                    conn.send(("done", mcap.finish()))
+                mcap = None
+        except Exception:
+            failed = traceback.format_exc()
+            if mcap is not None:
+                mcap.abandon()
+                mcap = None
 
 
 def pieces(messages: list, size: int) -> list[list]:
@@ -271,63 +279,142 @@ class WriterDied(Exception):
     pass
 
 
+class SnapshotError(Exception):
+    """The writer process could not write a file (and is still there)."""
+
+
+class _Child:
+    """One writer process and the collector's end of its pipe."""
+
+    def __init__(self):
+        context = multiprocessing.get_context("spawn")
+        self.conn, theirs = context.Pipe()
+        self.process = context.Process(
+            target=_serve, args=(theirs,), name="ftt-snapshot-writer", daemon=False
+        )
+        self.process.start()
+        theirs.close()  # so that its death is an end of file here
+        self.pid = self.process.pid
+        self.ready = False
+        self.stuck = ""  # why the watchdog killed it
+
+    def kill(self) -> None:
+        self.process.kill()
+
+    def close(self, wait: float) -> None:
+        self.conn.close()  # its end of file: it returns
+        self.process.join(wait)
+        if self.process.is_alive():
+            self.process.kill()
+            self.process.join(5)
+
+
 class WriterProcess:
     """The child process that writes snapshot files, started by the first
     trigger and kept.  'spawn': the collector has DDS threads running, and a
     forked copy of them is undefined; a spawned interpreter imports this module
-    and the mcap library only.  If it dies (killed, out of memory) the
-    collector logs it and starts a new one for the next file."""
+    and the mcap library only.  If it dies (killed, out of memory) or is stuck
+    (alive but not done within its time), the collector logs it, kills it and
+    starts a new one for the next file."""
 
     def __init__(self):
-        self._pool: ProcessPoolExecutor | None = None
+        self._child: _Child | None = None
         self._lock = threading.Lock()
-        self.pid: int | None = None
 
-    def start(self) -> ProcessPoolExecutor:
+    @property
+    def pid(self) -> int | None:
+        child = self._child
+        return child.pid if child is not None else None
+
+    def start(self) -> _Child:
+        """The running writer, started if needed (without waiting for it to be ready)."""
         with self._lock:
-            if self._pool is None:
-                self._pool = ProcessPoolExecutor(
-                    1,
-                    mp_context=multiprocessing.get_context("spawn"),
-                    initializer=_start_writer,
-                    initargs=(os.getpid(),),
-                )
-                self._pool.submit(os.getpid).add_done_callback(self._started)
-            return self._pool
+            old = self._child
+            if old is not None and not old.process.is_alive():
+                log.error("the snapshot writer process (pid %d) died; starting a new one", old.pid)
+                old.close(wait=0)
+                self._child = None
+            if self._child is None:
+                self._child = _Child()
+                log.info("snapshot writer process started (pid %d)", self._child.pid)
+                # multiprocessing joins its children at exit: a writer whose pipe
+                # is still open would keep the collector from ever exiting.
+                atexit.unregister(self.close)
+                atexit.register(self.close)
+            return self._child
 
-    def _started(self, future: Future) -> None:
-        if future.exception() is None:
-            self.pid = future.result()
-            log.info("snapshot writer process started (pid %d)", self.pid)
-
-    def write(self, path: Path, messages: list, types: dict[str, str]) -> dict:
-        """Write the file in the child; a child that dies gets one successor to try again."""
+    def write(self, path: Path, messages: list, types: dict[str, str], timeout: float) -> dict:
+        """Write the file in the child, which must be done within ``timeout``
+        seconds once it runs; a child that dies or is stuck gets one successor
+        to try again."""
         for attempt in (1, 2):
-            pool = self.start()
+            child = self.start()
             try:
-                pool.submit(_begin, str(path), types).result()
-                for piece in pieces(messages, PIECE):
-                    pool.submit(_add, piece).result()
-                return pool.submit(_finish).result()
-            except BrokenProcessPool:
+                return self._write(child, path, messages, types, timeout)
+            except (OSError, EOFError):
+                what = f"was stuck ({child.stuck}) and was killed" if child.stuck else "died"
                 log.error(
-                    "the snapshot writer process (pid %s) died before it finished %s; %s",
-                    self.pid,
+                    "the snapshot writer process (pid %s) %s before it finished %s; %s",
+                    child.pid,
+                    what,
                     path.name,
                     "starting a new one to try again" if attempt == 1 else "snapshot lost",
                 )
+                child.kill()
+                # Half a file, or a whole one it had no time to report: the
+                # successor writes it again, or nothing is delivered.
                 part_path(path).unlink(missing_ok=True)
+                path.unlink(missing_ok=True)
                 with self._lock:
-                    if self._pool is pool:
-                        self._pool, self.pid = None, None
-                pool.shutdown(wait=False)
-        raise WriterDied(f"the snapshot writer died twice while writing {path.name}")
+                    if self._child is child:
+                        self._child = None
+                child.close(wait=5)
+        raise WriterDied(f"the snapshot writer failed twice while writing {path.name}")
+
+    def _write(self, child: _Child, path: Path, messages, types, timeout: float) -> dict:
+        conn = child.conn
+        if not child.ready:
+            # Starting an interpreter and loading the type store: seconds on a
+            # loaded machine, not part of the file's time.
+            self._within(child, START_TIMEOUT, "not ready", conn.recv)
+            child.ready = True
+        work = lambda: self._exchange(conn, path, messages, types)  # noqa: E731
+        return self._within(child, timeout, "not done", work)
+
+    @staticmethod
+    def _exchange(conn, path: Path, messages, types) -> dict:
+        conn.send(("begin", (str(path), types)))
+        for piece in pieces(messages, PIECE):
+            conn.send(("add", piece))
+        conn.send(("finish", None))
+        status, result = conn.recv()
+        if status == "error":
+            raise SnapshotError(f"the writer process could not write {path.name}:\n{result}")
+        return result
+
+    @staticmethod
+    def _within(child: _Child, seconds: float, what: str, work):
+        """Run ``work``; a child not done by then is killed, which ends whatever
+        ``work`` waits for (a full pipe, a reply) with an OSError or EOFError."""
+
+        def stuck() -> None:
+            child.stuck = f"{what} after {seconds:.0f} s"
+            child.kill()
+
+        watchdog = threading.Timer(seconds, stuck)
+        watchdog.daemon = True
+        watchdog.start()
+        try:
+            return work()
+        finally:
+            watchdog.cancel()
 
     def close(self) -> None:
+        atexit.unregister(self.close)
         with self._lock:
-            pool, self._pool = self._pool, None
-        if pool is not None:
-            pool.shutdown(wait=True)
+            child, self._child = self._child, None
+        if child is not None:
+            child.close(wait=30)
 
 
 class Blackbox:
@@ -354,6 +441,7 @@ class Blackbox:
         self.before = float(params["snapshot.before"])
         self.after = float(params["snapshot.after"])
         self.budget = int(params["snapshot.disk_budget_mb"] * MB)
+        self.write_timeout = float(params["snapshot.write_timeout"])
         self.buffer.seconds = self.before
         self.buffer.max_bytes = int(params["snapshot.buffer_mb"] * MB)
 
@@ -445,7 +533,8 @@ class Blackbox:
             return
         stamp = _at(snap.start).strftime("%Y%m%d-%H%M%S")
         path = self.directory / f"snapshot-{stamp}-{snap.uid.hex[:8]}.mcap"
-        topics = self.writer.write(path, messages, types)
+        timeout = self.write_timeout + WRITE_SECONDS_PER_MB * snap.size / MB
+        topics = self.writer.write(path, messages, types, timeout)
         self.written += 1
         data = {
             "master": snap.master,

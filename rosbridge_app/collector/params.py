@@ -160,6 +160,13 @@ SPECS: dict[str, Spec] = {
         minimum=1,
         maximum=1_000_000,
     ),
+    "snapshot.write_timeout": Spec(
+        60.0,
+        "Seconds a snapshot file may take to write, plus 1 s per MB of its window; a "
+        "writer process not done by then is taken as stuck: killed, logged and replaced.",
+        minimum=1.0,
+        maximum=3600.0,
+    ),
 }
 
 

@@ -1,6 +1,7 @@
 """Robot data lands on master segments, once, with nothing invented."""
 
 import math
+import os
 import uuid
 from datetime import UTC, datetime
 
@@ -106,3 +107,35 @@ def test_images_are_files_in_media_storage_on_the_master(ito, media_root):
 def test_empty_image_is_refused(ito, media_root):
     with pytest.raises(RuleViolation):
         recording.attach_image(ito, content=b"")
+
+
+def test_a_snapshot_is_stored_without_a_second_copy_and_its_pending_file_stays(
+    ito, media_root, tmp_path
+):
+    pending = tmp_path / "snapshot-1.mcap"
+    pending.write_bytes(b"MCAP" * 1000)
+    stored = recording.attach_recording(
+        ito, path=pending, start=timezone.now(), end=timezone.now(), topics={}
+    )
+    assert stored.file.read() == b"MCAP" * 1000
+    # The collector removes the pending file only after the commit.
+    assert pending.read_bytes() == b"MCAP" * 1000
+    # Same filesystem: the stored file is the pending file's data, not a copy of it.
+    assert os.path.samefile(stored.file.path, pending)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["media", "snapshot-1.mcap"]
+
+
+def test_a_snapshot_is_copied_where_it_cannot_be_linked(ito, media_root, tmp_path, monkeypatch):
+    pending = tmp_path / "snapshot-1.mcap"
+    pending.write_bytes(b"MCAP" * 1000)
+
+    def no_links(source, target):
+        raise OSError(18, "Invalid cross-device link")
+
+    monkeypatch.setattr(recording.os, "link", no_links)
+    stored = recording.attach_recording(
+        ito, path=pending, start=timezone.now(), end=timezone.now(), topics={}
+    )
+    assert stored.file.read() == b"MCAP" * 1000
+    assert not os.path.samefile(stored.file.path, pending)
+    assert pending.read_bytes() == b"MCAP" * 1000

@@ -3,6 +3,7 @@ hand it the messages, and a writer that dies neither stops the collector nor
 delivers half a file."""
 
 import os
+import re
 import signal
 import time
 from datetime import UTC, datetime
@@ -135,3 +136,87 @@ def test_a_snapshot_whose_writers_keep_dying_is_lost_and_the_next_one_is_written
     box.close()
     (event,) = sent
     assert messages_in(event.data["path"]) == list(range(COUNT, 2 * COUNT))
+
+
+def numbered(numbers: range, size: int = 5_000) -> list[bytes]:
+    """UInt8MultiArray messages of ``size`` data bytes ending in their number."""
+    head = b"\x00\x01\x00\x00" + bytes(8) + size.to_bytes(4, "little")
+    return [head + bytes(size - 4) + i.to_bytes(4, "little") for i in numbers]
+
+
+def snapshot_of(box: Blackbox, numbers: range) -> None:
+    """A window of the last second with those messages, handed to the writer,
+    and back once the writer thread is done with it (written, or given up)."""
+    box.buffer.items.clear()
+    box.buffer.size = 0
+    start = time.time_ns() - 10**9
+    for k, data in enumerate(numbered(numbers)):
+        box.receive(TOPIC, data, start + k * 1000)
+    box.trigger(datetime.now(UTC), None, "test")
+    time.sleep(0.01)
+    box.poll()
+    box._pool.submit(lambda: None).result()
+
+
+@pytest.fixture
+def quick_box(tmp_path):
+    """A black box whose writer is given 3 s (+1 s per MB: 1 MB windows)."""
+    sent = []
+    values = {name: spec.default for name, spec in SPECS.items()}
+    values.update({"snapshot.before": 5.0, "snapshot.after": 0.0, "snapshot.write_timeout": 3.0})
+    box = Blackbox(sent.append, values)
+    box.directory = tmp_path
+    box.types[TOPIC] = TYPE
+    yield box, sent
+    box.close()
+
+
+def gone(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    return False
+
+
+def test_a_stuck_writer_is_killed_after_its_time_and_the_next_one_writes_the_file(
+    quick_box, tmp_path, caplog
+):
+    box, sent = quick_box
+    snapshot_of(box, range(0, 200))
+    stuck = box.writer.pid
+    os.kill(stuck, signal.SIGSTOP)  # alive, but does nothing any more
+    # 1 MB: more than the pipe holds, so the hand-over itself blocks on it.
+    snapshot_of(box, range(200, 400))
+    assert f"snapshot writer process (pid {stuck}) was stuck" in caplog.text
+    assert gone(stuck)
+    assert box.writer.pid != stuck
+    assert [messages_in(e.data["path"]) for e in sent] == [list(range(200)), list(range(200, 400))]
+    assert not list(tmp_path.glob(".*.part"))
+
+
+def test_a_snapshot_whose_writers_are_stuck_is_lost_and_the_next_one_is_written(
+    quick_box, tmp_path, caplog, monkeypatch
+):
+    from rosbridge_app.collector import blackbox
+
+    box, sent = quick_box
+    started = blackbox._Child.__init__
+
+    def stopped_at_start(child):
+        started(child)
+        os.kill(child.pid, signal.SIGSTOP)
+
+    monkeypatch.setattr(blackbox, "START_TIMEOUT", 3.0)
+    monkeypatch.setattr(blackbox._Child, "__init__", stopped_at_start)
+    snapshot_of(box, range(0, 200))
+    stuck = [int(pid) for pid in re.findall(r"pid (\d+)\) was stuck", caplog.text)]
+    assert len(stuck) == 2 and all(gone(pid) for pid in stuck)
+    assert "snapshot lost" in caplog.text
+    assert sent == []  # nothing to deliver, so no Recording row
+    assert not list(tmp_path.glob("*.mcap")) and not list(tmp_path.glob(".*.part"))
+
+    monkeypatch.undo()
+    snapshot_of(box, range(200, 400))
+    (event,) = sent
+    assert messages_in(event.data["path"]) == list(range(200, 400))
