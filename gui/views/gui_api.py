@@ -135,12 +135,21 @@ class LegTracks(GuiView):
                 "gps": [] if g is None else _drawn(g, GPS, zooms[GPS]),
                 "local": [] if lo is None else _drawn(lo, LOCAL, zooms[LOCAL]),
                 "distance_m": distances[segment_id],
+                # Where a take-over circle goes when the master has a start position.
+                "start": _lat_lon(master.start_position),
+                "start_local": None
+                if master.start_local_x is None or master.start_local_y is None
+                else [master.start_local_x, master.start_local_y],
             }
         body = {"leg": leg.pk, "segments": segments, "labels": leg_labels(leg)}
         body.update(zoom=zooms[GPS], local_zoom=zooms[LOCAL])
         if zooms[GPS] is not None:
             body["tolerance_deg"] = tolerance(GPS, zooms[GPS])
         return Response(body)
+
+
+def _lat_lon(point) -> list[float] | None:
+    return None if point is None else [point.y, point.x]
 
 
 def _in_view(leg, masters, q) -> dict:

@@ -174,3 +174,14 @@ def test_a_pose_that_arrives_late_for_a_closed_segment_is_in_the_next_read(clien
     assert len(after["gps"]) == len(before["gps"]) + 1 == 2001
     assert after["gps"][-1] == [50.0005, 7.3]
     assert after["distance_m"] > before["distance_m"] + 20000
+
+
+def test_each_master_says_where_it_started_for_its_take_over_circle(client, zigzag_leg):
+    leg, master = zigzag_leg
+    ito = segments.report_mode(
+        leg, "ito", gps=segments.GpsPosition(7.25, 50.5), local=segments.LocalPosition(3.0, -4.0)
+    ).master
+    body = tracks(client, leg, fit="800,600")["segments"]
+    assert body[str(ito.pk)]["start"] == [50.5, 7.25]
+    assert body[str(ito.pk)]["start_local"] == [3.0, -4.0]
+    assert body[str(master.pk)]["start"] is None and body[str(master.pk)]["start_local"] is None
