@@ -28,11 +28,10 @@ let drawnLeg = null; // the leg whose tracks the maps show
 
 export function loadLegTracks(leg) {
   const fit = fitSize();
-  if (early && early.leg === leg && early.fit === fit) {
-    const { answer } = early;
-    early = null;
-    return answer;
-  }
+  // Taken once: later reads (live updates) need a fresh answer.
+  const first = early && early.leg === leg ? early : null;
+  if (first) early = null;
+  if (first && first.fit === fit) return first.answer;
   return api("GET", `legs/${leg}/tracks/?fit=${fit}`, undefined, { root: CONFIG.guiApiRoot });
 }
 
@@ -76,7 +75,10 @@ function firstDrawing(leg, data) {
 /* Empties both maps for another leg; the leg drawn (or about to be drawn)
  * from the early answer stays. */
 export function clearMaps(leg) {
-  if (leg !== null && (drawnLeg === leg || (early && early.leg === leg))) return;
+  if (leg !== null && drawnLeg === leg) return;
+  if (leg !== null && drawnLeg === null && early && early.leg === leg) return;
+  // Another leg: the early answer is of no use any more.
+  early = null;
   drawnLeg = null;
   gpsMap.clear();
   localMap.clear();
