@@ -449,7 +449,10 @@ def kept_tracks(segments: list[Segment], modes=MODES) -> dict[str, dict[int, Tra
         read = load_tracks(ids, mode)
         found[mode].update(read)
         for seg, track in read.items():
-            _kept.put((mode, seg), (by_id[seg].uid, *counts[mode, seg]), track)
+            key = (by_id[seg].uid, *counts[mode, seg])
+            # What the track was read for, so results derived from it can be kept too.
+            track.memo["kept"] = (mode, *key)
+            _kept.put((mode, seg), key, track)
     return found
 
 

@@ -5,6 +5,7 @@ import json
 
 import pytest
 from django.contrib.auth.models import Group, User
+from django.contrib.gis.geos import Point
 from django.db import connection
 from django.test.utils import CaptureQueriesContext
 
@@ -185,3 +186,13 @@ def test_each_master_says_where_it_started_for_its_take_over_circle(client, zigz
     assert body[str(ito.pk)]["start"] == [50.5, 7.25]
     assert body[str(ito.pk)]["start_local"] == [3.0, -4.0]
     assert body[str(master.pk)]["start"] is None and body[str(master.pk)]["start_local"] is None
+
+
+def test_a_moved_start_position_changes_the_distance_in_the_next_read(client, zigzag_leg):
+    leg, master = zigzag_leg
+    before = tracks(client, leg)["segments"][str(master.pk)]["distance_m"]
+    # An operator corrects where the segment started: 0.01 degrees (about 1.1 km) south.
+    master.start_position = Point(7.0, 49.99, srid=4326)
+    master.save(update_fields=["start_position"])
+    after = tracks(client, leg)["segments"][str(master.pk)]["distance_m"]
+    assert after > before + 1000
