@@ -13,7 +13,14 @@ a later re-render (fitting the view) counts.  Then the GPS map is zoomed in
 three levels with its + button and the time until the detail for the area in
 view is drawn is measured the same way.  Target: <= 1 s from navigation.
 
+Each visit's figure is split into the page's start-up until the tracks
+request leaves, the wait for its first byte, the transfer, and decoding plus
+drawing; the bytes transferred are printed.  ``--against /work/main`` runs a
+second server from another checkout on the same database and leg and
+alternates the visits, for an A/B comparison under the same load.
+
 Run: .venv/bin/python benchmarks/track_render.py [--repeat 5] [--poses 200000]
+     [--keep | --reuse EVENT,SHIFT,LEG] [--against /path/to/other/checkout]
 """
 
 import argparse
@@ -31,6 +38,7 @@ os.environ.setdefault("DJANGO_ALLOW_ASYNC_UNSAFE", "true")
 
 from playwright.sync_api import sync_playwright  # noqa: E402
 
+from tests.support.browser import ROOT as CHECKOUT  # noqa: E402
 from tests.support.browser import Server, session_code, system_chromium  # noqa: E402
 
 TARGET_MS = 1000
@@ -144,6 +152,52 @@ def percentile(values, share):
     return ordered[max(0, round(len(ordered) * share) - 1)]
 
 
+def one_visit(page, url) -> dict:
+    """Navigation -> both maps drawn, then three zoom-in taps -> detail drawn."""
+    seen = []
+    page.on("requestfinished", lambda r: "/tracks/" in r.url and seen.append(r))
+    page.goto(url, wait_until="commit", timeout=120_000)
+    while not seen:
+        page.wait_for_timeout(20)
+    body = json.loads(seen[0].response().body())
+    want = [
+        sum(len(s["gps"]) for s in body["segments"].values()),
+        sum(len(s["local"]) for s in body["segments"].values()),
+    ]
+    gps_at, local_at = quiet_mark(page, DRAWN, want)
+    drawn = max(gps_at, local_at)
+    # Zoom in: the detail of the area in view replaces the thinned line.
+    before = len(seen)
+    clicked = page.evaluate("performance.now()")
+    for _ in range(3):
+        page.locator("#gps-map .leaflet-control-zoom-in").click()
+    mark = quiet_mark(
+        page,
+        """() => { const d = document.querySelector("#gps-map").dataset;
+                   return d.detailZoom ? [d.detailZoom, Number(d.drawnAt)] : null; }""",
+        None,
+    )
+    resources = page.evaluate(RESOURCES)
+    whole = next(r for r in resources if "fit=" in r[0])
+    _, start, first, end, packed, plain = whole
+    return {
+        "drawn": drawn,
+        "points": want,
+        "zoom": mark[1] - clicked,
+        "zoom_level": mark[0],
+        "details": len([r for r in seen[before:] if "map=gps" in r.url]),
+        # The split of "drawn": page start-up until the tracks request leaves,
+        # waiting for the server's first byte, the transfer, then decoding,
+        # drawing and fitting until the canvas mark.
+        "start": start,
+        "wait": first - start,
+        "transfer": end - first,
+        "draw": drawn - end,
+        "bytes": (packed, plain),
+        "resources": resources,
+    }
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=5)
@@ -153,16 +207,30 @@ def main():
     parser.add_argument("--keep", action="store_true", help="keep the leg (prints its ids)")
     parser.add_argument("--reuse", help="event,shift,leg of a kept leg: skip building")
     parser.add_argument("--screenshots", help="folder for the cockpit at three sizes, to look at")
+    parser.add_argument(
+        "--against",
+        help="another checkout (e.g. /work/main): its server runs beside this one on the "
+        "same database and leg, visits alternate, and the figures are compared",
+    )
     args = parser.parse_args()
     tag = str(os.getpid())
-    server = Server(
-        Path(tempfile.mkdtemp(prefix="ftt-bench-")),
-        "http://127.0.0.1:9/tiles/{z}/{x}/{y}.png",
-        database_url=args.database_url,
-    )
-    server.start()
+    data = Path(tempfile.mkdtemp(prefix="ftt-bench-"))
+    tiles = "http://127.0.0.1:9/tiles/{z}/{x}/{y}.png"
+    # One data folder: both servers share the secret key, so one session cookie serves both.
+    servers = {"this": Server(data, tiles, database_url=args.database_url, name="track-render")}
+    if args.against:
+        servers["against"] = Server(
+            data,
+            tiles,
+            database_url=args.database_url,
+            name="track-render-against",
+            root=Path(args.against).resolve(),
+        )
+    for server in servers.values():
+        server.start()
+    server = servers["this"]
     ids = None
-    loads, zooms, requests = [], [], []
+    visits = {label: [] for label in servers}
     try:
         started = time.perf_counter()
         if args.reuse:
@@ -174,82 +242,77 @@ def main():
         out = server.python(code, timeout=1800)
         ids = json.loads(next(x for x in out.splitlines() if x.startswith("IDS"))[4:])
         print(f"leg ready in {time.perf_counter() - started:.0f} s: {ids}")
-        url = f"{server.url}/?event={ids['event']}&shift={ids['shift']}&leg={ids['leg']}"
+        query = f"/?event={ids['event']}&shift={ids['shift']}&leg={ids['leg']}"
         with sync_playwright() as p:
             exe = os.environ.get("FTT_CHROMIUM") or system_chromium()
             browser = p.chromium.launch(**({"executable_path": exe} if exe else {}))
             context = browser.new_context(viewport={"width": 1366, "height": 768})
-            context.add_cookies([{"name": "sessionid", "value": ids["session"], "url": server.url}])
+            for each in servers.values():
+                context.add_cookies(
+                    [{"name": "sessionid", "value": ids["session"], "url": each.url}]
+                )
             context.route("**/tiles/**", lambda route: route.fulfill(status=404))
             for run in range(args.repeat):
-                page = context.new_page()
-                seen = []
-                page.on(
-                    "requestfinished", lambda r, seen=seen: "/tracks/" in r.url and seen.append(r)
-                )
-                page.goto(url, wait_until="commit", timeout=120_000)
-                while not seen:
-                    page.wait_for_timeout(20)
-                overview = seen[0]
-                body = json.loads(overview.response().body())
-                want = [
-                    sum(len(s["gps"]) for s in body["segments"].values()),
-                    sum(len(s["local"]) for s in body["segments"].values()),
-                ]
-                gps_at, local_at = quiet_mark(page, DRAWN, want)
-                loads.append(max(gps_at, local_at))
-                # Zoom in: the detail of the area in view replaces the thinned line.
-                before = len(seen)
-                clicked = page.evaluate("performance.now()")
-                for _ in range(3):
-                    page.locator("#gps-map .leaflet-control-zoom-in").click()
-                mark = quiet_mark(
-                    page,
-                    """() => { const d = document.querySelector("#gps-map").dataset;
-                               return d.detailZoom ? [d.detailZoom, Number(d.drawnAt)] : null; }""",
-                    None,
-                )
-                zooms.append(mark[1] - clicked)
-                detail = [r for r in seen[before:] if "map=gps" in r.url]
-                resources = page.evaluate(RESOURCES)
-                requests.extend(resources)
-                for name, start, first, end, packed, plain in resources:
-                    print(f"  {start:6.0f} {first:6.0f} {end:6.0f} {packed:9d} {plain:9d}  {name}")
-                print(
-                    f"run {run + 1}: drawn {loads[-1]:.0f} ms after navigation "
-                    f"(GPS {gps_at} ms, local {local_at} ms, {want[0]} + {want[1]} points); "
-                    f"zoom-in detail (zoom {mark[0]}) drawn {zooms[-1]:.0f} ms "
-                    "after the first tap, "
-                    f"{len(detail)} detail request(s)"
-                )
-                page.close()
+                for label, each in servers.items():
+                    page = context.new_page()
+                    visit = one_visit(page, each.url + query)
+                    page.close()
+                    visits[label].append(visit)
+                    for name, start, first, end, packed, plain in visit["resources"]:
+                        times = f"{start:6.0f} {first:6.0f} {end:6.0f}"
+                        print(f"  {times} {packed:9d} {plain:9d}  {name}")
+                    print(
+                        f"run {run + 1} ({label}): drawn {visit['drawn']:.0f} ms after navigation "
+                        f"(tracks request leaves at {visit['start']:.0f} ms, first byte after "
+                        f"{visit['wait']:.0f} ms, transfer {visit['transfer']:.0f} ms, decode and "
+                        f"draw {visit['draw']:.0f} ms; {visit['points'][0]} + "
+                        f"{visit['points'][1]} points); zoom-in detail (zoom "
+                        f"{visit['zoom_level']}) drawn {visit['zoom']:.0f} ms after the first "
+                        f"tap, {visit['details']} detail request(s)"
+                    )
             if args.screenshots:
-                shots(context, url, Path(args.screenshots))
+                shots(context, server.url + query, Path(args.screenshots))
             browser.close()
     finally:
         if ids is not None and args.database_url and not (args.keep or args.reuse):
             server.python(CLEANUP.format(event=ids["event"], tag=tag))
-        server.stop()
+        for each in servers.values():
+            each.stop()
     load = os.getloadavg()
     print(
         f"database: {'PostGIS' if args.database_url else 'SpatiaLite'} · {os.cpu_count()} cores · "
         f"load average {load[0]:.2f} / {load[1]:.2f} / {load[2]:.2f}"
     )
-    print(f"{'what':44} {'median ms':>9} {'p95 ms':>7}  target")
-    for what, values, target in (
-        ("navigation -> all tracks drawn", loads, f"<= {TARGET_MS} ms"),
-        ("zoom in 3 levels -> detail in view drawn", zooms, ""),
-    ):
-        median, p95 = statistics.median(values), percentile(values, 0.95)
-        print(f"{what:44} {median:9.0f} {p95:7.0f}  {target}")
-    for kind, mark in (("whole leg (fit=)", "fit="), ("area in view (map=gps)", "map=gps")):
-        chosen = [r for r in requests if mark in r[0]]
+    for label, runs in visits.items():
+        checkout = Path(args.against).resolve() if label == "against" else CHECKOUT
+        print(f"{label} ({checkout}), {len(runs)} visits; the first one reads the leg cold")
+        print(f"  {'what':48} {'median ms':>9} {'p95 ms':>7}  target")
+        rows = (
+            ("navigation -> all tracks drawn", "drawn", f"<= {TARGET_MS} ms"),
+            ("  of which: until the tracks request leaves", "start", ""),
+            ("  of which: waiting for its first byte", "wait", ""),
+            ("  of which: its transfer", "transfer", ""),
+            ("  of which: decode, draw and fit", "draw", ""),
+            ("zoom in 3 levels -> detail in view drawn", "zoom", "well under 1000 ms"),
+        )
+        for what, key, target in rows:
+            values = [r[key] for r in runs]
+            median, p95 = statistics.median(values), percentile(values, 0.95)
+            print(f"  {what:48} {median:9.0f} {p95:7.0f}  {target}")
+        packed, plain = runs[0]["bytes"]
+        print(f"  whole-leg answer: {packed} bytes transferred (gzip), {plain} bytes JSON")
+        chosen = [r for v in runs for r in v["resources"] if "map=gps" in r[0]]
         if chosen:
             took = statistics.median(end - start for _, start, _, end, _, _ in chosen)
             print(
-                f"request {kind}: median {took:.0f} ms, {chosen[0][4]} bytes gzipped, "
-                f"{chosen[0][5]} bytes JSON"
+                f"  area-in-view answer: median {took:.0f} ms, {chosen[0][4]} bytes transferred "
+                f"(gzip), {chosen[0][5]} bytes JSON"
             )
+    if args.against:
+        for key, what in (("drawn", "navigation -> drawn"), ("zoom", "zoom-in detail")):
+            this = statistics.median(r[key] for r in visits["this"])
+            other = statistics.median(r[key] for r in visits["against"])
+            print(f"ratio this / against, {what}: {this / other:.2f}")
 
 
 if __name__ == "__main__":

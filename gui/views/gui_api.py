@@ -42,7 +42,8 @@ from telemetry.selectors.tracks import (
     MIN_LOCAL_ZOOM,
     drawn,
     fit_zoom,
-    load_tracks,
+    kept_tracks,
+    thinned,
     tolerance,
 )
 
@@ -114,11 +115,10 @@ class LegTracks(GuiView):
         query.is_valid(raise_exception=True)
         q = query.validated_data
         masters = list(leg.segments.filter(parent__isnull=True).order_by("start", "id"))
-        ids = [m.pk for m in masters]
         if "map" in q:
-            return Response(_in_view(leg, ids, q))
-        gps = load_tracks(ids, GPS)
-        local = load_tracks(ids, LOCAL)
+            return Response(_in_view(leg, masters, q))
+        loaded = kept_tracks(masters)
+        gps, local = loaded[GPS], loaded[LOCAL]
         zooms = {GPS: q.get("zoom"), LOCAL: q.get("local_zoom")}
         for mode, loaded in ((GPS, gps), (LOCAL, local)):
             if zooms[mode] is None and "fit" in q:
@@ -135,6 +135,11 @@ class LegTracks(GuiView):
                 "gps": [] if g is None else _drawn(g, GPS, zooms[GPS]),
                 "local": [] if lo is None else _drawn(lo, LOCAL, zooms[LOCAL]),
                 "distance_m": distances[segment_id],
+                # Where a take-over circle goes when the master has a start position.
+                "start": _lat_lon(master.start_position),
+                "start_local": None
+                if master.start_local_x is None or master.start_local_y is None
+                else [master.start_local_x, master.start_local_y],
             }
         body = {"leg": leg.pk, "segments": segments, "labels": leg_labels(leg)}
         body.update(zoom=zooms[GPS], local_zoom=zooms[LOCAL])
@@ -143,13 +148,17 @@ class LegTracks(GuiView):
         return Response(body)
 
 
-def _in_view(leg, ids, q) -> dict:
+def _lat_lon(point) -> list[float] | None:
+    return None if point is None else [point.y, point.x]
+
+
+def _in_view(leg, masters, q) -> dict:
     """One map's tracks, at ``bbox_zoom`` in the area in view and at ``zoom`` (or
     in full without it) elsewhere; segments without points are left out."""
     mode = q["map"]
     box = q["bbox"]
     segments = {}
-    for segment_id, track in load_tracks(ids, mode).items():
+    for segment_id, track in kept_tracks(masters, [mode])[mode].items():
         if len(track):
             segments[segment_id] = _drawn(track, mode, q.get("zoom"), box, q["bbox_zoom"])
     return {
@@ -164,7 +173,10 @@ def _in_view(leg, ids, q) -> dict:
 def _drawn(track, mode, zoom, box=None, box_zoom=None) -> list[list[float]]:
     outside = 0.0 if zoom is None else tolerance(mode, zoom)
     inside = 0.0 if box_zoom is None else tolerance(mode, box_zoom)
-    x, y = drawn(track.x, track.y, outside, box, inside)
+    if box is None:
+        x, y = thinned(track, outside)
+    else:
+        x, y = drawn(track.x, track.y, outside, box, inside)
     # 1e-7 degrees is 1 cm; the 17 digits a float prints would triple the bytes.
     # GPS points go as [lat, lon], the order Leaflet takes.
     pairs = np.column_stack([y, x] if mode == GPS else [x, y])

@@ -5,8 +5,12 @@ which role they have and the site's map settings; and, so that the first screen
 does not wait for a chain of requests, the answers of the script's first reads.
 """
 
+import functools
+import re
+
 from django.conf import settings
 from django.contrib.auth.decorators import login_required
+from django.contrib.staticfiles import finders
 from django.shortcuts import redirect, render
 from django.templatetags.static import static
 from django.urls import reverse
@@ -20,11 +24,6 @@ from rosbridge_app.selectors.collectors import logging_into
 
 # How static/gui/api.js's list() asks for a whole list.
 WHOLE_LIST = "?page_size=5000"
-# The modules main.js imports, named in the page so that the browser fetches them
-# at once rather than one import level after the other.
-MODULES = sorted(
-    p.name for p in (settings.BASE_DIR / "static" / "gui").glob("*.js") if p.name != "compare.js"
-)
 
 
 def missing_configuration() -> list[str]:
@@ -94,6 +93,31 @@ def first_answers(request, logging: dict | None) -> dict[str, object]:
     return answers
 
 
+# `import ... from "./x.js"`, `export ... from "./x.js"` and `import "./x.js"`.
+_IMPORT = re.compile(r'^(?:import|export)\b[^;]*?(?:from\s+)?"\./([\w-]+\.js)"', re.M)
+
+
+@functools.cache
+def module_graph(entry: str) -> tuple[str, ...]:
+    """Every module ``entry`` (a static path such as "gui/main.js") imports,
+    directly or not, read from the modules' own import lines.  The page lists
+    them as modulepreload links, so the browser fetches them all at once instead
+    of discovering them level by level, one round trip each."""
+    folder = entry.rsplit("/", 1)[0]
+    found, todo = [], [entry]
+    while todo:
+        path = finders.find(todo.pop())
+        if path is None:
+            continue
+        with open(path, encoding="utf-8") as source:
+            for match in _IMPORT.finditer(source.read()):
+                name = f"{folder}/{match.group(1)}"
+                if name not in found and name != entry:
+                    found.append(name)
+                    todo.append(name)
+    return tuple(found)
+
+
 @login_required
 def index(request):
     user = request.user
@@ -111,6 +135,7 @@ def index(request):
         "levels": [("event", "Test event"), ("shift", "Shift"), ("leg", "Leg")],
         # The catalogue says which reasons get a button (ItoReason.quick, set in admin).
         "quick_reasons": ItoReason.objects.filter(quick=True).order_by("short_description"),
+        "modules": module_graph("gui/main.js"),
         "gui_config": {
             "tileUrl": settings.FTT_TILE_URL,
             "tileAttribution": getattr(settings, "FTT_TILE_ATTRIBUTION", ""),
@@ -125,7 +150,6 @@ def index(request):
             "lastEventId": last_event,
             "answers": first_answers(request, logging) if can_view else {},
         },
-        "modules": MODULES,
     }
     return render(request, "gui/index.html", context)
 

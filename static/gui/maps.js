@@ -75,6 +75,7 @@ class TrackMap {
     for (const t of this.tracks.values()) t.line.remove();
     this.tracks.clear();
     this.markers.clearLayers();
+    this.takeOversKey = null;
     this.fitted = false;
     this.dropDetail();
     this.markDrawn();
@@ -114,10 +115,17 @@ class TrackMap {
     if (!this.fitted) this.fitAll();
     else if (this.follow && points.length) this.map.panTo(this.toLatLngs(points.slice(-1))[0]);
   }
-  addTakeOver(id, point) {
-    L.circleMarker(this.toLatLngs([point])[0], { radius: 7, color: COLORS.ito, weight: 2, fillOpacity: 0.2, renderer: this.renderer })
-      .bindTooltip(() => `Take-over, ${this.labelOf(id)}`)
-      .addTo(this.markers);
+  /* spots: [[segment id, point], ...]; the same spots again leave the canvas as it is. */
+  setTakeOvers(spots) {
+    const key = JSON.stringify(spots);
+    if (key === this.takeOversKey) return;
+    this.takeOversKey = key;
+    this.markers.clearLayers();
+    for (const [id, point] of spots) {
+      L.circleMarker(this.toLatLngs([point])[0], { radius: 7, color: COLORS.ito, weight: 2, fillOpacity: 0.2, renderer: this.renderer })
+        .bindTooltip(() => `Take-over, ${this.labelOf(id)}`)
+        .addTo(this.markers);
+    }
     this.markDrawn();
   }
   /* What the canvas shows, on the map element for tests and benchmarks:
@@ -210,14 +218,14 @@ class TrackMap {
       this.map.fitBounds(t.line.getBounds(), { maxZoom: this.maxFocusZoom, padding: [30, 30] });
     }
   }
-  fitAll() {
+  fitAll(options = {}) {
     let bounds = null;
     for (const t of this.tracks.values()) {
       if (!t.line.getLatLngs().length) continue;
       bounds = bounds ? bounds.extend(t.line.getBounds()) : L.latLngBounds(t.line.getBounds().getSouthWest(), t.line.getBounds().getNorthEast());
     }
     if (bounds) {
-      this.map.fitBounds(bounds, { maxZoom: this.maxFocusZoom, padding: [20, 20] });
+      this.map.fitBounds(bounds, { maxZoom: this.maxFocusZoom, padding: [20, 20], ...options });
       this.fitted = true;
     }
   }

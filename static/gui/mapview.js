@@ -14,11 +14,24 @@ for (const m of [gpsMap, localMap]) m.labelOf = (id) => segmentLabel(id);
 /* The leg's tracks thinned for the GPS map's size (the local map is laid out
  * the same), so a 200 000-point leg crosses the wire as a few thousand points.
  * Zoomed in, each map fetches the area in view in detail (TrackMap.followView). */
-export async function loadLegTracks(leg) {
+function fitSize() {
   // The element's size: Leaflet's getSize() still holds the size from before the
   // maps section was shown.  fitAll pads by 20 px on each side.
   const shown = [gpsMap, localMap].map((m) => m.element).find((e) => e.clientWidth > 40 && e.clientHeight > 40);
-  const fit = shown ? `${shown.clientWidth - 40},${shown.clientHeight - 40}` : "800,600";
+  return shown ? `${shown.clientWidth - 40},${shown.clientHeight - 40}` : "800,600";
+}
+
+/* The tracks of the leg in the address, asked for while the module loads:
+ * with the page's first reads rather than after the pickers are filled. */
+let early = null; // {leg, fit, answer}
+let drawnLeg = null; // the leg whose tracks the maps show
+
+export function loadLegTracks(leg) {
+  const fit = fitSize();
+  // Taken once: later reads (live updates) need a fresh answer.
+  const first = early && early.leg === leg ? early : null;
+  if (first) early = null;
+  if (first && first.fit === fit) return first.answer;
   return api("GET", `legs/${leg}/tracks/?fit=${fit}`, undefined, { root: CONFIG.guiApiRoot });
 }
 
@@ -32,6 +45,78 @@ export function drawLegTracks(data, redraw = true) {
     if (t.gps.length) gpsMap.setTrack(sid, t.mode, t.gps);
     if (t.local.length) localMap.setTrack(sid, t.mode, t.local);
   }
+}
+
+/* The selected leg's tracks, take-overs and fitted view, drawn once: by
+ * whichever comes first of the early answer and the page's own request. */
+export async function showLegTracks(leg) {
+  const data = await loadLegTracks(leg);
+  if (leg === state.selected.leg) firstDrawing(leg, data);
+  return data;
+}
+
+function firstDrawing(leg, data) {
+  if (drawnLeg === leg) return;
+  drawnLeg = leg;
+  drawLegTracks(data);
+  showTakeOvers(null, data.segments);
+  const anyLocal = Object.values(data.segments).some((t) => t.local.length);
+  if (anyLocal && !$("#show-local").checked) {
+    $("#show-local").checked = true;
+    showMaps();
+  }
+  for (const m of [gpsMap, localMap]) {
+    m.invalidate();
+    // At once: an animated zoom would draw the canvas again a quarter second later.
+    m.fitAll({ animate: false });
+  }
+}
+
+/* Empties both maps for another leg; the leg drawn (or about to be drawn)
+ * from the early answer stays. */
+export function clearMaps(leg) {
+  if (leg !== null && drawnLeg === leg) return;
+  if (leg !== null && drawnLeg === null && early && early.leg === leg) return;
+  // Another leg: the early answer is of no use any more.
+  early = null;
+  drawnLeg = null;
+  gpsMap.clear();
+  localMap.clear();
+}
+
+/* Take-over circles where each ITO master starts: its start position, else
+ * its track's first point.  From the segment rows once the list is loaded,
+ * else from the tracks answer, which carries the same positions. */
+export function showTakeOvers(segments, tracks) {
+  const spots = { gps: [], local: [] };
+  if (segments && segments.length) {
+    for (const s of segments) {
+      if (s.parent !== null || s.segment_type !== "ito") continue;
+      const t = tracks[s.id];
+      const local = s.start_local_x !== null && s.start_local_x !== undefined ? [s.start_local_x, s.start_local_y] : null;
+      addSpots(spots, s.id, s.start_position ? [s.start_position.coordinates[1], s.start_position.coordinates[0]] : null, local, t);
+    }
+  } else {
+    for (const [id, t] of Object.entries(tracks)) if (t.ito) addSpots(spots, Number(id), t.start, t.start_local, t);
+  }
+  gpsMap.setTakeOvers(spots.gps);
+  localMap.setTakeOvers(spots.local);
+}
+
+function addSpots(spots, id, gps, local, t) {
+  const g = gps || (t && t.gps[0]);
+  if (g) spots.gps.push([id, g]);
+  const l = local || (t && t.local[0]);
+  if (l) spots.local.push([id, l]);
+}
+
+if (state.selected.leg && !state.view) {
+  $("#maps-section").hidden = false;
+  const leg = state.selected.leg;
+  early = { leg, fit: fitSize(), answer: null };
+  early.answer = api("GET", `legs/${leg}/tracks/?fit=${early.fit}`, undefined, { root: CONFIG.guiApiRoot });
+  // Errors reach the page through its own request, which takes this answer.
+  early.answer.then((data) => leg === state.selected.leg && firstDrawing(leg, data), () => {});
 }
 
 for (const [map, name] of [[gpsMap, "gps"], [localMap, "local"]]) {

@@ -6,7 +6,7 @@ import { clearError, notice, showError } from "./feedback.js";
 import { byId, current, fromUrl, putSegment, reasonName, saveUrl, segmentLabel, shortLabel, state } from "./state.js";
 import { fmtClock, fmtDistance, fmtDuration, fmtTime } from "./format.js";
 import { confirmDialog } from "./dialogs.js";
-import { drawLegTracks, gpsMap, loadBasemaps, loadLegTracks, loadLocalMap, localMap, showMaps } from "./mapview.js";
+import { clearMaps, drawLegTracks, showTakeOvers, gpsMap, loadBasemaps, loadLegTracks, loadLocalMap, localMap, showLegTracks } from "./mapview.js";
 import { Live, onSelectedLeg } from "./live.js";
 import { Collector } from "./collector.js";
 import { openSegmentDialog } from "./segment-dialog.js";
@@ -55,8 +55,7 @@ export async function selectionChanged() {
   state.segments = [];
   state.tracks = {};
   state.labels = {};
-  gpsMap.clear();
-  localMap.clear();
+  clearMaps(state.selected.leg);
   if (!leg) {
     Collector.refresh();
     renderSegments();
@@ -64,16 +63,13 @@ export async function selectionChanged() {
   }
   // The server answers a page's requests one after the other: the list first (it
   // is what the operator waits for; on a page load it came with the page), the
-  // tracks next, and what the first screen does not need waits for both.
+  // tracks next (drawn and fitted as they arrive), and what the first screen does
+  // not need waits for both.
   try {
     await Promise.all([loadSegments(), loadTracks()]);
   } finally {
     Collector.refresh();
   }
-  gpsMap.invalidate();
-  gpsMap.fitAll();
-  localMap.invalidate();
-  localMap.fitAll();
   if (restoring && byId(state.segments, restoring)) selectSegment(restoring);
   else saveUrl();
   // The map image and overlay belong to the shift: kept when only the leg changes.
@@ -121,30 +117,15 @@ async function segmentWrite(path) {
 
 async function loadTracks() {
   const leg = state.selected.leg;
-  const data = await loadLegTracks(leg);
+  const data = await showLegTracks(leg);
   if (leg !== state.selected.leg) return;
-  drawLegTracks(data);
   state.tracks = data.segments;
   drawTakeOvers();
-  const anyLocal = Object.values(data.segments).some((t) => t.local.length);
-  if (anyLocal && !$("#show-local").checked) {
-    $("#show-local").checked = true;
-    showMaps();
-  }
   renderSegments();
 }
 
 export function drawTakeOvers() {
-  gpsMap.markers.clearLayers();
-  localMap.markers.clearLayers();
-  for (const s of state.segments) {
-    if (s.parent !== null || s.segment_type !== "ito") continue;
-    const t = state.tracks[s.id];
-    const gps = s.start_position ? [s.start_position.coordinates[1], s.start_position.coordinates[0]] : t && t.gps[0];
-    if (gps) gpsMap.addTakeOver(s.id, gps);
-    const local = s.start_local_x !== null && s.start_local_x !== undefined ? [s.start_local_x, s.start_local_y] : t && t.local[0];
-    if (local) localMap.addTakeOver(s.id, local);
-  }
+  showTakeOvers(state.segments, state.tracks);
 }
 
 function visibleSegments() {

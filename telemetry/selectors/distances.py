@@ -20,6 +20,8 @@ The GUI's segment list, the API, the statistics, the report and the exports
 all read distances from here.
 """
 
+import threading
+from collections import OrderedDict
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
@@ -220,10 +222,62 @@ def displayed_distances(
     local: dict[int, Track] | None = None,
 ) -> dict[int, float | None]:
     """What a list shows for one leg's masters: the GPS distance where one was
-    measured, else the local one, else None (nothing measured)."""
+    measured, else the local one, else None (nothing measured).
+
+    For tracks the map keeps (``tracks.kept_tracks``) the answer is kept too,
+    by everything it is measured from: each master's id, leg, start, start
+    positions and its tracks' keys, so a late pose or a moved start measures
+    again."""
+    inputs = _measured_from(masters, gps, local)
+    if inputs is not None:
+        with _displayed_lock:
+            found = _displayed.get(inputs)
+            if found is not None:
+                _displayed.move_to_end(inputs)
+                return dict(found)
     by_gps = measured_paths(masters, GPS, gps)
     by_local = measured_paths(masters, LOCAL, local)
-    return {
+    distances = {
         pk: path.distance if path.distance is not None else by_local[pk].distance
         for pk, path in by_gps.items()
     }
+    if inputs is not None:
+        with _displayed_lock:
+            _displayed[inputs] = dict(distances)
+            while len(_displayed) > _DISPLAYED_LEGS:
+                _displayed.popitem(last=False)
+    return distances
+
+
+# Answers of displayed_distances kept in each process, one per leg the map shows.
+_DISPLAYED_LEGS = 64
+_displayed: OrderedDict[tuple, dict[int, float | None]] = OrderedDict()
+_displayed_lock = threading.Lock()
+
+
+def _measured_from(masters, gps, local) -> tuple | None:
+    """The inputs of displayed_distances as a key, or None unless both maps'
+    tracks are kept ones (whose keys change with every added pose)."""
+    if gps is None or local is None:
+        return None
+    parts = []
+    for m in masters:
+        if "start_position" in m.get_deferred_fields():
+            return None
+        tracks = [gps.get(m.pk), local.get(m.pk)]
+        keys = [None if t is None else t.memo.get("kept") for t in tracks]
+        if any(t is not None and k is None for t, k in zip(tracks, keys, strict=True)):
+            return None
+        position = m.start_position
+        parts.append(
+            (
+                m.pk,
+                m.leg_id,
+                m.start,
+                None if position is None else (position.x, position.y),
+                m.start_local_x,
+                m.start_local_y,
+                *keys,
+            )
+        )
+    return tuple(parts)

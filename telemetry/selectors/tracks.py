@@ -5,13 +5,15 @@ late-arriving batch from the collector's offline queue still lands where it
 was driven.  Fixes flagged "no fix" carry no usable position and are dropped.
 """
 
-from dataclasses import dataclass
+import threading
+from collections import OrderedDict
+from dataclasses import dataclass, field
 from datetime import UTC, datetime
 
 import numpy as np
 import shapely
 from django.db import connection, transaction
-from django.db.models import F, FloatField, Func, OuterRef, QuerySet, Subquery
+from django.db.models import Count, F, FloatField, Func, Max, OuterRef, QuerySet, Subquery, Value
 from django.db.models.functions import Coalesce
 
 from common.sql import bound_cursor
@@ -48,6 +50,8 @@ class Track:
     t: np.ndarray
     frame: str = ""
     no_fix: int = 0
+    # Thinned copies by tolerance (see ``thinned``).
+    memo: dict = field(default_factory=dict, repr=False, compare=False)
 
     def __len__(self) -> int:
         return len(self.x)
@@ -160,6 +164,15 @@ def drawn(
     return np.concatenate(xs), np.concatenate(ys)
 
 
+def thinned(track: Track, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
+    """``simplified`` of a whole track, remembered on the track: a kept track
+    (``kept_tracks``) is thinned once per zoom, not once per request."""
+    found = track.memo.get(tolerance)
+    if found is None:
+        found = track.memo[tolerance] = simplified(track.x, track.y, tolerance)
+    return found
+
+
 def simplified(x: np.ndarray, y: np.ndarray, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
     """The polyline with fewer points, none further than ``tolerance`` from the original
     (Douglas-Peucker, GEOS via shapely); the first and last points are kept.
@@ -212,11 +225,17 @@ _WKB_POINT = np.dtype([("order", "u1"), ("type", "<u4"), ("x", "<f8"), ("y", "<f
 # timestamptz_send: big-endian microseconds since 2000-01-01 UTC.
 _PG_STAMP = np.dtype(">i8")
 _PG_EPOCH_MICROSECONDS = 946_684_800_000_000
+# float8send: a big-endian double.
+_PG_FLOAT = np.dtype(">f8")
+
+
+# The keys of the pose_segment_time and localpose_segment_time indexes.
+_DRIVING_ORDER = "ORDER BY segment_id, robot_stamp ASC NULLS LAST, received, id"
 
 
 def gps_tracks_sql() -> str:
-    """The query of ``_gps_tracks_postgis`` (one parameter: the segment ids), so
-    the benchmark can show its plan."""
+    """The query of the GPS tracks on PostgreSQL (one parameter: the segment ids),
+    so the benchmark can show its plan."""
     no_fix = int(FixStatus.NO_FIX)
     return (
         "SELECT segment_id, "
@@ -225,87 +244,86 @@ def gps_tracks_sql() -> str:
         f"count(*) FILTER (WHERE fix_status = {no_fix}) "
         "FROM (SELECT segment_id, point, fix_status, COALESCE(robot_stamp, received) AS t "
         f'FROM "{Pose._meta.db_table}" WHERE segment_id = ANY(%s::bigint[]) '
-        "ORDER BY segment_id, robot_stamp ASC NULLS LAST, received, id) AS ordered "
+        f"{_DRIVING_ORDER}) AS ordered "
         "GROUP BY segment_id"
     )
 
 
-def _gps_tracks_postgis(segment_ids: list[int]) -> dict[int, Track]:
-    """GPS tracks read as one row per segment holding its points and times packed
-    into two byte strings in driving order: a million points cross the wire as
+def local_tracks_sql() -> str:
+    """The query of the local tracks on PostgreSQL, read the way the GPS tracks
+    are; the frame is that of each track's first point, found through the
+    same index."""
+    table = LocalPose._meta.db_table
+    return (
+        "SELECT segment_id, string_agg(float8send(x), ''::bytea), "
+        "string_agg(float8send(y), ''::bytea), string_agg(timestamptz_send(t), ''::bytea), "
+        f'(SELECT frame FROM "{table}" AS first WHERE first.segment_id = ordered.segment_id '
+        "ORDER BY robot_stamp ASC NULLS LAST, received, id LIMIT 1) "
+        "FROM (SELECT segment_id, x, y, COALESCE(robot_stamp, received) AS t "
+        f'FROM "{table}" WHERE segment_id = ANY(%s::bigint[]) {_DRIVING_ORDER}) AS ordered '
+        "GROUP BY segment_id"
+    )
+
+
+def _packed_rows(query: str, segment_ids: list[int]) -> list[tuple]:
+    """Tracks read as one row per segment holding its points and times packed
+    into byte strings in driving order: a million points cross the wire as
     1 000 rows that numpy reads without a Python object per point.
 
-    The inner query walks the ``pose_segment_time`` index, whose keys are the
-    driving order and which covers the columns read here, so PostgreSQL neither
-    sorts nor reads the table (an Index Only Scan once vacuum has marked the
-    pages).  An aggregate over a sorted subquery takes the rows in the
-    subquery's order (PostgreSQL's manual, "Aggregate Expressions"; the ORDER BY
-    keeps the planner from flattening the subquery); an ``ORDER BY`` inside the
-    aggregate would make PostgreSQL 15 sort every segment again, a third of
-    the query's time.  The time leaves as the stored timestamp, which costs
-    nothing to send, where ``date_part`` would convert every row.  The result
-    comes in binary, as the bytes are stored: Django's cursors bind parameters
-    on the client, which returns text, and hex-decoding the 37 MB of a million
-    points took about a quarter of a second.  JIT compiling is off for this
-    statement: for a plain scan it took longer than the time it saved (``SET
-    LOCAL``: until the end of the caller's transaction where there is one,
-    which only costs other big queries in it their JIT)."""
+    The inner query walks the segment+time index, whose keys are the driving
+    order and which covers the columns read here, so PostgreSQL neither sorts
+    nor reads the table (an Index Only Scan once vacuum has marked the pages).
+    An aggregate over a sorted subquery takes the rows in the subquery's order
+    (PostgreSQL's manual, "Aggregate Expressions"; the ORDER BY keeps the
+    planner from flattening the subquery); an ``ORDER BY`` inside the aggregate
+    would make PostgreSQL 15 sort every segment again, a third of the query's
+    time.  The time leaves as the stored timestamp, which costs nothing to
+    send, where ``date_part`` would convert every row.  The result comes in
+    binary, as the bytes are stored: Django's cursors bind parameters on the
+    client, which returns text, and hex-decoding the 37 MB of a million points
+    took about a quarter of a second.  JIT compiling is off for this statement:
+    for a plain scan it took longer than the time it saved (``SET LOCAL``: until
+    the end of the caller's transaction where there is one, which only costs
+    other big queries in it their JIT)."""
     with transaction.atomic():
         with connection.cursor() as cursor:
             cursor.execute("SET LOCAL jit = off")
         with bound_cursor(binary_results=True) as cursor:
-            cursor.execute(gps_tracks_sql(), [segment_ids])
-            rows = cursor.fetchall()
+            cursor.execute(query, [segment_ids])
+            return cursor.fetchall()
+
+
+def _seconds(stamps: bytes | None) -> np.ndarray:
+    # The same single rounding as PostgreSQL's epoch: exact microseconds, then float.
+    micro = np.frombuffer(stamps or b"", dtype=_PG_STAMP) + _PG_EPOCH_MICROSECONDS
+    return micro / 1e6
+
+
+def _gps_tracks_postgis(segment_ids: list[int]) -> dict[int, Track]:
     tracks = {}
-    for seg, points, stamps, no_fix_count in rows:
+    for seg, points, stamps, no_fix_count in _packed_rows(gps_tracks_sql(), segment_ids):
         points = np.frombuffer(points or b"", dtype=_WKB_POINT)
-        # The same single rounding as PostgreSQL's epoch: exact microseconds, then float.
-        micro = np.frombuffer(stamps or b"", dtype=_PG_STAMP) + _PG_EPOCH_MICROSECONDS
         tracks[seg] = Track(
             segment_id=seg,
             x=points["x"].astype(float),
             y=points["y"].astype(float),
-            t=micro / 1e6,
+            t=_seconds(stamps),
             no_fix=no_fix_count,
         )
     return tracks
 
 
-def _packed_tracks(query: str, segment_ids: list[int], dtype, extra: str) -> dict[int, Track]:
-    """Runs a query answering (segment id, packed points, ``extra`` of Track) rows."""
-    with connection.cursor() as cursor:
-        cursor.execute(query, [segment_ids])
-        rows = cursor.fetchall()
+def _local_tracks_postgres(segment_ids: list[int]) -> dict[int, Track]:
     tracks = {}
-    for seg, packed, value in rows:
-        points = np.frombuffer(packed or b"", dtype=dtype)
+    for seg, x, y, stamps, frame in _packed_rows(local_tracks_sql(), segment_ids):
         tracks[seg] = Track(
             segment_id=seg,
-            x=points["x"].astype(float),
-            y=points["y"].astype(float),
-            t=points["t"].astype(float),
-            **{extra: value},
+            x=np.frombuffer(x, dtype=_PG_FLOAT).astype(float),
+            y=np.frombuffer(y, dtype=_PG_FLOAT).astype(float),
+            t=_seconds(stamps),
+            frame=frame or "",
         )
     return tracks
-
-
-# One local point as _local_tracks_postgres packs it: x, y, time (float8send, big-endian).
-_PACKED_LOCAL = np.dtype([("x", ">f8"), ("y", ">f8"), ("t", ">f8")])
-
-
-def _local_tracks_postgres(segment_ids: list[int]) -> dict[int, Track]:
-    """Local tracks packed into one byte string per segment (no Python object per point),
-    and the frame of its first point."""
-    table = LocalPose._meta.db_table
-    order = "ORDER BY robot_stamp ASC NULLS LAST, received, id"
-    query = (
-        "SELECT segment_id, string_agg("
-        "float8send(x) || float8send(y) || "
-        "float8send(date_part('epoch', COALESCE(robot_stamp, received))), "
-        f"''::bytea {order}), COALESCE((array_agg(frame {order}))[1], '') "
-        f'FROM "{table}" WHERE segment_id = ANY(%s) GROUP BY segment_id'
-    )
-    return _packed_tracks(query, segment_ids, _PACKED_LOCAL, "frame")
 
 
 def load_tracks(segment_ids: list[int], mode: str = GPS) -> dict[int, Track]:
@@ -341,6 +359,106 @@ def load_tracks(segment_ids: list[int], mode: str = GPS) -> dict[int, Track]:
     for seg, count in no_fix.items():
         tracks[seg] = Track(seg, np.empty(0), np.empty(0), np.empty(0), no_fix=count)
     return tracks
+
+
+class _Kept:
+    """Tracks kept between the map's reads in each web process, bounded in
+    points (x, y and t: 24 bytes each), least recently read dropped first."""
+
+    def __init__(self, points: int):
+        self.points = points
+        self.slots: OrderedDict[tuple[str, int], tuple[tuple, Track]] = OrderedDict()
+        self.total = 0
+        self.lock = threading.Lock()
+
+    def get(self, slot: tuple[str, int], key: tuple) -> Track | None:
+        with self.lock:
+            kept = self.slots.get(slot)
+            if kept is None or kept[0] != key:
+                return None
+            self.slots.move_to_end(slot)
+            return kept[1]
+
+    def put(self, slot: tuple[str, int], key: tuple, track: Track) -> None:
+        with self.lock:
+            old = self.slots.pop(slot, None)
+            if old is not None:
+                self.total -= len(old[1])
+            if len(track) > self.points:
+                return
+            self.slots[slot] = (key, track)
+            self.total += len(track)
+            while self.total > self.points:
+                _, (_, dropped) = self.slots.popitem(last=False)
+                self.total -= len(dropped)
+
+    def clear(self) -> None:
+        with self.lock:
+            self.slots.clear()
+            self.total = 0
+
+
+# About 100 MB per web process.
+_kept = _Kept(4_000_000)
+
+
+def pose_counts(segment_ids: list[int], modes=MODES) -> dict[tuple[str, int], tuple[int, int]]:
+    """{(mode, segment id): (poses stored, newest pose id)} of the segments
+    that have poses, in one query (an index-only count on PostgreSQL)."""
+    parts = [
+        (Pose if mode == GPS else LocalPose)
+        .objects.filter(segment_id__in=segment_ids)
+        .values("segment_id")
+        .annotate(_n=Count("id"), _newest=Max("id"), _mode=Value(mode))
+        .values_list("_mode", "segment_id", "_n", "_newest")
+        .order_by()
+        for mode in modes
+    ]
+    if not segment_ids or not parts:
+        return {}
+    rows = parts[0].union(*parts[1:], all=True) if len(parts) > 1 else parts[0]
+    return {(mode, seg): (n, newest) for mode, seg, n, newest in rows}
+
+
+def kept_tracks(segments: list[Segment], modes=MODES) -> dict[str, dict[int, Track]]:
+    """``load_tracks`` of each mode for the map, which asks again at every
+    visit, zoom and live update: {mode: {segment id: track}}.
+
+    A track read before in this process is used again while its segment's
+    count of poses and newest pose id are unchanged.  Poses are only ever
+    added (a late batch from a collector's spool may still arrive for a closed
+    segment) and deleted with their segment, and every added pose raises the
+    count, so a changed track is always read again; its segment's uid tells it
+    from an older segment that had the same id (a database restored under a
+    running server).  Two queries at most per mode, however many segments."""
+    by_id = {s.pk: s for s in segments}
+    counts = pose_counts(list(by_id), modes)
+    found: dict[str, dict[int, Track]] = {mode: {} for mode in modes}
+    stale: dict[str, list[int]] = {mode: [] for mode in modes}
+    for (mode, seg), count in counts.items():
+        track = _kept.get((mode, seg), (by_id[seg].uid, *count))
+        if track is None:
+            stale[mode].append(seg)
+        else:
+            found[mode][seg] = track
+    for mode, ids in stale.items():
+        if not ids:
+            continue
+        # A pose stored after the count was taken is in the track read now and
+        # changes the count again, so the next read replaces this one.
+        read = load_tracks(ids, mode)
+        found[mode].update(read)
+        for seg, track in read.items():
+            key = (by_id[seg].uid, *counts[mode, seg])
+            # What the track was read for, so results derived from it can be kept too.
+            track.memo["kept"] = (mode, *key)
+            _kept.put((mode, seg), key, track)
+    return found
+
+
+def forget_kept_tracks() -> None:
+    """Empties this process's kept tracks (tests that compare a fresh read)."""
+    _kept.clear()
 
 
 def _instant(seconds: float) -> datetime:

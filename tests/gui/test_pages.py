@@ -56,6 +56,16 @@ def test_every_script_and_stylesheet_of_the_page_is_served_by_ftt_itself(client)
         assert b"".join(response.streaming_content if response.streaming else [response.content])
 
 
+def test_the_page_asks_for_every_module_of_the_cockpit_at_once(client):
+    member(client, "olga", "operator")
+    page = client.get("/").content.decode()
+    preloaded = set(re.findall(r'<link rel="modulepreload" href="/static/gui/([\w-]+\.js)"', page))
+    # Imported by main.js, by modules main.js imports, and one level further.
+    assert {"segments.js", "mapview.js", "maps.js", "api.js"} <= preloaded
+    # The comparison page's module is not part of the cockpit.
+    assert "compare.js" not in preloaded and "main.js" not in preloaded
+
+
 def test_operator_gets_no_admin_link_and_account_without_role_is_told(client):
     member(client, "otto", "operator")
     page = client.get("/").content.decode()

@@ -5,12 +5,18 @@ import json
 
 import pytest
 from django.contrib.auth.models import Group, User
+from django.contrib.gis.geos import Point
+from django.db import connection
+from django.test.utils import CaptureQueriesContext
 
 from events.services import segments
-from telemetry.selectors.tracks import zoom_tolerance
+from telemetry.selectors.tracks import forget_kept_tracks, zoom_tolerance
 from telemetry.services import recording
 
 pytestmark = pytest.mark.django_db
+
+# The area in view of a map zoomed in (docs/gui.md, Big tracks).
+VIEW = {"map": "gps", "zoom": 8, "bbox": "6.999,49.999,7.001,50.005", "bbox_zoom": 18}
 
 # A 2000-point drive north with a 20 m zigzag every 100 points: about 2.2 km.
 ZIGZAG = 2e-4
@@ -128,3 +134,65 @@ def test_the_local_map_zooms_below_zero(client, zigzag_leg):
     body = tracks(client, leg, map="local", zoom=-3, bbox="0,-1,10,1", bbox_zoom=-1)
     # A straight line keeps its ends and the point past the view where its detail ends.
     assert body["segments"][str(master.pk)] == [[0.0, 0.0], [12.0, 0.0], [49.0, 0.0]]
+
+
+def _queries_for_tracks(client, leg, **params):
+    with CaptureQueriesContext(connection) as queries:
+        tracks(client, leg, **params)
+    return len(queries)
+
+
+@pytest.mark.parametrize("params", [{"fit": "800,600"}, VIEW])
+def test_reading_the_tracks_takes_as_many_queries_for_many_segments_as_for_one(
+    client, zigzag_leg, params
+):
+    leg, master = zigzag_leg
+    recording.record_local_poses(master, [recording.MapPose(i, 0.0, "map") for i in range(20)])
+    forget_kept_tracks()
+    one = [_queries_for_tracks(client, leg, **params), _queries_for_tracks(client, leg, **params)]
+    for k in range(5):
+        master = segments.report_mode(leg, "ito" if k % 2 == 0 else "auto").master
+        recording.record_poses(
+            master, [recording.GpsFix(7.01 + k * 1e-3, 50.0 + i * 1e-5) for i in range(20)]
+        )
+        recording.record_local_poses(
+            master, [recording.MapPose(k + i, 0.0, "map") for i in range(20)]
+        )
+    forget_kept_tracks()
+    # The first read of the tracks, then one that finds them kept.
+    assert [
+        _queries_for_tracks(client, leg, **params),
+        _queries_for_tracks(client, leg, **params),
+    ] == one
+
+
+def test_a_pose_that_arrives_late_for_a_closed_segment_is_in_the_next_read(client, zigzag_leg):
+    leg, master = zigzag_leg
+    segments.report_mode(leg, "ito")
+    before = tracks(client, leg)["segments"][str(master.pk)]
+    recording.record_poses(master, [recording.GpsFix(7.3, 50.0005, robot_stamp=None)])
+    after = tracks(client, leg)["segments"][str(master.pk)]
+    assert len(after["gps"]) == len(before["gps"]) + 1 == 2001
+    assert after["gps"][-1] == [50.0005, 7.3]
+    assert after["distance_m"] > before["distance_m"] + 20000
+
+
+def test_each_master_says_where_it_started_for_its_take_over_circle(client, zigzag_leg):
+    leg, master = zigzag_leg
+    ito = segments.report_mode(
+        leg, "ito", gps=segments.GpsPosition(7.25, 50.5), local=segments.LocalPosition(3.0, -4.0)
+    ).master
+    body = tracks(client, leg, fit="800,600")["segments"]
+    assert body[str(ito.pk)]["start"] == [50.5, 7.25]
+    assert body[str(ito.pk)]["start_local"] == [3.0, -4.0]
+    assert body[str(master.pk)]["start"] is None and body[str(master.pk)]["start_local"] is None
+
+
+def test_a_moved_start_position_changes_the_distance_in_the_next_read(client, zigzag_leg):
+    leg, master = zigzag_leg
+    before = tracks(client, leg)["segments"][str(master.pk)]["distance_m"]
+    # An operator corrects where the segment started: 0.01 degrees (about 1.1 km) south.
+    master.start_position = Point(7.0, 49.99, srid=4326)
+    master.save(update_fields=["start_position"])
+    after = tracks(client, leg)["segments"][str(master.pk)]["distance_m"]
+    assert after > before + 1000

@@ -49,9 +49,18 @@ class Server:
     """A daphne process and the job worker beside it (as scripts/run.sh starts
     them), plus a way to run Django code in other processes."""
 
-    def __init__(self, data_dir: Path, tile_url: str, database_url: str = "", name: str = "daphne"):
-        """SpatiaLite in ``data_dir`` unless ``database_url`` names a PostgreSQL database."""
+    def __init__(
+        self,
+        data_dir: Path,
+        tile_url: str,
+        database_url: str = "",
+        name: str = "daphne",
+        root: Path = ROOT,
+    ):
+        """SpatiaLite in ``data_dir`` unless ``database_url`` names a PostgreSQL
+        database; ``root``: the checkout whose code runs (a benchmark compares two)."""
         self.name = name
+        self.root = root
         self.port = _free_port()
         self.url = f"http://127.0.0.1:{self.port}"
         self.env = {
@@ -62,7 +71,7 @@ class Server:
             FTT_TILE_URL=tile_url,
             FTT_ALLOWED_HOSTS="127.0.0.1,localhost",
             DJANGO_SETTINGS_MODULE="ftt_site.settings",
-            PYTHONPATH=str(ROOT),
+            PYTHONPATH=str(root),
         )
         if database_url:
             self.env["FTT_DATABASE_URL"] = database_url
@@ -71,7 +80,7 @@ class Server:
     def manage(self, *args, timeout=120) -> str:
         result = subprocess.run(
             [sys.executable, "manage.py", *args],
-            cwd=ROOT,
+            cwd=self.root,
             env=self.env,
             capture_output=True,
             text=True,
@@ -87,7 +96,7 @@ class Server:
     def spawn(self, code: str) -> subprocess.Popen:
         return subprocess.Popen(
             [sys.executable, "manage.py", "shell", "-c", textwrap.dedent(code)],
-            cwd=ROOT,
+            cwd=self.root,
             env=self.env,
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
@@ -111,7 +120,7 @@ class Server:
                 str(self.port),
                 "ftt_site.asgi:application",
             ],
-            cwd=ROOT,
+            cwd=self.root,
             env=self.env,
             # Kept as an artifact: when a page hangs, the server's side tells why.
             stdout=self.log,
@@ -119,7 +128,7 @@ class Server:
         )
         self.worker = subprocess.Popen(
             [sys.executable, "manage.py", "ftt_worker", "--interval", "0.5"],
-            cwd=ROOT,
+            cwd=self.root,
             env=self.env,
             stdout=self.log,
             stderr=subprocess.STDOUT,

@@ -8,13 +8,24 @@ from datetime import UTC, datetime, timedelta
 
 import numpy as np
 import pytest
+from django.db import connection
+from django.test.utils import CaptureQueriesContext
 
 from events.models import SegmentType
 from events.services import segments
 from events.services.segments import GpsPosition
 from telemetry.models import Pose
 from telemetry.models.poses import FixStatus
-from telemetry.selectors.tracks import GPS, LOCAL, Track, drawn, fit_zoom, load_tracks
+from telemetry.selectors.tracks import (
+    GPS,
+    LOCAL,
+    Track,
+    drawn,
+    fit_zoom,
+    forget_kept_tracks,
+    kept_tracks,
+    load_tracks,
+)
 from telemetry.services import recording
 from telemetry.services.recording import GpsFix
 
@@ -104,3 +115,65 @@ def test_fit_zoom_is_the_zoom_a_map_of_that_size_shows_the_whole_leg_at():
     local = Track(1, np.array([0.0, 100.0]), np.array([0.0, 50.0]), np.zeros(2))
     assert fit_zoom(LOCAL, [local], 800, 800) == 3
     assert fit_zoom(GPS, [], 800, 600) is None
+
+
+def _closed_segments_with_tracks(leg, count):
+    leg.start = T0 - timedelta(minutes=1)
+    leg.save(update_fields=["start"])
+    masters = []
+    for k in range(count):
+        mode = SegmentType.AUTO if k % 2 == 0 else SegmentType.ITO
+        master = segments.report_mode(leg, mode, at=_at(100 * k)).master
+        recording.record_poses(
+            master,
+            [
+                GpsFix(7.0 + k * 1e-3 + i * 1e-5, 50.0, robot_stamp=_at(100 * k + i))
+                for i in range(50)
+            ],
+        )
+        recording.record_local_poses(
+            master,
+            [
+                recording.MapPose(k * 100.0 + i, 0.0, "map", robot_stamp=_at(100 * k + i))
+                for i in range(50)
+            ],
+        )
+        masters.append(master)
+    # The next mode report closes the last of them.
+    segments.report_mode(leg, SegmentType.AUTO, at=_at(100 * count))
+    return masters
+
+
+def _same(a: dict, b: dict):
+    assert a.keys() == b.keys()
+    for seg in a:
+        assert a[seg].x.tolist() == b[seg].x.tolist() and a[seg].y.tolist() == b[seg].y.tolist()
+        assert a[seg].t.tolist() == b[seg].t.tolist()
+        assert (a[seg].frame, a[seg].no_fix) == (b[seg].frame, b[seg].no_fix)
+
+
+def test_kept_tracks_are_the_tracks_and_a_late_pose_in_a_closed_segment_shows_up(leg):
+    masters = _closed_segments_with_tracks(leg, 3)
+    ids = [m.pk for m in masters]
+    forget_kept_tracks()
+    first = kept_tracks(masters)
+    with CaptureQueriesContext(connection) as unchanged:
+        again = kept_tracks(masters)
+    for mode in (GPS, LOCAL):
+        _same(first[mode], load_tracks(ids, mode))
+        _same(again[mode], first[mode])
+    # Nothing changed: only the poses are counted, no track is read again.
+    assert len(unchanged) == 1
+
+    # A collector's spool replays a fix driven in the middle of the first segment.
+    recording.record_poses(masters[0], [GpsFix(7.5, 50.5, robot_stamp=_at(10.5))])
+    recording.record_local_poses(
+        masters[0], [recording.MapPose(-5.0, 1.0, "map", robot_stamp=_at(10.5))]
+    )
+    later = kept_tracks(masters)
+    for mode in (GPS, LOCAL):
+        _same(later[mode], load_tracks(ids, mode))
+    gps, local = later[GPS][masters[0].pk], later[LOCAL][masters[0].pk]
+    assert len(gps) == len(local) == 51
+    assert gps.x[10:13].tolist() == [7.0 + 10 * 1e-5, 7.5, 7.0 + 11 * 1e-5]
+    assert local.x[10:13].tolist() == [10.0, -5.0, 11.0]

@@ -54,13 +54,13 @@ CASES = {
     "/api/maps/": (_maps, LIST_QUERIES),
     "/api/images/": (_images, LIST_QUERIES),
     # The leg, its masters, their points: more segments add none.
-    # GPS points on PostGIS are one query in a transaction that switches JIT off
-    # (savepoint, SET LOCAL, query, release: telemetry/selectors/tracks.py).
+    # GPS and local points on PostGIS are one query in a transaction that switches
+    # JIT off (savepoint, SET LOCAL, query, release: telemetry/selectors/tracks.py).
     "/api/tracks/?leg={leg}": (_poses, 6),
-    "/api/local-tracks/?leg={leg}": (_local_poses, 3),
+    "/api/local-tracks/?leg={leg}": (_local_poses, 6),
     "/api/tracks/?shift={shift}": (_poses, 6),
     "/api/tracks/?test_event={test_event}": (_poses, 6),
-    "/api/local-tracks/?shift={shift}": (_local_poses, 3),
+    "/api/local-tracks/?shift={shift}": (_local_poses, 6),
 }
 
 
