@@ -29,9 +29,16 @@ def checked_picture(content: bytes, formats: dict[str, str] = PHOTO_FORMATS) -> 
             with PilImage.open(io.BytesIO(content), formats=list(formats)) as picture:
                 if picture.width * picture.height > limit:
                     raise ValidationError({"image": [f"The image has more than {limit} pixels."]})
-                picture.load()
+                if picture.format == "PNG":
+                    # Every chunk's CRC, the pixel data's included, and the end
+                    # marker: a truncated or damaged file is refused without
+                    # inflating it. Decoding a robot's 2000×2000 map took 13 ms,
+                    # most of the cost of replaying a collector's outage spool.
+                    picture.verify()
+                else:
+                    picture.load()
                 return formats[picture.format]
     except ValidationError:
         raise
-    except (OSError, SyntaxError, ValueError, PilImage.DecompressionBombError, KeyError):
+    except (OSError, SyntaxError, ValueError, EOFError, PilImage.DecompressionBombError, KeyError):
         raise ValidationError({"image": [f"Not a readable {names} image."]}) from None

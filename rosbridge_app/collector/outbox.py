@@ -65,12 +65,21 @@ class Outbox:
                 self._db.execute("ROLLBACK")
                 raise
 
-    def peek(self, limit: int = 500, max_bytes: int = 32 * 1024 * 1024) -> list[tuple[int, Event]]:
-        """The oldest events, in order, without removing them."""
+    def peek(
+        self,
+        limit: int = 500,
+        max_bytes: int = 32 * 1024 * 1024,
+        *,
+        where: str = "1",
+        params: tuple = (),
+    ) -> list[tuple[int, Event]]:
+        """The oldest events (of those ``where`` selects), in order, without removing them."""
         out, size = [], 0
         with self._lock:
             cursor = self._db.execute(
-                "SELECT id, kind, at, uid, data, blob FROM event ORDER BY id LIMIT ?", (limit,)
+                "SELECT id, kind, at, uid, data, blob FROM event "
+                f"WHERE {where} ORDER BY id LIMIT ?",
+                (*params, limit),
             )
             for row_id, kind, at, uid, data, blob in cursor:
                 out.append((row_id, Event.from_record(kind, at, uid, json.loads(data), blob)))
@@ -82,8 +91,33 @@ class Outbox:
     def remove(self, ids: list[int]) -> None:
         if not ids:
             return
+        # By id, not by range: the writer may take younger events before older ones.
         with self._lock:
-            self._db.execute("DELETE FROM event WHERE id BETWEEN ? AND ?", (min(ids), max(ids)))
+            self._db.execute(
+                "DELETE FROM event WHERE id IN (SELECT value FROM json_each(?))", (json.dumps(ids),)
+            )
+
+    def last_id(self) -> int:
+        with self._lock:
+            return self._db.execute("SELECT coalesce(max(id), 0) FROM event").fetchone()[0]
+
+    def count_by_kind(self, upto: int) -> dict[str, int]:
+        with self._lock:
+            rows = self._db.execute(
+                "SELECT kind, count(*) FROM event WHERE id <= ? GROUP BY kind ORDER BY 2 DESC",
+                (upto,),
+            ).fetchall()
+        return dict(rows)
+
+    def any_of(self, kinds, upto: int) -> bool:
+        """Whether an event of one of ``kinds`` with an id up to ``upto`` is still here."""
+        kinds = sorted(kinds)
+        marks = ", ".join("?" * len(kinds))
+        with self._lock:
+            row = self._db.execute(
+                f"SELECT 1 FROM event WHERE id <= ? AND kind IN ({marks}) LIMIT 1", (upto, *kinds)
+            ).fetchone()
+        return row is not None
 
     def __len__(self) -> int:
         with self._lock:

@@ -15,6 +15,7 @@ import copy
 import logging
 import uuid
 from collections.abc import Callable
+from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
 
@@ -46,6 +47,18 @@ log = logging.getLogger("ftt.collector")
 _MAP_PER_SHIFT = uuid.UUID("0c6f3d2e-57a4-4c57-9d53-3a7e4c1f2b90")
 
 
+# What moves positions to another master: everything else may be stored beside them.
+SEGMENT_CHANGES = frozenset({ev.MODE, ev.START, ev.STOP})
+
+
+@dataclass(frozen=True)
+class Onto:
+    """Store positions, frames and snapshots on this master (uid; None: nowhere),
+    not on the open one: a backlog replayed after live data (collector/replay.py)."""
+
+    master: str | None
+
+
 class DatabaseUnavailable(Exception):
     """Nothing of the batch was stored; try the same events again later."""
 
@@ -66,14 +79,18 @@ class Recorder:
             "map_shift_id": None,
         }
         self.leg: Leg | None = None
+        self.onto: Onto | None = None
         self.skipped = 0  # events that could not be placed (no leg, no segment, bad data)
 
     # --- public -------------------------------------------------------------------------
 
-    def apply(self, events: list[Event]) -> None:
+    def apply(self, events: list[Event], onto: Onto | None = None) -> None:
         """Store events in order.  Raises DatabaseUnavailable with nothing stored
         (and this object's state unchanged) when the database cannot be used."""
+        if onto is not None and any(e.kind in SEGMENT_CHANGES for e in events):
+            raise ValueError("a segment change cannot be stored onto a given master")
         saved = copy.copy(self.state), self.leg, self.skipped
+        self.onto = onto
         try:
             with transaction.atomic():
                 rest = self._stops_first(events)
@@ -87,6 +104,15 @@ class Recorder:
                 "a batch of %d events failed (%s); storing them one by one", len(events), exc
             )
             self._apply_one_by_one(events)
+        finally:
+            self.onto = None
+
+    def open_master_uid(self) -> str | None:
+        """The uid of the master open now (after following leg changes)."""
+        with transaction.atomic():
+            self._sync()
+            master = self._master()
+        return str(master.uid) if master is not None else None
 
     def sync(self) -> Leg | None:
         """Follow leg changes now (called periodically while no events arrive)."""
@@ -151,14 +177,18 @@ class Recorder:
             self._store_map(self.state["map"])
 
     def _master(self) -> Segment | None:
+        if self.onto is not None:
+            uid = self.onto.master
+            return Segment.objects.filter(uid=uid).first() if uid is not None else None
         return open_master(self.leg) if self.leg is not None else None
 
     def _apply_all(self, events: list[Event]) -> None:
-        # GPS fixes and local poses go to two tables and never change the
-        # segment, so a run of them, interleaved as a robot sends them, is
-        # stored with one bulk insert per table; anything else ends the run
-        # (a mode event opens another segment). Flushed at every change of
-        # kind, a replayed spool cost one insert per record.
+        # GPS fixes and local poses go to two tables and only a segment change
+        # (mode, start, stop) moves them to another master, so everything
+        # between two changes is stored with one bulk insert per table; maps,
+        # camera frames and snapshots go elsewhere and do not end the run.
+        # Flushed at every map, a replayed outage spool cost two inserts and
+        # two master lookups per two seconds of the robot's driving.
         fixes: list[Event] = []
         locals_: list[Event] = []
         for event in events:
@@ -167,9 +197,10 @@ class Recorder:
             elif event.kind == ev.LOCAL:
                 locals_.append(event)
             else:
-                self._store_fixes(fixes)
-                self._store_locals(locals_)
-                fixes, locals_ = [], []
+                if event.kind in SEGMENT_CHANGES:
+                    self._store_fixes(fixes)
+                    self._store_locals(locals_)
+                    fixes, locals_ = [], []
                 getattr(self, f"_on_{event.kind}")(event)
         self._store_fixes(fixes)
         self._store_locals(locals_)
