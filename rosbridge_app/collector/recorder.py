@@ -35,11 +35,12 @@ from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.events import Event
 from telemetry.services.recording import (
     GpsFix,
+    MapPicture,
     MapPose,
     attach_image,
     attach_recording,
     record_local_poses,
-    record_map,
+    record_maps,
     record_poses,
 )
 
@@ -80,6 +81,7 @@ class Recorder:
         }
         self.leg: Leg | None = None
         self.onto: Onto | None = None
+        self._maps: list[Event] = []  # maps of the current run, stored together
         self.skipped = 0  # events that could not be placed (no leg, no segment, bad data)
 
     # --- public -------------------------------------------------------------------------
@@ -191,6 +193,7 @@ class Recorder:
         # two master lookups per two seconds of the robot's driving.
         fixes: list[Event] = []
         locals_: list[Event] = []
+        self._maps = []
         for event in events:
             if event.kind == ev.GPS:
                 fixes.append(event)
@@ -200,10 +203,12 @@ class Recorder:
                 if event.kind in SEGMENT_CHANGES:
                     self._store_fixes(fixes)
                     self._store_locals(locals_)
+                    self._store_maps()
                     fixes, locals_ = [], []
                 getattr(self, f"_on_{event.kind}")(event)
         self._store_fixes(fixes)
         self._store_locals(locals_)
+        self._store_maps()
 
     def _on_start(self, event: Event) -> None:
         self.state["logging"] = True
@@ -291,13 +296,24 @@ class Recorder:
         if self.leg is None:
             self.skipped += 1
             return
-        self._store_map(event)
+        self._maps.append(event)
+
+    def _store_maps(self) -> None:
+        maps, self._maps = self._maps, []
+        if not maps:
+            return
+        shift = self.leg.shift
+        record_maps(shift, [self._map_picture(event, shift) for event in maps])
+        self.state["map_shift_id"] = shift.pk
 
     def _store_map(self, event: Event) -> None:
-        shift = self.leg.shift
+        self._maps.append(event)
+        self._store_maps()
+
+    @staticmethod
+    def _map_picture(event: Event, shift) -> MapPicture:
         d = event.data
-        record_map(
-            shift,
+        return MapPicture(
             png=event.blob,
             frame=d["frame"],
             width=d["width"],
@@ -311,7 +327,6 @@ class Recorder:
             # One map event may be stored in several shifts: one uid per shift.
             uid=uuid.uuid5(_MAP_PER_SHIFT, f"{event.uid}/{shift.uid}"),
         )
-        self.state["map_shift_id"] = shift.pk
 
     def _on_image(self, event: Event) -> None:
         master = Segment.objects.filter(uid=event.data["master"]).first()

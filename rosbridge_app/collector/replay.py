@@ -3,7 +3,8 @@
 Normally first in, first out. After an outage (or a start with a full spool)
 the spool holds a backlog, and first in, first out kept live data waiting
 until all of it was written: a mode switch published after a 2-hour outage
-was stored 68 s later. So, once the writer finds more than a slice pending:
+was stored 68 s later. So, once the writer finds more than a quarter of a
+slice pending:
 
 * the backlog is what the spool held then (ids up to ``end``);
 * segment changes (mode, start, stop) are applied strictly in spool order:
@@ -46,8 +47,11 @@ class Slice:
 
 
 class ReplayOrder:
-    def __init__(self, outbox: Outbox, size: int):
+    """``size``: records per slice; ``backlog``: more pending than this is a backlog."""
+
+    def __init__(self, outbox: Outbox, size: int, backlog: int | None = None):
         self.outbox, self.size = outbox, size
+        self.backlog = size // 4 if backlog is None else backlog
         saved = outbox.get_state(_STATE)
         self.lane = json.loads(saved) if saved else None  # {"end": id, "master": uid | None}
         self.end = self.lane["end"] if self.lane else None
@@ -58,7 +62,7 @@ class ReplayOrder:
         return self.lane is not None
 
     def slices(self, recorder: Recorder) -> list[Slice]:
-        if self.end is None and len(self.outbox) > self.size:
+        if self.end is None and len(self.outbox) > self.backlog:
             self.end = self.outbox.last_id()
             self._found = time.monotonic(), self.outbox.count_by_kind(self.end)
         if self.end is not None and self.lane is None:
