@@ -246,6 +246,8 @@ def outage(relay, spool, minutes, leg, mode, collector_log) -> None:
             Segment.objects.filter(leg=leg, parent__isnull=True).count() > before
         ):
             switch_stored = time.monotonic()
+            # The order, not the timing: what of the backlog was still unwritten.
+            left_behind = spool.records(upto=backlog_end)
         if backlog_stored is None and spool.records(upto=backlog_end) == 0:
             backlog_stored = time.monotonic()
         time.sleep(0.05)
@@ -267,15 +269,11 @@ def outage(relay, spool, minutes, leg, mode, collector_log) -> None:
     if switch_stored is None:
         print("  live mode switch: not stored in 30 min")
     else:
-        order = (
-            "before the backlog was stored"
-            if backlog_stored is None or switch_stored < backlog_stored
-            else "after the backlog"
-        )
+        order = f"{left_behind} of the backlog's records still in the spool then"
         print(
             f"  live mode switch published {published - restored:.1f} s after the restore: stored "
             f"{switch_stored - restored:.2f} s after the restore, {order}  "
-            "[target: before the backlog]"
+            "[target: before the backlog, i.e. > 0 left]"
         )
     if back:
         print(f"  (the collector said: database back after {back.group(1)} s of outage)")

@@ -1,7 +1,7 @@
 """What a stored picture may be, whoever stores it (API, collector, imports).
 
-A file's name or declared type says nothing: only what Pillow decodes counts,
-and the stored file gets the extension of the decoded format.  Other formats
+A file's name or declared type says nothing: only what Pillow reads counts,
+and the stored file gets the extension of the format found.  Other formats
 are refused because browsers and the report treat them differently (an
 ``.html`` "photo" would be served as a page; EPS goes to Ghostscript).
 """
@@ -18,8 +18,8 @@ MAP_FORMATS = {"PNG": "png"}
 
 
 def checked_picture(content: bytes, formats: dict[str, str] = PHOTO_FORMATS) -> str:
-    """The extension to store ``content`` under; ValidationError unless it decodes
-    as one of ``formats`` within FTT_MAX_IMAGE_PIXELS."""
+    """The extension to store ``content`` under; ValidationError unless it is one of
+    ``formats`` within FTT_MAX_IMAGE_PIXELS, whole (a PNG's chunks check, others decode)."""
     names = "/".join(formats)
     limit = settings.FTT_MAX_IMAGE_PIXELS
     try:
