@@ -27,6 +27,10 @@ CREATE TABLE IF NOT EXISTS event (
     blob BLOB
 );
 CREATE TABLE IF NOT EXISTS state (key TEXT PRIMARY KEY, value TEXT NOT NULL);
+-- Segment changes of a backlog already stored, each with the master it left
+-- open (uid or NULL); they stay in the event table as the borders of the
+-- backlog's runs until the backlog is written (collector/replay.py).
+CREATE TABLE IF NOT EXISTS applied (id INTEGER PRIMARY KEY, master TEXT);
 """
 
 
@@ -97,6 +101,22 @@ class Outbox:
                 "DELETE FROM event WHERE id IN (SELECT value FROM json_each(?))", (json.dumps(ids),)
             )
 
+    def mark_applied(self, marks: list[tuple[int, str | None]]) -> None:
+        with self._lock:
+            self._db.executemany("INSERT OR REPLACE INTO applied (id, master) VALUES (?, ?)", marks)
+
+    def applied(self) -> list[tuple[int, str | None]]:
+        with self._lock:
+            return self._db.execute("SELECT id, master FROM applied ORDER BY id").fetchall()
+
+    def forget_applied(self) -> None:
+        """The backlog is written: its segment changes leave the spool."""
+        with self._lock:
+            self._db.execute("BEGIN IMMEDIATE")
+            self._db.execute("DELETE FROM event WHERE id IN (SELECT id FROM applied)")
+            self._db.execute("DELETE FROM applied")
+            self._db.execute("COMMIT")
+
     def last_id(self) -> int:
         with self._lock:
             return self._db.execute("SELECT coalesce(max(id), 0) FROM event").fetchone()[0]
@@ -108,16 +128,6 @@ class Outbox:
                 (upto,),
             ).fetchall()
         return dict(rows)
-
-    def any_of(self, kinds, upto: int) -> bool:
-        """Whether an event of one of ``kinds`` with an id up to ``upto`` is still here."""
-        kinds = sorted(kinds)
-        marks = ", ".join("?" * len(kinds))
-        with self._lock:
-            row = self._db.execute(
-                f"SELECT 1 FROM event WHERE id <= ? AND kind IN ({marks}) LIMIT 1", (upto, *kinds)
-            ).fetchone()
-        return row is not None
 
     def __len__(self) -> int:
         with self._lock:

@@ -82,6 +82,7 @@ class Recorder:
         self.leg: Leg | None = None
         self.onto: Onto | None = None
         self._maps: list[Event] = []  # maps of the current run, stored together
+        self._left_open: list[str | None] | None = None  # see apply_changes
         self.skipped = 0  # events that could not be placed (no leg, no segment, bad data)
 
     # --- public -------------------------------------------------------------------------
@@ -105,6 +106,8 @@ class Recorder:
             log.warning(
                 "a batch of %d events failed (%s); storing them one by one", len(events), exc
             )
+            if self._left_open is not None:
+                self._left_open = []
             self._apply_one_by_one(events)
         finally:
             self.onto = None
@@ -113,8 +116,27 @@ class Recorder:
         """The uid of the master open now (after following leg changes)."""
         with transaction.atomic():
             self._sync()
-            master = self._master()
+            return self._master_uid()
+
+    def apply_changes(self, events: list[Event]) -> list[str | None]:
+        """Apply segment changes (and nothing else) in order; for each, the uid of
+        the master it left open (None: none)."""
+        if any(e.kind not in SEGMENT_CHANGES for e in events):
+            raise ValueError("only segment changes")
+        self._left_open = []
+        try:
+            self.apply(events)
+            return self._left_open
+        finally:
+            self._left_open = None
+
+    def _master_uid(self) -> str | None:
+        master = self._master()
         return str(master.uid) if master is not None else None
+
+    def _note_left_open(self) -> None:
+        if self._left_open is not None:
+            self._left_open.append(self._master_uid())
 
     def sync(self) -> Leg | None:
         """Follow leg changes now (called periodically while no events arrive)."""
@@ -143,6 +165,8 @@ class Recorder:
                     raise DatabaseUnavailable(str(exc)) from exc
                 self.skipped += 1
                 log.warning("dropped a %s event: %s", event.kind, exc)
+                if event.kind in SEGMENT_CHANGES:
+                    self._note_left_open()
                 if event.kind == ev.MODE:
                     # The robot is in this mode even though its segment could not
                     # be stored; the next leg must start in it, not in the old one.
@@ -159,6 +183,7 @@ class Recorder:
         count = 0
         while count < len(events) and events[count].kind == ev.STOP:
             self._on_stop(events[count])
+            self._note_left_open()
             count += 1
         return events[count:]
 
@@ -206,6 +231,8 @@ class Recorder:
                     self._store_maps()
                     fixes, locals_ = [], []
                 getattr(self, f"_on_{event.kind}")(event)
+                if event.kind in SEGMENT_CHANGES:
+                    self._note_left_open()
         self._store_fixes(fixes)
         self._store_locals(locals_)
         self._store_maps()

@@ -4,29 +4,30 @@ Normally first in, first out. After an outage (or a start with a full spool)
 the spool holds a backlog, and first in, first out kept live data waiting
 until all of it was written: a mode switch published after a 2-hour outage
 was stored 68 s later. So, once the writer finds more than a quarter of a
-slice pending:
+slice pending, what the spool holds then is the backlog (ids up to ``end``):
 
-* the backlog is what the spool held then (ids up to ``end``);
-* segment changes (mode, start, stop) are applied strictly in spool order:
-  while the backlog still holds one, the writer goes first in, first out;
-* then it keeps two lanes, live first: each turn it stores what arrived after
-  ``end`` (up to a slice), then one slice of the backlog. The backlog's
-  positions, camera frames and snapshots go onto the master that was open
-  after its last segment change, which is where first in, first out would have
-  put them, whatever live switches were stored meanwhile; that master's uid is
-  kept in the spool, so a restart in the middle continues the same way;
-* maps keep their own order (the newest stored is the shift's current map):
-  a live map waits in the backlog lane.
+1. its segment changes (mode, start, stop) are applied first, in spool order,
+   and each is marked in the spool with the master it left open;
+2. then, each turn: one slice of what arrived after the backlog (live data,
+   in order, onto the open master), then one slice of the backlog's other
+   records, each run between two of its segment changes onto the master the
+   earlier one left open (before the first: the master open when the backlog
+   was found). That is where first in, first out would have put them,
+   whatever live switches were stored meanwhile;
+3. maps keep their own order (the newest stored is the shift's current map):
+   a live map waits in the backlog lane.
 
-So a live switch waits for at most one slice, never for the backlog, and no
-record is stored before a segment change that preceded it. A backlog whose
-last switch is near its end is written first in, first out up to that switch.
+So a live switch waits for the backlog's few segment changes and one slice,
+never for the backlog, and no segment change is applied before one that
+preceded it. The marks and the backlog's bounds live in the spool, so a
+restart in the middle goes on the same way.
 """
 
+import bisect
+import itertools
 import json
 import logging
 import time
-from dataclasses import dataclass
 
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.outbox import Outbox
@@ -36,16 +37,6 @@ _STATE = "backlog"
 log = logging.getLogger("ftt.collector")
 
 
-@dataclass
-class Slice:
-    rows: list
-    onto: Onto | None = None  # None: the open master, as records arrive
-
-    @property
-    def backlog(self) -> bool:
-        return self.onto is not None
-
-
 class ReplayOrder:
     """``size``: records per slice; ``backlog``: more pending than this is a backlog."""
 
@@ -53,36 +44,63 @@ class ReplayOrder:
         self.outbox, self.size = outbox, size
         self.backlog = size // 4 if backlog is None else backlog
         saved = outbox.get_state(_STATE)
-        self.lane = json.loads(saved) if saved else None  # {"end": id, "master": uid | None}
-        self.end = self.lane["end"] if self.lane else None
-        self._found = (time.monotonic(), outbox.count_by_kind(self.end)) if self.lane else None
+        # {"end": last id of the backlog, "master": uid open before it, or None}
+        self.lane = json.loads(saved) if saved else None
+        self._found = (
+            (time.monotonic(), outbox.count_by_kind(self.lane["end"])) if self.lane else None
+        )
 
     @property
     def replaying(self) -> bool:
         return self.lane is not None
 
-    def slices(self, recorder: Recorder) -> list[Slice]:
-        if self.end is None and len(self.outbox) > self.backlog:
-            self.end = self.outbox.last_id()
-            self._found = time.monotonic(), self.outbox.count_by_kind(self.end)
-        if self.end is not None and self.lane is None:
-            # First in, first out up to the backlog's last segment change.
-            if not self.outbox.any_of(SEGMENT_CHANGES, upto=self.end):
-                self.lane = {"end": self.end, "master": recorder.open_master_uid()}
-                self.outbox.set_state(_STATE, json.dumps(self.lane))
+    def write_next(self, recorder: Recorder) -> int:
+        """Store the next slices; how many records were taken or marked."""
+        if self.lane is None and len(self.outbox) > self.backlog:
+            end = self.outbox.last_id()
+            self._found = time.monotonic(), self.outbox.count_by_kind(end)
+            self.lane = {"end": end, "master": recorder.open_master_uid()}
+            self.outbox.set_state(_STATE, json.dumps(self.lane))
         if self.lane is None:
-            rows = self.outbox.peek(self.size)
-            if self.end is not None and (not rows or rows[0][0] > self.end):
-                self._done()
-            return [Slice(rows)]
+            return self._store(recorder, self.outbox.peek(self.size), None)
         end = self.lane["end"]
+        kinds = sorted(SEGMENT_CHANGES)
+        changes = self.outbox.peek(
+            self.size,
+            where=f"id <= ? AND kind IN ({', '.join('?' * len(kinds))}) "
+            "AND id NOT IN (SELECT id FROM applied)",
+            params=(end, *kinds),
+        )
+        if changes:
+            masters = recorder.apply_changes([event for _, event in changes])
+            ids = [row_id for row_id, _ in changes]
+            self.outbox.mark_applied(list(zip(ids, masters, strict=True)))
+            return len(changes)
         live = self.outbox.peek(self.size, where="id > ? AND kind != ?", params=(end, ev.MAP))
-        backlog = self.outbox.peek(self.size, where="id <= ? OR kind = ?", params=(end, ev.MAP))
-        parts = [Slice(live), Slice(backlog, Onto(self.lane["master"]))]
+        taken = self._store(recorder, live, None)
+        backlog = self.outbox.peek(
+            self.size,
+            where="(id <= ? AND id NOT IN (SELECT id FROM applied)) OR (id > ? AND kind = ?)",
+            params=(end, end, ev.MAP),
+        )
         if not backlog:
+            self.outbox.forget_applied()
             self.outbox.set_state(_STATE, "")
             self._done()
-        return parts
+            return taken
+        marks = self.outbox.applied()
+        borders = [row_id for row_id, _ in marks]
+        runs = itertools.groupby(backlog, key=lambda row: bisect.bisect(borders, row[0]))
+        for run, rows in runs:
+            master = marks[run - 1][1] if run else self.lane["master"]
+            taken += self._store(recorder, list(rows), Onto(master))
+        return taken
+
+    def _store(self, recorder: Recorder, rows: list, onto: Onto | None) -> int:
+        if rows:
+            recorder.apply([event for _, event in rows], onto=onto)
+            self.outbox.remove([row_id for row_id, _ in rows])
+        return len(rows)
 
     def _done(self) -> None:
         started, kinds = self._found
@@ -96,15 +114,4 @@ class ReplayOrder:
             total / took,
             ", ".join(f"{kind} {count} = {count / took:.0f}/s" for kind, count in kinds.items()),
         )
-        self.lane = self.end = self._found = None
-
-    def write_next(self, recorder: Recorder) -> int:
-        """Store the next slices; how many records were taken from the spool."""
-        taken = 0
-        for part in self.slices(recorder):
-            if not part.rows:
-                continue
-            recorder.apply([event for _, event in part.rows], onto=part.onto)
-            self.outbox.remove([row_id for row_id, _ in part.rows])
-            taken += len(part.rows)
-        return taken
+        self.lane = self._found = None
