@@ -8,9 +8,12 @@ the collector logs with the shipped parameters (default thinning).
 process; the relay is cut for ``--minutes`` (every connection dropped, new
 ones refused), as when the robot's link to the base station goes, then
 restored. Prints how the spool grows (records and bytes per minute,
-extrapolated to 2 hours), the replay rate after the outage (records written
-per second; the robot keeps driving meanwhile) and how long a mode switch
-published during the replay waits until it is stored.
+extrapolated to 2 hours) and what it holds by kind, the time from the restore
+until the backlog is stored, the collector's own replay rate by kind (its log
+line "backlog of N spooled records stored in ..."; the robot keeps driving
+meanwhile), and when a mode switch published at the restore was stored, with
+how many backlog records were still unwritten then (the order, not a timing).
+``--collector-root /work/main`` runs main's collector (A/B at the same load).
 
 ``soak``: ``--minutes`` at full rate; prints the collector's RSS every minute
 and the growth over the second half.
@@ -235,9 +238,8 @@ def outage(relay, spool, minutes, leg, mode, collector_log) -> None:
     before = Segment.objects.filter(leg=leg, parent__isnull=True).count()
     relay.restore()
     restored = time.monotonic()
-    # A switch right after the restore, while the backlog is replayed: when is
+    # A switch at the restore, while the backlog waits to be replayed: when is
     # it in the database, and is that before the backlog is?
-    time.sleep(0.5)
     mode.publish(Bool(data=False))
     published = time.monotonic()
     switch_stored = backlog_stored = None
