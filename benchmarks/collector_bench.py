@@ -75,10 +75,13 @@ class Bench:
             "FTT_MEDIA_ROOT": str(self.work / "media"),
         }
 
-    def collector(self, spool: Path, log: Path, env: dict | None = None) -> subprocess.Popen:
+    def collector(
+        self, spool: Path, log: Path, env: dict | None = None, manage=MANAGE
+    ) -> subprocess.Popen:
+        """``manage``: another checkout's manage.py runs the collector for an A/B run."""
         return subprocess.Popen(
             [
-                *MANAGE,
+                *manage,
                 "ftt_collect",
                 "--params-file",
                 str(self.params),

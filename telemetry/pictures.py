@@ -1,7 +1,7 @@
 """What a stored picture may be, whoever stores it (API, collector, imports).
 
-A file's name or declared type says nothing: only what Pillow decodes counts,
-and the stored file gets the extension of the decoded format.  Other formats
+A file's name or declared type says nothing: only what Pillow reads counts,
+and the stored file gets the extension of the format found.  Other formats
 are refused because browsers and the report treat them differently (an
 ``.html`` "photo" would be served as a page; EPS goes to Ghostscript).
 """
@@ -18,8 +18,8 @@ MAP_FORMATS = {"PNG": "png"}
 
 
 def checked_picture(content: bytes, formats: dict[str, str] = PHOTO_FORMATS) -> str:
-    """The extension to store ``content`` under; ValidationError unless it decodes
-    as one of ``formats`` within FTT_MAX_IMAGE_PIXELS."""
+    """The extension to store ``content`` under; ValidationError unless it is one of
+    ``formats`` within FTT_MAX_IMAGE_PIXELS, whole (a PNG's chunks check, others decode)."""
     names = "/".join(formats)
     limit = settings.FTT_MAX_IMAGE_PIXELS
     try:
@@ -29,9 +29,16 @@ def checked_picture(content: bytes, formats: dict[str, str] = PHOTO_FORMATS) -> 
             with PilImage.open(io.BytesIO(content), formats=list(formats)) as picture:
                 if picture.width * picture.height > limit:
                     raise ValidationError({"image": [f"The image has more than {limit} pixels."]})
-                picture.load()
+                if picture.format == "PNG":
+                    # Every chunk's CRC, the pixel data's included, and the end
+                    # marker: a truncated or damaged file is refused without
+                    # inflating it. Decoding a robot's 2000×2000 map took 13 ms,
+                    # most of the cost of replaying a collector's outage spool.
+                    picture.verify()
+                else:
+                    picture.load()
                 return formats[picture.format]
     except ValidationError:
         raise
-    except (OSError, SyntaxError, ValueError, PilImage.DecompressionBombError, KeyError):
+    except (OSError, SyntaxError, ValueError, EOFError, PilImage.DecompressionBombError, KeyError):
         raise ValidationError({"image": [f"Not a readable {names} image."]}) from None

@@ -27,6 +27,10 @@ CREATE TABLE IF NOT EXISTS event (
     blob BLOB
 );
 CREATE TABLE IF NOT EXISTS state (key TEXT PRIMARY KEY, value TEXT NOT NULL);
+-- Segment changes of a backlog already stored, each with the master it left
+-- open (uid or NULL); they stay in the event table as the borders of the
+-- backlog's runs until the backlog is written (collector/replay.py).
+CREATE TABLE IF NOT EXISTS applied (id INTEGER PRIMARY KEY, master TEXT);
 """
 
 
@@ -65,12 +69,21 @@ class Outbox:
                 self._db.execute("ROLLBACK")
                 raise
 
-    def peek(self, limit: int = 500, max_bytes: int = 32 * 1024 * 1024) -> list[tuple[int, Event]]:
-        """The oldest events, in order, without removing them."""
+    def peek(
+        self,
+        limit: int = 500,
+        max_bytes: int = 32 * 1024 * 1024,
+        *,
+        where: str = "1",
+        params: tuple = (),
+    ) -> list[tuple[int, Event]]:
+        """The oldest events (of those ``where`` selects), in order, without removing them."""
         out, size = [], 0
         with self._lock:
             cursor = self._db.execute(
-                "SELECT id, kind, at, uid, data, blob FROM event ORDER BY id LIMIT ?", (limit,)
+                "SELECT id, kind, at, uid, data, blob FROM event "
+                f"WHERE {where} ORDER BY id LIMIT ?",
+                (*params, limit),
             )
             for row_id, kind, at, uid, data, blob in cursor:
                 out.append((row_id, Event.from_record(kind, at, uid, json.loads(data), blob)))
@@ -82,8 +95,39 @@ class Outbox:
     def remove(self, ids: list[int]) -> None:
         if not ids:
             return
+        # By id, not by range: the writer may take younger events before older ones.
         with self._lock:
-            self._db.execute("DELETE FROM event WHERE id BETWEEN ? AND ?", (min(ids), max(ids)))
+            self._db.execute(
+                "DELETE FROM event WHERE id IN (SELECT value FROM json_each(?))", (json.dumps(ids),)
+            )
+
+    def mark_applied(self, marks: list[tuple[int, str | None]]) -> None:
+        with self._lock:
+            self._db.executemany("INSERT OR REPLACE INTO applied (id, master) VALUES (?, ?)", marks)
+
+    def applied(self) -> list[tuple[int, str | None]]:
+        with self._lock:
+            return self._db.execute("SELECT id, master FROM applied ORDER BY id").fetchall()
+
+    def forget_applied(self) -> None:
+        """The backlog is written: its segment changes leave the spool."""
+        with self._lock:
+            self._db.execute("BEGIN IMMEDIATE")
+            self._db.execute("DELETE FROM event WHERE id IN (SELECT id FROM applied)")
+            self._db.execute("DELETE FROM applied")
+            self._db.execute("COMMIT")
+
+    def last_id(self) -> int:
+        with self._lock:
+            return self._db.execute("SELECT coalesce(max(id), 0) FROM event").fetchone()[0]
+
+    def count_by_kind(self, upto: int) -> dict[str, int]:
+        with self._lock:
+            rows = self._db.execute(
+                "SELECT kind, count(*) FROM event WHERE id <= ? GROUP BY kind ORDER BY 2 DESC",
+                (upto,),
+            ).fetchall()
+        return dict(rows)
 
     def __len__(self) -> int:
         with self._lock:

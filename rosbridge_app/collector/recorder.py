@@ -15,6 +15,7 @@ import copy
 import logging
 import uuid
 from collections.abc import Callable
+from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
 
@@ -34,16 +35,29 @@ from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.events import Event
 from telemetry.services.recording import (
     GpsFix,
+    MapPicture,
     MapPose,
     attach_image,
     attach_recording,
     record_local_poses,
-    record_map,
+    record_maps,
     record_poses,
 )
 
 log = logging.getLogger("ftt.collector")
 _MAP_PER_SHIFT = uuid.UUID("0c6f3d2e-57a4-4c57-9d53-3a7e4c1f2b90")
+
+
+# What moves positions to another master: everything else may be stored beside them.
+SEGMENT_CHANGES = frozenset({ev.MODE, ev.START, ev.STOP})
+
+
+@dataclass(frozen=True)
+class Onto:
+    """Store positions, frames and snapshots on this master (uid; None: nowhere),
+    not on the open one: a backlog replayed after live data (collector/replay.py)."""
+
+    master: str | None
 
 
 class DatabaseUnavailable(Exception):
@@ -66,14 +80,20 @@ class Recorder:
             "map_shift_id": None,
         }
         self.leg: Leg | None = None
+        self.onto: Onto | None = None
+        self._maps: list[Event] = []  # maps of the current run, stored together
+        self._left_open: list[str | None] | None = None  # see apply_changes
         self.skipped = 0  # events that could not be placed (no leg, no segment, bad data)
 
     # --- public -------------------------------------------------------------------------
 
-    def apply(self, events: list[Event]) -> None:
+    def apply(self, events: list[Event], onto: Onto | None = None) -> None:
         """Store events in order.  Raises DatabaseUnavailable with nothing stored
         (and this object's state unchanged) when the database cannot be used."""
+        if onto is not None and any(e.kind in SEGMENT_CHANGES for e in events):
+            raise ValueError("a segment change cannot be stored onto a given master")
         saved = copy.copy(self.state), self.leg, self.skipped
+        self.onto = onto
         try:
             with transaction.atomic():
                 rest = self._stops_first(events)
@@ -86,7 +106,37 @@ class Recorder:
             log.warning(
                 "a batch of %d events failed (%s); storing them one by one", len(events), exc
             )
+            if self._left_open is not None:
+                self._left_open = []
             self._apply_one_by_one(events)
+        finally:
+            self.onto = None
+
+    def open_master_uid(self) -> str | None:
+        """The uid of the master open now (after following leg changes)."""
+        with transaction.atomic():
+            self._sync()
+            return self._master_uid()
+
+    def apply_changes(self, events: list[Event]) -> list[str | None]:
+        """Apply segment changes (and nothing else) in order; for each, the uid of
+        the master it left open (None: none)."""
+        if any(e.kind not in SEGMENT_CHANGES for e in events):
+            raise ValueError("only segment changes")
+        self._left_open = []
+        try:
+            self.apply(events)
+            return self._left_open
+        finally:
+            self._left_open = None
+
+    def _master_uid(self) -> str | None:
+        master = self._master()
+        return str(master.uid) if master is not None else None
+
+    def _note_left_open(self) -> None:
+        if self._left_open is not None:
+            self._left_open.append(self._master_uid())
 
     def sync(self) -> Leg | None:
         """Follow leg changes now (called periodically while no events arrive)."""
@@ -115,6 +165,8 @@ class Recorder:
                     raise DatabaseUnavailable(str(exc)) from exc
                 self.skipped += 1
                 log.warning("dropped a %s event: %s", event.kind, exc)
+                if event.kind in SEGMENT_CHANGES:
+                    self._note_left_open()
                 if event.kind == ev.MODE:
                     # The robot is in this mode even though its segment could not
                     # be stored; the next leg must start in it, not in the old one.
@@ -131,6 +183,7 @@ class Recorder:
         count = 0
         while count < len(events) and events[count].kind == ev.STOP:
             self._on_stop(events[count])
+            self._note_left_open()
             count += 1
         return events[count:]
 
@@ -151,28 +204,38 @@ class Recorder:
             self._store_map(self.state["map"])
 
     def _master(self) -> Segment | None:
+        if self.onto is not None:
+            uid = self.onto.master
+            return Segment.objects.filter(uid=uid).first() if uid is not None else None
         return open_master(self.leg) if self.leg is not None else None
 
     def _apply_all(self, events: list[Event]) -> None:
-        # GPS fixes and local poses go to two tables and never change the
-        # segment, so a run of them, interleaved as a robot sends them, is
-        # stored with one bulk insert per table; anything else ends the run
-        # (a mode event opens another segment). Flushed at every change of
-        # kind, a replayed spool cost one insert per record.
+        # GPS fixes and local poses go to two tables and only a segment change
+        # (mode, start, stop) moves them to another master, so everything
+        # between two changes is stored with one bulk insert per table; maps,
+        # camera frames and snapshots go elsewhere and do not end the run.
+        # Flushed at every map, a replayed outage spool cost two inserts and
+        # two master lookups per two seconds of the robot's driving.
         fixes: list[Event] = []
         locals_: list[Event] = []
+        self._maps = []
         for event in events:
             if event.kind == ev.GPS:
                 fixes.append(event)
             elif event.kind == ev.LOCAL:
                 locals_.append(event)
             else:
-                self._store_fixes(fixes)
-                self._store_locals(locals_)
-                fixes, locals_ = [], []
+                if event.kind in SEGMENT_CHANGES:
+                    self._store_fixes(fixes)
+                    self._store_locals(locals_)
+                    self._store_maps()
+                    fixes, locals_ = [], []
                 getattr(self, f"_on_{event.kind}")(event)
+                if event.kind in SEGMENT_CHANGES:
+                    self._note_left_open()
         self._store_fixes(fixes)
         self._store_locals(locals_)
+        self._store_maps()
 
     def _on_start(self, event: Event) -> None:
         self.state["logging"] = True
@@ -260,13 +323,24 @@ class Recorder:
         if self.leg is None:
             self.skipped += 1
             return
-        self._store_map(event)
+        self._maps.append(event)
+
+    def _store_maps(self) -> None:
+        maps, self._maps = self._maps, []
+        if not maps:
+            return
+        shift = self.leg.shift
+        record_maps(shift, [self._map_picture(event, shift) for event in maps])
+        self.state["map_shift_id"] = shift.pk
 
     def _store_map(self, event: Event) -> None:
-        shift = self.leg.shift
+        self._maps.append(event)
+        self._store_maps()
+
+    @staticmethod
+    def _map_picture(event: Event, shift) -> MapPicture:
         d = event.data
-        record_map(
-            shift,
+        return MapPicture(
             png=event.blob,
             frame=d["frame"],
             width=d["width"],
@@ -280,7 +354,6 @@ class Recorder:
             # One map event may be stored in several shifts: one uid per shift.
             uid=uuid.uuid5(_MAP_PER_SHIFT, f"{event.uid}/{shift.uid}"),
         )
-        self.state["map_shift_id"] = shift.pk
 
     def _on_image(self, event: Event) -> None:
         master = Segment.objects.filter(uid=event.data["master"]).first()

@@ -50,6 +50,7 @@ from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.node import CollectorNode, Status
 from rosbridge_app.collector.outbox import Outbox
 from rosbridge_app.collector.recorder import DatabaseUnavailable, Recorder
+from rosbridge_app.collector.replay import ReplayOrder
 from rosbridge_app.models import CollectorCommand
 from rosbridge_app.services import collectors as link
 
@@ -58,7 +59,8 @@ log = logging.getLogger("ftt.collector")
 SPOOL_INTERVAL = 0.05
 BATCH = 500
 # Records the writer takes from the outbox per transaction: a backlog after an
-# outage is replayed in few large bulk inserts (benchmarks/collector_endurance.py).
+# outage is replayed in few large bulk inserts (benchmarks/collector_endurance.py),
+# and a live mode switch waits for at most one such slice (collector/replay.py).
 WRITE_BATCH = 2000
 HEARTBEAT = 1.0
 COMMAND_POLL = 0.25
@@ -223,6 +225,14 @@ class CollectorRuntime:
             # notice a connection that died with the robot's Wi-Fi within a minute
             # instead of the kernel's two hours.
             options = db.settings_dict.setdefault("OPTIONS", {})
+            # One thread writes, so a pool (the web server's) gains nothing and
+            # its reconnection backs off, doubling up to minutes, while the writer
+            # waits up to the pool's timeout per attempt: after an outage the
+            # collector came back 30-60 s after the database did. A plain
+            # connection, kept open and checked, is tried again every RETRY.
+            if options.pop("pool", None) is not None:
+                db.settings_dict["CONN_MAX_AGE"] = None
+                db.settings_dict["CONN_HEALTH_CHECKS"] = True
             for name, value in (
                 ("connect_timeout", 3),
                 ("keepalives", 1),
@@ -246,6 +256,7 @@ class CollectorRuntime:
         self.name = self.name or f"{self.host}/{self.vehicle_key or self.node.get_name()}"
         self.outbox = Outbox(self.spool_path or default_spool(self.name))
         self.recorder = Recorder(self._leg)
+        self.order = ReplayOrder(self.outbox, WRITE_BATCH)
         self.node.blackbox.directory = self.outbox.path.with_suffix(".snapshots")
         pending = len(self.outbox)
         log.info(
@@ -328,12 +339,10 @@ class CollectorRuntime:
                 retry_at = time.monotonic() + RETRY
 
     def _write_batch(self) -> bool:
-        batch = self.outbox.peek(WRITE_BATCH)
-        self.status.pending = len(self.outbox) if batch else 0
-        if not batch:
+        if not self.order.write_next(self.recorder):
+            self.status.pending = 0
             return False
-        self.recorder.apply([event for _, event in batch])
-        self.outbox.remove([row_id for row_id, _ in batch])
+        self.status.pending = len(self.outbox)
         if not self.startup.reported and self.startup.has("first message received"):
             self.startup.mark("first record stored after it")
             self.startup.reported = True

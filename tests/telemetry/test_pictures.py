@@ -3,11 +3,13 @@
 import io
 
 import pytest
+from django.core.exceptions import ValidationError
 from django.core.files.uploadedfile import SimpleUploadedFile
 from PIL import Image as PilImage
 
 from events.services import segments
 from telemetry.models import Image, MapImage
+from telemetry.pictures import MAP_FORMATS, checked_picture
 from tests.support.images import image_bytes
 
 pytestmark = pytest.mark.django_db
@@ -77,3 +79,18 @@ def test_maps_are_png_only_also_on_the_service_path(shift, media_root):
             origin_y=0,
         )
     assert not MapImage.objects.exists()
+
+
+def _damaged_pngs() -> dict[str, bytes]:
+    png = image_bytes(fmt="PNG", size=(64, 64))
+    data = png.index(b"IDAT") + 8
+    flipped = png[:data] + bytes([png[data] ^ 0xFF]) + png[data + 1 :]
+    return {"truncated": png[: len(png) // 2], "flipped pixel byte": flipped}
+
+
+@pytest.mark.parametrize("name", ["truncated", "flipped pixel byte"])
+def test_a_damaged_png_map_is_refused(name):
+    # What the collector and the importers call (the API's form checks uploads first).
+    with pytest.raises(ValidationError, match="Not a readable PNG"):
+        checked_picture(_damaged_pngs()[name], MAP_FORMATS)
+    assert checked_picture(image_bytes(fmt="PNG", size=(64, 64)), MAP_FORMATS) == "png"

@@ -97,6 +97,25 @@ def test_unchanged_map_is_not_stored_again_but_a_changed_one_is(leg, media_root)
     assert leg.shift.maps.latest() == moved
 
 
+def test_a_batch_of_maps_is_stored_in_order_like_one_map_at_a_time(leg, media_root):
+    meta = dict(frame="map", width=1, height=1, resolution=0.05, origin_x=1.0, origin_y=2.0)
+    retried = uuid.uuid4()
+    recording.record_map(leg.shift, png=PNG, origin_yaw=0.1, uid=retried, **meta)
+    batch = [
+        recording.MapPicture(png=PNG, origin_yaw=0.1, uid=retried, **meta),  # a retry
+        recording.MapPicture(png=PNG, origin_yaw=0.2, **meta),
+        recording.MapPicture(png=PNG, origin_yaw=0.2, **meta),  # unchanged
+        recording.MapPicture(png=PNG, origin_yaw=0.3, uid=uuid.uuid4(), **meta),
+    ]
+    results = recording.record_maps(leg.shift, batch)
+    assert [stored for _, stored in results] == [False, True, False, True]
+    assert results[2][0] == results[1][0]
+    yaws = list(leg.shift.maps.order_by("received", "id").values_list("origin_yaw", flat=True))
+    assert yaws == [0.1, 0.2, 0.3]
+    assert leg.shift.maps.latest() == results[3][0]
+    assert all(m.image.read() == PNG for m in leg.shift.maps.all())
+
+
 def test_images_are_files_in_media_storage_on_the_master(ito, media_root):
     image = recording.attach_image(ito.children.get(), content=PNG)
     assert image.segment == ito

@@ -1,0 +1,99 @@
+"""After an outage, live data overtakes the spooled backlog without changing where
+anything is stored: the writer's order (collector/replay.py), outbox to database."""
+
+from datetime import UTC, datetime, timedelta
+
+import pytest
+
+from events.models import Segment
+from rosbridge_app.collector import events as ev
+from rosbridge_app.collector.events import Event
+from rosbridge_app.collector.outbox import Outbox
+from rosbridge_app.collector.recorder import Recorder
+from rosbridge_app.collector.replay import ReplayOrder
+from telemetry.models import LocalPose, MapImage, Pose
+from tests.support.images import grey_png
+
+pytestmark = pytest.mark.django_db
+SLICE = 10
+
+
+def _fixes(start: datetime, count: int) -> list[Event]:
+    out = []
+    for i in range(count):
+        t = start + timedelta(seconds=0.1 * (i + 1))
+        out.append(Event(ev.GPS, t, {"lon": 7.0, "lat": 50.0 + i * 1e-6, "robot_stamp": t}))
+        out.append(Event(ev.LOCAL, t, {"x": float(i), "y": 0.0, "frame": "map", "yaw": 0.0}))
+    return out
+
+
+def _map(t: datetime, level: int) -> Event:
+    grid = {"frame": "map", "width": 2, "height": 2, "resolution": 0.1}
+    grid.update(origin_x=0.0, origin_y=0.0, checksum=str(level))
+    return Event(ev.MAP, t, grid, blob=grey_png(level, size=(2, 2)))
+
+
+@pytest.mark.parametrize("restart", [False, True], ids=["one run", "restarted midway"])
+def test_a_live_switch_is_stored_before_the_backlog_and_everything_once(
+    leg, tmp_path, media_root, restart
+):
+    t0 = datetime.now(UTC) + timedelta(minutes=1)
+    auto, ito_at = t0, t0 + timedelta(seconds=10)
+    ranges = {"auto": _fixes(auto, 20), "ito": _fixes(ito_at, 40)}
+    backlog = [
+        Event(ev.START, t0),
+        Event(ev.MODE, auto, {"mode": "auto"}),
+        *ranges["auto"][:20],
+        _map(auto + timedelta(seconds=1), 10),
+        *ranges["auto"][20:],
+        Event(ev.MODE, ito_at, {"mode": "ito"}),
+        *ranges["ito"][:40],
+        _map(ito_at + timedelta(seconds=2), 20),
+        *ranges["ito"][40:],
+    ]
+    outbox = Outbox(tmp_path / "spool.sqlite3")
+    outbox.append(backlog)
+    recorder = Recorder(lambda: leg)
+    order = ReplayOrder(outbox, SLICE)
+    order.write_next(recorder)  # the database is back: the writer has found the backlog
+
+    # Published after the restore, while the backlog is replayed.
+    live_at = t0 + timedelta(minutes=5)
+    live = [Event(ev.MODE, live_at, {"mode": "auto"}), *_fixes(live_at, 3)]
+    live.append(_map(live_at + timedelta(seconds=1), 30))
+    outbox.append(live)
+
+    backlog_left_when_live_stored = None
+    turns = restarts = 0
+    while len(outbox):
+        if restart and order.replaying and turns == 1:
+            # A crash or restart in the middle: the spool says where the backlog goes.
+            recorder, order = Recorder(lambda: leg), ReplayOrder(outbox, SLICE)
+            restarts += 1
+        order.write_next(recorder)
+        turns += 1
+        assert turns < 100
+        if backlog_left_when_live_stored is None and Segment.objects.filter(uid=live[0].uid):
+            spooled = {str(e.uid) for _, e in outbox.peek(1000)}
+            backlog_left_when_live_stored = sum(str(e.uid) in spooled for e in backlog)
+
+    assert backlog_left_when_live_stored and backlog_left_when_live_stored > SLICE
+    assert restarts == (1 if restart else 0)
+    masters = list(Segment.objects.filter(leg=leg, parent__isnull=True).order_by("start"))
+    assert [(m.segment_type_id, m.start) for m in masters] == [
+        ("auto", auto),
+        ("ito", ito_at),
+        ("auto", live_at),
+    ]
+    assert [m.end for m in masters] == [ito_at, live_at, None]
+    expected = {**ranges, "live": live[1:7]}
+    for master, (name, events) in zip(masters, expected.items(), strict=True):
+        stored = {str(u) for u in Pose.objects.filter(segment=master).values_list("uid", flat=True)}
+        stored |= {
+            str(u) for u in LocalPose.objects.filter(segment=master).values_list("uid", flat=True)
+        }
+        assert stored == {str(e.uid) for e in events}, name
+    assert Pose.objects.count() + LocalPose.objects.count() == 2 * (20 + 40 + 3)
+    # The live map was newer than the backlog's: it is still the shift's current one.
+    maps = list(MapImage.objects.order_by("received", "id").values_list("checksum", flat=True))
+    assert maps == ["10", "20", "30"]
