@@ -282,20 +282,6 @@ def _floats(values) -> list[float | None]:
 
 
 def _insert_fixes_postgres(master, fixes, source_id, received) -> set[uuid.UUID]:
-    if len(fixes) >= COPY_FROM:
-        rows = (
-            (
-                _as_uuid(f.uid),
-                f.longitude,
-                f.latitude,
-                f.altitude,
-                f.fix_status,
-                f.horizontal_accuracy,
-                f.robot_stamp,
-            )
-            for f in fixes
-        )
-        return _copy_new(_POSE_STAGING, rows, [master.pk, source_id, received])
     columns = (
         [_as_uuid(f.uid) for f in fixes],
         _floats(f.longitude for f in fixes),
@@ -305,12 +291,19 @@ def _insert_fixes_postgres(master, fixes, source_id, received) -> set[uuid.UUID]
         _floats(f.horizontal_accuracy for f in fixes),
         [f.robot_stamp for f in fixes],
     )
+    insert = _POSTGRES_INSERT.format(table=Pose._meta.db_table)
+    return _insert_columns(_POSE_STAGING, insert, columns, [master.pk, source_id, received])
+
+
+def _insert_columns(staging, insert: str, columns, params) -> set[uuid.UUID]:
+    """Store the rows given as column lists (the uid's first, in the staging
+    table's order) whose uid is new; returns their uids.  ``params`` come before
+    the columns in ``insert`` and are the staging insert's own parameters."""
+    if len(columns[0]) >= COPY_FROM:
+        return _copy_new(staging, zip(*columns, strict=True), params)
     with bound_cursor() as cursor:
-        cursor.execute(
-            _POSTGRES_INSERT.format(table=Pose._meta.db_table),
-            [master.pk, source_id, received, *columns],
-        )
-        return {_as_uuid(uid) for (uid,) in cursor.fetchall()}
+        cursor.execute(insert, [*params, *columns])
+        return {_as_uuid(row[0]) for row in cursor.fetchall()}
 
 
 # From this many rows on, a batch goes to PostgreSQL by COPY into a temporary
@@ -425,15 +418,8 @@ def _insert_local_postgres(master, poses: list[MapPose], received) -> list[MapPo
         _floats(p.yaw for p in poses),
         [p.robot_stamp for p in poses],
     )
-    if len(poses) >= COPY_FROM:
-        new = _copy_new(_LOCAL_POSE_STAGING, zip(*columns, strict=True), [master.pk, received])
-    else:
-        with bound_cursor() as cursor:
-            cursor.execute(
-                _POSTGRES_LOCAL_INSERT.format(table=LocalPose._meta.db_table),
-                [master.pk, received, *columns],
-            )
-            new = {_as_uuid(row[0]) for row in cursor.fetchall()}
+    insert = _POSTGRES_LOCAL_INSERT.format(table=LocalPose._meta.db_table)
+    new = _insert_columns(_LOCAL_POSE_STAGING, insert, columns, [master.pk, received])
     return [p for p, uid in zip(poses, uids, strict=True) if uid in new]
 
 
