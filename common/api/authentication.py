@@ -7,6 +7,7 @@ from django.conf import settings
 from django.db.models import F
 from django.utils.translation import gettext_lazy as _
 from rest_framework import authentication, exceptions
+from rest_framework.authtoken.models import Token
 
 from common import roles
 from common.memo import Expiring
@@ -18,35 +19,60 @@ from common.memo import Expiring
 # through another process it is honoured within this many seconds.
 known_tokens = Expiring(settings.FTT_TOKEN_CACHE_SECONDS)
 
+KEYWORD = "Token"
+
+
+def sent_key(header: bytes) -> str | None:
+    """The key of an ``Authorization: Token <key>`` header as DRF's class reads it;
+    None for anything else (no token, another scheme, a malformed header), which
+    the class answers itself."""
+    parts = header.split()
+    if len(parts) != 2 or parts[0].lower() != KEYWORD.lower().encode():
+        return None
+    try:
+        return parts[1].decode()
+    except UnicodeError:
+        return None
+
+
+def token_account(key: str):
+    """(user, token) for an API token: the account with its roles read along, a
+    fresh copy per request.  Raises AuthenticationFailed for an unknown token or
+    an inactive account.  DRF's class below and the single-pose route
+    (ftt_site.pose_route) both ask this."""
+    known = known_tokens.get(key)
+    if known is None:
+        known = _look_up(key)
+        known_tokens.put(key, known)
+    user, token, groups = known
+    # Each request gets its own copy: views and selectors keep per-request
+    # things on the user object (common.roles, events.selectors.robots).
+    user = copy.copy(user)
+    roles.remember_groups(user, groups)
+    return user, token
+
+
+def _look_up(key):
+    # One row per group (a single row with no group name for none).
+    rows = list(
+        Token.objects.select_related("user")
+        .filter(key=key)
+        .annotate(group_name=F("user__groups__name"))
+    )
+    if not rows:
+        raise exceptions.AuthenticationFailed(_("Invalid token."))
+    user = rows[0].user
+    if not user.is_active:
+        raise exceptions.AuthenticationFailed(_("User inactive or deleted."))
+    groups = frozenset(row.group_name for row in rows if row.group_name)
+    return user, rows[0], groups
+
 
 class TokenAuthentication(authentication.TokenAuthentication):
     """DRF's token check, reading the account's groups (its roles) with the token
     and the user: one query instead of two, and none while the token is kept."""
 
-    def authenticate_credentials(self, key):
-        known = known_tokens.get(key)
-        if known is None:
-            known = self._look_up(key)
-            known_tokens.put(key, known)
-        user, token, groups = known
-        # Each request gets its own copy: views and selectors keep per-request
-        # things on the user object (common.roles, events.selectors.robots).
-        user = copy.copy(user)
-        roles.remember_groups(user, groups)
-        return user, token
+    keyword = KEYWORD
 
-    def _look_up(self, key):
-        # One row per group (a single row with no group name for none).
-        rows = list(
-            self.get_model()
-            .objects.select_related("user")
-            .filter(key=key)
-            .annotate(group_name=F("user__groups__name"))
-        )
-        if not rows:
-            raise exceptions.AuthenticationFailed(_("Invalid token."))
-        user = rows[0].user
-        if not user.is_active:
-            raise exceptions.AuthenticationFailed(_("User inactive or deleted."))
-        groups = frozenset(row.group_name for row in rows if row.group_name)
-        return user, rows[0], groups
+    def authenticate_credentials(self, key):
+        return token_account(key)

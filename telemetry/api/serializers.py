@@ -1,5 +1,6 @@
 """Shapes of robot-recorded data; storing it is up to ``telemetry.services.recording``."""
 
+import re
 import uuid
 from typing import Annotated
 
@@ -79,12 +80,10 @@ class _SentId(serializers.Field):
 
 
 class PoseByIdSerializer(serializers.Serializer):
-    """A single pose whose segment and pose source the storing statement looks up
-    (telemetry.services.recording.record_pose_at); a request it refuses is checked
-    again by PoseSerializer, whose messages answer.  Its fields are PoseSerializer's,
-    declared once here: a ModelSerializer builds them from the model on every
-    request, a third of a single pose's time in Python.  It also answers with the
-    stored pose, in PoseSerializer's shape."""
+    """The answer to a single pose stored the quick way (telemetry.api.single_pose),
+    in PoseSerializer's shape.  Its fields are PoseSerializer's, declared once
+    here: a ModelSerializer builds them from the model on every request, a third
+    of a single pose's time in Python."""
 
     id = serializers.IntegerField(read_only=True)
     uid = serializers.UUIDField(required=False)
@@ -137,9 +136,14 @@ def map_pose(data: dict) -> MapPose:
     return pose
 
 
+# The start DRF's DateTimeField (Django's parse_datetime) needs too: pydantic
+# alone would also take a number of seconds written as text.
+_ISO_DATETIME = re.compile(r"\d{4}-\d\d-\d\d[T ]\d\d:\d\d")
+
+
 def _text(value):
-    if not isinstance(value, str):
-        raise ValueError("a date-time is written as text")
+    if not isinstance(value, str) or not _ISO_DATETIME.match(value):
+        raise ValueError("a date-time is written as ISO 8601 text")
     return value
 
 
@@ -159,6 +163,32 @@ class _FastPoseItem(BaseModel):
 
 _FAST_POSES = TypeAdapter(list[_FastPoseItem])
 _FIX_STATUSES = frozenset(FixStatus.values)
+
+# A row id as the view's serializer takes it (ids sent as text are left to it).
+_RowId = Annotated[int, Strict(), Field(gt=0, lt=2**63)]
+
+
+class _FastPose(_FastPoseItem):
+    """A single pose (``POST poses/``): a batch item's fields, one definition, and
+    the ids the storing statement looks up."""
+
+    segment: _RowId
+    pose_source: _RowId | None = None
+
+
+def sent_pose(data) -> tuple[int, GpsFix, int | None] | None:
+    """(segment id, fix, pose source id) of a single pose as sent, checked in one
+    pass of pydantic; None for anything it does not accept, which PoseSerializer
+    then checks and answers with its field messages."""
+    if not isinstance(data, dict):
+        return None
+    try:
+        item = _FastPose.model_validate(data)
+    except ValidationError:
+        return None
+    if item.fix_status not in _FIX_STATUSES:
+        return None
+    return item.segment, gps_fix(_as_validated(item)), item.pose_source
 
 
 class PoseListSerializer(serializers.ListSerializer):

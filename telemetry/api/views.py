@@ -16,6 +16,7 @@ from events.api.serializers import PrimaryKeyField
 from events.api.viewsets import ServiceBaseViewSet, ServiceCreateMixin
 from events.models import Leg, Shift, TestEvent
 from telemetry.api import serializers as s
+from telemetry.api import single_pose
 from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 from telemetry.selectors import distances, tracks
 from telemetry.selectors import maps as map_selectors
@@ -98,19 +99,9 @@ class PoseViewSet(RecordingViewSet):
     def create(self, request, *args, **kwargs):
         # Ids as sent, checked by the service in the statement that stores the pose;
         # anything it cannot answer alone gets the full check and its messages.
-        quick = s.PoseByIdSerializer(data=request.data)
-        if quick.is_valid():
-            data = quick.validated_data
-            stored = recording.record_pose_at(
-                data["segment_id"],
-                s.gps_fix(data),
-                data.get("pose_source_id"),
-                writer=request.user,
-            )
-            if stored is not None:
-                pose, new = stored
-                code = status.HTTP_201_CREATED if new else status.HTTP_200_OK
-                return self.respond(pose, s.PoseByIdSerializer, code=code)
+        answer = single_pose.store_sent(request.user, request.data)
+        if answer is not None:
+            return Response(*answer)
         serializer = self.get_serializer(data=request.data)
         serializer.is_valid(raise_exception=True)
         data = serializer.validated_data

@@ -1,0 +1,265 @@
+"""The production server's lean route for single poses answers as the API view does.
+
+Requests go through the real ASGI application (ftt_site.asgi); the view's own
+answers come from Django's test client.  The database work of the ASGI
+application runs in other threads, so these tests commit (transaction=True).
+"""
+
+import asyncio
+import json
+import uuid
+
+import httpx
+import pytest
+from django.core.signals import request_started
+from django.db import connection
+from django.test.utils import CaptureQueriesContext
+from rest_framework.throttling import SimpleRateThrottle
+
+from events.models import Announcement, SegmentType
+from events.services import segments
+from ftt_site.asgi import application
+from ftt_site.pose_route import PATH, PoseRoute
+from telemetry.models import Pose
+
+pytestmark = pytest.mark.django_db(transaction=True)
+
+# Answered per request, not by the route: the server's clock and the length.
+_PER_ANSWER = {"date", "server", "content-length"}
+
+
+@pytest.fixture
+def master(leg):
+    return segments.report_mode(leg, SegmentType.AUTO).master
+
+
+@pytest.fixture
+def django_requests():
+    """How many requests Django's own handler took (the lean route takes none)."""
+    seen = []
+
+    def count(**kwargs):
+        seen.append(kwargs)
+
+    request_started.connect(count)
+    yield seen
+    request_started.disconnect(count)
+
+
+def _token(client) -> str:
+    return client._credentials["HTTP_AUTHORIZATION"].split()[1]
+
+
+def post_asgi(body, token=None, headers=None):
+    """POST /api/poses/ through the ASGI application; (status, headers, json)."""
+
+    async def send():
+        sent = {"Content-Type": "application/json", **(headers or {})}
+        if token:
+            sent["Authorization"] = f"Token {token}"
+        transport = httpx.ASGITransport(app=application)
+        async with httpx.AsyncClient(transport=transport, base_url="http://127.0.0.1") as client:
+            return await client.post(PATH, content=json.dumps(body), headers=sent)
+
+    response = asyncio.run(send())
+    return response.status_code, response.headers, response.json()
+
+
+def _headers(headers) -> dict:
+    # The policy's directives come in set order; compare them as a set.
+    found = {k.lower(): v for k, v in headers.items() if k.lower() not in _PER_ANSWER}
+    if "content-security-policy" in found:
+        found["content-security-policy"] = set(found["content-security-policy"].split("; "))
+    return found
+
+
+def _stored(uid):
+    pose = Pose.objects.get(uid=uid)
+    return {
+        "segment": pose.segment_id,
+        "point": (pose.point.x, pose.point.y, pose.point.srid),
+        "altitude": pose.altitude,
+        "fix_status": pose.fix_status,
+        "horizontal_accuracy": pose.horizontal_accuracy,
+        "pose_source": pose.pose_source_id,
+        "robot_stamp": pose.robot_stamp,
+    }
+
+
+@pytest.mark.postgis_only
+def test_a_pose_is_stored_and_answered_as_the_view_does(
+    api_client, master, django_requests, media_root
+):
+    client = api_client("operator")
+    child = segments.report_mode(master.leg, SegmentType.ITO).master
+    sent = {
+        "segment": child.pk,
+        "longitude": 7.1,
+        "latitude": 50.7,
+        "altitude": 62.5,
+        "fix_status": 2,
+        "horizontal_accuracy": 0.02,
+        "robot_stamp": "2026-05-04T10:00:00.25+02:00",
+    }
+    lean_uid, view_uid = uuid.uuid4(), uuid.uuid4()
+    feed_before = Announcement.objects.count()
+
+    status, headers, lean = post_asgi({**sent, "uid": str(lean_uid)}, _token(client))
+    assert django_requests == []  # answered by the route alone
+    view = client.post(PATH, {**sent, "uid": str(view_uid)}, format="json")
+
+    assert (status, view.status_code) == (201, 201)
+    different = {"id", "uid", "received"}
+    assert {k: v for k, v in lean.items() if k not in different} == {
+        k: v for k, v in view.json().items() if k not in different
+    }
+    assert lean["uid"] == str(lean_uid) and lean["robot_stamp"] == "2026-05-04T08:00:00.250000Z"
+    assert _stored(lean_uid) == _stored(view_uid)
+    assert _headers(headers) == _headers(view.headers)
+    # One feed row each, naming the same segment and point.
+    feed = list(Announcement.objects.order_by("pk")[feed_before:])
+    assert [(a.kind, a.payload) for a in feed[:1]] == [(a.kind, a.payload) for a in feed[1:]]
+
+
+@pytest.mark.postgis_only
+def test_a_retried_uid_is_stored_once_and_answered_with_the_first_row(
+    api_client, master, django_requests
+):
+    token = _token(api_client("operator"))
+    body = {"uid": str(uuid.uuid4()), "segment": master.pk, "longitude": 8, "latitude": 50}
+
+    first = post_asgi(body, token)
+    again = post_asgi(body, token)
+
+    assert django_requests == []
+    assert (first[0], again[0]) == (201, 200)
+    assert again[2] == first[2]
+    assert Pose.objects.filter(uid=body["uid"]).count() == 1
+
+
+@pytest.mark.postgis_only
+def test_a_robot_posts_to_its_own_vehicle_the_lean_way(
+    robot_client, vehicle, master, django_requests
+):
+    token = _token(robot_client(vehicle))
+
+    status, _, answer = post_asgi({"segment": master.pk, "longitude": 8, "latitude": 50}, token)
+
+    assert status == 201 and django_requests == []
+    assert Pose.objects.filter(uid=answer["uid"], segment=master).exists()
+
+
+def _refusals(master, other_leg):
+    foreign = segments.report_mode(other_leg, SegmentType.AUTO).master
+    good = {"segment": master.pk, "longitude": 8, "latitude": 50}
+    return {
+        "bad field": ("operator", {**good, "latitude": 95}),
+        "text for a number": ("operator", {**good, "longitude": "east"}),
+        "unknown segment": ("operator", {**good, "segment": 10**9}),
+        "unknown pose source": ("operator", {**good, "pose_source": 10**9}),
+        "not an object": ("operator", [good]),
+        "viewer": ("viewer", good),
+        "no role": (None, good),
+        "no token": ("anonymous", good),
+        "unknown token": ("unknown", good),
+        "robot, other vehicle": ("robot", {**good, "segment": foreign.pk}),
+        "JSON with NaN": ("operator", {**good, "altitude": float("nan")}),
+    }
+
+
+REFUSALS = [
+    "bad field",
+    "text for a number",
+    "unknown segment",
+    "unknown pose source",
+    "not an object",
+    "viewer",
+    "no role",
+    "no token",
+    "unknown token",
+    "robot, other vehicle",
+    "JSON with NaN",
+]
+
+
+@pytest.mark.parametrize("case", REFUSALS)
+def test_what_the_route_cannot_answer_gets_the_views_answer(
+    case, api_client, robot_client, vehicle, master, other_leg
+):
+    role, body = _refusals(master, other_leg)[case]
+    if role == "robot":
+        client = robot_client(vehicle)
+        token = _token(client)
+    elif role in ("anonymous", "unknown"):
+        client = api_client(anonymous=True)
+        token = None if role == "anonymous" else "0" * 40
+        if token:
+            client.credentials(HTTP_AUTHORIZATION=f"Token {token}")
+    else:
+        client = api_client(role)
+        token = _token(client)
+    before = Pose.objects.count()
+
+    status, headers, answer = post_asgi(body, token)
+    view = client.post(PATH, json.dumps(body), content_type="application/json")
+
+    assert status == view.status_code and status >= 400
+    assert answer == view.json()
+    assert _headers(headers) == _headers(view.headers)
+    assert Pose.objects.count() == before
+
+
+def test_a_browsers_cross_origin_post_gets_djangos_cors_headers(
+    api_client, master, settings, django_requests
+):
+    settings.CORS_ALLOWED_ORIGINS = ["https://gui.example"]
+    client = api_client("operator")
+    body = {"segment": master.pk, "longitude": 8, "latitude": 50}
+    origin = {"Origin": "https://gui.example"}
+
+    status, headers, _ = post_asgi(body, _token(client), origin)
+    view = client.post(PATH, body, format="json", HTTP_ORIGIN=origin["Origin"])
+
+    assert len(django_requests) == 2  # the route left it to Django
+    assert (status, view.status_code) == (201, 201)
+    assert headers["access-control-allow-origin"] == "https://gui.example"
+    assert _headers(headers) == _headers(view.headers)
+
+
+@pytest.mark.postgis_only
+def test_the_lean_way_counts_against_the_request_rate(api_client, master, monkeypatch):
+    monkeypatch.setattr(SimpleRateThrottle, "THROTTLE_RATES", {"anon": "2/min", "user": "2/min"})
+    token = _token(api_client("operator"))
+    body = {"segment": master.pk, "longitude": 8, "latitude": 50}
+
+    answers = [post_asgi(body, token) for _ in range(3)]
+
+    assert [status for status, _, _ in answers] == [201, 201, 429]
+    assert "retry-after" in answers[2][1]
+    assert Pose.objects.filter(segment=master).count() == 2
+
+
+@pytest.mark.postgis_only
+def test_a_pose_the_lean_way_is_one_query(api_client, master):
+    token = _token(api_client("operator"))
+    body = json.dumps({"segment": master.pk, "longitude": 8, "latitude": 50}).encode()
+    scope = {
+        "type": "http",
+        "method": "POST",
+        "path": PATH,
+        "query_string": b"",
+        "scheme": "http",
+        "server": ("127.0.0.1", 8000),
+        "client": ("127.0.0.1", 50000),
+        "root_path": "",
+        "headers": [(b"host", b"127.0.0.1"), (b"content-type", b"application/json")],
+    }
+    route = PoseRoute(application)
+    # The segment, token and answer headers are kept per process after the first.
+    assert route.answer(scope, token, body)[0] == 201
+
+    with CaptureQueriesContext(connection) as queries:
+        status, content, _ = route.answer(scope, token, body)
+
+    assert status == 201 and Pose.objects.filter(uid=json.loads(content)["uid"]).exists()
+    assert len(queries) == 1, [q["sql"] for q in queries]
