@@ -195,6 +195,10 @@ def _middleware_headers(request, view) -> list[tuple[bytes, bytes]]:
     answered = handler(request)
     if answered is not response:
         raise RuntimeError(f"the middleware answered {answered.status_code} by itself")
+    if response.cookies:
+        # Something of this request's own (a session, a CSRF cookie) that the
+        # answers to every other request must not carry.
+        raise RuntimeError("the middleware set a cookie")
     return [
         (name.lower().encode("latin-1"), value.encode("latin-1"))
         for name, value in response.items()
