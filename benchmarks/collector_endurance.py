@@ -12,7 +12,9 @@ extrapolated to 2 hours) and what it holds by kind, the time from the restore
 until the backlog is stored, the collector's own replay rate by kind (its log
 line "backlog of N spooled records stored in ..."; the robot keeps driving
 meanwhile), and when a mode switch published at the restore was stored, with
-how many backlog records were still unwritten then (the order, not a timing).
+how many backlog records were still unwritten then (the order, not a timing),
+the same for a second switch once a fifth of the backlog is written, and the
+highest ``pending`` the collector showed (the GUI's "records not yet stored").
 ``--collector-root /work/main`` runs main's collector (A/B at the same load).
 
 ``soak``: ``--minutes`` at full rate; prints the collector's RSS every minute
@@ -196,7 +198,8 @@ def main() -> None:
         mode = robot_mode(bench.leg)
         if args.drill == "outage":
             filler = (lambda: fill(bench, spool.path, minutes)) if args.fill else None
-            outage(relay, spool, minutes, bench.leg, mode, bench.work / "collector.log", filler)
+            log = bench.work / "collector.log"
+            outage(relay, spool, minutes, bench.leg, mode, log, filler, bench.key)
         else:
             soak(collector, robot, minutes)
     finally:
@@ -227,7 +230,7 @@ def robot_mode(leg):
     return mode
 
 
-def outage(relay, spool, minutes, leg, mode, collector_log, filler=None) -> None:
+def outage(relay, spool, minutes, leg, mode, collector_log, filler=None, name="") -> None:
     from std_msgs.msg import Bool
 
     time.sleep(10)  # the robot is found and the first records are stored
@@ -262,9 +265,12 @@ def outage(relay, spool, minutes, leg, mode, collector_log, filler=None) -> None
     switch_stored = backlog_stored = None
     # A second switch once a fifth of the backlog is written: it waits for the
     # backlog slice being stored (collector/replay.py), the live side's worst case.
-    total, mid, mid_stored = sum(kinds.values()), None, None
+    total, mid, mid_stored, shown = sum(kinds.values()), None, None, 0
     while time.monotonic() - restored < 1800:
         t = time.monotonic()
+        # What the GUI's collector line says ("N records not yet stored").
+        row = Collector.objects.filter(name=name).values_list("pending", flat=True).first()
+        shown = max(shown, row or 0)
         masters = Segment.objects.filter(leg=leg, parent__isnull=True).count()
         left = spool.records(upto=backlog_end)
         if switch_stored is None and masters > before:
@@ -305,6 +311,7 @@ def outage(relay, spool, minutes, leg, mode, collector_log, filler=None) -> None
             f"{switch_stored - restored:.2f} s after the restore, {order}  "
             "[target: before the backlog, i.e. > 0 left]"
         )
+    print(f"  the GUI's backlog (the collector's pending, highest seen after the restore): {shown}")
     if mid is None:
         print("  switch during the replay: not sent (the backlog went too fast to catch)")
     elif mid_stored is None:
