@@ -12,11 +12,21 @@ extrapolated to 2 hours) and what it holds by kind, the time from the restore
 until the backlog is stored, the collector's own replay rate by kind (its log
 line "backlog of N spooled records stored in ..."; the robot keeps driving
 meanwhile), and when a mode switch published at the restore was stored, with
-how many backlog records were still unwritten then (the order, not a timing).
+how many backlog records were still unwritten then (the order, not a timing),
+the same for a second switch once a fifth of the backlog is written, and the
+highest ``pending`` the collector showed (the GUI's "records not yet stored").
 ``--collector-root /work/main`` runs main's collector (A/B at the same load).
 
 ``soak``: ``--minutes`` at full rate; prints the collector's RSS every minute
 and the growth over the second half.
+
+``outage --fill``: the 2-hour outage without waiting 2 hours. Once the
+relay is cut, the benchmark robot's next ``--minutes`` (the simulator's own
+code on a clock run as fast as the machine allows) go through a collector
+pipeline and the collector's spooler into the running collector's spool, as
+the collector itself would have appended them; then the relay is restored
+and the same figures are printed. The camera is simulated too but, with no
+mode switch, leaves no records, as in the real drill.
 
 ``replay``: the writer alone, without ROS traffic: a spool of ``--records``
 GPS fixes and local poses interleaved as the robot sends them (what a long
@@ -24,7 +34,7 @@ outage leaves, apart from the maps) is written by a starting collector;
 prints records per second.
 
     FTT_DATABASE_URL=postgis://... .venv/bin/python benchmarks/collector_endurance.py \\
-        outage|soak [--minutes N] | replay [--records N]
+        outage [--fill] | soak [--minutes N] | replay [--records N]
 
 Issue 16's targets: a 2-hour outage with a documented spool size and replay at
 >= 5 000 records/s; RSS flat over 1 hour. The load average is printed with
@@ -45,7 +55,7 @@ import time
 from pathlib import Path
 from urllib.parse import urlsplit, urlunsplit
 
-from collector_bench import MANAGE, Bench, load
+from collector_bench import MANAGE, ROBOT, Bench, load
 from django.db import connection
 
 from events.models import Segment
@@ -143,6 +153,9 @@ def main() -> None:
     parser.add_argument("drill", choices=("outage", "soak", "replay"))
     parser.add_argument("--records", type=int, default=100_000, help="replay: spooled records")
     parser.add_argument("--minutes", type=float, default=None, help="outage 120, soak 60")
+    parser.add_argument(
+        "--fill", action="store_true", help="outage: spool --minutes of the robot at once"
+    )
     parser.add_argument("--keep-log", type=Path, help="copy the collector's log here at the end")
     parser.add_argument(
         "--collector-root",
@@ -177,12 +190,16 @@ def main() -> None:
     while not Collector.objects.filter(name=bench.key).exists():
         time.sleep(0.2)
     seconds = minutes * 60 + (90 if args.drill == "outage" else 0)
+    if args.fill:
+        seconds = 600
     robot = bench.robot(seconds, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
     print(f"database: {connection.vendor} · {os.cpu_count()} cores · {load()}")
     try:
         mode = robot_mode(bench.leg)
         if args.drill == "outage":
-            outage(relay, spool, minutes, bench.leg, mode, bench.work / "collector.log")
+            filler = (lambda: fill(bench, spool.path, minutes)) if args.fill else None
+            log = bench.work / "collector.log"
+            outage(relay, spool, minutes, bench.leg, mode, log, filler, bench.key)
         else:
             soak(collector, robot, minutes)
     finally:
@@ -200,7 +217,8 @@ def robot_mode(leg):
     import rclpy
     from std_msgs.msg import Bool
 
-    rclpy.init()
+    if not rclpy.ok():
+        rclpy.init()
     node = rclpy.create_node("ftt_endurance")
     mode = node.create_publisher(Bool, "robot_mode", 10)
     started = time.monotonic()
@@ -212,7 +230,7 @@ def robot_mode(leg):
     return mode
 
 
-def outage(relay, spool, minutes, leg, mode, collector_log) -> None:
+def outage(relay, spool, minutes, leg, mode, collector_log, filler=None, name="") -> None:
     from std_msgs.msg import Bool
 
     time.sleep(10)  # the robot is found and the first records are stored
@@ -220,7 +238,9 @@ def outage(relay, spool, minutes, leg, mode, collector_log) -> None:
     relay.cut()
     cut_at = time.monotonic()
     print(f"outage begins: spool {base} records ({load()})")
-    while time.monotonic() - cut_at < minutes * 60:
+    if filler is not None:
+        filler()
+    while filler is None and time.monotonic() - cut_at < minutes * 60:
         time.sleep(min(60.0, minutes * 60 - (time.monotonic() - cut_at)))
         elapsed = (time.monotonic() - cut_at) / 60
         print(
@@ -243,15 +263,29 @@ def outage(relay, spool, minutes, leg, mode, collector_log) -> None:
     mode.publish(Bool(data=False))
     published = time.monotonic()
     switch_stored = backlog_stored = None
-    while time.monotonic() - restored < 1800 and None in (switch_stored, backlog_stored):
-        if switch_stored is None and (
-            Segment.objects.filter(leg=leg, parent__isnull=True).count() > before
-        ):
-            switch_stored = time.monotonic()
+    # A second switch once a fifth of the backlog is written: it waits for the
+    # backlog slice being stored (collector/replay.py), the live side's worst case.
+    total, mid, mid_stored, shown = sum(kinds.values()), None, None, 0
+    while time.monotonic() - restored < 1800:
+        t = time.monotonic()
+        # What the GUI's collector line says ("N records not yet stored").
+        row = Collector.objects.filter(name=name).values_list("pending", flat=True).first()
+        shown = max(shown, row or 0)
+        masters = Segment.objects.filter(leg=leg, parent__isnull=True).count()
+        left = spool.records(upto=backlog_end)
+        if switch_stored is None and masters > before:
+            switch_stored = t
             # The order, not the timing: what of the backlog was still unwritten.
-            left_behind = spool.records(upto=backlog_end)
-        if backlog_stored is None and spool.records(upto=backlog_end) == 0:
-            backlog_stored = time.monotonic()
+            left_behind = left
+        if mid is not None and mid_stored is None and masters > before + 1:
+            mid_stored, mid_left_after = t, left
+        if mid is None and switch_stored is not None and 0 < left < total * 0.8:
+            mode.publish(Bool(data=True))
+            mid, mid_left = time.monotonic(), left
+        if backlog_stored is None and left == 0:
+            backlog_stored = t
+        if None not in (switch_stored, backlog_stored) and (mid is None or mid_stored):
+            break
         time.sleep(0.05)
     time.sleep(1.5)  # the collector logs the backlog when it has stored it
     log = collector_log.read_text(errors="replace")
@@ -276,6 +310,16 @@ def outage(relay, spool, minutes, leg, mode, collector_log) -> None:
             f"  live mode switch published {published - restored:.1f} s after the restore: stored "
             f"{switch_stored - restored:.2f} s after the restore, {order}  "
             "[target: before the backlog, i.e. > 0 left]"
+        )
+    print(f"  the GUI's backlog (the collector's pending, highest seen after the restore): {shown}")
+    if mid is None:
+        print("  switch during the replay: not sent (the backlog went too fast to catch)")
+    elif mid_stored is None:
+        print("  switch during the replay: not stored in 30 min")
+    else:
+        print(
+            f"  switch published during the replay ({mid_left} backlog records left): stored "
+            f"{mid_stored - mid:.2f} s later, {mid_left_after} backlog records still unwritten"
         )
     if back:
         print(f"  (the collector said: database back after {back.group(1)} s of outage)")
@@ -330,6 +374,108 @@ def replay(bench, records: int) -> None:
         f"{first[1] / took:.0f} records/s ({load()}); collector started "
         f"{first[0] - started:.1f} s before the first batch was written"
     )
+
+
+class _Into:
+    """A publisher of the simulated robot that hands its messages to the pipeline,
+    received at the robot's clock."""
+
+    def __init__(self, handler, clock):
+        self.handler, self.clock = handler, clock
+
+    def publish(self, msg) -> None:
+        self.handler(msg, self.clock.now())
+
+
+class _Clock:
+    def __init__(self, t: float):
+        self.t = t
+
+    def now(self):
+        from datetime import UTC, datetime
+
+        return datetime.fromtimestamp(self.t, UTC)
+
+
+def fill(bench, path: Path, minutes: float) -> None:
+    """The spool a collector cut off from the database for ``minutes`` leaves."""
+    import queue
+
+    import rclpy
+    from std_msgs.msg import Bool
+
+    from rosbridge_app.collector import events as ev
+    from rosbridge_app.collector import params as P
+    from rosbridge_app.collector.outbox import Outbox
+    from rosbridge_app.collector.pipeline import Pipeline
+    from rosbridge_app.collector.runtime import SPOOL_INTERVAL, Spooler
+    from rosbridge_app.collector.simulator import SimConfig, SimulatedRobot
+
+    options = dict(zip(ROBOT[::2], ROBOT[1::2], strict=True))
+    width, height = (int(v) for v in options["--camera-size"].split("x"))
+    config = SimConfig(
+        gps_rate=float(options["--gps-rate"]),
+        tf_rate=float(options["--tf-rate"]),
+        camera_rate=float(options["--camera-rate"]),
+        camera_width=width,
+        camera_height=height,
+        map_size=int(options["--map-size"]),
+        map_rate=float(options["--map-rate"]),
+        mode_rate=float(options["--mode-rate"]),
+    )
+    if not rclpy.ok():
+        rclpy.init()
+    started = time.monotonic()
+    clock = _Clock(time.time() - minutes * 60)
+    robot = SimulatedRobot(config, "ftt_backlog_fill", clock=lambda: clock.t)
+    events = queue.Queue()
+    pipeline = Pipeline(events.put, P.read_file(bench.params))
+    outbox = Outbox(path)
+    spooler = Spooler(events, outbox)
+    robot.pub_fix = _Into(pipeline.on_fix, clock)
+    robot.pub_tf = _Into(pipeline.on_tf, clock)
+    robot.pub_tf_static = _Into(lambda m, at: pipeline.on_tf(m, at, static=True), clock)
+    robot.pub_map = _Into(pipeline.on_grid, clock)
+    robot.pub_image = _Into(pipeline.on_image, clock)
+    robot._publish_static()
+    robot.publish_map()
+    # The collector logs in the mode robot_mode() sends: its start and that mode
+    # are in the database already, and the pipeline records nothing before them.
+    pipeline.start_logging(clock.now())
+    pipeline.on_mode(Bool(data=True), clock.now())
+    kept = []
+    while not events.empty():
+        event = events.get()
+        if event.kind not in (ev.START, ev.MODE):
+            kept.append(event)
+    for event in kept:
+        events.put(event)
+    robot.t0 = clock.t
+    step = 1 / config.gps_rate
+    every = {
+        robot.publish_tf: round(config.gps_rate / config.tf_rate),
+        robot.publish_image: round(config.gps_rate / config.camera_rate),
+        robot.publish_map: round(config.gps_rate / config.map_rate),
+        lambda: pipeline.tick(clock.now()): round(config.gps_rate),
+    }
+    spool_every = max(1, round(SPOOL_INTERVAL / step))
+    begin = clock.t
+    for i in range(round(minutes * 60 * config.gps_rate)):
+        clock.t = begin + i * step
+        robot.publish_fix()
+        for publish, n in every.items():
+            if i % n == 0:
+                publish()
+        if i % spool_every == 0:
+            while spooler.spool_once(timeout=0):
+                pass
+        if i % round(600 * config.gps_rate) == 0 and i:
+            print(f"  filled {i * step / 60:.0f} min ({time.monotonic() - started:.0f} s)")
+    while spooler.spool_once(timeout=0):
+        pass
+    outbox.close()
+    robot.destroy_node()
+    print(f"filled {minutes:g} min of the robot in {time.monotonic() - started:.0f} s ({load()})")
 
 
 def soak(collector, robot, minutes) -> None:

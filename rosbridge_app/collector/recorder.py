@@ -226,15 +226,13 @@ class Recorder:
                 locals_.append(event)
             else:
                 if event.kind in SEGMENT_CHANGES:
-                    self._store_fixes(fixes)
-                    self._store_locals(locals_)
+                    self._store_positions(fixes, locals_)
                     self._store_maps()
                     fixes, locals_ = [], []
                 getattr(self, f"_on_{event.kind}")(event)
                 if event.kind in SEGMENT_CHANGES:
                     self._note_left_open()
-        self._store_fixes(fixes)
-        self._store_locals(locals_)
+        self._store_positions(fixes, locals_)
         self._store_maps()
 
     def _on_start(self, event: Event) -> None:
@@ -277,13 +275,23 @@ class Recorder:
             uid=event.uid,
         )
 
-    def _store_fixes(self, fixes: list[Event]) -> None:
-        if not fixes:
+    def _store_positions(self, fixes: list[Event], locals_: list[Event]) -> None:
+        if not fixes and not locals_:
             return
         master = self._master()
         if master is None:
-            self.skipped += len(fixes)
+            self.skipped += len(fixes) + len(locals_)
             return
+        if self.leg is not None and master.leg_id == self.leg.pk:
+            # The leg (with its shift) as read for this batch: the services and the
+            # feed would fetch both again for each table.
+            master.leg = self.leg
+        if fixes:
+            self._store_fixes(master, fixes)
+        if locals_:
+            self._store_locals(master, locals_)
+
+    def _store_fixes(self, master: Segment, fixes: list[Event]) -> None:
         rows = [
             GpsFix(
                 longitude=e.data["lon"],
@@ -298,13 +306,7 @@ class Recorder:
         ]
         record_poses(master, rows)
 
-    def _store_locals(self, poses: list[Event]) -> None:
-        if not poses:
-            return
-        master = self._master()
-        if master is None:
-            self.skipped += len(poses)
-            return
+    def _store_locals(self, master: Segment, poses: list[Event]) -> None:
         rows = [
             MapPose(
                 x=e.data["x"],

@@ -21,6 +21,12 @@ So a live switch waits for the backlog's few segment changes and one slice,
 never for the backlog, and no segment change is applied before one that
 preceded it. The marks and the backlog's bounds live in the spool, so a
 restart in the middle goes on the same way.
+
+A backlog slice grows (up to ``MAX_SLICES`` live slices) while it is stored
+in less than ``SLICE_SECONDS``: each slice costs a few dozen round trips to
+the database whatever its size (the leg, the master, the staging tables,
+the feed, the commit), which at 2 000 records was a quarter of the replay
+over a loaded link. That time is also how long a live switch may wait.
 """
 
 import bisect
@@ -34,6 +40,8 @@ from rosbridge_app.collector.outbox import Outbox
 from rosbridge_app.collector.recorder import SEGMENT_CHANGES, Onto, Recorder
 
 _STATE = "backlog"
+SLICE_SECONDS = 1.0
+MAX_SLICES = 10
 log = logging.getLogger("ftt.collector")
 
 
@@ -43,6 +51,10 @@ class ReplayOrder:
     def __init__(self, outbox: Outbox, size: int, backlog: int | None = None):
         self.outbox, self.size = outbox, size
         self.backlog = size // 4 if backlog is None else backlog
+        self.backlog_slice = size  # records per backlog slice, see SLICE_SECONDS
+        # Set once the backlog's segment changes are all applied: looking for
+        # more would scan the whole backlog every turn.
+        self._changes_done = False
         saved = outbox.get_state(_STATE)
         # {"end": last id of the backlog, "master": uid open before it, or None}
         self.lane = json.loads(saved) if saved else None
@@ -57,6 +69,8 @@ class ReplayOrder:
     def write_next(self, recorder: Recorder) -> int:
         """Store the next slices; how many records were taken or marked."""
         if self.lane is None and len(self.outbox) > self.backlog:
+            self._changes_done = False
+            self.backlog_slice = self.size
             end = self.outbox.last_id()
             self._found = time.monotonic(), self.outbox.count_by_kind(end)
             self.lane = {"end": end, "master": recorder.open_master_uid()}
@@ -65,21 +79,24 @@ class ReplayOrder:
             return self._store(recorder, self.outbox.peek(self.size), None)
         end = self.lane["end"]
         kinds = sorted(SEGMENT_CHANGES)
-        changes = self.outbox.peek(
-            self.size,
-            where=f"id <= ? AND kind IN ({', '.join('?' * len(kinds))}) "
-            "AND id NOT IN (SELECT id FROM applied)",
-            params=(end, *kinds),
-        )
-        if changes:
-            masters = recorder.apply_changes([event for _, event in changes])
-            ids = [row_id for row_id, _ in changes]
-            self.outbox.mark_applied(list(zip(ids, masters, strict=True)))
-            return len(changes)
+        if not self._changes_done:
+            changes = self.outbox.peek(
+                self.size,
+                where=f"id <= ? AND kind IN ({', '.join('?' * len(kinds))}) "
+                "AND id NOT IN (SELECT id FROM applied)",
+                params=(end, *kinds),
+            )
+            if changes:
+                masters = recorder.apply_changes([event for _, event in changes])
+                ids = [row_id for row_id, _ in changes]
+                self.outbox.mark_applied(list(zip(ids, masters, strict=True)))
+                return len(changes)
+            self._changes_done = True
         live = self.outbox.peek(self.size, where="id > ? AND kind != ?", params=(end, ev.MAP))
         taken = self._store(recorder, live, None)
+        started = time.monotonic()
         backlog = self.outbox.peek(
-            self.size,
+            self.backlog_slice,
             where="(id <= ? AND id NOT IN (SELECT id FROM applied)) OR (id > ? AND kind = ?)",
             params=(end, end, ev.MAP),
         )
@@ -91,10 +108,16 @@ class ReplayOrder:
         marks = self.outbox.applied()
         borders = [row_id for row_id, _ in marks]
         runs = itertools.groupby(backlog, key=lambda row: bisect.bisect(borders, row[0]))
+        stored = 0
         for run, rows in runs:
             master = marks[run - 1][1] if run else self.lane["master"]
-            taken += self._store(recorder, list(rows), Onto(master))
-        return taken
+            stored += self._store(recorder, list(rows), Onto(master))
+        if stored == self.backlog_slice:  # a short slice (the last, or maps) tells nothing
+            rate = stored / max(time.monotonic() - started, 1e-3)
+            self.backlog_slice = int(
+                min(self.size * MAX_SLICES, max(self.size, rate * SLICE_SECONDS))
+            )
+        return taken + stored
 
     def _store(self, recorder: Recorder, rows: list, onto: Onto | None) -> int:
         if rows:

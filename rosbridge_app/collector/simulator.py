@@ -9,6 +9,7 @@ base_link→gps_link), a latched occupancy grid and camera frames (raw rgb8 on
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import cv2
@@ -53,10 +54,17 @@ def _stamp(msg_stamp, t: float) -> None:
 
 
 class SimulatedRobot(Node):
-    def __init__(self, config: SimConfig, name: str = "ftt_simulated_robot"):
+    def __init__(
+        self,
+        config: SimConfig,
+        name: str = "ftt_simulated_robot",
+        clock: Callable[[], float] = time.time,
+    ):
+        """``clock``: the robot's time; a benchmark drives it faster than real time."""
         super().__init__(name)
         self.c = config
-        self.t0 = time.time()
+        self.clock = clock
+        self.t0 = clock()
         p = config.prefix.rstrip("/")
         latched = QoSProfile(
             depth=1,
@@ -87,7 +95,7 @@ class SimulatedRobot(Node):
         end = time.monotonic() + wait_for_subscriber
         while time.monotonic() < end and self.pub_fix.get_subscription_count() == 0:
             time.sleep(0.05)
-        self.t0 = time.time()
+        self.t0 = self.clock()
         c = self.c
         for rate, fn in (
             (c.mode_rate, self.publish_mode),
@@ -102,7 +110,7 @@ class SimulatedRobot(Node):
     # --- the drive ----------------------------------------------------------------------
 
     def elapsed(self) -> float:
-        return time.time() - self.t0
+        return self.clock() - self.t0
 
     def mode(self) -> str:
         phase = int(self.elapsed() // self.c.switch_every) if self.c.switch_every > 0 else 0
@@ -133,7 +141,7 @@ class SimulatedRobot(Node):
         x, y, _ = self.position()
         lat, lon = self.lat_lon(x, y)
         msg = NavSatFix()
-        _stamp(msg.header.stamp, time.time())
+        _stamp(msg.header.stamp, self.clock())
         msg.header.frame_id = "gps_link"
         msg.status.status = NavSatStatus.STATUS_FIX
         msg.status.service = NavSatStatus.SERVICE_GPS
@@ -152,7 +160,7 @@ class SimulatedRobot(Node):
         return tf
 
     def publish_tf(self) -> None:
-        now = time.time()
+        now = self.clock()
         x, y, yaw = self.position(now - self.t0)
         # odom drifts slowly away from map, as real odometry does.
         drift = 0.01 * (now - self.t0)
@@ -166,7 +174,7 @@ class SimulatedRobot(Node):
         self.counts["tf"] += 1
 
     def _publish_static(self) -> None:
-        tf = self._transform("base_link", "gps_link", 0.2, 0.0, 0.0, time.time())
+        tf = self._transform("base_link", "gps_link", 0.2, 0.0, 0.0, self.clock())
         self.pub_tf_static.publish(TFMessage(transforms=[tf]))
 
     def _make_grid(self) -> np.ndarray:
@@ -185,7 +193,7 @@ class SimulatedRobot(Node):
             self._grid[self.map_version % n, :8] = 100
         self.map_version += 1
         msg = OccupancyGrid()
-        _stamp(msg.header.stamp, time.time())
+        _stamp(msg.header.stamp, self.clock())
         msg.header.frame_id = "map"
         msg.info.width = msg.info.height = n
         msg.info.resolution = self.c.map_resolution
@@ -229,7 +237,7 @@ class SimulatedRobot(Node):
             msg.height, msg.width, msg.encoding = h, w, "rgb8"
             msg.step = w * 3
             msg.data = self._picture(self.elapsed()).tobytes()
-        _stamp(msg.header.stamp, time.time())
+        _stamp(msg.header.stamp, self.clock())
         msg.header.frame_id = "camera"
         self.pub_image.publish(msg)
         self.counts["image"] += 1
