@@ -156,7 +156,7 @@ def leg_masters(leg_id: int) -> list[Segment]:
     return list(Segment.objects.filter(leg_id=leg_id, parent__isnull=True).order_by("start", "id"))
 
 
-def read_ahead(leg: Leg) -> threading.Thread:
+def read_ahead(leg: Leg) -> threading.Thread | None:
     """Starts reading what LegTracks answers from (the kept tracks of both maps,
     the displayed distances) in a thread of its own, and returns the thread.
 
@@ -164,19 +164,20 @@ def read_ahead(leg: Leg) -> threading.Thread:
     tracks about half a second after the page, and a process that has not kept
     them yet (the first visit after a restart) reads them meanwhile instead of
     after the request (``kept_tracks`` lets the request wait for this read).
-    Where the process keeps any of them it does nothing: the request then
-    reads only what changed, and a second count would only add load."""
-    thread = threading.Thread(target=_read_leg, args=(leg.pk,), name="tracks-read-ahead")
+    Where the process keeps any of them it starts nothing (None): the request
+    then reads only what changed, and a thread with a connection and a second
+    count of the poses would only load the machine while the page starts."""
+    masters = leg_masters(leg.pk)
+    if not masters or keeps_any(masters):
+        return None
+    thread = threading.Thread(target=_read_leg, args=(masters,), name="tracks-read-ahead")
     thread.daemon = True
     thread.start()
     return thread
 
 
-def _read_leg(leg_id: int) -> None:
+def _read_leg(masters: list[Segment]) -> None:
     try:
-        masters = leg_masters(leg_id)
-        if keeps_any(masters):
-            return
         kept = kept_tracks(masters)
         displayed_distances(masters, kept[GPS], kept[LOCAL])
     except DatabaseError:
