@@ -8,7 +8,7 @@ visit).  Done while the process starts, before it listens, nobody waits.
 """
 
 from django.template.loader import get_template
-from django.urls import resolve
+from django.urls import resolve, reverse
 
 from gui.views.pages import module_graph
 
@@ -17,11 +17,15 @@ FIRST_TEMPLATES = ("registration/login.html", "gui/index.html")
 
 
 def warm_up() -> None:
-    """Import every view (through the URL configuration), compile the first
-    pages' templates and read the cockpit's module list.  Repeating it costs
-    nothing: each step keeps its result for the life of the process."""
+    """Import every view (through the URL configuration), index the URL names
+    for reversing, compile the first pages' templates and read the cockpit's
+    module list.  Repeating it costs nothing: each step keeps its result for
+    the life of the process."""
     # Loading the root configuration imports every included one with its views.
     resolve("/")
+    # The first reverse() indexes every pattern (70 ms of the first cockpit page);
+    # a namespaced name indexes its namespace too.
+    reverse("admin:index")
     for name in FIRST_TEMPLATES:
         get_template(name)
     module_graph("gui/main.js")
