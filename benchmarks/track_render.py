@@ -15,15 +15,26 @@ view is drawn is measured the same way.  Target: <= 1 s from navigation.
 
 Each visit's figure is split into the page's start-up until the tracks
 request leaves, the wait for its first byte, the transfer, and decoding plus
-drawing; the bytes transferred are printed.  ``--against /work/main`` runs a
-second server from another checkout on the same database and leg and
-alternates the visits, for an A/B comparison under the same load.
+drawing; the bytes transferred are printed (the tracks answer and the whole
+visit).  ``--against /work/main`` runs a second server from another checkout
+on the same database and leg and alternates the visits, for an A/B comparison
+under the same load.
 
-Run: .venv/bin/python benchmarks/track_render.py [--repeat 5] [--poses 200000]
+A cold visit is the first one to a freshly started server, from a fresh
+browser (nothing cached): what a field team sees when it opens a leg after the
+server (re)started.  Each long-running server's first visit is one; ``--cold
+N`` adds N more, each on a server started for it and stopped after it
+(alternating with the other checkout).  The warm figures are the later
+visits to the long-running servers.  The load average is printed with every
+visit.
+
+Run: .venv/bin/python benchmarks/track_render.py [--repeat 5] [--cold 2] [--poses 200000]
      [--keep | --reuse EVENT,SHIFT,LEG] [--against /path/to/other/checkout]
+     [--port 18400]
 """
 
 import argparse
+import itertools
 import json
 import os
 import statistics
@@ -117,6 +128,12 @@ RESOURCES = """() => performance.getEntriesByType("resource")
   .map((r) => [r.name.split("/gui/api/")[1], r.startTime, r.responseStart, r.responseEnd,
                r.encodedBodySize, r.decodedBodySize])"""
 
+# Bytes the visit fetched from the server (page, modules, styles, API answers),
+# headers included; what came from the browser's cache counts 0.
+TRANSFERRED = """() => [...performance.getEntriesByType("navigation"),
+                    ...performance.getEntriesByType("resource")]
+  .reduce((sum, r) => sum + (r.transferSize || 0), 0)"""
+
 
 def quiet_mark(page, script, arg):
     """The mark once it has not changed for half a second."""
@@ -178,6 +195,7 @@ def one_visit(page, url) -> dict:
         None,
     )
     resources = page.evaluate(RESOURCES)
+    transferred = page.evaluate(TRANSFERRED)
     whole = next(r for r in resources if "fit=" in r[0])
     _, start, first, end, packed, plain = whole
     return {
@@ -194,13 +212,70 @@ def one_visit(page, url) -> dict:
         "transfer": end - first,
         "draw": drawn - end,
         "bytes": (packed, plain),
+        "transferred": transferred,
         "resources": resources,
+        "load": os.getloadavg()[0],
     }
+
+
+def print_visit(label, kind, visit):
+    for name, start, first, end, packed, plain in visit["resources"]:
+        print(f"  {start:6.0f} {first:6.0f} {end:6.0f} {packed:9d} {plain:9d}  {name}")
+    print(
+        f"{kind} visit ({label}, load {visit['load']:.2f}): drawn {visit['drawn']:.0f} ms after "
+        f"navigation (tracks request leaves at {visit['start']:.0f} ms, first byte after "
+        f"{visit['wait']:.0f} ms, transfer {visit['transfer']:.0f} ms, decode and draw "
+        f"{visit['draw']:.0f} ms; {visit['points'][0]} + {visit['points'][1]} points; "
+        f"{visit['transferred']} bytes transferred until drawn); zoom-in detail (zoom "
+        f"{visit['zoom_level']}) drawn {visit['zoom']:.0f} ms after the first tap, "
+        f"{visit['details']} detail request(s)",
+        flush=True,
+    )
+
+
+def summary(label, checkout, cold, warm):
+    print(f"{label} ({checkout}): {len(cold)} cold visits, {len(warm)} warm visits")
+    print(f"  {'what':48} {'cold median':>11} {'cold max':>8} {'warm median':>11} {'warm p95':>8}")
+    rows = (
+        ("navigation -> all tracks drawn", "drawn"),
+        ("  of which: until the tracks request leaves", "start"),
+        ("  of which: waiting for its first byte", "wait"),
+        ("  of which: its transfer", "transfer"),
+        ("  of which: decode, draw and fit", "draw"),
+        ("zoom in 3 levels -> detail in view drawn", "zoom"),
+    )
+    for what, key in rows:
+        figures = []
+        for runs, high in ((cold, max), (warm, lambda v: percentile(v, 0.95))):
+            values = [r[key] for r in runs]
+            figures += [statistics.median(values), high(values)] if values else [0, 0]
+        print(
+            f"  {what:48} {figures[0]:11.0f} {figures[1]:8.0f} {figures[2]:11.0f} {figures[3]:8.0f}"
+        )
+    print(f"  target: navigation -> drawn <= {TARGET_MS} ms, cold and warm")
+    for kind, runs in (("cold", cold), ("warm", warm)):
+        if runs:
+            sent = statistics.median(r["transferred"] for r in runs)
+            print(f"  {kind}: median {sent:.0f} bytes transferred from navigation until drawn")
+    packed, plain = (cold or warm)[0]["bytes"]
+    print(f"  whole-leg answer: {packed} bytes transferred (gzip), {plain} bytes JSON")
+    chosen = [r for v in cold + warm for r in v["resources"] if "map=gps" in r[0]]
+    if chosen:
+        took = statistics.median(end - start for _, start, _, end, _, _ in chosen)
+        print(
+            f"  area-in-view answer: median {took:.0f} ms, {chosen[0][4]} bytes transferred "
+            f"(gzip), {chosen[0][5]} bytes JSON"
+        )
+    loads = [r["load"] for r in cold + warm]
+    print(f"  load average (1 min) during the visits: {min(loads):.2f}-{max(loads):.2f}")
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument("--repeat", type=int, default=5, help="visits per long-running server")
+    parser.add_argument(
+        "--cold", type=int, default=0, help="more cold visits, each to a server started for it"
+    )
     parser.add_argument("--poses", type=int, default=200_000)
     parser.add_argument("--segments", type=int, default=20)
     parser.add_argument("--database-url", default=os.environ.get("FTT_DATABASE_URL", ""))
@@ -212,26 +287,40 @@ def main():
         help="another checkout (e.g. /work/main): its server runs beside this one on the "
         "same database and leg, visits alternate, and the figures are compared",
     )
+    parser.add_argument(
+        "--port", type=int, help="servers listen on the 100 ports from this one (else any free)"
+    )
     args = parser.parse_args()
     tag = str(os.getpid())
     data = Path(tempfile.mkdtemp(prefix="ftt-bench-"))
     tiles = "http://127.0.0.1:9/tiles/{z}/{x}/{y}.png"
-    # One data folder: both servers share the secret key, so one session cookie serves both.
-    servers = {"this": Server(data, tiles, database_url=args.database_url, name="track-render")}
-    if args.against:
-        servers["against"] = Server(
+    ports = itertools.cycle(range(args.port, args.port + 100)) if args.port else None
+    labels = ["this", "against"] if args.against else ["this"]
+    checkouts = {"this": CHECKOUT, "against": Path(args.against or ".").resolve()}
+
+    def new_server(label: str) -> Server:
+        # One data folder: all servers share the secret key, so one session cookie serves all.
+        server = Server(
             data,
             tiles,
             database_url=args.database_url,
-            name="track-render-against",
-            root=Path(args.against).resolve(),
+            name="track-render" if label == "this" else "track-render-against",
+            root=checkouts[label],
         )
-    for server in servers.values():
+        if ports is not None:
+            server.port = next(ports)
+            server.url = f"http://127.0.0.1:{server.port}"
         server.start()
-    server = servers["this"]
+        return server
+
+    servers = {}
     ids = None
-    visits = {label: [] for label in servers}
+    cold = {label: [] for label in labels}
+    warm = {label: [] for label in labels}
     try:
+        for label in labels:
+            servers[label] = new_server(label)
+        server = servers["this"]
         started = time.perf_counter()
         if args.reuse:
             code = session_code(f"tracks-{tag}", "viewer") + REUSE.format(ids=args.reuse)
@@ -246,73 +335,58 @@ def main():
         with sync_playwright() as p:
             exe = os.environ.get("FTT_CHROMIUM") or system_chromium()
             browser = p.chromium.launch(**({"executable_path": exe} if exe else {}))
-            context = browser.new_context(viewport={"width": 1366, "height": 768})
-            for each in servers.values():
+
+            def new_context(each: Server):
+                context = browser.new_context(viewport={"width": 1366, "height": 768})
                 context.add_cookies(
                     [{"name": "sessionid", "value": ids["session"], "url": each.url}]
                 )
-            context.route("**/tiles/**", lambda route: route.fulfill(status=404))
+                context.route("**/tiles/**", lambda route: route.fulfill(status=404))
+                return context
+
+            # The long-running servers' browser: later visits find its cache.
+            contexts = {label: new_context(each) for label, each in servers.items()}
             for run in range(args.repeat):
                 for label, each in servers.items():
-                    page = context.new_page()
+                    page = contexts[label].new_page()
                     visit = one_visit(page, each.url + query)
                     page.close()
-                    visits[label].append(visit)
-                    for name, start, first, end, packed, plain in visit["resources"]:
-                        times = f"{start:6.0f} {first:6.0f} {end:6.0f}"
-                        print(f"  {times} {packed:9d} {plain:9d}  {name}")
-                    print(
-                        f"run {run + 1} ({label}): drawn {visit['drawn']:.0f} ms after navigation "
-                        f"(tracks request leaves at {visit['start']:.0f} ms, first byte after "
-                        f"{visit['wait']:.0f} ms, transfer {visit['transfer']:.0f} ms, decode and "
-                        f"draw {visit['draw']:.0f} ms; {visit['points'][0]} + "
-                        f"{visit['points'][1]} points); zoom-in detail (zoom "
-                        f"{visit['zoom_level']}) drawn {visit['zoom']:.0f} ms after the first "
-                        f"tap, {visit['details']} detail request(s)"
-                    )
+                    kind = "cold" if run == 0 else "warm"
+                    (cold if run == 0 else warm)[label].append(visit)
+                    print_visit(label, f"{kind} {run + 1}", visit)
+            for run in range(args.cold):
+                for label in labels:
+                    fresh = new_server(label)
+                    try:
+                        context = new_context(fresh)
+                        visit = one_visit(context.new_page(), fresh.url + query)
+                        context.close()
+                    finally:
+                        fresh.stop()
+                    cold[label].append(visit)
+                    print_visit(label, f"cold (restart {run + 1})", visit)
             if args.screenshots:
-                shots(context, server.url + query, Path(args.screenshots))
+                shots(contexts["this"], server.url + query, Path(args.screenshots))
             browser.close()
     finally:
         if ids is not None and args.database_url and not (args.keep or args.reuse):
-            server.python(CLEANUP.format(event=ids["event"], tag=tag))
+            servers["this"].python(CLEANUP.format(event=ids["event"], tag=tag))
         for each in servers.values():
             each.stop()
     load = os.getloadavg()
     print(
         f"database: {'PostGIS' if args.database_url else 'SpatiaLite'} · {os.cpu_count()} cores · "
-        f"load average {load[0]:.2f} / {load[1]:.2f} / {load[2]:.2f}"
+        f"load average now {load[0]:.2f} / {load[1]:.2f} / {load[2]:.2f}"
     )
-    for label, runs in visits.items():
-        checkout = Path(args.against).resolve() if label == "against" else CHECKOUT
-        print(f"{label} ({checkout}), {len(runs)} visits; the first one reads the leg cold")
-        print(f"  {'what':48} {'median ms':>9} {'p95 ms':>7}  target")
-        rows = (
-            ("navigation -> all tracks drawn", "drawn", f"<= {TARGET_MS} ms"),
-            ("  of which: until the tracks request leaves", "start", ""),
-            ("  of which: waiting for its first byte", "wait", ""),
-            ("  of which: its transfer", "transfer", ""),
-            ("  of which: decode, draw and fit", "draw", ""),
-            ("zoom in 3 levels -> detail in view drawn", "zoom", "well under 1000 ms"),
-        )
-        for what, key, target in rows:
-            values = [r[key] for r in runs]
-            median, p95 = statistics.median(values), percentile(values, 0.95)
-            print(f"  {what:48} {median:9.0f} {p95:7.0f}  {target}")
-        packed, plain = runs[0]["bytes"]
-        print(f"  whole-leg answer: {packed} bytes transferred (gzip), {plain} bytes JSON")
-        chosen = [r for v in runs for r in v["resources"] if "map=gps" in r[0]]
-        if chosen:
-            took = statistics.median(end - start for _, start, _, end, _, _ in chosen)
-            print(
-                f"  area-in-view answer: median {took:.0f} ms, {chosen[0][4]} bytes transferred "
-                f"(gzip), {chosen[0][5]} bytes JSON"
-            )
+    for label in labels:
+        summary(label, checkouts[label], cold[label], warm[label])
     if args.against:
         for key, what in (("drawn", "navigation -> drawn"), ("zoom", "zoom-in detail")):
-            this = statistics.median(r[key] for r in visits["this"])
-            other = statistics.median(r[key] for r in visits["against"])
-            print(f"ratio this / against, {what}: {this / other:.2f}")
+            for kind, runs in (("cold", cold), ("warm", warm)):
+                if runs["this"] and runs["against"]:
+                    this = statistics.median(r[key] for r in runs["this"])
+                    other = statistics.median(r[key] for r in runs["against"])
+                    print(f"ratio this / against, {what}, {kind}: {this / other:.2f}")
 
 
 if __name__ == "__main__":

@@ -18,7 +18,10 @@ from channels.security.websocket import AllowedHostsOriginValidator  # noqa: E40
 
 from ftt_site.pose_route import PoseRoute  # noqa: E402
 from ftt_site.request_limits import RequestLimits  # noqa: E402
+from ftt_site.warmup import warm_up  # noqa: E402
 from rosbridge_app.routing import websocket_urlpatterns  # noqa: E402
+
+warm_up()
 
 application = ProtocolTypeRouter(
     {

@@ -28,17 +28,12 @@ preload_app = os.environ.get("FTT_DEBUG", "0").lower() not in ("1", "true", "yes
 def on_starting(server):
     """Runs after the preload, before the address is bound.
 
-    Django imports views and compiles templates on the first request; done here
-    the first page a user asks for comes as fast as the next ones.
+    The preloaded application warmed itself up (ftt_site.warmup: the views
+    imported, the first pages' templates compiled), so the forked workers start
+    with all of it.
     """
     if not server.cfg.preload_app:
         return
-    # Imported here: this file is read before Django is set up.
-    from django.template.loader import get_template
-    from django.urls import resolve
-
-    resolve("/login/")
-    get_template("registration/login.html")
     # Everything loaded so far lives as long as the process.  Frozen, it is left
     # out of the collector's full passes: with ~230 000 objects each such pass
     # took 1.5-2 s on the busy 2-core machine, and a 5 000-pose batch triggered

@@ -5,7 +5,10 @@ Same authentication, roles and error shape as /api/ (DRF views with the
 project defaults); the numbers come from selectors, never from here.
 """
 
+import threading
+
 import numpy as np
+from django.db import DatabaseError, connections
 from django.shortcuts import get_object_or_404
 from django.utils.decorators import method_decorator
 from django.views.decorators.gzip import gzip_page
@@ -42,6 +45,7 @@ from telemetry.selectors.tracks import (
     MIN_LOCAL_ZOOM,
     drawn,
     fit_zoom,
+    keeps_any,
     kept_tracks,
     thinned,
     tolerance,
@@ -114,7 +118,7 @@ class LegTracks(GuiView):
         query = TrackQuery(data=request.query_params)
         query.is_valid(raise_exception=True)
         q = query.validated_data
-        masters = list(leg.segments.filter(parent__isnull=True).order_by("start", "id"))
+        masters = leg_masters(leg.pk)
         if "map" in q:
             return Response(_in_view(leg, masters, q))
         loaded = kept_tracks(masters)
@@ -146,6 +150,42 @@ class LegTracks(GuiView):
         if zooms[GPS] is not None:
             body["tolerance_deg"] = tolerance(GPS, zooms[GPS])
         return Response(body)
+
+
+def leg_masters(leg_id: int) -> list[Segment]:
+    return list(Segment.objects.filter(leg_id=leg_id, parent__isnull=True).order_by("start", "id"))
+
+
+def read_ahead(leg: Leg) -> threading.Thread | None:
+    """Starts reading what LegTracks answers from (the kept tracks of both maps,
+    the displayed distances) in a thread of its own, and returns the thread.
+
+    The cockpit's page calls it for the leg it opens: its scripts ask for the
+    tracks about half a second after the page, and a process that has not kept
+    them yet (the first visit after a restart) reads them meanwhile instead of
+    after the request (``kept_tracks`` lets the request wait for this read).
+    Where the process keeps any of them it starts nothing (None): the request
+    then reads only what changed, and a thread with a connection and a second
+    count of the poses would only load the machine while the page starts."""
+    masters = leg_masters(leg.pk)
+    if not masters or keeps_any(masters):
+        return None
+    thread = threading.Thread(target=_read_leg, args=(masters,), name="tracks-read-ahead")
+    thread.daemon = True
+    thread.start()
+    return thread
+
+
+def _read_leg(masters: list[Segment]) -> None:
+    try:
+        kept = kept_tracks(masters)
+        displayed_distances(masters, kept[GPS], kept[LOCAL])
+    except DatabaseError:
+        # Only a head start: the tracks request reads whatever is not kept yet.
+        pass
+    finally:
+        # This thread's own connection; the thread ends here.
+        connections.close_all()
 
 
 def _lat_lon(point) -> list[float] | None:

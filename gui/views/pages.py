@@ -19,7 +19,7 @@ from common import roles
 from events import feed
 from events.api import serializers as s
 from events.models import ItoReason, Leg, Performer, PoseSource, Shift, TestEvent, Vehicle
-from gui.views.gui_api import leg_segments
+from gui.views.gui_api import leg_segments, read_ahead
 from rosbridge_app.selectors.collectors import logging_into
 
 # How static/gui/api.js's list() asks for a whole list.
@@ -62,7 +62,9 @@ def first_answers(request, logging: dict | None) -> dict[str, object]:
     """{URL the page's script reads first: its answer}: the catalogues, the pickers
     down to the leg in the address (or the leg a collector logs into) and that leg's
     segments, each as its REST or /gui/api/ read answers it.  The script takes each
-    once instead of asking (static/gui/api.js); later reads go to the server."""
+    once instead of asking (static/gui/api.js); later reads go to the server.
+    That leg's tracks are read ahead meanwhile (``read_ahead``): the script asks
+    for them as its modules load."""
     chosen = {k: _chosen(request, k) for k in ("event", "shift", "leg")}
     if chosen["event"] is None and logging:
         chosen = logging
@@ -90,6 +92,7 @@ def first_answers(request, logging: dict | None) -> dict[str, object]:
         shown = next((r for r in legs if r.pk == leg), None)
         if shown is not None:
             answers[f"/gui/api/legs/{leg}/segments/"] = leg_segments(shown)
+            read_ahead(shown)
     return answers
 
 

@@ -392,6 +392,10 @@ class _Kept:
                 _, (_, dropped) = self.slots.popitem(last=False)
                 self.total -= len(dropped)
 
+    def holds_any(self, segment_ids) -> bool:
+        with self.lock:
+            return any((mode, seg) in self.slots for mode in MODES for seg in segment_ids)
+
     def clear(self) -> None:
         with self.lock:
             self.slots.clear()
@@ -400,6 +404,10 @@ class _Kept:
 
 # About 100 MB per web process.
 _kept = _Kept(4_000_000)
+# Held while tracks that are not kept are read, so a request that arrives
+# during a read ahead of the same leg (gui.views.gui_api.read_ahead) waits for
+# it and takes its tracks instead of reading them a second time.
+_reading = threading.Lock()
 
 
 def pose_counts(segment_ids: list[int], modes=MODES) -> dict[tuple[str, int], tuple[int, int]]:
@@ -434,26 +442,45 @@ def kept_tracks(segments: list[Segment], modes=MODES) -> dict[str, dict[int, Tra
     by_id = {s.pk: s for s in segments}
     counts = pose_counts(list(by_id), modes)
     found: dict[str, dict[int, Track]] = {mode: {} for mode in modes}
-    stale: dict[str, list[int]] = {mode: [] for mode in modes}
+    if _take_kept(found, by_id, counts):
+        return found
+    with _reading:
+        if _take_kept(found, by_id, counts):
+            return found
+        for mode, tracks in found.items():
+            ids = [seg for (m, seg) in counts if m == mode and seg not in tracks]
+            if not ids:
+                continue
+            # A pose stored after the count was taken is in the track read now and
+            # changes the count again, so the next read replaces this one.
+            read = load_tracks(ids, mode)
+            tracks.update(read)
+            for seg, track in read.items():
+                key = (by_id[seg].uid, *counts[mode, seg])
+                # What the track was read for, so results derived from it can be kept too.
+                track.memo["kept"] = (mode, *key)
+                _kept.put((mode, seg), key, track)
+    return found
+
+
+def _take_kept(found: dict[str, dict[int, Track]], by_id: dict, counts: dict) -> bool:
+    """Puts the kept tracks of ``counts`` into ``found``; True when all were kept."""
+    complete = True
     for (mode, seg), count in counts.items():
+        if seg in found[mode]:
+            continue
         track = _kept.get((mode, seg), (by_id[seg].uid, *count))
         if track is None:
-            stale[mode].append(seg)
+            complete = False
         else:
             found[mode][seg] = track
-    for mode, ids in stale.items():
-        if not ids:
-            continue
-        # A pose stored after the count was taken is in the track read now and
-        # changes the count again, so the next read replaces this one.
-        read = load_tracks(ids, mode)
-        found[mode].update(read)
-        for seg, track in read.items():
-            key = (by_id[seg].uid, *counts[mode, seg])
-            # What the track was read for, so results derived from it can be kept too.
-            track.memo["kept"] = (mode, *key)
-            _kept.put((mode, seg), key, track)
-    return found
+    return complete
+
+
+def keeps_any(segments: list[Segment]) -> bool:
+    """Whether this process keeps a track of any of ``segments``, current or
+    not (no query: what ``kept_tracks`` would then read is what changed)."""
+    return _kept.holds_any([s.pk for s in segments])
 
 
 def forget_kept_tracks() -> None:

@@ -4,7 +4,6 @@ import gzip
 import json
 
 import pytest
-from django.contrib.auth.models import Group, User
 from django.contrib.gis.geos import Point
 from django.db import connection
 from django.test.utils import CaptureQueriesContext
@@ -12,6 +11,7 @@ from django.test.utils import CaptureQueriesContext
 from events.services import segments
 from telemetry.selectors.tracks import forget_kept_tracks, zoom_tolerance
 from telemetry.services import recording
+from tests.support.accounts import signed_in
 
 pytestmark = pytest.mark.django_db
 
@@ -24,9 +24,7 @@ ZIGZAG = 2e-4
 
 @pytest.fixture
 def zigzag_leg(client, leg):
-    user = User.objects.create_user("vera", password="pw")
-    user.groups.add(Group.objects.get(name="viewer"))
-    client.force_login(user)
+    signed_in(client, "vera", "viewer")
     master = segments.report_mode(leg, "auto").master
     fixes = [
         recording.GpsFix(7.0 + (ZIGZAG if (i // 100) % 2 else 0.0), 50.0 + i * 1e-5)

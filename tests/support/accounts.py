@@ -10,3 +10,11 @@ def staff_user(role):
     )
     user.groups.add(Group.objects.get(name=role))
     return user
+
+
+def signed_in(client, name: str, role: str):
+    """A user with ``role``, signed in on the test ``client``."""
+    user = User.objects.create_user(name, password="pw")
+    user.groups.add(Group.objects.get(name=role))
+    client.force_login(user)
+    return user
