@@ -591,10 +591,10 @@ class PoseDelays(threading.Thread):
     """GPS fix stamped (the simulator stamps with its publish time, same clock) →
     its pose row seen by this script, which looks every 20 ms in a thread of its
     own (so up to 20 ms late, whatever the main loop waits for).  Grouped like the
-    mode switches, by the moment the fix was published.  Fixes published while
-    a mode switch was being stored are left out: a switch is published as each
-    write begins, and the fixes behind its transaction (frames, segments) would
-    count its time as the write's."""
+    mode switches, by the moment the fix was published.  Fixes in flight while a
+    mode switch was being stored are left out (all groups): a switch is
+    published as each write begins, and the fixes that share or wait for its
+    transaction (frames, segments) would count its time as the write's."""
 
     def __init__(self, leg, writing: SnapshotWatch, phases: Phases, switches: "Switches"):
         super().__init__(daemon=True)
@@ -626,7 +626,8 @@ class PoseDelays(threading.Thread):
             if stamp is None:
                 continue
             t = stamp.timestamp()
-            if any(a - 0.005 <= t <= b for a, b in self.switches.spans[-20:]):
+            # In flight (published, not yet seen) while a switch was stored.
+            if any(a <= seen and t <= b for a, b in self.switches.spans[-20:]):
                 continue
             kind = group(self.writing, self.phases, t, seen)
             if kind is not None:
