@@ -13,7 +13,7 @@ to be carried out while the robot is this busy.
 
 The black box (issue 15) runs with its default topics (mode, GPS, TF, static
 TF, compressed camera; the raw camera with ``--camera raw``) and the default
-20 s before; ``after`` is 2 s so that a run has many snapshots.  With
+20 s before; ``after`` is 3.5 s so that a run has many snapshots.  With
 ``--snapshot alternate`` (default) it is switched on and off every ``--phase``
 seconds through the GUI command path, so the buffer's CPU share is the
 difference of the on and off phases of one run, under the same load of the
@@ -26,7 +26,10 @@ mode switch is published at a chosen moment: with the black box on,
 alternately between writes ("on, idle") and just as a write begins, the file
 being built or the finished file about to be stored ("during a write"),
 balanced by the direction of the switch (each switch to ITO starts the
-snapshot written ``after`` seconds later); with it off, every 0.3 s.  GPS
+snapshot written ``after`` seconds later); with it off, at once.  Every
+switch comes at least 3.2 s after the previous one, so that each stores a full
+buffer of camera frames (3, one a second) and the groups differ by the write
+only (sooner, a switch carries fewer frames and is stored quicker).  GPS
 fixes are grouped the same way by their stamp (the simulator's publish time).
 Off, idle and write samples are interleaved in one run, so they share the
 machine's load.  The last lines print p50 and p95 per group and the verdicts:
@@ -124,7 +127,13 @@ def main() -> None:
         help="Seconds per on/off phase; longer than before + after, so that most "
         "snapshots have a full window.",
     )
-    parser.add_argument("--snapshot-after", type=float, default=2.0)
+    parser.add_argument(
+        "--snapshot-after",
+        type=float,
+        default=3.5,
+        help="Longer than the camera frames' buffer (3 × 1 s): the switch published as a "
+        "write begins carries a full buffer, like every other switch.",
+    )
     parser.add_argument(
         "--ros-domain",
         type=int,
@@ -229,8 +238,10 @@ def main() -> None:
         time.sleep(0.1)
     writing.start()
     phases = Phases(args.snapshot, args.phase)
-    switches = Switches(leg, writing, phases, args.snapshot_after)
-    poses = PoseDelays(leg, writing, phases)
+    values = P.read_file(bench.params)
+    frames = values["params.image_buffer_size"] * values["params.image_buffer_step"]
+    switches = Switches(leg, writing, phases, args.snapshot_after, frames + 0.2)
+    poses = PoseDelays(leg, writing, phases, switches)
     poses.start()
     cpu_by_phase: dict[bool, list[float]] = {True: [], False: []}
     command_delays, cpu_samples, rss_max, pending_max = [], [], 0, 0
@@ -480,8 +491,19 @@ class Switches:
     file about to be stored), balanced by the direction of the switch.  Every
     switch to ITO starts a snapshot whose write begins ``after`` seconds later."""
 
-    def __init__(self, leg, writing: SnapshotWatch, phases: Phases, after: float):
+    def __init__(self, leg, writing: SnapshotWatch, phases: Phases, after: float, gap: float):
         self.leg, self.writing, self.phases, self.after = leg, writing, phases, after
+        # Each switch stores the camera frames buffered since the previous one
+        # (up to params.image_buffer_size, one per image_buffer_step): published
+        # sooner, a switch would carry fewer and be quicker to store.  Every
+        # switch waits ``gap`` after the previous one, so all carry a full
+        # buffer, as in the field where take-overs are minutes apart; a switch
+        # published as a write begins (``after`` > ``gap`` after the switch to
+        # ITO) and one published between writes then store the same rows.
+        self.gap = gap
+        self.last: float = 0.0
+        # [published, stored] of each switch (stored: inf while in flight).
+        self.spans: list[list[float]] = []
         self.auto = False
         self.ito_at: float | None = None  # last switch to ITO whose write has not begun
         self.delays = new_groups()
@@ -496,18 +518,22 @@ class Switches:
             target = min(("write", "idle"), key=lambda g: self.counts[(auto, g)])
         if self.ito_at is not None and self.writing.since(self.ito_at):
             self.ito_at = None  # its write began meanwhile
+        self._await_gap(sample)
         if target == "write" and not self._await_write(sample):
             target = "idle"
         if target == "idle":
             self._await_quiet(sample)
-        elif target == "off":
-            time.sleep(0.3)
         stage = self.writing.stage
         kind, delay = self._publish(mode, auto, sample)
         if stage:
             self.stages[stage] += 1
         if kind == "write":
             self.by_stage.setdefault(stage or "ending", []).append(delay)
+
+    def _await_gap(self, sample) -> None:
+        while time.time() - self.last < self.gap:
+            sample()
+            time.sleep(0.01)
 
     def _await_write(self, sample) -> bool:
         """Until a write begins (False if none is due)."""
@@ -543,7 +569,8 @@ class Switches:
 
         segments = Segment.objects.filter(leg=self.leg, parent__isnull=True)
         before = segments.count()
-        published = time.time()
+        published = self.last = time.time()
+        self.spans.append([published, math.inf])
         mode.publish(Bool(data=auto))
         self.auto = auto
         if not auto and self.phases.enabled:
@@ -551,7 +578,7 @@ class Switches:
         while segments.count() == before and time.time() - published < 30:
             sample()
             time.sleep(0.005)
-        done = time.time()
+        done = self.spans[-1][1] = time.time()
         kind = group(self.writing, self.phases, published, done)
         if kind is not None:
             self.delays[kind].append(done - published)
@@ -564,11 +591,14 @@ class PoseDelays(threading.Thread):
     """GPS fix stamped (the simulator stamps with its publish time, same clock) →
     its pose row seen by this script, which looks every 20 ms in a thread of its
     own (so up to 20 ms late, whatever the main loop waits for).  Grouped like the
-    mode switches, by the moment the fix was published."""
+    mode switches, by the moment the fix was published.  Fixes in flight while a
+    mode switch was being stored are left out (all groups): a switch is
+    published as each write begins, and the fixes that share or wait for its
+    transaction (frames, segments) would count its time as the write's."""
 
-    def __init__(self, leg, writing: SnapshotWatch, phases: Phases):
+    def __init__(self, leg, writing: SnapshotWatch, phases: Phases, switches: "Switches"):
         super().__init__(daemon=True)
-        self.leg, self.writing, self.phases = leg, writing, phases
+        self.leg, self.writing, self.phases, self.switches = leg, writing, phases, switches
         self.last_id = Pose.objects.filter(segment__leg=leg).aggregate(m=Max("id"))["m"] or 0
         self.delays = new_groups()
         self._halt = threading.Event()
@@ -595,7 +625,11 @@ class PoseDelays(threading.Thread):
             self.last_id = max(self.last_id, pk)
             if stamp is None:
                 continue
-            kind = group(self.writing, self.phases, stamp.timestamp(), seen)
+            t = stamp.timestamp()
+            # In flight (published, not yet seen) while a switch was stored.
+            if any(a <= seen and t <= b for a, b in self.switches.spans[-20:]):
+                continue
+            kind = group(self.writing, self.phases, t, seen)
             if kind is not None:
                 self.delays[kind].append(seen - stamp.timestamp())
 
@@ -880,7 +914,8 @@ def start_bench(label: str, **parameters) -> tuple[Bench, subprocess.Popen]:
     """A throw-away leg and ftt_collect logging into it, once it has beaten."""
     bench = Bench(label, **parameters)
     log = bench.work / "collector.log"
-    collector = bench.collector(bench.work / "spool.sqlite3", log)
+    # collector_bench.MANAGE, not the name imported above: --code replaces it after the import.
+    collector = bench.collector(bench.work / "spool.sqlite3", log, manage=collector_bench.MANAGE)
     while not Collector.objects.filter(name=bench.key).exists():
         if collector.poll() is not None:
             raise SystemExit(log.read_text()[-3000:])

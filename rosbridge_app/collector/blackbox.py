@@ -15,9 +15,18 @@ with the message definitions at the first one) is Python work: in a thread of
 the collector it held the interpreter lock that the executor and the database
 writer need, for up to seconds on a loaded machine.  So a child process
 (:class:`WriterProcess`) builds the files, and the collector's writer thread
-only hands it the messages (bytes that are already there, in small pieces over
-a pipe) and waits, for a bounded time (``snapshot.write_timeout``): a writer
-that is alive but stuck is killed and replaced like one that died.
+only hands it the messages and waits, for a bounded time
+(``snapshot.write_timeout``): a writer that is alive but stuck is killed and
+replaced like one that died.
+
+The hand-over must not take the collector's time either.  Pickled through a
+pipe, 12 MB went 64 kB at a time: some 200 wake-ups of the writer thread, each
+taking the interpreter lock back from the database writer while it stored a
+mode switch.  Now the bytes of up to :data:`PIECE` go into an anonymous
+memory file in one ``writev`` (the lock released) and the child gets the file
+descriptor and an index of (time, topic, length): a few wake-ups per window.
+The child runs SCHED_IDLE: it gets a core only when no thread of the collector,
+the database or the robot wants it (and a waking thread takes it at once).
 """
 
 import atexit
@@ -27,6 +36,7 @@ import multiprocessing
 import os
 import signal
 import sys
+import tempfile
 import threading
 import time
 import traceback
@@ -35,6 +45,7 @@ from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
+from multiprocessing import reduction
 from pathlib import Path
 
 from mcap.writer import CompressionType, Writer
@@ -47,15 +58,16 @@ from rosbridge_app.collector.events import Event
 log = logging.getLogger("ftt.collector")
 
 MB = 1024 * 1024
-# Messages handed to the snapshot writer process at a time: pickling a piece
-# holds the collector's interpreter lock, so pieces are small.
-PIECE = 1 * MB
+# Bytes handed to the snapshot writer process at a time (one memory file each):
+# a 20 s window of the benchmark robot is one piece, and a 200 MB window never
+# lies in memory twice.
+PIECE = 32 * MB
 # Added to snapshot.write_timeout per MB of the window.
 WRITE_SECONDS_PER_MB = 1.0
 # A new writer process must be ready (interpreter, mcap, type store) within this;
 # a few seconds on a loaded machine.
 START_TIMEOUT = 120.0
-WRITER_NICE = 10
+WRITER_NICE = 10  # where SCHED_IDLE is not to be had
 # Added to the snapshot topics when they are published (common names on most robots).
 OPTIONAL_TOPICS = ("odom", "cmd_vel")
 DEFAULT_TOPIC_PARAMETERS = ("robot_mode", "gps_fix", "tf", "tf_static", "image_compressed")
@@ -228,17 +240,19 @@ def _serve(conn) -> None:
     """The writer process: files from requests on ``conn`` until the collector
     closes it or is gone (end of file either way).  Ctrl-C and SIGTERM reach the
     whole process group: the collector decides when its writer ends (it writes
-    the open windows at exit).  Niced: on a busy machine the collector's own
-    threads come first, a file may well be written a second later."""
+    the open windows at exit).  SCHED_IDLE (niced where not available): on a
+    busy machine the collector's own threads come first, a file may well be
+    written a second later."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
-    os.nice(WRITER_NICE)
+    _step_aside()
     _definitions.load()  # at the trigger, not when the window has passed
     conn.send(("ready", None))
     mcap, failed = None, None
     while True:
         try:
             op, arg = conn.recv()
+            window = reduction.recv_handle(conn) if op == "add" else None
         except EOFError:
             return
         try:
@@ -247,8 +261,13 @@ def _serve(conn) -> None:
                     mcap.abandon()
                 failed, mcap = None, None
                 mcap = McapFile(Path(arg[0]), arg[1], _definitions)
-            elif op == "add" and failed is None:
-                mcap.add(arg)
+            elif op == "add":
+                try:
+                    if failed is None:
+                        mcap.add(read_window(window, arg))
+                finally:
+                    os.close(window)
+                    conn.send(("added", None))
             elif op == "finish":
                 if failed is not None:
                     conn.send(("error", failed))
@@ -260,6 +279,49 @@ def _serve(conn) -> None:
             if mcap is not None:
                 mcap.abandon()
                 mcap = None
+
+
+def _step_aside() -> None:
+    """Run only on a core that nothing else wants (SCHED_IDLE), where Linux
+    has it; niced otherwise."""
+    try:
+        os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
+    except (AttributeError, OSError):
+        os.nice(WRITER_NICE)
+
+
+def window_file(messages: list) -> tuple[int, list]:
+    """(descriptor of a memory file holding the messages' bytes one after the
+    other, index [(t_ns, topic, length)]).  ``writev`` copies them in a few
+    system calls, which release the interpreter lock."""
+    if hasattr(os, "memfd_create"):
+        fd = os.memfd_create("ftt-snapshot-window", os.MFD_CLOEXEC)
+    else:
+        fd = os.dup((f := tempfile.TemporaryFile()).fileno())
+        f.close()
+    try:
+        datas = [m[2] for m in messages]
+        step = os.sysconf("SC_IOV_MAX")
+        for i in range(0, len(datas), step):
+            chunk = datas[i : i + step]
+            written = os.writev(fd, chunk)
+            if written < sum(map(len, chunk)):  # a short write (rare): the rest
+                rest = memoryview(b"".join(chunk))[written:]
+                while rest:
+                    rest = rest[os.write(fd, rest) :]
+        return fd, [(t, topic, len(data)) for t, topic, data in messages]
+    except BaseException:
+        os.close(fd)
+        raise
+
+
+def read_window(fd: int, index: list) -> list:
+    """The messages (t_ns, topic, bytes) of a :func:`window_file`."""
+    out, offset = [], 0
+    for t, topic, length in index:
+        out.append((t, topic, os.pread(fd, length, offset)))
+        offset += length
+    return out
 
 
 def pieces(messages: list, size: int) -> list[list]:
@@ -378,14 +440,20 @@ class WriterProcess:
             # loaded machine, not part of the file's time.
             self._within(child, START_TIMEOUT, "not ready", conn.recv)
             child.ready = True
-        work = lambda: self._exchange(conn, path, messages, types)  # noqa: E731
+        work = lambda: self._exchange(conn, child.pid, path, messages, types)  # noqa: E731
         return self._within(child, timeout, "not done", work)
 
     @staticmethod
-    def _exchange(conn, path: Path, messages, types) -> dict:
+    def _exchange(conn, child_pid: int, path: Path, messages, types) -> dict:
         conn.send(("begin", (str(path), types)))
         for piece in pieces(messages, PIECE):
-            conn.send(("add", piece))
+            fd, index = window_file(piece)
+            try:
+                conn.send(("add", index))
+                reduction.send_handle(conn, fd, child_pid)
+            finally:
+                os.close(fd)
+            conn.recv()  # taken: the next piece (so at most one is in memory twice)
         conn.send(("finish", None))
         status, result = conn.recv()
         if status == "error":

@@ -186,7 +186,7 @@ def test_a_stuck_writer_is_killed_after_its_time_and_the_next_one_writes_the_fil
     snapshot_of(box, range(0, 200))
     stuck = box.writer.pid
     os.kill(stuck, signal.SIGSTOP)  # alive, but does nothing any more
-    # 1 MB: more than the pipe holds, so the hand-over itself blocks on it.
+    # The hand-over itself waits for the stopped child to take the window.
     snapshot_of(box, range(200, 400))
     assert f"snapshot writer process (pid {stuck}) was stuck" in caplog.text
     assert gone(stuck)
