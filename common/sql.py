@@ -1,7 +1,8 @@
 """Raw SQL on PostgreSQL beyond what Django's cursors offer."""
 
 import psycopg
-from django.db import connection
+from django.db import connection, connections, migrations
+from psycopg.conninfo import make_conninfo
 
 
 def bound_cursor(*, binary_results: bool = False):
@@ -18,3 +19,29 @@ def bound_cursor(*, binary_results: bool = False):
         raw.format = psycopg.pq.Format.BINARY
     wrap = connection.make_debug_cursor if connection.queries_logged else connection.make_cursor
     return wrap(raw)
+
+
+def conninfo(using: str = "default") -> str:
+    """A connection string to the database Django uses, for a connection of its
+    own (a LISTEN, a NOTIFY outside the request's transaction)."""
+    db = connections[using].settings_dict
+    return make_conninfo(
+        dbname=db["NAME"],
+        user=db.get("USER") or None,
+        password=db.get("PASSWORD") or None,
+        host=db.get("HOST") or None,
+        port=db.get("PORT") or None,
+    )
+
+
+def postgresql_only(forward: str, backward: str) -> migrations.RunPython:
+    """A migration step of raw SQL that runs on PostgreSQL and nowhere else."""
+
+    def run(sql):
+        def step(apps, schema_editor):
+            if schema_editor.connection.vendor == "postgresql":
+                schema_editor.execute(sql)
+
+        return step
+
+    return migrations.RunPython(run(forward), run(backward))

@@ -22,9 +22,9 @@ from django.conf import settings
 from django.contrib import auth
 from django.db import connections
 from psycopg import AsyncConnection
-from psycopg.conninfo import make_conninfo
 
 from common import roles
+from common.sql import conninfo
 from events import feed
 from events.api.serializers import touched_rows
 from events.feed import FLEET_KINDS, LOG_KINDS
@@ -154,7 +154,7 @@ class OutboxPoller:
         """Wake the poller on every NOTIFY of the feed (a commit in any process)."""
         while True:
             try:
-                async with await AsyncConnection.connect(_conninfo(), autocommit=True) as conn:
+                async with await AsyncConnection.connect(conninfo(), autocommit=True) as conn:
                     await conn.execute(f"LISTEN {feed.CHANNEL}")
                     # Rows committed while (re)connecting are found by this read.
                     self.wakeup.set()
@@ -208,17 +208,6 @@ class OutboxPoller:
             self.floor = min(self.seen) - 1
             self.gap_since = None
             self._advance_floor()
-
-
-def _conninfo() -> str:
-    db = connections["default"].settings_dict
-    return make_conninfo(
-        dbname=db["NAME"],
-        user=db.get("USER") or None,
-        password=db.get("PASSWORD") or None,
-        host=db.get("HOST") or None,
-        port=db.get("PORT") or None,
-    )
 
 
 @database_sync_to_async

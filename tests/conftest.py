@@ -5,7 +5,7 @@ from django.core.cache import cache
 from django.db import connection
 
 from common import memo
-from events import seeds
+from events import notifier, seeds
 from events.models import Performer, Personnel, PoseSource, Vehicle
 from events.services import logs
 from events.services.robots import ensure_robot_account
@@ -24,6 +24,11 @@ def _seeds_after_flush(request):
     if marker and marker.kwargs.get("transaction"):
         request.getfixturevalue("transactional_db")
         seeds.ensure()
+        yield
+        # Its connection would keep the test database from being dropped.
+        notifier.disconnect()
+    else:
+        yield
 
 
 @pytest.fixture(autouse=True)

@@ -10,6 +10,8 @@ whatever the code later says.
 
 from django.db import migrations
 
+from common.sql import postgresql_only
+
 FORWARD = """
 CREATE FUNCTION ftt_live_notify() RETURNS trigger LANGUAGE plpgsql AS $$
 BEGIN
@@ -26,17 +28,10 @@ DROP FUNCTION IF EXISTS ftt_live_notify();
 """
 
 
-def _on_postgresql(sql):
-    def run(apps, schema_editor):
-        if schema_editor.connection.vendor == "postgresql":
-            schema_editor.execute(sql)
-
-    return run
-
 
 class Migration(migrations.Migration):
     dependencies = [
         ("events", "0008_itoreason_quick"),
     ]
 
-    operations = [migrations.RunPython(_on_postgresql(FORWARD), _on_postgresql(BACKWARD))]
+    operations = [postgresql_only(FORWARD, BACKWARD)]

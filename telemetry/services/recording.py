@@ -22,7 +22,7 @@ from psycopg.types.json import Jsonb
 
 from common.errors import RuleViolation
 from common.sql import bound_cursor
-from events import feed, rules
+from events import feed, notifier, rules
 from events.feed import announce_row, announce_track, announced
 from events.models import Announcement, Leg, PoseSource, Segment, Shift
 from events.selectors.segments import pose_target
@@ -161,10 +161,12 @@ def record_pose(
 # transaction.  It checks that the segment still exists (the master comes
 # from a per-process cache) and that a named pose source does, takes the
 # leg's default source as it is now, and adds the feed row only when the pose
-# is new; the feed's trigger sends the NOTIFY.
+# is new.  It tells the feed's trigger not to NOTIFY (notifier.LATER): commits
+# that notify cannot share a WAL flush, so its process sends one NOTIFY for
+# many poses after their commits (notifier.notify_soon).
 _ONE_POSE = f"""
 WITH target AS (
-    SELECT l.default_pose_source_id AS source
+    SELECT l.default_pose_source_id AS source, {notifier.LATER}
     FROM {Segment._meta.db_table} m JOIN {Leg._meta.db_table} l
          ON l.id = m.leg_id
     WHERE m.id = %(master)s::bigint
@@ -233,6 +235,8 @@ def record_pose_at(
     if pk is None:
         return Pose.objects.get(uid=fix.uid), False
     feed.inserted(event, event_id)
+    # At once in autocommit; after the commit inside a transaction.
+    transaction.on_commit(notifier.notify_soon)
     row = fix.row(master, source_id, received)
     row.pk = pk
     return row, True

@@ -10,12 +10,15 @@ import json
 import uuid
 
 import httpx
+import psycopg
 import pytest
 from django.core.signals import request_started
 from django.db import connection
 from django.test.utils import CaptureQueriesContext
 from rest_framework.throttling import SimpleRateThrottle
 
+from common.sql import conninfo
+from events.feed import CHANNEL
 from events.models import Announcement, SegmentType
 from events.services import segments
 from ftt_site.asgi import application
@@ -263,3 +266,15 @@ def test_a_pose_the_lean_way_is_one_query(api_client, master):
 
     assert status == 201 and Pose.objects.filter(uid=json.loads(content)["uid"]).exists()
     assert len(queries) == 1, [q["sql"] for q in queries]
+
+
+@pytest.mark.postgis_only
+def test_a_pose_the_lean_way_wakes_the_live_readers_at_once(api_client, master):
+    token = _token(api_client("operator"))
+    with psycopg.connect(conninfo(), autocommit=True) as listener:
+        listener.execute(f"LISTEN {CHANNEL}")
+        status, _, _ = post_asgi({"segment": master.pk, "longitude": 8, "latitude": 50}, token)
+        heard = list(listener.notifies(timeout=1.0, stop_after=1))
+
+    assert status == 201
+    assert [note.channel for note in heard] == [CHANNEL]

@@ -7,8 +7,9 @@ import psycopg
 import pytest
 from django.db import connection, transaction
 
-from events import feed
-from rosbridge_app import consumers, wakeup
+from common.sql import conninfo
+from events import feed, notifier
+from rosbridge_app import wakeup
 
 pytestmark = pytest.mark.django_db(transaction=True)
 
@@ -33,7 +34,7 @@ def listening():
     if connection.vendor != "postgresql":
         yield heard
         return
-    with psycopg.connect(consumers._conninfo(), autocommit=True) as listener:
+    with psycopg.connect(conninfo(), autocommit=True) as listener:
         listener.execute(f"LISTEN {feed.CHANNEL}")
         yield heard
         # Delivered at the writer's commit, before this is asked.
@@ -75,6 +76,18 @@ def test_a_rolled_back_feed_row_notifies_nobody():
             raise RuntimeError("undo")
         feed.record("poses")  # so that the listener has something to hear
     assert len(heard) == (1 if connection.vendor == "postgresql" else 0)
+
+
+@pytest.mark.postgis_only
+def test_a_commit_that_says_it_notifies_later_is_not_notified_by_the_trigger():
+    with listening() as heard:
+        with transaction.atomic():
+            with connection.cursor() as cursor:
+                cursor.execute(f"SELECT {notifier.LATER}")
+            feed.record("poses")
+        # The setting ends with its transaction.
+        feed.record("poses")
+    assert len(heard) == 1
 
 
 def test_a_rolled_back_transaction_wakes_nobody(woken):
