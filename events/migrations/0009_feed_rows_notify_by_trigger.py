@@ -28,7 +28,6 @@ DROP FUNCTION IF EXISTS ftt_live_notify();
 """
 
 
-
 class Migration(migrations.Migration):
     dependencies = [
         ("events", "0008_itoreason_quick"),

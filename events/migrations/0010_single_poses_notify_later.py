@@ -33,7 +33,6 @@ END $$;
 """
 
 
-
 class Migration(migrations.Migration):
     dependencies = [
         ("events", "0009_feed_rows_notify_by_trigger"),

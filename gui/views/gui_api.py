@@ -35,6 +35,7 @@ from rosbridge_app.selectors.fleet import fleet
 from rosbridge_app.services.collectors import issue_command
 from telemetry.api.serializers import ImageSerializer, RecordingSerializer
 from telemetry.models import Image, Recording
+from telemetry.selectors import tracks
 from telemetry.selectors.distances import displayed_distances
 from telemetry.selectors.maps import current_map
 from telemetry.selectors.overlay import map_corners, overlay
@@ -118,7 +119,7 @@ class LegTracks(GuiView):
         query = TrackQuery(data=request.query_params)
         query.is_valid(raise_exception=True)
         q = query.validated_data
-        masters = leg_masters(leg.pk)
+        masters = list(tracks.masters(leg=leg.pk))
         if "map" in q:
             return Response(_in_view(leg, masters, q))
         loaded = kept_tracks(masters)
@@ -152,10 +153,6 @@ class LegTracks(GuiView):
         return Response(body)
 
 
-def leg_masters(leg_id: int) -> list[Segment]:
-    return list(Segment.objects.filter(leg_id=leg_id, parent__isnull=True).order_by("start", "id"))
-
-
 def read_ahead(leg: Leg) -> threading.Thread | None:
     """Starts reading what LegTracks answers from (the kept tracks of both maps,
     the displayed distances) in a thread of its own, and returns the thread.
@@ -167,7 +164,7 @@ def read_ahead(leg: Leg) -> threading.Thread | None:
     Where the process keeps any of them it starts nothing (None): the request
     then reads only what changed, and a thread with a connection and a second
     count of the poses would only load the machine while the page starts."""
-    masters = leg_masters(leg.pk)
+    masters = list(tracks.masters(leg=leg.pk))
     if not masters or keeps_any(masters):
         return None
     thread = threading.Thread(target=_read_leg, args=(masters,), name="tracks-read-ahead")

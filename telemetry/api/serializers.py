@@ -60,41 +60,22 @@ class PoseSerializer(ClientUidMixin, ServiceSerializer):
         }
 
 
-class _SentId(serializers.Field):
-    """A row id as a client sent it, not looked up: PrimaryKeyField's type check only
-    (writing only; the serializer gives the ids it answers with)."""
-
-    default_error_messages = {"invalid": "Not a row id."}
-
-    def to_internal_value(self, data):
-        digits = isinstance(data, str) and data.isascii() and data.isdigit()
-        if isinstance(data, bool) or not (isinstance(data, int) or digits):
-            self.fail("invalid")
-        value = int(data)
-        if not 0 < value < 2**63:
-            self.fail("invalid")
-        return value
-
-    def to_representation(self, value):
-        return value
-
-
 class PoseByIdSerializer(serializers.Serializer):
     """The answer to a single pose stored the quick way (telemetry.api.single_pose),
-    in PoseSerializer's shape.  Its fields are PoseSerializer's, declared once
-    here: a ModelSerializer builds them from the model on every request, a third
-    of a single pose's time in Python."""
+    in PoseSerializer's shape; what it accepts is checked by ``sent_pose``.  Its
+    fields are declared once here: a ModelSerializer builds them from the model
+    on every request, a third of a single pose's time in Python."""
 
     id = serializers.IntegerField(read_only=True)
-    uid = serializers.UUIDField(required=False)
-    segment = _SentId(source="segment_id")
-    longitude = serializers.FloatField(source="point.x", min_value=-180, max_value=180)
-    latitude = serializers.FloatField(source="point.y", min_value=-90, max_value=90)
-    altitude = serializers.FloatField(required=False, allow_null=True)
-    fix_status = serializers.ChoiceField(choices=FixStatus.choices, default=FixStatus.FIX)
-    horizontal_accuracy = serializers.FloatField(required=False, allow_null=True)
-    pose_source = _SentId(source="pose_source_id", required=False, allow_null=True)
-    robot_stamp = serializers.DateTimeField(required=False, allow_null=True)
+    uid = serializers.UUIDField(read_only=True)
+    segment = serializers.IntegerField(source="segment_id", read_only=True)
+    longitude = serializers.FloatField(source="point.x", read_only=True)
+    latitude = serializers.FloatField(source="point.y", read_only=True)
+    altitude = serializers.FloatField(read_only=True)
+    fix_status = serializers.ChoiceField(choices=FixStatus.choices, read_only=True)
+    horizontal_accuracy = serializers.FloatField(read_only=True)
+    pose_source = serializers.IntegerField(source="pose_source_id", read_only=True)
+    robot_stamp = serializers.DateTimeField(read_only=True)
     received = serializers.DateTimeField(read_only=True)
 
 
