@@ -7,6 +7,7 @@ import pytest
 
 from events.models import Segment
 from rosbridge_app.collector import events as ev
+from rosbridge_app.collector import replay
 from rosbridge_app.collector.events import Event
 from rosbridge_app.collector.outbox import Outbox
 from rosbridge_app.collector.recorder import Recorder
@@ -97,3 +98,30 @@ def test_a_live_switch_is_stored_before_the_backlog_and_everything_once(
     # The live map was newer than the backlog's: it is still the shift's current one.
     maps = list(MapImage.objects.order_by("received", "id").values_list("checksum", flat=True))
     assert maps == ["10", "20", "30"]
+
+
+@pytest.mark.parametrize("seconds", [60.0, 0.0], ids=["quick slices", "slow slices"])
+def test_backlog_slices_grow_while_each_is_stored_within_the_time_a_live_switch_may_wait(
+    leg, tmp_path, monkeypatch, seconds
+):
+    # SLICE_SECONDS is how long a live switch may wait behind one backlog slice.
+    monkeypatch.setattr(replay, "SLICE_SECONDS", seconds)
+    t0 = datetime.now(UTC) + timedelta(minutes=1)
+    positions = _fixes(t0 + timedelta(seconds=1), 200)
+    outbox = Outbox(tmp_path / "spool.sqlite3")
+    outbox.append([Event(ev.START, t0), Event(ev.MODE, t0, {"mode": "auto"}), *positions])
+    order = ReplayOrder(outbox, SLICE)
+    order.write_next(Recorder(lambda: leg))  # finds the backlog, applies its segment changes
+
+    recorder, taken = Recorder(lambda: leg), []
+    while len(outbox):
+        taken.append(order.write_next(recorder))
+        assert len(taken) < 100
+
+    assert Pose.objects.count() + LocalPose.objects.count() == len(positions)
+    if seconds:
+        # Stored far within the time: slices grow to their bound, fewer turns.
+        assert max(taken) == SLICE * replay.MAX_SLICES
+        assert len(taken) < len(positions) // SLICE
+    else:
+        assert max(taken) == SLICE

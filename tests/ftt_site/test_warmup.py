@@ -1,0 +1,36 @@
+"""A web process loads its views before it takes a request (ftt_site.warmup), so
+the first visitor after a restart does not wait for the imports (about 1.3 s)."""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+
+PROBE = """
+import json, sys
+import ftt_site.asgi
+from django.urls import get_resolver
+resolver = get_resolver()
+print(json.dumps({
+    "urls_loaded": resolver._populated,
+    "report_figures_imported": "matplotlib" in sys.modules,
+}))
+"""
+
+
+def test_the_asgi_application_has_its_views_loaded_before_the_first_request():
+    env = {**os.environ, "DJANGO_SETTINGS_MODULE": "ftt_site.settings"}
+    done = subprocess.run(
+        [sys.executable, "-c", PROBE],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=True,
+    )
+    state = json.loads(done.stdout.strip().splitlines()[-1])
+    assert state == {"urls_loaded": True, "report_figures_imported": True}
