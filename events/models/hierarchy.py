@@ -243,5 +243,17 @@ class Segment(ChangeStamped):
         return self.parent_id is None
 
     @property
+    def master_id(self) -> int:
+        """The id of the master this segment belongs to: its own for a master, its
+        parent's for an ITO child (data sent for a child is stored on the master)."""
+        return self.pk if self.parent_id is None else self.parent_id
+
+    @property
+    def master(self) -> "Segment":
+        """The master segment itself; no query for a master, or for a child fetched
+        with ``select_related("parent")``."""
+        return self if self.parent_id is None else self.parent
+
+    @property
     def is_ito(self) -> bool:
         return self.segment_type_id == SegmentType.ITO

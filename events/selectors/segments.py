@@ -27,7 +27,7 @@ def pose_target(segment_id: int) -> Segment | None:
         )
         if segment is None:
             return None
-        master = segment.parent if segment.parent_id is not None else segment
+        master = segment.master
         _pose_targets.put(segment_id, master)
     return master
 

@@ -83,8 +83,7 @@ def segments_csv(event: TestEvent, mode: str = GPS) -> str:
     ordered = sorted(segments, key=lambda s: (s.leg.shift.start, s.leg.start, s.start, s.id))
     labels = segment_labels(ordered)
     for seg in ordered:
-        master_id = seg.parent_id or seg.id
-        run = runs.get(master_id)
+        run = runs.get(seg.master_id)
         shift = seg.leg.shift
         reason = reasons.get(seg.ito_reason_id) if seg.ito_reason_id else None
         end = seg.end
@@ -99,7 +98,7 @@ def segments_csv(event: TestEvent, mode: str = GPS) -> str:
                 seg.leg.number,
                 labels[seg.id],
                 seg.id,
-                master_id,
+                seg.master_id,
                 "master" if is_master else "reason",
                 seg.segment_type_id,
                 seg.start.astimezone(tz).isoformat(),

@@ -32,6 +32,13 @@ def test_new_ito_master_gets_an_unassigned_child_at_once(leg):
     assert child.is_open
 
 
+def test_a_reason_belongs_to_its_master_and_a_master_to_itself(leg):
+    ito = segments.report_mode(leg, "ito").master
+    child = Segment.objects.select_related("parent").get(parent=ito)
+    assert (child.master, child.master_id) == (ito, ito.pk)
+    assert (ito.master, ito.master_id) == (ito, ito.pk)
+
+
 def test_reporting_the_open_mode_again_changes_nothing(leg):
     first = segments.report_mode(leg, "auto")
     again = segments.report_mode(leg, "auto")
