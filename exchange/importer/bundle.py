@@ -1,0 +1,84 @@
+"""Importing a whole archive: every step in one transaction, announced in the change
+feed, and every failure turned into :class:`ImportRefused` with nothing changed."""
+
+from django.core.exceptions import ValidationError
+from django.db import DatabaseError, IntegrityError, transaction
+
+from events import feed
+from events.models import Segment
+from exchange import records as rec
+from exchange.archive import ArchiveError
+from exchange.importer import configuration, logbook, telemetry
+from exchange.importer.plan import ImportRefused, MalformedRecord, Plan, describe
+from exchange.importer.session import ImportSession
+
+# In this order: a row's parents and configuration come before it.
+STEPS = (
+    configuration.import_catalogues,
+    configuration.import_configuration,
+    logbook.import_test_events,
+    logbook.link_basemaps,
+    logbook.import_shifts,
+    logbook.import_legs,
+    logbook.import_segments,
+    logbook.import_notes,
+    telemetry.import_poses,
+    telemetry.import_local_poses,
+    telemetry.import_maps,
+    telemetry.import_images,
+    telemetry.import_recordings,
+    logbook.refuse_open_under_closed,
+)
+
+
+def announce_changes(session: ImportSession):
+    """Open browsers see an import like any other change (same transaction)."""
+    for row in session.changed:
+        feed.announce_row(row)
+    masters = Segment.objects.in_bulk({segment for _, segment in session.track_points})
+    for (table, segment), count in session.track_points.items():
+        kind = "poses" if table == "poses" else "local_poses"
+        # No points inline: the page re-reads the track.
+        feed.announce(kind, masters[segment], segment=segment, mode=None, count=count)
+
+
+def import_bundle(bundle, *, dry_run: bool = False) -> Plan:
+    """Apply a verified archive (or any object with ``records(table)`` and
+    ``read_file(name)``).  Raises :class:`ImportRefused`; then nothing changed."""
+    session = ImportSession(bundle, dry_run)
+    try:
+        with transaction.atomic():
+            for step in STEPS:
+                step(session)
+            announce_changes(session)
+            if dry_run:
+                transaction.set_rollback(True)
+    except ImportRefused as exc:
+        session.discard_files()
+        raise type(exc)(f"{exc} Nothing was imported.") from None
+    except ValidationError as exc:
+        session.discard_files()
+        raise ImportRefused(f"{session.where}: {describe(exc)}. Nothing was imported.") from None
+    except (
+        ArchiveError,
+        rec.RecordError,
+        LookupError,
+        AttributeError,
+        TypeError,
+        ValueError,
+        OverflowError,
+    ) as exc:
+        session.discard_files()
+        what = f"missing field {exc}" if isinstance(exc, KeyError) else str(exc)
+        raise MalformedRecord(
+            f"{session.where}: malformed record ({what}). Nothing was imported."
+        ) from None
+    except (IntegrityError, DatabaseError) as exc:
+        session.discard_files()
+        raise ImportRefused(
+            f"{session.where}: the database refused it ({str(exc).strip()}). Nothing was imported."
+        ) from None
+    except BaseException:
+        session.discard_files()
+        raise
+    return session.plan

@@ -1,0 +1,55 @@
+"""What an import did (or, on a dry run, would do), and why it refused."""
+
+from collections import Counter, defaultdict
+from dataclasses import dataclass, field
+
+from django.core.exceptions import ValidationError
+
+from exchange import records as rec
+
+OUTCOMES = ("added", "updated", "unchanged", "reused")
+
+
+class ImportRefused(Exception):
+    """The data cannot be imported as it is; nothing was changed."""
+
+
+class MalformedRecord(ImportRefused):
+    """A record or file has the wrong shape (a bad request, not a conflict with data here)."""
+
+
+@dataclass
+class Plan:
+    dry_run: bool = False
+    counts: dict = field(default_factory=lambda: defaultdict(Counter))
+
+    def note(self, table: str, outcome: str, n: int = 1) -> None:
+        if n:
+            self.counts[table][outcome] += n
+
+    def total(self, outcome: str) -> int:
+        return sum(c[outcome] for c in self.counts.values())
+
+    def changes(self) -> int:
+        return self.total("added") + self.total("updated")
+
+    def verdict(self) -> str:
+        if self.dry_run:
+            return f"Would change {self.changes()} row(s); dry run, nothing written."
+        return f"Changed {self.changes()} row(s)."
+
+    def lines(self) -> list[str]:
+        head = f"{'':14}" + "".join(f"{o:>11}" for o in OUTCOMES)
+        rows = [head]
+        for table in rec.TABLES:
+            if table in self.counts:
+                c = self.counts[table]
+                rows.append(f"{table:14}" + "".join(f"{c[o]:>11}" for o in OUTCOMES))
+        return rows
+
+
+def describe(exc: ValidationError) -> str:
+    """A validation error's messages on one line, field by field."""
+    if hasattr(exc, "error_dict"):
+        return "; ".join(f"{k}: {' '.join(v)}" for k, v in exc.message_dict.items())
+    return " ".join(exc.messages)
