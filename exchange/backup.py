@@ -9,6 +9,7 @@ on SpatiaLite, and ``media/...``.  docs/data-exchange.md gives the restore steps
 import os
 import re
 import shutil
+import sqlite3  # the build Django uses: settings (ftt_site.sqlite_shim) choose it before apps load
 import subprocess
 import tempfile
 from pathlib import Path
@@ -70,8 +71,6 @@ def _dump_postgres(target: Path) -> Path:
 
 
 def _copy_sqlite(target: Path) -> Path:
-    import sqlite3  # after settings: the build that matches Django's (see sqlite_shim)
-
     out = target / "ftt.sqlite3"
     source = sqlite3.connect(f"file:{connection.settings_dict['NAME']}?mode=ro", uri=True)
     copy = sqlite3.connect(out)
