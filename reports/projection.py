@@ -21,9 +21,8 @@ class _Inverse:
 
 @lru_cache(maxsize=64)
 def _aeqd(lon0: float, lat0: float):
-    # A PROJ pipeline string needs no lookup in PROJ's CRS database, which made
-    # Transformer.from_crs take 40 ms per frame (16 s for a 300-segment report);
-    # this takes half a millisecond and gives the same coordinates.
+    # A PROJ pipeline string needs no lookup in PROJ's CRS database (slow per
+    # frame, docs/report.md) and gives the same coordinates as the CRS would.
     pipeline = Transformer.from_pipeline(
         "+proj=pipeline +step +proj=unitconvert +xy_in=deg +xy_out=rad "
         f"+step +proj=aeqd +lat_0={lat0} +lon_0={lon0} +ellps=WGS84"

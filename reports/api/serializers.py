@@ -1,9 +1,9 @@
 from rest_framework import serializers
 
+from reports.documents.options import MAX_TIMELINE_HOURS
 from reports.figures.tiles import MAX_ZOOM
 from reports.models import Report
 from reports.services.generation import COMPARE
-from reports.services.rendering import MAX_TIMELINE_HOURS
 
 
 class ReportSerializer(serializers.ModelSerializer):

@@ -15,6 +15,7 @@ from common import roles
 from common.api.permissions import RolePermission
 from events.models import TestEvent
 from reports.api.serializers import ReportRequestSerializer, ReportSerializer
+from reports.documents.options import FULL, LEVELS
 from reports.models import Report
 from reports.selectors import exports
 from reports.selectors.comparison import compare
@@ -25,7 +26,6 @@ from reports.services.generation import (
     request_comparison,
     request_report,
 )
-from reports.services.rendering import FULL, LEVELS
 from telemetry.selectors.tracks import MODES
 
 MODE_PARAM = OpenApiParameter("mode", str, enum=list(MODES), description="gps (default) or local")

@@ -41,7 +41,7 @@ def draw_timeline(
     row_of = {key: 2 + i for i, key in enumerate(reason_rows)}
     ax.xaxis_date(tz)
     # Bars of one row, colour and hatch are one collection, markers of one colour one
-    # scatter: a shift has hundreds of runs, and an artist per run was most of the time.
+    # scatter: a shift has hundreds of runs, too many for an artist each.
     bars: dict[tuple, list] = defaultdict(list)
     markers: dict[tuple, list] = defaultdict(list)
     for run in shift_runs:

@@ -24,15 +24,10 @@ from django_tasks import task
 from common import jobs
 from common.errors import RuleViolation
 from events.models import TestEvent
+from reports.documents.comparison import render_comparison
+from reports.documents.event_report import ReportResult, check_reportable, render_report
+from reports.documents.options import ReportError, ReportOptions
 from reports.models import Report
-from reports.services.comparing import render_comparison
-from reports.services.rendering import (
-    ReportError,
-    ReportOptions,
-    ReportResult,
-    check_reportable,
-    render_report,
-)
 
 log = logging.getLogger(__name__)
 

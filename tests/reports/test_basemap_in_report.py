@@ -4,7 +4,8 @@ import numpy as np
 from PIL import Image
 
 from basemaps.services import layers
-from reports.services.rendering import ReportOptions, render_report
+from reports.documents.event_report import render_report
+from reports.documents.options import ReportOptions
 from telemetry.models import Pose
 from tests.support.basemaps import QUADRANTS, quadrant_geotiff
 from tests.support.pdf import flat, pdf_text, save_pages

@@ -142,7 +142,8 @@ def test_job_mode_makes_a_queued_report(scenario, django_capture_on_commit_callb
 
 
 def test_site_logo_replaces_the_default(scenario, tmp_path, settings):
-    from reports.services.rendering import ReportOptions, render_report
+    from reports.documents.event_report import render_report
+    from reports.documents.options import ReportOptions
 
     logo = tmp_path / "kunde.png"
     logo.write_bytes(png((120, 60), (250, 0, 250)))

@@ -11,8 +11,9 @@ from django.db.models import Max
 
 from events.models import Segment
 from events.services import logs
+from reports.documents.event_report import render_report
+from reports.documents.options import ReportOptions
 from reports.selectors.statistics import event_statistics
-from reports.services.rendering import ReportOptions, render_report
 from rosbridge_app.collector.bag import bag_events
 from rosbridge_app.collector.recorder import record_events
 from tests.support.fkie import FKIE_BAG

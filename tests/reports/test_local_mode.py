@@ -10,9 +10,10 @@ from PIL import Image as PILImage
 
 from events.services import logs, segments
 from events.services.segments import LocalPosition
+from reports.documents.event_report import render_report
+from reports.documents.options import ReportOptions
 from reports.figures.maps import Background, Line, MapPainter
 from reports.selectors.statistics import event_statistics
-from reports.services.rendering import ReportOptions, render_report
 from telemetry.services import recording
 from telemetry.services.recording import MapPose
 from tests.support.pdf import flat, pdf_text, save_pages

@@ -8,7 +8,8 @@ the data does not have.
 import pytest
 
 from events.services import logs
-from reports.services.rendering import ReportOptions, render_report
+from reports.documents.event_report import render_report
+from reports.documents.options import ReportOptions
 from telemetry.services import recording
 from tests.support.pdf import has_row, pdf_text
 from tests.support.scenario import CHI2_95, STEP_M, T0, _at, _fixes, _switch

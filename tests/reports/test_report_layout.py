@@ -6,7 +6,8 @@ import xml.etree.ElementTree as ET
 import pytest
 
 from events.selectors.labels import segment_label
-from reports.services.rendering import ReportOptions, render_report
+from reports.documents.event_report import render_report
+from reports.documents.options import ReportOptions
 from tests.support.pdf import flat, page_count, pdf_text
 from tests.support.scenario import build_scenario
 

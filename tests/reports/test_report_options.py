@@ -6,10 +6,11 @@ from datetime import UTC, datetime, timedelta
 import pytest
 from django.core.management import CommandError, call_command
 
+from reports.documents import sections
+from reports.documents.event_report import render_report
+from reports.documents.options import ReportOptions
 from reports.figures.timeline import time_axis
 from reports.models import Report
-from reports.services import rendering
-from reports.services.rendering import ReportOptions, render_report
 
 
 @pytest.fixture
@@ -36,13 +37,13 @@ def test_a_short_shift_is_drawn_over_the_minimum_timeline_length():
 
 def test_the_report_draws_every_timeline_with_the_minimum_length(scenario, tile_cache, monkeypatch):
     spans = []
-    draw = rendering.draw_timeline
+    draw = sections.draw_timeline
 
     def recording_draw(*args, **kwargs):
         spans.append(kwargs["min_span"])
         return draw(*args, **kwargs)
 
-    monkeypatch.setattr(rendering, "draw_timeline", recording_draw)
+    monkeypatch.setattr(sections, "draw_timeline", recording_draw)
     render_report(scenario.event, ReportOptions(no_tiles=True, min_timeline_hours=1.5))
     assert spans and all(span == timedelta(hours=1.5) for span in spans)
 

@@ -10,7 +10,8 @@ import subprocess
 import pytest
 
 from events.selectors.labels import segment_label
-from reports.services.rendering import ReportOptions, render_report
+from reports.documents.event_report import render_report
+from reports.documents.options import ReportOptions
 from telemetry.models import Pose
 from tests.support.pdf import flat, has_row, page_count, pdf_text, save_pages
 from tests.support.scenario import CHI2_05, CHI2_95, HOSTILE, STEP_M, T0

@@ -1,7 +1,8 @@
 """The report's segment page names each black-box snapshot of the segment."""
 
 from events.services import logs
-from reports.services.rendering import ReportOptions, render_report
+from reports.documents.event_report import render_report
+from reports.documents.options import ReportOptions
 from telemetry.services import recording
 from tests.support.mcap_files import write_fixes
 from tests.support.pdf import flat, pdf_text

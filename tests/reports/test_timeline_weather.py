@@ -7,10 +7,11 @@ from zoneinfo import ZoneInfo
 import numpy as np
 from PIL import Image
 
+from reports.documents import sections
+from reports.documents.event_report import render_report
+from reports.documents.options import ReportOptions
 from reports.figures import weather
 from reports.figures.timeline import draw_timeline
-from reports.services import rendering
-from reports.services.rendering import ReportOptions, render_report
 
 T0 = datetime(2026, 5, 4, 9, 0, tzinfo=UTC)
 
@@ -67,12 +68,12 @@ def test_every_catalogue_symbol_is_distinct_and_an_unknown_one_is_a_question_mar
 def test_the_report_gives_each_shift_its_legs_weather(scenario, settings, tmp_path, monkeypatch):
     settings.FTT_TILE_CACHE = tmp_path / "tiles"
     seen = []
-    real = rendering.draw_timeline
+    real = sections.draw_timeline
 
     def recording(shift_runs, reasons, weather_changes, *args, **kwargs):
         seen.append([(label, icon) for _, label, icon in weather_changes])
         return real(shift_runs, reasons, weather_changes, *args, **kwargs)
 
-    monkeypatch.setattr(rendering, "draw_timeline", recording)
+    monkeypatch.setattr(sections, "draw_timeline", recording)
     render_report(scenario.event, ReportOptions(no_tiles=True))
     assert seen == [[("sunny", "sun")], [("rainy", "rain")]]

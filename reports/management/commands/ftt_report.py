@@ -14,12 +14,13 @@ from django.core.management.base import BaseCommand, CommandError
 
 from common.progress import ProgressBar
 from events.models import TestEvent
+from reports.documents.comparison import render_comparison
+from reports.documents.event_report import render_report
+from reports.documents.options import FULL, LEVELS, ReportError, ReportOptions
 from reports.figures.tiles import MAX_ZOOM
 from reports.models import Report
 from reports.selectors import exports
-from reports.services.comparing import render_comparison
 from reports.services.generation import run_job
-from reports.services.rendering import FULL, LEVELS, ReportError, ReportOptions, render_report
 
 
 class Command(BaseCommand):

@@ -4,19 +4,16 @@ The figures are the comparison selector's; this only formats them and lets
 typst set them, with user text passed as JSON data, never as markup.
 """
 
-import json
-import shutil
 import tempfile
 from pathlib import Path
 
-import typst
-
 from events.models import ItoReason, TestEvent
 from reports import formatting as fmt
+from reports.documents.options import ReportError
+from reports.documents.typesetting import typeset
 from reports.figures import style
 from reports.figures.growth import growth_chart, hotspot_chart
 from reports.selectors.comparison import compare
-from reports.services.rendering import TEMPLATE_DIR, ReportError
 from telemetry.selectors.tracks import GPS
 
 
@@ -73,12 +70,4 @@ def render_comparison(events: list[TestEvent], mode: str = GPS) -> bytes:
             "hotspot_rows": [_hotspot_row(spot, reasons, names) for spot in data["hotspots"]],
             "formulas": [[k, v] for k, v in data["formulas"].items()],
         }
-        shutil.copy(TEMPLATE_DIR / "compare.typ", root / "compare.typ")
-        try:
-            return typst.compile(
-                str(root / "compare.typ"),
-                root=tmp,
-                sys_inputs={"data": json.dumps(document, ensure_ascii=False)},
-            )
-        except typst.TypstError as exc:
-            raise ReportError(f"Typesetting failed: {exc}") from exc
+        return typeset("compare.typ", document, root)

@@ -1,0 +1,5 @@
+"""The PDF documents: a test event's report and the comparison of several.
+
+They read (through the selectors) and draw (reports.figures) but store nothing;
+reports.services.generation keeps what they make.
+"""

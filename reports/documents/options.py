@@ -1,0 +1,65 @@
+"""What may be asked of a report, and the error when it cannot be made."""
+
+from dataclasses import dataclass, field
+
+from reports.figures.tiles import MAX_ZOOM
+
+MAX_TIMELINE_HOURS = 48
+
+# How much of each shift the report shows: the GUI dialog, the API and the
+# command offer these choices (value, what a person reads).
+SUMMARY, STANDARD, FULL = "summary", "standard", "full"
+LEVELS = (
+    (SUMMARY, "Summary: event and shift pages only"),
+    (STANDARD, "Standard: plus one compact block per intervention (ITO)"),
+    (FULL, "Full: every segment with its map"),
+)
+
+
+class ReportError(Exception):
+    """The report cannot be made; the message says why in words for a person."""
+
+
+@dataclass
+class ReportOptions:
+    name: str = ""
+    version: str = "1.0"
+    recipient: str = ""
+    recipient_address: list[str] = field(default_factory=list)
+    creator: str = ""
+    creator_address: list[str] = field(default_factory=list)
+    local: bool = False
+    tile_url: str | None = None  # None: the site's FTT_TILE_URL
+    no_tiles: bool = False
+    logo: str | None = None
+    # The original's min_dur: a short shift's timeline still spans this many
+    # hours, so timelines of several reports can be compared by eye.
+    min_timeline_hours: float = 0.0
+    # The original's zoom_level, as an upper bound: the zoom is still fitted to
+    # each track, but never closer than this (a tile server may stop at 17).
+    max_zoom: int = MAX_ZOOM
+    level: str = FULL
+    # Camera frames appear as thumbnails; with this each links to a full-size
+    # copy in an appendix (without it the report stays shorter).
+    image_appendix: bool = True
+
+    def problems(self) -> list[str]:
+        """What is out of range, in words for the person who asked."""
+        found = []
+        if not 0 <= self.min_timeline_hours <= MAX_TIMELINE_HOURS:
+            found.append(
+                f"The minimum timeline length must be between 0 and {MAX_TIMELINE_HOURS} hours."
+            )
+        if not 1 <= self.max_zoom <= MAX_ZOOM:
+            found.append(f"The maximum map zoom must be between 1 and {MAX_ZOOM}.")
+        if self.level not in dict(LEVELS):
+            found.append(f"The level must be one of {', '.join(dict(LEVELS))}.")
+        return found
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "ReportOptions":
+        known = {k: v for k, v in (data or {}).items() if k in cls.__dataclass_fields__}
+        return cls(**known)
+
+    def as_dict(self) -> dict:
+        return {k: getattr(self, k) for k in self.__dataclass_fields__}

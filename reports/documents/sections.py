@@ -1,0 +1,424 @@
+"""The sections of a test event's report as one JSON document for its typst
+template: title, event, global figures, a page per shift with its segments, the
+image appendix and the methods.  All times are in the test event's time zone."""
+
+import shutil
+from datetime import date, timedelta
+from pathlib import Path
+
+from django.conf import settings
+from django.utils import timezone
+
+from reports import formatting as fmt
+from reports.documents import tables
+from reports.documents.maps import TrackMaps, tile_source
+from reports.documents.options import FULL, STANDARD, ReportOptions
+from reports.documents.pictures import Pictures
+from reports.documents.typesetting import TEMPLATE_DIR
+from reports.figures import charts
+from reports.figures.sketch import track_sketch
+from reports.figures.timeline import draw_timeline
+from reports.selectors import content
+from reports.selectors.statistics import (
+    CONFIDENCE,
+    FORMULAS,
+    EventStatistics,
+    Figures,
+    event_statistics,
+)
+from telemetry.selectors.recordings import recordings_by_master, summary
+from telemetry.selectors.tracks import GAP_SECONDS, GPS, LOCAL
+
+DEFAULT_LOGO = TEMPLATE_DIR / "logo.svg"
+FONT_NOTE = (
+    "DejaVu Sans with WenQuanYi Micro Hei or Noto CJK for Chinese, Japanese and Korean, "
+    "and Noto Color Emoji for emoji"
+)
+# Points: the size of a segment's map sketch.
+SKETCH_SIZE = (190.0, 135.0)
+# Inches: the size of a shift's overview map.
+OVERVIEW_SIZE = (6.5, 4.8)
+MAX_GAPS_LISTED = 200
+
+
+class Sections:
+    """Builds the document; figure and picture files go into ``root``."""
+
+    def __init__(self, event, options: ReportOptions, root: Path, progress, time_stage):
+        self.event = event
+        self.options = options
+        self.root = root
+        self.progress = progress
+        self.time_stage = time_stage
+        self.tz = event.tzinfo
+        self.mode = LOCAL if options.local else GPS
+        self.warnings: list[str] = []
+        self.reasons = content.reasons_by_key()
+        self.pictures = Pictures(root, options.image_appendix, self.warnings, time_stage)
+        tiles = tile_source(event, options, self.mode)
+        self.maps = TrackMaps(self.mode, tiles, self.pictures, time_stage)
+        self.figure_count = 0
+        self.appendix: list[dict] = []
+
+    @property
+    def tiles_used(self) -> bool:
+        return self.maps.tiles_used
+
+    def _file(self, stem: str, suffix: str = ".png") -> Path:
+        self.figure_count += 1
+        return self.root / f"{stem}-{self.figure_count}{suffix}"
+
+    def document(self) -> dict:
+        event = self.event
+        self.progress(0.02, "statistics")
+        with self.time_stage("statistics (queries and distances)"):
+            stats = event_statistics(event, self.mode)
+        shifts = content.shifts_of(event)
+        self.legs = content.legs_by_shift(shifts)
+        self.notes = content.notes_by_master(event)
+        self.images = content.images_by_segment(event)
+        self.recordings = recordings_by_master(segment__leg__shift__test_event=event)
+        runs_by_shift = stats.runs_by_shift()
+        total_steps = 2 + len(shifts) + len(stats.runs)
+        self.step = 0
+
+        def tick(message):
+            self.step += 1
+            self.progress(0.05 + 0.9 * self.step / total_steps, message)
+
+        tick("global statistics")
+        global_section = self._global(stats, shifts)
+        shift_sections = []
+        for shift in shifts:
+            runs = runs_by_shift.get(shift.id, [])
+            shift_sections.append(self._shift(shift, stats.by_shift.get(shift.id), runs, tick))
+        return {
+            "title": self._title(),
+            "provisional": stats.provisional,
+            "event": self._event_rows(),
+            "mode": "GPS (WGS84)" if self.mode == GPS else "local map frame",
+            "global": global_section,
+            "shifts": shift_sections,
+            "level": self.options.level,
+            "appendix": self.appendix,
+            "methods": self._methods(stats, shifts),
+        }
+
+    def _title(self) -> dict:
+        o = self.options
+        site_logo = getattr(settings, "FTT_REPORT_LOGO", "")
+        logo = Path(o.logo or site_logo) if (o.logo or site_logo) else DEFAULT_LOGO
+        logo_name = None
+        if logo.exists():
+            logo_name = "logo" + logo.suffix.lower()
+            shutil.copy(logo, self.root / logo_name)
+        else:
+            self.warnings.append(f"Logo {logo} not found; the title page has none.")
+        return {
+            "name": o.name or f"Field test report: {self.event}",
+            "version": o.version,
+            "recipient": o.recipient,
+            "recipient_address": list(o.recipient_address),
+            "creator": o.creator,
+            "creator_address": list(o.creator_address),
+            "date": date.today().isoformat(),
+            "generated": fmt.timestamp(timezone.now(), self.tz),
+            "logo": logo_name,
+        }
+
+    def _event_rows(self) -> list:
+        e = self.event
+        return tables.label_rows(
+            [
+                ("Test event", str(e.pk)),
+                ("Location", e.location or fmt.DASH),
+                ("Software version", e.version or fmt.DASH),
+                ("Start", fmt.timestamp(e.start, self.tz)),
+                ("End", fmt.timestamp(e.end, self.tz) if e.end else "open"),
+                ("Time zone", e.time_zone),
+                ("Positions", "GPS (WGS84)" if self.mode == GPS else "local map frame"),
+                ("Note", e.note or fmt.DASH),
+            ]
+        )
+
+    def _global(self, stats: EventStatistics, shifts) -> dict:
+        empty = stats.overall  # same shape, used for shifts without runs
+        labels = [f"Shift {s.number}" for s in shifts]
+        per_shift = [stats.by_shift.get(s.id, empty) for s in shifts]
+        has = [s.id in stats.by_shift for s in shifts]
+        distance_rows = []
+        reliability_rows = []
+        for shift, f, present in zip(shifts, per_shift, has, strict=True):
+            head = [
+                f"Shift {shift.number}",
+                shift.vehicle.short_description,
+                tables.weather_text(self.legs[shift.id]),
+            ]
+            if not present:
+                distance_rows.append(head + [fmt.DASH] * 6)
+                reliability_rows.append(head[:1] + [fmt.DASH] * 7)
+                continue
+            distance_rows.append(head + tables.distance_cells(f))
+            reliability_rows.append(tables.reliability_row(head[0], f))
+        o = stats.overall
+        distance_rows.append(["Test event", "", ""] + tables.distance_cells(o))
+        reliability_rows.append(tables.reliability_row("Test event", o))
+        vehicles = {s.vehicle_id: s.vehicle for s in shifts}
+        vehicle_rows = [
+            tables.reliability_row(vehicles[vid].short_description, f)
+            for vid, f in stats.by_vehicle.items()
+        ]
+        reason_rows = []
+        for key in sorted(
+            set(o.manual_seconds_by_reason) | set(o.interventions_by_reason),
+            key=lambda k: self.reasons[k].short_description if k in self.reasons else k,
+        ):
+            reason = self.reasons.get(key)
+            reason_rows.append(
+                [
+                    reason.short_description if reason else key,
+                    "yes" if key in stats.counted_reasons else "no",
+                    str(o.interventions_by_reason.get(key, 0)),
+                    fmt.duration(o.manual_seconds_by_reason.get(key, 0.0)),
+                ]
+            )
+        present = [(lab, f) for lab, f, p in zip(labels, per_shift, has, strict=True) if p]
+        with self.time_stage("figures: charts"):
+            charts_out = self._charts(present)
+        return {
+            "summary": tables.figure_rows(o),
+            "distance_rows": distance_rows,
+            "reliability_rows": reliability_rows,
+            "vehicle_rows": vehicle_rows,
+            "reason_rows": reason_rows,
+            "charts": charts_out,
+        }
+
+    def _charts(self, present: list[tuple[str, Figures]]) -> list[str | None]:
+        if not present:
+            return []
+        names = [label for label, _ in present]
+        made = (
+            charts.distance_chart(
+                names,
+                [f.auto_distance for _, f in present],
+                [f.manual_distance for _, f in present],
+                str(self._file("distance", ".svg")),
+            ),
+            charts.reasons_chart(
+                names,
+                [f.interventions_by_reason for _, f in present],
+                self.reasons,
+                str(self._file("reasons", ".svg")),
+            ),
+        ) + tuple(
+            charts.estimate_chart(
+                names,
+                [getattr(f, key) for _, f in present],
+                str(self._file(key, ".svg")),
+                key.upper(),
+                unit,
+                scale=scale,
+            )
+            for key, unit, scale in (("mdbi", "m", 1.0), ("mtbi", "h", 3600.0))
+        )
+        return [_name(path) for path in made]
+
+    def _timeline(self, shift, runs) -> str | None:
+        with self.time_stage("figures: timelines"):
+            if not runs:
+                return None
+            weather_changes = [
+                (
+                    leg.start,
+                    leg.weather.short_description if leg.weather else "weather unknown",
+                    leg.weather.icon if leg.weather else "",
+                )
+                for leg in self.legs[shift.id]
+            ]
+            return _name(
+                draw_timeline(
+                    runs,
+                    self.reasons,
+                    weather_changes,
+                    self.tz,
+                    # SVG: no rasterising and PNG encoding, and its text stays sharp.
+                    str(self._file("timeline", ".svg")),
+                    min_span=timedelta(hours=self.options.min_timeline_hours),
+                )
+            )
+
+    def _shift(self, shift, f: Figures | None, runs, tick) -> dict:
+        tz = self.tz
+        starts = [r.start for r in runs] + [shift.start]
+        ends = [r.end for r in runs] + ([shift.end] if shift.end else [])
+        summary_rows = tables.label_rows(
+            [
+                ("Shift", str(shift.number)),
+                ("Start", fmt.timestamp(min(starts), tz)),
+                ("End", fmt.timestamp(max(ends), tz) if shift.end else "open"),
+                ("Test director", tables.person_text(shift.test_director)),
+                ("Test administrator", tables.person_text(shift.test_administrator)),
+                ("Robot operator", tables.person_text(shift.robot_operator)),
+                ("Safety officer", tables.person_text(shift.safety_officer)),
+                ("Performer", shift.performer.institution if shift.performer else fmt.DASH),
+                ("Vehicle", shift.vehicle.short_description),
+                ("Test intent", shift.test_intent or fmt.DASH),
+                ("Workspace", shift.workspace or fmt.DASH),
+                ("Weather", tables.weather_text(self.legs[shift.id])),
+                ("Note", shift.note or fmt.DASH),
+            ]
+        )
+        overview, overview_note = self.maps.draw(runs, shift, self._file, OVERVIEW_SIZE)
+        timeline = self._timeline(shift, runs)
+        tick(f"shift {shift.number}")
+        legs = {leg.id: leg for leg in self.legs[shift.id]}
+        segments = []
+        level = self.options.level
+        for index, run in enumerate(runs, start=1):
+            if level == FULL or (level == STANDARD and run.kind == "ito"):
+                segments.append(self._segment(run, legs[run.leg_id], full=level == FULL))
+            tick(f"shift {shift.number}, segment {index}")
+        return {
+            "title": f"Shift {shift.number}: {fmt.timestamp(min(starts), tz)} – "
+            + (fmt.timestamp(max(ends), tz) if shift.end else "open"),
+            "summary": summary_rows,
+            "figures": tables.figure_rows(f) if f is not None else [],
+            "mode_rows": tables.mode_rows(f) if f is not None else [],
+            "map": overview,
+            "map_note": overview_note,
+            "timeline": timeline,
+            "timeline_note": "" if timeline else "No segments to draw.",
+            "segments": segments,
+        }
+
+    def _segment(self, run, leg, full: bool) -> dict:
+        tz = self.tz
+        spans = sorted(run.reasons, key=lambda s: (s.start, s.id))
+
+        def joined(attr):
+            values = [getattr(s, attr) for s in spans if getattr(s, attr)]
+            return ", ".join(values) or fmt.DASH
+
+        reasons = ", ".join(
+            (self.reasons[s.reason].short_description if s.reason in self.reasons else s.reason)
+            + (" (counted)" if s.reason in run.counted_reasons else "")
+            for s in spans
+        )
+        rows = tables.label_rows(
+            [
+                ("Segment", run.label),
+                ("Type", run.kind.upper()),
+                ("Start", fmt.timestamp(run.start, tz)),
+                ("End", fmt.timestamp(run.end, tz) + (" (still open)" if run.is_open else "")),
+                ("Duration", fmt.duration(run.seconds)),
+                ("Distance", fmt.metres(run.distance)),
+                ("Poses", str(run.pose_count)),
+                ("Database id", str(run.id)),
+                ("Reason(s)", reasons or fmt.DASH),
+                ("Obstacle", joined("obstacle")),
+                ("Lighting", joined("lighting")),
+                ("Slope", joined("slope")),
+                ("Weather", leg.weather.short_description if leg.weather else "unknown"),
+            ]
+            + [
+                ("Snapshot", f"{summary(r)}, {fmt.clock(r.start, tz)}–{fmt.clock(r.end, tz)}")
+                for r in self.recordings.get(run.id, [])
+            ]
+        )
+        notes = [
+            {
+                "author": note.author.name if note.author else "unknown author",
+                "time": fmt.timestamp(note.created, tz),
+                "text": note.text,
+            }
+            for note in self.notes.get(run.id, [])
+        ]
+        sketch = None
+        if full:
+            sketch = track_sketch(run.path_x, run.path_y, self.mode, *SKETCH_SIZE)
+        return {
+            "anchor": f"segment-{run.id}",
+            "title": f"{run.label} · {run.kind.upper()} at {fmt.clock(run.start, tz)}",
+            "open": run.is_open,
+            "rows": rows,
+            "notes": notes,
+            "sketch": sketch,
+            "map_note": "" if sketch or not full else "No positions recorded.",
+            "images": self._images(run),
+        }
+
+    def _images(self, run) -> list[dict]:
+        """A segment's camera frames; with the appendix, each links to its full size."""
+        images = []
+        for image in self.images.get(run.id, []):
+            picture = self.pictures.camera(image)
+            if picture is None:
+                continue
+            caption = image.description or "Camera image"
+            entry = {"thumb": picture[0], "caption": caption, "anchor": None}
+            if self.options.image_appendix:
+                entry["anchor"] = f"image-{len(self.appendix) + 1}"
+                self.appendix.append(
+                    {
+                        "anchor": entry["anchor"],
+                        "path": picture[1],
+                        "caption": f"{run.label}: {caption}",
+                        "segment": f"segment-{run.id}",
+                    }
+                )
+            images.append(entry)
+        return images
+
+    def _methods(self, stats: EventStatistics, shifts) -> dict:
+        number = {s.id: s.number for s in shifts}
+        runs = stats.runs
+        without_poses = [
+            f"Shift {number[r.shift_id]}, {r.label} ({r.kind.upper()}) "
+            f"({fmt.timestamp(r.start, self.tz)})"
+            for r in runs
+            if r.pose_count == 0
+        ]
+        gaps = []
+        no_fix = 0
+        for r in runs:
+            if r.track is None:
+                continue
+            no_fix += r.track.no_fix
+            for a, b in r.track.gaps:
+                gaps.append(
+                    f"Shift {number[r.shift_id]}, {r.label}: "
+                    f"{fmt.timestamp(a, self.tz)} – {fmt.clock(b, self.tz)} "
+                    f"({fmt.duration((b - a).total_seconds())})"
+                )
+        no_start = [
+            f"Shift {number[r.shift_id]}, {r.label}" for r in runs if not r.has_start_position
+        ]
+        counted = [
+            self.reasons[k].short_description for k in stats.counted_reasons if k in self.reasons
+        ]
+        not_counted = [
+            r.short_description
+            for k, r in sorted(self.reasons.items())
+            if k not in stats.counted_reasons
+        ]
+        return {
+            "formulas": [list(pair) for pair in FORMULAS],
+            "counted": counted,
+            "not_counted": not_counted,
+            "confidence": f"{round(CONFIDENCE * 100)} %",
+            "time_zone": self.event.time_zone,
+            "gap_seconds": f"{GAP_SECONDS:g}",
+            "without_poses": without_poses,
+            "gaps": gaps[:MAX_GAPS_LISTED],
+            "gaps_more": max(0, len(gaps) - MAX_GAPS_LISTED),
+            "no_fix": no_fix,
+            "no_start": no_start,
+            "tiles": self.maps.tiles_note(),
+            "fonts": FONT_NOTE,
+            "warnings": self.warnings,
+        }
+
+
+def _name(path) -> str | None:
+    return None if path is None else Path(path).name

@@ -1,0 +1,95 @@
+"""The report's tables: rows of labels and formatted figures."""
+
+from reports import formatting as fmt
+from reports.selectors.statistics import CONFIDENCE, Figures
+
+
+def label_rows(pairs) -> list[list[str]]:
+    return [[label, value] for label, value in pairs]
+
+
+def person_text(person) -> str:
+    if person is None:
+        return fmt.DASH
+    return f"{person.name} ({person.institution})" if person.institution else person.name
+
+
+def weather_text(legs) -> str:
+    """The weather of a shift's legs in time order, a repeat named once."""
+    names = []
+    for leg in legs:
+        label = leg.weather.short_description if leg.weather else "unknown"
+        if not names or names[-1] != label:
+            names.append(label)
+    return ", ".join(names) or "unknown"
+
+
+def figure_rows(f: Figures) -> list:
+    conf = f"{round(CONFIDENCE * 100)} %"
+    return label_rows(
+        [
+            ("Total distance", fmt.metres(f.total_distance)),
+            ("Autonomous distance", fmt.metres(f.auto_distance)),
+            ("Manual (ITO) distance", fmt.metres(f.manual_distance)),
+            ("Autonomy by distance", fmt.percent(f.autonomy_ratio_distance)),
+            ("Autonomous time", fmt.duration(f.auto_seconds)),
+            ("Manual (ITO) time", fmt.duration(f.manual_seconds)),
+            ("Autonomy by time", fmt.percent(f.autonomy_ratio_time)),
+            ("Autonomous runs", str(f.auto_runs)),
+            ("Mean autonomous run", fmt.metres(f.mean_auto_run)),
+            ("Longest autonomous run", fmt.metres(f.max_auto_run)),
+            ("Interventions", str(f.interventions)),
+            ("MDBI", fmt.estimate(f.mdbi, fmt.metres)),
+            (f"MDBI {conf} bounds", fmt.bounds(f.mdbi, fmt.metres)),
+            ("MTBI", fmt.estimate(f.mtbi, fmt.duration)),
+            (f"MTBI {conf} bounds", fmt.bounds(f.mtbi, fmt.duration)),
+            ("Interventions per km", fmt.rate(f.interventions_per_km)),
+            ("Interventions per hour", fmt.rate(f.interventions_per_hour)),
+        ]
+    )
+
+
+def reliability_row(label, f: Figures) -> list:
+    return [
+        label,
+        str(f.interventions),
+        fmt.estimate(f.mdbi, fmt.metres),
+        fmt.bounds(f.mdbi, fmt.metres),
+        fmt.estimate(f.mtbi, fmt.duration),
+        fmt.bounds(f.mtbi, fmt.duration),
+        fmt.rate(f.interventions_per_km),
+        fmt.rate(f.interventions_per_hour),
+    ]
+
+
+def distance_cells(f: Figures) -> list:
+    return [
+        fmt.metres(f.total_distance),
+        fmt.metres(f.auto_distance),
+        fmt.percent(f.autonomy_ratio_distance),
+        fmt.percent(f.autonomy_ratio_time),
+        fmt.metres(f.mean_auto_run),
+        fmt.metres(f.max_auto_run),
+    ]
+
+
+def mode_rows(f: Figures) -> list:
+    """One row per mode: runs, interventions, time, distance and speed."""
+    rows = []
+    for label, count, seconds, distance, extra in (
+        ("AUTO", f.auto_runs, f.auto_seconds, f.auto_distance, fmt.DASH),
+        ("ITO", f.ito_runs, f.manual_seconds, f.manual_distance, str(f.interventions)),
+    ):
+        kmh = fmt.DASH if seconds <= 0 else f"{distance / seconds * 3.6:.2f} km/h"
+        rows.append(
+            [
+                label,
+                str(count),
+                extra,
+                fmt.duration(seconds),
+                fmt.metres(distance),
+                fmt.speed(distance, seconds),
+                kmh,
+            ]
+        )
+    return rows
