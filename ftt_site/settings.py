@@ -4,6 +4,7 @@ Everything that differs between a laptop on the test field and a production
 server comes from ``FTT_*`` environment variables; README.md lists them.
 """
 
+import ipaddress
 from datetime import timedelta
 from pathlib import Path
 from urllib.parse import urlsplit
@@ -65,6 +66,8 @@ SECURE_HSTS_PRELOAD = HTTPS
 FTT_BEHIND_PROXY = env_bool("FTT_BEHIND_PROXY", False)
 if FTT_BEHIND_PROXY:
     SECURE_PROXY_SSL_HEADER = ("HTTP_X_FORWARDED_PROTO", "https")
+# A load balancer's health probes may come over plain HTTP.
+SECURE_REDIRECT_EXEMPT = [r"^healthz$", r"^readyz$"]
 SECURE_CONTENT_TYPE_NOSNIFF = True
 SECURE_REFERRER_POLICY = "same-origin"
 X_FRAME_OPTIONS = "DENY"
@@ -93,6 +96,7 @@ INSTALLED_APPS = [
     "channels",
     "django_tasks",
     "django_tasks_db",
+    "django_prometheus",
     "ftt_site",
     "common",
     "events",
@@ -107,6 +111,8 @@ INSTALLED_APPS = [
 ]
 
 MIDDLEWARE = [
+    # First and last: request counts and latencies for /metrics (ftt_site.metrics).
+    "django_prometheus.middleware.PrometheusBeforeMiddleware",
     "django.middleware.security.SecurityMiddleware",
     "whitenoise.middleware.WhiteNoiseMiddleware",
     "django.contrib.sessions.middleware.SessionMiddleware",
@@ -119,6 +125,7 @@ MIDDLEWARE = [
     "csp.middleware.CSPMiddleware",
     # Last: turns a lockout on any login path into one answer (ftt_site.lockout).
     "axes.middleware.AxesMiddleware",
+    "django_prometheus.middleware.PrometheusAfterMiddleware",
 ]
 
 # Failed logins on every path (GUI, admin, /api/token/) are counted by
@@ -376,3 +383,15 @@ LEAFLET_CONFIG = {
     "DEFAULT_ZOOM": 3,
     "RESET_VIEW": False,
 }
+
+# Monitoring (README, Monitoring): who may read /metrics (a bearer token, or a
+# client address in these networks), and the free disk below which /readyz
+# answers 503.
+FTT_METRICS_TOKEN = env_str("FTT_METRICS_TOKEN", "")
+FTT_METRICS_NETWORKS = [
+    ipaddress.ip_network(net, strict=False)
+    for net in env_list("FTT_METRICS_ADDRESSES", "127.0.0.1/32,::1/128")
+]
+FTT_READY_MIN_FREE_MB = env_int("FTT_READY_MIN_FREE_MB", 1024)
+# The migrations' state is read by /readyz, not at every start.
+PROMETHEUS_EXPORT_MIGRATIONS = False
