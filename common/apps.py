@@ -11,9 +11,11 @@ class CommonConfig(AppConfig):
     def ready(self):
         from django.contrib.auth import get_user_model
         from django.contrib.auth.models import Group
+        from django_auth_ldap.backend import populate_user
         from rest_framework.authtoken.models import Token
 
         from common.api.authentication import known_tokens
+        from common.directory import apply_directory_role
         from common.metrics import observe_pool
 
         # Whatever may revoke or change what a kept token grants.
@@ -29,3 +31,4 @@ class CommonConfig(AppConfig):
             weak=False,
             dispatch_uid="ftt-pool-gauges",
         )
+        populate_user.connect(apply_directory_role, dispatch_uid="ftt-directory-role")

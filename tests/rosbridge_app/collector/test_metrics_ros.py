@@ -54,11 +54,9 @@ def test_a_scrape_follows_a_simulated_robot(start_collector, procs, client):
 
     def moved():
         later.update(figures(client))
-        return (
-            stored(later) > stored(first)
-            and later.get(("ftt_collector_input_messages_total", gps), 0)
-            > first.get(("ftt_collector_input_messages_total", gps), 0)
-        )
+        return stored(later) > stored(first) and later.get(
+            ("ftt_collector_input_messages_total", gps), 0
+        ) > first.get(("ftt_collector_input_messages_total", gps), 0)
 
     wait_for(moved, 20, what="the stored records and GPS messages counted up")
     assert later[("ftt_collector_input_last_message_age_seconds", gps)] < 5
