@@ -13,6 +13,7 @@ urlpatterns = [
     path("admin/", admin.site.urls),
     path("api/", include("ftt_site.api_urls")),
     path("tiles/", include("basemaps.urls")),
+    path("legacy/", include("rosbridge_app.legacy_api.urls")),
     path("", include("gui.urls")),
 ]
 
