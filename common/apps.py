@@ -1,4 +1,6 @@
 from django.apps import AppConfig
+from django.core.signals import request_finished
+from django.db import connection
 from django.db.models.signals import m2m_changed, post_delete, post_save
 
 
@@ -9,9 +11,12 @@ class CommonConfig(AppConfig):
     def ready(self):
         from django.contrib.auth import get_user_model
         from django.contrib.auth.models import Group
+        from django_auth_ldap.backend import populate_user
         from rest_framework.authtoken.models import Token
 
         from common.api.authentication import known_tokens
+        from common.directory import apply_directory_role
+        from common.metrics import observe_pool
 
         # Whatever may revoke or change what a kept token grants.
         user = get_user_model()
@@ -19,3 +24,11 @@ class CommonConfig(AppConfig):
             post_save.connect(known_tokens.clear, sender=sender, weak=False)
             post_delete.connect(known_tokens.clear, sender=sender, weak=False)
         m2m_changed.connect(known_tokens.clear, sender=user.groups.through, weak=False)
+
+        # The pool gauges follow each request's end (common.metrics).
+        request_finished.connect(
+            lambda **kwargs: observe_pool(getattr(connection, "pool", None)),
+            weak=False,
+            dispatch_uid="ftt-pool-gauges",
+        )
+        populate_user.connect(apply_directory_role, dispatch_uid="ftt-directory-role")

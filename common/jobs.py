@@ -86,6 +86,14 @@ def worker_running(now=None) -> bool:
     return JobWorker.objects.filter(beat__gte=now - DEAD_AFTER).exists()
 
 
+def queue_state(now=None) -> tuple[int, float]:
+    """Jobs waiting for a worker, and how long the oldest has waited (s)."""
+    now = now or timezone.now()
+    waiting = DBTaskResult.objects.filter(status=TaskResultStatus.READY)
+    oldest = waiting.order_by("enqueued_at").values_list("enqueued_at", flat=True).first()
+    return waiting.count(), (now - oldest).total_seconds() if oldest else 0.0
+
+
 def _alive(worker: JobWorker | None, now) -> bool:
     if worker is None or worker.beat < now - DEAD_AFTER:
         return False

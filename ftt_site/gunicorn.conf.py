@@ -8,6 +8,12 @@ first). README's production section explains the choice and the budget.
 
 import gc
 import os
+import shutil
+import tempfile
+
+# Every worker writes its metric values here; /metrics adds them up
+# (ftt_site.metrics). Set before the application, and prometheus_client, load.
+os.environ["PROMETHEUS_MULTIPROC_DIR"] = tempfile.mkdtemp(prefix="ftt-metrics-")
 
 bind = os.environ.get("FTT_BIND", "127.0.0.1:8000")
 workers = int(os.environ.get("FTT_WEB_WORKERS", "2"))
@@ -40,3 +46,14 @@ def on_starting(server):
     # one every other request (benchmarks/api_throughput.py).  The forked
     # workers inherit the frozen set, and their pages of it stay shared.
     gc.freeze()
+
+
+def child_exit(server, worker):
+    """A dead worker's live gauges no longer count."""
+    from prometheus_client import multiprocess
+
+    multiprocess.mark_process_dead(worker.pid)
+
+
+def on_exit(server):
+    shutil.rmtree(os.environ["PROMETHEUS_MULTIPROC_DIR"], ignore_errors=True)

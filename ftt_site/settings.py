@@ -4,7 +4,10 @@ Everything that differs between a laptop on the test field and a production
 server comes from ``FTT_*`` environment variables; README.md lists them.
 """
 
+import ipaddress
 from datetime import timedelta
+from functools import reduce
+from operator import or_
 from pathlib import Path
 from urllib.parse import urlsplit
 
@@ -14,8 +17,15 @@ sqlite_shim.install()
 native_libs.preload()
 
 import dj_database_url  # noqa: E402
+import ldap  # noqa: E402
 from csp.constants import NONE, SELF, UNSAFE_INLINE  # noqa: E402
 from django.core.management.utils import get_random_secret_key  # noqa: E402
+from django_auth_ldap.config import (  # noqa: E402
+    GroupOfNamesType,
+    LDAPGroupQuery,
+    LDAPSearch,
+    NestedActiveDirectoryGroupType,
+)
 
 from ftt_site.env import (  # noqa: E402
     env_bool,
@@ -65,6 +75,8 @@ SECURE_HSTS_PRELOAD = HTTPS
 FTT_BEHIND_PROXY = env_bool("FTT_BEHIND_PROXY", False)
 if FTT_BEHIND_PROXY:
     SECURE_PROXY_SSL_HEADER = ("HTTP_X_FORWARDED_PROTO", "https")
+# A load balancer's health probes may come over plain HTTP.
+SECURE_REDIRECT_EXEMPT = [r"^healthz$", r"^readyz$"]
 SECURE_CONTENT_TYPE_NOSNIFF = True
 SECURE_REFERRER_POLICY = "same-origin"
 X_FRAME_OPTIONS = "DENY"
@@ -93,6 +105,7 @@ INSTALLED_APPS = [
     "channels",
     "django_tasks",
     "django_tasks_db",
+    "django_prometheus",
     "ftt_site",
     "common",
     "events",
@@ -107,6 +120,8 @@ INSTALLED_APPS = [
 ]
 
 MIDDLEWARE = [
+    # First and last: request counts and latencies for /metrics (ftt_site.metrics).
+    "django_prometheus.middleware.PrometheusBeforeMiddleware",
     "django.middleware.security.SecurityMiddleware",
     "whitenoise.middleware.WhiteNoiseMiddleware",
     "django.contrib.sessions.middleware.SessionMiddleware",
@@ -119,6 +134,7 @@ MIDDLEWARE = [
     "csp.middleware.CSPMiddleware",
     # Last: turns a lockout on any login path into one answer (ftt_site.lockout).
     "axes.middleware.AxesMiddleware",
+    "django_prometheus.middleware.PrometheusAfterMiddleware",
 ]
 
 # Failed logins on every path (GUI, admin, /api/token/) are counted by
@@ -376,3 +392,56 @@ LEAFLET_CONFIG = {
     "DEFAULT_ZOOM": 3,
     "RESET_VIEW": False,
 }
+
+# Monitoring (README, Monitoring): who may read /metrics (a bearer token, or a
+# client address in these networks), and the free disk below which /readyz
+# answers 503.
+FTT_METRICS_TOKEN = env_str("FTT_METRICS_TOKEN", "")
+FTT_METRICS_NETWORKS = [
+    ipaddress.ip_network(net, strict=False)
+    for net in env_list("FTT_METRICS_ADDRESSES", "127.0.0.1/32,::1/128")
+]
+FTT_READY_MIN_FREE_MB = env_int("FTT_READY_MIN_FREE_MB", 1024)
+# The migrations' state is read by /readyz, not at every start.
+PROMETHEUS_EXPORT_MIGRATIONS = False
+
+# Sign-in from a directory (README, Directory sign-in): with FTT_LDAP_SERVER_URI
+# set, django-auth-ldap checks passwords against LDAP or Active Directory after
+# the local accounts; a directory user gets the FTT role of the highest role
+# group they are in (common.directory), and one in none of them is refused.
+FTT_LDAP_ROLE_GROUPS = {
+    role: env_str(f"FTT_LDAP_{role.upper()}_GROUP")
+    for role in ("viewer", "operator", "administrator")
+    if env_str(f"FTT_LDAP_{role.upper()}_GROUP")
+}
+if env_str("FTT_LDAP_SERVER_URI"):
+    if not FTT_LDAP_ROLE_GROUPS:
+        raise ValueError(
+            "FTT_LDAP_SERVER_URI needs FTT_LDAP_VIEWER_GROUP, FTT_LDAP_OPERATOR_GROUP "
+            "or FTT_LDAP_ADMINISTRATOR_GROUP: directory users without a role cannot sign in"
+        )
+    AUTHENTICATION_BACKENDS.insert(1, "django_auth_ldap.backend.LDAPBackend")
+    AUTH_LDAP_SERVER_URI = env_str("FTT_LDAP_SERVER_URI")
+    AUTH_LDAP_START_TLS = env_bool("FTT_LDAP_START_TLS", False)
+    AUTH_LDAP_BIND_DN = env_str("FTT_LDAP_BIND_DN")
+    AUTH_LDAP_BIND_PASSWORD = env_str("FTT_LDAP_BIND_PASSWORD")
+    AUTH_LDAP_USER_SEARCH = LDAPSearch(
+        env_str("FTT_LDAP_USER_BASE"),
+        ldap.SCOPE_SUBTREE,
+        env_str("FTT_LDAP_USER_FILTER", "(uid=%(user)s)"),
+    )
+    AUTH_LDAP_GROUP_SEARCH = LDAPSearch(
+        env_str("FTT_LDAP_GROUP_BASE", env_str("FTT_LDAP_USER_BASE")), ldap.SCOPE_SUBTREE
+    )
+    AUTH_LDAP_GROUP_TYPE = (
+        NestedActiveDirectoryGroupType()
+        if env_str("FTT_LDAP_GROUP_TYPE", "groupOfNames") == "active_directory"
+        else GroupOfNamesType()
+    )
+    AUTH_LDAP_USER_ATTR_MAP = {"first_name": "givenName", "last_name": "sn", "email": "mail"}
+    AUTH_LDAP_REQUIRE_GROUP = reduce(or_, map(LDAPGroupQuery, FTT_LDAP_ROLE_GROUPS.values()))
+    if env_str("FTT_LDAP_DENY_GROUP"):
+        AUTH_LDAP_DENY_GROUP = env_str("FTT_LDAP_DENY_GROUP")
+    if "administrator" in FTT_LDAP_ROLE_GROUPS:
+        AUTH_LDAP_USER_FLAGS_BY_GROUP = {"is_staff": FTT_LDAP_ROLE_GROUPS["administrator"]}
+    AUTH_LDAP_CACHE_TIMEOUT = 300

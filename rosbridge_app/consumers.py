@@ -24,6 +24,7 @@ from django.db import connections
 from psycopg import AsyncConnection
 
 from common import roles
+from common.metrics import LIVE_CONNECTIONS
 from common.sql import conninfo
 from events import feed
 from events.api.serializers import touched_rows
@@ -239,6 +240,7 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
         self.sent: set[int] = set()
         self.poller = OutboxPoller.for_loop()
         await self.accept()
+        LIVE_CONNECTIONS.inc()
         await self.poller.add(self)
         if getattr(settings, "REDIS_URL", "") and self.channel_layer is not None:
             await self.channel_layer.group_add(GROUP, self.channel_name)
@@ -263,6 +265,7 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
             guard.cancel()
         poller = getattr(self, "poller", None)
         if poller is not None:
+            LIVE_CONNECTIONS.dec()
             poller.remove(self)
             if getattr(settings, "REDIS_URL", "") and self.channel_layer is not None:
                 await self.channel_layer.group_discard(GROUP, self.channel_name)

@@ -41,6 +41,9 @@ class Collector(models.Model):
     pending = models.PositiveIntegerField(
         default=0, help_text="Records spooled on the robot, not yet in the database."
     )
+    stored = models.PositiveBigIntegerField(
+        default=0, help_text="Records written to the database since the collector started."
+    )
     hearing = models.CharField(
         max_length=300,
         blank=True,

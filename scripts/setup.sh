@@ -42,13 +42,16 @@ needs=(
     "libgeos-c1v5|libgeos-c1t64"
     "libproj25"
     "libsqlite3-mod-spatialite"
+    # python-ldap (directory sign-in) is built from source against these.
+    "libldap2-dev"
+    "libsasl2-dev"
 )
 base_python=${FTT_PYTHON:-python3}
 if ! venv_ok && ! python_ok "$base_python"; then
     needs+=("python3" "python3-venv")
 fi
 if [ "$FTT_SETUP_MODE" = test ]; then
-    needs+=("redis-server" "chromium|chromium-browser" "poppler-utils" "shellcheck")
+    needs+=("redis-server" "chromium|chromium-browser" "poppler-utils" "shellcheck" "slapd")
     # A configured database needs no local server.
     if [ -z "${FTT_DATABASE_URL:-}" ]; then
         pg=$(ftt_pg_major)

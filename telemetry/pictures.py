@@ -42,3 +42,13 @@ def checked_picture(content: bytes, formats: dict[str, str] = PHOTO_FORMATS) -> 
         raise
     except (OSError, SyntaxError, ValueError, EOFError, PilImage.DecompressionBombError, KeyError):
         raise ValidationError({"image": [f"Not a readable {names} image."]}) from None
+
+
+def greyscale_png(content: bytes) -> bytes:
+    """A photo-format picture as the greyscale PNG a map is kept as (the original FTT
+    sent and stored its maps as greyscale JPEG)."""
+    checked_picture(content)
+    with PilImage.open(io.BytesIO(content)) as picture:
+        out = io.BytesIO()
+        picture.convert("L").save(out, format="PNG")
+        return out.getvalue()

@@ -187,6 +187,8 @@ class CollectorRuntime:
         self.events: queue.Queue = queue.Queue()
         self.status = Status()
         self.collector = None
+        # Records written since start; the heartbeat reports it for monitoring.
+        self.stored = 0
         self._said_no_leg = None
         self._db_down_since = None
         self._last_mode_logged = None
@@ -339,9 +341,11 @@ class CollectorRuntime:
                 retry_at = time.monotonic() + RETRY
 
     def _write_batch(self) -> bool:
-        if not self.order.write_next(self.recorder):
+        taken = self.order.write_next(self.recorder)
+        if not taken:
             self.status.pending = 0
             return False
+        self.stored += taken
         self.status.pending = len(self.outbox)
         if not self.startup.reported and self.startup.has("first message received"):
             self.startup.mark("first record stored after it")
@@ -400,6 +404,7 @@ class CollectorRuntime:
             "leg": leg,
             "state": self.status.describe(),
             "pending": len(self.outbox),
+            "stored": self.stored,
             "parameters": self.node.current_parameters(),
             "topics": list(self.node.topics),
             "inputs": {k: dict(v) for k, v in self.node.inputs.items()},

@@ -2,6 +2,8 @@
 
 from collections import defaultdict
 
+from django.db.models import Count
+
 from telemetry.models import Recording
 
 
@@ -21,3 +23,9 @@ def summary(recording: Recording) -> str:
         f"{recording} ({recording.duration:.0f} s, {recording.message_count} messages, "
         f"{recording.size / 1e6:.1f} MB; {topics})"
     )
+
+
+def snapshots_per_vehicle() -> dict[int, int]:
+    """{vehicle id: snapshots stored for it}, for monitoring."""
+    rows = Recording.objects.values("segment__leg__shift__vehicle").annotate(n=Count("id"))
+    return {row["segment__leg__shift__vehicle"]: row["n"] for row in rows}

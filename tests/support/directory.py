@@ -1,0 +1,144 @@
+"""A real OpenLDAP server (Debian's slapd) on loopback with a small directory."""
+
+import shutil
+import subprocess
+import textwrap
+import time
+from pathlib import Path
+
+import ldap
+from ldap import modlist
+
+from tests.support.drill import free_port
+
+BASE = "dc=ftt,dc=test"
+ADMIN_DN = f"cn=admin,{BASE}"
+ADMIN_PASSWORD = "directory-admin-pw"
+PEOPLE = f"ou=people,{BASE}"
+GROUPS = f"ou=groups,{BASE}"
+ROLE_GROUPS = {
+    "viewer": f"cn=ftt-viewers,{GROUPS}",
+    "operator": f"cn=ftt-operators,{GROUPS}",
+    "administrator": f"cn=ftt-administrators,{GROUPS}",
+}
+DISABLED_GROUP = f"cn=disabled,{GROUPS}"
+# uid: (given name, surname, password, groups)
+PERSONS = {
+    "vera": ("Vera", "Viewer", "vera-pw-1", [ROLE_GROUPS["viewer"]]),
+    "otto": ("Otto", "Operator", "otto-pw-1", [ROLE_GROUPS["viewer"], ROLE_GROUPS["operator"]]),
+    "alma": ("Alma", "Admin", "alma-pw-1", [ROLE_GROUPS["administrator"]]),
+    "nora": ("Nora", "Nogroup", "nora-pw-1", []),
+    "dora": ("Dora", "Disabled", "dora-pw-1", [ROLE_GROUPS["operator"], DISABLED_GROUP]),
+}
+
+
+def slapd_available() -> bool:
+    return shutil.which("slapd") is not None or Path("/usr/sbin/slapd").exists()
+
+
+def person_dn(uid: str) -> str:
+    return f"uid={uid},{PEOPLE}"
+
+
+class Directory:
+    def __init__(self, folder: Path):
+        self.folder = folder
+        self.port = free_port()
+        self.uri = f"ldap://127.0.0.1:{self.port}/"
+        self.process = None
+
+    def environment(self) -> dict[str, str]:
+        """FTT's settings for this directory, as an administrator would set them."""
+        return {
+            "FTT_LDAP_SERVER_URI": self.uri,
+            "FTT_LDAP_BIND_DN": ADMIN_DN,
+            "FTT_LDAP_BIND_PASSWORD": ADMIN_PASSWORD,
+            "FTT_LDAP_USER_BASE": PEOPLE,
+            "FTT_LDAP_GROUP_BASE": GROUPS,
+            "FTT_LDAP_VIEWER_GROUP": ROLE_GROUPS["viewer"],
+            "FTT_LDAP_OPERATOR_GROUP": ROLE_GROUPS["operator"],
+            "FTT_LDAP_ADMINISTRATOR_GROUP": ROLE_GROUPS["administrator"],
+            "FTT_LDAP_DENY_GROUP": DISABLED_GROUP,
+        }
+
+    def start(self) -> "Directory":
+        (self.folder / "db").mkdir(parents=True)
+        config = self.folder / "slapd.conf"
+        config.write_text(
+            textwrap.dedent(
+                f"""\
+                include /etc/ldap/schema/core.schema
+                include /etc/ldap/schema/cosine.schema
+                include /etc/ldap/schema/inetorgperson.schema
+                include /etc/ldap/schema/nis.schema
+                modulepath /usr/lib/ldap
+                moduleload back_mdb
+                pidfile {self.folder}/slapd.pid
+                database mdb
+                suffix "{BASE}"
+                rootdn "{ADMIN_DN}"
+                rootpw {ADMIN_PASSWORD}
+                directory {self.folder}/db
+                """
+            )
+        )
+        log = open(self.folder / "slapd.log", "w")  # noqa: SIM115 - open while it runs
+        self.process = subprocess.Popen(
+            ["slapd", "-f", str(config), "-h", self.uri, "-d", "0"],
+            stdout=log,
+            stderr=subprocess.STDOUT,
+        )
+        self._fill(self._admin_connection())
+        return self
+
+    def _admin_connection(self):
+        deadline = time.monotonic() + 20
+        while True:
+            connection = ldap.initialize(self.uri)
+            try:
+                connection.simple_bind_s(ADMIN_DN, ADMIN_PASSWORD)
+                return connection
+            except ldap.SERVER_DOWN:
+                if self.process.poll() is not None or time.monotonic() > deadline:
+                    raise RuntimeError((self.folder / "slapd.log").read_text()[-2000:]) from None
+                time.sleep(0.1)
+
+    def _fill(self, connection) -> None:
+        def add(dn, **attributes):
+            encoded = {
+                key: [v.encode() for v in (value if isinstance(value, list) else [value])]
+                for key, value in attributes.items()
+            }
+            connection.add_s(dn, modlist.addModlist(encoded))
+
+        add(BASE, objectClass=["dcObject", "organization"], dc="ftt", o="FTT test")
+        add(PEOPLE, objectClass="organizationalUnit", ou="people")
+        add(GROUPS, objectClass="organizationalUnit", ou="groups")
+        members: dict[str, list[str]] = {dn: [] for dn in [*ROLE_GROUPS.values(), DISABLED_GROUP]}
+        for uid, (given, surname, password, groups) in PERSONS.items():
+            add(
+                person_dn(uid),
+                objectClass="inetOrgPerson",
+                uid=uid,
+                cn=f"{given} {surname}",
+                givenName=given,
+                sn=surname,
+                mail=f"{uid}@ftt.test",
+                userPassword=password,
+            )
+            for group in groups:
+                members[group].append(person_dn(uid))
+        for dn, people in members.items():
+            # groupOfNames needs a member: the admin stands in for an empty group.
+            add(
+                dn,
+                objectClass="groupOfNames",
+                cn=dn.split(",")[0][3:],
+                member=people or [ADMIN_DN],
+            )
+        connection.unbind_s()
+
+    def stop(self) -> None:
+        if self.process is not None and self.process.poll() is None:
+            self.process.terminate()
+            self.process.wait(10)
