@@ -9,6 +9,8 @@ from its id, its start time and its parent's uid, so reading the same database
 import uuid
 from pathlib import Path
 
+from django.core.exceptions import ValidationError
+
 from events.models import (
     ItoReason,
     Leg,
@@ -33,12 +35,12 @@ from exchange.legacy.values import (
     point_xy,
     rgb_colour,
     to_float,
-    to_grey_png,
     to_int,
     to_text,
     to_time,
 )
 from telemetry.models import Image
+from telemetry.pictures import greyscale_png
 
 # Fixed, so that uids stay the same from one run (and one installation) to the next.
 NAMESPACE = uuid.UUID("6f1e0c52-43a5-4b8e-9a43-0d1c2f7e8b11")
@@ -335,9 +337,9 @@ class LegacyBundle:
                 continue
             uid = derived_uid(uuid.UUID(shifts[r["shift_id"]]), "map_image", int(r["id"]))
             try:
-                png = to_grey_png(decode_picture(bytes(r["image_data"])))
-            except OSError as exc:
-                raise LegacyError(f"map_image {r['id']}: unreadable picture ({exc}).") from None
+                png = greyscale_png(decode_picture(bytes(r["image_data"])))
+            except ValidationError as exc:
+                raise LegacyError(f"map_image {r['id']}: {' '.join(exc.messages)}") from None
             name = f"legacy/maps/{uid}.png"
             self.files[name] = png
             origin = point_xy(r["origin"]) or (0.0, 0.0)

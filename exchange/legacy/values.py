@@ -2,7 +2,6 @@
 
 import base64
 import binascii
-import io
 import re
 import uuid
 import zoneinfo
@@ -10,7 +9,6 @@ from datetime import UTC, datetime
 
 from django.contrib.gis.geos import GEOSException, GEOSGeometry
 from django.utils.text import slugify
-from PIL import Image as PilImage
 
 from exchange.legacy.sources import LegacyError
 
@@ -84,10 +82,3 @@ def decode_picture(data: bytes) -> bytes:
         return base64.b64decode(data, validate=False)
     except (binascii.Error, ValueError):
         return data
-
-
-def to_grey_png(data: bytes) -> bytes:
-    with PilImage.open(io.BytesIO(data)) as picture:
-        out = io.BytesIO()
-        picture.convert("L").save(out, format="PNG")
-        return out.getvalue()
