@@ -1,6 +1,6 @@
 """How fast the cockpit answers: page load to interactive and the main actions.
 
-Starts daphne on a fresh SpatiaLite file, makes a leg with --segments take-overs
+Starts the production server on a fresh SpatiaLite file, makes a leg with --segments take-overs
 and GPS tracks, drives Chromium at the tablet size (1024x768, touch) and prints
 the median and the slowest of --repeat runs per action, measured from the tap
 until the page shows the result (tested at every animation frame; the page load

@@ -1,14 +1,15 @@
 """Live-update latency, in two ways.
 
-Default: robot write in one process -> browser websocket of daphne.  Starts
-daphne on a fresh SpatiaLite file (no broker), subscribes a websocket client
+Default: robot write in one process -> browser websocket of the production
+server.  Starts it as the browser tests do (tests/support/browser.py) on a
+fresh SpatiaLite file (no broker), subscribes a websocket client
 to a leg, lets a separate process switch modes and store pose batches, and
 prints how long each announcement took from the writer's commit to the client.
 
 ``--robot``: the whole way, robot message -> row on the operator's screen.
 An rclpy publisher in this process stamps the time it sends each mode switch;
-``ftt_collect`` runs in its own process (shipped parameters, logging), daphne
-serves the GUI, and headless Chromium shows the leg; a MutationObserver notes
+``ftt_collect`` runs in its own process (shipped parameters, logging), the
+production server serves the GUI, and headless Chromium shows the leg; a MutationObserver notes
 when the segment table gains the new row.  ``--database-url postgis://...``
 runs it on PostGIS (a database this script may fill), else on SpatiaLite.
 

@@ -2,7 +2,7 @@
 
 Builds a leg with --poses GPS poses and as many local poses (--segments master
 segments) on the configured database (FTT_DATABASE_URL or --database-url;
-otherwise a fresh SpatiaLite file), starts daphne as the browser tests do, and
+otherwise a fresh SpatiaLite file), starts the server as the browser tests do, and
 opens the cockpit in Chromium at 1366x768 --repeat times.
 
 "Drawn" is the map's own mark (TrackMap.markDrawn in static/gui/maps.js): an

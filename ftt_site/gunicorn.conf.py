@@ -6,9 +6,11 @@ control instead of buffering them (Daphne reads a whole body into memory
 first). README's production section explains the choice and the budget.
 """
 
+import faulthandler
 import gc
 import os
 import shutil
+import signal
 import tempfile
 
 # Every worker writes its metric values here; /metrics adds them up
@@ -17,10 +19,15 @@ os.environ["PROMETHEUS_MULTIPROC_DIR"] = tempfile.mkdtemp(prefix="ftt-metrics-")
 
 bind = os.environ.get("FTT_BIND", "127.0.0.1:8000")
 workers = int(os.environ.get("FTT_WEB_WORKERS", "2"))
-worker_class = "uvicorn_worker.UvicornWorker"
+worker_class = "ftt_site.web_worker.Worker"
 # A worker that has not answered its supervisor for this long is replaced.
 timeout = 120
+# On Ctrl-C or SIGTERM an idle worker stops at once (ftt_site/web_worker.py);
+# requests in flight get this long to finish.
 graceful_timeout = 30
+# FTT does not use gunicornc; its default socket path is one per user, shared
+# by every server that user starts on the machine.
+control_socket_disable = True
 # The websocket of an idle browser stays open; keep-alive for its API calls.
 keepalive = 5
 accesslog = os.environ.get("FTT_ACCESS_LOG") or None
@@ -57,3 +64,10 @@ def child_exit(server, worker):
 
 def on_exit(server):
     shutil.rmtree(os.environ["PROMETHEUS_MULTIPROC_DIR"], ignore_errors=True)
+
+
+def post_worker_init(worker):
+    """`kill -USR1` on a worker, or on the master that passes it on, prints every
+    thread's stack (as ftt_site/asgi.py promises) and then reopens the log files
+    as Gunicorn does: Gunicorn's own USR1 handler replaced the one asgi.py set."""
+    faulthandler.register(signal.SIGUSR1, all_threads=True, chain=True)

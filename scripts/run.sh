@@ -5,7 +5,8 @@
 # websockets) on http://127.0.0.1:8000 with the production server: Gunicorn
 # supervising Uvicorn workers (ftt_site/gunicorn.conf.py; README, Production),
 # and beside it the job worker that makes requested reports and imports
-# (manage.py ftt_worker); Ctrl-C stops both.
+# (manage.py ftt_worker); Ctrl-C stops both, at once when idle, else after
+# the requests in flight and the job at hand.
 #
 # Usage: bash scripts/run.sh [ADDRESS:PORT]     (default 127.0.0.1:8000)
 set -euo pipefail
@@ -36,13 +37,28 @@ case "${FTT_DEBUG,,}" in 1 | true | yes | on) reload=(--reload) ;; esac
 export FTT_WEB_WORKERS=${FTT_WEB_WORKERS:-1}
 # Requested reports and imports are jobs in the database; this worker runs
 # them. A job it was running when stopped the hard way is retried by the next.
-"$py" manage.py ftt_worker --verbosity 0 &
+# It runs in a session of its own so that Ctrl-C reaches it once, from here:
+# a second signal makes it abandon the job at hand.
+setsid "$py" manage.py ftt_worker --verbosity 0 &
 worker=$!
-stop_worker() {
-    kill -TERM "$worker" 2>/dev/null || true
-    wait "$worker" 2>/dev/null || true
+web=""
+stopping=0
+stop() { # Ctrl-C or SIGTERM: both stop together, each once
+    [ "$stopping" -eq 0 ] || return 0
+    stopping=1
+    kill -TERM "$worker" ${web:+"$web"} 2>/dev/null || true
 }
-trap stop_worker EXIT
+trap stop INT TERM
+trap 'stop; wait' EXIT
 ftt_log "FTT at http://$address/ (Django admin at /admin/); Ctrl-C stops it"
 "$py" -m gunicorn -c ftt_site/gunicorn.conf.py "${reload[@]}" --bind "$address" \
-    ftt_site.asgi:application
+    ftt_site.asgi:application &
+web=$!
+status=0
+wait "$web" || status=$?
+if [ "$stopping" -eq 1 ]; then
+    # The signal ended the wait; the server finishes what is in flight.
+    status=0
+    wait "$web" || status=$?
+fi
+exit "$status"

@@ -4,7 +4,9 @@
 #   1. system packages (GDAL, GEOS, PROJ, SpatiaLite; with --test also
 #      PostgreSQL+PostGIS, Redis, Chromium, poppler-utils);
 #   2. the virtualenv .venv (python3 >= 3.11, or FTT_PYTHON) with the
-#      requirements, skipped while their hash matches the stamp in .venv;
+#      locked requirements (requirements.txt, with --test requirements-dev.txt;
+#      every file's hash checked), skipped while the lock matches the stamp
+#      in .venv;
 #   3. the hooks scripts/setup.d/*.sh, sourced in name order.
 # A second run only checks, in about a second.
 #
@@ -83,6 +85,7 @@ fi
 export FTT_PY=$FTT_VENV/bin/python
 ftt_log "$("$FTT_PY" -V 2>&1) in $FTT_VENV"
 
+# The locks come from requirements*.in (scripts/lock.sh writes them).
 requirements_hash() { # FILE... -> hash of the files and the interpreter
     { "$FTT_PY" -VV && cat "$@"; } | sha256sum | cut -d' ' -f1
 }
@@ -93,14 +96,14 @@ if [ "$FTT_SETUP_MODE" = test ]; then
     up_to_date() { ftt_stamp_ok pip-test "$hash_test"; }
 else
     file=requirements.txt
-    # The dev set includes the runtime set.
+    # The test lock includes the runtime lock.
     up_to_date() { ftt_stamp_ok pip-run "$hash_run" || ftt_stamp_ok pip-test "$hash_test"; }
 fi
 if up_to_date; then
     ftt_log "$file: already installed"
 else
-    ftt_log "pip install -r $file"
-    "$FTT_PY" -m pip install -q --disable-pip-version-check -r "$file"
+    ftt_log "pip install --require-hashes -r $file"
+    "$FTT_PY" -m pip install -q --disable-pip-version-check --require-hashes -r "$file"
     "$FTT_PY" -m pip check
     ftt_stamp_write pip-run "$hash_run"
     if [ "$FTT_SETUP_MODE" = test ]; then

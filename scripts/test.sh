@@ -190,8 +190,9 @@ if [ "${#core[@]}" -gt 0 ] && [ -n "${FTT_DATABASE_URL:-}" ]; then
 fi
 
 if [ -d tests/e2e ]; then
-    # Browser tests need their own process: Playwright's event loop and
-    # pytest-asyncio's do not mix (reference notes, browser testing).
+    # Browser tests need their own process: Playwright's sync API keeps an
+    # event loop running in the test thread, which pytest-asyncio's tests
+    # cannot share.
     step --may-be-empty "pytest e2e (browser)" "${pytest[@]}" tests/e2e
 fi
 

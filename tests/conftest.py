@@ -9,6 +9,7 @@ from events import notifier, seeds
 from events.models import Performer, Personnel, PoseSource, Vehicle
 from events.services import logs
 from events.services.robots import ensure_robot_account
+from tests.support.modes import start_auto
 
 
 def pytest_runtest_setup(item):
@@ -99,6 +100,12 @@ def other_leg(test_event, other_vehicle, pose_source):
     return logs.create_leg(shift=other_shift, default_pose_source=pose_source)
 
 
+@pytest.fixture
+def auto_master(leg):
+    """The AUTO master segment a robot's first mode report opens on ``leg``."""
+    return start_auto(leg)
+
+
 # --- API users: one per role, each with a token (tests/events/api, tests/telemetry/api) ---
 
 
@@ -124,7 +131,8 @@ def role_user(db, django_user_model):
 
 @pytest.fixture
 def api_client(role_user):
-    """api_client("viewer") -> a DRF client sending that user's token (None: anonymous)."""
+    """api_client("viewer") -> a DRF client sending that user's token (None: anonymous);
+    the client's ``user`` and ``token`` say whose."""
     from rest_framework.test import APIClient
 
     def make(role="operator", *, anonymous=False):
@@ -133,6 +141,7 @@ def api_client(role_user):
             user = role_user(role)
             client.credentials(HTTP_AUTHORIZATION=f"Token {user.auth_token.key}")
             client.user = user
+            client.token = user.auth_token.key
         return client
 
     return make
@@ -141,7 +150,8 @@ def api_client(role_user):
 @pytest.fixture
 def robot_client(db):
     """robot_client(vehicle, ...) -> a DRF client with the token of a robot account
-    bound to those vehicles (none: bound to no vehicle)."""
+    bound to those vehicles (none: bound to no vehicle); the client's ``user`` and
+    ``token`` say whose."""
     from rest_framework.test import APIClient
 
     made = []
@@ -152,6 +162,7 @@ def robot_client(db):
         client = APIClient()
         client.credentials(HTTP_AUTHORIZATION=f"Token {login.token}")
         client.user = login.account.user
+        client.token = login.token
         return client
 
     return make

@@ -38,8 +38,9 @@ PY
     fi
     command -v cmake >/dev/null 2>&1 && command -v g++ >/dev/null 2>&1 ||
         ftt_apt_ensure cmake g++
-    ftt_log "pip install -r requirements-rosidl.txt"
-    "$FTT_PY" -m pip install -q --disable-pip-version-check -r "$FTT_ROOT/requirements-rosidl.txt"
+    ftt_log "pip install --require-hashes -r requirements-rosidl.txt"
+    "$FTT_PY" -m pip install -q --disable-pip-version-check --require-hashes \
+        -r "$FTT_ROOT/requirements-rosidl.txt"
     # The wheels' exported CMake targets name the include directories of the
     # machine that built them; point them at this interpreter and numpy.
     local py_inc np_inc

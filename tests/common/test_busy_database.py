@@ -8,7 +8,7 @@ from django.db import connection
 from psycopg import connect as pg_connect
 
 from events.models import Note
-from events.services import segments
+from tests.support.modes import start_auto
 
 pytestmark = pytest.mark.django_db(transaction=True)
 
@@ -16,7 +16,7 @@ pytestmark = pytest.mark.django_db(transaction=True)
 @pytest.fixture
 def master(leg):
     # Made before the lock is taken: only the note write meets it.
-    return segments.report_mode(leg, "auto").master
+    return start_auto(leg)
 
 
 @contextmanager

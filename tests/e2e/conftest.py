@@ -1,6 +1,7 @@
 """Browser tests: Debian's Chromium driven by Playwright against a real server.
 
-The server is daphne in a process of its own on the embedded SpatiaLite
+The server is the production one (Gunicorn with a Uvicorn worker, as
+scripts/run.sh starts it) in a process of its own on the embedded SpatiaLite
 default with no broker, and the "robot" writes from yet another process, so
 live updates are tested the way they happen in the field.
 """
@@ -50,7 +51,7 @@ def pytest_runtest_makereport(item, call):
     report = yield
     server = _running_server
     if report.failed and server is not None and server.process.poll() is None:
-        # The server's thread stacks at the moment of failure, in daphne.log.
+        # The server's thread stacks at the moment of failure, in its log.
         server.process.send_signal(signal.SIGUSR1)
     return report
 
@@ -87,7 +88,7 @@ def postgres_server(tmp_path_factory):
         tmp_path_factory.mktemp("ftt-e2e-postgres"),
         _tile_url(),
         database_url=database,
-        name="daphne-postgres",
+        name="server-postgres",
     )
     srv.start()
     before, _running_server = _running_server, srv

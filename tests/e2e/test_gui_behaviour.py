@@ -61,11 +61,7 @@ def test_map_without_tiles_says_so_and_still_draws(page, server, open_leg, shot)
     login(page, server, "otto")
     choose(page, open_leg)
     expect(page.locator("#tile-message")).to_contain_text("tiles are unavailable")
-    expect(page.locator("#gps-map")).to_have_class(
-        "map leaflet-container leaflet-touch "
-        "leaflet-fade-anim leaflet-grab "
-        "leaflet-touch-drag leaflet-touch-zoom no-tiles"
-    )
+    expect(page.locator("#gps-map")).to_have_class(re.compile(r"(^|\s)no-tiles(\s|$)"))
     # The track is drawn on the map's canvas, which tells what it holds.
     expect(page.locator("#gps-map")).to_have_attribute("data-tracks", "1")
     expect(page.locator("#gps-map canvas")).to_be_visible()

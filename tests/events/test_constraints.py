@@ -6,6 +6,7 @@ from django.utils import timezone
 
 from events.models import Leg, Segment, Shift
 from events.services import segments
+from tests.support.modes import start_auto
 
 
 def test_second_open_shift_for_a_vehicle_is_refused_by_the_database(shift):
@@ -27,7 +28,7 @@ def test_second_open_master_in_a_leg_is_refused_by_the_database(leg):
 
 
 def test_auto_children_and_annotated_masters_are_refused_by_the_database(leg):
-    master = segments.report_mode(leg, "auto").master
+    master = start_auto(leg)
     with pytest.raises(IntegrityError), transaction.atomic():
         Segment.objects.create(leg=leg, parent=master, segment_type_id="auto", start=master.start)
     with pytest.raises(IntegrityError), transaction.atomic():

@@ -11,6 +11,7 @@ from events import feed
 from events.models import Announcement
 from events.services import logs, notes, segments
 from telemetry.services import recording
+from tests.support.modes import start_auto
 
 pytestmark = pytest.mark.django_db
 
@@ -25,7 +26,7 @@ def last_id():
 
 def test_new_segment_and_poses_are_announced_with_their_leg(leg):
     before = last_id()
-    master = segments.report_mode(leg, "auto").master
+    master = start_auto(leg)
     recording.record_poses(master, [recording.GpsFix(7.1, 50.6), recording.GpsFix(7.2, 50.7)])
     events = list(Announcement.objects.filter(id__gt=before))
     assert [e.kind for e in events] == ["segment", "poses"]
@@ -35,7 +36,7 @@ def test_new_segment_and_poses_are_announced_with_their_leg(leg):
 
 
 def test_repeated_pose_batch_announces_nothing_new(leg):
-    master = segments.report_mode(leg, "auto").master
+    master = start_auto(leg)
     fix = recording.GpsFix(7.1, 50.6)
     recording.record_poses(master, [fix])
     before = last_id()

@@ -5,15 +5,16 @@ import pytest
 from events.models import SegmentType
 from events.selectors.labels import leg_numbers, segment_label
 from events.services import logs, segments
+from tests.support.modes import start_auto
 
 pytestmark = pytest.mark.django_db
 
 
 def test_masters_are_numbered_per_leg_in_driving_order_and_reasons_under_them(leg):
-    a1 = segments.report_mode(leg, SegmentType.AUTO).master
+    a1 = start_auto(leg)
     i1 = segments.report_mode(leg, SegmentType.ITO).master
     reason = segments.add_ito_child(i1, reason="unassigned")
-    a2 = segments.report_mode(leg, SegmentType.AUTO).master
+    a2 = start_auto(leg)
     numbers = leg_numbers(leg.pk)
     assert numbers[a1.pk] == "1"
     assert numbers[i1.pk] == "2"
@@ -25,5 +26,5 @@ def test_masters_are_numbered_per_leg_in_driving_order_and_reasons_under_them(le
 def test_numbering_starts_again_in_the_next_leg(leg):
     segments.report_mode(leg, SegmentType.AUTO)
     second = logs.create_leg(shift=leg.shift)
-    first_of_second = segments.report_mode(second, SegmentType.AUTO).master
+    first_of_second = start_auto(second)
     assert segment_label(first_of_second) == f"Leg {second.number} · #1"

@@ -9,6 +9,7 @@ from common.errors import RuleViolation
 from events.models import Segment
 from events.services import segments
 from events.services.segments import GpsPosition, LocalPosition
+from tests.support.modes import start_auto
 
 
 def masters(leg):
@@ -16,7 +17,7 @@ def masters(leg):
 
 
 def test_mode_change_closes_the_master_and_opens_one_of_the_new_type(leg):
-    auto = segments.report_mode(leg, "auto").master
+    auto = start_auto(leg)
     ito = segments.report_mode(leg, "ito").master
     auto.refresh_from_db()
     assert auto.end == ito.start
@@ -61,7 +62,7 @@ def test_operator_adds_a_second_reason_to_an_open_ito_master(leg):
 
 
 def test_manual_segment_while_auto_runs_switches_to_ito(leg):
-    auto = segments.report_mode(leg, "auto").master
+    auto = start_auto(leg)
     child = segments.new_manual_segment(leg, reason="safety")
     auto.refresh_from_db()
     assert not auto.is_open
@@ -87,7 +88,7 @@ def test_closing_a_master_closes_its_children(leg):
 
 
 def test_reasons_belong_to_ito_children_not_auto(leg):
-    auto = segments.report_mode(leg, "auto").master
+    auto = start_auto(leg)
     with pytest.raises(RuleViolation, match="AUTO"):
         segments.annotate_segment(auto, obstacle="tree")
 
@@ -144,7 +145,7 @@ def test_state_machine_is_scoped_to_one_leg(test_event, vehicle, other_vehicle):
 
     leg_a = logs.create_leg(shift=logs.create_shift(test_event=test_event, vehicle=vehicle))
     leg_b = logs.create_leg(shift=logs.create_shift(test_event=test_event, vehicle=other_vehicle))
-    a = segments.report_mode(leg_a, "auto").master
+    a = start_auto(leg_a)
     segments.report_mode(leg_b, "ito")
     a.refresh_from_db()
     assert a.is_open

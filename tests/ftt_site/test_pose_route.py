@@ -24,6 +24,7 @@ from events.services import segments
 from ftt_site.asgi import application
 from ftt_site.pose_route import PATH, PoseRoute
 from telemetry.models import Pose
+from tests.support.modes import start_auto
 
 pytestmark = pytest.mark.django_db(transaction=True)
 
@@ -33,7 +34,7 @@ _PER_ANSWER = {"date", "server", "content-length"}
 
 @pytest.fixture
 def master(leg):
-    return segments.report_mode(leg, SegmentType.AUTO).master
+    return start_auto(leg)
 
 
 @pytest.fixture
@@ -47,10 +48,6 @@ def django_requests():
     request_started.connect(count)
     yield seen
     request_started.disconnect(count)
-
-
-def _token(client) -> str:
-    return client._credentials["HTTP_AUTHORIZATION"].split()[1]
 
 
 def post_asgi(body, token=None, headers=None):
@@ -107,7 +104,7 @@ def test_a_pose_is_stored_and_answered_as_the_view_does(
     lean_uid, view_uid = uuid.uuid4(), uuid.uuid4()
     feed_before = Announcement.objects.count()
 
-    status, headers, lean = post_asgi({**sent, "uid": str(lean_uid)}, _token(client))
+    status, headers, lean = post_asgi({**sent, "uid": str(lean_uid)}, client.token)
     assert django_requests == []  # answered by the route alone
     view = client.post(PATH, {**sent, "uid": str(view_uid)}, format="json")
 
@@ -128,7 +125,7 @@ def test_a_pose_is_stored_and_answered_as_the_view_does(
 def test_a_retried_uid_is_stored_once_and_answered_with_the_first_row(
     api_client, master, django_requests
 ):
-    token = _token(api_client("operator"))
+    token = api_client("operator").token
     body = {"uid": str(uuid.uuid4()), "segment": master.pk, "longitude": 8, "latitude": 50}
 
     first = post_asgi(body, token)
@@ -144,7 +141,7 @@ def test_a_retried_uid_is_stored_once_and_answered_with_the_first_row(
 def test_a_robot_posts_to_its_own_vehicle_the_lean_way(
     robot_client, vehicle, master, django_requests
 ):
-    token = _token(robot_client(vehicle))
+    token = robot_client(vehicle).token
 
     status, _, answer = post_asgi({"segment": master.pk, "longitude": 8, "latitude": 50}, token)
 
@@ -153,7 +150,7 @@ def test_a_robot_posts_to_its_own_vehicle_the_lean_way(
 
 
 def _refusals(master, other_leg):
-    foreign = segments.report_mode(other_leg, SegmentType.AUTO).master
+    foreign = start_auto(other_leg)
     good = {"segment": master.pk, "longitude": 8, "latitude": 50}
     return {
         "bad field": ("operator", {**good, "latitude": 95}),
@@ -192,7 +189,7 @@ def test_what_the_route_cannot_answer_gets_the_views_answer(
     role, body = _refusals(master, other_leg)[case]
     if role == "robot":
         client = robot_client(vehicle)
-        token = _token(client)
+        token = client.token
     elif role in ("anonymous", "unknown"):
         client = api_client(anonymous=True)
         token = None if role == "anonymous" else "0" * 40
@@ -200,7 +197,7 @@ def test_what_the_route_cannot_answer_gets_the_views_answer(
             client.credentials(HTTP_AUTHORIZATION=f"Token {token}")
     else:
         client = api_client(role)
-        token = _token(client)
+        token = client.token
     before = Pose.objects.count()
 
     status, headers, answer = post_asgi(body, token)
@@ -220,7 +217,7 @@ def test_a_browsers_cross_origin_post_gets_djangos_cors_headers(
     body = {"segment": master.pk, "longitude": 8, "latitude": 50}
     origin = {"Origin": "https://gui.example"}
 
-    status, headers, _ = post_asgi(body, _token(client), origin)
+    status, headers, _ = post_asgi(body, client.token, origin)
     view = client.post(PATH, body, format="json", HTTP_ORIGIN=origin["Origin"])
 
     assert len(django_requests) == 2  # the route left it to Django
@@ -232,7 +229,7 @@ def test_a_browsers_cross_origin_post_gets_djangos_cors_headers(
 @pytest.mark.postgis_only
 def test_the_lean_way_counts_against_the_request_rate(api_client, master, monkeypatch):
     monkeypatch.setattr(SimpleRateThrottle, "THROTTLE_RATES", {"anon": "2/min", "user": "2/min"})
-    token = _token(api_client("operator"))
+    token = api_client("operator").token
     body = {"segment": master.pk, "longitude": 8, "latitude": 50}
 
     answers = [post_asgi(body, token) for _ in range(3)]
@@ -244,7 +241,7 @@ def test_the_lean_way_counts_against_the_request_rate(api_client, master, monkey
 
 @pytest.mark.postgis_only
 def test_a_pose_the_lean_way_is_one_query(api_client, master):
-    token = _token(api_client("operator"))
+    token = api_client("operator").token
     body = json.dumps({"segment": master.pk, "longitude": 8, "latitude": 50}).encode()
     scope = {
         "type": "http",
@@ -270,7 +267,7 @@ def test_a_pose_the_lean_way_is_one_query(api_client, master):
 
 @pytest.mark.postgis_only
 def test_a_pose_the_lean_way_wakes_the_live_readers_at_once(api_client, master):
-    token = _token(api_client("operator"))
+    token = api_client("operator").token
     with psycopg.connect(conninfo(), autocommit=True) as listener:
         listener.execute(f"LISTEN {CHANNEL}")
         status, _, _ = post_asgi({"segment": master.pk, "longitude": 8, "latitude": 50}, token)

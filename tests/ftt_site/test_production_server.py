@@ -6,7 +6,8 @@ import time
 
 import pytest
 
-from tests.support.drill import WebServer, prepare, run_drill, stored
+from tests.support.drill import prepare, run_drill, stored
+from tests.support.web import WebServer
 
 MB = 1024 * 1024
 

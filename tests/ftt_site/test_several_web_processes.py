@@ -14,7 +14,7 @@ import requests
 import websockets
 
 from tests.support.browser import session_code
-from tests.support.drill import WebServer
+from tests.support.web import WebServer
 
 SESSION = (
     session_code("watcher", "operator")

@@ -12,6 +12,7 @@ from events.services import segments
 from rosbridge_app.services import collectors
 from telemetry.services import recording
 from tests.support.images import PNG, jpeg
+from tests.support.modes import start_auto
 from tests.support.pages import asset_urls, external_assets
 
 pytestmark = pytest.mark.django_db
@@ -131,7 +132,7 @@ def test_behind_nginx_the_file_transfer_is_handed_to_the_proxy(client, leg, medi
 
 def test_leg_tracks_carry_points_and_distance(client, leg):
     member(client, "vera", "viewer")
-    master = segments.report_mode(leg, "auto").master
+    master = start_auto(leg)
     recording.record_poses(master, [recording.GpsFix(7.0, 50.0), recording.GpsFix(7.0, 50.001)])
     data = client.get(f"/gui/api/legs/{leg.pk}/tracks/").json()
     track = data["segments"][str(master.pk)]
@@ -245,7 +246,7 @@ def test_photos_open_for_token_clients_with_a_role(client, leg, media_root, role
 
 def test_leg_tracks_name_segments_as_the_report_does(client, leg):
     member(client, "vera", "viewer")
-    auto = segments.report_mode(leg, "auto").master
+    auto = start_auto(leg)
     ito = segments.report_mode(leg, "ito").master
     child = ito.children.get()
     labels = client.get(f"/gui/api/legs/{leg.pk}/tracks/").json()["labels"]

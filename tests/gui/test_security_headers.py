@@ -5,6 +5,8 @@ import re
 import pytest
 from django.contrib.auth.models import User
 
+from tests.support.modes import start_auto
+
 pytestmark = pytest.mark.django_db
 
 PAGES = ["/", "/admin/", "/admin/events/segment/", "/api/docs/", "/import/"]
@@ -40,9 +42,8 @@ def test_api_docs_start_without_an_inline_script(signed_in):
 
 def test_admin_forms_run_under_the_strict_policy(client, leg):
     """No inline script on an admin form with a map field: nothing the CSP would block."""
-    from events.services import segments
 
     client.force_login(User.objects.create_superuser("root", password="pw"))
-    segment = segments.report_mode(leg, "auto").master
+    segment = start_auto(leg)
     form = client.get(f"/admin/events/segment/{segment.pk}/change/").content.decode()
     assert not re.search(r"<script(?![^>]*\bsrc=)[^>]*>", form)

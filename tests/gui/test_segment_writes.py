@@ -4,8 +4,9 @@ rules, roles and refusals are the REST actions' own."""
 
 import pytest
 
-from events.models import Segment, SegmentType
+from events.models import Segment
 from events.services import segments
+from tests.support.modes import start_auto
 
 pytestmark = pytest.mark.django_db
 
@@ -19,7 +20,7 @@ def listed(client, leg):
 
 
 def test_a_take_over_in_auto_answers_the_closed_auto_and_the_new_ito_rows(api_client, leg):
-    auto = segments.report_mode(leg, SegmentType.AUTO).master
+    auto = start_auto(leg)
     client = api_client("operator")
     answer = client.post(f"/gui/api/legs/{leg.pk}/manual-segment/", {}, format="json")
     assert answer.status_code == 201, answer.content

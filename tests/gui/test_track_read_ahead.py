@@ -6,10 +6,10 @@ import pytest
 from django.db import connection
 from django.test.utils import CaptureQueriesContext
 
-from events.services import segments
 from telemetry.selectors.tracks import forget_kept_tracks
 from telemetry.services import recording
 from tests.support.accounts import signed_in
+from tests.support.modes import start_auto
 
 # Committed for real, as a server runs it: the read ahead has a connection of its own.
 pytestmark = pytest.mark.django_db(transaction=True)
@@ -18,7 +18,7 @@ pytestmark = pytest.mark.django_db(transaction=True)
 @pytest.fixture
 def driven_leg(client, leg):
     signed_in(client, "vera", "viewer")
-    master = segments.report_mode(leg, "auto").master
+    master = start_auto(leg)
     recording.record_poses(master, [recording.GpsFix(7.0, 50.0 + i * 1e-5) for i in range(300)])
     recording.record_local_poses(master, [recording.MapPose(i, 0.0, "map") for i in range(300)])
     return leg, master

@@ -12,6 +12,7 @@ from events.services import segments
 from telemetry.selectors.tracks import forget_kept_tracks, zoom_tolerance
 from telemetry.services import recording
 from tests.support.accounts import signed_in
+from tests.support.modes import start_auto
 
 pytestmark = pytest.mark.django_db
 
@@ -25,7 +26,7 @@ ZIGZAG = 2e-4
 @pytest.fixture
 def zigzag_leg(client, leg):
     signed_in(client, "vera", "viewer")
-    master = segments.report_mode(leg, "auto").master
+    master = start_auto(leg)
     fixes = [
         recording.GpsFix(7.0 + (ZIGZAG if (i // 100) % 2 else 0.0), 50.0 + i * 1e-5)
         for i in range(2000)

@@ -157,12 +157,26 @@ async def test_poller_waits_for_a_gap_before_skipping_it(viewer, leg, monkeypatc
     poller = consumers.OutboxPoller()
     poller.floor = 10
     poller.seen = {12}
-    monkeypatch.setattr(consumers, "GAP_PATIENCE", 0.05)
     poller._advance_floor()
     assert poller.floor == 10  # id 11 may still commit
-    await asyncio.sleep(0.1)
+    poller.gap_since -= consumers.GAP_PATIENCE + 1  # as if seen that much longer ago
     poller._advance_floor()
     assert poller.floor == 12 and not poller.seen
+
+
+def first_poll(monkeypatch) -> asyncio.Event:
+    """An event set once the poller has read the outbox: a write after it can only
+    reach the browser through a wake-up (or the next poll)."""
+    polled = asyncio.Event()
+    poll_once = consumers.OutboxPoller.poll_once
+
+    async def noted(self):
+        rows = await poll_once(self)
+        polled.set()
+        return rows
+
+    monkeypatch.setattr(consumers.OutboxPoller, "poll_once", noted)
+    return polled
 
 
 def _redis_or_skip():
@@ -191,9 +205,10 @@ async def test_with_redis_a_commit_wakes_the_poller_at_once(viewer, leg, setting
     channel_layers.backends.clear()
     # Polling alone would take an hour now: only the wake-up can deliver the event.
     monkeypatch.setattr(consumers, "POLL_INTERVAL", 3600.0)
+    polled = first_poll(monkeypatch)
     try:
         communicator, _ = await connect(viewer, leg=leg.pk)
-        await asyncio.sleep(0.3)  # the first poll has passed; the poller now sleeps
+        await asyncio.wait_for(polled.wait(), 10)  # the poller now waits for a wake-up
         await database_sync_to_async(segments.report_mode)(leg, "auto")
         events = await next_events(communicator, timeout=10)
         assert [e["kind"] for e in events] == ["segment"]
@@ -205,8 +220,9 @@ async def test_with_redis_a_commit_wakes_the_poller_at_once(viewer, leg, setting
 async def _only_the_wakeup_delivers(viewer, leg, monkeypatch):
     # Polling alone would take an hour: only a wake-up can deliver the event in time.
     monkeypatch.setattr(consumers, "POLL_INTERVAL", 3600.0)
+    polled = first_poll(monkeypatch)
     communicator, _ = await connect(viewer, leg=leg.pk)
-    await asyncio.sleep(0.5)  # the first poll has passed; the poller now sleeps
+    await asyncio.wait_for(polled.wait(), 10)  # the poller now waits for a wake-up
     await database_sync_to_async(segments.report_mode)(leg, "auto")
     events = await next_events(communicator, timeout=5)
     assert [e["kind"] for e in events] == ["segment"]

@@ -1,7 +1,7 @@
 """The browser tests' server and simulated robot.
 
-:class:`Server` runs daphne in a process of its own; ``ROBOT`` is a simulated
-robot with its collector, run in its own process by the e2e tests.
+:class:`Server` runs the production server in a process of its own; ``ROBOT``
+is a simulated robot with its collector, run in its own process by the e2e tests.
 
 It registers like `manage.py ftt_collect` does, answers start/stop logging,
 and writes segments and poses through the service layer when the test tells
@@ -10,17 +10,16 @@ it to on stdin.  After each write has committed it prints "DONE <unix time>".
 
 import os
 import re
-import socket
 import subprocess
 import sys
 import textwrap
-import time
 from pathlib import Path
 from urllib.parse import unquote, urlsplit, urlunsplit
 
 import psycopg
 
-ROOT = Path(__file__).resolve().parents[2]
+from tests.support.web import ROOT, WebServer, end
+
 # Not under test-results/: pytest-playwright empties that folder when a session starts.
 ARTIFACTS = Path(os.environ.get("FTT_E2E_ARTIFACTS", ROOT / "test-artifacts" / "e2e"))
 PASSWORD = "field-test-2026"
@@ -39,59 +38,27 @@ def system_chromium() -> str | None:
     return found.stdout.strip()
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-class Server:
-    """A daphne process and the job worker beside it (as scripts/run.sh starts
-    them), plus a way to run Django code in other processes."""
+class Server(WebServer):
+    """The production server (as scripts/run.sh starts it, one worker) and the job
+    worker beside it, plus a way to run Django code in other processes."""
 
     def __init__(
         self,
         data_dir: Path,
         tile_url: str,
         database_url: str = "",
-        name: str = "daphne",
+        name: str = "server",
         root: Path = ROOT,
     ):
         """SpatiaLite in ``data_dir`` unless ``database_url`` names a PostgreSQL
-        database; ``root``: the checkout whose code runs (a benchmark compares two)."""
-        self.name = name
-        self.root = root
-        self.port = _free_port()
-        self.url = f"http://127.0.0.1:{self.port}"
-        self.env = {
-            k: v for k, v in os.environ.items() if not k.startswith(("FTT_", "DJANGO_ALLOW"))
-        }
-        self.env.update(
-            FTT_DATA_DIR=str(data_dir),
-            FTT_TILE_URL=tile_url,
-            FTT_ALLOWED_HOSTS="127.0.0.1,localhost",
-            DJANGO_SETTINGS_MODULE="ftt_site.settings",
-            PYTHONPATH=str(root),
-        )
+        database; ``name``: its log's, under ARTIFACTS; ``root``: the checkout whose
+        code runs (a benchmark compares two)."""
+        env = {"FTT_DATA_DIR": str(data_dir), "FTT_TILE_URL": tile_url}
         if database_url:
-            self.env["FTT_DATABASE_URL"] = database_url
-        self.process = self.worker = None
-
-    def manage(self, *args, timeout=120) -> str:
-        result = subprocess.run(
-            [sys.executable, "manage.py", *args],
-            cwd=self.root,
-            env=self.env,
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-        )
-        assert result.returncode == 0, result.stderr[-3000:]
-        return result.stdout
-
-    def python(self, code: str, timeout: float = 120) -> str:
-        """Run Django code in a separate process (the robot, an admin script)."""
-        return self.manage("shell", "-c", textwrap.dedent(code), timeout=timeout)
+            env["FTT_DATABASE_URL"] = database_url
+        super().__init__(env, log=ARTIFACTS / f"{name}.log", root=root)
+        self.name = name
+        self.worker = None
 
     def spawn(self, code: str) -> subprocess.Popen:
         return subprocess.Popen(
@@ -106,26 +73,8 @@ class Server:
         )
 
     def start(self):
-        self.manage("migrate", "--noinput", timeout=300)
         ARTIFACTS.mkdir(parents=True, exist_ok=True)
-        self.log = open(ARTIFACTS / f"{self.name}.log", "w")  # noqa: SIM115 - open while it runs
-        self.process = subprocess.Popen(
-            [
-                sys.executable,
-                "-m",
-                "daphne",
-                "-b",
-                "127.0.0.1",
-                "-p",
-                str(self.port),
-                "ftt_site.asgi:application",
-            ],
-            cwd=self.root,
-            env=self.env,
-            # Kept as an artifact: when a page hangs, the server's side tells why.
-            stdout=self.log,
-            stderr=subprocess.STDOUT,
-        )
+        super().start()
         self.worker = subprocess.Popen(
             [sys.executable, "manage.py", "ftt_worker", "--interval", "0.5"],
             cwd=self.root,
@@ -133,25 +82,11 @@ class Server:
             stdout=self.log,
             stderr=subprocess.STDOUT,
         )
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline:
-            try:
-                with socket.create_connection(("127.0.0.1", self.port), timeout=0.5):
-                    return
-            except OSError:
-                time.sleep(0.2)
-        raise RuntimeError("daphne did not start")
+        return self
 
     def stop(self):
-        for process in (self.worker, self.process):
-            if process is not None:
-                process.terminate()
-                try:
-                    process.wait(10)
-                except subprocess.TimeoutExpired:
-                    process.kill()
-        if self.process is not None:
-            self.log.close()
+        end(self.worker, 10)
+        super().stop()
 
 
 def open_leg_code(key: str) -> str:

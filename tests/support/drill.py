@@ -1,28 +1,22 @@
 """The concurrent-clients drill: the production web server and many API clients at once.
 
-:class:`WebServer` starts the server the way README's production section does
-(Gunicorn with Uvicorn workers) on loopback; :func:`run_drill` lets N clients
-each post a note and then a mode report, R times, all at the same moment; and
-:func:`stored` reads back what the database kept. Used by
-``tests/ftt_site/test_concurrent_clients.py`` and ``benchmarks/api_concurrency.py``.
+:class:`~tests.support.web.WebServer` starts the production server on loopback;
+:func:`run_drill` lets N clients each post a note and then a mode report, R
+times, all at the same moment; and :func:`stored` reads back what the database
+kept. Used by ``tests/ftt_site/test_concurrent_clients.py`` and
+``benchmarks/api_concurrency.py``.
 """
 
 import json
-import os
-import socket
-import subprocess
-import sys
-import textwrap
 import threading
 import time
 import uuid
 from collections import Counter
 from concurrent.futures import ThreadPoolExecutor
-from pathlib import Path
 
 import requests
 
-ROOT = Path(__file__).resolve().parents[2]
+from tests.support.web import WebServer
 
 SETUP = """
 import json
@@ -56,89 +50,6 @@ print(json.dumps({{
     ).count(),
 }}))
 """
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-class WebServer:
-    """``gunicorn -k uvicorn_worker.UvicornWorker`` as README's production section starts it."""
-
-    def __init__(self, env: dict, workers: int = 1, log: Path | None = None):
-        self.port = free_port()
-        self.url = f"http://127.0.0.1:{self.port}"
-        self.env = {k: v for k, v in os.environ.items() if not k.startswith("FTT_")}
-        self.env.update(
-            DJANGO_SETTINGS_MODULE="ftt_site.settings",
-            FTT_ALLOWED_HOSTS="127.0.0.1,localhost",
-            PYTHONPATH=str(ROOT),
-            **env,
-        )
-        self.workers = workers
-        self.log_path = log
-        self.process = None
-
-    def manage(self, *args, stdin: str | None = None, timeout=300) -> str:
-        result = subprocess.run(
-            [sys.executable, "manage.py", *args],
-            cwd=ROOT,
-            env=self.env,
-            input=stdin,
-            capture_output=True,
-            text=True,
-            timeout=timeout,
-        )
-        assert result.returncode == 0, result.stderr[-3000:]
-        return result.stdout
-
-    def python(self, code: str, stdin: str | None = None) -> str:
-        return self.manage("shell", "-c", textwrap.dedent(code), stdin=stdin)
-
-    def start(self, migrate: bool = True):
-        if migrate:
-            self.manage("migrate", "--noinput")
-        log = open(self.log_path or os.devnull, "w")  # noqa: SIM115 - open while it runs
-        self.process = subprocess.Popen(
-            [
-                sys.executable,
-                "-m",
-                "gunicorn",
-                "-c",
-                str(ROOT / "ftt_site" / "gunicorn.conf.py"),
-                "--bind",
-                f"127.0.0.1:{self.port}",
-                "--workers",
-                str(self.workers),
-                "ftt_site.asgi:application",
-            ],
-            cwd=ROOT,
-            env=self.env,
-            stdout=log,
-            stderr=subprocess.STDOUT,
-        )
-        deadline = time.monotonic() + 90
-        while time.monotonic() < deadline:
-            if self.process.poll() is not None:
-                raise RuntimeError("the web server exited")
-            try:
-                if requests.get(f"{self.url}/login/", timeout=2).status_code == 200:
-                    return self
-            except requests.RequestException:
-                pass
-            time.sleep(0.3)
-        raise RuntimeError("the web server did not start")
-
-    def stop(self):
-        if self.process is not None and self.process.poll() is None:
-            self.process.terminate()
-            try:
-                self.process.wait(20)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
-                self.process.wait()
 
 
 def prepare(server: WebServer) -> dict:

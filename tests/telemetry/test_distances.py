@@ -21,6 +21,7 @@ from telemetry.selectors.distances import measured_paths, path_length
 from telemetry.selectors.tracks import GPS, masters
 from telemetry.services import recording
 from telemetry.services.recording import GpsFix
+from tests.support.modes import start_auto
 
 pytestmark = pytest.mark.django_db
 
@@ -86,7 +87,7 @@ def test_gui_api_statistics_and_csv_give_the_same_distance(drive, leg, client, r
 
 def test_a_segment_with_nothing_measured_shows_no_distance(leg, client, role_user):
     """No start position, no poses, nothing after it: "—", not 0 m."""
-    master = segments.report_mode(leg, SegmentType.AUTO).master
+    master = start_auto(leg)
     client.force_login(role_user("viewer"))
     gui = client.get(f"/gui/api/legs/{leg.pk}/tracks/").json()["segments"]
     assert gui[str(master.pk)]["distance_m"] is None

@@ -7,10 +7,10 @@ from django.core.exceptions import ValidationError
 from django.core.files.uploadedfile import SimpleUploadedFile
 from PIL import Image as PilImage
 
-from events.services import segments
 from telemetry.models import Image, MapImage
 from telemetry.pictures import MAP_FORMATS, checked_picture
 from tests.support.images import image_bytes
+from tests.support.modes import start_auto
 
 pytestmark = pytest.mark.django_db
 
@@ -24,7 +24,7 @@ def _eps() -> bytes:
 @pytest.fixture
 def post_photo(api_client, leg, media_root):
     client = api_client("operator")
-    master = segments.report_mode(leg, "auto").master
+    master = start_auto(leg)
 
     def send(name: str, content: bytes):
         upload = SimpleUploadedFile(name, content, "image/jpeg")

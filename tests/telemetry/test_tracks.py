@@ -28,6 +28,7 @@ from telemetry.selectors.tracks import (
 )
 from telemetry.services import recording
 from telemetry.services.recording import GpsFix
+from tests.support.modes import start_auto
 
 pytestmark = pytest.mark.django_db
 
@@ -72,7 +73,7 @@ def test_points_are_ordered_by_robot_clock_and_no_fix_points_are_counted_apart(l
 
 
 def test_local_points_come_in_driving_order_with_their_frame(leg):
-    master = segments.report_mode(leg, SegmentType.AUTO).master
+    master = start_auto(leg)
     recording.record_local_poses(
         master,
         [

@@ -20,6 +20,7 @@ from events.services import logs, notes, segments
 from ftt_site.wsgi import application
 from telemetry.services import recording
 from tests.support.images import jpeg
+from tests.support.modes import start_auto
 
 # Small enough that the whole run stays well under two minutes on the CI machine.
 MAX_EXAMPLES = 8
@@ -107,7 +108,7 @@ def real_ids(vehicle, performer, person, pose_source, media_root):
             test_event=event, vehicle=vehicle, performer=performer, robot_operator=person
         )
         leg = logs.create_leg(shift=shift, default_pose_source=pose_source)
-        auto = segments.report_mode(leg, SegmentType.AUTO).master
+        auto = start_auto(leg)
         ito = segments.report_mode(leg, SegmentType.ITO).master
         child = ito.children.get()
         current.update(

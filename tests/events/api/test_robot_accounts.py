@@ -8,6 +8,7 @@ from common import roles
 from events.models import Note, Segment, SegmentType, TestEvent
 from events.services import logs, segments
 from tests.support.api import assert_error_shape
+from tests.support.modes import start_auto
 
 
 def _mode(client, leg, mode="auto"):
@@ -98,7 +99,7 @@ def test_a_robot_may_do_nothing_but_log(robot_client, vehicle, leg):
 
 
 def test_a_robot_reads_where_it_logs(robot_client, vehicle, leg, pose_source):
-    master = segments.report_mode(leg, SegmentType.AUTO).master
+    master = start_auto(leg)
     robot = robot_client(vehicle)
     current = robot.get(f"/api/vehicles/{vehicle.key}/current-leg/")
     assert current.status_code == 200, current.content
@@ -120,7 +121,7 @@ def test_a_robot_reads_where_it_logs(robot_client, vehicle, leg, pose_source):
 
 def test_a_robot_reads_nothing_of_another_vehicle(robot_client, vehicle, other_leg):
     other_vehicle = other_leg.shift.vehicle
-    master = segments.report_mode(other_leg, SegmentType.AUTO).master
+    master = start_auto(other_leg)
     robot = robot_client(vehicle)
     for url in (
         f"/api/vehicles/{other_vehicle.key}/current-leg/",

@@ -9,6 +9,7 @@ from events.models import Segment, SegmentType, Shift
 from events.models import TestEvent as TestEventModel
 from events.services import logs, segments
 from tests.support.api import assert_error_shape
+from tests.support.modes import start_auto
 
 
 @pytest.fixture
@@ -181,7 +182,7 @@ def test_children_add_a_second_reason_and_refuse_auto(operator, leg):
         "maintenance",
         "unassigned",
     ]
-    auto = segments.report_mode(leg, SegmentType.AUTO).master
+    auto = start_auto(leg)
     body = assert_error_shape(operator.post(f"/api/segments/{auto.pk}/children/"), 409)
     assert "AUTO" in body["detail"]
 
@@ -210,7 +211,7 @@ def test_annotating_a_reason_and_refusing_auto(operator, leg):
     child.refresh_from_db()
     assert (child.ito_reason_id, child.obstacle, child.slope) == ("safety", "fence", "steep")
 
-    auto = segments.report_mode(leg, SegmentType.AUTO).master
+    auto = start_auto(leg)
     body = assert_error_shape(
         operator.patch(f"/api/segments/{auto.pk}/", {"obstacle": "x"}, format="json"), 409
     )
@@ -233,7 +234,7 @@ def test_current_leg_of_a_vehicle_by_key_and_id(api_client, leg, vehicle):
     response = viewer.get(f"/api/vehicles/{vehicle.key}/current-leg/")
     assert response.status_code == 200
     assert response.json()["id"] == leg.pk and response.json()["open_segment"] is None
-    master = segments.report_mode(leg, SegmentType.AUTO).master
+    master = start_auto(leg)
     by_id = viewer.get(f"/api/vehicles/{vehicle.pk}/current-leg/").json()
     assert by_id["open_segment"]["id"] == master.pk
     logs.close_leg(leg)

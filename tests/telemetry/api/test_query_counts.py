@@ -14,16 +14,17 @@ from telemetry.services import recording
 from telemetry.services.recording import COPY_FROM, GpsFix, MapPose
 from tests.support.api import LIST_QUERIES, assert_constant_queries, post_counting_queries
 from tests.support.images import png
+from tests.support.modes import start_auto
 
 
 def _poses(n, leg):
-    master = segments.report_mode(leg, SegmentType.AUTO).master
+    master = start_auto(leg)
     recording.record_poses(master, [GpsFix(7 + i / 1000, 50.0) for i in range(n)])
     segments.report_mode(leg, SegmentType.ITO)
 
 
 def _local_poses(n, leg):
-    master = segments.report_mode(leg, SegmentType.AUTO).master
+    master = start_auto(leg)
     recording.record_local_poses(master, [MapPose(i, 0.0, "map") for i in range(n)])
     segments.report_mode(leg, SegmentType.ITO)
 
@@ -43,7 +44,7 @@ def _maps(n, leg):
 
 
 def _images(n, leg):
-    master = segments.report_mode(leg, SegmentType.AUTO).master
+    master = start_auto(leg)
     for _ in range(n):
         recording.attach_image(master, content=png(fmt="JPEG"))
 
@@ -156,7 +157,7 @@ def test_a_single_pose_on_sqlite_is_one_short_transaction(api_client, leg):
 
 def test_a_robots_single_pose_costs_what_an_operators_does(api_client, robot_client, vehicle, leg):
     """The robot's vehicles are read on its first request and kept, like its token."""
-    master = segments.report_mode(leg, SegmentType.AUTO).master
+    master = start_auto(leg)
     counts = {}
     for name, client in (("operator", api_client("operator")), ("robot", robot_client(vehicle))):
         first, first_queries = _one_post(client, _pose(master))
@@ -193,9 +194,9 @@ def test_a_robot_may_not_post_a_pose_to_another_vehicles_segment(
     robot_client, vehicle, leg, other_leg
 ):
     client = robot_client(vehicle)
-    own = segments.report_mode(leg, SegmentType.AUTO).master
+    own = start_auto(leg)
     assert client.post("/api/poses/", _pose(own), format="json").status_code == 201
-    other = segments.report_mode(other_leg, SegmentType.AUTO).master
+    other = start_auto(other_leg)
     response = client.post("/api/poses/", _pose(other), format="json")
     assert response.status_code == 403, response.content
     assert "belongs to vehicle jackal" in response.json()["detail"]
@@ -203,7 +204,7 @@ def test_a_robot_may_not_post_a_pose_to_another_vehicles_segment(
 
 
 def test_a_deleted_segment_is_noticed_although_it_was_kept(api_client, leg):
-    master = segments.report_mode(leg, SegmentType.AUTO).master
+    master = start_auto(leg)
     client = api_client("operator")
     assert client.post("/api/poses/", _pose(master), format="json").status_code == 201
     # Deleted behind this process's back (another worker, the admin of another process).

@@ -5,16 +5,16 @@ import uuid
 import pytest
 
 from common import roles
-from events.models import RobotAccount, SegmentType
-from events.services import segments
+from events.models import RobotAccount
 from telemetry.models import Image, LocalPose, MapImage, Pose
 from tests.support.api import assert_error_shape
 from tests.support.images import upload
+from tests.support.modes import start_auto
 
 
 @pytest.fixture
 def other_master(other_leg):
-    return segments.report_mode(other_leg, SegmentType.AUTO).master
+    return start_auto(other_leg)
 
 
 def _pose(segment):
@@ -121,7 +121,7 @@ def test_operators_write_telemetry_into_every_vehicles_leg(
 def test_a_robot_unbound_from_its_vehicle_is_refused_at_once(robot_client, vehicle, leg):
     """Its vehicles are kept between requests, but not past a change of its binding."""
     client = robot_client(vehicle)
-    master = segments.report_mode(leg, SegmentType.AUTO).master
+    master = start_auto(leg)
     assert client.post("/api/poses/", _pose(master), format="json").status_code == 201
     RobotAccount.objects.get(user=client.user).vehicles.remove(vehicle)
     response = client.post("/api/poses/", _pose(master), format="json")
