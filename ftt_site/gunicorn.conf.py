@@ -11,11 +11,13 @@ import os
 
 bind = os.environ.get("FTT_BIND", "127.0.0.1:8000")
 workers = int(os.environ.get("FTT_WEB_WORKERS", "2"))
-worker_class = "uvicorn_worker.UvicornWorker"
+# Uvicorn with a time limit on request headers (ftt_site.server).
+worker_class = "ftt_site.server.Worker"
 # A worker that has not answered its supervisor for this long is replaced.
 timeout = 120
 graceful_timeout = 30
 # The websocket of an idle browser stays open; keep-alive for its API calls.
+# An idle keep-alive connection is closed after this many seconds.
 keepalive = 5
 accesslog = os.environ.get("FTT_ACCESS_LOG") or None
 # Load Django once before forking: the address is bound only when the

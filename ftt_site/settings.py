@@ -233,12 +233,19 @@ WHITENOISE_AUTOREFRESH = DEBUG
 FILE_UPLOAD_MAX_MEMORY_SIZE = 10 * 1024 * 1024
 DATA_UPLOAD_MAX_MEMORY_SIZE = 50 * 1024 * 1024
 # Checked by ftt_site.request_limits before a body is read: uploads of images,
-# maps and archives may be large; every other address takes small bodies only.
+# maps and archives may be large, for accounts that may upload them
+# (ftt_site.uploaders); every other request takes small bodies only.
 FTT_MAX_REQUEST_BODY = env_int("FTT_MAX_REQUEST_BODY", DATA_UPLOAD_MAX_MEMORY_SIZE)
 FTT_MAX_UPLOAD_SIZE = env_int("FTT_MAX_UPLOAD_SIZE", 2 * 1024**3)
-FTT_UPLOAD_PATHS = ["/api/images/", "/api/maps/", "/api/archives/import/", "/import/", "/admin/"]
+# A request's headers must arrive within FTT_HEADER_TIMEOUT seconds
+# (ftt_site.server); its body, after FTT_BODY_GRACE_SECONDS, at no less than
+# FTT_BODY_MIN_RATE bytes per second on average, or it is answered 408.
+FTT_HEADER_TIMEOUT = env_int("FTT_HEADER_TIMEOUT", 10)
+FTT_BODY_GRACE_SECONDS = env_int("FTT_BODY_GRACE_SECONDS", 10)
+FTT_BODY_MIN_RATE = env_int("FTT_BODY_MIN_RATE", 1024)
 # Requests running in the application at once per web process (each is a
-# thread); the rest wait up to FTT_REQUEST_QUEUE_TIMEOUT seconds, then 503.
+# thread, taken once the body has arrived); the rest wait up to
+# FTT_REQUEST_QUEUE_TIMEOUT seconds, then 503.
 FTT_MAX_ACTIVE_REQUESTS = env_int("FTT_MAX_ACTIVE_REQUESTS", 8)
 FTT_REQUEST_QUEUE_TIMEOUT = env_int("FTT_REQUEST_QUEUE_TIMEOUT", 30)
 
