@@ -9,16 +9,15 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
-import rasterio
 from django.core.exceptions import ValidationError
 from pmtiles.reader import MmapSource
 from pmtiles.reader import Reader as PMTilesReader
 from pmtiles.tile import TileType
 from rasterio.errors import NotGeoreferencedWarning, RasterioError
 from rio_tiler.errors import RioTilerError
-from rio_tiler.io import Reader as RasterReader
 
 from basemaps.models.layers import MAX_ZOOM, BasemapLayer
+from basemaps.rasters import GeoTiffTiles, NotAGeoTiff, check_local_file, open_geotiff
 
 SQLITE_MAGIC = b"SQLite format 3\x00"
 PMTILES_MAGIC = b"PMTiles"
@@ -41,8 +40,16 @@ def refuse(message: str):
     raise ValidationError(message, code="not_a_basemap")
 
 
+def local_file(path) -> Path:
+    """``path`` as a regular local file; refused for a GDAL virtual path or an address."""
+    try:
+        return check_local_file(path)
+    except NotAGeoTiff as exc:
+        refuse(str(exc))
+
+
 def inspect_file(path) -> FileFacts:
-    path = Path(path)
+    path = local_file(path)
     with path.open("rb") as f:
         head = f.read(16)
     if head.startswith(SQLITE_MAGIC):
@@ -57,7 +64,7 @@ def _raster(path: Path) -> FileFacts:
         # A plain image is expected here and answered below; no warning in the log.
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", NotGeoreferencedWarning)
-            dataset = rasterio.open(path)
+            dataset = open_geotiff(path)
         with dataset:
             if dataset.crs is None or dataset.transform.is_identity:
                 refuse(
@@ -68,10 +75,11 @@ def _raster(path: Path) -> FileFacts:
                 refuse(f"Need 1 (grey), 3 (RGB) or 4 (RGBA) bands, not {dataset.count}.")
             if set(dataset.dtypes) != {"uint8"}:
                 refuse(f"Need 8-bit bands, not {', '.join(sorted(set(dataset.dtypes)))}.")
-        with RasterReader(str(path)) as reader:
+        with GeoTiffTiles(path) as tiles:
+            reader = tiles.reader
             bounds = tuple(reader.get_geographic_bounds(reader.tms.rasterio_geographic_crs))
             low, high = reader.minzoom, reader.maxzoom
-    except (RasterioError, RioTilerError) as exc:
+    except (NotAGeoTiff, RasterioError, RioTilerError) as exc:
         refuse(
             "Not a georeferenced raster (GeoTIFF) nor an MBTiles or PMTiles archive "
             f"({str(exc).splitlines()[0][:200]})."

@@ -352,6 +352,8 @@ class _Importer:
                     attribution=r.get("attribution", ""),
                     max_zoom=r.get("max_zoom", 19),
                     key=r["key"],
+                    # An address from an archive is not yet one an administrator checked.
+                    enabled=False,
                 )
             if layer is None:
                 # The file is not here; a backup, not an archive, moves basemap files.

@@ -6,7 +6,11 @@ from basemaps.models import BasemapLayer, EventBasemap
 
 
 def default_layer(test_event_id) -> BasemapLayer | None:
-    found = EventBasemap.objects.select_related("layer").filter(test_event_id=test_event_id).first()
+    found = (
+        EventBasemap.objects.select_related("layer")
+        .filter(test_event_id=test_event_id, layer__enabled=True)
+        .first()
+    )
     return found.layer if found else None
 
 
@@ -34,5 +38,5 @@ def layer_list(test_event_id=None) -> list[dict]:
             else None,
             "default": default is not None and layer.pk == default.pk,
         }
-        for layer in BasemapLayer.objects.all()
+        for layer in BasemapLayer.objects.filter(enabled=True)
     ]

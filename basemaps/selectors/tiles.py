@@ -15,9 +15,9 @@ from PIL import Image
 from pmtiles.reader import MmapSource
 from pmtiles.reader import Reader as PMTilesReader
 from rio_tiler.errors import TileOutsideBounds
-from rio_tiler.io import Reader as RasterReader
 
 from basemaps.models import BasemapLayer
+from basemaps.rasters import GeoTiffTiles
 
 FORMATS = {"png": "PNG", "webp": "WEBP"}
 WEB_MERCATOR = morecantile.tms.get("WebMercatorQuad")
@@ -66,10 +66,6 @@ def _mbtiles(path: Path):
     return sqlite3.connect(f"{path.as_uri()}?mode=ro", uri=True, check_same_thread=True)
 
 
-def _raster(path: Path):
-    return RasterReader(str(path))
-
-
 def tile_in_bounds(layer: BasemapLayer, z: int, x: int, y: int) -> bool:
     if not (layer.min_zoom <= z <= layer.max_zoom and 0 <= x < 2**z and 0 <= y < 2**z):
         return False
@@ -86,7 +82,7 @@ def render_tile(layer: BasemapLayer, z: int, x: int, y: int, fmt: str = "png") -
         return None
     path = Path(layer.file.path)
     if layer.kind == BasemapLayer.RASTER:
-        reader = _open(path, _raster)
+        reader = _open(path, GeoTiffTiles)
         try:
             image = reader.tile(x, y, z)
         except TileOutsideBounds:

@@ -7,8 +7,9 @@ URL = "/gui/api/basemaps/"
 
 
 def test_the_switcher_lists_every_layer_and_marks_the_events_default(
-    client, role_user, test_event, media_root, tmp_path
+    client, role_user, test_event, media_root, tmp_path, settings
 ):
+    settings.FTT_TILE_HOSTS = ["t.example"]
     ortho = layers.register_file(quadrant_geotiff(tmp_path / "o.tif"), name="Ortho", key="ortho")
     layers.register_url("https://t.example/{z}/{x}/{y}.png", name="Online", attribution="© T")
     layers.set_event_default(test_event, ortho)
