@@ -342,6 +342,9 @@ FTT_TILE_CACHE = Path(env_str("FTT_TILE_CACHE", str(DATA_DIR / "tile_cache")))
 # many tiles per second ``ftt_basemap fetch`` asks of a tile server.
 FTT_BASEMAP_MAX_UPLOAD_MB = env_int("FTT_BASEMAP_MAX_UPLOAD_MB", 2048)
 FTT_BASEMAP_FETCH_RATE = float(env_str("FTT_BASEMAP_FETCH_RATE", "2"))
+# Seconds an MBTiles archive may take to give one tile before the tile is
+# answered 503 (basemaps.mbtiles).
+FTT_TILE_SECONDS = float(env_str("FTT_TILE_SECONDS", "2"))
 # Background jobs (reports, archive imports) wait in FTT's own database until
 # ``manage.py ftt_worker`` runs them (common/jobs.py says why this queue).
 TASKS = {"default": {"BACKEND": "django_tasks_db.DatabaseBackend", "QUEUES": ["default"]}}
