@@ -53,6 +53,16 @@ async def test_logout_closes_an_open_websocket(browser, monkeypatch):
     assert (await communicator.receive_output(timeout=3))["code"] == 4401
 
 
+async def test_logout_tells_the_websocket_at_once(browser):
+    """Not at the socket's next periodic check (30 s): the logout tells the live layer."""
+    client, user, session = browser
+    communicator = await opened(user, session)
+    await database_sync_to_async(client.post)("/logout/")
+    message = await communicator.receive_json_from(timeout=2)
+    assert message["type"] == "error" and "sign in again" in message["detail"]
+    assert (await communicator.receive_output(timeout=1))["code"] == 4401
+
+
 async def test_losing_the_role_closes_the_websocket_on_the_next_subscribe(browser):
     _, user, session = browser
     communicator = await opened(user, session)
