@@ -1,6 +1,7 @@
 """Which layers there are and which one a test event starts on."""
 
 from django.urls import reverse
+from django.utils.html import escape
 
 from basemaps.models import BasemapLayer, EventBasemap
 
@@ -29,7 +30,8 @@ def layer_list(test_event_id=None) -> list[dict]:
             "key": layer.key,
             "name": layer.name,
             "url": tile_url_template(layer),
-            "attribution": layer.attribution,
+            # Leaflet puts attributions in the page as HTML; the layer's is text.
+            "attribution": escape(layer.attribution),
             "minZoom": layer.min_zoom,
             "maxZoom": layer.max_zoom,
             # Leaflet wants [[south, west], [north, east]].
