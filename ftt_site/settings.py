@@ -347,6 +347,8 @@ FTT_BASEMAP_FETCH_RATE = float(env_str("FTT_BASEMAP_FETCH_RATE", "2"))
 FTT_TILE_SECONDS = float(env_str("FTT_TILE_SECONDS", "2"))
 # Background jobs (reports, archive imports) wait in FTT's own database until
 # ``manage.py ftt_worker`` runs them (common/jobs.py says why this queue).
+# Reports one account may have queued or running at once; more are 429.
+FTT_MAX_WAITING_REPORTS = env_int("FTT_MAX_WAITING_REPORTS", 5)
 TASKS = {"default": {"BACKEND": "django_tasks_db.DatabaseBackend", "QUEUES": ["default"]}}
 # Title-page logo of every report (PNG, JPEG or SVG); empty: FTT's own.
 FTT_REPORT_LOGO = env_str("FTT_REPORT_LOGO", "")
