@@ -43,9 +43,7 @@ async def opened(user, session):
     return communicator
 
 
-async def test_a_session_that_ends_without_a_logout_closes_at_the_next_check(
-    browser, monkeypatch
-):
+async def test_a_session_that_ends_without_a_logout_closes_at_the_next_check(browser, monkeypatch):
     monkeypatch.setattr(consumers, "SESSION_CHECK_INTERVAL", 0.2)
     _, user, session = browser
     communicator = await opened(user, session)
