@@ -122,15 +122,20 @@ MIDDLEWARE = [
 ]
 
 # Failed logins on every path (GUI, admin, /api/token/) are counted by
-# django-axes, per account and per address independently: guessing one
-# account's password and trying one password on many accounts both stop.
+# django-axes (ftt_site.lockout): an address that fails too often is locked,
+# whatever accounts it tried; an account failed from many addresses is only
+# slowed down, so no stranger can lock someone else out.
 AUTHENTICATION_BACKENDS = [
     "axes.backends.AxesStandaloneBackend",
+    "ftt_site.lockout.AccountPace",
     "django.contrib.auth.backends.ModelBackend",
 ]
 AXES_FAILURE_LIMIT = env_int("FTT_LOGIN_FAILURE_LIMIT", 5)
 AXES_COOLOFF_TIME = timedelta(minutes=env_int("FTT_LOGIN_COOLOFF_MINUTES", 15))
-AXES_LOCKOUT_PARAMETERS = ["ip_address", "username"]
+AXES_LOCKOUT_PARAMETERS = ["ip_address"]
+# An attempt refused while locked or slowed does not count as one more failure.
+AXES_RESET_COOL_OFF_ON_FAILURE_DURING_LOCKOUT = False
+FTT_LOGIN_ACCOUNT_PACE_SECONDS = env_int("FTT_LOGIN_ACCOUNT_PACE_SECONDS", 10)
 # How long a web process keeps an API token (with its account's roles) and a
 # robot account's vehicles after reading them (common.api.authentication).
 FTT_TOKEN_CACHE_SECONDS = env_int("FTT_TOKEN_CACHE_SECONDS", 5)
