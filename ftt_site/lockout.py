@@ -16,7 +16,6 @@ from datetime import timedelta
 from axes.helpers import get_cool_off
 from axes.models import AccessAttempt
 from django.conf import settings
-from django.contrib.auth.backends import BaseBackend
 from django.core.exceptions import PermissionDenied
 from django.db.models import Max, Sum
 from django.http import JsonResponse
@@ -36,10 +35,13 @@ def account_wait(username: str) -> int:
     return max(0, math.ceil((failed["last"] + pace - timezone.now()).total_seconds()))
 
 
-class AccountPace(BaseBackend):
+class AccountPace:
     """After axes' own check: an account with many recent failures from anywhere
     may be tried once per pace. A refused attempt is answered like a lockout
-    (axes' middleware, ``locked_out``) and not counted as a failure."""
+    (axes' middleware, ``locked_out``) and not counted as a failure.
+
+    An authentication backend that never signs anyone in, so it has no
+    ``get_user``: a session is never bound to it."""
 
     def authenticate(self, request, username=None, **credentials):
         if request is None or not username:
