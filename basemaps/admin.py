@@ -12,7 +12,7 @@ from common import roles
 class BasemapLayerForm(forms.ModelForm):
     class Meta:
         model = BasemapLayer
-        fields = ["name", "key", "file", "url", "attribution", "min_zoom", "max_zoom"]
+        fields = ["name", "key", "file", "url", "enabled", "attribution", "min_zoom", "max_zoom"]
 
     def clean(self):
         data = super().clean()
@@ -52,7 +52,7 @@ class RoleAdmin(admin.ModelAdmin):
 @admin.register(BasemapLayer)
 class BasemapLayerAdmin(RoleAdmin):
     form = BasemapLayerForm
-    list_display = ["name", "key", "kind", "min_zoom", "max_zoom", "attribution"]
+    list_display = ["name", "key", "kind", "enabled", "min_zoom", "max_zoom", "attribution"]
     readonly_fields = ["kind", "west", "south", "east", "north", "tile_format"]
     prepopulated_fields = {"key": ["name"]}
 

@@ -1,12 +1,15 @@
 from django.apps import AppConfig
 from django.conf import settings
 
+from basemaps.confinement import confine_gdal
+
 
 class BasemapsConfig(AppConfig):
     name = "basemaps"
     verbose_name = "Basemaps"
 
     def ready(self):
+        confine_gdal()
         # rasterio's wheel brings its own GDAL and PROJ. Loaded after SpatiaLite's
         # mod_spatialite has bound the system's libraries, it crashes the process
         # (a segfault importing rio_tiler after the first SpatiaLite connection).

@@ -4,26 +4,32 @@
 tile archive, with a message for the person who uploaded it.
 """
 
+import math
 import sqlite3
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
-import rasterio
 from django.core.exceptions import ValidationError
 from pmtiles.reader import MmapSource
 from pmtiles.reader import Reader as PMTilesReader
 from pmtiles.tile import TileType
 from rasterio.errors import NotGeoreferencedWarning, RasterioError
 from rio_tiler.errors import RioTilerError
-from rio_tiler.io import Reader as RasterReader
 
+from basemaps.mbtiles import MBTiles, TooCostly
 from basemaps.models.layers import MAX_ZOOM, BasemapLayer
+from basemaps.rasters import GeoTiffTiles, NotAGeoTiff, check_local_file, open_geotiff
 
 SQLITE_MAGIC = b"SQLite format 3\x00"
 PMTILES_MAGIC = b"PMTiles"
 PMTILES_PARTS = ("root", "metadata", "leaf_directory", "tile_data")
 RASTER_TILE_TYPES = {TileType.PNG: "png", TileType.JPEG: "jpg", TileType.WEBP: "webp"}
+# Seconds an archive's metadata and zoom range may take to read on upload.
+CHECK_SECONDS = 10
+# A zoomed-out tile is drawn from the coarsest overview (or the image itself):
+# one larger than this a side would take seconds per tile.
+MAX_COARSEST_SIDE = 8192
 # Beyond its native resolution a raster is still drawn, enlarged, for a few zooms.
 OVERZOOM = 3
 
@@ -41,8 +47,16 @@ def refuse(message: str):
     raise ValidationError(message, code="not_a_basemap")
 
 
+def local_file(path) -> Path:
+    """``path`` as a regular local file; refused for a GDAL virtual path or an address."""
+    try:
+        return check_local_file(path)
+    except NotAGeoTiff as exc:
+        refuse(str(exc))
+
+
 def inspect_file(path) -> FileFacts:
-    path = Path(path)
+    path = local_file(path)
     with path.open("rb") as f:
         head = f.read(16)
     if head.startswith(SQLITE_MAGIC):
@@ -57,7 +71,7 @@ def _raster(path: Path) -> FileFacts:
         # A plain image is expected here and answered below; no warning in the log.
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", NotGeoreferencedWarning)
-            dataset = rasterio.open(path)
+            dataset = open_geotiff(path)
         with dataset:
             if dataset.crs is None or dataset.transform.is_identity:
                 refuse(
@@ -68,10 +82,18 @@ def _raster(path: Path) -> FileFacts:
                 refuse(f"Need 1 (grey), 3 (RGB) or 4 (RGBA) bands, not {dataset.count}.")
             if set(dataset.dtypes) != {"uint8"}:
                 refuse(f"Need 8-bit bands, not {', '.join(sorted(set(dataset.dtypes)))}.")
-        with RasterReader(str(path)) as reader:
+            coarsest = max(dataset.overviews(1), default=1)
+            if max(dataset.width, dataset.height) / coarsest > MAX_COARSEST_SIDE:
+                refuse(
+                    f"{dataset.width} x {dataset.height} pixels, and no overview of at most "
+                    f"{MAX_COARSEST_SIDE} pixels a side to draw the whole area from; add "
+                    "overviews first (gdaladdo -r average FILE, or export a COG)."
+                )
+        with GeoTiffTiles(path) as tiles:
+            reader = tiles.reader
             bounds = tuple(reader.get_geographic_bounds(reader.tms.rasterio_geographic_crs))
             low, high = reader.minzoom, reader.maxzoom
-    except (RasterioError, RioTilerError) as exc:
+    except (NotAGeoTiff, RasterioError, RioTilerError) as exc:
         refuse(
             "Not a georeferenced raster (GeoTIFF) nor an MBTiles or PMTiles archive "
             f"({str(exc).splitlines()[0][:200]})."
@@ -81,31 +103,43 @@ def _raster(path: Path) -> FileFacts:
     return FileFacts(BasemapLayer.RASTER, bounds, 0, min(MAX_ZOOM, max(high, low) + OVERZOOM))
 
 
+def _zoom(meta: dict, name: str, found: int) -> int:
+    raw = meta.get(name, found)
+    try:
+        zoom = int(raw)
+    except (TypeError, ValueError):
+        refuse(f"This MBTiles archive's {name} is {str(raw)[:40]!r}, not a zoom level.")
+    if not 0 <= zoom <= MAX_ZOOM:
+        refuse(f"This MBTiles archive's {name} is {zoom}; zoom levels go from 0 to {MAX_ZOOM}.")
+    return zoom
+
+
 def _mbtiles(path: Path) -> FileFacts:
     try:
-        with sqlite3.connect(f"{path.as_uri()}?mode=ro", uri=True) as db:
-            meta = dict(db.execute("SELECT name, value FROM metadata").fetchall())
-            zooms = db.execute("SELECT min(zoom_level), max(zoom_level) FROM tiles").fetchone()
+        with MBTiles(path) as archive:
+            meta = dict(archive.query("SELECT name, value FROM metadata", seconds=CHECK_SECONDS))
+            (zooms,) = archive.query(
+                "SELECT min(zoom_level), max(zoom_level) FROM tiles", seconds=CHECK_SECONDS
+            )
     except sqlite3.Error as exc:
         refuse(f"An SQLite file, but not an MBTiles archive ({exc}).")
-    fmt = meta.get("format", "png").lower().replace("jpeg", "jpg")
+    except TooCostly as exc:
+        refuse(f"This MBTiles archive is too slow to read ({exc}).")
+    fmt = str(meta.get("format", "png")).lower().replace("jpeg", "jpg")
     if fmt not in ("png", "jpg", "webp"):
-        refuse(f"Only raster archives can be served; this one holds {fmt!r} tiles.")
+        refuse(f"Only raster archives can be served; this one holds {fmt[:40]!r} tiles.")
     if zooms[0] is None:
         refuse("This MBTiles archive holds no tiles.")
     try:
-        bounds = tuple(float(v) for v in meta["bounds"].split(","))
+        bounds = tuple(float(v) for v in str(meta["bounds"]).split(","))
     except (KeyError, ValueError):
         refuse("This MBTiles archive has no bounds in its metadata.")
-    if len(bounds) != 4:
+    if len(bounds) != 4 or not all(math.isfinite(v) for v in bounds):
         refuse("This MBTiles archive has malformed bounds in its metadata.")
-    return FileFacts(
-        BasemapLayer.MBTILES,
-        bounds,
-        int(meta.get("minzoom", zooms[0])),
-        int(meta.get("maxzoom", zooms[1])),
-        fmt,
-    )
+    low, high = _zoom(meta, "minzoom", zooms[0]), _zoom(meta, "maxzoom", zooms[1])
+    if low > high:
+        refuse(f"This MBTiles archive's minzoom {low} is above its maxzoom {high}.")
+    return FileFacts(BasemapLayer.MBTILES, bounds, low, high, fmt)
 
 
 def _pmtiles(path: Path) -> FileFacts:

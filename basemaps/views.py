@@ -4,9 +4,11 @@ from django.http import Http404, HttpResponse
 from django.shortcuts import get_object_or_404
 from django.utils.cache import patch_cache_control, patch_vary_headers
 
+from basemaps.mbtiles import TooCostly
 from basemaps.models import BasemapLayer
 from basemaps.selectors.tiles import render_tile
 from common import roles
+from common.api.errors import RETRY_AFTER_SECONDS
 
 CONTENT_TYPES = {"png": "image/png", "webp": "image/webp"}
 # A layer's file does not change under its key without ``modified`` changing,
@@ -21,7 +23,16 @@ def tile(request, key, z, x, y, fmt):
     if not roles.has_role(user, roles.VIEWER):
         return HttpResponse("Your account has no role.", status=403, content_type="text/plain")
     layer = get_object_or_404(BasemapLayer, key=key)
-    data = render_tile(layer, z, x, y, fmt)
+    try:
+        data = render_tile(layer, z, x, y, fmt)
+    except TooCostly:
+        response = HttpResponse(
+            "This map file did not give the tile in time; try again later.",
+            status=503,
+            content_type="text/plain",
+        )
+        response["Retry-After"] = str(RETRY_AFTER_SECONDS)
+        return response
     if data is None:
         raise Http404("No tile here.")
     response = HttpResponse(data, content_type=CONTENT_TYPES[fmt])

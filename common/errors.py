@@ -18,6 +18,12 @@ class NotFound(ValidationError):
     """A referenced row does not exist."""
 
 
+class TooManyWaiting(ValidationError):
+    """The caller already has as many jobs waiting as it may (HTTP 429, Retry-After)."""
+
+    retry_after = 30
+
+
 def describe_protected(exc: ProtectedError | RestrictedError) -> str:
     blockers = list(getattr(exc, "protected_objects", None) or exc.restricted_objects)
     counts = Counter(type(obj)._meta.verbose_name_plural for obj in blockers)

@@ -138,6 +138,11 @@ def _safe_name(name: str) -> bool:
     return not path.is_absolute() and ".." not in path.parts and "\\" not in name
 
 
+# General purpose flag bit 0: the member is encrypted.
+_ENCRYPTED = 0x1
+_METHODS = (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED, zipfile.ZIP_BZIP2, zipfile.ZIP_LZMA)
+
+
 class ArchiveReader:
     """A verified archive.  Open it with :func:`open_archive`.
 
@@ -188,7 +193,20 @@ class ArchiveReader:
                 f"{settings.FTT_ARCHIVE_MAX_TOTAL_BYTES} (FTT_ARCHIVE_MAX_TOTAL_BYTES)."
             )
         for info in infos:
+            self._check_method(info)
             self._check_member(info.filename, info.file_size, info.compress_size)
+
+    def _check_method(self, info: zipfile.ZipInfo) -> None:
+        if info.flag_bits & _ENCRYPTED:
+            raise ArchiveError(
+                f"{self.path.name}: {info.filename} is encrypted; "
+                "FTT reads unencrypted archives only."
+            )
+        if info.compress_type not in _METHODS:
+            raise ArchiveError(
+                f"{self.path.name}: {info.filename} uses compression method "
+                f"{info.compress_type}; FTT reads stored, deflate, bzip2 and LZMA members only."
+            )
 
     def _check_member(self, name: str, size: int, compressed: int) -> None:
         if size > settings.FTT_ARCHIVE_MAX_MEMBER_BYTES:
@@ -215,7 +233,15 @@ class ArchiveReader:
                         raise ArchiveError(f"{self.path.name} is damaged at {name}.")
                     self._check_member(name, size, info.compress_size)
                     yield chunk
-        except (zipfile.BadZipFile, OSError, EOFError, zlib.error, ValueError) as exc:
+        except (
+            zipfile.BadZipFile,
+            OSError,
+            EOFError,
+            zlib.error,
+            ValueError,
+            NotImplementedError,
+            RuntimeError,
+        ) as exc:
             raise ArchiveError(f"{self.path.name} is damaged at {name}: {exc}") from None
 
     def _read_small(self, name: str, limit: int, what: str) -> bytes:

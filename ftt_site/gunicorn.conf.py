@@ -19,6 +19,8 @@ os.environ["PROMETHEUS_MULTIPROC_DIR"] = tempfile.mkdtemp(prefix="ftt-metrics-")
 
 bind = os.environ.get("FTT_BIND", "127.0.0.1:8000")
 workers = int(os.environ.get("FTT_WEB_WORKERS", "2"))
+# Uvicorn that stops at once when idle and limits the time for request headers
+# (ftt_site/web_worker.py).
 worker_class = "ftt_site.web_worker.Worker"
 # A worker that has not answered its supervisor for this long is replaced.
 timeout = 120
@@ -29,6 +31,7 @@ graceful_timeout = 30
 # by every server that user starts on the machine.
 control_socket_disable = True
 # The websocket of an idle browser stays open; keep-alive for its API calls.
+# An idle keep-alive connection is closed after this many seconds.
 keepalive = 5
 accesslog = os.environ.get("FTT_ACCESS_LOG") or None
 # Load Django once before forking: the address is bound only when the

@@ -1,20 +1,71 @@
-"""What a client sees after too many failed logins (django-axes' lockout hook):
-when it may try again, as a page, or as the API's JSON error, with Retry-After."""
+"""Failed sign-ins: who is stopped, and what a client then sees.
+
+An address (a browser behind FTT's proxy) is locked by django-axes for
+``FTT_LOGIN_COOLOFF_MINUTES`` after ``FTT_LOGIN_FAILURE_LIMIT`` failures,
+whatever accounts it tried. An account is never locked by failures from other
+addresses, or a stranger could lock anyone out: after that many failures
+across all addresses it is only slowed down, to one attempt per
+``FTT_LOGIN_ACCOUNT_PACE_SECONDS`` (:class:`AccountPace`). Either way the
+client is told when it may try again, as a page, or as the API's JSON error,
+with Retry-After (``locked_out``, axes' lockout hook).
+"""
 
 import math
+from datetime import timedelta
 
 from axes.helpers import get_cool_off
+from axes.models import AccessAttempt
 from django.conf import settings
+from django.core.exceptions import PermissionDenied
+from django.db.models import Max, Sum
 from django.http import JsonResponse
 from django.shortcuts import render
+from django.utils import timezone
+
+
+def account_wait(username: str) -> int:
+    """Seconds before ``username`` may be tried again (0: now)."""
+    since = timezone.now() - get_cool_off()
+    failed = AccessAttempt.objects.filter(username=username, attempt_time__gte=since).aggregate(
+        failures=Sum("failures_since_start"), last=Max("attempt_time")
+    )
+    if (failed["failures"] or 0) < settings.AXES_FAILURE_LIMIT:
+        return 0
+    pace = timedelta(seconds=settings.FTT_LOGIN_ACCOUNT_PACE_SECONDS)
+    return max(0, math.ceil((failed["last"] + pace - timezone.now()).total_seconds()))
+
+
+class AccountPace:
+    """After axes' own check: an account with many recent failures from anywhere
+    may be tried once per pace. A refused attempt is answered like a lockout
+    (axes' middleware, ``locked_out``) and not counted as a failure.
+
+    An authentication backend that never signs anyone in, so it has no
+    ``get_user``: a session is never bound to it."""
+
+    def authenticate(self, request, username=None, **credentials):
+        if request is None or not username:
+            return None
+        wait = account_wait(username)
+        if wait:
+            request.ftt_account_wait = wait
+            request.axes_locked_out = True
+            raise PermissionDenied
+        return None
+
+
+def _in_words(seconds: int) -> str:
+    if seconds < 60:
+        return f"{seconds} second{'s' if seconds != 1 else ''}"
+    minutes = math.ceil(seconds / 60)
+    return f"{minutes} minute{'s' if minutes != 1 else ''}"
 
 
 def locked_out(request, original_response=None, credentials=None):
-    seconds = int(get_cool_off(request).total_seconds())
-    minutes = math.ceil(seconds / 60)
-    message = (
-        f"Too many failed sign-ins. Try again in {minutes} minute{'s' if minutes != 1 else ''}."
+    seconds = getattr(request, "ftt_account_wait", None) or int(
+        get_cool_off(request).total_seconds()
     )
+    message = f"Too many failed sign-ins. Try again in {_in_words(seconds)}."
     if request.path.startswith("/api/"):
         response = JsonResponse({"detail": message, "errors": {}}, status=429)
     else:

@@ -35,6 +35,7 @@ from rest_framework.renderers import JSONRenderer
 from rest_framework.request import Request
 
 from common.api.authentication import sent_key, token_account
+from common.text import holds_lone_surrogate, may_hold_surrogate
 from telemetry.api import single_pose
 from telemetry.api.views import PoseViewSet
 
@@ -111,6 +112,9 @@ class PoseRoute:
         try:
             data = json.loads(body, parse_constant=_refuse_constant)
         except ValueError:
+            return None
+        if may_hold_surrogate(body) and holds_lone_surrogate(data):
+            # Django's JSON parser answers it (400).
             return None
         request = ASGIRequest(scope, io.BytesIO(body))
         try:

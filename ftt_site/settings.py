@@ -138,15 +138,20 @@ MIDDLEWARE = [
 ]
 
 # Failed logins on every path (GUI, admin, /api/token/) are counted by
-# django-axes, per account and per address independently: guessing one
-# account's password and trying one password on many accounts both stop.
+# django-axes (ftt_site.lockout): an address that fails too often is locked,
+# whatever accounts it tried; an account failed from many addresses is only
+# slowed down, so no stranger can lock someone else out.
 AUTHENTICATION_BACKENDS = [
     "axes.backends.AxesStandaloneBackend",
+    "ftt_site.lockout.AccountPace",
     "django.contrib.auth.backends.ModelBackend",
 ]
 AXES_FAILURE_LIMIT = env_int("FTT_LOGIN_FAILURE_LIMIT", 5)
 AXES_COOLOFF_TIME = timedelta(minutes=env_int("FTT_LOGIN_COOLOFF_MINUTES", 15))
-AXES_LOCKOUT_PARAMETERS = ["ip_address", "username"]
+AXES_LOCKOUT_PARAMETERS = ["ip_address"]
+# An attempt refused while locked or slowed does not count as one more failure.
+AXES_RESET_COOL_OFF_ON_FAILURE_DURING_LOCKOUT = False
+FTT_LOGIN_ACCOUNT_PACE_SECONDS = env_int("FTT_LOGIN_ACCOUNT_PACE_SECONDS", 10)
 # How long a web process keeps an API token (with its account's roles) and a
 # robot account's vehicles after reading them (common.api.authentication).
 FTT_TOKEN_CACHE_SECONDS = env_int("FTT_TOKEN_CACHE_SECONDS", 5)
@@ -249,12 +254,19 @@ WHITENOISE_AUTOREFRESH = DEBUG
 FILE_UPLOAD_MAX_MEMORY_SIZE = 10 * 1024 * 1024
 DATA_UPLOAD_MAX_MEMORY_SIZE = 50 * 1024 * 1024
 # Checked by ftt_site.request_limits before a body is read: uploads of images,
-# maps and archives may be large; every other address takes small bodies only.
+# maps and archives may be large, for accounts that may upload them
+# (ftt_site.uploaders); every other request takes small bodies only.
 FTT_MAX_REQUEST_BODY = env_int("FTT_MAX_REQUEST_BODY", DATA_UPLOAD_MAX_MEMORY_SIZE)
 FTT_MAX_UPLOAD_SIZE = env_int("FTT_MAX_UPLOAD_SIZE", 2 * 1024**3)
-FTT_UPLOAD_PATHS = ["/api/images/", "/api/maps/", "/api/archives/import/", "/import/", "/admin/"]
+# A request's headers must arrive within FTT_HEADER_TIMEOUT seconds
+# (ftt_site.web_worker); its body, after FTT_BODY_GRACE_SECONDS, at no less than
+# FTT_BODY_MIN_RATE bytes per second on average, or it is answered 408.
+FTT_HEADER_TIMEOUT = env_int("FTT_HEADER_TIMEOUT", 10)
+FTT_BODY_GRACE_SECONDS = env_int("FTT_BODY_GRACE_SECONDS", 10)
+FTT_BODY_MIN_RATE = env_int("FTT_BODY_MIN_RATE", 1024)
 # Requests running in the application at once per web process (each is a
-# thread); the rest wait up to FTT_REQUEST_QUEUE_TIMEOUT seconds, then 503.
+# thread, taken once the body has arrived); the rest wait up to
+# FTT_REQUEST_QUEUE_TIMEOUT seconds, then 503.
 FTT_MAX_ACTIVE_REQUESTS = env_int("FTT_MAX_ACTIVE_REQUESTS", 8)
 FTT_REQUEST_QUEUE_TIMEOUT = env_int("FTT_REQUEST_QUEUE_TIMEOUT", 30)
 
@@ -341,6 +353,9 @@ LOGGING = {
 
 # Tile server used by the GUI maps (site default, users may override it).
 FTT_TILE_URL = env_str("FTT_TILE_URL", "https://tile.openstreetmap.org/{z}/{x}/{y}.png")
+# Tile servers an external basemap layer may name (basemaps.hosts): names, or
+# "*.domain" for the names below it; IP addresses only listed exactly.
+FTT_TILE_HOSTS = env_list("FTT_TILE_HOSTS", urlsplit(FTT_TILE_URL).hostname or "")
 # PDF reports: where map tiles are cached, and how requested reports run
 # ("thread" in the web process, or "subprocess": manage.py ftt_report --job ID).
 FTT_TILE_CACHE = Path(env_str("FTT_TILE_CACHE", str(DATA_DIR / "tile_cache")))
@@ -348,8 +363,13 @@ FTT_TILE_CACHE = Path(env_str("FTT_TILE_CACHE", str(DATA_DIR / "tile_cache")))
 # many tiles per second ``ftt_basemap fetch`` asks of a tile server.
 FTT_BASEMAP_MAX_UPLOAD_MB = env_int("FTT_BASEMAP_MAX_UPLOAD_MB", 2048)
 FTT_BASEMAP_FETCH_RATE = float(env_str("FTT_BASEMAP_FETCH_RATE", "2"))
+# Seconds an MBTiles archive may take to give one tile before the tile is
+# answered 503 (basemaps.mbtiles).
+FTT_TILE_SECONDS = float(env_str("FTT_TILE_SECONDS", "2"))
 # Background jobs (reports, archive imports) wait in FTT's own database until
 # ``manage.py ftt_worker`` runs them (common/jobs.py says why this queue).
+# Reports one account may have queued or running at once; more are 429.
+FTT_MAX_WAITING_REPORTS = env_int("FTT_MAX_WAITING_REPORTS", 5)
 TASKS = {"default": {"BACKEND": "django_tasks_db.DatabaseBackend", "QUEUES": ["default"]}}
 # Title-page logo of every report (PNG, JPEG or SVG); empty: FTT's own.
 FTT_REPORT_LOGO = env_str("FTT_REPORT_LOGO", "")

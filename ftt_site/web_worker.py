@@ -1,22 +1,73 @@
-"""The Gunicorn worker of FTT's production server (ftt_site/gunicorn.conf.py).
+"""The Gunicorn worker of FTT's production server (ftt_site/gunicorn.conf.py):
+Uvicorn's, with two differences.
 
-Uvicorn's worker for Gunicorn, with one difference: the supervisor's quick-stop
-signal stops it.  Gunicorn's master answers SIGINT (Ctrl-C) and SIGQUIT by
-sending its workers SIGQUIT, which Uvicorn's worker only notes without stopping
-its server; the master then waited its whole graceful timeout before killing
-it, also when nothing was in flight.  Here SIGQUIT becomes the SIGTERM that
-Uvicorn's server stops on: it closes the listening socket, idle keep-alive
-connections and websockets (code 1012, "service restart": the live pages
-reconnect) at once, lets requests in flight finish, and exits; the master's
-graceful timeout bounds how long those may take.
+* The supervisor's quick-stop signal stops it. Gunicorn's master answers SIGINT
+  (Ctrl-C) and SIGQUIT by sending its workers SIGQUIT, which Uvicorn's worker
+  only notes without stopping its server, so the master waited its whole
+  graceful timeout. Here SIGQUIT becomes the SIGTERM that Uvicorn stops on: the
+  listening socket, idle keep-alive connections and websockets (code 1012,
+  "service restart": the live pages reconnect) close at once, requests in
+  flight finish within the master's graceful timeout.
+* A time limit on request headers. Uvicorn times out an idle keep-alive
+  connection but not one that opened, or began a request, and then sends its
+  headers slowly or not at all. Here a request's headers must be complete
+  ``FTT_HEADER_TIMEOUT`` seconds after the connection opened or the request
+  began, or the connection is closed. Slow bodies are ftt_site.request_limits'
+  concern: they are visible to the application.
 """
 
+import os
 import signal
 
+from uvicorn.protocols.http.httptools_impl import HttpToolsProtocol
 from uvicorn_worker import UvicornWorker
+
+# Read here rather than from Django's settings: the worker class is loaded by
+# Gunicorn before (and whether or not) Django is.
+HEADER_TIMEOUT = float(os.environ.get("FTT_HEADER_TIMEOUT") or 10)
+
+
+class HeaderTimeoutProtocol(HttpToolsProtocol):
+    header_timer = None
+
+    def arm_header_timer(self) -> None:
+        self.disarm_header_timer()
+        self.header_timer = self.loop.call_later(HEADER_TIMEOUT, self.headers_too_slow)
+
+    def disarm_header_timer(self) -> None:
+        if self.header_timer is not None:
+            self.header_timer.cancel()
+            self.header_timer = None
+
+    def headers_too_slow(self) -> None:
+        self.header_timer = None
+        if not self.transport.is_closing():
+            self.transport.close()
+
+    def connection_made(self, transport) -> None:
+        super().connection_made(transport)
+        self.arm_header_timer()
+
+    def connection_lost(self, exc) -> None:
+        self.disarm_header_timer()
+        super().connection_lost(exc)
+
+    def on_message_begin(self) -> None:
+        super().on_message_begin()
+        self.arm_header_timer()
+
+    def on_headers_complete(self) -> None:
+        self.disarm_header_timer()
+        super().on_headers_complete()
+
+    def handle_websocket_upgrade(self) -> None:
+        self.disarm_header_timer()
+        super().handle_websocket_upgrade()
 
 
 class Worker(UvicornWorker):
+    CONFIG_KWARGS = {"loop": "auto", "http": HeaderTimeoutProtocol}
+
     def handle_exit(self, sig, frame):
         super().handle_exit(sig, frame)
         if sig == signal.SIGQUIT:

@@ -1,6 +1,6 @@
 from django.apps import AppConfig
 
-from rosbridge_app import wakeup
+from rosbridge_app import sessions, wakeup
 
 
 class RosbridgeAppConfig(AppConfig):
@@ -12,4 +12,5 @@ class RosbridgeAppConfig(AppConfig):
         from rosbridge_app.services import collectors  # noqa: PLC0415
 
         wakeup.connect()
+        sessions.connect()
         collectors.connect()

@@ -31,6 +31,7 @@ from events.api.serializers import touched_rows
 from events.feed import FLEET_KINDS, LOG_KINDS
 from events.models import Announcement
 from rosbridge_app import wakeup
+from rosbridge_app.sessions import session_group
 from rosbridge_app.wakeup import GROUP
 
 logger = logging.getLogger(__name__)
@@ -244,6 +245,10 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
         await self.poller.add(self)
         if getattr(settings, "REDIS_URL", "") and self.channel_layer is not None:
             await self.channel_layer.group_add(GROUP, self.channel_name)
+        key = getattr(self.scope.get("session"), "session_key", None)
+        self.session_group = session_group(key) if key and self.channel_layer else None
+        if self.session_group:
+            await self.channel_layer.group_add(self.session_group, self.channel_name)
         self.guard = asyncio.get_running_loop().create_task(self._guard_session())
 
     async def _guard_session(self) -> None:
@@ -255,14 +260,24 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
     async def _session_holds(self) -> bool:
         if await _still_allowed(self.scope):
             return True
+        await self._end_session()
+        return False
+
+    async def _end_session(self) -> None:
         await self.send_json({"type": "error", "detail": "Your session has ended; sign in again."})
         await self.close(code=4401)
-        return False
+
+    async def session_ended(self, message):
+        """A logout in this socket's session (rosbridge_app.sessions)."""
+        await self._end_session()
 
     async def disconnect(self, code):
         guard = getattr(self, "guard", None)
         if guard is not None and guard is not asyncio.current_task():
             guard.cancel()
+        group = getattr(self, "session_group", None)
+        if group:
+            await self.channel_layer.group_discard(group, self.channel_name)
         poller = getattr(self, "poller", None)
         if poller is not None:
             LIVE_CONNECTIONS.dec()

@@ -1,8 +1,13 @@
-"""Failed logins on every login path are throttled per account and per address,
-and the person locked out is told when to try again."""
+"""Failed logins on every login path lock the address and slow the account
+(never lock it: issue 31, finding 13), and the person stopped is told when to
+try again."""
+
+from datetime import timedelta
 
 import pytest
+from axes.models import AccessAttempt
 from django.contrib.auth.models import User
+from django.db.models import F
 from django.test import Client
 from rest_framework.throttling import SimpleRateThrottle
 
@@ -21,16 +26,38 @@ def ada(settings):
     return User.objects.create_user("ada", password="right-password-1", is_staff=True)
 
 
+SIGNED_IN = {"gui": 302, "admin": 302, "token": 200}
+
+
 @pytest.mark.parametrize("path", LOGINS)
-def test_guessing_a_password_locks_the_account_and_says_when_to_retry(ada, path):
+def test_guessing_a_password_locks_the_address_and_says_when_to_retry(ada, path):
     login = LOGINS[path]
     codes = [login(Client(), "ada", "wrong").status_code for _ in range(3)]
     assert codes[:2] in ([200, 200], [400, 400]) and codes[2] == 429
-    # Even the right password waits now, from another address too.
-    locked = login(Client(REMOTE_ADDR="10.0.0.9"), "ada", "right-password-1")
+    # Even the right password waits now, from this address.
+    locked = login(Client(), "ada", "right-password-1")
     assert locked.status_code == 429
     assert int(locked["Retry-After"]) == 15 * 60
     assert "Try again in 15 minutes" in locked.content.decode()
+
+
+@pytest.mark.parametrize("path", LOGINS)
+def test_a_stranger_slows_an_account_down_but_cannot_lock_it(ada, path, settings):
+    settings.FTT_LOGIN_ACCOUNT_PACE_SECONDS = 10
+    login = LOGINS[path]
+    # Failures from many addresses, each below its own limit.
+    for address in ("6.6.6.1", "6.6.6.2", "6.6.6.3", "6.6.6.4"):
+        login(Client(REMOTE_ADDR=address), "ada", "wrong")
+    paced = login(Client(REMOTE_ADDR="10.0.0.9"), "ada", "right-password-1")
+    assert paced.status_code == 429
+    assert 0 < int(paced["Retry-After"]) <= 10
+    assert "seconds" in paced.content.decode()
+    # The pace is up: Ada gets in, from her own address, with her password.
+    AccessAttempt.objects.update(attempt_time=F("attempt_time") - timedelta(seconds=11))
+    assert (
+        login(Client(REMOTE_ADDR="10.0.0.9"), "ada", "right-password-1").status_code
+        == (SIGNED_IN[path])
+    )
 
 
 def test_one_address_trying_many_accounts_is_stopped(ada):

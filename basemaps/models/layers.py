@@ -3,6 +3,8 @@
 from django.core.validators import MaxValueValidator, MinValueValidator, RegexValidator
 from django.db import models
 
+from basemaps.hosts import check_tile_url
+
 MAX_ZOOM = 24
 zoom_validators = [MinValueValidator(0), MaxValueValidator(MAX_ZOOM)]
 
@@ -30,10 +32,19 @@ class BasemapLayer(models.Model):
     url = models.CharField(
         max_length=500,
         blank=True,
-        validators=[RegexValidator(r"^https?://.*\{z\}.*\{x\}.*\{y\}", "Needs {z}, {x} and {y}.")],
+        validators=[
+            RegexValidator(r"^https?://.*\{z\}.*\{x\}.*\{y\}", "Needs {z}, {x} and {y}."),
+            check_tile_url,
+        ],
         help_text="Only for external layers, e.g. https://tile.openstreetmap.org/{z}/{x}/{y}.png",
     )
     attribution = models.CharField(max_length=300, blank=True)
+    enabled = models.BooleanField(
+        default=True,
+        help_text="Offered in the maps and used as a test event's default. An external "
+        "layer that came with an imported archive arrives off until an administrator "
+        "checks its address and turns it on.",
+    )
     min_zoom = models.PositiveSmallIntegerField(default=0, validators=zoom_validators)
     max_zoom = models.PositiveSmallIntegerField(default=19, validators=zoom_validators)
     # Bounds in WGS 84 degrees, read from the file; empty for external layers.

@@ -1,12 +1,17 @@
 """Which layers there are and which one a test event starts on."""
 
 from django.urls import reverse
+from django.utils.html import escape
 
 from basemaps.models import BasemapLayer, EventBasemap
 
 
 def default_layer(test_event_id) -> BasemapLayer | None:
-    found = EventBasemap.objects.select_related("layer").filter(test_event_id=test_event_id).first()
+    found = (
+        EventBasemap.objects.select_related("layer")
+        .filter(test_event_id=test_event_id, layer__enabled=True)
+        .first()
+    )
     return found.layer if found else None
 
 
@@ -25,7 +30,8 @@ def layer_list(test_event_id=None) -> list[dict]:
             "key": layer.key,
             "name": layer.name,
             "url": tile_url_template(layer),
-            "attribution": layer.attribution,
+            # Leaflet puts attributions in the page as HTML; the layer's is text.
+            "attribution": escape(layer.attribution),
             "minZoom": layer.min_zoom,
             "maxZoom": layer.max_zoom,
             # Leaflet wants [[south, west], [north, east]].
@@ -34,5 +40,5 @@ def layer_list(test_event_id=None) -> list[dict]:
             else None,
             "default": default is not None and layer.pk == default.pk,
         }
-        for layer in BasemapLayer.objects.all()
+        for layer in BasemapLayer.objects.filter(enabled=True)
     ]

@@ -6,22 +6,46 @@ drawn from the same pixels the GUI shows, without an HTTP request to itself.
 
 import io
 import sqlite3
+import struct
 import threading
+import zlib
 from collections import OrderedDict
 from pathlib import Path
 
 import morecantile
-from PIL import Image
+from django.conf import settings
+from PIL import Image, UnidentifiedImageError
 from pmtiles.reader import MmapSource
 from pmtiles.reader import Reader as PMTilesReader
-from rio_tiler.errors import TileOutsideBounds
-from rio_tiler.io import Reader as RasterReader
+from rasterio.errors import RasterioError
+from rio_tiler.errors import RioTilerError, TileOutsideBounds
 
+from basemaps.mbtiles import MBTiles
 from basemaps.models import BasemapLayer
+from basemaps.rasters import GeoTiffTiles, NotAGeoTiff
 
 FORMATS = {"png": "PNG", "webp": "WEBP"}
 WEB_MERCATOR = morecantile.tms.get("WebMercatorQuad")
 OPEN_FILES = 8
+# A stored tile larger than this, or picturing more pixels, is not drawn.
+MAX_TILE_BYTES = 4 * 1024 * 1024
+MAX_TILE_PIXELS = 2048 * 2048
+# What a damaged or hostile file raises while a tile is read or decoded: that
+# tile is missing (404), not a server error.
+DAMAGED = (
+    sqlite3.Error,
+    RasterioError,
+    RioTilerError,
+    NotAGeoTiff,
+    UnidentifiedImageError,
+    Image.DecompressionBombError,
+    zlib.error,
+    OSError,
+    ValueError,
+    LookupError,
+    SyntaxError,
+    struct.error,
+)
 
 # Opening a GeoTIFF costs more than reading one tile from it, so each thread
 # keeps its last few files open; rasterio datasets must not be shared by threads.
@@ -62,14 +86,6 @@ class _PMTiles:
         self.handle.close()
 
 
-def _mbtiles(path: Path):
-    return sqlite3.connect(f"{path.as_uri()}?mode=ro", uri=True, check_same_thread=True)
-
-
-def _raster(path: Path):
-    return RasterReader(str(path))
-
-
 def tile_in_bounds(layer: BasemapLayer, z: int, x: int, y: int) -> bool:
     if not (layer.min_zoom <= z <= layer.max_zoom and 0 <= x < 2**z and 0 <= y < 2**z):
         return False
@@ -81,37 +97,53 @@ def tile_in_bounds(layer: BasemapLayer, z: int, x: int, y: int) -> bool:
 
 
 def render_tile(layer: BasemapLayer, z: int, x: int, y: int, fmt: str = "png") -> bytes | None:
-    """The tile's image bytes, or None where the layer has nothing to show."""
+    """The tile's image bytes, or None where the layer has nothing to show (or a
+    damaged file has nothing that can be drawn). Raises TooCostly when an
+    archive does not answer within FTT_TILE_SECONDS."""
     if not layer.served_by_ftt or not layer.file or not tile_in_bounds(layer, z, x, y):
         return None
     path = Path(layer.file.path)
-    if layer.kind == BasemapLayer.RASTER:
-        reader = _open(path, _raster)
-        try:
-            image = reader.tile(x, y, z)
-        except TileOutsideBounds:
+    try:
+        if layer.kind == BasemapLayer.RASTER:
+            return _raster_tile(_open(path, GeoTiffTiles), z, x, y, fmt)
+        data = _archive_tile(layer, path, z, x, y)
+        if not data or len(data) > MAX_TILE_BYTES:
             return None
-        # zlevel 1: tiles travel over the field LAN; encoding time matters more than
-        # the ~10 % of bytes the default level saves (benchmarks/basemap_tiles.py).
-        options = {"zlevel": 1} if fmt == "png" else {}
-        return image.render(img_format=FORMATS[fmt], **options)
-    if layer.kind == BasemapLayer.MBTILES:
-        row = (
-            _open(path, _mbtiles)
-            .execute(
-                "SELECT tile_data FROM tiles WHERE zoom_level=? AND tile_column=? AND tile_row=?",
-                # MBTiles count rows from the south (TMS), tile URLs from the north.
-                (z, x, 2**z - 1 - y),
-            )
-            .fetchone()
-        )
-        data = row[0] if row else None
-    else:
-        data = _open(path, _PMTiles).get(z, x, y)
-    if not data:
+        if layer.tile_format == fmt:
+            return bytes(data)
+        return _converted(data, fmt)
+    except DAMAGED:
         return None
-    if layer.tile_format == fmt:
-        return bytes(data)
+
+
+def _raster_tile(reader, z, x, y, fmt) -> bytes | None:
+    try:
+        image = reader.tile(x, y, z)
+    except TileOutsideBounds:
+        return None
+    # zlevel 1: tiles travel over the field LAN; encoding time matters more than
+    # the ~10 % of bytes the default level saves (benchmarks/basemap_tiles.py).
+    options = {"zlevel": 1} if fmt == "png" else {}
+    return image.render(img_format=FORMATS[fmt], **options)
+
+
+def _archive_tile(layer, path: Path, z, x, y):
+    if layer.kind == BasemapLayer.MBTILES:
+        rows = _open(path, MBTiles).query(
+            "SELECT tile_data FROM tiles WHERE zoom_level=? AND tile_column=? AND tile_row=?",
+            # MBTiles count rows from the south (TMS), tile URLs from the north.
+            (z, x, 2**z - 1 - y),
+            seconds=settings.FTT_TILE_SECONDS,
+        )
+        return rows[0][0] if rows else None
+    return _open(path, _PMTiles).get(z, x, y)
+
+
+def _converted(data: bytes, fmt: str) -> bytes | None:
+    image = Image.open(io.BytesIO(data))
+    # Checked before decoding: a small file may claim a huge picture.
+    if image.width * image.height > MAX_TILE_PIXELS:
+        return None
     out = io.BytesIO()
-    Image.open(io.BytesIO(data)).save(out, format=FORMATS[fmt])
+    image.save(out, format=FORMATS[fmt])
     return out.getvalue()

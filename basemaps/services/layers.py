@@ -9,7 +9,7 @@ from django.core.files import File
 from django.db import transaction
 from django.utils.text import slugify
 
-from basemaps.files import inspect_file
+from basemaps.files import inspect_file, local_file
 from basemaps.models import BasemapLayer, EventBasemap
 
 
@@ -51,7 +51,7 @@ def register_file(path, *, name: str = "", attribution: str = "", key: str = "")
 
     The file is checked before anything is written and copied into MEDIA_ROOT.
     """
-    path = Path(path)
+    path = local_file(path)
     check_size(path.stat().st_size)
     layer = BasemapLayer(name=name or path.stem, attribution=attribution)
     apply_file_facts(layer, path)
@@ -70,9 +70,17 @@ def register_file(path, *, name: str = "", attribution: str = "", key: str = "")
     return layer
 
 
-def register_url(url: str, *, name: str, attribution: str = "", max_zoom: int = 19, key=""):
+def register_url(
+    url: str, *, name: str, attribution: str = "", max_zoom: int = 19, key="", enabled=True
+):
+    """An external layer; the address must name an allowed tile server (basemaps.hosts)."""
     layer = BasemapLayer(
-        name=name, kind=BasemapLayer.URL, url=url, attribution=attribution, max_zoom=max_zoom
+        name=name,
+        kind=BasemapLayer.URL,
+        url=url,
+        attribution=attribution,
+        max_zoom=max_zoom,
+        enabled=enabled,
     )
     with transaction.atomic():
         layer.key = key or _unique_key(name)

@@ -12,7 +12,7 @@ from rest_framework import status
 from rest_framework.response import Response
 from rest_framework.views import exception_handler as drf_exception_handler
 
-from common.errors import NotFound, RuleViolation, describe_protected
+from common.errors import NotFound, RuleViolation, TooManyWaiting, describe_protected
 
 logger = logging.getLogger(__name__)
 
@@ -71,6 +71,9 @@ def exception_handler(exc, context):
         elif isinstance(exc, NotFound):
             code = status.HTTP_404_NOT_FOUND
         detail = "; ".join(m for msgs in errors.values() for m in msgs)
+        if isinstance(exc, TooManyWaiting):
+            retry = {"Retry-After": str(exc.retry_after)}
+            return Response({"detail": detail, "errors": errors}, status=429, headers=retry)
         return Response({"detail": detail, "errors": errors}, status=code)
     if isinstance(exc, ProtectedError | RestrictedError):
         detail = describe_protected(exc)

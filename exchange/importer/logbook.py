@@ -132,6 +132,8 @@ def link_basemaps(session: ImportSession):
                 attribution=r.get("attribution", ""),
                 max_zoom=r.get("max_zoom", 19),
                 key=r["key"],
+                # An address from an archive is not yet one an administrator checked.
+                enabled=False,
             )
         if layer is None:
             # The file is not here; a backup, not an archive, moves basemap files.

@@ -15,6 +15,8 @@ import math
 import threading
 import time
 
+from django.conf import settings
+from django.contrib.auth import get_user_model
 from django.core.exceptions import ValidationError
 from django.core.files.base import ContentFile
 from django.db import transaction
@@ -22,7 +24,7 @@ from django.utils import timezone
 from django_tasks import task
 
 from common import jobs
-from common.errors import RuleViolation
+from common.errors import RuleViolation, TooManyWaiting
 from events.models import TestEvent
 from reports.documents.comparison import render_comparison
 from reports.documents.event_report import ReportResult, check_reportable, render_report
@@ -45,6 +47,7 @@ def request_report(
     except ReportError as exc:
         raise RuleViolation(str(exc), code="empty") from None
     with transaction.atomic():
+        check_waiting(user)
         report = Report.objects.create(
             test_event=test_event,
             options=opts.as_dict(),
@@ -76,6 +79,7 @@ def request_comparison(
         raise ValidationError({"compare": ["Give at least two different test events."]})
     events = sorted(test_events, key=lambda e: (e.start, e.pk))
     with transaction.atomic():
+        check_waiting(user)
         report = Report.objects.create(
             test_event=events[0],
             options={COMPARE: [e.pk for e in events], "local": bool(options.get("local", False))},
@@ -84,6 +88,25 @@ def request_comparison(
         )
         make_report.enqueue(report.pk)
     return report
+
+
+def check_waiting(user) -> None:
+    """Refuse a report when ``user`` already has FTT_MAX_WAITING_REPORTS queued or
+    running; call inside the transaction that queues it."""
+    if user is None or not user.is_authenticated:
+        return
+    # One request of this account at a time past this point: the count holds.
+    list(get_user_model().objects.select_for_update().filter(pk=user.pk).values_list("pk"))
+    waiting = Report.objects.filter(
+        requested_by=user, status__in=[Report.Status.QUEUED, Report.Status.RUNNING]
+    ).count()
+    limit = settings.FTT_MAX_WAITING_REPORTS
+    if waiting >= limit:
+        raise TooManyWaiting(
+            f"You have {waiting} reports waiting or being made, the most one account may "
+            f"have (FTT_MAX_WAITING_REPORTS={limit}); request more when they are done.",
+            code="too_many_waiting",
+        )
 
 
 QUEUED_MESSAGE = "waiting for the job worker"

@@ -50,7 +50,7 @@ def test_a_geotiff_upload_becomes_a_layer_with_bounds_from_the_file(
     "name, content, message",
     [
         ("ortho.tif", b"II*\x00 this is not really a tiff" * 50, "Not a georeferenced raster"),
-        ("photo.png", png(size=(64, 64)), "has no georeference"),
+        ("photo.png", png(size=(64, 64)), "Not a georeferenced raster"),
         ("area.mbtiles", b"SQLite format 3\x00" + b"\x00" * 200, "not an MBTiles archive"),
         ("area.pmtiles", "cut-short", "A damaged PMTiles archive"),
         ("vector.pmtiles", "vector", "Only raster archives can be served; this one holds MVT"),
@@ -79,7 +79,8 @@ def test_a_file_over_the_size_limit_is_refused(admin_client, media_root, tmp_pat
     assert stored_files(media_root) == []
 
 
-def test_an_external_url_layer_needs_no_file(admin_client, media_root):
+def test_an_external_url_layer_needs_no_file(admin_client, media_root, settings):
+    settings.FTT_TILE_HOSTS = ["tile.example.org"]
     url = "https://tile.example.org/{z}/{x}/{y}.png"
     response = admin_client.post(reverse(ADD), form("", url=url))
     assert response.status_code == 302

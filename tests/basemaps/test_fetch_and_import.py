@@ -141,7 +141,8 @@ def test_import_of_a_bad_file_says_why_and_keeps_nothing(db, media_root, tmp_pat
     assert not (media_root / "basemaps").exists() or not any((media_root / "basemaps").iterdir())
 
 
-def test_the_event_default_can_be_changed_and_cleared(test_event, media_root, tmp_path):
+def test_the_event_default_can_be_changed_and_cleared(test_event, media_root, tmp_path, settings):
+    settings.FTT_TILE_HOSTS = ["t.example"]
     layer = layers.register_url("https://t.example/{z}/{x}/{y}.png", name="OSM")
     layers.set_event_default(test_event, layer)
     assert default_layer(test_event.pk) == layer

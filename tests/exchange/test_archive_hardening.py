@@ -4,6 +4,7 @@ posing as photos and malformed manifests or records are refused with a message
 
 import io
 import json
+import struct
 import zipfile
 
 import pytest
@@ -180,3 +181,36 @@ def test_fuzzed_archive_structure_never_gives_a_server_error(exported, post, dat
         members[name] = b"\n".join(lines) + b"\n"
     response = post(signed_archive(members, manifest))
     assert response.status_code in (202, 400, 409), response.content
+
+
+def _patched_directory(data: bytes, member: str, *, flags: int = 0, method: int | None = None):
+    """The zip with ``member``'s central directory entry given more flag bits or
+    another compression method (what an encrypting or AES zip tool writes)."""
+    out = bytearray(data)
+    at = out.find(b"PK\x01\x02")
+    while at != -1:
+        name_length = struct.unpack_from("<H", out, at + 28)[0]
+        if out[at + 46 : at + 46 + name_length] == member.encode():
+            old_flags = struct.unpack_from("<H", out, at + 8)[0]
+            struct.pack_into("<H", out, at + 8, old_flags | flags)
+            if method is not None:
+                struct.pack_into("<H", out, at + 10, method)
+            return bytes(out)
+        at = out.find(b"PK\x01\x02", at + 4)
+    raise LookupError(member)
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"method": 99}, "uses compression method 99"),
+        ({"flags": 0x1}, "is encrypted"),
+    ],
+    ids=["aes-method-99", "encryption-flag"],
+)
+def test_encrypted_or_unknown_compression_members_are_400(exported, post, change, message):
+    member = next(name for name in exported if name.startswith("data/"))
+    response = post(_patched_directory(signed_archive(exported), member, **change))
+    assert response.status_code == 400, response.content
+    assert message in response.json()["detail"]
+    assert not any(snapshot().values())

@@ -8,7 +8,9 @@ import zipfile
 import pytest
 from django.core.management import call_command
 from django.db import connection
+from rest_framework.authtoken.models import Token
 
+from common import roles
 from exchange.backup import make_backup
 from tests.support.field_day import field_day
 from tests.support.sites import Site
@@ -41,12 +43,37 @@ def test_spatialite_backup_restores_to_an_equal_installation(tmp_path, media_roo
     assert Site(restored).snapshot() == before
 
 
+def test_an_administrators_backup_holds_no_session_token_or_password_hash(
+    tmp_path, media_root, api_client, client, django_user_model
+):
+    owner = django_user_model.objects.create_superuser("owner", password="a long passphrase")
+    client.force_login(owner)
+    session_key = client.cookies["sessionid"].value
+    robot_token = Token.objects.create(user=django_user_model.objects.create_user("r2"))
+    administrator = api_client(roles.ADMINISTRATOR)
+    secrets = [session_key, robot_token.key, administrator.user.auth_token.key, owner.password]
+    response = administrator.get("/api/backup/")
+    assert response.status_code == 200
+    (tmp_path / "backup.zip").write_bytes(b"".join(response.streaming_content))
+    with zipfile.ZipFile(tmp_path / "backup.zip") as z:
+        contents = b"".join(z.read(name) for name in z.namelist())
+        assert json.loads(z.read("manifest.json"))["selection"]["credentials"] is False
+    assert not [secret for secret in secrets if secret.encode() in contents]
+    # The owner's full copy keeps them.
+    call_command(
+        "ftt_backup", str(tmp_path / "full.zip"), "--with-credentials", stdout=open(os.devnull, "w")
+    )
+    with zipfile.ZipFile(tmp_path / "full.zip") as z:
+        assert json.loads(z.read("manifest.json"))["selection"]["credentials"] is True
+
+
 @pytest.mark.postgis_only
 @pytest.mark.skipif(connection.vendor != "postgresql", reason="PostGIS backup")
-def test_postgis_backup_restores_with_pg_restore(tmp_path, media_root):
+@pytest.mark.parametrize("credentials", [True, False], ids=["pg_restore", "psql"])
+def test_postgis_backup_restores_as_the_doc_says(tmp_path, media_root, credentials):
     field_day()
     before = json.loads(json.dumps(snapshot()))
-    make_backup(tmp_path / "backup.zip")
+    make_backup(tmp_path / "backup.zip", credentials=credentials)
     unpack(tmp_path / "backup.zip", tmp_path / "unpacked")
     db = connection.settings_dict
     target = "ftt_restore_xchg"
@@ -55,11 +82,29 @@ def test_postgis_backup_restores_with_pg_restore(tmp_path, media_root):
     subprocess.run(["dropdb", "--if-exists", "--force", *server, target], env=env, check=True)
     subprocess.run(["createdb", *server, target], env=env, check=True)
     try:
-        subprocess.run(
-            ["pg_restore", "--no-owner", "--exit-on-error", *server, "-d", target,
-             str(tmp_path / "unpacked/database/database.pgdump")],
-            env=env, check=True, capture_output=True,
-        )  # fmt: skip
+        if credentials:
+            restore = [
+                "pg_restore",
+                "--no-owner",
+                "--exit-on-error",
+                *server,
+                "-d",
+                target,
+                str(tmp_path / "unpacked/database/database.pgdump"),
+            ]
+        else:
+            restore = [
+                "psql",
+                "--quiet",
+                "-v",
+                "ON_ERROR_STOP=1",
+                *server,
+                "-d",
+                target,
+                "-f",
+                str(tmp_path / "unpacked/database/database.sql"),
+            ]
+        subprocess.run(restore, env=env, check=True, capture_output=True)  # fmt: skip
         url = f"postgis://{db['USER']}:{db['PASSWORD']}@{db['HOST']}:{db['PORT'] or 5432}/{target}"
         site = Site(
             tmp_path / "site",

@@ -10,7 +10,7 @@ from basemaps.services import layers
 from exchange.archive import open_archive
 from exchange.backup import make_backup
 from exchange.export import export_events
-from exchange.importer import import_bundle
+from exchange.importer import ImportRefused, import_bundle
 from tests.support.basemaps import quadrant_geotiff
 from tests.support.field_day import field_day
 
@@ -20,7 +20,10 @@ def load(path):
         return import_bundle(bundle)
 
 
-def test_the_archive_names_the_events_basemap_and_the_import_links_it(db, tmp_path, media_root):
+def test_the_archive_names_the_events_basemap_and_the_import_links_it(
+    db, tmp_path, media_root, settings
+):
+    settings.FTT_TILE_HOSTS = ["t.example"]
     event = field_day()
     ortho = layers.register_file(quadrant_geotiff(tmp_path / "o.tif"), name="Ortho", key="ortho")
     layers.set_event_default(event, ortho)
@@ -38,13 +41,39 @@ def test_the_archive_names_the_events_basemap_and_the_import_links_it(db, tmp_pa
     assert plan.counts["basemaps"]["added"] == 1
     assert default_layer(event.pk) == ortho
     assert load(tmp_path / "with-ortho.zip").counts["basemaps"]["unchanged"] == 1
-    # An external layer travels whole: one that is missing is made again.
+    # An external layer travels whole: one that is missing is made again, but
+    # off (no event starts on it, no report fetches from it) until an
+    # administrator turns it on.
     online.delete()
     plan = load(tmp_path / "with-url.zip")
     assert plan.counts["basemaps"]["updated"] == 1
-    made = default_layer(event.pk)
-    assert (made.key, made.kind, made.url) == ("osm", "url", "https://t.example/{z}/{x}/{y}.png")
+    made = BasemapLayer.objects.get(key="osm")
+    assert (made.kind, made.url, made.enabled) == (
+        "url",
+        "https://t.example/{z}/{x}/{y}.png",
+        False,
+    )
+    assert default_layer(event.pk) is None
+    made.enabled = True
+    made.save()
+    assert default_layer(event.pk) == made
     assert BasemapLayer.objects.count() == 2
+
+
+def test_an_archives_url_layer_to_a_host_nobody_allowed_is_refused(db, tmp_path, media_root):
+    event = field_day()
+    layer = BasemapLayer.objects.create(
+        key="inside",
+        name="Inside",
+        kind=BasemapLayer.URL,
+        url="http://127.0.0.1:8099/{z}/{x}/{y}.png",
+    )
+    layers.set_event_default(event, layer)
+    export_events(tmp_path / "loopback.zip", [event])
+    layer.delete()
+    with pytest.raises(ImportRefused, match="127.0.0.1 is not among the tile servers"):
+        load(tmp_path / "loopback.zip")
+    assert not BasemapLayer.objects.filter(key="inside").exists()
 
 
 @pytest.mark.django_db(transaction=True)

@@ -1,5 +1,6 @@
 """The production server (Gunicorn + Uvicorn, as README starts it) under abuse and load."""
 
+import json
 import os
 import socket
 import time
@@ -15,7 +16,9 @@ MB = 1024 * 1024
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
     data_dir = tmp_path_factory.mktemp("server")
-    env = {"FTT_DATA_DIR": str(data_dir)}
+    # Where the server's temporary upload files go (tempfile reads TMPDIR).
+    (data_dir / "tmp").mkdir()
+    env = {"FTT_DATA_DIR": str(data_dir), "TMPDIR": str(data_dir / "tmp")}
     if os.environ.get("FTT_DATABASE_URL"):
         pytest.skip("drives a server of its own on the embedded database")
     web = WebServer(env, workers=1, log=data_dir / "server.log").start()
@@ -66,6 +69,62 @@ def test_an_anonymous_300_mb_login_post_is_refused_before_its_body_is_read(serve
     assert status.startswith("HTTP/1.1 413"), status
     assert time.monotonic() - started < 5
     assert worker_rss(server) - before < 50 * MB
+
+
+ACCOUNTS = """
+import json
+from django.contrib.auth.models import Group, User
+from rest_framework.authtoken.models import Token
+tokens = {}
+for role in ("viewer", "operator"):
+    user, _ = User.objects.get_or_create(username=f"upload-{role}")
+    user.groups.add(Group.objects.get(name=role))
+    tokens[role] = Token.objects.get_or_create(user=user)[0].key
+print(json.dumps(tokens))
+"""
+
+
+@pytest.fixture(scope="module")
+def tokens(server):
+    return json.loads(server.python(ACCOUNTS).strip().splitlines()[-1])
+
+
+def upload_head(path: str, length: int, token: str | None = None) -> str:
+    authorization = f"Authorization: Token {token}\r\n" if token else ""
+    return (
+        f"POST {path} HTTP/1.1\r\nHost: 127.0.0.1\r\n{authorization}"
+        "Content-Type: multipart/form-data; boundary=x\r\n"
+        f"Content-Length: {length}\r\n\r\n"
+    )
+
+
+def temporary_files(server) -> list[str]:
+    return os.listdir(os.path.join(server.env["FTT_DATA_DIR"], "tmp"))
+
+
+@pytest.mark.parametrize(
+    "path", ["/api/images/", "/api/maps/", "/api/archives/import/", "/import/", "/admin/login/"]
+)
+def test_an_anonymous_100_mb_upload_is_refused_before_its_body_is_read(server, path):
+    status, _ = post_raw(server, upload_head(path, 100 * MB), [])
+    assert status.startswith("HTTP/1.1 401"), status
+    assert temporary_files(server) == []
+
+
+def test_a_viewers_100_mb_upload_is_refused_before_its_body_is_read(server, tokens):
+    status, _ = post_raw(server, upload_head("/api/images/", 100 * MB, tokens["viewer"]), [])
+    assert status.startswith("HTTP/1.1 403"), status
+
+
+def test_an_operators_60_mb_upload_is_read_and_its_temporary_file_removed(server, tokens):
+    body = b'--x\r\nContent-Disposition: form-data; name="image"; filename="a.jpg"\r\n\r\n'
+    body += b"\0" * (60 * MB) + b"\r\n--x--\r\n"
+    head = upload_head("/api/images/", len(body), tokens["operator"])
+    status, sent = post_raw(server, head, [body[i : i + MB] for i in range(0, len(body), MB)])
+    # Read in full and judged by the view: not an image.
+    assert status.startswith("HTTP/1.1 400"), status
+    assert sent == len(body)
+    assert temporary_files(server) == []
 
 
 def test_a_chunked_body_without_length_is_cut_off_at_the_limit(server):

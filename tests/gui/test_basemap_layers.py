@@ -7,8 +7,9 @@ URL = "/gui/api/basemaps/"
 
 
 def test_the_switcher_lists_every_layer_and_marks_the_events_default(
-    client, role_user, test_event, media_root, tmp_path
+    client, role_user, test_event, media_root, tmp_path, settings
 ):
+    settings.FTT_TILE_HOSTS = ["t.example"]
     ortho = layers.register_file(quadrant_geotiff(tmp_path / "o.tif"), name="Ortho", key="ortho")
     layers.register_url("https://t.example/{z}/{x}/{y}.png", name="Online", attribution="© T")
     layers.set_event_default(test_event, ortho)
@@ -32,6 +33,17 @@ def test_the_switcher_lists_every_layer_and_marks_the_events_default(
     }
     others = client.get(URL).json()["layers"]
     assert [row["default"] for row in others] == [False, False]
+
+
+def test_an_attribution_is_text_not_html(client, role_user, media_root, tmp_path):
+    hostile = '<img src=x onerror="alert(1)"> <a href="https://evil.example">x</a>'
+    layers.register_file(quadrant_geotiff(tmp_path / "o.tif"), name="Ortho", attribution=hostile)
+    client.force_login(role_user("viewer"))
+    (row,) = client.get(URL).json()["layers"]
+    assert row["attribution"] == (
+        "&lt;img src=x onerror=&quot;alert(1)&quot;&gt; "
+        "&lt;a href=&quot;https://evil.example&quot;&gt;x&lt;/a&gt;"
+    )
 
 
 def test_the_layer_list_needs_a_role_and_a_proper_event(client, role_user, db):

@@ -110,6 +110,23 @@ def test_bad_requests_are_refused_before_queueing(scenario, api_client, db):
     assert Report.objects.count() == 0
 
 
+def test_one_account_may_have_only_so_many_reports_waiting(scenario, api_client, settings):
+    settings.FTT_MAX_WAITING_REPORTS = 3
+    operator, other = api_client("operator"), api_client("operator")
+    body = {"test_event": scenario.event.pk, "options": {"no_tiles": True}}
+    codes = [operator.post("/api/reports/", body, format="json").status_code for _ in range(5)]
+    assert codes == [202, 202, 202, 429, 429]
+    refused = operator.post("/api/reports/", body, format="json")
+    assert "You have 3 reports waiting" in refused.json()["detail"]
+    assert int(refused["Retry-After"]) > 0
+    # Another account is not held up by it.
+    assert other.post("/api/reports/", body, format="json").status_code == 202
+    assert Report.objects.count() == 4
+    # Once they are made, the account may ask again.
+    run_queued_jobs()
+    assert operator.post("/api/reports/", body, format="json").status_code == 202
+
+
 def test_failures_are_recorded_on_the_row(scenario, monkeypatch):
     def explode(*args, **kwargs):
         raise RuntimeError("disk full")

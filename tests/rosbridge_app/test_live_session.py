@@ -43,14 +43,25 @@ async def opened(user, session):
     return communicator
 
 
-async def test_logout_closes_an_open_websocket(browser, monkeypatch):
+async def test_a_session_that_ends_without_a_logout_closes_at_the_next_check(browser, monkeypatch):
     monkeypatch.setattr(consumers, "SESSION_CHECK_INTERVAL", 0.2)
-    client, user, session = browser
+    _, user, session = browser
     communicator = await opened(user, session)
-    await database_sync_to_async(client.post)("/logout/")
+    # Expired and cleared (clearsessions), or deleted by an administrator: no signal.
+    await database_sync_to_async(session.delete)()
     message = await communicator.receive_json_from(timeout=3)
     assert message["type"] == "error" and "sign in again" in message["detail"]
     assert (await communicator.receive_output(timeout=3))["code"] == 4401
+
+
+async def test_logout_tells_the_websocket_at_once(browser):
+    """Not at the socket's next periodic check (30 s): the logout tells the live layer."""
+    client, user, session = browser
+    communicator = await opened(user, session)
+    await database_sync_to_async(client.post)("/logout/")
+    message = await communicator.receive_json_from(timeout=2)
+    assert message["type"] == "error" and "sign in again" in message["detail"]
+    assert (await communicator.receive_output(timeout=1))["code"] == 4401
 
 
 async def test_losing_the_role_closes_the_websocket_on_the_next_subscribe(browser):

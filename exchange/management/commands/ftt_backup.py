@@ -1,4 +1,8 @@
-"""Back up the whole installation: ``manage.py ftt_backup ftt-backup.zip``."""
+"""Back up the whole installation: ``manage.py ftt_backup ftt-backup.zip``.
+
+Without ``--with-credentials`` the backup holds no session, API token or
+password hash (exchange.backup), like the one administrators download; with it,
+it is the machine owner's full copy, to be kept like the database itself."""
 
 from django.core.management.base import BaseCommand, CommandError
 
@@ -13,10 +17,16 @@ class Command(BaseCommand):
 
     def add_arguments(self, parser):
         parser.add_argument("output", help="Zip file to write.")
+        parser.add_argument(
+            "--with-credentials",
+            action="store_true",
+            help="Keep sessions, API tokens and password hashes (a full copy for the "
+            "machine's owner: whoever holds it can sign in as anyone).",
+        )
 
-    def handle(self, *args, output, **options):
+    def handle(self, *args, output, with_credentials, **options):
         try:
-            manifest = make_backup(output)
+            manifest = make_backup(output, credentials=with_credentials)
         except BackupError as exc:
             raise CommandError(str(exc)) from None
         database = next(n for n in manifest["members"] if n.startswith("database/"))
