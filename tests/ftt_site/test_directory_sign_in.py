@@ -8,7 +8,7 @@ import pytest
 import requests
 
 from tests.support.directory import PERSONS, Directory, slapd_available
-from tests.support.drill import WebServer
+from tests.support.web import WebServer
 
 pytestmark = pytest.mark.skipif(not slapd_available(), reason="needs Debian's slapd")
 

@@ -6,7 +6,7 @@ import pytest
 import requests
 from prometheus_client.parser import text_string_to_metric_families
 
-from tests.support.drill import WebServer
+from tests.support.web import WebServer
 
 
 @pytest.fixture(scope="module")

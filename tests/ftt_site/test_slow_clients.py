@@ -12,7 +12,7 @@ from contextlib import ExitStack
 import pytest
 import requests
 
-from tests.support.drill import WebServer
+from tests.support.web import WebServer
 
 ROBOT = """
 import json

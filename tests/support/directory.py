@@ -9,7 +9,7 @@ from pathlib import Path
 import ldap
 from ldap import modlist
 
-from tests.support.drill import free_port
+from tests.support.web import free_port
 
 BASE = "dc=ftt,dc=test"
 ADMIN_DN = f"cn=admin,{BASE}"
