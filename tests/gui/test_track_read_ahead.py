@@ -7,7 +7,7 @@ from django.db import connection
 from django.test.utils import CaptureQueriesContext
 
 from events.services import segments
-from telemetry.selectors.tracks import forget_kept_tracks
+from telemetry.selectors.kept_tracks import forget_kept_tracks
 from telemetry.services import recording
 from tests.support.accounts import signed_in
 
