@@ -408,8 +408,8 @@ def fill(bench, path: Path, minutes: float) -> None:
     from rosbridge_app.collector import params as P
     from rosbridge_app.collector.outbox import Outbox
     from rosbridge_app.collector.pipeline import Pipeline
-    from rosbridge_app.collector.runtime import SPOOL_INTERVAL, Spooler
     from rosbridge_app.collector.simulator import SimConfig, SimulatedRobot
+    from rosbridge_app.collector.spooler import SPOOL_INTERVAL, Spooler
 
     options = dict(zip(ROBOT[::2], ROBOT[1::2], strict=True))
     width, height = (int(v) for v in options["--camera-size"].split("x"))

@@ -746,7 +746,8 @@ def writer_stall(rounds: int = 3) -> None:
     the same load."""
     import threading
 
-    from rosbridge_app.collector.blackbox import MessageDefinitions, WriterProcess, write_mcap
+    from rosbridge_app.collector.mcap_files import MessageDefinitions, write_mcap
+    from rosbridge_app.collector.snapshot_writer import WriterProcess
 
     traffic = [
         ("/gps_fix", 100, 96),

@@ -46,7 +46,8 @@ from django.db import connection  # noqa: E402
 
 from events.models import Leg, Segment, Shift, TestEvent, Vehicle  # noqa: E402
 from telemetry.models import Pose  # noqa: E402
-from telemetry.selectors.tracks import GPS, gps_tracks_sql, load_tracks  # noqa: E402
+from telemetry.selectors.packed_tracks import gps_tracks_sql  # noqa: E402
+from telemetry.selectors.tracks import GPS, load_tracks  # noqa: E402
 
 # Seconds: issue 14's target for the statistics of a million poses.
 STATISTICS_TARGET = 1.0

@@ -7,9 +7,9 @@ whatever is kept must be harmless for that long: the owner picks the time.
 """
 
 import threading
-import time
 import weakref
-from collections import OrderedDict
+
+from cachetools import TTLCache
 
 _every: weakref.WeakSet = weakref.WeakSet()
 
@@ -21,33 +21,23 @@ def clear_all() -> None:
 
 
 class Expiring:
-    """A bounded mapping whose entries expire ``seconds`` after they were put."""
+    """A bounded mapping whose entries expire ``seconds`` after they were put:
+    cachetools' TTLCache behind a lock (web requests run in threads, and
+    TTLCache is not thread-safe)."""
 
     def __init__(self, seconds: float, size: int = 4096):
-        self.seconds = seconds
-        self.size = size
-        self._entries: OrderedDict = OrderedDict()
-        # Web requests run in threads; the order of the entries is shared.
+        self._entries = TTLCache(maxsize=size, ttl=seconds)
         self._lock = threading.Lock()
         _every.add(self)
 
     def get(self, key):
         """The value kept for ``key``, or None when absent or expired."""
         with self._lock:
-            entry = self._entries.get(key)
-            if entry is None:
-                return None
-            if entry[0] < time.monotonic():
-                del self._entries[key]
-                return None
-            return entry[1]
+            return self._entries.get(key)
 
     def put(self, key, value) -> None:
         with self._lock:
-            self._entries[key] = (time.monotonic() + self.seconds, value)
-            self._entries.move_to_end(key)
-            while len(self._entries) > self.size:
-                self._entries.popitem(last=False)
+            self._entries[key] = value
 
     def forget(self, key) -> None:
         with self._lock:

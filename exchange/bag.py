@@ -28,8 +28,9 @@ from events.models import Leg, Shift, TestEvent, Vehicle
 from events.services import logs
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.bag import bag_events, open_bag
-from rosbridge_app.collector.blackbox import MessageDefinitions, snapshot_topics, write_mcap
+from rosbridge_app.collector.blackbox import snapshot_topics
 from rosbridge_app.collector.events import Event
+from rosbridge_app.collector.mcap_files import MessageDefinitions, write_mcap
 from rosbridge_app.collector.modes import ITO
 from rosbridge_app.collector.params import SPECS, InvalidParameter, check
 from rosbridge_app.collector.recorder import Recorder

@@ -9,10 +9,10 @@ import sqlite3
 import struct
 import threading
 import zlib
-from collections import OrderedDict
 from pathlib import Path
 
 import morecantile
+from cachetools import LRUCache
 from django.conf import settings
 from PIL import Image, UnidentifiedImageError
 from pmtiles.reader import MmapSource
@@ -52,26 +52,27 @@ DAMAGED = (
 _local = threading.local()
 
 
-class _OpenFiles:
-    def __init__(self):
-        self.files: OrderedDict = OrderedDict()
+class _OpenFiles(LRUCache):
+    """A thread's open files by (path, modification time); beyond OPEN_FILES
+    the least recently read one is closed."""
 
-    def get(self, path: Path, opener):
+    def popitem(self):
+        key, handle = super().popitem()
+        handle.close()
+        return key, handle
+
+    def get_open(self, path: Path, opener):
         key = (str(path), path.stat().st_mtime_ns)
-        handle = self.files.pop(key, None)
+        handle = self.get(key)
         if handle is None:
-            handle = opener(path)
-        self.files[key] = handle
-        while len(self.files) > OPEN_FILES:
-            _, old = self.files.popitem(last=False)
-            old.close()
+            handle = self[key] = opener(path)
         return handle
 
 
 def _open(path: Path, opener):
     if not hasattr(_local, "files"):
-        _local.files = _OpenFiles()
-    return _local.files.get(path, opener)
+        _local.files = _OpenFiles(maxsize=OPEN_FILES)
+    return _local.files.get_open(path, opener)
 
 
 class _PMTiles:

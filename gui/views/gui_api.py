@@ -37,20 +37,18 @@ from telemetry.api.serializers import ImageSerializer, RecordingSerializer
 from telemetry.models import Image, Recording
 from telemetry.selectors import tracks
 from telemetry.selectors.distances import displayed_distances
+from telemetry.selectors.kept_tracks import keeps_any, kept_tracks
 from telemetry.selectors.maps import current_map
 from telemetry.selectors.overlay import map_corners, overlay
-from telemetry.selectors.tracks import (
-    GPS,
-    LOCAL,
+from telemetry.selectors.track_drawing import (
     MAX_ZOOM,
     MIN_LOCAL_ZOOM,
     drawn,
     fit_zoom,
-    keeps_any,
-    kept_tracks,
     thinned,
     tolerance,
 )
+from telemetry.selectors.tracks import GPS, LOCAL
 
 
 @extend_schema(exclude=True)

@@ -18,47 +18,22 @@ from pathlib import Path
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import (
-    DurabilityPolicy,
-    HistoryPolicy,
-    QoSProfile,
-    ReliabilityPolicy,
-)
 from std_srvs.srv import SetBool, Trigger
 
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector import params as P
 from rosbridge_app.collector.blackbox import Blackbox, message_class, snapshot_topics
-from rosbridge_app.collector.modes import ITO, message_type
+from rosbridge_app.collector.hearing import RENEW, RESUBSCRIBE, STREAMS, Hearing
+from rosbridge_app.collector.inputs import (
+    drained_subscription,
+    qos,
+    volatile_map_inputs,
+    wanted_inputs,
+)
+from rosbridge_app.collector.modes import ITO
 from rosbridge_app.collector.pipeline import SECOND_COPY, Pipeline
 
 log = logging.getLogger("ftt.collector")
-
-# Positions may come at 1 kHz: the subscription's history holds 2 s of them, so
-# a moment in which this process's other threads hold the interpreter loses nothing.
-POSITION_DEPTH = 2000
-# The most messages one callback takes from its subscription besides its own.
-DRAIN = 200
-# Inputs a robot publishes all the time while it runs; the mode and maps may
-# come only on a change, so their silence says nothing about the collector.
-STREAMS = ("gps_fix", "tf", "local_pose", "image", "image_compressed")
-DEAF = "robot publishes, collector hears nothing"
-
-RELIABLE_LATCHED = QoSProfile(
-    history=HistoryPolicy.KEEP_LAST,
-    depth=1,
-    reliability=ReliabilityPolicy.RELIABLE,
-    durability=DurabilityPolicy.TRANSIENT_LOCAL,
-)
-
-
-def _qos(depth: int, reliable: bool, latched: bool = False) -> QoSProfile:
-    return QoSProfile(
-        history=HistoryPolicy.KEEP_LAST,
-        depth=depth,
-        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
-        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE,
-    )
 
 
 def now() -> datetime:
@@ -105,10 +80,7 @@ class CollectorNode(Node):
         # Called (executor thread) when re-created subscriptions did not help either.
         self.on_deaf = on_deaf or (lambda: None)
         self.on_first_message = on_first_message
-        # Empty, or what the GUI shows while the collector hears nothing.
-        self.hearing = ""
-        self._heard = (0, time.monotonic())
-        self._deaf_steps = 0
+        self._hearing = Hearing(time.monotonic())
         self.inputs: dict[str, dict] = {}
         self.topics: list = []
         self._errors: dict[str, float] = {}
@@ -286,11 +258,12 @@ class CollectorNode(Node):
                 continue
             latched = topic == static
             try:
-                self._snapshot_subs[topic] = self._drained_subscription(
+                self._snapshot_subs[topic] = drained_subscription(
+                    self,
                     message_class(typename),
                     topic,
                     self._safe("snapshot", functools.partial(self.blackbox.receive, topic)),
-                    _qos(100, latched, latched=latched),
+                    qos(100, latched, latched=latched),
                     raw=True,
                 )
             except Exception as exc:
@@ -335,33 +308,7 @@ class CollectorNode(Node):
 
         return self._safe(name, receive)
 
-    def _drained_subscription(self, msg_type, topic, callback, qos, raw=False):
-        """A subscription whose callback also takes the messages waiting behind
-        its own (at most DRAIN).
-
-        The executor builds a new wait set for every message it takes, which
-        in Python costs more than converting a fix; a 1 kHz GPS spent most of
-        the collector's time there and lost fixes when the CPU was busy.
-        """
-        subscription = None
-
-        def receive(msg):
-            callback(msg)
-            for _ in range(DRAIN):
-                with subscription.handle:
-                    taken = subscription.handle.take_message(msg_type, raw)
-                if taken is None:
-                    return
-                callback(taken[0])
-
-        subscription = self.create_subscription(msg_type, topic, receive, qos, raw=raw)
-        return subscription
-
     def _subscribe(self) -> None:
-        from geometry_msgs.msg import PoseStamped
-        from nav_msgs.msg import OccupancyGrid
-        from sensor_msgs.msg import CompressedImage, Image, NavSatFix
-
         for sub in [*self._ftt_subs.values(), *self._snapshot_subs.values()]:
             self.destroy_subscription(sub)
         self._ftt_subs = {}
@@ -369,71 +316,14 @@ class CollectorNode(Node):
         self._snapshot_subs = {}
         self.blackbox.types.clear()
         get = lambda name: self.get_parameter(name).value  # noqa: E731
-        reliable = get("params.sensor_reliable")
-        mode_type = get("params.robot_mode_type")
-        pipe = self.pipeline
-        wanted = [
-            (
-                "robot_mode",
-                message_type(mode_type),
-                get("topics.robot_mode"),
-                _qos(50, True),
-                pipe.on_mode,
-            ),
-            (
-                "gps_fix",
-                NavSatFix,
-                get("topics.gps_fix"),
-                _qos(POSITION_DEPTH, reliable),
-                pipe.on_fix,
-            ),
-            ("map", OccupancyGrid, get("topics.map"), RELIABLE_LATCHED, pipe.on_grid),
-            (
-                "map_jpeg",
-                CompressedImage,
-                get("topics.map_jpeg"),
-                RELIABLE_LATCHED,
-                pipe.on_map_jpeg,
-            ),
-            ("image", Image, get("topics.image"), _qos(2, reliable), pipe.on_image),
-            (
-                "image_compressed",
-                CompressedImage,
-                get("topics.image_compressed"),
-                _qos(2, reliable),
-                lambda m, at: pipe.on_image(m, at, compressed=True),
-            ),
-        ]
-        if get("params.use_tf"):
-            from tf2_msgs.msg import TFMessage
-
-            wanted += [
-                ("tf", TFMessage, get("topics.tf"), _qos(POSITION_DEPTH, True), pipe.on_tf),
-                (
-                    "tf_static",
-                    TFMessage,
-                    get("topics.tf_static"),
-                    _qos(100, True, latched=True),
-                    lambda m, at: pipe.on_tf(m, at, static=True),
-                ),
-            ]
-        else:
-            wanted.append(
-                (
-                    "local_pose",
-                    PoseStamped,
-                    get("topics.local_pose"),
-                    _qos(POSITION_DEPTH, reliable),
-                    pipe.on_pose,
-                )
-            )
+        wanted = wanted_inputs(get, self.pipeline)
         inputs = {}
-        for name, msg_type, topic, qos, handler in wanted:
+        for name, msg_type, topic, qos_profile, handler in wanted:
             if not topic:
                 continue
             try:
-                self._ftt_subs[name] = self._drained_subscription(
-                    msg_type, topic, self._input(name, handler), qos
+                self._ftt_subs[name] = drained_subscription(
+                    self, msg_type, topic, self._input(name, handler), qos_profile
                 )
             except Exception as exc:
                 log.error("cannot subscribe to %s (%s): %s", topic, name, exc)
@@ -446,17 +336,10 @@ class CollectorNode(Node):
                 "count": old.get("count", 0) if old.get("topic") == resolved else 0,
                 "last_received": old.get("last_received"),
             }
-        # Only a TRANSIENT_LOCAL subscription gets a map latched before it
-        # existed, but it never matches a volatile publisher (cartographer's
-        # /map); a second, volatile one takes those.  A map that arrives twice
-        # is dropped by the pipeline's checksum or byte comparison.
-        for name, msg_type, handler in (
-            ("map", OccupancyGrid, pipe.on_grid),
-            ("map_jpeg", CompressedImage, pipe.on_map_jpeg),
-        ):
+        for name, msg_type, handler in volatile_map_inputs(self.pipeline):
             if name in self._ftt_subs:
-                self._ftt_subs[f"{name} (volatile)"] = self._drained_subscription(
-                    msg_type, get(f"topics.{name}"), self._input(name, handler), _qos(1, True)
+                self._ftt_subs[f"{name} (volatile)"] = drained_subscription(
+                    self, msg_type, get(f"topics.{name}"), self._input(name, handler), qos(1, True)
                 )
         self.inputs = inputs
 
@@ -471,37 +354,20 @@ class CollectorNode(Node):
 
     # --- hearing watchdog ---------------------------------------------------------------
 
+    @property
+    def hearing(self) -> str:
+        """Empty, or what the GUI shows while the collector hears nothing."""
+        return self._hearing.text
+
     def _watch_hearing(self, t: float) -> None:
-        """While logging: nothing heard for params.deaf_timeout seconds although
-        other nodes publish sensor topics we subscribe to means our side of DDS
-        is deaf (seen after a SIGKILL restart): re-create the subscriptions,
-        and if that does not help within another timeout, the collector."""
         received = sum(info["count"] for info in self.inputs.values())
         timeout = self.get_parameter("params.deaf_timeout").value
-        count, since = self._heard
-        if received != count or not timeout or not self.pipeline.logging:
-            if self.hearing and received != count:
-                log.warning("the collector hears its topics again")
-            self._heard = (received, t)
-            self.hearing, self._deaf_steps = "", 0
-            return
-        if t - since < timeout:
-            return
-        self._heard = (received, t)
-        publishing = self._published_streams()
-        if not publishing:  # the robot is quiet: nothing to hear
-            self.hearing, self._deaf_steps = "", 0
-            return
-        self._deaf_steps += 1
-        topics = ", ".join(publishing)
-        if self._deaf_steps == 1:
-            self.hearing = f"{DEAF} ({topics}) for {timeout:g} s: subscriptions re-created"
-            log.warning("%s", self.hearing)
+        action = self._hearing.check(
+            t, received, timeout, self.pipeline.logging, self._published_streams
+        )
+        if action == RESUBSCRIBE:
             self._subscribe()
-        else:
-            self.hearing = f"{DEAF} ({topics}) for {timeout * 2:g} s: the collector restarts"
-            log.warning("%s", self.hearing)
-            self._deaf_steps = 0  # if it stays, re-created subscriptions come first again
+        elif action == RENEW:
             self.on_deaf()
 
     def _published_streams(self) -> list[str]:

@@ -1,4 +1,4 @@
-"""Events → rows, through the Foundation services only.
+"""Events → rows, through the logbook's and telemetry's services only.
 
 Used by the live collector (events from its outbox) and by bag imports
 (events straight from :class:`~rosbridge_app.collector.pipeline.Pipeline`).
@@ -53,9 +53,9 @@ SEGMENT_CHANGES = frozenset({ev.MODE, ev.START, ev.STOP})
 
 
 @dataclass(frozen=True)
-class Onto:
-    """Store positions, frames and snapshots on this master (uid; None: nowhere),
-    not on the open one: a backlog replayed after live data (collector/replay.py)."""
+class GivenMaster:
+    """Positions, frames and snapshots go to this master (uid; None: nowhere),
+    not to the open one: a backlog replayed after live data (collector/replay.py)."""
 
     master: str | None
 
@@ -80,20 +80,20 @@ class Recorder:
             "map_shift_id": None,
         }
         self.leg: Leg | None = None
-        self.onto: Onto | None = None
+        self.given: GivenMaster | None = None
         self._maps: list[Event] = []  # maps of the current run, stored together
         self._left_open: list[str | None] | None = None  # see apply_changes
         self.skipped = 0  # events that could not be placed (no leg, no segment, bad data)
 
     # --- public -------------------------------------------------------------------------
 
-    def apply(self, events: list[Event], onto: Onto | None = None) -> None:
+    def apply(self, events: list[Event], master: GivenMaster | None = None) -> None:
         """Store events in order.  Raises DatabaseUnavailable with nothing stored
         (and this object's state unchanged) when the database cannot be used."""
-        if onto is not None and any(e.kind in SEGMENT_CHANGES for e in events):
-            raise ValueError("a segment change cannot be stored onto a given master")
+        if master is not None and any(e.kind in SEGMENT_CHANGES for e in events):
+            raise ValueError("a segment change cannot be stored on a given master")
         saved = copy.copy(self.state), self.leg, self.skipped
-        self.onto = onto
+        self.given = master
         try:
             with transaction.atomic():
                 rest = self._stops_first(events)
@@ -110,7 +110,7 @@ class Recorder:
                 self._left_open = []
             self._apply_one_by_one(events)
         finally:
-            self.onto = None
+            self.given = None
 
     def open_master_uid(self) -> str | None:
         """The uid of the master open now (after following leg changes)."""
@@ -204,8 +204,8 @@ class Recorder:
             self._store_map(self.state["map"])
 
     def _master(self) -> Segment | None:
-        if self.onto is not None:
-            uid = self.onto.master
+        if self.given is not None:
+            uid = self.given.master
             return Segment.objects.filter(uid=uid).first() if uid is not None else None
         return open_master(self.leg) if self.leg is not None else None
 

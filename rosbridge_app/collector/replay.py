@@ -1,10 +1,9 @@
 """The order in which the writer stores what the spool holds (the one place of that rule).
 
-Normally first in, first out. After an outage (or a start with a full spool)
-the spool holds a backlog, and first in, first out kept live data waiting
-until all of it was written: a mode switch published after a 2-hour outage
-was stored 68 s later. So, once the writer finds more than a quarter of a
-slice pending, what the spool holds then is the backlog (ids up to ``end``):
+Normally first in, first out. When the writer finds more than a quarter of a
+slice pending (after an outage, or at a start with a full spool), live data
+must not wait behind it: what the spool holds then is the backlog (ids up to
+``end``), and:
 
 1. its segment changes (mode, start, stop) are applied first, in spool order,
    and each is marked in the spool with the master it left open;
@@ -23,10 +22,9 @@ preceded it. The marks and the backlog's bounds live in the spool, so a
 restart in the middle goes on the same way.
 
 A backlog slice grows (up to ``MAX_SLICES`` live slices) while it is stored
-in less than ``SLICE_SECONDS``: each slice costs a few dozen round trips to
-the database whatever its size (the leg, the master, the staging tables,
-the feed, the commit), which at 2 000 records was a quarter of the replay
-over a loaded link. That time is also how long a live switch may wait.
+in less than ``SLICE_SECONDS``: a slice costs a few dozen round trips to the
+database whatever its size. That time is also how long a live switch may wait.
+docs/collector.md ("Nothing is lost") has the figures.
 """
 
 import bisect
@@ -37,7 +35,7 @@ import time
 
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.outbox import Outbox
-from rosbridge_app.collector.recorder import SEGMENT_CHANGES, Onto, Recorder
+from rosbridge_app.collector.recorder import SEGMENT_CHANGES, GivenMaster, Recorder
 
 _STATE = "backlog"
 SLICE_SECONDS = 1.0
@@ -111,7 +109,7 @@ class ReplayOrder:
         stored = 0
         for run, rows in runs:
             master = marks[run - 1][1] if run else self.lane["master"]
-            stored += self._store(recorder, list(rows), Onto(master))
+            stored += self._store(recorder, list(rows), GivenMaster(master))
         if stored == self.backlog_slice:  # a short slice (the last, or maps) tells nothing
             rate = stored / max(time.monotonic() - started, 1e-3)
             self.backlog_slice = int(
@@ -119,9 +117,9 @@ class ReplayOrder:
             )
         return taken + stored
 
-    def _store(self, recorder: Recorder, rows: list, onto: Onto | None) -> int:
+    def _store(self, recorder: Recorder, rows: list, master: GivenMaster | None) -> int:
         if rows:
-            recorder.apply([event for _, event in rows], onto=onto)
+            recorder.apply([event for _, event in rows], master=master)
             self.outbox.remove([row_id for row_id, _ in rows])
         return len(rows)
 

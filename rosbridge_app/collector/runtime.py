@@ -13,18 +13,16 @@ SIGINT/SIGTERM (rclpy's handlers) stop the ROS thread; then the queue is
 spooled, the outbox is written to the database if it can be, and the process
 exits.  A SIGKILL loses only what was still in memory (< ~0.1 s of data).
 
-A collector whose node hears nothing while others publish (node.py's hearing
-watchdog) and whose re-created subscriptions did not help either renews
-itself: the same clean stop, then the process executes itself again (same pid,
-new DDS participant), resuming its logging state from the spool.
+A collector whose node hears nothing while others publish (hearing.py) and
+whose re-created subscriptions did not help either renews itself: the same
+clean stop, then the process executes itself again (same pid, new DDS
+participant), resuming its logging state from the spool.
 
-DDS transport: Fast DDS sends between processes of one host through shared
-memory by default. A collector killed with SIGKILL leaves its shared-memory
-port behind, and publishers that still hold the dead port keep writing into
-it: the restarted collector heard nothing for up to a minute (issue 16). The
-collector therefore receives over UDP only (``FASTDDS_BUILTIN_TRANSPORTS=UDPv4``
-unless set otherwise), which holds no state a crash can leave behind; on
-loopback it costs a little CPU, nothing a collector's rates notice.
+DDS transport: the collector receives over UDP only
+(``FASTDDS_BUILTIN_TRANSPORTS=UDPv4`` unless set otherwise), which holds no
+state a crash can leave behind: Fast DDS's shared-memory ports outlive a
+SIGKILL, and publishers that still hold a dead port keep writing into it
+(docs/collector.md, "Nothing is lost").
 """
 
 import logging
@@ -37,7 +35,6 @@ import time
 from pathlib import Path
 
 import rclpy
-from django.conf import settings
 from django.db import InterfaceError, OperationalError, close_old_connections, connections
 from django.utils import timezone
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
@@ -46,18 +43,16 @@ from rclpy.parameter import Parameter
 from events import feed
 from events.models import Vehicle
 from events.selectors.logs import open_leg_for_vehicle
-from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.node import CollectorNode, Status
 from rosbridge_app.collector.outbox import Outbox
 from rosbridge_app.collector.recorder import DatabaseUnavailable, Recorder
 from rosbridge_app.collector.replay import ReplayOrder
+from rosbridge_app.collector.spooler import Spooler, default_spool
 from rosbridge_app.models import CollectorCommand
 from rosbridge_app.services import collectors as link
 
 log = logging.getLogger("ftt.collector")
 
-SPOOL_INTERVAL = 0.05
-BATCH = 500
 # Records the writer takes from the outbox per transaction: a backlog after an
 # outage is replayed in few large bulk inserts (benchmarks/collector_endurance.py),
 # and a live mode switch waits for at most one such slice (collector/replay.py).
@@ -114,58 +109,6 @@ class StartupTimes:
 def udp_only_transport(env=os.environ) -> None:
     """Receive over UDP, not shared memory (see the module's docstring); before rclpy.init."""
     env.setdefault("FASTDDS_BUILTIN_TRANSPORTS", "UDPv4")
-
-
-def default_spool(name: str) -> Path:
-    safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in name)
-    return Path(settings.DATA_DIR) / "collector" / f"{safe}.spool.sqlite3"
-
-
-# What an operator waits to see: spooled at once, not after the batching window.
-_URGENT = frozenset({ev.MODE, ev.START, ev.STOP})
-
-
-class Spooler(threading.Thread):
-    def __init__(self, events: queue.Queue, outbox: Outbox):
-        super().__init__(name="ftt-spool", daemon=True)
-        self.events, self.outbox = events, outbox
-        self.stop = threading.Event()
-        # Set after every append: the writer waits on it instead of sleeping.
-        self.spooled = threading.Event()
-        self.dropped = 0
-
-    def run(self) -> None:
-        while not self.stop.is_set() or not self.events.empty():
-            self.spool_once(timeout=SPOOL_INTERVAL)
-
-    def spool_once(self, timeout: float) -> int:
-        """Positions wait up to ``timeout`` to share one append; a mode switch,
-        start or stop ends the wait, so it reaches the database without it."""
-        batch = []
-        deadline = time.monotonic() + timeout
-        while len(batch) < BATCH:
-            try:
-                event = self.events.get(timeout=max(0.0, deadline - time.monotonic()))
-            except queue.Empty:
-                break
-            try:
-                batch.append(event.prepare())
-            except Exception as exc:
-                self.dropped += 1
-                log.warning("dropped a %s that cannot be converted: %s", event.kind, exc)
-            if event.kind in _URGENT:
-                deadline = 0.0  # take only what is already queued
-        if batch:
-            while True:
-                try:
-                    self.outbox.append(batch)
-                    break
-                except Exception:
-                    # The disk is our last resort: keep trying rather than drop.
-                    log.exception("cannot write the spool %s; retrying", self.outbox.path)
-                    time.sleep(1.0)
-            self.spooled.set()
-        return len(batch)
 
 
 class CollectorRuntime:

@@ -55,9 +55,10 @@ class Pose(TrackPoint):
     class Meta:
         ordering = ["robot_stamp", "received", "id"]
         indexes = [
-            # The driving order (tracks.py) to its last key, so reading a track needs
-            # no sort; on PostgreSQL the covered columns let the statistics of a
-            # million poses come from the index alone (benchmarks/report_benchmark.py).
+            # The driving order (selectors/driving_order.py) to its last key, so
+            # reading a track needs no sort; on PostgreSQL the covered columns let
+            # the statistics of a million poses come from the index alone
+            # (benchmarks/report_benchmark.py).
             models.Index(
                 fields=["segment", "robot_stamp", "received", "id"],
                 include=["point", "fix_status"],

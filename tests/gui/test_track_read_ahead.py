@@ -6,7 +6,7 @@ import pytest
 from django.db import connection
 from django.test.utils import CaptureQueriesContext
 
-from telemetry.selectors.tracks import forget_kept_tracks
+from telemetry.selectors.kept_tracks import forget_kept_tracks
 from telemetry.services import recording
 from tests.support.accounts import signed_in
 from tests.support.modes import start_auto

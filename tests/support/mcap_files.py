@@ -24,7 +24,7 @@ def write_fixes(path: Path, latitudes) -> dict:
     from rclpy.serialization import serialize_message
     from sensor_msgs.msg import NavSatFix
 
-    from rosbridge_app.collector.blackbox import MessageDefinitions, write_mcap
+    from rosbridge_app.collector.mcap_files import MessageDefinitions, write_mcap
 
     messages = [
         (i, "/gps_fix", serialize_message(NavSatFix(latitude=lat)))

@@ -16,14 +16,12 @@ from events.services import segments
 from events.services.segments import GpsPosition
 from telemetry.models import Pose
 from telemetry.models.poses import FixStatus
+from telemetry.selectors.kept_tracks import forget_kept_tracks, kept_tracks
+from telemetry.selectors.track_drawing import drawn, fit_zoom
 from telemetry.selectors.tracks import (
     GPS,
     LOCAL,
     Track,
-    drawn,
-    fit_zoom,
-    forget_kept_tracks,
-    kept_tracks,
     load_tracks,
 )
 from telemetry.services import recording

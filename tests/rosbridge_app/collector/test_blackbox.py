@@ -8,14 +8,10 @@ from datetime import UTC, datetime
 from rclpy.serialization import serialize_message
 
 from rosbridge_app.collector import events as ev
-from rosbridge_app.collector.blackbox import (
-    Blackbox,
-    MessageDefinitions,
-    RingBuffer,
-    snapshot_topics,
-    write_mcap,
-)
+from rosbridge_app.collector.blackbox import Blackbox, snapshot_topics
+from rosbridge_app.collector.mcap_files import MessageDefinitions, write_mcap
 from rosbridge_app.collector.params import SPECS
+from rosbridge_app.collector.ring_buffer import RingBuffer
 from tests.support.mcap_files import read_mcap
 
 

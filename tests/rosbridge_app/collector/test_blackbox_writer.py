@@ -198,17 +198,17 @@ def test_a_stuck_writer_is_killed_after_its_time_and_the_next_one_writes_the_fil
 def test_a_snapshot_whose_writers_are_stuck_is_lost_and_the_next_one_is_written(
     quick_box, tmp_path, caplog, monkeypatch
 ):
-    from rosbridge_app.collector import blackbox
+    from rosbridge_app.collector import snapshot_writer
 
     box, sent = quick_box
-    started = blackbox._Child.__init__
+    started = snapshot_writer._Child.__init__
 
     def stopped_at_start(child):
         started(child)
         os.kill(child.pid, signal.SIGSTOP)
 
-    monkeypatch.setattr(blackbox, "START_TIMEOUT", 3.0)
-    monkeypatch.setattr(blackbox._Child, "__init__", stopped_at_start)
+    monkeypatch.setattr(snapshot_writer, "START_TIMEOUT", 3.0)
+    monkeypatch.setattr(snapshot_writer._Child, "__init__", stopped_at_start)
     snapshot_of(box, range(0, 200))
     stuck = [int(pid) for pid in re.findall(r"pid (\d+)\) was stuck", caplog.text)]
     assert len(stuck) == 2 and all(gone(pid) for pid in stuck)

@@ -154,8 +154,12 @@ def test_every_input_type_ends_up_in_the_database(ros, start_collector, robot_le
         5,
         what="the heartbeat counting map 2",
     )
-    time.sleep(1.5)  # a further heartbeat, which would carry a doubled count
-    status.refresh_from_db()
+    # A further heartbeat, which would carry a doubled count.
+    status = wait_for(
+        lambda: Collector.objects.filter(name="collector", last_seen__gt=status.last_seen).first(),
+        5,
+        what="the heartbeat after the one counting map 2",
+    )
     assert status.inputs["map"]["count"] == 2
     assert collector.alive()
 

@@ -1,4 +1,4 @@
-"""Events → rows through the Foundation services (what the live collector's
+"""Events → rows through the domain services (what the live collector's
 writer and a bag import both do)."""
 
 from datetime import UTC, datetime, timedelta

@@ -7,7 +7,7 @@ from datetime import UTC, datetime
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.events import Event
 from rosbridge_app.collector.outbox import Outbox
-from rosbridge_app.collector.runtime import Spooler
+from rosbridge_app.collector.spooler import Spooler
 
 WINDOW = 60.0  # far longer than any machine needs for the rest
 

@@ -56,7 +56,7 @@ CASES = {
     "/api/images/": (_images, LIST_QUERIES),
     # The leg, its masters, their points: more segments add none.
     # GPS and local points on PostGIS are one query in a transaction that switches
-    # JIT off (savepoint, SET LOCAL, query, release: telemetry/selectors/tracks.py).
+    # JIT off (savepoint, SET LOCAL, query, release: telemetry/selectors/packed_tracks.py).
     "/api/tracks/?leg={leg}": (_poses, 6),
     "/api/local-tracks/?leg={leg}": (_local_poses, 6),
     "/api/tracks/?shift={shift}": (_poses, 6),

@@ -1,0 +1,120 @@
+"""What the collector subscribes to: the inputs, their message types and QoS.
+
+:func:`wanted_inputs` is the one table of the collector's inputs (the mode,
+positions, maps, camera); the node subscribes to each through
+:func:`drained_subscription`.
+"""
+
+from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import OccupancyGrid
+from rclpy.qos import (
+    DurabilityPolicy,
+    HistoryPolicy,
+    QoSProfile,
+    ReliabilityPolicy,
+)
+from sensor_msgs.msg import CompressedImage, Image, NavSatFix
+from tf2_msgs.msg import TFMessage
+
+from rosbridge_app.collector.modes import message_type
+
+# Positions may come at 1 kHz: the subscription's history holds 2 s of them, so
+# a moment in which this process's other threads hold the interpreter loses nothing.
+POSITION_DEPTH = 2000
+# The most messages one callback takes from its subscription besides its own.
+DRAIN = 200
+
+RELIABLE_LATCHED = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=1,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+
+
+def qos(depth: int, reliable: bool, latched: bool = False) -> QoSProfile:
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST,
+        depth=depth,
+        reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+        durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE,
+    )
+
+
+def wanted_inputs(get, pipe) -> list[tuple]:
+    """(name, message type, topic, QoS, handler(msg, at)) of every input the
+    parameters ask for (``get(name)``: a parameter's value), handled by the
+    pipeline ``pipe``."""
+    reliable = get("params.sensor_reliable")
+    wanted = [
+        (
+            "robot_mode",
+            message_type(get("params.robot_mode_type")),
+            get("topics.robot_mode"),
+            qos(50, True),
+            pipe.on_mode,
+        ),
+        ("gps_fix", NavSatFix, get("topics.gps_fix"), qos(POSITION_DEPTH, reliable), pipe.on_fix),
+        ("map", OccupancyGrid, get("topics.map"), RELIABLE_LATCHED, pipe.on_grid),
+        ("map_jpeg", CompressedImage, get("topics.map_jpeg"), RELIABLE_LATCHED, pipe.on_map_jpeg),
+        ("image", Image, get("topics.image"), qos(2, reliable), pipe.on_image),
+        (
+            "image_compressed",
+            CompressedImage,
+            get("topics.image_compressed"),
+            qos(2, reliable),
+            lambda m, at: pipe.on_image(m, at, compressed=True),
+        ),
+    ]
+    if get("params.use_tf"):
+        wanted += [
+            ("tf", TFMessage, get("topics.tf"), qos(POSITION_DEPTH, True), pipe.on_tf),
+            (
+                "tf_static",
+                TFMessage,
+                get("topics.tf_static"),
+                qos(100, True, latched=True),
+                lambda m, at: pipe.on_tf(m, at, static=True),
+            ),
+        ]
+    else:
+        wanted.append(
+            (
+                "local_pose",
+                PoseStamped,
+                get("topics.local_pose"),
+                qos(POSITION_DEPTH, reliable),
+                pipe.on_pose,
+            )
+        )
+    return wanted
+
+
+def volatile_map_inputs(pipe) -> list[tuple]:
+    """(name, message type, handler) of the maps' second, volatile subscriptions:
+    only a TRANSIENT_LOCAL subscription gets a map latched before it existed,
+    but it never matches a volatile publisher (cartographer's /map).  A map
+    that arrives twice is dropped by the pipeline's checksum or byte comparison."""
+    from nav_msgs.msg import OccupancyGrid
+    from sensor_msgs.msg import CompressedImage
+
+    return [("map", OccupancyGrid, pipe.on_grid), ("map_jpeg", CompressedImage, pipe.on_map_jpeg)]
+
+
+def drained_subscription(node, msg_type, topic, callback, qos_profile, raw=False):
+    """A subscription of ``node`` whose callback also takes the messages waiting
+    behind its own (at most DRAIN): the executor builds a new wait set for every
+    message it takes, which in Python costs more than converting a fix."""
+    subscription = None
+
+    def receive(msg):
+        callback(msg)
+        for _ in range(DRAIN):
+            with subscription.handle:
+                taken = subscription.handle.take_message(msg_type, raw)
+            if taken is None:
+                return
+            callback(taken[0])
+
+    subscription = node.create_subscription(msg_type, topic, receive, qos_profile, raw=raw)
+    return subscription

@@ -1,0 +1,119 @@
+"""Tracks kept between the map's reads in each web process.
+
+The map asks for a leg's tracks at every visit, zoom and live update; a track
+read before is used again while its segment is unchanged (``kept_tracks``).
+"""
+
+import threading
+
+from cachetools import LRUCache
+from django.db.models import Count, Max, Value
+
+from events.models import Segment
+from telemetry.models import LocalPose, Pose
+from telemetry.selectors.tracks import GPS, MODES, Track, load_tracks
+
+# {(mode, segment id): (key, track)}, bounded in points (x, y and t: 24 bytes
+# each, so about 100 MB), least recently read dropped first.
+_kept: LRUCache = LRUCache(maxsize=4_000_000, getsizeof=lambda kept: len(kept[1]))
+_lock = threading.Lock()
+
+
+def _kept_for(slot: tuple[str, int], key: tuple) -> Track | None:
+    """The track kept in ``slot`` if it was read for ``key``."""
+    with _lock:
+        kept = _kept.get(slot)
+    return kept[1] if kept is not None and kept[0] == key else None
+
+
+def _keep(slot: tuple[str, int], key: tuple, track: Track) -> None:
+    with _lock:
+        _kept.pop(slot, None)
+        if len(track) <= _kept.maxsize:
+            _kept[slot] = (key, track)
+
+
+# Held while tracks that are not kept are read, so a request that arrives
+# during a read ahead of the same leg (gui.views.gui_api.read_ahead) waits for
+# it and takes its tracks instead of reading them a second time.
+_reading = threading.Lock()
+
+
+def pose_counts(segment_ids: list[int], modes=MODES) -> dict[tuple[str, int], tuple[int, int]]:
+    """{(mode, segment id): (poses stored, newest pose id)} of the segments
+    that have poses, in one query (an index-only count on PostgreSQL)."""
+    parts = [
+        (Pose if mode == GPS else LocalPose)
+        .objects.filter(segment_id__in=segment_ids)
+        .values("segment_id")
+        .annotate(_n=Count("id"), _newest=Max("id"), _mode=Value(mode))
+        .values_list("_mode", "segment_id", "_n", "_newest")
+        .order_by()
+        for mode in modes
+    ]
+    if not segment_ids or not parts:
+        return {}
+    rows = parts[0].union(*parts[1:], all=True) if len(parts) > 1 else parts[0]
+    return {(mode, seg): (n, newest) for mode, seg, n, newest in rows}
+
+
+def kept_tracks(segments: list[Segment], modes=MODES) -> dict[str, dict[int, Track]]:
+    """``load_tracks`` of each mode for the map, which asks again at every
+    visit, zoom and live update: {mode: {segment id: track}}.
+
+    A track read before in this process is used again while its segment's
+    count of poses and newest pose id are unchanged.  Poses are only ever
+    added (a late batch from a collector's spool may still arrive for a closed
+    segment) and deleted with their segment, and every added pose raises the
+    count, so a changed track is always read again; its segment's uid tells it
+    from an older segment that had the same id (a database restored under a
+    running server).  Two queries at most per mode, however many segments."""
+    by_id = {s.pk: s for s in segments}
+    counts = pose_counts(list(by_id), modes)
+    found: dict[str, dict[int, Track]] = {mode: {} for mode in modes}
+    if _take_kept(found, by_id, counts):
+        return found
+    with _reading:
+        if _take_kept(found, by_id, counts):
+            return found
+        for mode, tracks in found.items():
+            ids = [seg for (m, seg) in counts if m == mode and seg not in tracks]
+            if not ids:
+                continue
+            # A pose stored after the count was taken is in the track read now and
+            # changes the count again, so the next read replaces this one.
+            read = load_tracks(ids, mode)
+            tracks.update(read)
+            for seg, track in read.items():
+                key = (by_id[seg].uid, *counts[mode, seg])
+                # What the track was read for, so results derived from it can be kept too.
+                track.memo["kept"] = (mode, *key)
+                _keep((mode, seg), key, track)
+    return found
+
+
+def _take_kept(found: dict[str, dict[int, Track]], by_id: dict, counts: dict) -> bool:
+    """Puts the kept tracks of ``counts`` into ``found``; True when all were kept."""
+    complete = True
+    for (mode, seg), count in counts.items():
+        if seg in found[mode]:
+            continue
+        track = _kept_for((mode, seg), (by_id[seg].uid, *count))
+        if track is None:
+            complete = False
+        else:
+            found[mode][seg] = track
+    return complete
+
+
+def keeps_any(segments: list[Segment]) -> bool:
+    """Whether this process keeps a track of any of ``segments``, current or
+    not (no query: what ``kept_tracks`` would then read is what changed)."""
+    with _lock:
+        return any((mode, s.pk) in _kept for mode in MODES for s in segments)
+
+
+def forget_kept_tracks() -> None:
+    """Empties this process's kept tracks (tests that compare a fresh read)."""
+    with _lock:
+        _kept.clear()
