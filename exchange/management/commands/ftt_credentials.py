@@ -1,0 +1,33 @@
+"""``manage.py ftt_credentials save FILE`` before restoring a backup without
+credentials, ``manage.py ftt_credentials restore FILE`` after it
+(exchange.credentials)."""
+
+from pathlib import Path
+
+from django.core.management.base import BaseCommand, CommandError
+
+from exchange.credentials import restore_credentials, save_credentials
+
+
+class Command(BaseCommand):
+    help = (
+        "Save every account's password hash, API token, role and flags to a file (0600), or "
+        "give them back after a backup without credentials was restored."
+    )
+
+    def add_arguments(self, parser):
+        parser.add_argument("action", choices=["save", "restore"])
+        parser.add_argument("file", type=Path)
+
+    def handle(self, *args, action, file, **options):
+        if action == "save":
+            count = save_credentials(file)
+            self.stdout.write(f"Saved the sign-ins of {count} account(s) to {file}.")
+            return
+        try:
+            done = restore_credentials(file)
+        except (OSError, ValueError, KeyError) as exc:
+            raise CommandError(f"Cannot restore sign-ins from {file}: {exc}") from None
+        self.stdout.write(
+            f"Sign-ins restored: {done['kept']} account(s) kept, {done['made']} made again."
+        )
