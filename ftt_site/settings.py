@@ -250,8 +250,8 @@ REDIS_URL = env_str("FTT_REDIS_URL")
 # How often a web process reads the change feed when no wake-up arrives (a
 # commit normally wakes it at once: NOTIFY on PostgreSQL, Redis, or in-process).
 FTT_LIVE_POLL_MS = env_int("FTT_LIVE_POLL_MS", 200)
-# Each process sends the cross-process wake-ups (NOTIFY, Redis) for all commits
-# of this long together, from a thread of its own (rosbridge_app.wakeup).
+# Each process sends the cross-process wake-ups (NOTIFY, Redis) from a thread of
+# its own, at most once per this long (rosbridge_app.wakeup).
 FTT_LIVE_NOTIFY_DELAY_MS = env_int("FTT_LIVE_NOTIFY_DELAY_MS", 2)
 if REDIS_URL:
     CHANNEL_LAYERS = {

@@ -19,13 +19,15 @@ layers, never call up to it) and, once the writer's transaction commits
 4. with Redis configured, every web process: a message to the channel-layer
    group :data:`GROUP`.
 
-2 and 3 and 4 leave the writer's thread: one thread per process sends them
-for every commit of the last FTT_LIVE_NOTIFY_DELAY_MS together, on its own
-connection.  A commit never sends NOTIFY itself, because PostgreSQL holds a
-database-wide lock from a notifying commit until its WAL flush ends, and
-commits that notify cannot share a flush (many single poses a second would
-be bounded by it).  A wake-up lost (a process that dies in between, a full
-socket queue) delays the readers by at most one poll interval.
+1 and 2 happen in the writer's thread just after its commit (a function call,
+a non-blocking datagram).  3 and 4 leave it: one thread per process sends them,
+at once after a quiet spell and at most once per FTT_LIVE_NOTIFY_DELAY_MS in a
+stream of commits, NOTIFY on a connection of its own.  A commit never sends
+NOTIFY itself, because PostgreSQL holds a database-wide lock from a notifying
+commit until its WAL flush ends, and commits that notify cannot share a flush
+(many single poses a second would be bounded by it).  A wake-up lost (a process
+that dies in between, a full socket queue) delays the readers by at most one
+poll interval.
 """
 
 import functools
@@ -140,7 +142,8 @@ class SqliteListener:
 
 class Sender:
     """Sends ``NOTIFY`` (PostgreSQL) and the channel-layer message (Redis) after
-    every :meth:`poke`, once for all pokes that arrive while it waits or sends.
+    every :meth:`poke`, at most once per ``delay`` and once for all pokes that
+    arrive while it waits or sends.
     :meth:`poke` never blocks and never fails: the thread and its connection
     start with the first one."""
 
@@ -170,9 +173,13 @@ class Sender:
             self._pid = os.getpid()
 
     def _run(self) -> None:
+        sent = 0.0
         while True:
             self._poked.wait()
-            time.sleep(self.delay)
+            # At once after a quiet spell; in a stream of commits, at most one
+            # wake-up per delay, so that many commits share one.
+            time.sleep(max(0.0, sent + self.delay - time.monotonic()))
+            sent = time.monotonic()
             try:
                 self._send()
             except Exception as exc:  # noqa: BLE001 - the readers poll meanwhile

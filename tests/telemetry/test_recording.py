@@ -151,7 +151,7 @@ def test_a_snapshot_is_copied_where_it_cannot_be_linked(ito, media_root, tmp_pat
     def no_links(source, target):
         raise OSError(18, "Invalid cross-device link")
 
-    monkeypatch.setattr(recording.os, "link", no_links)
+    monkeypatch.setattr(attachments.os, "link", no_links)
     stored = attachments.attach_recording(
         ito, path=pending, start=timezone.now(), end=timezone.now(), topics={}
     )
