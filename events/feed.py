@@ -1,15 +1,14 @@
 """The write side of the change feed (:class:`events.models.Announcement`).
 
-Every writer (services, collector, importers) calls :func:`announce` inside
-the transaction of its change: the feed shows the change exactly when it is
-committed, and a rolled-back change announces nothing.  The live link
-(:mod:`rosbridge_app.consumers`) reads the feed; it may also listen for new
-rows to wake up at once, but the feed never calls up to it.
+Every writer (services, collector, importers) adds its row here, by the ORM,
+inside the transaction of its change: the feed shows the change exactly when
+it is committed, and a rolled-back change announces nothing.  The live link
+(:mod:`rosbridge_app.consumers`) reads the feed and hears its new rows
+(:mod:`rosbridge_app.wakeup` lists every way), but the feed never calls up to it.
 """
 
 from datetime import timedelta
 
-from django.db.models.signals import post_save
 from django.utils import timezone
 
 from events.models import Announcement, Leg, Segment, Shift, TestEvent
@@ -24,9 +23,6 @@ MAX_INLINE_POINTS = 2000
 PRUNE_EVERY = 500
 # A browser away for longer than this reloads instead of catching up.
 RETENTION = timedelta(hours=1)
-# PostgreSQL's LISTEN/NOTIFY channel: a trigger on the feed's table notifies it
-# for every new row (events migration 0009), so no writer spends a round trip.
-CHANNEL = "ftt_live"
 
 
 def _scope(obj) -> tuple[int | None, int | None, int | None]:
@@ -50,48 +46,26 @@ def _scope(obj) -> tuple[int | None, int | None, int | None]:
 
 
 def announce(kind: str, obj=None, *, collector_id: int | None = None, **payload) -> Announcement:
-    return _saved(unsaved(kind, obj, collector_id=collector_id, **payload))
-
-
-def unsaved(kind: str, obj=None, *, collector_id: int | None = None, **payload) -> Announcement:
-    """The row :func:`announce` saves, for a writer that inserts it in its own
-    statement and then calls :func:`inserted`."""
+    """Add a row about ``obj`` (its test event, shift and leg are the row's scope)."""
     test_event, shift, leg = _scope(obj)
     # The scope travels in the payload too: a deleted leg takes its own
     # announcements with it (foreign key), so "leg deleted" is kept leg-less.
     payload.update(test_event=test_event, shift=shift, leg=leg)
     leg_fk = None if kind == "deleted" else leg
-    return Announcement(kind=kind, leg_id=leg_fk, collector_id=collector_id, payload=payload)
+    return _save(Announcement(kind=kind, leg_id=leg_fk, collector_id=collector_id, payload=payload))
 
 
 def record(kind: str, *, leg_id=None, collector_id=None, payload=None) -> Announcement:
     """Add one row to the feed as given (the collector link states its own scope)."""
-    return _saved(
+    return _save(
         Announcement(kind=kind, leg_id=leg_id, collector_id=collector_id, payload=payload or {})
     )
 
 
-def _saved(event: Announcement) -> Announcement:
+def _save(event: Announcement) -> Announcement:
+    """The one way a feed row is written; every PRUNE_EVERY-th row also prunes,
+    in the same transaction."""
     event.save(force_insert=True)
-    return _pruned(event)
-
-
-def inserted(event: Announcement, pk: int, using: str = "default") -> Announcement:
-    """``event`` was inserted by its writer's own SQL as row ``pk``: it wakes the
-    readers as a saved row does (post_save) and prunes in its turn."""
-    event.pk = pk
-    post_save.send(
-        sender=Announcement,
-        instance=event,
-        created=True,
-        update_fields=None,
-        raw=False,
-        using=using,
-    )
-    return _pruned(event)
-
-
-def _pruned(event: Announcement) -> Announcement:
     if event.pk % PRUNE_EVERY == 0:
         prune()
     return event
@@ -118,15 +92,10 @@ def announce_track(segment, points, *, local: bool) -> Announcement | None:
     browsers append them without a fetch."""
     if not points:
         return None
-    return _saved(track_announcement(segment, points, local=local))
-
-
-def track_announcement(segment, points, *, local: bool) -> Announcement:
-    """The unsaved row of :func:`announce_track` (see :func:`unsaved`)."""
     payload = {"segment": segment.pk, "mode": segment.segment_type_id, "count": len(points)}
     if len(points) <= MAX_INLINE_POINTS:
         payload["points"] = [[x, y] for x, y in points]
-    return unsaved("local_poses" if local else "poses", segment, **payload)
+    return announce("local_poses" if local else "poses", segment, **payload)
 
 
 def prune() -> int:
@@ -147,7 +116,7 @@ def bounds() -> tuple[int, int]:
     return first or 0, last or 0
 
 
-def announced(obj):
-    """``return announced(row)`` at the end of a service function."""
+def announce_and_return(obj):
+    """``return announce_and_return(row)`` at the end of a service function."""
     announce_row(obj)
     return obj

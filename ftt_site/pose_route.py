@@ -1,22 +1,26 @@
-"""The lean route for ``POST /api/poses/``: one pose from a robot, many a second.
+"""``POST /api/poses/`` without Django's request handling around it.
 
-Through Django's middleware, DRF and the ASGI adapter a single pose cost
-5-11 ms of CPU, the storing statement a fraction of it.  This route answers
-what it can alone with the same rule code the API view calls: the token and
-its roles (common.api.authentication.token_account), the view's own
-permission and throttle classes, the pose's one definition of fields and
-ranges and the one storing statement (telemetry.api.single_pose).  Everything
-else goes on, body and all, to Django: another method, address, body type or
-renderer, a browser's Origin (CORS), a host not allowed, no token or a bad
-one, a field it does not accept, an unknown or foreign segment, any error.
-Django then answers exactly as before (4xx with field messages, 503 with
-Retry-After).  Its answers carry the headers Django's middleware gives this
-address (security headers, CSP, Vary), taken once per process from that
-middleware.  It sits inside ftt_site.request_limits, so the body limits and
-the request slots hold.
+A robot sends single poses many times a second; Django's middleware, DRF's
+view dispatch and the ASGI adapter's one thread per process cost more than
+storing the pose.  This route answers such a request alone with the code the
+API view runs: the token and its roles (common.api.authentication), the pose
+view's permission and throttle classes, the quick check of a sent pose
+(telemetry.api.serializers.sent_pose) and the one way a pose is stored and
+answered (telemetry.api.single_pose).  Its answers carry the headers Django
+gave this address's answer (security headers, CSP, Vary): the first request
+of each scheme goes to Django, and the route keeps those headers.
+
+Everything it does not take goes on, body and all, to Django, which answers
+with its field messages: another method, address, body type or renderer, a
+browser's Origin (CORS), a disallowed host, no token or a bad one, a body the
+quick check refuses, a request over the rate.  That decision is made before
+the request is counted against the rate and before anything is stored; from
+then on the route answers itself, errors included (the API's exception
+handler: 4xx with field messages, 503 with Retry-After), so no request is
+counted or stored twice.  It sits inside ftt_site.request_limits, so the body
+limits and the request slots hold.
 """
 
-import functools
 import io
 import json
 import logging
@@ -26,17 +30,14 @@ from django.conf import settings
 from django.core.exceptions import DisallowedHost
 from django.core.handlers.asgi import ASGIRequest
 from django.db import close_old_connections
-from django.http import HttpResponse
-from django.urls import resolve
-from django.utils.cache import patch_vary_headers
-from django.utils.module_loading import import_string
 from rest_framework.exceptions import AuthenticationFailed
 from rest_framework.renderers import JSONRenderer
 from rest_framework.request import Request
+from rest_framework.settings import api_settings
 
 from common.api.authentication import sent_key, token_account
 from common.text import holds_lone_surrogate, may_hold_surrogate
-from telemetry.api import single_pose
+from telemetry.api import serializers, single_pose
 from telemetry.api.views import PoseViewSet
 
 logger = logging.getLogger(__name__)
@@ -46,6 +47,9 @@ PATH = "/api/poses/"
 MAX_BODY = 16 * 1024
 _JSON_TYPES = {b"application/json", b"application/json; charset=utf-8"}
 _ACCEPTED = {None, b"*/*", b"application/json"}
+# Headers of Django's answer that belong to that answer alone.
+_OWN_HEADERS = {b"content-length", b"date", b"server", b"set-cookie"}
+INTERNAL_ERROR = {"detail": "Internal error; it has been logged.", "errors": {}}
 
 
 def _refuse_constant(name):
@@ -53,9 +57,17 @@ def _refuse_constant(name):
     raise ValueError(f"{name} is not JSON")
 
 
+class _Learn:
+    """Hand the request to Django and keep its answer's headers for ``secure``."""
+
+    def __init__(self, secure: bool):
+        self.secure = secure
+
+
 class PoseRoute:
     def __init__(self, app):
         self.app = app
+        # Per scheme (https or not): Django's answer headers for this address.
         self._headers: dict[bool, list[tuple[bytes, bytes]]] = {}
         self._renderer = JSONRenderer()
 
@@ -88,33 +100,49 @@ class PoseRoute:
         answer = await sync_to_async(self.answer, thread_sensitive=False)(scope, key, body)
         if answer is None:
             return await self.app(scope, replay, send)
+        if isinstance(answer, _Learn):
+            return await self.app(scope, replay, self._learning(send, answer.secure))
         status, content, headers = answer
         await send({"type": "http.response.start", "status": status, "headers": headers})
         await send({"type": "http.response.body", "body": content})
 
     def answer(self, scope, key, body):
-        """(status, body, headers) when this route answers alone, else None.  Runs
-        in a worker thread; its database connection goes back to the pool (or
-        is closed) at the end, as at the end of a Django request."""
+        """(status, body, headers) when this route answers, None or a _Learn when
+        Django does.  Runs in a worker thread; its database connection goes back
+        to the pool (or is closed) at the end, as at the end of a Django request."""
         try:
-            return self._store(scope, key, body)
+            checked = self._checked(scope, key, body)
+            if checked is None or isinstance(checked, _Learn):
+                return checked
+            api_request, view, sent, secure = checked
+            # Counted as DRF counts; a request over the rate is left to Django,
+            # which answers 429 with Retry-After (a refused request is not counted).
+            if not all(t.allow_request(api_request, view) for t in view.get_throttles()):
+                return None
         except Exception:
-            # Django answers it, with the message and status its handlers give.
             logger.debug("single pose left to Django", exc_info=True)
+            close_old_connections()
             return None
+        # From here on the request is counted and may be stored: it is answered here.
+        try:
+            status, data, extra = self._stored(api_request, view, sent)
+            content = self._renderer.render(data)
+            headers = [*self._headers[secure], *extra]
+            return status, content, [*headers, (b"content-length", str(len(content)).encode())]
         finally:
-            try:
-                close_old_connections()
-            except Exception:
-                logger.warning("closing a database connection failed", exc_info=True)
+            close_old_connections()
 
-    def _store(self, scope, key, body):
+    def _checked(self, scope, key, body):
+        """What storing needs, when everything before it says this route may answer."""
         try:
             data = json.loads(body, parse_constant=_refuse_constant)
         except ValueError:
             return None
         if may_hold_surrogate(body) and holds_lone_surrogate(data):
             # Django's JSON parser answers it (400).
+            return None
+        sent = serializers.sent_pose(data)
+        if sent is None:
             return None
         request = ASGIRequest(scope, io.BytesIO(body))
         try:
@@ -124,90 +152,54 @@ class PoseRoute:
         secure = request.is_secure()
         if settings.SECURE_SSL_REDIRECT and not secure:
             return None
+        if secure not in self._headers:
+            return _Learn(secure)
         try:
             user, token = token_account(key)
         except AuthenticationFailed:
             return None
         api_request = Request(request)
         api_request.user, api_request.auth = user, token
-        view = _view(api_request)
-        if view is None:
-            return None
+        view = PoseViewSet(
+            request=api_request, action="create", args=(), kwargs={}, format_kwarg=None
+        )
         if not all(p.has_permission(api_request, view) for p in view.get_permissions()):
             return None
-        # Counted as DRF counts: a request over the rate is left to Django,
-        # which answers 429 with Retry-After.
-        if not all(t.allow_request(api_request, view) for t in view.get_throttles()):
-            return None
-        # Before the pose is stored: after it, nothing may send the request on to
-        # Django, which would store a pose sent without a uid a second time.
-        headers = self._answer_headers(request, secure, view)
-        answer = single_pose.store_sent(user, data)
-        if answer is None:
-            return None
-        data, status = answer
-        content = self._renderer.render(data)
-        return status, content, [*headers, (b"content-length", str(len(content)).encode())]
+        return api_request, view, sent, secure
 
-    def _answer_headers(self, request, secure: bool, view) -> list[tuple[bytes, bytes]]:
-        """The headers of the view's JSON answer after Django's middleware, run
-        once (per scheme) through that middleware as configured."""
-        known = self._headers.get(secure)
-        if known is None:
-            known = self._headers[secure] = _middleware_headers(request, view)
-        return known
+    def _stored(self, api_request, view, sent) -> tuple[int, object, list]:
+        """(status, body, extra headers): the pose stored, or the API's error answer."""
+        try:
+            data, status = single_pose.store(api_request.user, sent)
+            return status, data, []
+        except Exception as exc:
+            context = {"view": view, "request": api_request, "args": (), "kwargs": {}}
+            response = api_settings.EXCEPTION_HANDLER(exc, context)
+            if response is None:
+                logger.exception("single pose failed")
+                return 500, INTERNAL_ERROR, []
+            extra = [
+                (name.lower().encode("latin-1"), value.encode("latin-1"))
+                for name, value in response.items()
+                if name.lower() not in {"content-type", "allow", "vary"}
+            ]
+            return response.status_code, response.data, extra
 
+    def _learning(self, send, secure: bool):
+        """``send`` that keeps the headers of Django's stored-pose answer."""
 
-@functools.cache
-def _resolved():
-    # The URLconf does not change while the process runs.
-    return resolve(PATH)
+        async def learn(message):
+            if message["type"] == "http.response.start" and message["status"] in (200, 201):
+                names = {name.lower() for name, _ in message["headers"]}
+                if b"set-cookie" not in names:
+                    self._headers[secure] = [
+                        (name.lower(), value)
+                        for name, value in message["headers"]
+                        if name.lower() not in _OWN_HEADERS
+                    ]
+            await send(message)
 
-
-def _view(api_request):
-    """The view Django would call for this request, made as DRF's ``as_view``
-    makes it; None if the address is not (or no longer) the pose view's."""
-    match = _resolved()
-    actions = getattr(match.func, "actions", None)
-    if getattr(match.func, "cls", None) is not PoseViewSet or actions.get("post") != "create":
-        return None
-    view = PoseViewSet(**match.func.initkwargs)
-    actions = dict(actions)
-    if "get" in actions:
-        actions.setdefault("head", actions["get"])
-    view.action_map = actions
-    for method, action in actions.items():
-        setattr(view, method, getattr(view, action))
-    view.request, view.args, view.kwargs = api_request, match.args, match.kwargs
-    view.format_kwarg, view.action = None, "create"
-    return view
-
-
-def _middleware_headers(request, view) -> list[tuple[bytes, bytes]]:
-    response = HttpResponse(content_type="application/json")
-    response["Allow"] = ", ".join(view.allowed_methods)
-    patch_vary_headers(response, ["Accept"])
-
-    def handler(_request):
-        return response
-
-    # Django builds its chain the same way (BaseHandler.load_middleware), the
-    # first entry outermost.  No view runs, so no CSRF check; the request was
-    # checked above (host, scheme) and carries no cookie or Origin.
-    for path in reversed(settings.MIDDLEWARE):
-        handler = import_string(path)(handler)
-    answered = handler(request)
-    if answered is not response:
-        raise RuntimeError(f"the middleware answered {answered.status_code} by itself")
-    if response.cookies:
-        # Something of this request's own (a session, a CSRF cookie) that the
-        # answers to every other request must not carry.
-        raise RuntimeError("the middleware set a cookie")
-    return [
-        (name.lower().encode("latin-1"), value.encode("latin-1"))
-        for name, value in response.items()
-        if name.lower() != "content-length"
-    ]
+        return learn
 
 
 async def _read_body(receive):

@@ -278,9 +278,8 @@ REDIS_URL = env_str("FTT_REDIS_URL")
 # How often a web process reads the change feed when no wake-up arrives (a
 # commit normally wakes it at once: NOTIFY on PostgreSQL, Redis, or in-process).
 FTT_LIVE_POLL_MS = env_int("FTT_LIVE_POLL_MS", 200)
-# A single stored pose leaves its NOTIFY to a thread that sends one for all
-# commits of this long (events.notifier): commits that notify cannot share a
-# WAL flush.
+# Each process sends the cross-process wake-ups (NOTIFY, Redis) from a thread of
+# its own, at most once per this long (rosbridge_app.wakeup).
 FTT_LIVE_NOTIFY_DELAY_MS = env_int("FTT_LIVE_NOTIFY_DELAY_MS", 2)
 if REDIS_URL:
     CHANNEL_LAYERS = {

@@ -32,7 +32,7 @@ from events.feed import FLEET_KINDS, LOG_KINDS
 from events.models import Announcement
 from rosbridge_app import wakeup
 from rosbridge_app.sessions import session_group
-from rosbridge_app.wakeup import GROUP
+from rosbridge_app.wakeup import CHANNEL, GROUP
 
 logger = logging.getLogger(__name__)
 
@@ -157,7 +157,7 @@ class OutboxPoller:
         while True:
             try:
                 async with await AsyncConnection.connect(conninfo(), autocommit=True) as conn:
-                    await conn.execute(f"LISTEN {feed.CHANNEL}")
+                    await conn.execute(f"LISTEN {CHANNEL}")
                     # Rows committed while (re)connecting are found by this read.
                     self.wakeup.set()
                     async for _ in conn.notifies():

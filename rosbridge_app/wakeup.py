@@ -1,45 +1,63 @@
-"""Wakes every web process's feed reader when a feed row commits.
+"""Waking the live readers when a change-feed row commits.
 
-Only a shortcut: the readers poll the feed anyway, so a lost wake-up costs at
-most one poll interval.  It listens to the feed's rows (a post_save signal)
-instead of being called by the writers, which sit in lower layers.
+Every change a browser sees goes the same way: a writer (service, collector,
+importer) adds an :class:`events.models.Announcement` row in the transaction of
+its change (events.feed); each web process has one reader per event loop
+(rosbridge_app.consumers.OutboxPoller) that reads the rows after the last it
+saw and sends them to its websockets.  The readers poll the feed every
+FTT_LIVE_POLL_MS anyway; this module only makes them read at once.  It hears
+each new feed row (Django's ``post_save``, so the writers, which sit in lower
+layers, never call up to it) and, once the writer's transaction commits
+(``transaction.on_commit``; a rolled-back change wakes nobody), wakes:
 
-Four ways, whichever apply: on PostgreSQL a NOTIFY from a trigger on the
-feed's table (events.feed.CHANNEL; delivered by the database at commit, to
-every listening process, the collector's included); with Redis a message to the channel-layer group;
-on SQLite a datagram to every reader's socket in a folder beside the database
-file (the collector and the web server are separate processes that share
-nothing else); and in the writing process itself a direct call to its readers.
+1. the readers of the writing process itself, by a direct call;
+2. on SQLite, every reader of the same database file in other processes (the
+   collector and the web server share nothing else): a datagram to each
+   reader's socket in a folder beside the database file;
+3. on PostgreSQL, every listening process: ``NOTIFY`` on :data:`CHANNEL`,
+   which each reader LISTENs to on a connection of its own;
+4. with Redis configured, every web process: a message to the channel-layer
+   group :data:`GROUP`.
+
+1 and 2 happen in the writer's thread just after its commit (a function call,
+a non-blocking datagram).  3 and 4 leave it: one thread per process sends them,
+at once after a quiet spell and at most once per FTT_LIVE_NOTIFY_DELAY_MS in a
+stream of commits, NOTIFY on a connection of its own.  A commit never sends
+NOTIFY itself, because PostgreSQL holds a database-wide lock from a notifying
+commit until its WAL flush ends, and commits that notify cannot share a flush
+(many single poses a second would be bounded by it).  A wake-up lost (a process
+that dies in between, a full socket queue) delays the readers by at most one
+poll interval.
 """
 
 import functools
 import logging
 import os
 import socket
+import threading
+import time
 from collections.abc import Callable
 from pathlib import Path
 
+import psycopg
 from asgiref.sync import async_to_sync
 from channels.layers import get_channel_layer
 from django.conf import settings
 from django.db import connections, transaction
 from django.db.models.signals import post_save
 
+from common.sql import conninfo
+
 logger = logging.getLogger(__name__)
 
 GROUP = "ftt-live"
+# PostgreSQL's LISTEN/NOTIFY channel of the feed.
+CHANNEL = "ftt_live"
+# After a failed wake-up the thread waits this long before it tries again.
+RETRY = 1.0
 
 # Readers in this process (one per event loop); each is thread-safe to call.
 local_readers: set[Callable[[], None]] = set()
-
-
-def _wake_other_processes() -> None:
-    try:
-        layer = get_channel_layer()
-        if layer is not None:
-            async_to_sync(layer.group_send)(GROUP, {"type": "live.wake"})
-    except Exception as exc:  # noqa: BLE001 - never fail a committed write
-        logger.debug("live wake-up not sent: %s", exc)
 
 
 def _wake_local_readers() -> None:
@@ -48,7 +66,11 @@ def _wake_local_readers() -> None:
             wake()
         except RuntimeError:  # its event loop has just closed
             local_readers.discard(wake)
+        except Exception:  # noqa: BLE001 - one reader's failure must not keep the others asleep
+            logger.exception("live reader not woken")
 
+
+# --- SQLite: a datagram per reader ---------------------------------------------------------
 
 # A socket path must fit in sockaddr_un (108 bytes with its terminator).
 _MAX_SOCKET_PATH = 100
@@ -66,7 +88,8 @@ def socket_folder(using: str = "default") -> Path | None:
     return Path(f"{name}.wake")
 
 
-def _wake_sqlite_readers(folder: Path) -> None:
+def wake_sqlite_readers(folder: Path) -> None:
+    """Send every reader listening in ``folder`` a datagram; forget dead ones."""
     global _sender
     try:
         paths = list(folder.iterdir())
@@ -114,36 +137,110 @@ class SqliteListener:
         self.path.unlink(missing_ok=True)
 
 
+# --- PostgreSQL and Redis: one thread per process ------------------------------------------
+
+
+class Sender:
+    """Sends ``NOTIFY`` (PostgreSQL) and the channel-layer message (Redis) after
+    every :meth:`poke`, at most once per ``delay`` and once for all pokes that
+    arrive while it waits or sends.
+    :meth:`poke` never blocks and never fails: the thread and its connection
+    start with the first one."""
+
+    def __init__(self, delay: float):
+        self.delay = delay
+        self._poked = threading.Event()
+        self._lock = threading.Lock()
+        # Held while the connection is used, by the thread or by disconnect().
+        self._using = threading.Lock()
+        self._connection = None
+        self._pid = None
+
+    def poke(self) -> None:
+        self._poked.set()
+        # A forked child has the parent's state but not its thread.
+        if self._pid == os.getpid():
+            return
+        with self._lock:
+            if self._pid == os.getpid():
+                return
+            try:
+                thread = threading.Thread(target=self._run, name="ftt-wakeup", daemon=True)
+                thread.start()
+            except RuntimeError as exc:  # the interpreter is shutting down
+                logger.warning("live wake-up thread not started: %s", exc)
+                return
+            self._pid = os.getpid()
+
+    def _run(self) -> None:
+        sent = 0.0
+        while True:
+            self._poked.wait()
+            # At once after a quiet spell; in a stream of commits, at most one
+            # wake-up per delay, so that many commits share one.
+            time.sleep(max(0.0, sent + self.delay - time.monotonic()))
+            sent = time.monotonic()
+            try:
+                self._send()
+            except Exception as exc:  # noqa: BLE001 - the readers poll meanwhile
+                logger.warning("live wake-up not sent: %s", exc)
+                self._close()
+                self._poked.set()
+                time.sleep(RETRY)
+
+    def _send(self) -> None:
+        with self._using:
+            # Cleared before sending: a poke from now on gets a wake-up of its own.
+            self._poked.clear()
+            if connections["default"].vendor == "postgresql":
+                if self._connection is None or self._connection.closed:
+                    self._connection = psycopg.connect(conninfo(), autocommit=True)
+                self._connection.execute(f"NOTIFY {CHANNEL}")
+        if settings.REDIS_URL:
+            layer = get_channel_layer()
+            if layer is not None:
+                async_to_sync(layer.group_send)(GROUP, {"type": "live.wake"})
+
+    def disconnect(self, wait: float = 1.0) -> None:
+        """Send what is due, then close the connection (the next wake-up opens
+        another): before a test database is dropped."""
+        until = time.monotonic() + wait
+        while self._poked.is_set() and self._pid == os.getpid() and time.monotonic() < until:
+            time.sleep(self.delay or 0.001)
+        self._close()
+
+    def _close(self) -> None:
+        with self._using:
+            if self._connection is not None:
+                self._connection.close()
+                self._connection = None
+
+
+_sender_thread = Sender(settings.FTT_LIVE_NOTIFY_DELAY_MS / 1000)
+
+
+def disconnect() -> None:
+    _sender_thread.disconnect()
+
+
+# --- the hook ------------------------------------------------------------------------------
+
+
 def _after_commit(using: str) -> None:
-    if getattr(settings, "REDIS_URL", ""):
-        _wake_other_processes()
-    folder = socket_folder(using)
-    if folder is not None:
-        _wake_sqlite_readers(folder)
     if local_readers:
         _wake_local_readers()
-
-
-def _announced_in_this_transaction(connection) -> bool:
-    # Django keeps the on-commit callbacks per transaction and drops those of a
-    # rolled-back savepoint: so "our callback is waiting" means exactly "this
-    # transaction will wake the readers".
-    return any(
-        getattr(func, "func", None) is _after_commit for _, func, *_ in connection.run_on_commit
-    )
+    folder = socket_folder(using)
+    if folder is not None:
+        wake_sqlite_readers(folder)
+    if connections[using].vendor == "postgresql" or settings.REDIS_URL:
+        _sender_thread.poke()
 
 
 def _on_feed_row(sender, instance, created, using=None, **kwargs) -> None:
-    """One wake-up per transaction, however many feed rows it writes (a pose
-    batch, a collector batch with a mode switch and its track)."""
-    if not created:
-        return
-    using = using or "default"
-    connection = connections[using]
-    if connection.in_atomic_block and _announced_in_this_transaction(connection):
-        return
-    # PostgreSQL's listeners hear the table's trigger; these are the other ways.
-    transaction.on_commit(functools.partial(_after_commit, using), using=using)
+    if created:
+        using = using or "default"
+        # robust: a failed wake-up is logged, never raised into the committed write.
+        transaction.on_commit(functools.partial(_after_commit, using), using=using, robust=True)
 
 
 def connect() -> None:

@@ -5,10 +5,11 @@ from django.core.cache import cache
 from django.db import connection
 
 from common import memo
-from events import notifier, seeds
+from events import seeds
 from events.models import Performer, Personnel, PoseSource, Vehicle
 from events.services import logs
 from events.services.robots import ensure_robot_account
+from rosbridge_app import wakeup
 from tests.support.modes import start_auto
 
 
@@ -27,7 +28,7 @@ def _seeds_after_flush(request):
         seeds.ensure()
         yield
         # Its connection would keep the test database from being dropped.
-        notifier.disconnect()
+        wakeup.disconnect()
     else:
         yield
 

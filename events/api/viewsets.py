@@ -5,6 +5,7 @@ from rest_framework.response import Response
 
 from common import roles
 from common.api.permissions import RolePermission
+from common.retries import stored_row
 from events.api.permissions import RobotTargetPermission
 from events.services import deletion
 
@@ -43,27 +44,29 @@ class ServiceBaseViewSet(
 
 
 class ServiceCreateMixin:
-    """Create through :meth:`create_with_service`.
+    """Create through :meth:`create_with_service`; a new row answers 201.
 
-    A create that carries a ``uid`` already stored answers 200 with the stored row
-    (a retry after a lost answer); a new row answers 201.
+    A create that carries a ``uid`` already stored (a retry after a lost answer)
+    answers 200 with the stored row, or 409 when that row has another owner
+    (:meth:`retry_owner`; the rule is common.retries).
     """
 
     def create_with_service(self, data: dict):
         raise NotImplementedError
 
-    def already_stored(self, data: dict) -> bool:
-        uid = data.get("uid")
-        return uid is not None and self.get_queryset().model.objects.filter(uid=uid).exists()
+    def retry_owner(self, data: dict) -> dict:
+        """The stored row's fields a retry of ``data`` must match; none by default."""
+        return {}
 
     def create(self, request, *args, **kwargs):
         serializer = self.get_serializer(data=request.data)
         serializer.is_valid(raise_exception=True)
         data = dict(serializer.validated_data)
-        existed = self.already_stored(data)
-        instance = self.create_with_service(data)
-        code = status.HTTP_200_OK if existed else status.HTTP_201_CREATED
-        return self.respond(instance, code=code)
+        model = self.get_queryset().model
+        known = stored_row(model, data.get("uid"), **self.retry_owner(data))
+        if known is not None:
+            return self.respond(known)
+        return self.respond(self.create_with_service(data), code=status.HTTP_201_CREATED)
 
 
 class ServiceUpdateMixin:

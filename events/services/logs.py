@@ -8,7 +8,7 @@ from django.dispatch import Signal
 
 from common.errors import RuleViolation
 from events import rules
-from events.feed import announced
+from events.feed import announce_and_return
 from events.models import Leg, Segment, Shift, TestEvent, Vehicle
 from events.services.common import (
     apply_fields,
@@ -60,7 +60,7 @@ def _create(model, uid: uuid.UUID | None, **values):
         obj.uid = uid
     obj.full_clean(validate_unique=False, validate_constraints=False)
     obj.save()
-    return announced(obj)
+    return announce_and_return(obj)
 
 
 # --- test events ---------------------------------------------------------------------------
@@ -79,7 +79,7 @@ def update_test_event(event: TestEvent, **fields) -> TestEvent:
     event = lock(event)
     apply_fields(event, fields, TEST_EVENT_FIELDS)
     event.save(update_fields=list(fields))
-    return announced(event)
+    return announce_and_return(event)
 
 
 @transaction.atomic
@@ -94,7 +94,7 @@ def close_test_event(event: TestEvent, at: datetime | None = None) -> TestEvent:
         _close_shift(shift, at)
     event.end = at
     event.save(update_fields=["end"])
-    return announced(event)
+    return announce_and_return(event)
 
 
 @transaction.atomic
@@ -105,7 +105,7 @@ def reopen_test_event(event: TestEvent) -> TestEvent:
         raise RuleViolation(f"Test event '{event}' is already open.", code="open")
     event.end = None
     event.save(update_fields=["end"])
-    return announced(event)
+    return announce_and_return(event)
 
 
 # --- shifts --------------------------------------------------------------------------------
@@ -156,7 +156,7 @@ def update_shift(shift: Shift, **fields) -> Shift:
             )
     apply_fields(shift, fields, SHIFT_FIELDS)
     shift.save(update_fields=list(fields))
-    return announced(shift)
+    return announce_and_return(shift)
 
 
 @transaction.atomic
@@ -166,7 +166,7 @@ def close_shift(shift: Shift, at: datetime | None = None) -> Shift:
     require_open(shift, str(shift))
     require_not_before(shift, at, str(shift))
     _announce_closing(shift.legs.filter(end__isnull=True))
-    return announced(_close_shift(shift, at))
+    return announce_and_return(_close_shift(shift, at))
 
 
 def _close_shift(shift: Shift, at: datetime) -> Shift:
@@ -199,7 +199,7 @@ def update_leg(leg: Leg, **fields) -> Leg:
     leg = lock(leg)
     apply_fields(leg, fields, LEG_FIELDS)
     leg.save(update_fields=list(fields))
-    return announced(leg)
+    return announce_and_return(leg)
 
 
 @transaction.atomic
@@ -209,7 +209,7 @@ def close_leg(leg: Leg, at: datetime | None = None) -> Leg:
     require_open(leg, str(leg))
     require_not_before(leg, at, str(leg))
     _announce_closing(Leg.objects.filter(pk=leg.pk))
-    return announced(_close_leg(leg, at))
+    return announce_and_return(_close_leg(leg, at))
 
 
 def _close_leg(leg: Leg, at: datetime) -> Leg:

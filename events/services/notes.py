@@ -3,7 +3,7 @@ from django.db import transaction
 from django.utils import timezone
 
 from common import roles
-from events.feed import announce_row, announced
+from events.feed import announce_and_return, announce_row
 from events.models import Note, Personnel, Segment
 
 # ``by`` is the signed-in user a request acts for; None is FTT itself (imports,
@@ -51,7 +51,7 @@ def add_note(
     if uid is not None:
         note.uid = uid
     note.save()
-    return announced(note)
+    return announce_and_return(note)
 
 
 @transaction.atomic
@@ -63,7 +63,7 @@ def edit_note(note: Note, *, text: str, by=None) -> Note:
     note.text = _clean_text(text)
     note.edited = timezone.now()
     note.save(update_fields=["text", "edited"])
-    return announced(note)
+    return announce_and_return(note)
 
 
 @transaction.atomic

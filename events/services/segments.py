@@ -16,7 +16,7 @@ from django.utils import timezone
 
 from common.errors import RuleViolation
 from events import rules
-from events.feed import announced
+from events.feed import announce_and_return
 from events.models import ItoReason, Leg, Segment, SegmentType
 from events.services.common import (
     apply_fields,
@@ -29,6 +29,12 @@ from events.services.common import (
 MODES = (SegmentType.ITO, SegmentType.AUTO)
 
 
+# The coordinates every stored position keeps to, in degrees (WGS 84); every
+# check of a sent position (API serializers, batch model, services) reads these.
+LONGITUDE_RANGE = (-180, 180)
+LATITUDE_RANGE = (-90, 90)
+
+
 @dataclass(frozen=True)
 class GpsPosition:
     longitude: float
@@ -36,14 +42,13 @@ class GpsPosition:
 
     def __post_init__(self):
         errors = {}
-        if not (isinstance(self.longitude, int | float) and math.isfinite(self.longitude)):
-            errors["longitude"] = ["Longitude must be a finite number."]
-        elif not -180 <= self.longitude <= 180:
-            errors["longitude"] = ["Longitude must be between -180 and 180 degrees."]
-        if not (isinstance(self.latitude, int | float) and math.isfinite(self.latitude)):
-            errors["latitude"] = ["Latitude must be a finite number."]
-        elif not -90 <= self.latitude <= 90:
-            errors["latitude"] = ["Latitude must be between -90 and 90 degrees."]
+        for name, (low, high) in (("longitude", LONGITUDE_RANGE), ("latitude", LATITUDE_RANGE)):
+            value = getattr(self, name)
+            label = name.capitalize()
+            if not (isinstance(value, int | float) and math.isfinite(value)):
+                errors[name] = [f"{label} must be a finite number."]
+            elif not low <= value <= high:
+                errors[name] = [f"{label} must be between {low:g} and {high:g} degrees."]
         if errors:
             raise RuleViolation(errors)
 
@@ -176,7 +181,7 @@ def report_mode(
     else:
         require_not_before(leg, at, str(leg))
     master = _start_master(leg, mode, at, robot_stamp, _position_fields(gps, local), reason, uid)
-    return ModeReport(announced(master), changed=True)
+    return ModeReport(announce_and_return(master), changed=True)
 
 
 @transaction.atomic
@@ -196,7 +201,7 @@ def new_manual_segment(
     current = _open_master(leg)
     if current is not None and current.segment_type_id == SegmentType.ITO:
         require_not_before(current, at, "The open ITO segment")
-        return announced(_add_child(current, _reason(reason), at))
+        return announce_and_return(_add_child(current, _reason(reason), at))
     outcome = report_mode(leg, SegmentType.ITO, at=at, gps=gps, local=local, reason=reason)
     return outcome.master.children.get()
 
@@ -213,7 +218,7 @@ def add_ito_child(
         raise RuleViolation("An AUTO segment has no take-over reasons.")
     require_open(master, "This ITO segment")
     require_not_before(master, at, "This ITO segment")
-    return announced(_add_child(master, _reason(reason), at))
+    return announce_and_return(_add_child(master, _reason(reason), at))
 
 
 @transaction.atomic
@@ -223,7 +228,7 @@ def close_segment(segment: Segment, at: datetime | None = None) -> Segment:
     at = instant(at)
     require_open(segment, "This segment")
     _close(segment, at)
-    return announced(segment)
+    return announce_and_return(segment)
 
 
 @transaction.atomic
@@ -233,7 +238,7 @@ def close_open_master(leg: Leg, at: datetime | None = None) -> Segment | None:
     at = instant(at)
     current = _open_master(leg)
     if current is not None:
-        _close(announced(current), at)
+        _close(announce_and_return(current), at)
     return current
 
 
@@ -257,4 +262,4 @@ def annotate_segment(segment: Segment, **fields) -> Segment:
     apply_fields(segment, fields, Segment.ANNOTATION_FIELDS)
     segment.annotated = timezone.now()
     segment.save(update_fields=[*fields, "annotated"])
-    return announced(segment)
+    return announce_and_return(segment)

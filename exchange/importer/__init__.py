@@ -25,7 +25,7 @@ Rules (docs/data-exchange.md explains them for administrators):
 The historical rows are written directly (the services only open entries "now"),
 inside one transaction, after ``full_clean`` and the checks above, which ask
 the same rule functions as the services (:mod:`events.rules`, the map checks
-of :func:`telemetry.services.recording.check_map_placement`); the database
+of :func:`telemetry.services.map_images.check_map_placement`); the database
 constraints stay the last guard.  Files written before a failure are removed.
 What changed is announced in the change feed in the same transaction.
 

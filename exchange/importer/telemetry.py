@@ -14,7 +14,8 @@ from exchange.importer.plan import MalformedRecord, describe
 from exchange.importer.session import ImportSession
 from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 from telemetry.pictures import MAP_FORMATS, PHOTO_FORMATS, checked_picture
-from telemetry.services.recording import GpsFix, MapPose, check_map_placement
+from telemetry.services.map_images import check_map_placement
+from telemetry.services.recording import GpsFix, MapPose
 
 BATCH = 2000
 # Every MCAP file starts with these bytes (the format's magic).

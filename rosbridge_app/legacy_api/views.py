@@ -16,7 +16,7 @@ from rosbridge_app.legacy_api import fields, targets
 from rosbridge_app.legacy_api.answers import LegacyRefusal, info, refusal, warn
 from rosbridge_app.legacy_api.fields import CURRENT_LEG, CURRENT_SEGMENT, CURRENT_SHIFT
 from telemetry.pictures import greyscale_png
-from telemetry.services import recording
+from telemetry.services import attachments, map_images, recording
 
 # The original's segment_type ids.
 MODE_OF_TYPE = {1: "ito", 2: "auto"}
@@ -179,7 +179,7 @@ class MapImageView(LegacyView):
                     "KeyError", f"Missing field {name}: the shift has no map to take it from."
                 )
         frame = fields.text(data, "frame_id").lstrip("/") or (newest.frame if newest else "map")
-        _, stored = recording.record_map(
+        _, stored = map_images.record_map(
             shift,
             png=greyscale_png(fields.picture(data, "image_data")),
             frame=frame,
@@ -202,7 +202,7 @@ class ImageView(LegacyView):
         # The node sends its image buffer again at every switch, even when the
         # camera stalled: the same frame is stored once, on its first take-over.
         uid = self.uid("image", stamp, hashlib.sha256(content).hexdigest())
-        recording.attach_image(
+        attachments.attach_image(
             segment, content=content, description=description, robot_stamp=stamp, uid=uid
         )
         return info("Created image entry.")

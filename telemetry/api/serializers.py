@@ -15,11 +15,19 @@ from pydantic import (
 )
 from rest_framework import serializers
 
+from common.errors import RuleViolation
 from events.api.serializers import ClientUidMixin, PrimaryKeyField, ServiceSerializer
 from events.models import PoseSource, Segment
+from events.services.segments import LATITUDE_RANGE, LONGITUDE_RANGE
 from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 from telemetry.models.poses import FixStatus
-from telemetry.services.recording import GpsFix, MapPose
+from telemetry.services.map_images import check_map_placement
+from telemetry.services.recording import (
+    DEFAULT_FIX_STATUS,
+    FIX_STATUSES,
+    GpsFix,
+    MapPose,
+)
 
 MAX_BATCH = 5000
 
@@ -32,9 +40,13 @@ def _segments():
 
 class PoseSerializer(ClientUidMixin, ServiceSerializer):
     # Nested sources: input arrives as validated_data["point"] = {"x": .., "y": ..}.
-    longitude = serializers.FloatField(source="point.x", min_value=-180, max_value=180)
-    latitude = serializers.FloatField(source="point.y", min_value=-90, max_value=90)
-    fix_status = serializers.ChoiceField(choices=FixStatus.choices, default=FixStatus.FIX)
+    longitude = serializers.FloatField(
+        source="point.x", min_value=LONGITUDE_RANGE[0], max_value=LONGITUDE_RANGE[1]
+    )
+    latitude = serializers.FloatField(
+        source="point.y", min_value=LATITUDE_RANGE[0], max_value=LATITUDE_RANGE[1]
+    )
+    fix_status = serializers.ChoiceField(choices=FixStatus.choices, default=DEFAULT_FIX_STATUS)
     segment = PrimaryKeyField(
         queryset=_segments(), help_text="Stored on the master when a child segment is given."
     )
@@ -85,7 +97,7 @@ def gps_fix(data: dict) -> GpsFix:
         "longitude": point["x"],
         "latitude": point["y"],
         "altitude": data.get("altitude"),
-        "fix_status": data.get("fix_status", FixStatus.FIX),
+        "fix_status": data.get("fix_status", DEFAULT_FIX_STATUS),
         "horizontal_accuracy": data.get("horizontal_accuracy"),
         "robot_stamp": data.get("robot_stamp"),
     }
@@ -133,17 +145,16 @@ class _FastPoseItem(BaseModel):
 
     # An explicit null is refused, as by DRF; a missing uid gets one in gps_fix.
     uid: uuid.UUID = Field(default=None)
-    longitude: float = Field(ge=-180, le=180, allow_inf_nan=False)
-    latitude: float = Field(ge=-90, le=90, allow_inf_nan=False)
+    longitude: float = Field(ge=LONGITUDE_RANGE[0], le=LONGITUDE_RANGE[1], allow_inf_nan=False)
+    latitude: float = Field(ge=LATITUDE_RANGE[0], le=LATITUDE_RANGE[1], allow_inf_nan=False)
     altitude: float | None = Field(default=None, allow_inf_nan=False)
-    fix_status: Annotated[int, Strict()] = FixStatus.FIX
+    fix_status: Annotated[int, Strict()] = DEFAULT_FIX_STATUS
     horizontal_accuracy: float | None = Field(default=None, allow_inf_nan=False)
     # Aware only: DRF reads a naive time in the server's zone.
     robot_stamp: Annotated[AwareDatetime, BeforeValidator(_text)] | None = None
 
 
 _FAST_POSES = TypeAdapter(list[_FastPoseItem])
-_FIX_STATUSES = frozenset(FixStatus.values)
 
 # A row id as the view's serializer takes it (ids sent as text are left to it).
 _RowId = Annotated[int, Strict(), Field(gt=0, lt=2**63)]
@@ -167,9 +178,15 @@ def sent_pose(data) -> tuple[int, GpsFix, int | None] | None:
         item = _FastPose.model_validate(data)
     except ValidationError:
         return None
-    if item.fix_status not in _FIX_STATUSES:
+    if item.fix_status not in FIX_STATUSES:
         return None
     return item.segment, gps_fix(_as_validated(item)), item.pose_source
+
+
+def sent_ids(data: dict) -> tuple[int, GpsFix, int | None]:
+    """:func:`sent_pose`'s tuple from PoseSerializer's validated data."""
+    source = data.get("pose_source")
+    return data["segment"].pk, gps_fix(data), source.pk if source is not None else None
 
 
 class PoseListSerializer(serializers.ListSerializer):
@@ -183,7 +200,7 @@ class PoseListSerializer(serializers.ListSerializer):
                 items = _FAST_POSES.validate_python(data)
             except ValidationError:
                 items = None
-            if items is not None and all(i.fix_status in _FIX_STATUSES for i in items):
+            if items is not None and all(i.fix_status in FIX_STATUSES for i in items):
                 return [_as_validated(item) for item in items]
         return super().to_internal_value(data)
 
@@ -246,8 +263,6 @@ class BatchResultSerializer(serializers.Serializer):
 
 class MapImageSerializer(ClientUidMixin, ServiceSerializer):
     image = serializers.ImageField(help_text="The map as a PNG file (multipart upload).")
-    width = serializers.IntegerField(min_value=1, max_value=100_000)
-    height = serializers.IntegerField(min_value=1, max_value=100_000)
 
     class Meta:
         model = MapImage
@@ -274,10 +289,20 @@ class MapImageSerializer(ClientUidMixin, ServiceSerializer):
             raise serializers.ValidationError("Upload the map as a PNG image.")
         return upload
 
-    def validate_resolution(self, value):
-        if value <= 0:
-            raise serializers.ValidationError("Resolution must be positive (metres per cell).")
-        return value
+    def validate(self, attrs):
+        # The placement rules are the services' (one place); here they answer
+        # 400 with their field messages, as any other bad field does.
+        try:
+            check_map_placement(
+                **{
+                    name: attrs.get(name, 0.0)
+                    for name in MapImage.PLACEMENT_FIELDS
+                    if name != "frame"
+                }
+            )
+        except RuleViolation as exc:
+            raise serializers.ValidationError(exc.message_dict) from exc
+        return attrs
 
 
 class ImageSerializer(ClientUidMixin, ServiceSerializer):

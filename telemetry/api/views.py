@@ -20,7 +20,7 @@ from telemetry.api import single_pose
 from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 from telemetry.selectors import distances, tracks
 from telemetry.selectors import maps as map_selectors
-from telemetry.services import recording
+from telemetry.services import attachments, map_images, recording
 
 # --- filters ------------------------------------------------------------------------------
 
@@ -77,18 +77,22 @@ class MapFilter(TimeRangeFilterSet):
 # --- robot data ---------------------------------------------------------------------------
 
 
-class RecordingViewSet(ServiceCreateMixin, ServiceBaseViewSet):
+class RobotDataViewSet(ServiceCreateMixin, ServiceBaseViewSet):
     """Robot data is created and deleted, never edited."""
 
     def stored_row(self, uid):
         return self.get_queryset().get(uid=uid)
+
+    def retry_owner(self, data):
+        # Rows sent for a segment are stored on its master.
+        return {"segment_id": data["segment"].master_id}
 
     def store_batch(self, request, serializer_class, store):
         stored = store(**self.payload(serializer_class).validated_data)
         return Response({"stored": stored}, status=status.HTTP_201_CREATED)
 
 
-class PoseViewSet(RecordingViewSet):
+class PoseViewSet(RobotDataViewSet):
     queryset = Pose.objects.all()
     serializer_class = s.PoseSerializer
     filterset_class = PoseFilter
@@ -97,16 +101,13 @@ class PoseViewSet(RecordingViewSet):
     robot_actions = ("create", "batch")
 
     def create(self, request, *args, **kwargs):
-        # Ids as sent, checked by the service in the statement that stores the pose;
-        # anything it cannot answer alone gets the full check and its messages.
-        answer = single_pose.store_sent(request.user, request.data)
-        if answer is not None:
-            return Response(*answer)
-        serializer = self.get_serializer(data=request.data)
-        serializer.is_valid(raise_exception=True)
-        data = serializer.validated_data
-        pose, new = recording.record_pose(data["segment"], s.gps_fix(data), data.get("pose_source"))
-        return self.respond(pose, code=status.HTTP_201_CREATED if new else status.HTTP_200_OK)
+        # The quick check first; what it refuses gets the serializer's field messages.
+        sent = s.sent_pose(request.data)
+        if sent is None:
+            serializer = self.get_serializer(data=request.data)
+            serializer.is_valid(raise_exception=True)
+            sent = s.sent_ids(serializer.validated_data)
+        return Response(*single_pose.store(request.user, sent))
 
     @extend_schema(request=s.PoseBatchSerializer, responses={201: s.BatchResultSerializer})
     @action(detail=False, methods=["post"])
@@ -121,7 +122,7 @@ class PoseViewSet(RecordingViewSet):
         )
 
 
-class LocalPoseViewSet(RecordingViewSet):
+class LocalPoseViewSet(RobotDataViewSet):
     queryset = LocalPose.objects.all()
     serializer_class = s.LocalPoseSerializer
     filterset_class = LocalPoseFilter
@@ -145,7 +146,7 @@ class LocalPoseViewSet(RecordingViewSet):
         )
 
 
-class MapImageViewSet(RecordingViewSet):
+class MapImageViewSet(RobotDataViewSet):
     """Maps are uploaded as multipart/form-data with the PNG in ``image``."""
 
     queryset = MapImage.objects.all()
@@ -160,7 +161,7 @@ class MapImageViewSet(RecordingViewSet):
         data = dict(serializer.validated_data)
         upload = data.pop("image")
         shift = data.pop("shift")
-        map_image, stored = recording.record_map(shift, png=upload.read(), **data)
+        map_image, stored = map_images.record_map(shift, png=upload.read(), **data)
         # An unchanged map (or a retried uid) is answered with the map already stored.
         code = status.HTTP_201_CREATED if stored else status.HTTP_200_OK
         return self.respond(map_image, code=code)
@@ -179,7 +180,7 @@ class MapImageViewSet(RecordingViewSet):
         return self.respond(map_image)
 
 
-class ImageViewSet(RecordingViewSet):
+class ImageViewSet(RobotDataViewSet):
     """Images are uploaded as multipart/form-data with the file in ``image``."""
 
     queryset = Image.objects.all()
@@ -190,7 +191,7 @@ class ImageViewSet(RecordingViewSet):
 
     def create_with_service(self, data):
         upload = data["image"]
-        return recording.attach_image(
+        return attachments.attach_image(
             data["segment"],
             content=upload.read(),
             description=data.get("description", ""),
@@ -199,7 +200,7 @@ class ImageViewSet(RecordingViewSet):
         )
 
     def delete_with_service(self, instance):
-        recording.delete_image(instance)
+        attachments.delete_image(instance)
 
 
 class RecordingFileViewSet(ServiceBaseViewSet):
@@ -210,7 +211,7 @@ class RecordingFileViewSet(ServiceBaseViewSet):
     filterset_class = RecordingFilter
 
     def delete_with_service(self, instance):
-        recording.delete_recording(instance)
+        attachments.delete_recording(instance)
 
 
 # --- tracks -------------------------------------------------------------------------------

@@ -41,7 +41,7 @@ def leg_with_snapshot(server):
         from events.models import Vehicle
         from events.selectors.logs import open_leg_for_vehicle
         from events.services import segments
-        from telemetry.services.recording import attach_recording
+        from telemetry.services.attachments import attach_recording
         from tests.support.mcap_files import write_fixes
 
         leg = open_leg_for_vehicle(Vehicle.objects.get(key="{key}"))

@@ -9,7 +9,7 @@ from exchange.archive import open_archive
 from exchange.export import export_events, select_events
 from exchange.importer import import_bundle
 from telemetry.models import Recording
-from telemetry.services.recording import attach_recording
+from telemetry.services.attachments import attach_recording
 from tests.support.field_day import field_day
 from tests.support.mcap_files import read_mcap, write_fixes
 

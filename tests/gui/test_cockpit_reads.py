@@ -8,7 +8,7 @@ from django.utils import timezone
 
 from events.models import SegmentType
 from events.services import notes, segments
-from telemetry.services import recording
+from telemetry.services import attachments
 from tests.support.api import assert_constant_queries
 from tests.support.images import png
 
@@ -54,11 +54,11 @@ def _attach(n, child, tmp_path):
     master = child.parent
     for i in range(n):
         notes.add_note(child, text=f"Note {i}")
-        recording.attach_image(master, content=png(fmt="JPEG"))
+        attachments.attach_image(master, content=png(fmt="JPEG"))
         path = tmp_path / f"snap-{i}-{master.images.count()}.mcap"
         path.write_bytes(b"mcap")
         now = timezone.now()
-        recording.attach_recording(
+        attachments.attach_recording(
             master, path=path, start=now - timedelta(seconds=5), end=now, topics={}
         )
 

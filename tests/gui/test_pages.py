@@ -10,7 +10,7 @@ from django.contrib.auth.models import Group, User
 from events.models import Announcement, ItoReason, Performer, PoseSource
 from events.services import segments
 from rosbridge_app.services import collectors
-from telemetry.services import recording
+from telemetry.services import attachments, map_images, recording
 from tests.support.images import PNG, jpeg
 from tests.support.modes import start_auto
 from tests.support.pages import asset_urls, external_assets
@@ -98,7 +98,7 @@ def test_quick_reason_buttons_are_the_catalogues_quick_reasons(client):
 
 def test_photos_are_only_served_to_users_with_a_role(client, leg, media_root):
     master = segments.report_mode(leg, "ito").master
-    image = recording.attach_image(master, content=jpeg(1))
+    image = attachments.attach_image(master, content=jpeg(1))
     url = image.image.url
     member(client, "nobody")
     assert client.get(url).status_code == 403
@@ -112,7 +112,7 @@ def test_photos_are_only_served_to_users_with_a_role(client, leg, media_root):
 def test_behind_nginx_the_file_transfer_is_handed_to_the_proxy(client, leg, media_root, settings):
     settings.FTT_MEDIA_ACCEL_PREFIX = "/protected-media/"
     master = segments.report_mode(leg, "ito").master
-    image = recording.attach_image(master, content=jpeg(1))
+    image = attachments.attach_image(master, content=jpeg(1))
     url = image.image.url
     member(client, "nobody")
     refused = client.get(url)
@@ -143,7 +143,7 @@ def test_leg_tracks_carry_points_and_distance(client, leg):
 def test_local_map_endpoint_places_the_newest_map(client, shift, media_root):
     member(client, "vera", "viewer")
     assert client.get(f"/gui/api/shifts/{shift.pk}/local-map/").json()["map"] is None
-    recording.record_map(
+    map_images.record_map(
         shift,
         png=PNG,
         frame="map",
@@ -236,7 +236,7 @@ def test_viewer_cannot_command_and_parameter_types_are_checked(client, leg, vehi
 
 def test_photos_open_for_token_clients_with_a_role(client, leg, media_root, role_user):
     master = segments.report_mode(leg, "ito").master
-    url = recording.attach_image(master, content=jpeg(1)).image.url
+    url = attachments.attach_image(master, content=jpeg(1)).image.url
     viewer, nobody = role_user("viewer"), role_user(None)
     assert client.get(url, HTTP_AUTHORIZATION=f"Token {nobody.auth_token.key}").status_code == 403
     assert client.get(url, HTTP_AUTHORIZATION="Token not-a-token").status_code == 403
@@ -270,7 +270,7 @@ def test_a_robot_token_opens_neither_photos_nor_the_guis_data(
 ):
     """Even of its own vehicle: a robot writes, people look."""
     master = segments.report_mode(leg, "ito").master
-    url = recording.attach_image(master, content=jpeg(1)).image.url
+    url = attachments.attach_image(master, content=jpeg(1)).image.url
     robot = robot_client(vehicle)
     token = f"Token {robot.user.auth_token.key}"
     assert client.get(url, HTTP_AUTHORIZATION=token).status_code == 403

@@ -14,7 +14,7 @@ from reports.documents.event_report import render_report
 from reports.documents.options import ReportOptions
 from reports.figures.maps import Background, Line, MapPainter
 from reports.selectors.statistics import event_statistics
-from telemetry.services import recording
+from telemetry.services import map_images, recording
 from telemetry.services.recording import MapPose
 from tests.support.pdf import flat, pdf_text, save_pages
 from tests.support.scenario import T0
@@ -33,7 +33,7 @@ def local_event(vehicle, performer, media_root):
     event = logs.create_test_event(location="Halle 3", time_zone="Europe/Berlin", at=T0)
     shift = logs.create_shift(test_event=event, vehicle=vehicle, performer=performer, at=T0)
     leg = logs.create_leg(shift=shift, at=T0)
-    recording.record_map(
+    map_images.record_map(
         shift,
         png=_grid_png(),
         frame="map",

@@ -3,7 +3,7 @@
 from events.services import logs
 from reports.documents.event_report import render_report
 from reports.documents.options import ReportOptions
-from telemetry.services import recording
+from telemetry.services import attachments
 from tests.support.mcap_files import write_fixes
 from tests.support.pdf import flat, pdf_text
 from tests.support.scenario import T0, _at, _switch
@@ -20,7 +20,7 @@ def test_the_segment_page_names_the_snapshot_its_window_and_topics(
     _switch(leg, "auto", T0, 130, 0.004)
     path = tmp_path / "snapshot-take-over.mcap"
     topics = write_fixes(path, [1.0, 2.0])
-    recording.attach_recording(ito, path=path, start=_at(T0, 80), end=_at(T0, 110), topics=topics)
+    attachments.attach_recording(ito, path=path, start=_at(T0, 80), end=_at(T0, 110), topics=topics)
     logs.close_test_event(event, at=_at(T0, 200))
 
     text = flat(pdf_text(render_report(event, ReportOptions(no_tiles=True)).pdf, tmp_path))

@@ -199,6 +199,7 @@ from events.services import segments
 from events.services.segments import GpsPosition, LocalPosition
 from rosbridge_app.services import collectors
 from telemetry.services import recording
+from telemetry.services import map_images
 
 KEY = "{key}"
 vehicle = Vehicle.objects.get(key=KEY)
@@ -269,7 +270,7 @@ for line in sys.stdin:
             recording.record_poses(open_master(leg), fixes)
             recording.record_local_poses(open_master(leg), local)
         elif word == "map":
-            recording.record_map(
+            map_images.record_map(
                 leg.shift, png=PNG, frame="map", width=2, height=2, resolution=40.0,
                 origin_x=-10.0, origin_y=-10.0,
             )

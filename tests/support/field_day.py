@@ -6,7 +6,7 @@ from events.models import Performer, Personnel, PoseSource, Vehicle, Weather
 from events.services import logs, notes, segments
 from events.services.segments import GpsPosition, LocalPosition
 from telemetry.models.poses import FixStatus
-from telemetry.services import recording
+from telemetry.services import attachments, map_images, recording
 from tests.support.images import grey_png, jpeg
 
 T0 = datetime(2026, 5, 4, 8, 0, tzinfo=UTC)
@@ -118,7 +118,7 @@ def field_day(start=T0, *, vehicle_key="husky", close=True, event=None):
     )
     note = notes.add_note(child, text="stopped at the fence", author=person)
     notes.edit_note(note, text="stopped at the fence, post 4")
-    recording.record_map(
+    map_images.record_map(
         shift,
         png=grey_png(200),
         frame="map",
@@ -130,7 +130,7 @@ def field_day(start=T0, *, vehicle_key="husky", close=True, event=None):
         origin_yaw=0.25,
         robot_stamp=at + timedelta(minutes=4),
     )
-    recording.attach_image(
+    attachments.attach_image(
         master,
         content=jpeg(90),
         description="front camera",

@@ -26,7 +26,7 @@ from datetime import UTC, datetime, timedelta
 from events.models import Personnel
 from events.services import logs, notes, segments
 from events.services.segments import GpsPosition
-from telemetry.services import recording
+from telemetry.services import attachments, recording
 from telemetry.services.recording import GpsFix
 from tests.support.images import png
 
@@ -117,7 +117,7 @@ def build_scenario(vehicle, other_vehicle, performer, text=HOSTILE) -> Scenario:
     segments.add_ito_child(m["I1"], reason="planner", at=_at(T0, 120))
     recording.record_poses(m["I1"], _fixes(T0, [(110, 0.0035)]))
     notes.add_note(m["I1"], text=f"note {text}", author=people["operator"])
-    recording.attach_image(m["I1"], content=png((64, 48), (40, 120, 200)), description=text)
+    attachments.attach_image(m["I1"], content=png((64, 48), (40, 120, 200)), description=text)
     m["A2"] = _switch(leg1, "auto", T0, 160, 0.004)
     recording.record_poses(m["A2"], _fixes(T0, [(170, 0.005), (180, 0.006)]))
     logs.close_leg(leg1, at=_at(T0, 400))

@@ -65,10 +65,10 @@ def test_a_decompression_bomb_is_refused(post_photo, settings):
 def test_maps_are_png_only_also_on_the_service_path(shift, media_root):
     from django.core.exceptions import ValidationError
 
-    from telemetry.services import recording
+    from telemetry.services import map_images
 
     with pytest.raises(ValidationError, match="PNG"):
-        recording.record_map(
+        map_images.record_map(
             shift,
             png=image_bytes(fmt="WEBP"),
             frame="map",

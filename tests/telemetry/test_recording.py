@@ -11,7 +11,7 @@ from django.utils import timezone
 from common.errors import RuleViolation
 from events.services import segments
 from telemetry.models import Image, LocalPose, MapImage, Pose
-from telemetry.services import recording
+from telemetry.services import attachments, map_images, recording
 from tests.support.images import PNG
 
 
@@ -88,9 +88,9 @@ def test_local_pose_keeps_yaw_and_zero_coordinates(ito):
 
 def test_unchanged_map_is_not_stored_again_but_a_changed_one_is(leg, media_root):
     meta = dict(frame="map", width=1, height=1, resolution=0.05, origin_x=1.0, origin_y=2.0)
-    first, stored = recording.record_map(leg.shift, png=PNG, origin_yaw=0.3, **meta)
-    again, stored_again = recording.record_map(leg.shift, png=PNG, origin_yaw=0.3, **meta)
-    moved, stored_moved = recording.record_map(leg.shift, png=PNG, origin_yaw=0.5, **meta)
+    first, stored = map_images.record_map(leg.shift, png=PNG, origin_yaw=0.3, **meta)
+    again, stored_again = map_images.record_map(leg.shift, png=PNG, origin_yaw=0.3, **meta)
+    moved, stored_moved = map_images.record_map(leg.shift, png=PNG, origin_yaw=0.5, **meta)
     assert (stored, stored_again, stored_moved) == (True, False, True)
     assert again == first
     assert MapImage.objects.count() == 2
@@ -100,14 +100,14 @@ def test_unchanged_map_is_not_stored_again_but_a_changed_one_is(leg, media_root)
 def test_a_batch_of_maps_is_stored_in_order_like_one_map_at_a_time(leg, media_root):
     meta = dict(frame="map", width=1, height=1, resolution=0.05, origin_x=1.0, origin_y=2.0)
     retried = uuid.uuid4()
-    recording.record_map(leg.shift, png=PNG, origin_yaw=0.1, uid=retried, **meta)
+    map_images.record_map(leg.shift, png=PNG, origin_yaw=0.1, uid=retried, **meta)
     batch = [
-        recording.MapPicture(png=PNG, origin_yaw=0.1, uid=retried, **meta),  # a retry
-        recording.MapPicture(png=PNG, origin_yaw=0.2, **meta),
-        recording.MapPicture(png=PNG, origin_yaw=0.2, **meta),  # unchanged
-        recording.MapPicture(png=PNG, origin_yaw=0.3, uid=uuid.uuid4(), **meta),
+        map_images.MapPicture(png=PNG, origin_yaw=0.1, uid=retried, **meta),  # a retry
+        map_images.MapPicture(png=PNG, origin_yaw=0.2, **meta),
+        map_images.MapPicture(png=PNG, origin_yaw=0.2, **meta),  # unchanged
+        map_images.MapPicture(png=PNG, origin_yaw=0.3, uid=uuid.uuid4(), **meta),
     ]
-    results = recording.record_maps(leg.shift, batch)
+    results = map_images.record_maps(leg.shift, batch)
     assert [stored for _, stored in results] == [False, True, False, True]
     assert results[2][0] == results[1][0]
     yaws = list(leg.shift.maps.order_by("received", "id").values_list("origin_yaw", flat=True))
@@ -117,7 +117,7 @@ def test_a_batch_of_maps_is_stored_in_order_like_one_map_at_a_time(leg, media_ro
 
 
 def test_images_are_files_in_media_storage_on_the_master(ito, media_root):
-    image = recording.attach_image(ito.children.get(), content=PNG)
+    image = attachments.attach_image(ito.children.get(), content=PNG)
     assert image.segment == ito
     assert (media_root / image.image.name).read_bytes() == PNG
     assert Image.objects.count() == 1
@@ -125,7 +125,7 @@ def test_images_are_files_in_media_storage_on_the_master(ito, media_root):
 
 def test_empty_image_is_refused(ito, media_root):
     with pytest.raises(RuleViolation):
-        recording.attach_image(ito, content=b"")
+        attachments.attach_image(ito, content=b"")
 
 
 def test_a_snapshot_is_stored_without_a_second_copy_and_its_pending_file_stays(
@@ -133,7 +133,7 @@ def test_a_snapshot_is_stored_without_a_second_copy_and_its_pending_file_stays(
 ):
     pending = tmp_path / "snapshot-1.mcap"
     pending.write_bytes(b"MCAP" * 1000)
-    stored = recording.attach_recording(
+    stored = attachments.attach_recording(
         ito, path=pending, start=timezone.now(), end=timezone.now(), topics={}
     )
     assert stored.file.read() == b"MCAP" * 1000
@@ -151,8 +151,8 @@ def test_a_snapshot_is_copied_where_it_cannot_be_linked(ito, media_root, tmp_pat
     def no_links(source, target):
         raise OSError(18, "Invalid cross-device link")
 
-    monkeypatch.setattr(recording.os, "link", no_links)
-    stored = recording.attach_recording(
+    monkeypatch.setattr(attachments.os, "link", no_links)
+    stored = attachments.attach_recording(
         ito, path=pending, start=timezone.now(), end=timezone.now(), topics={}
     )
     assert stored.file.read() == b"MCAP" * 1000

@@ -18,7 +18,7 @@ from common import roles
 from events.models import Leg, SegmentType
 from events.services import logs, notes, segments
 from ftt_site.wsgi import application
-from telemetry.services import recording
+from telemetry.services import attachments
 from tests.support.images import jpeg
 from tests.support.modes import start_auto
 
@@ -118,7 +118,7 @@ def real_ids(vehicle, performer, person, pose_source, media_root):
                 "legs": leg.pk,
                 "segments": [auto.pk, ito.pk, child.pk],
                 "notes": notes.add_note(child, text="fuzz").pk,
-                "images": recording.attach_image(ito, content=jpeg(1)).pk,
+                "images": attachments.attach_image(ito, content=jpeg(1)).pk,
                 "vehicles": vehicle.key,
                 "personnel": person.pk,
                 "performers": performer.pk,

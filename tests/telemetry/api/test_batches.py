@@ -9,7 +9,7 @@ import pytest
 from events.models import Announcement, SegmentType
 from events.services import segments
 from telemetry.models import LocalPose, Pose
-from telemetry.services.recording import COPY_FROM
+from telemetry.services.pose_rows import COPY_FROM
 from tests.support.api import assert_error_shape
 
 T0 = datetime(2026, 5, 4, 8, tzinfo=UTC)

@@ -7,7 +7,7 @@ import pytest
 
 from common import roles
 from telemetry.models import LocalPose, MapImage, Pose
-from telemetry.services import recording
+from telemetry.services import attachments, map_images, recording
 from telemetry.services.recording import GpsFix, MapPose
 from tests.support.api import CrudTests, assert_error_shape
 from tests.support.images import png, upload
@@ -159,7 +159,7 @@ class TestMaps(CrudTests):
 
     @pytest.fixture
     def instance(self, shift, media_root):
-        map_image, _ = recording.record_map(
+        map_image, _ = map_images.record_map(
             shift,
             png=png(),
             frame="map",
@@ -221,7 +221,7 @@ class TestImages(CrudTests):
 
     @pytest.fixture
     def instance(self, auto_master, media_root):
-        return recording.attach_image(auto_master, content=png(fmt="JPEG"))
+        return attachments.attach_image(auto_master, content=png(fmt="JPEG"))
 
     @pytest.fixture
     def create_data(self, auto_master, media_root):

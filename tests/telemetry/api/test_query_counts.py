@@ -10,8 +10,9 @@ from events import feed
 from events.models import Announcement, Segment, SegmentType
 from events.services import segments
 from telemetry.models import Pose
-from telemetry.services import recording
-from telemetry.services.recording import COPY_FROM, GpsFix, MapPose
+from telemetry.services import attachments, map_images, recording
+from telemetry.services.pose_rows import COPY_FROM
+from telemetry.services.recording import GpsFix, MapPose
 from tests.support.api import LIST_QUERIES, assert_constant_queries, post_counting_queries
 from tests.support.images import png
 from tests.support.modes import start_auto
@@ -31,7 +32,7 @@ def _local_poses(n, leg):
 
 def _maps(n, leg):
     for _ in range(n):
-        recording.record_map(
+        map_images.record_map(
             leg.shift,
             png=png(colour=(len(leg.shift.maps.all()), 0, 0)),
             frame="map",
@@ -46,7 +47,7 @@ def _maps(n, leg):
 def _images(n, leg):
     master = start_auto(leg)
     for _ in range(n):
-        recording.attach_image(master, content=png(fmt="JPEG"))
+        attachments.attach_image(master, content=png(fmt="JPEG"))
 
 
 CASES = {
@@ -95,21 +96,24 @@ def _one_post(client, body):
     return response, [q["sql"] for q in captured.captured_queries]
 
 
-@pytest.mark.postgis_only
 # Committed for real, as a server runs it: no test-wide transaction around it.
 @pytest.mark.django_db(transaction=True)
-def test_a_single_pose_is_one_statement_on_postgresql(api_client, leg):
+def test_a_single_pose_is_one_short_transaction_of_two_inserts(api_client, leg):
+    """The same statements on PostgreSQL and SpatiaLite: the pose (its segment and
+    pose source checked in the same statement) and its feed row."""
     child = segments.new_manual_segment(leg)
     master = child.parent
     client = api_client("operator")
     # The first pose also reads the token and the segment; both are kept.
     assert client.post("/api/poses/", _pose(child), format="json").status_code == 201
     body = _pose(child, uid=str(uuid.uuid4()), altitude=101.5, horizontal_accuracy=0.2)
-    response, queries = _one_post(client, body)
+    response, every, in_transaction = post_counting_queries(client, "/api/poses/", body)
     assert response.status_code == 201, response.content
-    # The pose and its feed row in one statement, its own transaction; the feed's
-    # trigger sends the NOTIFY.
-    assert len(queries) == 1, queries
+    assert len(every) == len(in_transaction) + 2, every  # nothing outside it
+    assert [q.split()[:3] for q in in_transaction] == [
+        ["INSERT", "INTO", "telemetry_pose"],
+        ["INSERT", "INTO", '"rosbridge_app_announcement"'],
+    ], in_transaction
     stored = Pose.objects.get(uid=body["uid"])
     assert (stored.segment_id, stored.point.x, stored.point.y) == (master.pk, 7.1, 50.2)
     assert (stored.altitude, stored.horizontal_accuracy) == (101.5, 0.2)
@@ -128,31 +132,11 @@ def test_a_single_pose_is_one_statement_on_postgresql(api_client, leg):
     ]
 
     feed_rows = Announcement.objects.count()
-    again, queries = _one_post(client, body)
+    again, every, in_transaction = post_counting_queries(client, "/api/poses/", body)
     assert again.status_code == 200 and again.json() == response.json()
     assert Pose.objects.filter(uid=body["uid"]).count() == 1
     assert Announcement.objects.count() == feed_rows  # nothing new to announce
-    assert len(queries) == 2, queries  # the statement, then the row stored first
-
-
-def test_a_single_pose_on_sqlite_is_one_short_transaction(api_client, leg):
-    if connection.vendor == "postgresql":
-        pytest.skip("PostgreSQL stores a single pose in one statement (test above)")
-    child = segments.new_manual_segment(leg)
-    client = api_client("operator")
-    assert client.post("/api/poses/", _pose(child), format="json").status_code == 201
-    body = _pose(child, uid=str(uuid.uuid4()))
-    response, every, in_transaction = post_counting_queries(client, "/api/poses/", body)
-    assert response.status_code == 201, response.content
-    # The segment (its id is checked), then the known uids, the insert, the feed row.
-    assert len(in_transaction) == 3, in_transaction
-    assert len(every) == 1 + len(in_transaction) + 2, every
-    stored = Pose.objects.get(uid=body["uid"])
-    assert (stored.segment_id, stored.point.x, stored.point.y) == (child.parent_id, 7.1, 50.2)
-    assert response.json()["id"] == stored.pk
-    again, _, _ = post_counting_queries(client, "/api/poses/", body)
-    assert again.status_code == 200 and again.json() == response.json()
-    assert Pose.objects.filter(uid=body["uid"]).count() == 1
+    assert len(in_transaction) == 1 and len(every) == 4, every  # then the row stored first
 
 
 def test_a_robots_single_pose_costs_what_an_operators_does(api_client, robot_client, vehicle, leg):

@@ -7,7 +7,7 @@ from django.utils import timezone
 
 from common import roles
 from telemetry.models import Recording
-from telemetry.services.recording import attach_recording
+from telemetry.services.attachments import attach_recording
 from tests.support.mcap_files import read_mcap, write_fixes
 
 pytestmark = pytest.mark.django_db
