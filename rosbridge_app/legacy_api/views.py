@@ -15,6 +15,7 @@ from events.services.segments import GpsPosition, LocalPosition
 from rosbridge_app.legacy_api import fields, targets
 from rosbridge_app.legacy_api.answers import LegacyRefusal, info, refusal, warn
 from rosbridge_app.legacy_api.fields import CURRENT_LEG, CURRENT_SEGMENT, CURRENT_SHIFT
+from telemetry.models import Image
 from telemetry.pictures import greyscale_png
 from telemetry.services import attachments, map_images, recording
 
@@ -202,6 +203,8 @@ class ImageView(LegacyView):
         # The node sends its image buffer again at every switch, even when the
         # camera stalled: the same frame is stored once, on its first take-over.
         uid = self.uid("image", stamp, hashlib.sha256(content).hexdigest())
+        if Image.objects.filter(uid=uid).exists():
+            return info("This frame is stored already, with the take-over it came first with.")
         attachments.attach_image(
             segment, content=content, description=description, robot_stamp=stamp, uid=uid
         )
