@@ -38,7 +38,11 @@ def test_a_quick_reason_goes_to_the_open_take_over_not_the_selected_row(
         robot.do("ito")
         expect(page.locator("#quick-target")).to_have_text("Reason for #3.1:")
         expect(safety).to_be_enabled()
-        shot(page, "tablet-ito")
+        for screen, options in VIEWPORTS.items():
+            page.set_viewport_size(options["viewport"])
+            expect(page.locator("#quick-target")).to_be_in_viewport()
+            shot(page, f"{screen}-ito")
+        page.set_viewport_size(VIEWPORTS["tablet"]["viewport"])
         safety.click()
     finally:
         robot.stop()
