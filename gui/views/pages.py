@@ -59,9 +59,10 @@ def opening(request) -> dict | None:
     legs = {c.leg for c in logging_into() if is_online(c)}
     if len(legs) > 1:
         return {"view": "fleet"}
-    for leg in legs:
-        return {"event": leg.shift.test_event_id, "shift": leg.shift_id, "leg": leg.pk}
-    return None
+    if not legs:
+        return None
+    (leg,) = legs
+    return {"event": leg.shift.test_event_id, "shift": leg.shift_id, "leg": leg.pk}
 
 
 def _chosen(request, name: str) -> int | None:

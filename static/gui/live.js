@@ -28,6 +28,8 @@ export const Live = {
       this.subscribe();
     };
     socket.onmessage = (e) => {
+      // A socket given up as dead says nothing about the link now.
+      if (this.socket !== socket) return;
       this.heard = Date.now();
       if (this.link !== "live") this.setLink("live");
       this.receive(JSON.parse(e.data));
