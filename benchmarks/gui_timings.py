@@ -5,7 +5,8 @@ and GPS tracks, drives Chromium at the tablet size (1024x768, touch) and prints
 the median and the slowest of --repeat runs per action, measured from the tap
 until the page shows the result (tested at every animation frame; the page load
 from the navigation, with an empty HTTP cache as routing leaves it).  Target:
-page interactive <= 1.5 s, each action <= 300 ms.
+page interactive <= 1.5 s, each action <= 300 ms; a stalled or cut link shown,
+and live again once it is back, <= 5 s each.
 Run: .venv/bin/python benchmarks/gui_timings.py [--repeat 5]
 """
 
@@ -24,6 +25,7 @@ os.environ.setdefault("DJANGO_ALLOW_ASYNC_UNSAFE", "true")
 
 from playwright.sync_api import expect, sync_playwright  # noqa: E402
 
+from tests.e2e.link import Link  # noqa: E402
 from tests.support.browser import PASSWORD, Server, login, system_chromium  # noqa: E402
 
 SETUP = """
@@ -68,9 +70,35 @@ def until(page, predicate: str, arg=None):
 
 ROWS = "document.querySelectorAll('#segment-table tbody tr')"
 CHILD = "document.querySelectorAll('#segment-table tbody tr.child')[i]"
+SELECTED = "document.querySelector('#segment-table tbody tr.selected')"
+BADGE = "(text) => document.querySelector('#live-status').textContent === text"
 SHOWN = "(e) => Boolean(e && e.checkVisibility())"
 DRAWN = "#gps-map[data-tracks]:not([data-tracks='0'])"
 NOTE = "#segment-dialog .notes li"
+
+
+def link_figures(browser, server, url, repeat, figures):
+    """The link between browser and server stalls (half-open: nothing gets through)
+    or is cut, and comes back: how long until the page says so (tests/e2e/link.py)."""
+    link = Link(server)
+    page = browser.new_page(viewport={"width": 1024, "height": 768}, has_touch=True)
+    page.route("**/tiles/**", lambda r: r.fulfill(status=404))
+    try:
+        login(page, link, "otto")
+        page.goto(url.replace(server.url, link.url))
+        expect(page.locator("#live-status")).to_have_text("live")
+        for _ in range(repeat):
+            for name, breaks, shown in (
+                ("link stalled -> stale shown", link.stall, "stale"),
+                ("link cut -> reconnecting shown", link.cut, "reconnecting…"),
+            ):
+                figures.setdefault(name, []).append(timed(breaks, until(page, BADGE, shown)))
+                figures.setdefault("link back -> live again", []).append(
+                    timed(link.restore, until(page, BADGE, "live"))
+                )
+    finally:
+        page.close()
+        link.close()
 
 
 def main():
@@ -111,12 +139,6 @@ def main():
                         row.click, until(page, f"(i) => {CHILD}.classList.contains('selected')", i)
                     ),
                 )
-                figures.setdefault("quick reason", []).append(
-                    timed(
-                        lambda: page.locator("[data-quick='safety']").click(),
-                        until(page, f"(i) => {CHILD}.cells[2].textContent === 'Safety'", i),
-                    )
-                )
                 count = rows.count()
                 figures.setdefault("New take-over (after the question)", []).append(
                     timed(
@@ -132,16 +154,18 @@ def main():
                         until(page, f"(n) => {ROWS}.length === n", count + 1),
                     )
                 )
-                # New selected the take-over it recorded; End closes it.
+                # New selected the take-over it recorded, which quick reasons annotate.
+                figures.setdefault("quick reason (the open take-over)", []).append(
+                    timed(
+                        lambda: page.locator("[data-quick='safety']").click(),
+                        until(page, f"() => {SELECTED}.cells[2].textContent === 'Safety'"),
+                    )
+                )
                 expect(page.locator("#segment-end")).to_be_enabled()
                 figures.setdefault("End a segment", []).append(
                     timed(
                         lambda: page.locator("#segment-end").click(),
-                        until(
-                            page,
-                            "() => document.querySelector('#segment-table tbody tr.selected')"
-                            ".cells[7].textContent === 'CLOSED'",
-                        ),
+                        until(page, f"() => {SELECTED}.cells[7].textContent === 'CLOSED'"),
                     )
                 )
                 dialog = page.locator("#segment-dialog")
@@ -194,13 +218,14 @@ def main():
                         ),
                     )
                 )
+            link_figures(browser, server, url, args.repeat, figures)
             browser.close()
     finally:
         server.stop()
     print(f"load average {os.getloadavg()[0]:.2f} (1 min) at the end")
     print(f"{'action':45} {'median ms':>10} {'max ms':>8} {'target':>7}  (n, tablet 1024x768)")
     for name, values in figures.items():
-        target = 1500 if name.startswith("page") else 300
+        target = 1500 if name.startswith("page") else 5000 if name.startswith("link") else 300
         median, most = statistics.median(values), max(values)
         verdict = "ok" if median <= target else "OVER"
         print(f"{name:45} {median:10.0f} {most:8.0f} {target:7d}  ({len(values)}) {verdict}")

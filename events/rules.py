@@ -9,7 +9,7 @@ from django.core.exceptions import PermissionDenied
 from django.db.models import QuerySet
 
 from common import roles
-from events.models import Leg, Segment, Shift, Vehicle
+from events.models import Leg, Segment, SegmentType, Shift, Vehicle
 from events.selectors.robots import robot_vehicles
 
 
@@ -26,6 +26,17 @@ def open_legs_of_shift(shift_id: int) -> QuerySet[Leg]:
 def open_masters_of_leg(leg_id: int) -> QuerySet[Segment]:
     """A leg has at most one open master segment: the mode the robot is in now."""
     return Segment.objects.filter(leg_id=leg_id, parent__isnull=True, end__isnull=True)
+
+
+def open_take_overs(leg_ids) -> QuerySet[Segment]:
+    """Each leg's open take-over first: the newest open reason under the open ITO
+    master (quick reasons annotate it, whatever row the operator has selected)."""
+    return Segment.objects.filter(
+        leg_id__in=leg_ids,
+        parent__end__isnull=True,
+        parent__segment_type_id=SegmentType.ITO,
+        end__isnull=True,
+    ).order_by("leg_id", "-start", "-id")
 
 
 # (model, parent field, what a person calls it): an entry may only be open

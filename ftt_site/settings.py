@@ -278,6 +278,9 @@ REDIS_URL = env_str("FTT_REDIS_URL")
 # How often a web process reads the change feed when no wake-up arrives (a
 # commit normally wakes it at once: NOTIFY on PostgreSQL, Redis, or in-process).
 FTT_LIVE_POLL_MS = env_int("FTT_LIVE_POLL_MS", 200)
+# How often the server speaks on an open live websocket, so that a page can tell
+# a quiet link from a dead one; the page shows its link stale after three missed.
+FTT_LIVE_HEARTBEAT_MS = env_int("FTT_LIVE_HEARTBEAT_MS", 1000)
 # Each process sends the cross-process wake-ups (NOTIFY, Redis) from a thread of
 # its own, at most once per this long (rosbridge_app.wakeup).
 FTT_LIVE_NOTIFY_DELAY_MS = env_int("FTT_LIVE_NOTIFY_DELAY_MS", 2)

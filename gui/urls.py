@@ -3,7 +3,6 @@
 from django.contrib.auth import views as auth_views
 from django.urls import path, re_path
 
-from events.api.views import LegViewSet, SegmentViewSet
 from gui.views import archive_import, gui_api, media, pages
 
 urlpatterns = [
@@ -21,13 +20,18 @@ urlpatterns = [
     path("gui/api/legs/<int:pk>/segments/", gui_api.LegSegments.as_view(), name="gui-segments"),
     path(
         "gui/api/legs/<int:pk>/manual-segment/",
-        gui_api.SegmentWrite.as_view(rest_view=LegViewSet.as_view({"post": "manual_segment"})),
+        gui_api.ManualSegment.as_view(),
         name="gui-manual-segment",
     ),
     path(
         "gui/api/segments/<int:pk>/close/",
-        gui_api.SegmentWrite.as_view(rest_view=SegmentViewSet.as_view({"post": "close"})),
+        gui_api.SegmentClose.as_view(),
         name="gui-segment-close",
+    ),
+    path(
+        "gui/api/legs/<int:pk>/quick-reason/",
+        gui_api.QuickReason.as_view(),
+        name="gui-quick-reason",
     ),
     path(
         "gui/api/segments/<int:pk>/attachments/",

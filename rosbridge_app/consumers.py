@@ -47,6 +47,8 @@ GAP_PATIENCE = 5.0
 CATCH_UP_LIMIT = 5000
 # How often an open websocket asks whether its session and role still hold.
 SESSION_CHECK_INTERVAL = 30.0
+# A page that has heard nothing for this many heartbeats shows its link stale.
+MISSED_BEATS = 3
 
 
 def as_message(row: Announcement) -> dict:
@@ -72,7 +74,7 @@ def _rows_after(after: int, limit: int = BATCH) -> list[dict]:
 def _attach_segments(rows: list[dict]) -> None:
     """Give each segment event the rows it changed, as the API shows them, with
     their labels, so the page applies them instead of re-reading the list.
-    Three queries however many events the batch holds; a segment deleted since
+    Four queries however many events the batch holds; a segment deleted since
     gets none, and the page re-reads."""
     touched = touched_rows({r["payload"].get("id") for r in rows} - {None})
     for row in rows:
@@ -249,7 +251,17 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
         self.session_group = session_group(key) if key and self.channel_layer else None
         if self.session_group:
             await self.channel_layer.group_add(self.session_group, self.channel_name)
-        self.guard = asyncio.get_running_loop().create_task(self._guard_session())
+        loop = asyncio.get_running_loop()
+        self.guard = loop.create_task(self._guard_session())
+        self.heart = loop.create_task(self._beat())
+
+    async def _beat(self) -> None:
+        """Speak every FTT_LIVE_HEARTBEAT_MS, events or not: a half-open Wi-Fi link
+        stays "open" to the browser, and only silence tells it the link is dead."""
+        while True:
+            every = settings.FTT_LIVE_HEARTBEAT_MS
+            await asyncio.sleep(every / 1000)
+            await self.send_json({"type": "heartbeat", "stale_after": every * MISSED_BEATS / 1000})
 
     async def _guard_session(self) -> None:
         while True:
@@ -272,9 +284,9 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
         await self._end_session()
 
     async def disconnect(self, code):
-        guard = getattr(self, "guard", None)
-        if guard is not None and guard is not asyncio.current_task():
-            guard.cancel()
+        for task in (getattr(self, "guard", None), getattr(self, "heart", None)):
+            if task is not None and task is not asyncio.current_task():
+                task.cancel()
         group = getattr(self, "session_group", None)
         if group:
             await self.channel_layer.group_discard(group, self.channel_name)

@@ -23,7 +23,7 @@ from events.models import (
     Vehicle,
     Weather,
 )
-from events.selectors.labels import legs_labels
+from events.selectors.labels import label, legs_numbers, short_label
 from events.selectors.segments import touched_by
 from events.services import logs
 from events.services.segments import MODES, GpsPosition, LocalPosition
@@ -229,18 +229,32 @@ class SegmentSerializer(ServiceSerializer):
         extra_kwargs = {"ito_reason": {"allow_null": False}}
 
 
+def open_take_over_ids(leg_ids) -> dict[int, int | None]:
+    """{leg id: whom the quick reasons annotate now (events.rules.open_take_overs)}."""
+    found: dict[int, int | None] = dict.fromkeys(leg_ids)
+    for leg, pk in rules.open_take_overs(leg_ids).values_list("leg_id", "pk"):
+        found[leg] = found[leg] or pk
+    return found
+
+
 def touched_rows(segment_ids) -> dict[int, dict]:
     """{changed segment id: {"segments": the rows that change touched, as the API
-    shows them, "labels": their labels}}, for readers that redraw only those rows
-    (the live feed, and the GUI's writes that answer with them).  Three queries."""
+    shows them, "labels": their labels, "short_labels": the same within their leg,
+    "open_take_over": the id of their leg's open take-over now, or None}}, for readers
+    that redraw only those rows (the live feed, and the GUI's writes that answer with
+    them).  Four queries."""
     touched = touched_by(segment_ids)
     if not touched:
         return {}
-    labels = legs_labels({c.leg_id for rows in touched.values() for c in rows})
+    legs = {c.leg_id for rows in touched.values() for c in rows}
+    numbers = legs_numbers(legs)
+    take_overs = open_take_over_ids(legs)
     return {
         pk: {
+            "open_take_over": take_overs[rows[0].leg_id] if rows else None,
             "segments": SegmentSerializer(rows, many=True).data,
-            "labels": {c.pk: labels.get(c.pk) for c in rows},
+            "labels": {c.pk: label(*numbers[c.pk]) for c in rows if c.pk in numbers},
+            "short_labels": {c.pk: short_label(numbers[c.pk][1]) for c in rows if c.pk in numbers},
         }
         for pk, rows in touched.items()
     }

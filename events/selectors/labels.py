@@ -19,8 +19,9 @@ def leg_numbers(leg_id: int) -> dict[int, str]:
     return numbers(rows)
 
 
-def legs_labels(leg_ids) -> dict[int, str]:
-    """{segment id: label} for every segment of the given legs, in one query."""
+def legs_numbers(leg_ids) -> dict[int, tuple[int, str]]:
+    """{segment id: (its leg's number, its number)} for every segment of the given
+    legs, in one query."""
     rows = (
         Segment.objects.filter(leg_id__in=leg_ids)
         .order_by("leg_id", "start", "id")
@@ -30,7 +31,7 @@ def legs_labels(leg_ids) -> dict[int, str]:
     for leg_id, leg_number, pk, parent in rows:
         by_leg[(leg_id, leg_number)].append((pk, parent))
     return {
-        pk: label(leg_number, n)
+        pk: (leg_number, n)
         for (_, leg_number), pairs in by_leg.items()
         for pk, n in numbers(pairs).items()
     }
@@ -55,7 +56,12 @@ def numbers(rows) -> dict[int, str]:
 
 
 def label(leg_number: int, number: str) -> str:
-    return f"Leg {leg_number} · #{number}"
+    return f"Leg {leg_number} · {short_label(number)}"
+
+
+def short_label(number: str) -> str:
+    """The label within its leg, where the leg is plain: "#7.1"."""
+    return f"#{number}"
 
 
 def segment_label(segment: Segment) -> str:

@@ -263,3 +263,18 @@ def annotate_segment(segment: Segment, **fields) -> Segment:
     segment.annotated = timezone.now()
     segment.save(update_fields=[*fields, "annotated"])
     return announce_and_return(segment)
+
+
+@transaction.atomic
+def annotate_open_take_over(leg: Leg, **fields) -> Segment:
+    """A quick reason: annotates the leg's open take-over (events.rules.open_take_overs),
+    which the robot may have started a moment ago; an older take-over is annotated
+    through :func:`annotate_segment`."""
+    leg = lock(leg)
+    take_over = rules.open_take_overs([leg.pk]).first()
+    if take_over is None:
+        raise RuleViolation(
+            "No take-over is open in this leg; give an earlier take-over its reason "
+            "in its segment's dialog."
+        )
+    return annotate_segment(take_over, **fields)

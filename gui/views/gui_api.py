@@ -20,9 +20,16 @@ from rest_framework.views import APIView
 
 from basemaps.selectors.layers import layer_list
 from common import roles
-from events.api.serializers import NoteSerializer, SegmentSerializer, touched_rows
+from events.api import serializers as s
+from events.api.serializers import (
+    NoteSerializer,
+    SegmentSerializer,
+    open_take_over_ids,
+    touched_rows,
+)
 from events.models import Leg, Note, Segment, SegmentType, Shift, Vehicle
-from events.selectors.labels import label, leg_numbers
+from events.selectors.labels import label, leg_numbers, short_label
+from events.services import segments as rules
 from gui.forms import gui_forms
 from rosbridge_app.models import Collector
 from rosbridge_app.selectors.collectors import collector_status, collectors
@@ -144,7 +151,7 @@ class LegTracks(GuiView):
                 if master.start_local_x is None or master.start_local_y is None
                 else [master.start_local_x, master.start_local_y],
             }
-        body = {"leg": leg.pk, "segments": segments, "labels": leg_labels(leg)}
+        body = {"leg": leg.pk, "segments": segments, **leg_labels(leg)}
         body.update(zoom=zooms[GPS], local_zoom=zooms[LOCAL])
         if zooms[GPS] is not None:
             body["tolerance_deg"] = tolerance(GPS, zooms[GPS])
@@ -218,8 +225,13 @@ def _drawn(track, mode, zoom, box=None, box_zoom=None) -> list[list[float]]:
     return np.round(pairs, 7).tolist()
 
 
-def leg_labels(leg: Leg) -> dict[int, str]:
-    return {pk: label(leg.number, n) for pk, n in leg_numbers(leg.pk).items()}
+def leg_labels(leg: Leg) -> dict[str, dict[int, str]]:
+    """Every segment's label ("Leg 2 · #7") and short label ("#7"), as the page shows them."""
+    numbers = leg_numbers(leg.pk).items()
+    return {
+        "labels": {pk: label(leg.number, n) for pk, n in numbers},
+        "short_labels": {pk: short_label(n) for pk, n in numbers},
+    }
 
 
 class LegSegments(GuiView):
@@ -232,32 +244,83 @@ class LegSegments(GuiView):
 
 def leg_segments(leg: Leg) -> dict:
     rows = SegmentSerializer(Segment.objects.filter(leg=leg), many=True).data
-    return {"leg": leg.pk, "segments": rows, "labels": leg_labels(leg)}
+    return {
+        "leg": leg.pk,
+        "segments": rows,
+        **leg_labels(leg),
+        "open_take_over": open_take_over_ids([leg.pk])[leg.pk],
+    }
 
 
 class SegmentWrite(GuiView):
-    """A segment write of the REST API (the same view: rules, roles, errors), answered
-    with the row it wrote and every row that change touched, with their labels, so the
-    page redraws them without reading the list again:
-    ``{"segment": row, "segments": [rows], "labels": {id: label}}``."""
+    """A segment write by the segment rules (events.services.segments), answered with
+    the row it wrote and every row that change touched, with their labels, so the page
+    redraws them without reading the list again:
+    ``{"segment": row, "segments": [rows], "labels": {id: label}, "short_labels": {...},
+    "open_take_over": id or None}``."""
 
     write_role = roles.OPERATOR
-    rest_view = None
+    answer_status = 200
+
+    def write(self, request, pk) -> Segment:
+        raise NotImplementedError
 
     def post(self, request, pk):
-        # The body is still unread here: the REST view parses and checks it.
-        answer = self.rest_view(request._request, pk=pk)
-        if answer.status_code >= 300:
-            return answer
-        row = answer.data
+        row = self.write(request, pk)
         # A new reason under a new master: the master's change closed the previous
         # master, the reason's closed its sibling; each id brings what it touched.
-        rows, labels = {}, {}
-        for changed in touched_rows({row["id"], row["parent"]} - {None}).values():
+        rows, labels, short_labels, take_over = {}, {}, {}, None
+        for changed in touched_rows({row.pk, row.parent_id} - {None}).values():
             rows.update((r["id"], r) for r in changed["segments"])
             labels.update(changed["labels"])
-        body = {"segment": row, "segments": list(rows.values()), "labels": labels}
-        return Response(body, status=answer.status_code)
+            short_labels.update(changed["short_labels"])
+            take_over = changed["open_take_over"]
+        body = {
+            "segment": SegmentSerializer(row).data,
+            "segments": list(rows.values()),
+            "labels": labels,
+            "short_labels": short_labels,
+            "open_take_over": take_over,
+        }
+        return Response(body, status=self.answer_status)
+
+
+def checked(serializer_class, request):
+    serializer = serializer_class(data=request.data, context={"request": request})
+    serializer.is_valid(raise_exception=True)
+    return serializer
+
+
+class ManualSegment(SegmentWrite):
+    """An operator records a take-over (``legs/{id}/manual-segment/`` of the API)."""
+
+    answer_status = 201
+
+    def write(self, request, pk):
+        leg = get_object_or_404(Leg, pk=pk)
+        payload = checked(s.ManualSegmentSerializer, request)
+        reason = s.reason_key(payload.validated_data)
+        return rules.new_manual_segment(leg, reason=reason, **payload.positions())
+
+
+class SegmentClose(SegmentWrite):
+    """Ends a segment (``segments/{id}/close/`` of the API)."""
+
+    def write(self, request, pk):
+        return rules.close_segment(get_object_or_404(Segment, pk=pk))
+
+
+class QuickReasonBody(serializers.Serializer):
+    reason = s.ReasonField(required=True, help_text="ITO reason key.")
+
+
+class QuickReason(SegmentWrite):
+    """A quick reason: the server picks the leg's open take-over and answers with it."""
+
+    def write(self, request, pk):
+        leg = get_object_or_404(Leg, pk=pk)
+        reason = checked(QuickReasonBody, request).validated_data["reason"]
+        return rules.annotate_open_take_over(leg, ito_reason=reason)
 
 
 class SegmentAttachments(GuiView):
@@ -267,7 +330,7 @@ class SegmentAttachments(GuiView):
 
     def get(self, request, pk):
         segment = get_object_or_404(Segment, pk=pk)
-        master = segment.parent_id or segment.pk
+        master = segment.master_id
         context = {"request": request}
         notes = Note.objects.select_related("author").filter(segment=segment)
         return Response(

@@ -2,7 +2,7 @@
 
 The page carries what the script cannot ask the API for: who is logged in,
 which role they have and the site's map settings; and, so that the first screen
-does not wait for a chain of requests, the answers of the script's first reads.
+does not wait for a chain of requests, what the script reads first (``bootstrap``).
 """
 
 import functools
@@ -16,14 +16,12 @@ from django.templatetags.static import static
 from django.urls import reverse
 
 from common import roles
+from common.api.pagination import Pagination
 from events import feed
 from events.api import serializers as s
 from events.models import ItoReason, Leg, Performer, PoseSource, Shift, TestEvent, Vehicle
 from gui.views.gui_api import leg_segments, read_ahead
-from rosbridge_app.selectors.collectors import logging_into
-
-# How static/gui/api.js's list() asks for a whole list.
-WHOLE_LIST = "?page_size=5000"
+from rosbridge_app.selectors.collectors import is_online, logging_into
 
 
 def missing_configuration() -> list[str]:
@@ -44,12 +42,26 @@ def missing_configuration() -> list[str]:
     return missing
 
 
-def logged_leg() -> dict | None:
-    """The leg a collector is logging into, offered when the address names none."""
-    collector = logging_into().first()
-    if collector is None:
+# The cookie the cockpit keeps with what it shows ("event.shift.leg"), so that a
+# bare address opens it again in this browser.
+LAST_COCKPIT = "ftt_cockpit"
+
+
+def opening(request) -> dict | None:
+    """What a bare address opens: the cockpit this browser showed last while its leg
+    still exists; else the one leg collectors log into; with robots logging into
+    several legs, the fleet view, which asks the operator to pick one."""
+    last = request.COOKIES.get(LAST_COCKPIT, "").split(".")
+    if len(last) == 3 and all(part.isdigit() for part in last):
+        event, shift, leg = map(int, last)
+        if Leg.objects.filter(pk=leg, shift_id=shift, shift__test_event_id=event).exists():
+            return {"event": event, "shift": shift, "leg": leg}
+    legs = {c.leg for c in logging_into() if is_online(c)}
+    if len(legs) > 1:
+        return {"view": "fleet"}
+    if not legs:
         return None
-    leg = collector.leg
+    (leg,) = legs
     return {"event": leg.shift.test_event_id, "shift": leg.shift_id, "leg": leg.pk}
 
 
@@ -58,42 +70,43 @@ def _chosen(request, name: str) -> int | None:
     return int(value) if value.isdigit() else None
 
 
-def first_answers(request, logging: dict | None) -> dict[str, object]:
-    """{URL the page's script reads first: its answer}: the catalogues, the pickers
-    down to the leg in the address (or the leg a collector logs into) and that leg's
-    segments, each as its REST or /gui/api/ read answers it.  The script takes each
-    once instead of asking (static/gui/api.js); later reads go to the server.
-    That leg's tracks are read ahead meanwhile (``read_ahead``): the script asks
-    for them as its modules load."""
+def bootstrap(request, opened: dict | None) -> dict[str, dict]:
+    """What the cockpit's script reads first, named by what it is: the catalogues,
+    the rows of each picker down to the leg in the address (or the one a bare
+    address opens) and that leg's segments, as /api/ and /gui/api/ answer them.
+
+    Each piece is ``{"of": the parent's id or None, "data": ...}``; the script
+    takes a piece once, when it reads that very thing (static/gui/bootstrap.js),
+    and asks the server for everything after.  That leg's tracks are read ahead
+    meanwhile (``read_ahead``): the script asks for them as its modules load."""
     chosen = {k: _chosen(request, k) for k in ("event", "shift", "leg")}
-    if chosen["event"] is None and logging:
-        chosen = logging
+    if chosen["event"] is None and opened and "leg" in opened:
+        chosen = opened
     context = {"request": request}
 
-    def rows(serializer, queryset):
-        data = serializer(queryset, many=True, context=context).data
-        # One page, as common.api.pagination answers WHOLE_LIST (lists are far shorter).
-        return {"count": len(data), "next": None, "previous": None, "results": data}
+    def piece(data, of=None):
+        return {"of": of, "data": data}
 
-    answers = {
-        "/api/ito-reasons/" + WHOLE_LIST: s.ItoReasonSerializer(
-            ItoReason.objects.all(), many=True, context=context
-        ).data,
-        "/api/vehicles/" + WHOLE_LIST: rows(s.VehicleSerializer, Vehicle.objects.all()),
-        "/api/test-events/" + WHOLE_LIST: rows(s.TestEventSerializer, TestEvent.objects.all()),
+    def rows(serializer, queryset):
+        return serializer(queryset, many=True, context=context).data
+
+    pieces = {
+        "reasons": piece(rows(s.ItoReasonSerializer, ItoReason.objects.all())),
+        "vehicles": piece(rows(s.VehicleSerializer, Vehicle.objects.all())),
+        "event": piece(rows(s.TestEventSerializer, TestEvent.objects.all())),
     }
     event, shift, leg = chosen["event"], chosen["shift"], chosen["leg"]
     if event is not None:
         shifts = Shift.objects.filter(test_event_id=event)
-        answers[f"/api/shifts/{WHOLE_LIST}&test_event={event}"] = rows(s.ShiftSerializer, shifts)
+        pieces["shift"] = piece(rows(s.ShiftSerializer, shifts), event)
     if shift is not None:
         legs = list(Leg.objects.select_related("shift").filter(shift_id=shift))
-        answers[f"/api/legs/{WHOLE_LIST}&shift={shift}"] = rows(s.LegSerializer, legs)
+        pieces["leg"] = piece(rows(s.LegSerializer, legs), shift)
         shown = next((r for r in legs if r.pk == leg), None)
         if shown is not None:
-            answers[f"/gui/api/legs/{leg}/segments/"] = leg_segments(shown)
+            pieces["segments"] = piece(leg_segments(shown), leg)
             read_ahead(shown)
-    return answers
+    return pieces
 
 
 # `import ... from "./x.js"`, `export ... from "./x.js"` and `import "./x.js"`.
@@ -126,7 +139,7 @@ def index(request):
     user = request.user
     is_admin = roles.has_role(user, roles.ADMINISTRATOR)
     personnel = getattr(user, "personnel", None)
-    logging = logged_leg()
+    opened = None if request.GET else opening(request)
     can_view = roles.has_role(user, roles.VIEWER)
     # Before the answers are read: what is announced meanwhile reaches the page live.
     last_event = feed.bounds()[1]
@@ -146,12 +159,15 @@ def index(request):
             "isAdmin": is_admin,
             "user": user.get_full_name() or user.get_username(),
             "personnel": personnel.pk if personnel else None,
-            "loggingLeg": logging,
+            "opening": opened,
+            "cockpitCookie": LAST_COCKPIT,
             "wsPath": "/ws/live/",
             "apiRoot": "/api/",
             "guiApiRoot": "/gui/api/",
             "lastEventId": last_event,
-            "answers": first_answers(request, logging) if can_view else {},
+            # The longest page /api/ lists answer: the script asks for whole lists.
+            "pageSize": Pagination.max_page_size,
+            "bootstrap": bootstrap(request, opened) if can_view else {},
         },
     }
     return render(request, "gui/index.html", context)
@@ -167,6 +183,7 @@ def compare(request):
         "gui_config": {
             "canOperate": roles.has_role(user, roles.OPERATOR),
             "apiRoot": "/api/",
+            "pageSize": Pagination.max_page_size,
         },
     }
     return render(request, "gui/compare.html", context)

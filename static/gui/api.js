@@ -49,22 +49,7 @@ function describeErrors(data) {
   return parts.length ? parts.join(" ") : data.detail;
 }
 
-/* The page carries the answers of its first reads (gui/views/pages.py,
- * first_answers): each is taken once while the page starts, later reads ask
- * the server. */
-const answers = new Map(Object.entries(CONFIG.answers || {}));
-
-/* Once the page has started, an answer not taken would be out of date. */
-export function forgetAnswers() {
-  answers.clear();
-}
-
 export async function api(method, path, body, { root = CONFIG.apiRoot, signal } = {}) {
-  if (method === "GET" && answers.has(root + path)) {
-    const answer = answers.get(root + path);
-    answers.delete(root + path);
-    return answer;
-  }
   const headers = { Accept: "application/json" };
   let payload;
   if (body instanceof FormData) {
@@ -87,8 +72,9 @@ export async function api(method, path, body, { root = CONFIG.apiRoot, signal } 
   return data;
 }
 
+/* A whole list: one page as long as the server allows (its pagination's limit, in the page's config). */
 export async function list(path, params = {}) {
-  const query = new URLSearchParams({ page_size: "5000", ...params });
+  const query = new URLSearchParams({ page_size: String(CONFIG.pageSize), ...params });
   const data = await api("GET", `${path}?${query}`);
   return Array.isArray(data) ? data : data.results;
 }

@@ -2,6 +2,7 @@
  * Delete for each level.  Choosing a leg hands over to segments.js. */
 import { CONFIG, $, $$ } from "./dom.js";
 import { ApiError, api, list } from "./api.js";
+import { take } from "./bootstrap.js";
 import { clearError, notice, showError } from "./feedback.js";
 import { LEVELS, byId, current, saveUrl, state, vehicleName } from "./state.js";
 import { fmtDay, fmtTime } from "./format.js";
@@ -19,7 +20,10 @@ function rowLabel(level, row) {
 
 export async function loadCatalogues() {
   // Reasons name and colour segments; vehicles name shifts.  Dialogs read their own choices.
-  const [reasons, vehicles] = await Promise.all([list("ito-reasons/"), list("vehicles/")]);
+  const [reasons, vehicles] = await Promise.all([
+    take("reasons") ?? list("ito-reasons/"),
+    take("vehicles") ?? list("vehicles/"),
+  ]);
   Object.assign(state.catalogue, { reasons, vehicles });
   const any = $("#reason-any");
   any.replaceChildren(...reasons.map((r) => new Option(r.short_description, r.key)));
@@ -28,9 +32,10 @@ export async function loadCatalogues() {
 export async function loadLevel(level, keepSelection = true) {
   const info = LEVELS[level];
   const select = $(`#pick-${level}`);
+  const parent = info.parent ? state.selected[info.parent] : null;
   let rows = [];
-  if (!info.parent) rows = await list(info.path);
-  else if (state.selected[info.parent]) rows = await list(info.path, { [info.parentField]: state.selected[info.parent] });
+  if (!info.parent) rows = take(level) ?? (await list(info.path));
+  else if (parent) rows = take(level, parent) ?? (await list(info.path, { [info.parentField]: parent }));
   // Newest first, whatever order the server uses.
   rows.sort((a, b) => (a.start < b.start ? 1 : a.start > b.start ? -1 : b.id - a.id));
   state.rows[level] = rows;

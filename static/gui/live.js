@@ -9,6 +9,10 @@ import { state } from "./state.js";
 export const Live = {
   socket: null,
   retry: 500,
+  // When the server last spoke, and how long a silence means a dead link (its heartbeat says).
+  heard: Date.now(),
+  staleAfter: 3,
+  link: "connecting", // "live", "stale" (silent though open) or "down" (closed, reconnecting)
   pending: new Set(),
   seen: new Set(), // ids of the events applied
   timer: null,
@@ -16,23 +20,61 @@ export const Live = {
     const scheme = location.protocol === "https:" ? "wss:" : "ws:";
     const socket = new WebSocket(`${scheme}//${location.host}${CONFIG.wsPath}`);
     this.socket = socket;
+    this.opened = Date.now();
     socket.onopen = () => {
       this.retry = 500;
-      this.setStatus("live", "ok");
+      this.heard = Date.now();
+      this.setLink("live");
       this.subscribe();
     };
-    socket.onmessage = (e) => this.receive(JSON.parse(e.data));
+    socket.onmessage = (e) => {
+      // A socket given up as dead says nothing about the link now.
+      if (this.socket !== socket) return;
+      this.heard = Date.now();
+      if (this.link !== "live") this.setLink("live");
+      this.receive(JSON.parse(e.data));
+    };
     socket.onclose = (e) => {
       if (this.socket !== socket) return;
       if (e.code === 4403) {
         this.setStatus("no live updates (no role)", "bad");
         return;
       }
-      this.setStatus("reconnecting…", "bad");
+      this.setLink("down");
       setTimeout(() => this.connect(), this.retry);
       this.retry = Math.min(this.retry * 2, 5000);
     };
   },
+  /* Called every second: an open socket that stays silent past the heartbeat is a
+   * dead link (a half-open Wi-Fi link never closes); it is dropped for a new one,
+   * which catches up from the change feed once it opens. */
+  watch() {
+    const socket = this.socket;
+    if (!socket) return;
+    const silent = (Date.now() - this.heard) / 1000;
+    if (socket.readyState === WebSocket.OPEN && silent > this.staleAfter) {
+      this.setLink("stale");
+      this.socket = null;
+      socket.close();
+      this.connect();
+    } else if (socket.readyState === WebSocket.CONNECTING && (Date.now() - this.opened) / 1000 > 2 * this.staleAfter) {
+      this.socket = null;
+      socket.close();
+      this.connect();
+    }
+  },
+  /* Seconds since the server last spoke while the link is stale or down; null otherwise. */
+  lost() {
+    return ["stale", "down"].includes(this.link) ? Math.round((Date.now() - this.heard) / 1000) : null;
+  },
+  setLink(link) {
+    this.link = link;
+    const words = { live: ["live", "ok"], stale: ["stale", "stale"], down: ["reconnecting…", "bad"] };
+    this.setStatus(...words[link]);
+    this.onLink(link);
+  },
+  onLink() {}, // main.js redraws the mode banner
+
   setStatus(text, kind) {
     const badge = $("#live-status");
     badge.textContent = text;
@@ -51,6 +93,10 @@ export const Live = {
     }));
   },
   receive(message) {
+    if (message.type === "heartbeat") {
+      this.staleAfter = message.stale_after;
+      return;
+    }
     if (message.type === "subscribed") {
       if (state.lastEventId === null || message.last_id > state.lastEventId) state.lastEventId = message.last_id;
       return;

@@ -3,7 +3,7 @@
  * the modules only show state and forward taps.  This one starts the page and
  * wires the change feed to the modules it concerns. */
 import { CONFIG, $, $$ } from "./dom.js";
-import { forgetAnswers } from "./api.js";
+import { forgetBootstrap } from "./bootstrap.js";
 import { showError } from "./feedback.js";
 import { current, fromUrl, state } from "./state.js";
 import { Live, onSelectedLeg } from "./live.js";
@@ -74,9 +74,14 @@ async function boot() {
   const catalogues = loadCatalogues();
   if (!CONFIG.canOperate) $$(".op").forEach((b) => (b.disabled = true));
   Live.connect();
-  // Nothing in the address: offer the leg a collector is logging into.
-  if (!fromUrl.event && CONFIG.loggingLeg) Object.assign(state.selected, CONFIG.loggingLeg);
+  // Nothing in the address: what the server says a bare address opens (this
+  // browser's last cockpit, the one logging leg, or the fleet to pick from).
+  const opening = !fromUrl.event && !fromUrl.view ? CONFIG.opening : null;
+  if (opening && opening.view) state.view = opening.view;
+  else if (opening) Object.assign(state.selected, opening);
+  Live.onLink = renderMode;
   setInterval(() => {
+    Live.watch();
     renderMode();
     Fleet.tick();
   }, 1000);
@@ -87,7 +92,7 @@ async function boot() {
   } catch (err) {
     showError(err);
   } finally {
-    forgetAnswers();
+    forgetBootstrap();
   }
   setInterval(() => {
     // Open segments' durations keep growing between events.
@@ -99,4 +104,3 @@ async function boot() {
 }
 
 if ($("#pick-event")) boot();
-window.FTT = { state, Live, Collector, Fleet };

@@ -2,8 +2,9 @@
  * tracks on the maps, and the segment actions (reasons, New, End, Edit). */
 import { CONFIG, $, $$ } from "./dom.js";
 import { ApiError, api } from "./api.js";
+import { take } from "./bootstrap.js";
 import { clearError, notice, showError } from "./feedback.js";
-import { byId, current, fromUrl, putSegment, reasonName, saveUrl, segmentLabel, shortLabel, state } from "./state.js";
+import { byId, current, fromUrl, putSegment, reasonName, saveUrl, segmentLabel, shortLabel, state, vehicleName } from "./state.js";
 import { fmtClock, fmtDistance, fmtDuration, fmtTime } from "./format.js";
 import { confirmDialog } from "./dialogs.js";
 import { clearMaps, drawLegTracks, showTakeOvers, gpsMap, loadBasemaps, loadLegTracks, loadLocalMap, localMap, showLegTracks } from "./mapview.js";
@@ -55,6 +56,8 @@ export async function selectionChanged() {
   state.segments = [];
   state.tracks = {};
   state.labels = {};
+  state.shortLabels = {};
+  state.openTakeOver = null;
   clearMaps(state.selected.leg);
   if (!leg) {
     Collector.refresh();
@@ -83,11 +86,12 @@ export async function selectionChanged() {
 export async function loadSegments() {
   const leg = state.selected.leg;
   // Rows and their labels in one read: the server works on one request at a time per page.
-  const data = await api("GET", `legs/${leg}/segments/`, undefined, { root: CONFIG.guiApiRoot });
+  const data = take("segments", leg) ?? (await api("GET", `legs/${leg}/segments/`, undefined, { root: CONFIG.guiApiRoot }));
   if (leg !== state.selected.leg) return;
-  state.segments = data.segments;
-  state.labels = data.labels;
-  renderSegments();
+  state.segments = [];
+  state.labels = {};
+  state.shortLabels = {};
+  applyRows(data);
 }
 
 /* A segment event, and the answer of a segment write, carry the rows the change
@@ -96,22 +100,25 @@ export async function loadSegments() {
  * caller re-reads. */
 export function applySegments(e) {
   if (!e.segments || e.leg !== state.selected.leg) return false;
-  applyRows(e.segments, e.labels);
+  applyRows(e);
   return true;
 }
 
-function applyRows(rows, labels) {
-  rows.forEach(putSegment);
-  Object.assign(state.labels, labels);
+/* Rows with their labels and the leg's open take-over, as the server answers them. */
+function applyRows(answer) {
+  answer.segments.forEach(putSegment);
+  Object.assign(state.labels, answer.labels);
+  Object.assign(state.shortLabels, answer.short_labels);
+  state.openTakeOver = answer.open_take_over ?? null;
   renderSegments();
   drawTakeOvers();
 }
 
 /* A write through /gui/api/ answers with the row it wrote and every row it touched. */
-async function segmentWrite(path) {
+async function segmentWrite(path, body = {}) {
   const leg = state.selected.leg;
-  const answer = await api("POST", path, {}, { root: CONFIG.guiApiRoot });
-  if (leg === state.selected.leg) applyRows(answer.segments, answer.labels);
+  const answer = await api("POST", path, body, { root: CONFIG.guiApiRoot });
+  if (leg === state.selected.leg) applyRows(answer);
   return answer.segment;
 }
 
@@ -202,23 +209,40 @@ function openMaster() {
   return state.segments.find((s) => s.parent === null && s.is_open) || null;
 }
 
+/* Which robot this is, in every size: with two robots both may be on "Leg 1". */
+function whom() {
+  const [event, shift, leg] = ["event", "shift", "leg"].map(current);
+  if (!event || !shift || !leg) return "";
+  return `${vehicleName(shift.vehicle)} · ${event.location || `test event #${event.id}`} · Shift ${shift.number} · Leg ${leg.number}`;
+}
+
 export function renderMode() {
   const panel = $("#mode-panel");
   const m = openMaster();
   const mode = m ? m.segment_type : "none";
   panel.dataset.mode = mode;
+  $("#mode-whom").textContent = whom();
+  // A dead link must not look live: what the page knows is shown as what it was.
+  const lost = Live.lost();
+  panel.dataset.link = lost === null ? "live" : "lost";
+  if (lost !== null) {
+    $("#mode-name").textContent = `last known: ${m ? mode.toUpperCase() : "no open segment"}, ${lost} s ago`;
+    $("#mode-since").textContent = `${m ? `${segmentLabel(m.id)} · ` : ""}no word from the server, reconnecting`;
+    return;
+  }
   $("#mode-name").textContent = m ? mode.toUpperCase() : "No open segment";
   $("#mode-since").textContent = m ? `for ${fmtDuration(m.start, null)} · ${segmentLabel(m.id)}` : "";
 }
 
-/* Reasons belong to take-overs: the buttons only work with an ITO row selected. */
+/* Quick reasons annotate the leg's open take-over, which the server names;
+ * an earlier take-over gets its reason in its dialog. */
 function updateSegmentButtons() {
   const s = byId(state.segments, state.segment);
-  const ito = Boolean(s && s.parent !== null);
-  const why = s ? (ito ? "" : "Reasons can only be given to ITO rows.") : "Select an ITO row first.";
+  const target = state.openTakeOver;
+  $("#quick-target").textContent = target ? `Reason for ${shortLabel(target)}:` : "No open take-over";
   for (const b of $$("[data-quick], #reason-apply")) {
-    b.disabled = !CONFIG.canOperate || !ito;
-    b.title = why;
+    b.disabled = !CONFIG.canOperate || !target;
+    b.title = target ? `Give ${segmentLabel(target)} this reason` : "Reasons of earlier take-overs: Edit the row.";
   }
   $("#segment-end").disabled = !CONFIG.canOperate || !(s && s.is_open);
   $("#segment-edit").disabled = !s;
@@ -230,11 +254,9 @@ function requireSegment() {
 }
 
 async function setReason(key) {
-  const id = requireSegment();
-  // The answer is the changed row (an annotation touches no other): no re-read.
-  putSegment(await api("PATCH", `segments/${id}/`, { ito_reason: key }));
-  renderSegments();
-  notice(`Reason of ${segmentLabel(id)} set to ${reasonName(key)}.`);
+  // The server picks the take-over (the robot may have started a new one a moment ago).
+  const row = await segmentWrite(`legs/${state.selected.leg}/quick-reason/`, { reason: key });
+  notice(`Reason of ${segmentLabel(row.id)} set to ${reasonName(key)}.`);
 }
 
 $$("[data-quick]").forEach((b) => b.addEventListener("click", () => segmentAction(() => setReason(b.dataset.quick))));

@@ -24,6 +24,9 @@ export function saveUrl() {
   if (state.view) q.set("view", state.view);
   const next = q.toString() ? `?${q}` : location.pathname;
   if (next !== location.search) history.replaceState(null, "", next || location.pathname);
+  // The cockpit shown, for the server to open again at a bare address (a year).
+  const { event, shift, leg } = state.selected;
+  if (event && shift && leg) document.cookie = `${CONFIG.cockpitCookie}=${event}.${shift}.${leg}; path=/; max-age=31536000; SameSite=Lax`;
 }
 
 export const state = {
@@ -32,10 +35,12 @@ export const state = {
   segments: [],
   tracks: {},
   labels: {}, // segment id -> "Leg 2 · #7", from the server
+  shortLabels: {}, // segment id -> "#7", from the server
   shownLeg: undefined, // leg whose segments and tracks are drawn
   basemapsOf: undefined, // test event whose basemaps the switcher offers
   localMapOf: undefined, // shift whose map image and overlay are shown
   segment: null, // selected segment id
+  openTakeOver: null, // the take-over quick reasons annotate, as the server says
   view: fromUrl.view, // "fleet": every logging vehicle on one map; null: the cockpit
   catalogue: {},
   // The change feed's newest event when the page's first answers were read: the
@@ -47,7 +52,7 @@ export const byId = (rows, id) => rows.find((r) => r.id === id) || null;
 export const current = (level) => byId(state.rows[level], state.selected[level]);
 export const vehicleName = (id) => (byId(state.catalogue.vehicles || [], id) || {}).short_description || `vehicle ${id}`;
 export const segmentLabel = (id) => state.labels[id] || `segment ${id}`;
-export const shortLabel = (id) => (state.labels[id] || "").replace(/^Leg \d+ · /, "") || "…";
+export const shortLabel = (id) => state.shortLabels[id] || "…";
 export const reasonName = (key) => {
   const r = (state.catalogue.reasons || []).find((x) => x.key === key);
   return r ? r.short_description : key || "";

@@ -7,19 +7,23 @@ live updates are tested the way they happen in the field.
 """
 
 import io
+import itertools
 import os
 import shutil
 import signal
+import time
 
 import pytest
 from PIL import Image
 
+from tests.e2e.link import Link
 from tests.support.browser import (
     ARTIFACTS,
     Server,
     add_users,
     drop_database,
     fresh_database,
+    open_leg_code,
     system_chromium,
 )
 
@@ -97,6 +101,26 @@ def postgres_server(tmp_path_factory):
     srv.stop()
     _running_server = before
     drop_database(database)
+
+
+_numbers = itertools.count(1)
+
+
+@pytest.fixture
+def open_leg(server):
+    """A vehicle with an open test event, shift and leg, made in a separate process."""
+    key = f"rover-{next(_numbers)}-{int(time.time() * 1000) % 100000}"
+    server.python(open_leg_code(key))
+    return key
+
+
+@pytest.fixture
+def link(server):
+    """The server behind a link the test can cut or stall (tests/e2e/link.py);
+    pages opened at ``link.url`` reach the server only through it."""
+    proxy = Link(server)
+    yield proxy
+    proxy.close()
 
 
 @pytest.fixture

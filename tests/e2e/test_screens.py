@@ -62,6 +62,11 @@ def test_cockpit_fits_the_screen(browser, server, driven_leg, shot, screen):
     expect(selected).to_have_count(1)
     expect(selected.locator("td").first).to_have_text("#2.1")
     expect(page.locator("#mode-name")).to_have_text("AUTO")
+    # Which robot, event and shift this is, in the banner's first screen at every size.
+    whom = page.locator("#mode-whom")
+    expect(whom).to_have_text("Cockpit Rover · Cockpit field · Shift 1 · Leg 1")
+    box = whom.bounding_box()
+    assert box["y"] >= 0 and box["y"] + box["height"] <= page.viewport_size["height"]
     expect(page.locator("#timeline .bar")).to_have_count(3)
     expect(page.locator("#collector")).to_be_visible()
     page.wait_for_timeout(300)  # the map's fit animation
@@ -78,9 +83,9 @@ def test_cockpit_fits_the_screen(browser, server, driven_leg, shot, screen):
         for part in ("#segment-table tbody tr >> nth=0", "#collector"):
             assert page.locator(part).bounding_box()["y"] < height, part
 
-    # Reasons apply to take-overs only: with an AUTO row selected they are off.
-    expect(page.locator("[data-quick='safety']")).to_be_enabled()
-    page.locator("#segment-table tbody tr.auto").first.click()
+    # Quick reasons annotate the open take-over: in AUTO there is none, and the
+    # buttons say so whichever row is selected (an earlier one gets its reason in its dialog).
+    expect(page.locator("#quick-target")).to_have_text("No open take-over")
     expect(page.locator("[data-quick='safety']")).to_be_disabled()
     page.close()
 

@@ -2,13 +2,16 @@
 
 import json
 import re
+from datetime import timedelta
 from urllib.parse import quote
 
 import pytest
 from django.contrib.auth.models import Group, User
+from django.utils import timezone
 
 from events.models import Announcement, ItoReason, Performer, PoseSource
 from events.services import segments
+from rosbridge_app.models import Collector
 from rosbridge_app.services import collectors
 from telemetry.services import attachments, map_images, recording
 from tests.support.images import PNG, jpeg
@@ -297,8 +300,15 @@ def _config(page: str) -> dict:
     return json.loads(config.group(1))
 
 
-def _answers(page: str) -> dict:
-    return _config(page)["answers"]
+def _bootstrap(page: str) -> dict:
+    return _config(page)["bootstrap"]
+
+
+def _whole(client, path: str) -> list:
+    page_size = _config(client.get("/").content.decode())["pageSize"]
+    joiner = "&" if "?" in path else "?"
+    answer = client.get(f"{path}{joiner}page_size={page_size}").json()
+    return answer if isinstance(answer, list) else answer["results"]
 
 
 def test_the_page_carries_its_first_reads_as_the_api_answers_them(client, leg, other_leg):
@@ -307,30 +317,83 @@ def test_the_page_carries_its_first_reads_as_the_api_answers_them(client, leg, o
     member(client, "otto", "operator")
     shift = leg.shift
     url = f"/?event={shift.test_event_id}&shift={shift.pk}&leg={leg.pk}"
-    answers = _answers(client.get(url).content.decode())
-    assert set(answers) == {
-        "/api/ito-reasons/?page_size=5000",
-        "/api/vehicles/?page_size=5000",
-        "/api/test-events/?page_size=5000",
-        f"/api/shifts/?page_size=5000&test_event={shift.test_event_id}",
-        f"/api/legs/?page_size=5000&shift={shift.pk}",
-        f"/gui/api/legs/{leg.pk}/segments/",
+    pieces = _bootstrap(client.get(url).content.decode())
+    expected = {
+        "reasons": (None, _whole(client, "/api/ito-reasons/")),
+        "vehicles": (None, _whole(client, "/api/vehicles/")),
+        "event": (None, _whole(client, "/api/test-events/")),
+        "shift": (
+            shift.test_event_id,
+            _whole(client, f"/api/shifts/?test_event={shift.test_event_id}"),
+        ),
+        "leg": (shift.pk, _whole(client, f"/api/legs/?shift={shift.pk}")),
+        "segments": (leg.pk, client.get(f"/gui/api/legs/{leg.pk}/segments/").json()),
     }
-    for path, answer in answers.items():
-        assert answer == client.get(path).json(), path
-    assert len(answers[f"/gui/api/legs/{leg.pk}/segments/"]["segments"]) == 3
+    assert {name: (p["of"], p["data"]) for name, p in pieces.items()} == expected
+    assert len(pieces["segments"]["data"]["segments"]) == 3
     # The change feed's newest event then: the page's subscription catches up from it.
     newest = Announcement.objects.latest("id").pk
     assert _config(client.get(url).content.decode())["lastEventId"] == newest
+    # The compare page asks for whole lists the same way.
+    assert (
+        _config(client.get("/compare/").content.decode())["pageSize"]
+        == _config(client.get(url).content.decode())["pageSize"]
+    )
 
 
 def test_without_an_address_the_page_carries_the_logging_legs_reads(client, leg, vehicle):
-    collectors.heartbeat("field-1", vehicle=vehicle, logging=True, leg=leg)
     member(client, "vera", "viewer")
-    answers = _answers(client.get("/").content.decode())
-    assert f"/gui/api/legs/{leg.pk}/segments/" in answers
-    # A leg that is not the shift's is not answered: the page asks, and gets its 404.
-    wrong = _answers(client.get(f"/?event=1&shift={leg.shift_id}&leg=999999").content.decode())
-    assert not any("/gui/api/legs/" in path for path in wrong)
+    # A process's first page loads its modules, which can take longer than a
+    # collector stays online without a beat.
+    assert "segments" not in _bootstrap(client.get("/").content.decode())
+    collectors.heartbeat("field-1", vehicle=vehicle, logging=True, leg=leg)
+    pieces = _bootstrap(client.get("/").content.decode())
+    assert pieces["segments"]["of"] == leg.pk
+    # A leg that is not the shift's is not carried: the page asks, and gets its 404.
+    wrong = _bootstrap(client.get(f"/?event=1&shift={leg.shift_id}&leg=999999").content.decode())
+    assert "segments" not in wrong
     member(client, "nobody")
-    assert _answers(client.get("/").content.decode()) == {}
+    assert _bootstrap(client.get("/").content.decode()) == {}
+
+
+def _opening(client, **cookies) -> dict | None:
+    client.cookies.pop("ftt_cockpit", None)
+    for name, value in cookies.items():
+        client.cookies[name] = value
+    return _config(client.get("/").content.decode())["opening"]
+
+
+def test_a_bare_address_opens_the_last_cockpit_or_asks_which_robot(
+    client, leg, other_leg, vehicle, other_vehicle
+):
+    member(client, "otto", "operator")
+    assert _opening(client) is None
+    logging = {"field-1": (vehicle, leg)}
+
+    def opening(**cookies):
+        # Collectors beat right before each look: a quiet one is not logging now.
+        for name, (robot, into) in logging.items():
+            collectors.heartbeat(name, vehicle=robot, logging=True, leg=into)
+        return _opening(client, **cookies)
+
+    mine = {"event": leg.shift.test_event_id, "shift": leg.shift_id, "leg": leg.pk}
+    assert opening() == mine
+    # Two robots logging into two legs: the page asks which (the fleet view lists them).
+    logging["field-2"] = (other_vehicle, other_leg)
+    assert opening() == {"view": "fleet"}
+    # The cockpit this browser showed last wins, while its leg is there.
+    other = {"event": other_leg.shift.test_event_id, "shift": other_leg.shift_id}
+    other["leg"] = other_leg.pk
+    shown = "{event}.{shift}.{leg}".format(**other)
+    assert opening(ftt_cockpit=shown) == other
+    # A last cockpit that no longer fits (another shift's leg, garbage) is not opened.
+    wrong = f"{other['event']}.{leg.shift_id}.{other_leg.pk}"
+    assert opening(ftt_cockpit=wrong) == {"view": "fleet"}
+    assert opening(ftt_cockpit="1.2") == {"view": "fleet"}
+    # An address that names something opens that, whatever the cookie says.
+    page = client.get(f"/?event={leg.shift.test_event_id}")
+    assert _config(page.content.decode())["opening"] is None
+    # A robot that has gone quiet is not logging now: one leg left to open.
+    del logging["field-2"]
+    Collector.objects.filter(name="field-2").update(last_seen=timezone.now() - timedelta(hours=1))
+    assert opening() == mine

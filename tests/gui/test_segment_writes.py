@@ -1,10 +1,10 @@
 """The cockpit's segment writes answer with every row the change touched, as the
 REST list shows them, so the page redraws without reading the list again; the
-rules, roles and refusals are the REST actions' own."""
+rules, roles and refusals are the segment rules' own, as the REST actions answer them."""
 
 import pytest
 
-from events.models import Segment
+from events.models import Segment, SegmentType
 from events.services import segments
 from tests.support.modes import start_auto
 
@@ -37,6 +37,8 @@ def test_a_take_over_in_auto_answers_the_closed_auto_and_the_new_ito_rows(api_cl
     labels = client.get(f"/gui/api/legs/{leg.pk}/tracks/").json()["labels"]
     assert body["labels"] == {str(pk): labels[str(pk)] for pk in rows}
     assert body["labels"][str(reason.pk)] == f"Leg {leg.number} · #2.1"
+    assert body["short_labels"][str(reason.pk)] == "#2.1"
+    assert body["open_take_over"] == reason.pk
 
 
 def test_a_take_over_in_ito_answers_its_new_reason_under_the_open_master(api_client, leg):
@@ -80,3 +82,34 @@ def test_refusals_are_the_rest_actions_and_write_nothing(api_client, leg):
     assert wrong.status_code == 400 and "reason" in wrong.json()["errors"]
     assert client.post("/gui/api/segments/999999/close/", {}, format="json").status_code == 404
     assert Segment.objects.count() == count
+
+
+def test_a_quick_reason_annotates_the_open_take_over_whichever_is_selected(api_client, leg):
+    older = segments.new_manual_segment(leg)
+    segments.report_mode(leg, SegmentType.AUTO)
+    newer = segments.report_mode(leg, SegmentType.ITO).master.children.get()
+    client = api_client("operator")
+    answer = client.post(
+        f"/gui/api/legs/{leg.pk}/quick-reason/", {"reason": "safety"}, format="json"
+    )
+    assert answer.status_code == 200, answer.content
+    body = answer.json()
+    assert body["segment"]["id"] == newer.pk == body["open_take_over"]
+    assert body["segment"]["ito_reason"] == "safety"
+    assert body["short_labels"][str(newer.pk)] == "#3.1"
+    older.refresh_from_db()
+    assert older.ito_reason_id == "unassigned"
+    assert listed(client, leg)[newer.pk] == body["segment"]
+
+
+def test_a_quick_reason_without_an_open_take_over_is_refused_in_words(api_client, leg):
+    segments.report_mode(leg, SegmentType.AUTO)
+    client = api_client("operator")
+    url = f"/gui/api/legs/{leg.pk}/quick-reason/"
+    refused = client.post(url, {"reason": "safety"}, format="json")
+    assert refused.status_code == 409
+    assert "No take-over is open" in refused.json()["detail"]
+    missing = client.post(url, {}, format="json")
+    assert missing.status_code == 400 and "reason" in missing.json()["errors"]
+    assert api_client("viewer").post(url, {"reason": "safety"}, format="json").status_code == 403
+    assert client.get(f"/gui/api/legs/{leg.pk}/segments/").json()["open_take_over"] is None

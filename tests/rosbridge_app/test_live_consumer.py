@@ -253,3 +253,11 @@ async def test_browser_away_longer_than_the_outbox_keeps_is_told_to_reload(viewe
     reply = await communicator.receive_json_from(timeout=2)
     assert reply == {"type": "reset", "last_id": newest}
     await communicator.disconnect()
+
+
+async def test_an_idle_socket_hears_a_heartbeat_it_can_judge_the_link_by(viewer, settings):
+    settings.FTT_LIVE_HEARTBEAT_MS = 100
+    communicator, _ = await connect(viewer)
+    beats = [await communicator.receive_json_from(timeout=1) for _ in range(3)]
+    assert beats == [{"type": "heartbeat", "stale_after": 0.3}] * 3
+    await communicator.disconnect()

@@ -38,7 +38,7 @@ def test_many_switches_on_two_legs_cost_as_few_queries_as_one(leg, shift):
     switch(other, "ito auto ito auto ito auto")
     many = segment_events(start)
     assert len(few) == 1 and len(many) >= 12
-    assert queries_to_attach(many) == queries_to_attach(few) == 3
+    assert queries_to_attach(many) == queries_to_attach(few) == 4
     # Each event still brings what it changed: the new master, the master it
     # closed and the reason under that one, named as the report names them.
     last = many[-1]
