@@ -15,6 +15,7 @@ from django.db import transaction
 from django.utils import timezone
 
 from common.errors import RuleViolation
+from common.retries import stored_row
 from events import rules
 from events.feed import announce_and_return
 from events.models import ItoReason, Leg, Segment, SegmentType
@@ -167,7 +168,7 @@ def report_mode(
     """
     if mode not in MODES:
         raise RuleViolation({"mode": [f"Mode must be one of {', '.join(MODES)}, not '{mode}'."]})
-    if uid is not None and (existing := Segment.objects.filter(uid=uid).first()):
+    if existing := stored_row(Segment, uid, leg_id=leg.pk):
         return ModeReport(existing, changed=False)
     leg = lock(leg)
     at = instant(at)

@@ -72,3 +72,28 @@ def test_another_vehicles_uid_is_refused_without_its_row(
     # Its own retry is answered with the row stored first.
     again = robot_client(other_vehicle).post(url, body(theirs, uid), format=fmt)
     assert again.status_code == 200 and again.json()["id"] == first.json()["id"]
+
+
+def test_another_vehicles_segment_uid_sent_to_mode_is_refused_without_its_row(
+    robot_client, vehicle, other_vehicle, leg, other_leg
+):
+    uid = str(uuid.uuid4())
+    first = robot_client(other_vehicle).post(
+        f"/api/legs/{other_leg.pk}/mode/", {"mode": "auto", "uid": uid}, format="json"
+    )
+    assert first.status_code in (200, 201), first.content
+    theirs = first.json()
+
+    answer = robot_client(vehicle).post(
+        f"/api/legs/{leg.pk}/mode/", {"mode": "auto", "uid": uid}, format="json"
+    )
+
+    assert answer.status_code == 409, answer.content
+    assert "uid" in answer.json()["errors"]
+    assert str(other_leg.pk) not in str(answer.json().get("leg", ""))
+    assert leg.segments.count() == 0
+    again = robot_client(other_vehicle).post(
+        f"/api/legs/{other_leg.pk}/mode/", {"mode": "auto", "uid": uid}, format="json"
+    )
+    assert again.status_code == 200
+    assert {**again.json(), "changed": True} == {**theirs, "changed": True}
