@@ -48,6 +48,8 @@ class LegacyView(APIView):
     permission_classes = [RobotsOnly]
     # The node sends JSON under any Content-Type; fields.body_of reads it.
     parser_classes = []
+    # The original's API, documented in docs/api.md; not part of FTT's OpenAPI schema.
+    schema = None
 
     def get_exception_handler(self):
         return refusal
