@@ -15,7 +15,11 @@ import tempfile
 
 # Every worker writes its metric values here; /metrics adds them up
 # (ftt_site.metrics). Set before the application, and prometheus_client, load.
-os.environ["PROMETHEUS_MULTIPROC_DIR"] = tempfile.mkdtemp(prefix="ftt-metrics-")
+# In memory where there is /dev/shm: the values are memory-mapped files written
+# at every request.
+os.environ["PROMETHEUS_MULTIPROC_DIR"] = tempfile.mkdtemp(
+    prefix="ftt-metrics-", dir="/dev/shm" if os.path.isdir("/dev/shm") else None
+)
 
 bind = os.environ.get("FTT_BIND", "127.0.0.1:8000")
 workers = int(os.environ.get("FTT_WEB_WORKERS", "2"))
