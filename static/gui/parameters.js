@@ -87,9 +87,10 @@ const Parameters = {
         if (value !== row.value) changes[name] = value;
       }
       if (!Object.keys(changes).length) return showError(new ApiError("Nothing was changed."), errorBox);
+      // The robot's answer replaces this toast; it may come before the request's own reply.
+      notice("Sending the parameters to the robot…");
       try {
         await Collector.command("set_parameters", { parameters: changes });
-        notice("Parameters sent to the robot.");
       } catch (err) {
         showError(err, errorBox);
       }
@@ -99,9 +100,9 @@ const Parameters = {
     save.textContent = "Save to the node's YAML file";
     save.addEventListener("click", async () => {
       errorBox.hidden = true;
+      notice("Asking the robot to save its parameters…");
       try {
         await Collector.command("save_parameters");
-        notice("Asked the robot to save its parameters.");
       } catch (err) {
         showError(err, errorBox);
       }
