@@ -10,7 +10,7 @@ class EventsConfig(AppConfig):
         from django.contrib.auth import get_user_model
 
         from events import checks  # noqa: F401  (registers system checks)
-        from events.models import RobotAccount, Segment, Vehicle
+        from events.models import Leg, RobotAccount, Segment, Vehicle
         from events.selectors.robots import forget_bindings
         from events.selectors.segments import forget_pose_targets
 
@@ -19,5 +19,7 @@ class EventsConfig(AppConfig):
             post_save.connect(forget_bindings, sender=sender, weak=False)
             post_delete.connect(forget_bindings, sender=sender, weak=False)
         m2m_changed.connect(forget_bindings, sender=RobotAccount.vehicles.through, weak=False)
-        post_save.connect(forget_pose_targets, sender=Segment, weak=False)
-        post_delete.connect(forget_pose_targets, sender=Segment, weak=False)
+        # A pose's target carries its leg (the leg's default pose source).
+        for sender in (Segment, Leg):
+            post_save.connect(forget_pose_targets, sender=sender, weak=False)
+            post_delete.connect(forget_pose_targets, sender=sender, weak=False)

@@ -53,7 +53,7 @@ def test_a_key_and_a_pair_that_is_one_character(api_client, leg):
 def test_a_robots_single_pose_through_the_production_route(robot_client, vehicle, leg):
     master = segments.report_mode(leg, SegmentType.AUTO).master
     robot = robot_client(vehicle)
-    token = robot._credentials["HTTP_AUTHORIZATION"].split()[1]
+    token = robot.token
     pose = {"segment": master.pk, "longitude": 7.1, "latitude": 50.2, "uid": str(uuid.uuid4())}
 
     async def post():

@@ -9,6 +9,7 @@ import pytest
 from django.utils import timezone
 
 from common.errors import RuleViolation
+from events.models import PoseSource
 from events.services import segments
 from telemetry.models import Image, LocalPose, MapImage, Pose
 from telemetry.services import attachments, map_images, recording
@@ -32,6 +33,15 @@ def test_pose_keeps_altitude_fix_quality_accuracy_and_default_pose_source(ito, p
     pose = Pose.objects.get()
     assert (pose.altitude, pose.fix_status, pose.horizontal_accuracy) == (123.4, 2, 0.02)
     assert pose.pose_source == pose_source
+
+
+def test_a_single_pose_takes_the_legs_default_pose_source_as_it_is_now(ito, pose_source):
+    recording.store_pose(ito.pk, recording.GpsFix(7.0, 50.0))
+    rtk = PoseSource.objects.create(key="rtk", short_description="RTK base 2")
+    ito.leg.default_pose_source = rtk
+    ito.leg.save(update_fields=["default_pose_source"])
+    recording.store_pose(ito.pk, recording.GpsFix(7.0, 50.1))
+    assert [p.pose_source for p in Pose.objects.order_by("id")] == [pose_source, rtk]
 
 
 def test_a_batch_keeps_every_value_exactly_including_the_missing_ones(ito):
