@@ -6,11 +6,12 @@ from datetime import UTC
 
 import django_filters as filters
 from django import forms
-from django.contrib.gis.geos import Polygon
+from django.db.models import Q
 from django_filters.fields import IsoDateTimeField
 from rest_framework import serializers
 from rest_framework_gis.filters import InBBoxFilter
 
+from common.areas import AreaError, area_from_box, area_from_text
 from events.models import Leg, Note, Segment, SegmentType, Shift, TestEvent
 
 # Ids beyond this cannot exist; rejecting them early keeps huge numbers away from the database.
@@ -120,6 +121,30 @@ class LegFilter(OpenStateFilterSet):
         time_fields = ["start", "end", "modified"]
 
 
+class AreaField(forms.CharField):
+    """A GeoJSON or WKT polygon, cut at the antimeridian (common.areas)."""
+
+    def to_python(self, value):
+        value = super().to_python(value)
+        if not value:
+            return None
+        try:
+            return area_from_text(value)
+        except AreaError as error:
+            raise forms.ValidationError(str(error), code="invalid") from None
+
+
+class AreaFilter(filters.Filter):
+    """Rows whose point lies inside the area or on its edge."""
+
+    field_class = AreaField
+
+    def filter(self, qs, value):
+        if value is None:
+            return qs
+        return qs.filter(**{f"{self.field_name}__intersects": value})
+
+
 class SegmentFilter(OpenStateFilterSet):
     leg = IdFilter(field_name="leg_id")
     shift = IdFilter(field_name="leg__shift_id")
@@ -131,11 +156,28 @@ class SegmentFilter(OpenStateFilterSet):
     mode = filters.ChoiceFilter(
         field_name="segment_type_id", choices=[(SegmentType.ITO, "ITO"), (SegmentType.AUTO, "AUTO")]
     )
+    vehicle = IdFilter(field_name="leg__shift__vehicle_id")
+    reason = filters.CharFilter(
+        method="filter_reason", label="take-over reason key (of the reason, or of its take-over)"
+    )
+    version = filters.CharFilter(
+        field_name="leg__shift__test_event__version", label="software version of the test event"
+    )
+    within = AreaFilter(
+        field_name="start_position",
+        label="where the segment started: a GeoJSON or WKT polygon (may cross ±180°)",
+    )
 
     class Meta:
         model = Segment
         fields = []
         time_fields = ["start", "end", "robot_stamp", "modified"]
+
+    def filter_reason(self, queryset, name, value):
+        with_reason = Segment.objects.filter(ito_reason__key=value)
+        return queryset.filter(
+            Q(pk__in=with_reason.values("pk")) | Q(pk__in=with_reason.values("parent_id"))
+        )
 
 
 class NoteFilter(TimeRangeFilterSet):
@@ -163,11 +205,17 @@ class BBoxFilter(InBBoxFilter):
             raise serializers.ValidationError({self.bbox_param: [message]}) from None
         if len(values) != 4 or not all(math.isfinite(v) for v in values):
             raise serializers.ValidationError({self.bbox_param: [message]})
-        west, south, east, north = values
-        longitudes_ok = all(-180 <= v <= 180 for v in (west, east))
-        latitudes_ok = all(-90 <= v <= 90 for v in (south, north))
-        if not (longitudes_ok and latitudes_ok):
-            raise serializers.ValidationError({self.bbox_param: [message]})
-        bbox = Polygon.from_bbox((west, south, east, north))
-        bbox.srid = 4326
-        return bbox
+        try:
+            # west > east: a box across the antimeridian.
+            return area_from_box(*values)
+        except AreaError as error:
+            raise serializers.ValidationError({self.bbox_param: [f"{message} {error}"]}) from None
+
+    def filter_queryset(self, request, queryset, view):
+        # Points on the box's edge count, and a box cut at ±180° is two boxes:
+        # the library's "contained" would test the bounding box of both.
+        field = getattr(view, "bbox_filter_field", None)
+        area = self.get_filter_bbox(request) if field else None
+        if area is None:
+            return queryset
+        return queryset.filter(**{f"{field}__intersects": area})

@@ -2,7 +2,12 @@
 
 from django.http import Http404
 from django_filters.rest_framework import DjangoFilterBackend
-from drf_spectacular.utils import OpenApiResponse, extend_schema, extend_schema_view
+from drf_spectacular.utils import (
+    OpenApiParameter,
+    OpenApiResponse,
+    extend_schema,
+    extend_schema_view,
+)
 from rest_framework import status
 from rest_framework.decorators import action
 from rest_framework.exceptions import NotFound
@@ -16,6 +21,7 @@ from events.api.filters import (
     ShiftFilter,
     TestEventFilter,
 )
+from events.api.found_files import KINDS, found_file
 from events.api.viewsets import ServiceBaseViewSet, ServiceUpdateMixin, ServiceViewSet
 from events.models import (
     ItoReason,
@@ -32,6 +38,7 @@ from events.models import (
     Weather,
 )
 from events.selectors import logs as log_selectors
+from events.selectors.found_segments import found_rows
 from events.services import configuration, logs, notes, segments
 
 NO_BODY = {"request": None}
@@ -257,6 +264,17 @@ class SegmentViewSet(ServiceUpdateMixin, ServiceBaseViewSet):
     def close(self, request, pk=None):
         """Closing a master also closes its children; closing a child ends only that reason."""
         return self.respond(segments.close_segment(self.get_object()))
+
+    @extend_schema(
+        parameters=[OpenApiParameter("as", str, enum=KINDS, description="file kind (geojson)")],
+        responses={200: OpenApiResponse(description="GeoJSON FeatureCollection or CSV")},
+    )
+    @action(detail=False, methods=["get"])
+    def found(self, request):
+        """Every segment the list's filters find (``within``, ``in_bbox``, ``reason``,
+        ``vehicle``, ``version``, times), unpaged, as a GeoJSON or CSV file."""
+        rows = found_rows(self.filter_queryset(self.get_queryset()))
+        return found_file(rows, request.query_params.get("as", "geojson"))
 
     @extend_schema(request=s.ChildSerializer, responses={201: s.SegmentSerializer})
     @action(detail=True, methods=["post"])

@@ -1,0 +1,60 @@
+"""The segments a search found, as a GeoJSON or CSV download."""
+
+import io
+import json
+
+from django.http import HttpResponse
+from rest_framework.exceptions import ValidationError
+
+from common.spreadsheet import SafeWriter
+from events.selectors.found_segments import COLUMNS, MAX_FOUND
+
+KINDS = ("geojson", "csv")
+
+
+def found_file(rows: list[dict], kind: str) -> HttpResponse:
+    if kind not in KINDS:
+        raise ValidationError({"as": [f"Choose one of: {', '.join(KINDS)}."]})
+    if len(rows) > MAX_FOUND:
+        message = f"More than {MAX_FOUND} segments found; narrow the search (area, time, vehicle)."
+        raise ValidationError({"detail": [message]})
+    if kind == "csv":
+        return _csv(rows)
+    return _geojson(rows)
+
+
+def _geojson(rows) -> HttpResponse:
+    features = [
+        {
+            "type": "Feature",
+            "id": row["id"],
+            "geometry": None
+            if row["longitude"] is None
+            else {"type": "Point", "coordinates": [row["longitude"], row["latitude"]]},
+            "properties": {
+                k: _text(row[k]) for k in COLUMNS if k not in ("id", "longitude", "latitude")
+            },
+        }
+        for row in rows
+    ]
+    body = json.dumps({"type": "FeatureCollection", "features": features}, ensure_ascii=False)
+    return _download(body, "application/geo+json", "segments.geojson")
+
+
+def _csv(rows) -> HttpResponse:
+    out = io.StringIO()
+    writer = SafeWriter(out)
+    writer.writerow(COLUMNS)
+    for row in rows:
+        writer.writerow([_text(row[k]) for k in COLUMNS])
+    return _download(out.getvalue(), "text/csv; charset=utf-8", "segments.csv")
+
+
+def _text(value):
+    return value.isoformat() if hasattr(value, "isoformat") else value
+
+
+def _download(body: str, content_type: str, name: str) -> HttpResponse:
+    response = HttpResponse(body, content_type=content_type)
+    response["Content-Disposition"] = f'attachment; filename="{name}"'
+    return response

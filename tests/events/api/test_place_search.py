@@ -1,0 +1,134 @@
+"""Where did it fail: take-overs found by place (polygon, box, across ±180°, with
+holes), reason, vehicle and version, as a list, GeoJSON and CSV, on both databases."""
+
+import csv
+import io
+import json
+
+import pytest
+
+from common import roles
+from events.models import SegmentType, Vehicle
+from events.services import logs, segments
+from events.services.segments import GpsPosition
+
+SQUARE = [[7.0, 50.0], [8.0, 50.0], [8.0, 51.0], [7.0, 51.0], [7.0, 50.0]]
+HOLE = [[7.4, 50.4], [7.6, 50.4], [7.6, 50.6], [7.4, 50.6], [7.4, 50.4]]
+# Drawn eastwards over the antimeridian, as a map that wraps lets one draw it.
+ACROSS = [[175.0, -10.0], [185.0, -10.0], [185.0, 10.0], [175.0, 10.0], [175.0, -10.0]]
+
+
+@pytest.fixture
+def take_overs(leg):
+    """Take-overs at named places, each reason 'safety' except 'edge' ('planner')."""
+    places = {
+        "inside": (7.5, 50.5),
+        "edge": (8.0, 50.25),
+        "corner": (7.0, 51.0),
+        "outside": (8.1, 50.5),
+        "in_hole_ring": (7.3, 50.5),
+        "east_of_180": (179.5, 0.0),
+        "west_of_180": (-179.5, 0.0),
+        "far_east": (170.0, 0.0),
+        "far_west": (-170.0, 0.0),
+    }
+    found = {}
+    for name, (lon, lat) in places.items():
+        segments.report_mode(leg, SegmentType.AUTO)
+        master = segments.report_mode(leg, SegmentType.ITO, gps=GpsPosition(lon, lat)).master
+        child = master.children.get()
+        segments.annotate_segment(child, ito_reason="planner" if name == "edge" else "safety")
+        found[name] = master.pk
+    return found
+
+
+@pytest.fixture
+def search(api_client):
+    client = api_client(roles.VIEWER)
+
+    def names(take_overs, **query):
+        response = client.get("/api/segments/", {"master": "true", "mode": "ito", **query})
+        assert response.status_code == 200, response.content
+        ids = {row["id"] for row in response.json()["results"]}
+        return sorted(name for name, pk in take_overs.items() if pk in ids)
+
+    return names
+
+
+def polygon(*rings):
+    return json.dumps({"type": "Polygon", "coordinates": list(rings)})
+
+
+def test_a_polygon_finds_the_take_overs_inside_and_on_its_edge(search, take_overs):
+    assert search(take_overs, within=polygon(SQUARE)) == [
+        "corner",
+        "edge",
+        "in_hole_ring",
+        "inside",
+    ]
+
+
+def test_a_hole_in_the_polygon_is_left_out(search, take_overs):
+    assert search(take_overs, within=polygon(SQUARE, HOLE)) == ["corner", "edge", "in_hole_ring"]
+
+
+def test_areas_across_the_antimeridian(search, take_overs):
+    expected = ["east_of_180", "west_of_180"]
+    assert search(take_overs, within=polygon(ACROSS)) == expected
+    assert search(take_overs, in_bbox="175,-10,-175,10") == expected
+    # The same area as a GeoJSON Feature and as WKT.
+    feature = {"type": "Feature", "geometry": json.loads(polygon(ACROSS)), "properties": {}}
+    assert search(take_overs, within=json.dumps(feature)) == expected
+    wkt = "POLYGON((175 -10, 185 -10, 185 10, 175 10, 175 -10))"
+    assert search(take_overs, within=wkt) == expected
+
+
+def test_place_combines_with_reason_vehicle_and_version(search, take_overs, leg):
+    area = polygon(SQUARE)
+    assert search(take_overs, within=area, reason="planner") == ["edge"]
+    assert search(take_overs, within=area, reason="safety") == ["corner", "in_hole_ring", "inside"]
+    assert search(take_overs, within=area, vehicle=leg.shift.vehicle_id) != []
+    other = Vehicle.objects.create(key="other", short_description="Other robot")
+    assert search(take_overs, within=area, vehicle=other.pk) == []
+    logs.update_test_event(leg.shift.test_event, version="2.3.1")
+    assert search(take_overs, within=area, version="2.3.1", reason="planner") == ["edge"]
+    assert search(take_overs, within=area, version="2.4") == []
+
+
+@pytest.mark.parametrize(
+    "bad, words",
+    [
+        ("nonsense", "GeoJSON or WKT polygon"),
+        (json.dumps({"type": "Point", "coordinates": [7, 50]}), "polygon, not a Point"),
+        (polygon([[7, 50], [8, 51], [8, 50], [7, 51], [7, 50]]), "not a valid polygon"),
+        (polygon([[7, 95], [8, 95], [8, 96], [7, 95]]), "within ±90°"),
+    ],
+)
+def test_a_bad_area_is_a_field_message(api_client, db, bad, words):
+    response = api_client(roles.VIEWER).get("/api/segments/", {"within": bad})
+    assert response.status_code == 400
+    assert words in " ".join(response.json()["errors"]["within"])
+
+
+def test_found_take_overs_download_as_geojson_and_csv(api_client, take_overs):
+    client = api_client(roles.VIEWER)
+    query = {"master": "true", "mode": "ito", "within": polygon(SQUARE, HOLE)}
+    geo = client.get("/api/segments/found/", query)
+    assert geo.status_code == 200 and geo["Content-Type"] == "application/geo+json"
+    features = json.loads(geo.content)["features"]
+    by_id = {f["id"]: f for f in features}
+    assert set(by_id) == {take_overs[n] for n in ("corner", "edge", "in_hole_ring")}
+    assert by_id[take_overs["edge"]]["geometry"]["coordinates"] == [8.0, 50.25]
+    assert by_id[take_overs["edge"]]["properties"]["reason"] == "planner"
+    assert by_id[take_overs["edge"]]["properties"]["mode"] == "ITO"
+
+    sheet = client.get("/api/segments/found/", {**query, "as": "csv"})
+    assert sheet.status_code == 200
+    rows = list(csv.DictReader(io.StringIO(sheet.content.decode())))
+    assert {int(r["id"]) for r in rows} == set(by_id)
+    edge = next(r for r in rows if int(r["id"]) == take_overs["edge"])
+    assert (float(edge["longitude"]), float(edge["latitude"])) == (8.0, 50.25)
+    assert edge["label"].startswith("Leg 1 · #")
+
+    wrong = client.get("/api/segments/found/", {**query, "as": "kml"})
+    assert wrong.status_code == 400 and "geojson" in wrong.json()["errors"]["as"][0]
