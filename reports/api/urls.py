@@ -5,6 +5,7 @@ from reports.api import views
 urlpatterns = [
     path("", views.ReportListView.as_view(), name="report-list"),
     path("compare/", views.ComparisonView.as_view(), name="report-compare"),
+    path("routes/", views.RouteComparisonView.as_view(), name="report-routes"),
     path("choices/", views.ReportChoicesView.as_view(), name="report-choices"),
     path("<int:pk>/", views.ReportDetailView.as_view(), name="report-detail"),
     path("<int:pk>/pdf/", views.ReportPdfView.as_view(), name="report-pdf"),

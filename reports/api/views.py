@@ -13,13 +13,14 @@ from rest_framework.views import APIView
 
 from common import roles
 from common.api.permissions import RolePermission
-from events.models import TestEvent
+from events.models import Leg, TestEvent
 from reports.api.serializers import ReportRequestSerializer, ReportSerializer
 from reports.documents.options import FULL, LEVELS
 from reports.models import Report
 from reports.selectors import exports
 from reports.selectors.comparison import compare
 from reports.selectors.reports import reports_of
+from reports.selectors.routes import DEFAULT_THRESHOLD, compare_routes, leg_route
 from reports.selectors.statistics import event_statistics
 from reports.services.generation import (
     COMPARE,
@@ -65,6 +66,41 @@ class ComparisonView(APIView):
         if len(ids) < 2 or not all(i.isdigit() for i in ids):
             raise ValidationError({"test_event": ["Give at least two test event ids (numbers)."]})
         return Response(compare(_events([int(i) for i in ids], "test_event"), _mode(request)))
+
+
+class RouteComparisonView(APIView):
+    """Driven routes side by side (?leg=1&leg=2): per pair, each route's deviation
+    from the other (metres: mean, 95th percentile, maximum, stretches beyond
+    ``threshold``) and the discrete Fréchet distance."""
+
+    permission_classes = [RolePermission]
+    read_role = roles.VIEWER
+
+    @extend_schema(
+        parameters=[
+            OpenApiParameter("leg", int, many=True),
+            OpenApiParameter("threshold", float, description="metres (default 5)"),
+        ],
+        responses={200: dict},
+    )
+    def get(self, request):
+        ids = request.query_params.getlist("leg")
+        if len(ids) < 2 or not all(i.isdigit() for i in ids):
+            raise ValidationError({"leg": ["Give at least two leg ids (numbers)."]})
+        legs = {leg.pk: leg for leg in Leg.objects.filter(pk__in=[int(i) for i in ids])}
+        missing = [i for i in ids if int(i) not in legs]
+        if missing:
+            raise ValidationError({"leg": [f"No leg with id {missing[0]}."]})
+        try:
+            threshold = float(request.query_params.get("threshold", DEFAULT_THRESHOLD))
+        except ValueError:
+            threshold = -1.0
+        if not 0 < threshold < 1e6:
+            raise ValidationError({"threshold": ["Give the threshold in metres, above 0."]})
+        try:
+            return Response(compare_routes([leg_route(legs[int(i)]) for i in ids], threshold))
+        except ValueError as error:
+            raise ValidationError({"leg": [str(error)]}) from None
 
 
 def _events(ids: list[int], field: str) -> list[TestEvent]:
