@@ -439,3 +439,6 @@ class NoteAdmin(ServiceDeleteMixin, admin.ModelAdmin):
     def save_model(self, request, obj, form, change):
         # The service stamps "edited" and tells the live map, as for API edits.
         notes.edit_note(obj, text=form.cleaned_data["text"], by=request.user)
+
+
+from events import test_plan_admin  # noqa: E402,F401  (registers the test plan pages)

@@ -4,10 +4,13 @@ from events.models.feed import Announcement
 from events.models.hierarchy import Leg, Segment, Shift, TestEvent
 from events.models.notes import Note
 from events.models.robots import RobotAccount
+from events.models.test_plans import Criterion, Judgement, TestCase
 
 __all__ = [
     "Announcement",
+    "Criterion",
     "ItoReason",
+    "Judgement",
     "Leg",
     "Note",
     "Performer",
@@ -16,6 +19,7 @@ __all__ = [
     "RobotAccount",
     "Segment",
     "SegmentType",
+    "TestCase",
     "Shift",
     "TestEvent",
     "Vehicle",

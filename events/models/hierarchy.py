@@ -147,6 +147,14 @@ class Leg(LogEntry):
         blank=True,
         help_text="Where the robot's recording (bag) of this leg is.",
     )
+    test_case = models.ForeignKey(
+        "events.TestCase",
+        on_delete=models.SET_NULL,
+        null=True,
+        blank=True,
+        related_name="legs",
+        help_text="The planned trial of the test event that this leg drives.",
+    )
 
     class Meta:
         ordering = ["-start", "-id"]

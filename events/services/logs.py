@@ -3,6 +3,7 @@
 import uuid
 from datetime import datetime
 
+from django.core.exceptions import ValidationError
 from django.db import transaction
 from django.dispatch import Signal
 
@@ -32,7 +33,7 @@ SHIFT_FIELDS = (
     "vehicle",
     "note",
 )
-LEG_FIELDS = ("weather", "default_pose_source", "note", "recording")
+LEG_FIELDS = ("weather", "default_pose_source", "note", "recording", "test_case")
 
 # Sent inside the closing transaction, before anything is closed, with the
 # legs that an explicit "end" closes (``legs``: a queryset of open legs).  The
@@ -191,12 +192,14 @@ def create_leg(*, shift: Shift, uid=None, at: datetime | None = None, **fields) 
     for open_leg in rules.open_legs_of_shift(shift.pk).select_for_update():
         _close_leg(open_leg, max(at, open_leg.start))
     check_fields(fields, LEG_FIELDS)
+    _require_own_test_case(shift, fields)
     return _create(Leg, uid, shift=shift, number=next_number(shift.legs), start=at, **fields)
 
 
 @transaction.atomic
 def update_leg(leg: Leg, **fields) -> Leg:
     leg = lock(leg)
+    _require_own_test_case(leg.shift, fields)
     apply_fields(leg, fields, LEG_FIELDS)
     leg.save(update_fields=list(fields))
     return announce_and_return(leg)
@@ -210,6 +213,14 @@ def close_leg(leg: Leg, at: datetime | None = None) -> Leg:
     require_not_before(leg, at, str(leg))
     _announce_closing(Leg.objects.filter(pk=leg.pk))
     return announce_and_return(_close_leg(leg, at))
+
+
+def _require_own_test_case(shift: Shift, fields: dict) -> None:
+    case = fields.get("test_case")
+    if case is not None and case.test_event_id != shift.test_event_id:
+        raise ValidationError(
+            {"test_case": [f"Test case {case.key} belongs to another test event."]}
+        )
 
 
 def _close_leg(leg: Leg, at: datetime) -> Leg:

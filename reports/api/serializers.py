@@ -1,5 +1,6 @@
 from rest_framework import serializers
 
+from events.models import Criterion, Leg
 from reports.documents.options import MAX_TIMELINE_HOURS
 from reports.figures.tiles import MAX_ZOOM
 from reports.models import Report
@@ -96,3 +97,12 @@ class ReportFormSerializer(serializers.Serializer):
     max_zoom = serializers.IntegerField(
         label=f"Closest map zoom (1–{MAX_ZOOM}, optional)", required=False
     )
+
+
+class JudgementSerializer(serializers.Serializer):
+    criterion = serializers.PrimaryKeyRelatedField(queryset=Criterion.objects.all())
+    leg = serializers.PrimaryKeyRelatedField(
+        queryset=Leg.objects.all(), required=False, allow_null=True
+    )
+    passed = serializers.BooleanField()
+    note = serializers.CharField(required=False, allow_blank=True, max_length=2000)

@@ -3,6 +3,8 @@
 Reading needs the viewer role; requesting a report needs operator.
 """
 
+import json
+
 from django.http import FileResponse, HttpResponse
 from django.shortcuts import get_object_or_404
 from drf_spectacular.utils import OpenApiParameter, extend_schema
@@ -14,7 +16,12 @@ from rest_framework.views import APIView
 from common import roles
 from common.api.permissions import RolePermission
 from events.models import Leg, TestEvent
-from reports.api.serializers import ReportRequestSerializer, ReportSerializer
+from events.services.test_plans import judge
+from reports.api.serializers import (
+    JudgementSerializer,
+    ReportRequestSerializer,
+    ReportSerializer,
+)
 from reports.documents.options import FULL, LEVELS
 from reports.models import Report
 from reports.selectors import exports
@@ -22,6 +29,7 @@ from reports.selectors.comparison import compare
 from reports.selectors.reports import reports_of
 from reports.selectors.routes import DEFAULT_THRESHOLD, compare_routes, leg_route
 from reports.selectors.statistics import event_statistics
+from reports.selectors.test_plans import test_plan, test_plan_csv
 from reports.services.generation import (
     COMPARE,
     request_comparison,
@@ -49,6 +57,42 @@ class StatisticsView(APIView):
     def get(self, request, test_event_id: int):
         event = get_object_or_404(TestEvent, pk=test_event_id)
         return Response(event_statistics(event, _mode(request)).as_dict())
+
+
+class TestPlanView(APIView):
+    """The test plan's verdicts: each test case, its criteria per case and per leg
+    (pass, fail, not yet, needs a judgement), its progress, and the unplanned legs."""
+
+    permission_classes = [RolePermission]
+    read_role = roles.VIEWER
+
+    @extend_schema(parameters=[MODE_PARAM], responses={200: dict})
+    def get(self, request, test_event_id: int):
+        event = get_object_or_404(TestEvent, pk=test_event_id)
+        return Response(test_plan(event, _mode(request)).as_dict())
+
+
+class JudgementView(APIView):
+    """A person's verdict on a criterion judged by a person: {criterion, leg (optional,
+    else the whole case), passed, note}."""
+
+    permission_classes = [RolePermission]
+    read_role = roles.VIEWER
+    write_role = roles.OPERATOR
+
+    @extend_schema(request=JudgementSerializer, responses={201: dict})
+    def post(self, request):
+        body = JudgementSerializer(data=request.data)
+        body.is_valid(raise_exception=True)
+        judgement = judge(**body.validated_data, by=request.user)
+        return Response(
+            {
+                "criterion": judgement.criterion_id,
+                "leg": judgement.leg_id,
+                "passed": judgement.passed,
+            },
+            status=status.HTTP_201_CREATED,
+        )
 
 
 class ComparisonView(APIView):
@@ -195,6 +239,8 @@ class ExportView(APIView):
         "segments.csv": "text/csv; charset=utf-8",
         "tracks.geojson": "application/geo+json",
         "tracks.gpx": "application/gpx+xml",
+        "test-plan.csv": "text/csv; charset=utf-8",
+        "test-plan.json": "application/json",
     }
 
     @extend_schema(parameters=[MODE_PARAM], responses={(200, "text/csv"): bytes})
@@ -204,6 +250,10 @@ class ExportView(APIView):
             body = exports.segments_csv(event, _mode(request))
         elif filename == "tracks.geojson":
             body = exports.tracks_geojson_text(event)
+        elif filename == "test-plan.csv":
+            body = test_plan_csv(test_plan(event, _mode(request)))
+        elif filename == "test-plan.json":
+            body = json.dumps(test_plan(event, _mode(request)).as_dict(), ensure_ascii=False)
         else:
             body = exports.tracks_gpx(event)
         response = HttpResponse(body, content_type=self.formats[filename])

@@ -26,6 +26,7 @@ from reports.selectors.statistics import (
     Figures,
     event_statistics,
 )
+from reports.selectors.test_plans import test_plan
 from telemetry.selectors.recordings import recordings_by_master, summary
 from telemetry.selectors.tracks import GAP_SECONDS, GPS, LOCAL
 
@@ -94,6 +95,7 @@ class Sections:
             shift_sections.append(self._shift(shift, stats.by_shift.get(shift.id), runs, tick))
         return {
             "title": self._title(),
+            "test_plan": tables.test_plan_rows(test_plan(event, self.mode, runs=stats.runs)),
             "provisional": stats.provisional,
             "event": self._event_rows(),
             "mode": "GPS (WGS84)" if self.mode == GPS else "local map frame",

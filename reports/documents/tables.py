@@ -38,6 +38,7 @@ def figure_rows(f: Figures) -> list:
             ("Autonomous runs", str(f.auto_runs)),
             ("Mean autonomous run", fmt.metres(f.mean_auto_run)),
             ("Longest autonomous run", fmt.metres(f.max_auto_run)),
+            ("Longest without intervention", fmt.metres(f.longest_without_intervention)),
             ("Interventions", str(f.interventions)),
             ("MDBI", fmt.estimate(f.mdbi, fmt.metres)),
             (f"MDBI {conf} bounds", fmt.bounds(f.mdbi, fmt.metres)),
@@ -93,3 +94,35 @@ def mode_rows(f: Figures) -> list:
             ]
         )
     return rows
+
+
+def test_plan_rows(plan) -> dict | None:
+    """The report's "Test plan" section: one row per verdict, the case's own first."""
+    if not plan.cases:
+        return None
+    rows = []
+    for case in plan.cases:
+        title = f"{case.case.key}: {case.case.title}"
+        rows.append([title, f"{case.progress} · {case.verdict}", "", "", ""])
+        scoped = [("whole case", v) for v in case.verdicts]
+        for leg in case.legs:
+            scoped += [(leg.as_dict()["label"], v) for v in leg.verdicts]
+        for scope, v in scoped:
+            rows.append(["", scope, str(v.criterion), _measured(v), v.verdict])
+    unplanned = [f"Shift {leg.shift.number} · Leg {leg.number}" for leg in plan.unplanned_legs]
+    return {"rows": rows, "unplanned": ", ".join(unplanned) or fmt.DASH}
+
+
+def _measured(v) -> str:
+    kind, value = v.criterion.kind, v.measured
+    if value is None:
+        return v.note or fmt.DASH
+    if isinstance(value, list):
+        return ", ".join(value) or "none"
+    if kind == "distance_without_intervention":
+        return fmt.metres(value)
+    if kind == "auto_time_share":
+        return f"{value:.1f} %"
+    if kind == "runs_completed":
+        return f"{value:.0f}"
+    return f"{value:.2f}"

@@ -83,6 +83,11 @@ FORMULAS = (
     ("Interventions per hour", "I / (T_a / 3600 s)"),
     ("Mean / longest autonomous run", "Mean and maximum distance of the AUTO segments."),
     (
+        "Longest distance without intervention",
+        "Largest sum of AUTO distance between two interventions of one leg (ITO segments "
+        "that are not interventions do not interrupt it).",
+    ),
+    (
         "Manual time per reason",
         "Sum of the durations of the reasons with that key (reasons of one segment may overlap).",
     ),
@@ -185,6 +190,7 @@ class Figures:
     manual_seconds_by_reason: dict[str, float]
     mean_auto_run: float | None
     max_auto_run: float | None
+    longest_without_intervention: float
     mdbi: Estimate
     mtbi: Estimate
     interventions_per_km: float | None
@@ -236,12 +242,26 @@ def figures(runs: list[Run]) -> Figures:
         manual_seconds_by_reason=dict(sorted(time_by_reason.items())),
         mean_auto_run=d_a / len(auto) if auto else None,
         max_auto_run=max((r.distance for r in auto), default=None),
+        longest_without_intervention=_longest_without_intervention(runs),
         mdbi=poisson_estimate(d_a, count),
         mtbi=poisson_estimate(t_a, count),
         interventions_per_km=count / (d_a / 1000.0) if d_a > 0 else None,
         interventions_per_hour=count / (t_a / 3600.0) if t_a > 0 else None,
         provisional=any(r.is_open or any(s.is_open for s in r.reasons) for r in runs),
     )
+
+
+def _longest_without_intervention(runs: list[Run]) -> float:
+    """Runs in driving order; the stretch restarts at each intervention and each leg."""
+    longest = stretch = 0.0
+    leg = None
+    for run in runs:
+        if run.leg_id != leg or run.is_intervention:
+            stretch, leg = 0.0, run.leg_id
+        if run.kind == SegmentType.AUTO:
+            stretch += run.distance
+            longest = max(longest, stretch)
+    return longest
 
 
 def _effective_end(segment: Segment, track: Track | None, children: list[Segment]):

@@ -1,0 +1,32 @@
+"""Admin pages of test plans: test cases with their criteria (events/admin.py loads it)."""
+
+from django.contrib import admin
+from leaflet.admin import LeafletGeoAdminMixin
+
+from events.models import Criterion, Judgement, TestCase
+
+
+class CriterionInline(admin.StackedInline):
+    model = Criterion
+    extra = 1
+    filter_horizontal = ["reasons"]
+    fields = ["kind", "value", "reasons", "text"]
+
+
+@admin.register(TestCase)
+class TestCaseAdmin(LeafletGeoAdminMixin, admin.ModelAdmin):
+    list_display = ["key", "title", "test_event", "planned_runs"]
+    list_filter = ["test_event"]
+    search_fields = ["key", "title", "description"]
+    fields = ["test_event", "key", "title", "description", "planned_runs", "area", "route"]
+    inlines = [CriterionInline]
+
+
+@admin.register(Judgement)
+class JudgementAdmin(admin.ModelAdmin):
+    list_display = ["criterion", "leg", "passed", "by", "at"]
+    readonly_fields = ["by", "at"]
+
+    def save_model(self, request, obj, form, change):
+        obj.by = request.user
+        super().save_model(request, obj, form, change)
