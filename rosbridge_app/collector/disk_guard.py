@@ -35,6 +35,8 @@ MB = 1024 * 1024
 OK, TIGHT, FULL = 0, 1, 2
 TIGHT_SHARE = 0.9
 RESERVE_BYTES = 2 * MB
+# A level is left only with this much room to spare.
+HYSTERESIS_BYTES = 1 * MB
 # Sizing the snapshot directory walks it: at most this often.
 SCAN_EVERY_S = 1.0
 # After a write failed for want of space the disk is tried again no sooner.
@@ -128,6 +130,8 @@ class DiskGuard:
     def check(self, extra: int = 0) -> int:
         """The level now (a FULL reached by a failed write stays until there is room)."""
         level, cause = self.measure(extra)
+        if level < self.level and self.measure(extra + HYSTERESIS_BYTES)[0] > level:
+            level = self.level  # not back yet: without a margin it would flap
         if self.level == FULL and self.cause.startswith("!") and level < FULL:
             # Left by a failed write: back only with room for the reserve too.
             if (
@@ -169,7 +173,11 @@ class DiskGuard:
         log.warning("robot disk %s again: %s", _word(level) if level else "has room", summary)
 
     def summary(self) -> str:
-        counts = ", ".join(f"{n} {what} dropped" for what, n in self.given_up.items() if n)
+        counts = ", ".join(
+            f"{n} {what} {'thinned out' if what == 'positions' else 'dropped'}"
+            for what, n in self.given_up.items()
+            if n
+        )
         since = time.strftime("%H:%M:%S", time.localtime(self.since)) if self.since else "-"
         return f"since {since}: {counts or 'nothing dropped'}"
 
