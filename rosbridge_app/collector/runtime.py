@@ -373,7 +373,7 @@ class CollectorRuntime:
             "topics": list(self.node.topics),
             "inputs": {k: dict(v) for k, v in self.node.inputs.items()},
             "hearing": self.node.hearing,
-            "disk": self.disk.describe(),
+            "disk": self.disk.describe()[:300],
             "stopped": None,
         }
         if self.collector is None:
