@@ -73,6 +73,7 @@ class DiskGuard:
         self.given_up = {"frames": 0, "snapshots": 0, "positions": 0, "maps": 0}
         self._snap_bytes, self._scanned = 0, 0.0
         self._failed_at = 0.0
+        self.failed_writes = 0  # summarised on the way back, never logged one by one
         self._lock = threading.Lock()
 
     def configure(self, budget_mb: float, headroom_mb: float) -> None:
@@ -146,6 +147,8 @@ class DiskGuard:
         """A write failed for want of space: FULL until ``check`` finds room."""
         self.release_reserve()
         self._failed_at = time.monotonic()
+        with self._lock:
+            self.failed_writes += 1
         self._set(FULL, "!" + str(exc).strip())
 
     def count(self, what: str, n: int = 1) -> None:
@@ -169,6 +172,7 @@ class DiskGuard:
             with self._lock:
                 self.since = None
                 self.given_up = dict.fromkeys(self.given_up, 0)
+                self.failed_writes = 0
             self.make_reserve()
         log.warning("robot disk %s again: %s", _word(level) if level else "has room", summary)
 
@@ -179,7 +183,8 @@ class DiskGuard:
             if n
         )
         since = time.strftime("%H:%M:%S", time.localtime(self.since)) if self.since else "-"
-        return f"since {since}: {counts or 'nothing dropped'}"
+        failed = f"; {self.failed_writes} writes to the spool failed" if self.failed_writes else ""
+        return f"since {since}: {counts or 'nothing dropped'}{failed}"
 
     def describe(self) -> str:
         """For the cockpit's robot panel: empty while there is room."""

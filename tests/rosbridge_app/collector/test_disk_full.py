@@ -132,3 +132,28 @@ def test_a_stuck_snapshot_writer_does_not_hold_the_exit(tmp_path):
     started = time.monotonic()
     box.close(within=1.0)
     assert time.monotonic() - started < 10  # not the writer's 60 s deadline, twice
+
+
+def test_a_write_that_meets_a_full_disk_is_spool_full_and_stored_records_still_leave(small_disk):
+    from rosbridge_app.collector.outbox import SpoolFull
+
+    outbox = Outbox(small_disk / "spool.sqlite3")
+    guard = DiskGuard(outbox.path)
+    guard.make_reserve()
+    outbox.free_reserve = guard.release_reserve
+    t = datetime.now(UTC)
+    stored = [Event(ev.MODE, t, {"mode": "auto"})]
+    outbox.append(stored)
+    # Another tool fills the disk between our check and our write.
+    filler = small_disk / "other-tools.bin"
+    with open(filler, "wb") as f, pytest.raises(OSError):
+        while True:
+            f.write(os.urandom(64 * 1024))
+            f.flush()
+    with pytest.raises(SpoolFull):
+        for _ in range(20):
+            outbox.append([Event(ev.MAP, t, {}, blob=NOISE)])
+    (row_id, event), *_ = outbox.peek()
+    assert event.kind == ev.MODE
+    outbox.remove([row_id])  # on the reserve, though nothing else fits
+    assert len(outbox) == 0 and not guard.reserve_path.exists()
