@@ -28,13 +28,21 @@ the collector itself would have appended them; then the relay is restored
 and the same figures are printed. The camera is simulated too but, with no
 mode switch, leaves no records, as in the real drill.
 
+``diskfull`` (issue 32): the benchmark robot, switching every 10 s, while
+the collector's spool lies on a 6 MB file system of its own; the database is
+cut until that disk is full, stays away ``--minutes`` (default 0.5) longer,
+then comes back, and the robot drives 10 s more. Prints mode switches and
+positions stored against published, the largest gap between stored positions,
+how soon live data was stored after the restore, what the cockpit showed, and
+whether the collector ran on. Needs root (it mounts a tmpfs).
+
 ``replay``: the writer alone, without ROS traffic: a spool of ``--records``
 GPS fixes and local poses interleaved as the robot sends them (what a long
 outage leaves, apart from the maps) is written by a starting collector;
 prints records per second.
 
     FTT_DATABASE_URL=postgis://... .venv/bin/python benchmarks/collector_endurance.py \\
-        outage [--fill] | soak [--minutes N] | replay [--records N]
+        outage [--fill] | soak [--minutes N] | replay [--records N] | diskfull
 
 Issue 16's targets: a 2-hour outage with a documented spool size and replay at
 >= 5 000 records/s; RSS flat over 1 hour. The load average is printed with
@@ -46,20 +54,20 @@ import argparse
 import os
 import re
 import shutil
-import socket
 import sqlite3
 import subprocess
 import sys
-import threading
 import time
 from pathlib import Path
 from urllib.parse import urlsplit, urlunsplit
 
 from collector_bench import MANAGE, ROBOT, Bench, load
+from collector_diskfull import disk_full
 from django.db import connection
 
 from events.models import Segment
 from rosbridge_app.models import Collector
+from tests.support.diskfull import Relay
 
 PAGE = os.sysconf("SC_PAGE_SIZE")
 
@@ -67,60 +75,6 @@ PAGE = os.sysconf("SC_PAGE_SIZE")
 def rss_mb(pid: int) -> float:
     fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
     return int(fields[21]) * PAGE / 2**20
-
-
-class Relay(threading.Thread):
-    """A TCP relay to the database that can be cut and restored."""
-
-    def __init__(self, target: tuple[str, int]):
-        super().__init__(daemon=True)
-        self.target = target
-        self.server = socket.create_server(("127.0.0.1", 0))
-        self.port = self.server.getsockname()[1]
-        self.up = True
-        self.sockets: set[socket.socket] = set()
-        self.lock = threading.Lock()
-
-    def run(self):
-        while True:
-            client, _ = self.server.accept()
-            if not self.up:
-                client.close()
-                continue
-            try:
-                upstream = socket.create_connection(self.target, timeout=5)
-            except OSError:
-                client.close()
-                continue
-            with self.lock:
-                self.sockets.update((client, upstream))
-            for a, b in ((client, upstream), (upstream, client)):
-                threading.Thread(target=self._pump, args=(a, b), daemon=True).start()
-
-    def _pump(self, source, sink):
-        try:
-            while data := source.recv(65536):
-                sink.sendall(data)
-        except OSError:
-            pass
-        for s in (source, sink):
-            try:
-                s.close()
-            except OSError:
-                pass
-
-    def cut(self):
-        self.up = False
-        with self.lock:
-            for s in self.sockets:
-                try:
-                    s.shutdown(socket.SHUT_RDWR)
-                except OSError:
-                    pass
-            self.sockets.clear()
-
-    def restore(self):
-        self.up = True
 
 
 class Spool:
@@ -150,7 +104,7 @@ class Spool:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("drill", choices=("outage", "soak", "replay"))
+    parser.add_argument("drill", choices=("outage", "soak", "replay", "diskfull"))
     parser.add_argument("--records", type=int, default=100_000, help="replay: spooled records")
     parser.add_argument("--minutes", type=float, default=None, help="outage 120, soak 60")
     parser.add_argument(
@@ -166,10 +120,17 @@ def main() -> None:
     minutes = args.minutes or (120.0 if args.drill == "outage" else 60.0)
     if connection.vendor != "postgresql":
         sys.exit("needs FTT_DATABASE_URL=postgis://...")
-    bench = Bench(args.drill, **{"snapshot.enabled": False})
+    # Snapshots are part of what fills a robot's disk.
+    bench = Bench(args.drill, **({} if args.drill == "diskfull" else {"snapshot.enabled": False}))
     if args.drill == "replay":
         try:
             replay(bench, args.records)
+        finally:
+            bench.close()
+        return
+    if args.drill == "diskfull":
+        try:
+            disk_full(bench, args.minutes or 0.5)
         finally:
             bench.close()
         return

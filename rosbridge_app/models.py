@@ -49,6 +49,11 @@ class Collector(models.Model):
         blank=True,
         help_text="Set while other nodes publish its topics and the collector hears nothing.",
     )
+    disk = models.CharField(
+        max_length=300,
+        blank=True,
+        help_text="Set while the robot's disk is (nearly) full: what the collector gives up.",
+    )
     parameters = models.JSONField(default=dict, blank=True)
     topics = models.JSONField(default=list, blank=True)
     inputs = models.JSONField(default=dict, blank=True)

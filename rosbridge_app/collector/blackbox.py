@@ -16,12 +16,14 @@ import logging
 import threading
 import time
 import uuid
+from concurrent import futures
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
 from rosbridge_app.collector import events as ev
+from rosbridge_app.collector.disk_guard import TIGHT
 from rosbridge_app.collector.events import Event
 from rosbridge_app.collector.ring_buffer import RingBuffer
 from rosbridge_app.collector.snapshot_writer import MB, WriterDied, WriterProcess
@@ -67,6 +69,8 @@ class Blackbox:
         self.last: dict[str, bytes] = {}
         self.pending: list[Snapshot] = []
         self.directory: Path | None = None
+        self.guard = None  # the collector's DiskGuard: no snapshot on a (nearly) full disk
+        self._futures: list = []
         self.written = 0
         self._dropped_said = (0, 0.0)  # count and time of the last warning
         # Waits for the writer process, one file after the other.
@@ -127,7 +131,8 @@ class Blackbox:
         now = time.time_ns()
         for snap in [s for s in self.pending if s.end < now]:
             self.pending.remove(snap)
-            self._pool.submit(self._write, snap, dict(self.types))
+            self._futures.append(self._pool.submit(self._write, snap, dict(self.types)))
+        self._futures = [f for f in self._futures if not f.done()]
         said, said_at = self._dropped_said
         if self.buffer.dropped > said and time.monotonic() - said_at > 60:
             log.warning(
@@ -136,12 +141,19 @@ class Blackbox:
             )
             self._dropped_said = (self.buffer.dropped, time.monotonic())
 
-    def close(self, wait: bool = True) -> None:
-        """Write what is pending with the messages it has, then stop the writer."""
+    def close(self, wait: bool = True, within: float | None = None) -> None:
+        """Write what is pending with the messages it has, then stop the writer;
+        a writer not done ``within`` seconds is killed and its snapshots are lost
+        (a stuck writer must not hold the collector's exit)."""
         for snap in self.pending:
             snap.end = min(snap.end, time.time_ns())
-            self._pool.submit(self._write, snap, dict(self.types))
+            self._futures.append(self._pool.submit(self._write, snap, dict(self.types)))
         self.pending = []
+        if within is not None:
+            _, late = futures.wait(self._futures, timeout=within)
+            if late:
+                log.error("snapshot writer not done within %.0f s at exit: killed", within)
+                self.writer.give_up()
         self._pool.shutdown(wait=wait)
         if wait:
             self.writer.close()
@@ -164,6 +176,10 @@ class Blackbox:
         for part in self.directory.glob(".snapshot-*.part"):
             part.unlink(missing_ok=True)
         messages = [m for m in snap.messages if m[1] in types]
+        if self.guard is not None and self.guard.check(snap.size) >= TIGHT:
+            self.guard.count("snapshots")
+            log.info("snapshot %s dropped: the robot disk is (nearly) full", snap.uid)
+            return
         if not self._make_room(snap.size):
             log.warning(
                 "snapshot %s dropped: %.1f MB is more than the disk budget",

@@ -100,6 +100,7 @@ class CollectorNode(Node):
                 log.warning("%s; using the default %r", exc, spec.default)
                 self.set_parameters([Parameter(name, value=spec.default)])
         self.blackbox = Blackbox(sink, self.current_parameters())
+        self.disk = None  # the runtime's DiskGuard, once it knows where the spool is
         self._snapshot_subs: dict[str, object] = {}
         self._master: str | None = None
         self.pipeline = Pipeline(self._watch_modes(sink), self.current_parameters())
@@ -112,6 +113,10 @@ class CollectorNode(Node):
         self._tick()
 
     # --- parameters ---------------------------------------------------------------------
+
+    def configure_disk(self) -> None:
+        p = self.current_parameters()
+        self.disk.configure(p["spool.disk_budget_mb"], p["spool.disk_headroom_mb"])
 
     def current_parameters(self) -> dict:
         return {name: self.get_parameter(name).value for name in P.SPECS}
@@ -132,6 +137,8 @@ class CollectorNode(Node):
             self.pipeline.update_params(changed)
             if any(n.startswith("snapshot.") for n in changed):
                 self.blackbox.configure(self.current_parameters())
+            if self.disk is not None and any(n.startswith("spool.") for n in changed):
+                self.configure_disk()
             if any(n.endswith("_service") for n in changed):
                 self._make_services()
             if any(

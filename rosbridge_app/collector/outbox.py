@@ -13,8 +13,10 @@ The file also keeps a little state (whether logging was on) for a restart.
 import json
 import sqlite3
 import threading
+from collections.abc import Callable
 from pathlib import Path
 
+from rosbridge_app.collector.disk_guard import disk_full
 from rosbridge_app.collector.events import Event
 
 _SCHEMA = """
@@ -34,9 +36,16 @@ CREATE TABLE IF NOT EXISTS applied (id INTEGER PRIMARY KEY, master TEXT);
 """
 
 
+class SpoolFull(Exception):
+    """The spool could not be written for want of space (nothing was appended)."""
+
+
 class Outbox:
     def __init__(self, path: Path):
         self.path = Path(path)
+        # Frees space when a removal or mark finds the disk full (the reserve,
+        # disk_guard.py): what was stored must leave the spool even then.
+        self.free_reserve: Callable[[], bool] = lambda: False
         self.path.parent.mkdir(parents=True, exist_ok=True)
         # One connection shared by the threads, serialised by the lock: the
         # statements are short, and SQLite would serialise the writes anyway.
@@ -58,16 +67,50 @@ class Outbox:
         for event in events:
             kind, at, uid, data, blob = event.to_record()
             rows.append((kind, at, uid, json.dumps(data), blob))
+        try:
+            self._transaction(
+                lambda: self._db.executemany(
+                    "INSERT INTO event (kind, at, uid, data, blob) VALUES (?, ?, ?, ?, ?)", rows
+                )
+            )
+        except (sqlite3.Error, OSError) as exc:
+            if disk_full(exc):
+                raise SpoolFull(str(exc)) from None
+            raise
+
+    def _transaction(self, work) -> None:
         with self._lock:
             self._db.execute("BEGIN IMMEDIATE")
             try:
-                self._db.executemany(
-                    "INSERT INTO event (kind, at, uid, data, blob) VALUES (?, ?, ?, ?, ?)", rows
-                )
+                work()
                 self._db.execute("COMMIT")
             except BaseException:
-                self._db.execute("ROLLBACK")
+                # A failed COMMIT (disk full) has already rolled back.
+                if self._db.in_transaction:
+                    try:
+                        self._db.execute("ROLLBACK")
+                    except sqlite3.Error:
+                        pass  # rolled back by SQLite meanwhile
                 raise
+
+    def _making_room(self, work) -> None:
+        """Run a write the writer needs even on a full disk: once more after
+        freeing the reserve."""
+        for last in (False, True):
+            try:
+                return self._transaction(work)
+            except sqlite3.Error as exc:
+                if not disk_full(exc):
+                    raise
+                if last or not self.free_reserve():
+                    raise SpoolFull(str(exc)) from None
+
+    def reusable(self) -> int:
+        """Bytes of free pages inside the file, which new records fill first."""
+        with self._lock:
+            free = self._db.execute("PRAGMA freelist_count").fetchone()[0]
+            size = self._db.execute("PRAGMA page_size").fetchone()[0]
+        return free * size
 
     def peek(
         self,
@@ -96,14 +139,18 @@ class Outbox:
         if not ids:
             return
         # By id, not by range: the writer may take younger events before older ones.
-        with self._lock:
-            self._db.execute(
+        self._making_room(
+            lambda: self._db.execute(
                 "DELETE FROM event WHERE id IN (SELECT value FROM json_each(?))", (json.dumps(ids),)
             )
+        )
 
     def mark_applied(self, marks: list[tuple[int, str | None]]) -> None:
-        with self._lock:
-            self._db.executemany("INSERT OR REPLACE INTO applied (id, master) VALUES (?, ?)", marks)
+        self._making_room(
+            lambda: self._db.executemany(
+                "INSERT OR REPLACE INTO applied (id, master) VALUES (?, ?)", marks
+            )
+        )
 
     def applied(self) -> list[tuple[int, str | None]]:
         with self._lock:
@@ -111,11 +158,12 @@ class Outbox:
 
     def forget_applied(self) -> None:
         """The backlog is written: its segment changes leave the spool."""
-        with self._lock:
-            self._db.execute("BEGIN IMMEDIATE")
+
+        def forget():
             self._db.execute("DELETE FROM event WHERE id IN (SELECT id FROM applied)")
             self._db.execute("DELETE FROM applied")
-            self._db.execute("COMMIT")
+
+        self._making_room(forget)
 
     def last_id(self) -> int:
         with self._lock:
@@ -139,9 +187,10 @@ class Outbox:
         return row[0] if row else default
 
     def set_state(self, key: str, value: str) -> None:
-        with self._lock:
-            self._db.execute(
+        self._making_room(
+            lambda: self._db.execute(
                 "INSERT INTO state (key, value) VALUES (?, ?) "
                 "ON CONFLICT (key) DO UPDATE SET value = excluded.value",
                 (key, value),
             )
+        )

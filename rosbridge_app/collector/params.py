@@ -167,6 +167,20 @@ SPECS: dict[str, Spec] = {
         minimum=1.0,
         maximum=3600.0,
     ),
+    "spool.disk_budget_mb": Spec(
+        4000,
+        "Disk for everything the collector writes: spool, snapshots, pending files (MB); "
+        "near it camera frames and snapshots are dropped, at it records are held in memory, "
+        "positions thinned (docs/collector.md, 'A full disk').",
+        minimum=1,
+        maximum=1_000_000,
+    ),
+    "spool.disk_headroom_mb": Spec(
+        100,
+        "Disk left free for the rest of the robot (MB); counts like the budget.",
+        minimum=0,
+        maximum=1_000_000,
+    ),
 }
 
 

@@ -16,6 +16,10 @@ must not wait behind it: what the spool holds then is the backlog (ids up to
 3. maps keep their own order (the newest stored is the shift's current map):
    a live map waits in the backlog lane.
 
+Records held in memory while the spool could not be written (held.py) are
+younger than everything in the spool: they are live data, taken when the
+spool has no live records (their maps after the backlog).
+
 So a live switch waits for the backlog's few segment changes and one slice,
 never for the backlog, and no segment change is applied before one that
 preceded it. The marks and the backlog's bounds live in the spool, so a
@@ -34,6 +38,7 @@ import logging
 import time
 
 from rosbridge_app.collector import events as ev
+from rosbridge_app.collector.held import Held
 from rosbridge_app.collector.outbox import Outbox
 from rosbridge_app.collector.recorder import SEGMENT_CHANGES, GivenMaster, Recorder
 
@@ -46,8 +51,10 @@ log = logging.getLogger("ftt.collector")
 class ReplayOrder:
     """``size``: records per slice; ``backlog``: more pending than this is a backlog."""
 
-    def __init__(self, outbox: Outbox, size: int, backlog: int | None = None):
-        self.outbox, self.size = outbox, size
+    def __init__(
+        self, outbox: Outbox, size: int, backlog: int | None = None, held: Held | None = None
+    ):
+        self.outbox, self.size, self.held = outbox, size, held
         self.backlog = size // 4 if backlog is None else backlog
         self.backlog_slice = size  # records per backlog slice, see SLICE_SECONDS
         # Set once the backlog's segment changes are all applied: looking for
@@ -74,7 +81,8 @@ class ReplayOrder:
             self.lane = {"end": end, "master": recorder.open_master_uid()}
             self.outbox.set_state(_STATE, json.dumps(self.lane))
         if self.lane is None:
-            return self._store(recorder, self.outbox.peek(self.size), None)
+            taken = self._store(recorder, self.outbox.peek(self.size), None)
+            return taken or self._store_held(recorder, maps=True)
         end = self.lane["end"]
         kinds = sorted(SEGMENT_CHANGES)
         if not self._changes_done:
@@ -91,7 +99,7 @@ class ReplayOrder:
                 return len(changes)
             self._changes_done = True
         live = self.outbox.peek(self.size, where="id > ? AND kind != ?", params=(end, ev.MAP))
-        taken = self._store(recorder, live, None)
+        taken = self._store(recorder, live, None) or self._store_held(recorder, maps=False)
         started = time.monotonic()
         backlog = self.outbox.peek(
             self.backlog_slice,
@@ -102,7 +110,7 @@ class ReplayOrder:
             self.outbox.forget_applied()
             self.outbox.set_state(_STATE, "")
             self._done()
-            return taken
+            return taken or self._store_held(recorder, maps=True)
         marks = self.outbox.applied()
         borders = [row_id for row_id, _ in marks]
         runs = itertools.groupby(backlog, key=lambda row: bisect.bisect(borders, row[0]))
@@ -122,6 +130,19 @@ class ReplayOrder:
             recorder.apply([event for _, event in rows], master=master)
             self.outbox.remove([row_id for row_id, _ in rows])
         return len(rows)
+
+    def _store_held(self, recorder: Recorder, maps: bool) -> int:
+        if self.held is None or not len(self.held):
+            return 0
+        with self.held.lock:
+            events = self.held.peek(self.size, maps=maps)
+        if events:
+            # Not under the lock: the spool thread goes on holding meanwhile. Should it
+            # move these to the spool too, they are stored again later as nothing (uids).
+            recorder.apply(events)
+            with self.held.lock:
+                self.held.remove(events)
+        return len(events)
 
     def _done(self) -> None:
         started, kinds = self._found

@@ -43,8 +43,9 @@ from rclpy.parameter import Parameter
 from events import feed
 from events.models import Vehicle
 from events.selectors.logs import open_leg_for_vehicle
+from rosbridge_app.collector.disk_guard import FULL, DiskGuard
 from rosbridge_app.collector.node import CollectorNode, Status
-from rosbridge_app.collector.outbox import Outbox
+from rosbridge_app.collector.outbox import Outbox, SpoolFull
 from rosbridge_app.collector.recorder import DatabaseUnavailable, Recorder
 from rosbridge_app.collector.replay import ReplayOrder
 from rosbridge_app.collector.spooler import Spooler, default_spool
@@ -62,6 +63,8 @@ COMMAND_POLL = 0.25
 SYNC = 1.0
 RETRY = 1.0
 EXIT_FLUSH_SECONDS = 10.0
+# Pending snapshots may take this long at exit; a stuck writer is killed then.
+EXIT_SNAPSHOT_SECONDS = 10.0
 # A renewed collector that is deaf again renews no sooner than this: it keeps
 # re-creating its subscriptions instead of restarting in a loop.
 RENEW_AT_MOST_EVERY_S = 300.0
@@ -201,8 +204,14 @@ class CollectorRuntime:
         self.name = self.name or f"{self.host}/{self.vehicle_key or self.node.get_name()}"
         self.outbox = Outbox(self.spool_path or default_spool(self.name))
         self.recorder = Recorder(self._leg)
-        self.order = ReplayOrder(self.outbox, WRITE_BATCH)
         self.node.blackbox.directory = self.outbox.path.with_suffix(".snapshots")
+        self.disk = DiskGuard(self.outbox.path)
+        self.disk.snapshots = self.node.blackbox.directory
+        self.node.disk = self.node.blackbox.guard = self.disk
+        self.node.configure_disk()
+        self.disk.make_reserve()
+        self.spooler = Spooler(self.events, self.outbox, self.disk)
+        self.order = ReplayOrder(self.outbox, WRITE_BATCH, held=self.spooler.held)
         pending = len(self.outbox)
         log.info(
             "collector %s for vehicle '%s'; spool %s (%d records pending)",
@@ -213,7 +222,6 @@ class CollectorRuntime:
         )
         if self.start_logging or self.outbox.get_state("logging") == "1":
             self.node.set_logging(True)
-        self.spooler = Spooler(self.events, self.outbox)
         self.spooler.start()
         self.executor = SingleThreadedExecutor()
         self.executor.add_node(self.node)
@@ -236,7 +244,11 @@ class CollectorRuntime:
             log.exception("the ROS executor stopped")
 
     def _persist_logging(self, on: bool) -> None:
-        self.outbox.set_state("logging", "1" if on else "0")
+        try:
+            self.outbox.set_state("logging", "1" if on else "0")
+        except SpoolFull:
+            # Logging goes on; only a restart on this full disk would not resume it.
+            log.warning("the robot disk is full: logging %s is not kept for a restart", on)
 
     # --- database side ------------------------------------------------------------------
 
@@ -282,6 +294,11 @@ class CollectorRuntime:
             except (DatabaseUnavailable, OperationalError, InterfaceError) as exc:
                 self._database_down(exc)
                 retry_at = time.monotonic() + RETRY
+            except SpoolFull as exc:
+                # Stored but not yet removed from the spool: tried again (as nothing
+                # new: uids) once the disk has room; the disk guard says so once.
+                self.disk.failed(exc)
+                retry_at = time.monotonic() + RETRY
 
     def _write_batch(self) -> bool:
         taken = self.order.write_next(self.recorder)
@@ -289,7 +306,7 @@ class CollectorRuntime:
             self.status.pending = 0
             return False
         self.stored += taken
-        self.status.pending = len(self.outbox)
+        self.status.pending = self._pending()
         if not self.startup.reported and self.startup.has("first message received"):
             self.startup.mark("first record stored after it")
             self.startup.reported = True
@@ -297,6 +314,10 @@ class CollectorRuntime:
         self._database_up()
         self._say_leg()
         return True
+
+    def _pending(self) -> int:
+        """Records not yet in the database: spooled, or held in memory (disk full)."""
+        return len(self.outbox) + len(self.spooler.held)
 
     def _say_leg(self) -> None:
         leg = self.recorder.leg
@@ -314,7 +335,7 @@ class CollectorRuntime:
 
     def _database_down(self, exc) -> None:
         self.status.database_ok = False
-        self.status.pending = len(self.outbox)
+        self.status.pending = self._pending()
         if self._db_down_since is None:
             self._db_down_since = timezone.now()
             log.warning(
@@ -346,12 +367,13 @@ class CollectorRuntime:
             "logging": self.node.pipeline.logging,
             "leg": leg,
             "state": self.status.describe(),
-            "pending": len(self.outbox),
+            "pending": self._pending(),
             "stored": self.stored,
             "parameters": self.node.current_parameters(),
             "topics": list(self.node.topics),
             "inputs": {k: dict(v) for k, v in self.node.inputs.items()},
             "hearing": self.node.hearing,
+            "disk": self.disk.describe()[:300],
             "stopped": None,
         }
         if self.collector is None:
@@ -400,7 +422,10 @@ class CollectorRuntime:
     def _shutdown(self) -> None:
         log.info("stopping: spooling what is still in memory")
         self.executor.shutdown(timeout_sec=2)
-        self.node.blackbox.close()  # windows still open are written with what they have
+        # Windows still open are written with what they have, unless the disk is
+        # full or the writer is stuck: neither holds the exit.
+        within = 0.0 if self.disk.level == FULL else EXIT_SNAPSHOT_SECONDS
+        self.node.blackbox.close(within=within)
         self.spooler.stop.set()
         self.spooler.join(10)
         deadline = time.monotonic() + EXIT_FLUSH_SECONDS
@@ -412,6 +437,16 @@ class CollectorRuntime:
                 link.mark_stopped(self.collector)
         except Exception as exc:
             log.warning("database not reachable at exit (%s)", exc)
+        held = list(self.spooler.held.events)
+        if held:
+            try:
+                self.outbox.append(held)
+            except SpoolFull:
+                log.error(
+                    "%d records held in memory are lost: the robot disk is full and the "
+                    "database unreachable",
+                    len(held),
+                )
         left = len(self.outbox)
         if left:
             log.warning("%d records stay in %s for the next start", left, self.outbox.path)

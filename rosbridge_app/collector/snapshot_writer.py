@@ -182,6 +182,7 @@ class WriterProcess:
     def __init__(self):
         self._child: _Child | None = None
         self._lock = threading.Lock()
+        self._given_up = False
 
     @property
     def pid(self) -> int | None:
@@ -210,10 +211,15 @@ class WriterProcess:
         seconds once it runs; a child that dies or is stuck gets one successor
         to try again."""
         for attempt in (1, 2):
+            if self._given_up:
+                raise WriterDied(f"the collector stopped before {path.name} was written")
             child = self.start()
             try:
                 return self._write(child, path, messages, types, timeout)
             except (OSError, EOFError):
+                if self._given_up:
+                    stopped = f"the collector stopped before {path.name} was written"
+                    raise WriterDied(stopped) from None
                 what = f"was stuck ({child.stuck}) and was killed" if child.stuck else "died"
                 log.error(
                     "the snapshot writer process (pid %s) %s before it finished %s; %s",
@@ -276,6 +282,14 @@ class WriterProcess:
             return work()
         finally:
             watchdog.cancel()
+
+    def give_up(self) -> None:
+        """Kill the writer now and start no other (the collector is stopping)."""
+        self._given_up = True
+        child = self._child
+        if child is not None:
+            child.stuck = "the collector stopped"
+            child.kill()
 
     def close(self) -> None:
         atexit.unregister(self.close)

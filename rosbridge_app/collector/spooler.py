@@ -1,7 +1,10 @@
 """The spool thread: events from the ROS thread into the outbox on disk.
 
 It renders pictures (PNG/JPEG) and appends events to the :class:`Outbox` a few
-times a second; a mode switch, start or stop is appended at once.
+times a second; a mode switch, start or stop is appended at once.  When the
+disk budget says so (disk_guard.py), camera frames are dropped, and when the
+spool cannot be written events are held in memory (held.py) instead; they go
+back to the spool, in order, before anything newer, once it has room.
 """
 
 import logging
@@ -13,7 +16,9 @@ from pathlib import Path
 from django.conf import settings
 
 from rosbridge_app.collector import events as ev
-from rosbridge_app.collector.outbox import Outbox
+from rosbridge_app.collector.disk_guard import FULL, TIGHT, DiskGuard
+from rosbridge_app.collector.held import Held
+from rosbridge_app.collector.outbox import Outbox, SpoolFull
 
 log = logging.getLogger("ftt.collector")
 
@@ -31,9 +36,13 @@ _URGENT = frozenset({ev.MODE, ev.START, ev.STOP})
 
 
 class Spooler(threading.Thread):
-    def __init__(self, events: queue.Queue, outbox: Outbox):
+    def __init__(self, events: queue.Queue, outbox: Outbox, guard: DiskGuard | None = None):
         super().__init__(name="ftt-spool", daemon=True)
         self.events, self.outbox = events, outbox
+        self.guard = guard or DiskGuard(outbox.path)
+        self.guard.reusable = outbox.reusable
+        outbox.free_reserve = self.guard.release_reserve
+        self.held = Held(self.guard)
         self.stop = threading.Event()
         # Set after every append: the writer waits on it instead of sleeping.
         self.spooled = threading.Event()
@@ -53,21 +62,43 @@ class Spooler(threading.Thread):
                 event = self.events.get(timeout=max(0.0, deadline - time.monotonic()))
             except queue.Empty:
                 break
-            try:
-                batch.append(event.prepare())
-            except Exception as exc:
-                self.dropped += 1
-                log.warning("dropped a %s that cannot be converted: %s", event.kind, exc)
+            if event.kind == ev.IMAGE and self.guard.level >= TIGHT:
+                self.guard.count("frames")  # before rendering: the first thing given up
+            else:
+                try:
+                    batch.append(event.prepare())
+                except Exception as exc:
+                    self.dropped += 1
+                    log.warning("dropped a %s that cannot be converted: %s", event.kind, exc)
             if event.kind in _URGENT:
                 deadline = 0.0  # take only what is already queued
-        if batch:
-            while True:
-                try:
-                    self.outbox.append(batch)
-                    break
-                except Exception:
-                    # The disk is our last resort: keep trying rather than drop.
-                    log.exception("cannot write the spool %s; retrying", self.outbox.path)
-                    time.sleep(1.0)
+        if batch or len(self.held):
+            self._store(batch)
             self.spooled.set()
         return len(batch)
+
+    def _store(self, batch: list) -> None:
+        """To the spool if it has room (what memory holds first), else to memory."""
+        size = sum(len(e.blob or b"") + 200 for e in batch)
+        if self.guard.check(size) < FULL:
+            self.held.flush_skipped()
+            with self.held.lock:
+                back = list(self.held.events)
+                if back and self._append(back):
+                    self.held.remove(back)
+            if not len(self.held) and (not batch or self._append(batch)):
+                return
+        for event in batch:
+            self.held.add(event)
+
+    def _append(self, events: list) -> bool:
+        try:
+            self.outbox.append(events)
+            return True
+        except SpoolFull as exc:
+            self.guard.failed(exc)
+        except Exception as exc:  # a spool that cannot be written at all: memory still can
+            if self.guard.level < FULL:
+                log.error("cannot write the spool %s: %s", self.outbox.path, exc)
+            self.guard.failed(exc)
+        return False

@@ -36,6 +36,7 @@ def collector_status(collector: Collector, now=None) -> dict:
         "leg": collector.leg_id,
         "state": collector.state,
         "hearing": collector.hearing,
+        "disk": collector.disk,
         "pending": collector.pending,
         "parameters": collector.parameters,
         "topics": collector.topics,

@@ -106,7 +106,7 @@ def connect() -> None:
 
 
 # A change in one of these is announced, so open browsers redraw the collector panel.
-_ANNOUNCED = ("logging", "leg_id", "state", "stopped", "vehicle_id")
+_ANNOUNCED = ("logging", "leg_id", "state", "stopped", "vehicle_id", "disk")
 
 
 @transaction.atomic

@@ -53,7 +53,10 @@ export const Collector = {
     const queue = c.pending ? ` · ${c.pending} records not yet stored` : "";
     // Set by the collector's watchdog, e.g. "robot publishes, collector hears nothing (…)".
     const hearing = c.online && c.hearing ? ` · ${c.hearing}` : "";
-    $("#collector-status").textContent = `${vehicleName(current("shift").vehicle)} (collector ${c.name}): ${c.online ? "online" : "offline"}, ${doing}${queue}${hearing}`;
+    // Set by the collector's disk guard, e.g. "robot disk full: positions thinned since 14:03, …";
+    // shown offline too, as the robot's last word (like the records not yet stored).
+    const disk = c.disk ? ` · ${c.disk}` : "";
+    $("#collector-status").textContent = `${vehicleName(current("shift").vehicle)} (collector ${c.name}): ${c.online ? "online" : "offline"}, ${doing}${queue}${hearing}${disk}`;
     inputs.replaceChildren(...Object.entries(c.inputs || {}).map(([name, info]) => {
       const li = document.createElement("li");
       const age = info && typeof info.age === "number" ? `${info.age.toFixed(1)} s ago` : "no data yet";

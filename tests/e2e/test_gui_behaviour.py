@@ -264,21 +264,25 @@ from rosbridge_app.services import collectors
 leg = Leg.objects.get(shift__vehicle__key="{key}")
 collectors.heartbeat(
     "spool-{key}", vehicle=leg.shift.vehicle, logging=True, leg=leg,
-    state="logging; {pending} records waiting", pending={pending},
+    state="logging; {pending} records waiting", pending={pending}, disk="{disk}",
 )
 """
+DISK_FULL = "robot disk full: positions thinned since 14:03, 2 snapshots dropped"
 
 
-def test_robot_panel_shows_the_collectors_backlog_until_it_is_replayed(page, server, open_leg):
+def test_robot_panel_shows_the_collectors_backlog_and_full_disk_until_gone(page, server, open_leg):
     # What a collector reports when the database is back after an outage: the
     # records still in its spool. The operator must see that data is on its way.
-    server.python(BACKLOG.format(key=open_leg, pending=3356))
+    # A full robot disk (issue 32) is said beside it, until there is room again.
+    server.python(BACKLOG.format(key=open_leg, pending=3356, disk=DISK_FULL))
     login(page, server, "otto")
     choose(page, open_leg)
     status = page.locator("#collector-status")
     expect(status).to_contain_text("logging into this leg · 3356 records not yet stored")
-    server.python(BACKLOG.format(key=open_leg, pending=0))
+    expect(status).to_contain_text(DISK_FULL)
+    server.python(BACKLOG.format(key=open_leg, pending=0, disk=""))
     expect(status).not_to_contain_text("not yet stored", timeout=8000)
+    expect(status).not_to_contain_text("robot disk")
     expect(status).to_contain_text("logging into this leg")
 
 

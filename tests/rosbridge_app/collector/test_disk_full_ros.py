@@ -1,0 +1,80 @@
+"""Issue 32 over DDS: a full disk during a database outage never stops the recording."""
+
+import time
+from urllib.parse import urlsplit, urlunsplit
+
+import pytest
+
+from tests.rosbridge_app.collector.conftest import VEHICLE
+from tests.support import diskfull
+from tests.support.ros import copy_default_params, requires_ros
+
+pytestmark = [pytest.mark.ros, requires_ros]
+
+
+def test_a_full_disk_during_an_outage_loses_no_switch_and_the_collector_goes_on(
+    ros, procs, robot_leg, ros_env, tmp_path
+):
+    url = urlsplit(ros_env["FTT_DATABASE_URL"])
+    relay = diskfull.Relay((url.hostname or "127.0.0.1", url.port or 5432))
+    relay.start()
+    netloc = f"{url.username}:{url.password}@127.0.0.1:{relay.port}"
+    env = {"FTT_DATABASE_URL": urlunsplit(url._replace(netloc=netloc))}
+    params = copy_default_params(tmp_path, vehicle=VEHICLE, **{"spool.disk_headroom_mb": 1})
+    try:
+        mount = diskfull.small_filesystem(tmp_path / "disk", 4)
+        disk = mount.__enter__()
+    except Exception:
+        pytest.skip("mounting a small file system needs root")
+    try:
+        collector = procs.start(
+            "ftt_collect",
+            "--params-file",
+            str(params),
+            "--name",
+            "diskfull",
+            "--spool",
+            str(disk / "spool.sqlite3"),
+            "--start-logging",
+            name="diskfull",
+            env=env,
+        )
+        listener = diskfull.Listener(ros.node)
+        procs.start(
+            "ftt_simulate",
+            *diskfull.ROBOT,
+            "--switch-every",
+            "4",
+            "--duration",
+            "300",
+            name="robot",
+        )
+        figures = diskfull.run(
+            relay=relay,
+            leg=robot_leg,
+            name="diskfull",
+            log=collector.log,
+            listener=listener,
+            full_seconds=3,
+            after_seconds=2,
+            alive=collector.alive,
+            say=lambda line: None,
+        )
+        output = collector.output()
+        started = time.monotonic()
+        collector.stop()
+        stopping = time.monotonic() - started
+    finally:
+        relay.cut()
+        procs.stop_all()
+        mount.__exit__(None, None, None)
+    assert not figures["collector exited"], output
+    assert figures["switches published"] >= 5 and figures["switches lost"] == 0, figures
+    assert figures["live stored after"] < 2.0, figures
+    # Positions cover the whole run, thinned where the disk was full.
+    assert figures["largest gap between stored positions"] < 1.5, figures
+    assert any(
+        s.startswith("robot disk full: positions thinned since") for s in figures["cockpit showed"]
+    )
+    assert output.count("robot disk full (") == 1 and "Traceback" not in output, output
+    assert stopping < 15
