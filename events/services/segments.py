@@ -118,12 +118,15 @@ def _close(segment: Segment, at: datetime) -> None:
     segment.save(update_fields=["end"])
 
 
-def _start_master(leg, mode, at, robot_stamp, positions, reason_key, uid) -> Segment:
+def _start_master(
+    leg, mode, at, robot_stamp, positions, reason_key, uid, start_uncertainty=None
+) -> Segment:
     master = Segment(
         leg=leg,
         segment_type_id=mode,
         start=at,
         robot_stamp=robot_stamp,
+        start_uncertainty=start_uncertainty,
         **positions,
     )
     if uid is not None:
@@ -160,6 +163,7 @@ def report_mode(
     local: LocalPosition | None = None,
     reason: str = ItoReason.UNASSIGNED,
     uid=None,
+    start_uncertainty: float | None = None,
 ) -> ModeReport:
     """The robot (or an importer) says which mode it is in now.
 
@@ -181,7 +185,10 @@ def report_mode(
         _close(current, at)
     else:
         require_not_before(leg, at, str(leg))
-    master = _start_master(leg, mode, at, robot_stamp, _position_fields(gps, local), reason, uid)
+    positions = _position_fields(gps, local)
+    master = _start_master(
+        leg, mode, at, robot_stamp, positions, reason, uid, start_uncertainty=start_uncertainty
+    )
     return ModeReport(announce_and_return(master), changed=True)
 
 
