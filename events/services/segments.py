@@ -133,12 +133,15 @@ def _start_master(
         master.uid = uid
     master.save()
     if mode == SegmentType.ITO:
-        _add_child(master, _reason(reason_key), at, robot_stamp)
+        _add_child(master, _reason(reason_key), at, robot_stamp, start_uncertainty)
     return master
 
 
-def _add_child(master: Segment, reason: ItoReason, at: datetime, robot_stamp=None) -> Segment:
+def _add_child(
+    master: Segment, reason: ItoReason, at: datetime, robot_stamp=None, start_uncertainty=None
+) -> Segment:
     return Segment.objects.create(
+        start_uncertainty=start_uncertainty,
         leg_id=master.leg_id,
         parent=master,
         segment_type_id=SegmentType.ITO,
