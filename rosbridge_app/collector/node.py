@@ -41,6 +41,7 @@ log = logging.getLogger("ftt.collector")
 MODE_INPUT = "robot_mode"
 # Stamped streams whose lost messages are estimated (see losses.py).
 LOSS_INPUTS = ("gps_fix", "local_pose")
+LOSS_LOG_PERIOD = 10.0
 
 
 def now() -> datetime:
@@ -100,6 +101,7 @@ class CollectorNode(Node):
         self._errors: dict[str, float] = {}
         self._ftt_subs: dict[str, object] = {}
         self._losses: dict[str, LossCounter] = {}
+        self._losses_logged = 0.0
         self._ftt_services: dict[str, object] = {}
         self._calls: queue.Queue = queue.Queue()
         self._lock = threading.Lock()
@@ -334,13 +336,22 @@ class CollectorNode(Node):
         counter.seen(stamp_ns(stamp) / 1e9 if stamp is not None else None)
         info.update(counter.report())
 
-    def _log_losses(self) -> None:
-        """Say in the log when an input lost messages since the last tick."""
+    def _log_losses(self, t: float) -> None:
+        """Say in the log, at most every LOSS_LOG_PERIOD, when an input lost messages."""
+        if t - self._losses_logged < LOSS_LOG_PERIOD:
+            return
+        self._losses_logged = t
         for name, counter in self._losses.items():
             new = counter.missed - counter.logged
             if new > 0:
                 counter.logged = counter.missed
-                log.warning("%s: about %d messages missed (%d so far)", name, new, counter.missed)
+                log.warning(
+                    "%s: about %d messages missed in %g s (%d so far)",
+                    name,
+                    new,
+                    LOSS_LOG_PERIOD,
+                    counter.missed,
+                )
 
     def _subscribe(self) -> None:
         for sub in [*self._ftt_subs.values(), *self._snapshot_subs.values()]:
@@ -413,7 +424,7 @@ class CollectorNode(Node):
         self._subscribe_snapshots()
         self.blackbox.poll()
         self._watch_hearing(time.monotonic())
-        self._log_losses()
+        self._log_losses(time.monotonic())
 
     # --- hearing watchdog ---------------------------------------------------------------
 
