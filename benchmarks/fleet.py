@@ -52,16 +52,20 @@ print("SETUP", s.session_key, json.dumps(legs))
 """
 RESULTS = """
 import json
-from events.models import Segment
+from events.models import Announcement, Segment
 from rosbridge_app.models import Collector
 from telemetry.models import Pose
+def stored(master):
+    # When the new segment was committed: its first row in the change feed.
+    row = Announcement.objects.filter(kind="segment", payload__id=master.pk).order_by("id").first()
+    return row.created.timestamp() if row else None
 out = {{}}
 for leg in {legs!r}:
     masters = Segment.objects.filter(leg_id=leg, parent__isnull=True).order_by("start")
     inputs = (Collector.objects.filter(leg_id=leg).values_list("inputs", flat=True).first()) or {{}}
     out[leg] = {{
         "masters": [
-            [m.segment_type_id, m.start.timestamp(), m.start_uncertainty, m.modified.timestamp()]
+            [m.segment_type_id, m.start.timestamp(), m.start_uncertainty, stored(m)]
             for m in masters
         ],
         "poses": Pose.objects.filter(segment__leg_id=leg).count(),
@@ -264,7 +268,8 @@ def summarise(n, args, legs, starts, published, results, vehicles, shown) -> dic
         stored += len(masters)
         for mode, start, uncertainty, modified in masters:
             k = round((start - t0) / every)
-            stored_after.append(modified - (t0 + k * every))
+            if modified is not None:
+                stored_after.append(modified - (t0 + k * every))
             errors.append(abs(start - (t0 + k * every)))
             bounds.append(uncertainty or 0.0)
             vehicle = vehicles[f"fleet-{i}"]
