@@ -17,6 +17,7 @@ from importlib import import_module
 from types import SimpleNamespace
 
 from channels.db import database_sync_to_async
+from channels.exceptions import StopConsumer
 from channels.generic.websocket import AsyncJsonWebsocketConsumer
 from django.conf import settings
 from django.contrib import auth
@@ -194,8 +195,18 @@ class OutboxPoller:
         self._advance_floor()
         if rows:
             for consumer in list(self.consumers):
-                await consumer.deliver(rows)
+                await self._deliver(consumer, rows)
         return rows
+
+    async def _deliver(self, consumer, rows: list[dict]) -> None:
+        """One consumer's failure neither stops the others nor repeats every poll."""
+        try:
+            await consumer.deliver(rows)
+        except StopConsumer:
+            pass  # its socket closed; the consumer has left already
+        except Exception:  # noqa: BLE001 - the rows are marked seen: the others must get them
+            logger.exception("live delivery failed; the socket is dropped")
+            self.remove(consumer)
 
     def _advance_floor(self) -> None:
         while self.floor + 1 in self.seen:
@@ -261,12 +272,20 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
         while True:
             every = settings.FTT_LIVE_HEARTBEAT_MS
             await asyncio.sleep(every / 1000)
-            await self.send_json({"type": "heartbeat", "stale_after": every * MISSED_BEATS / 1000})
+            try:
+                await self.send_json(
+                    {"type": "heartbeat", "stale_after": every * MISSED_BEATS / 1000}
+                )
+            except StopConsumer:
+                return
 
     async def _guard_session(self) -> None:
         while True:
             await asyncio.sleep(SESSION_CHECK_INTERVAL)
-            if not await self._session_holds():
+            try:
+                if not await self._session_holds():
+                    return
+            except StopConsumer:
                 return
 
     async def _session_holds(self) -> bool:
@@ -283,7 +302,21 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
         """A logout in this socket's session (rosbridge_app.sessions)."""
         await self._end_session()
 
+    async def send_json(self, content, close=False):
+        """Send, or leave at once if the browser has gone: Uvicorn raises
+        ClientDisconnected (an OSError) and then never calls disconnect()."""
+        try:
+            await super().send_json(content, close)
+        except OSError as exc:
+            logger.info("live socket closed while sending: %r", exc)
+            await self.disconnect(None)
+            raise StopConsumer from exc
+
     async def disconnect(self, code):
+        """Leave the poller and the groups; safe to call twice."""
+        if getattr(self, "gone", False):
+            return
+        self.gone = True
         for task in (getattr(self, "guard", None), getattr(self, "heart", None)):
             if task is not None and task is not asyncio.current_task():
                 task.cancel()

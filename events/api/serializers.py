@@ -208,6 +208,7 @@ class SegmentSerializer(ServiceSerializer):
             "start",
             "end",
             "robot_stamp",
+            "start_uncertainty",
             "is_open",
             "is_master",
             "modified",
@@ -224,6 +225,7 @@ class SegmentSerializer(ServiceSerializer):
             "start",
             "end",
             "robot_stamp",
+            "start_uncertainty",
         ]
 
         extra_kwargs = {"ito_reason": {"allow_null": False}}

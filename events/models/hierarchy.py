@@ -202,6 +202,12 @@ class Segment(ChangeStamped):
     robot_stamp = models.DateTimeField(
         null=True, blank=True, help_text="The robot's own clock at the mode switch."
     )
+    # Seconds the start may lie before `start`: the robot's mode message had no
+    # stamp of its own (rosbridge_app.collector.mode_timing); null: not known
+    # or not needed (a stamped message, an operator's entry).
+    start_uncertainty = models.FloatField(
+        null=True, blank=True, help_text="Seconds before its start the segment may have begun."
+    )
     # When an operator last set reason, obstacle, lighting or slope (never: null).
     # Imports merge the annotation by this stamp, the rest of the row by `modified`.
     annotated = models.DateTimeField(null=True, blank=True, editable=False)

@@ -118,24 +118,30 @@ def _close(segment: Segment, at: datetime) -> None:
     segment.save(update_fields=["end"])
 
 
-def _start_master(leg, mode, at, robot_stamp, positions, reason_key, uid) -> Segment:
+def _start_master(
+    leg, mode, at, robot_stamp, positions, reason_key, uid, start_uncertainty=None
+) -> Segment:
     master = Segment(
         leg=leg,
         segment_type_id=mode,
         start=at,
         robot_stamp=robot_stamp,
+        start_uncertainty=start_uncertainty,
         **positions,
     )
     if uid is not None:
         master.uid = uid
     master.save()
     if mode == SegmentType.ITO:
-        _add_child(master, _reason(reason_key), at, robot_stamp)
+        _add_child(master, _reason(reason_key), at, robot_stamp, start_uncertainty)
     return master
 
 
-def _add_child(master: Segment, reason: ItoReason, at: datetime, robot_stamp=None) -> Segment:
+def _add_child(
+    master: Segment, reason: ItoReason, at: datetime, robot_stamp=None, start_uncertainty=None
+) -> Segment:
     return Segment.objects.create(
+        start_uncertainty=start_uncertainty,
         leg_id=master.leg_id,
         parent=master,
         segment_type_id=SegmentType.ITO,
@@ -160,6 +166,7 @@ def report_mode(
     local: LocalPosition | None = None,
     reason: str = ItoReason.UNASSIGNED,
     uid=None,
+    start_uncertainty: float | None = None,
 ) -> ModeReport:
     """The robot (or an importer) says which mode it is in now.
 
@@ -181,7 +188,10 @@ def report_mode(
         _close(current, at)
     else:
         require_not_before(leg, at, str(leg))
-    master = _start_master(leg, mode, at, robot_stamp, _position_fields(gps, local), reason, uid)
+    positions = _position_fields(gps, local)
+    master = _start_master(
+        leg, mode, at, robot_stamp, positions, reason, uid, start_uncertainty=start_uncertainty
+    )
     return ModeReport(announce_and_return(master), changed=True)
 
 

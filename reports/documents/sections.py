@@ -393,6 +393,7 @@ class Sections:
                     f"{fmt.timestamp(a, self.tz)} – {fmt.clock(b, self.tz)} "
                     f"({fmt.duration((b - a).total_seconds())})"
                 )
+        uncertain = [r.start_uncertainty for r in runs if r.start_uncertainty]
         no_start = [
             f"Shift {number[r.shift_id]}, {r.label}" for r in runs if not r.has_start_position
         ]
@@ -416,6 +417,8 @@ class Sections:
             "gaps_more": max(0, len(gaps) - MAX_GAPS_LISTED),
             "no_fix": no_fix,
             "no_start": no_start,
+            "uncertain_starts": len(uncertain),
+            "uncertainty_max": f"{max(uncertain, default=0):.1f}",
             "tiles": self.maps.tiles_note(),
             "fonts": FONT_NOTE,
             "warnings": self.warnings,

@@ -133,6 +133,8 @@ class Run:
     path_y: np.ndarray = field(default_factory=lambda: np.empty(0))
     # The GUI's name of the segment ("Leg 2 · #7"), see events.selectors.labels.
     label: str = ""
+    # Seconds the robot may have switched before `start` (a mode message without a stamp).
+    start_uncertainty: float | None = None
 
     @property
     def seconds(self) -> float:
@@ -280,6 +282,7 @@ RUN_FIELDS = (
     "segment_type",
     "ito_reason",
     "start",
+    "start_uncertainty",
     "end",
     "obstacle",
     "lighting",
@@ -350,6 +353,7 @@ def event_runs(event: TestEvent, mode: str = GPS) -> list[Run]:
                 counted_reasons=[s.reason for s in spans if s.reason in counted],
                 track=track,
                 has_start_position=path.has_start_position,
+                start_uncertainty=master.start_uncertainty,
                 path_x=path.x,
                 path_y=path.y,
                 label=labels[master.id],

@@ -12,7 +12,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import datetime
 
-MODE = "mode"  # data: mode, robot_stamp, gps [lon, lat] | None, local [x, y, frame] | None
+# data: mode, robot_stamp, start_uncertainty (s), gps [lon, lat] | None, local [x, y, frame] | None
+MODE = "mode"
 GPS = "gps"  # data: lon, lat, alt, status, accuracy, robot_stamp
 LOCAL = "local"  # data: x, y, yaw, frame, robot_stamp
 MAP = "map"  # data: frame, width, height, resolution, origin_*, robot_stamp, checksum; blob PNG

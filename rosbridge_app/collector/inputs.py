@@ -23,6 +23,10 @@ from rosbridge_app.collector.modes import message_type
 POSITION_DEPTH = 2000
 # The most messages one callback takes from its subscription besides its own.
 DRAIN = 200
+# While draining sensor data, the mode subscription is looked at this often.
+AHEAD_EVERY = 20
+# The mode is never dropped: a reliable history deep enough for a burst of switches.
+MODE_DEPTH = 50
 
 RELIABLE_LATCHED = QoSProfile(
     history=HistoryPolicy.KEEP_LAST,
@@ -51,7 +55,7 @@ def wanted_inputs(get, pipe) -> list[tuple]:
             "robot_mode",
             message_type(get("params.robot_mode_type")),
             get("topics.robot_mode"),
-            qos(50, True),
+            qos(MODE_DEPTH, True),
             pipe.on_mode,
         ),
         ("gps_fix", NavSatFix, get("topics.gps_fix"), qos(POSITION_DEPTH, reliable), pipe.on_fix),
@@ -101,20 +105,47 @@ def volatile_map_inputs(pipe) -> list[tuple]:
     return [("map", OccupancyGrid, pipe.on_grid), ("map_jpeg", CompressedImage, pipe.on_map_jpeg)]
 
 
-def drained_subscription(node, msg_type, topic, callback, qos_profile, raw=False):
+def drained_subscription(
+    node, msg_type, topic, callback, qos_profile, raw=False, with_info=False, ahead=None
+):
     """A subscription of ``node`` whose callback also takes the messages waiting
     behind its own (at most DRAIN): the executor builds a new wait set for every
-    message it takes, which in Python costs more than converting a fix."""
+    message it takes, which in Python costs more than converting a fix.
+    ``with_info``: the callback also gets rmw's message info (its source
+    timestamp); ``ahead()`` is called every AHEAD_EVERY messages, so that the
+    mode is taken before a long backlog of sensor data."""
     subscription = None
 
-    def receive(msg):
-        callback(msg)
-        for _ in range(DRAIN):
-            with subscription.handle:
-                taken = subscription.handle.take_message(msg_type, raw)
-            if taken is None:
-                return
-            callback(taken[0])
+    def take() -> bool:
+        with subscription.handle:
+            taken = subscription.handle.take_message(msg_type, raw)
+        if taken is None:
+            return False
+        callback(*taken) if with_info else callback(taken[0])
+        return True
 
-    subscription = node.create_subscription(msg_type, topic, receive, qos_profile, raw=raw)
+    def receive(*msg_and_info):
+        callback(*msg_and_info)
+        for n in range(1, DRAIN + 1):
+            if ahead is not None and n % AHEAD_EVERY == 0:
+                ahead()
+            if not take():
+                return
+
+    def receive_message(msg):
+        receive(msg)
+
+    def receive_with_info(msg, info):
+        receive(msg, info)
+
+    subscription = node.create_subscription(
+        msg_type, topic, receive_with_info if with_info else receive_message, qos_profile, raw=raw
+    )
+
+    def take_waiting() -> None:
+        for _ in range(DRAIN):
+            if not take():
+                return
+
+    subscription.take_waiting = take_waiting
     return subscription

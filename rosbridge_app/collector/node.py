@@ -23,6 +23,7 @@ from std_srvs.srv import SetBool, Trigger
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector import params as P
 from rosbridge_app.collector.blackbox import Blackbox, message_class, snapshot_topics
+from rosbridge_app.collector.conversions import stamp_ns
 from rosbridge_app.collector.hearing import RENEW, RESUBSCRIBE, STREAMS, Hearing
 from rosbridge_app.collector.inputs import (
     drained_subscription,
@@ -30,14 +31,28 @@ from rosbridge_app.collector.inputs import (
     volatile_map_inputs,
     wanted_inputs,
 )
+from rosbridge_app.collector.losses import LossCounter
 from rosbridge_app.collector.modes import ITO
 from rosbridge_app.collector.pipeline import SECOND_COPY, Pipeline
 
 log = logging.getLogger("ftt.collector")
 
 
+MODE_INPUT = "robot_mode"
+# Stamped streams whose lost messages are estimated (see losses.py).
+LOSS_INPUTS = ("gps_fix", "local_pose")
+LOSS_LOG_PERIOD = 10.0
+
+
 def now() -> datetime:
     return datetime.now(UTC)
+
+
+def sent_at(info) -> datetime | None:
+    """The publisher's send time from rmw's message info; None where the
+    middleware does not give it."""
+    ns = info.get("source_timestamp") if isinstance(info, dict) else None
+    return datetime.fromtimestamp(ns / 1e9, tz=UTC) if ns else None
 
 
 class Status:
@@ -85,6 +100,8 @@ class CollectorNode(Node):
         self.topics: list = []
         self._errors: dict[str, float] = {}
         self._ftt_subs: dict[str, object] = {}
+        self._losses: dict[str, LossCounter] = {}
+        self._losses_logged = 0.0
         self._ftt_services: dict[str, object] = {}
         self._calls: queue.Queue = queue.Queue()
         self._lock = threading.Lock()
@@ -298,22 +315,50 @@ class CollectorNode(Node):
         return wrapper
 
     def _input(self, name: str, handler):
-        def receive(msg):
+        def receive(msg, info=None):
             at = now()
             if self.on_first_message is not None:
                 first, self.on_first_message = self.on_first_message, None
                 first()
             answer = None
             try:
-                answer = handler(msg, at)
+                if info is None:
+                    answer = handler(msg, at)
+                else:
+                    answer = handler(msg, at, sent_at(info))
             finally:
                 # Counted even when the handler fails: the message did arrive.
                 info = self.inputs.get(name)
                 if info is not None and answer is not SECOND_COPY:
                     info["count"] += 1
                     info["last_received"] = at.isoformat()
+                    if name in LOSS_INPUTS:
+                        self._count_losses(name, msg, info)
 
         return self._safe(name, receive)
+
+    def _count_losses(self, name: str, msg, info: dict) -> None:
+        counter = self._losses.setdefault(name, LossCounter())
+        stamp = getattr(getattr(msg, "header", None), "stamp", None)
+        counter.seen(stamp_ns(stamp) / 1e9 if stamp is not None else None)
+        info.update(counter.report())
+
+    def _log_losses(self, t: float) -> None:
+        """Say in the log, at most every LOSS_LOG_PERIOD, when an input lost messages."""
+        if t - self._losses_logged < LOSS_LOG_PERIOD:
+            return
+        self._losses_logged = t
+        for name, counter in self._losses.items():
+            new = counter.missed - counter.logged
+            if new > 0:
+                counter.logged = counter.missed
+                log.warning(
+                    "%s: about %d messages missed in %g s (%d so far)",
+                    name,
+                    new,
+                    LOSS_LOG_PERIOD,
+                    counter.missed,
+                )
 
     def _subscribe(self) -> None:
         for sub in [*self._ftt_subs.values(), *self._snapshot_subs.values()]:
@@ -328,10 +373,27 @@ class CollectorNode(Node):
         for name, msg_type, topic, qos_profile, handler in wanted:
             if not topic:
                 continue
+            mode = name == MODE_INPUT
             try:
                 self._ftt_subs[name] = drained_subscription(
-                    self, msg_type, topic, self._input(name, handler), qos_profile
+                    self,
+                    msg_type,
+                    topic,
+                    self._input(name, handler),
+                    qos_profile,
+                    with_info=mode,
+                    ahead=None if mode else self._take_modes,
                 )
+                if mode:
+                    # A publisher that latches its mode gives it to a late collector.
+                    self._ftt_subs[f"{name} (latched)"] = drained_subscription(
+                        self,
+                        msg_type,
+                        topic,
+                        self._input(name, handler),
+                        qos(1, True, latched=True),
+                        with_info=True,
+                    )
             except Exception as exc:
                 log.error("cannot subscribe to %s (%s): %s", topic, name, exc)
                 continue
@@ -343,12 +405,23 @@ class CollectorNode(Node):
                 "count": old.get("count", 0) if old.get("topic") == resolved else 0,
                 "last_received": old.get("last_received"),
             }
+            if old.get("topic") != resolved:
+                self._losses.pop(name, None)
+            elif name in LOSS_INPUTS:
+                inputs[name].update(self._losses.get(name, LossCounter()).report())
         for name, msg_type, handler in volatile_map_inputs(self.pipeline):
             if name in self._ftt_subs:
                 self._ftt_subs[f"{name} (volatile)"] = drained_subscription(
                     self, msg_type, get(f"topics.{name}"), self._input(name, handler), qos(1, True)
                 )
         self.inputs = inputs
+
+    def _take_modes(self) -> None:
+        """Mode messages go ahead of the sensor backlog being drained."""
+        for key in (MODE_INPUT, f"{MODE_INPUT} (latched)"):
+            sub = self._ftt_subs.get(key)
+            if sub is not None:
+                sub.take_waiting()
 
     def _tick(self) -> None:
         self.pipeline.tick(now())
@@ -358,6 +431,7 @@ class CollectorNode(Node):
         self._subscribe_snapshots()
         self.blackbox.poll()
         self._watch_hearing(time.monotonic())
+        self._log_losses(time.monotonic())
 
     # --- hearing watchdog ---------------------------------------------------------------
 

@@ -29,6 +29,7 @@ from datetime import datetime
 from rosbridge_app.collector import conversions as conv
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.events import Event
+from rosbridge_app.collector.mode_timing import ModeClock
 from rosbridge_app.collector.modes import mode_of
 from rosbridge_app.collector.params import SPECS
 from rosbridge_app.collector.tf_buffer import TfBuffer, TfLookupError
@@ -57,6 +58,7 @@ class Pipeline:
         self.sink = sink
         self.params = {name: spec.default for name, spec in SPECS.items()}
         self.gps_thinner = Thinner(geographic=True)
+        self.mode_clock = ModeClock()
         self.local_thinner = Thinner()
         self.tf = TfBuffer()
         self.images: deque = deque(maxlen=1)
@@ -122,16 +124,26 @@ class Pipeline:
 
     # --- mode ---------------------------------------------------------------------------
 
-    def on_mode(self, msg, at: datetime) -> None:
+    def on_mode(self, msg, at: datetime, sent: datetime | None = None):
+        """``sent``: when the publisher sent it (DDS source timestamp), if known."""
         mode = mode_of(msg, self.params["params.robot_mode_type"])
         if mode is None:
-            return
-        self.on_mode_value(mode, at)
+            return None
+        header = getattr(msg, "header", None)
+        stamp = conv.stamp_to_datetime(header.stamp) if header is not None else None
+        placed = self.mode_clock.place(mode, stamp, sent, at)
+        if placed is None:
+            return SECOND_COPY
+        start, robot_stamp, uncertainty = placed
+        self.on_mode_value(mode, start, robot_stamp=robot_stamp, uncertainty=uncertainty)
+        return None
 
-    def on_mode_value(self, mode: str, at: datetime) -> None:
+    def on_mode_value(
+        self, mode: str, at: datetime, *, robot_stamp=None, uncertainty: float | None = None
+    ) -> None:
         self.last_mode = mode
         if self.logging and mode != self.open_mode:
-            self._switch(mode, at)
+            self._switch(mode, at, robot_stamp, uncertainty)
 
     def _fresh(self, sample, at: datetime):
         if sample is None:
@@ -141,7 +153,7 @@ class Pipeline:
             return None
         return value
 
-    def _switch(self, mode: str, at: datetime) -> None:
+    def _switch(self, mode: str, at: datetime, robot_stamp=None, uncertainty=None) -> None:
         if self.open_mode is not None:
             self._close_track(at)
         fix = self._fresh(self.last_fix, at)
@@ -153,7 +165,8 @@ class Pipeline:
                 at,
                 {
                     "mode": mode,
-                    "robot_stamp": None,
+                    "robot_stamp": robot_stamp,
+                    "start_uncertainty": uncertainty,
                     "gps": [fix["lon"], fix["lat"]] if fix else None,
                     "local": [local["x"], local["y"], local["frame"]] if local else None,
                 },

@@ -263,6 +263,7 @@ class Recorder:
             data["mode"],
             at=max(at, self.leg.start),
             robot_stamp=data.get("robot_stamp"),
+            start_uncertainty=data.get("start_uncertainty"),
             gps=gps,
             local=local,
             uid=event.uid,

@@ -60,7 +60,9 @@ export const Collector = {
     inputs.replaceChildren(...Object.entries(c.inputs || {}).map(([name, info]) => {
       const li = document.createElement("li");
       const age = info && typeof info.age === "number" ? `${info.age.toFixed(1)} s ago` : "no data yet";
-      li.textContent = `${name}: ${age}`;
+      // Estimated by the collector from gaps in the robot's stamps (losses.py).
+      const missed = info && info.missed ? ` · about ${info.missed} missed` : "";
+      li.textContent = `${name}: ${age}${missed}`;
       return li;
     }));
     button.textContent = c.logging ? "Stop logging" : "Start logging";

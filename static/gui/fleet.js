@@ -1,6 +1,9 @@
 /* The fleet view: every vehicle that is logging, on one map, for a test
- * director running several robots.  What is shown comes from one read,
- * /gui/api/fleet/; one tap on a vehicle opens its cockpit. */
+ * director running several robots.  Opening it reads /gui/api/fleet/ once;
+ * after that each robot's mode and position arrive over the live link and are
+ * applied to its entry (apply); only what the events cannot say (a vehicle
+ * that starts or stops logging, a collector's state) is read again.  One tap
+ * on a vehicle opens its cockpit. */
 import { CONFIG, $ } from "./dom.js";
 import { api } from "./api.js";
 import { showError } from "./feedback.js";
@@ -12,7 +15,7 @@ import { Live } from "./live.js";
 import { loadLevel } from "./levels.js";
 
 const NO_MODE = "#6b7785";
-// Positions arrive several times a second per robot; the fleet is read at most this often.
+// What needs a re-read is read at most this often.
 const MIN_INTERVAL_MS = 1000;
 
 export const Fleet = {
@@ -23,6 +26,7 @@ export const Fleet = {
   fitted: new Set(), // vehicle ids the view was last fitted to
   lastRead: 0,
   timer: null,
+  frame: null,
 
   visible() {
     return state.view === "fleet";
@@ -77,6 +81,43 @@ export const Fleet = {
     const data = await api("GET", "fleet/", undefined, { root: CONFIG.guiApiRoot });
     this.vehicles = data.vehicles;
     this.render();
+  },
+
+  /* A segment or poses event of the change feed, applied to its vehicle in place. */
+  apply(e) {
+    if (!this.visible()) return;
+    const v = this.vehicles.find((x) => x.leg.id === e.leg);
+    if (!v) {
+      Live.later("fleet"); // a vehicle that is not on the map yet
+      return;
+    }
+    if (e.kind === "poses") {
+      const points = e.payload.points;
+      if (!points || !points.length) {
+        Live.later("fleet"); // too many to inline: the server has the last one
+        return;
+      }
+      const [lon, lat] = points[points.length - 1];
+      v.position = [lat, lon];
+    } else if (e.kind === "segment") {
+      const masters = (e.segments || []).filter((s) => s.parent === null && s.leg === v.leg.id);
+      const open = masters.find((s) => s.is_open);
+      if (open) {
+        v.mode = open.segment_type;
+        v.mode_since = open.start;
+        if (open.segment_type === "ito") v.last_takeover = open.start;
+      } else if (masters.length) {
+        Live.later("fleet"); // its segment closed: logging may have stopped
+        return;
+      } else return; // an annotation, not a mode
+    }
+    // Several robots' events in one frame are drawn once.
+    if (!this.frame) {
+      this.frame = requestAnimationFrame(() => {
+        this.frame = null;
+        this.render();
+      });
+    }
   },
 
   color(v) {

@@ -40,8 +40,10 @@ Live.on("map", (e) => {
 });
 Live.on("command", (e) => Collector.commandAnswered(e));
 Live.on("collector", () => Collector.refresh());
-// The fleet view hears every logging robot's mode and positions (it subscribes with fleet: true).
-for (const kind of ["segment", "poses", "collector", "log"]) {
+// The fleet view hears every logging robot's mode and positions (it subscribes with
+// fleet: true) and applies them; a collector's or a log's change is read again.
+for (const kind of ["segment", "poses"]) Live.on(kind, (e) => Fleet.apply(e));
+for (const kind of ["collector", "log"]) {
   Live.on(kind, () => {
     if (Fleet.visible()) Live.later("fleet");
   });

@@ -19,7 +19,9 @@ export async function openSegmentDialog(id) {
   errorBox.hidden = true;
   const kind = s.segment_type === "ito" ? (s.parent === null ? "ITO (take-over)" : "ITO reason") : "AUTO";
   $(".title", segmentDialog).textContent = `${segmentLabel(s.id)} · ${kind}`;
-  $(".subtitle", segmentDialog).textContent = `Start ${fmtTime(s.start)} · End ${s.end ? fmtTime(s.end) : "still open"}`;
+  // Set when the robot's mode message had no stamp: the switch lies within this interval.
+  const uncertain = s.start_uncertainty > 0 ? ` (switched up to ${s.start_uncertainty.toFixed(1)} s earlier; the robot's mode message has no time stamp)` : "";
+  $(".subtitle", segmentDialog).textContent = `Start ${fmtTime(s.start)}${uncertain} · End ${s.end ? fmtTime(s.end) : "still open"}`;
   const form = $("#annotation-form");
   form.elements.ito_reason.replaceChildren(...state.catalogue.reasons.map((r) => new Option(r.short_description, r.key)));
   form.elements.ito_reason.value = s.ito_reason || "unassigned";

@@ -200,17 +200,17 @@ def with_last_position(queryset: QuerySet, leg_field: str = "leg") -> QuerySet:
     ``last_lon``/``last_lat``: where the leg's GPS track ends now, or None.
 
     Subqueries, so a list of any length stays one query.  The end is the newest
-    usable fix (by the robot's clock, else by arrival) of the newest master
-    segment that has one."""
-    newest_fix = (
-        Pose.objects.filter(segment=OuterRef("pk"))
-        .exclude(fix_status=FixStatus.NO_FIX)
-        .order_by(Coalesce("robot_stamp", "received").desc(), "-id")
-        .values("pk")[:1]
-    )
+    usable fix of the newest master segment that has one: by the robot's clock,
+    or by arrival where no fix has a stamp.  Each is the last entry of the
+    pose_segment_time index (read backwards), so the cost does not grow with
+    the track: ordering by the two times merged would read every fix of it."""
+    usable = Pose.objects.filter(segment=OuterRef("pk")).exclude(fix_status=FixStatus.NO_FIX)
+    stamped = usable.filter(robot_stamp__isnull=False).order_by("-robot_stamp", "-received", "-id")
+    unstamped = usable.filter(robot_stamp__isnull=True).order_by("-received", "-id")
+    newest_fix = Coalesce(Subquery(stamped.values("pk")[:1]), Subquery(unstamped.values("pk")[:1]))
     fix_of_leg = (
         Segment.objects.filter(leg=OuterRef(leg_field), parent__isnull=True)
-        .annotate(_fix=Subquery(newest_fix))
+        .annotate(_fix=newest_fix)
         .filter(_fix__isnull=False)
         .order_by("-start", "-id")
         .values("_fix")[:1]

@@ -1,6 +1,7 @@
 """The websocket pushes outbox rows to subscribed browsers and catches up reconnects."""
 
 import asyncio
+import contextlib
 
 import pytest
 import pytest_asyncio
@@ -261,3 +262,54 @@ async def test_an_idle_socket_hears_a_heartbeat_it_can_judge_the_link_by(viewer,
     beats = [await communicator.receive_json_from(timeout=1) for _ in range(3)]
     assert beats == [{"type": "heartbeat", "stale_after": 0.3}] * 3
     await communicator.disconnect()
+
+
+def closing_socket(user):
+    """A socket whose browser closes while being answered: like Uvicorn, sending
+    then raises ClientDisconnected and the consumer's disconnect() is never called."""
+    from uvicorn.protocols.utils import ClientDisconnected
+
+    closed = asyncio.Event()
+
+    async def app(scope, receive, send):
+        async def send_or_fail(message):
+            if closed.is_set():
+                raise ClientDisconnected
+            await send(message)
+
+        await LiveConsumer.as_asgi()(scope, receive, send_or_fail)
+
+    communicator = WebsocketCommunicator(app, "/ws/live/")
+    communicator.scope["user"] = user
+    return communicator, closed
+
+
+async def test_sockets_closed_while_subscribing_leave_and_the_others_get_every_row(
+    viewer, leg, caplog
+):
+    fleet, last_id = await connect(viewer, fleet=True)
+    await database_sync_to_async(segments.report_mode)(leg, "auto")
+    assert [e["kind"] for e in await next_events(fleet)] == ["segment"]
+    closing = []
+    for _ in range(5):
+        communicator, closed = closing_socket(viewer)
+        assert (await communicator.connect())[0]
+        closed.set()  # the browser goes as its old last_id is answered
+        await communicator.send_json_to({"type": "subscribe", "fleet": True, "last_id": last_id})
+        closing.append(communicator)
+    poller = consumers.OutboxPoller.for_loop()
+    for communicator in closing:
+        with contextlib.suppress(OSError):  # Uvicorn swallows what the app raises
+            await communicator.wait(timeout=2)  # the consumer has ended
+    assert len(poller.consumers) == 1
+    master = await database_sync_to_async(lambda: leg.segments.get(end__isnull=True))()
+    for i in range(20):
+        await database_sync_to_async(recording.record_poses)(
+            master, [recording.GpsFix(7.0 + i / 1000, 50.0)]
+        )
+    received = []
+    while len(received) < 20:
+        received += await next_events(fleet)
+    assert [e["kind"] for e in received] == ["poses"] * 20
+    assert not [r for r in caplog.records if r.levelname in ("ERROR", "CRITICAL")]
+    await fleet.disconnect()

@@ -73,9 +73,14 @@ def _fixes(base, points):
     return [GpsFix(longitude=lon, latitude=0.0, robot_stamp=_at(base, t)) for t, lon in points]
 
 
-def _switch(leg, mode, base, t, lon, reason="unassigned"):
+def _switch(leg, mode, base, t, lon, reason="unassigned", uncertainty=None):
     return segments.report_mode(
-        leg, mode, at=_at(base, t), gps=GpsPosition(lon, 0.0), reason=reason
+        leg,
+        mode,
+        at=_at(base, t),
+        gps=GpsPosition(lon, 0.0),
+        reason=reason,
+        start_uncertainty=uncertainty,
     ).master
 
 
@@ -130,7 +135,8 @@ def build_scenario(vehicle, other_vehicle, performer, text=HOSTILE) -> Scenario:
     m["A3"] = _switch(leg2, "auto", T1, 0, 0.010)
     recording.record_poses(m["A3"], _fixes(T1, [(10, 0.011), (20, 0.012), (40, 0.013)]))
     m["I2"] = _switch(leg2, "ito", T1, 300, 0.014, reason="goal")
-    m["A4"] = _switch(leg2, "auto", T1, 330, 0.016)
+    # A robot whose mode message has no stamp: it switched up to 0.8 s earlier.
+    m["A4"] = _switch(leg2, "auto", T1, 330, 0.016, uncertainty=0.8)
     recording.record_poses(m["A4"], _fixes(T1, [(340, 0.017), (350, 0.018), (360, 0.019)]))
     m["I3"] = _switch(leg2, "ito", T1, 630, 0.020, reason="unexpected")
     recording.record_poses(m["I3"], _fixes(T1, [(640, 0.021)]))

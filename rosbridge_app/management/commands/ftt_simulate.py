@@ -99,7 +99,8 @@ class Command(BaseCommand):
         executor = SingleThreadedExecutor()
         executor.add_node(robot)
         self.stdout.write(
-            f"simulated robot near {config.latitude}, {config.longitude}; Ctrl-C stops it"
+            f"simulated robot near {config.latitude}, {config.longitude}, "
+            f"started at {robot.t0:.6f}; Ctrl-C stops it"
         )
         end = time.monotonic() + o["duration"] if o["duration"] > 0 else None
         try:

@@ -1,0 +1,347 @@
+"""A fleet on one server: N simulated robots, each with its collector in its own
+ROS domain, one PostGIS, the production server (2 workers, Redis if given) and
+headless Chromium on the fleet view (issue 33).
+
+Per N it prints: mode switches stored and their time error against the
+robot's switch (the simulator switches every --switch-every s from the start
+time it prints), the largest stored uncertainty, GPS fixes missing (published
+by the robots vs stored, thinning off) and the collectors' own estimate,
+switch -> fleet view on screen p50/p95, the fleet view's open time and the
+fleet API's time, CPU and RSS per process kind, and server errors logged.
+The robots' share (simulators and collectors, which on a real fleet run on
+the robots) is printed apart from the server's.
+
+    .venv/bin/python benchmarks/fleet.py --database-url postgis://ftt:ftt@127.0.0.1:5432/ftt \\
+        [--robots 3 6 10] [--seconds 60] [--redis-url redis://127.0.0.1:6379/2]
+
+It makes (and drops) a database per N next to the one --database-url names.
+"""
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from tests.support.browser import (  # noqa: E402
+    ARTIFACTS,
+    Server,
+    drop_database,
+    fresh_database,
+    session_code,
+    system_chromium,
+)
+
+TICK = os.sysconf("SC_CLK_TCK")
+SETUP = """
+import json
+from events.models import Vehicle
+from events.services import logs
+legs = []
+for i in range({n}):
+    v = Vehicle.objects.create(key=f"fleet-{{i}}", short_description=f"Rover {{i}}")
+    e = logs.create_test_event(location=f"Fleet {{i}}")
+    legs.append(logs.create_leg(shift=logs.create_shift(test_event=e, vehicle=v)).pk)
+print("SETUP", s.session_key, json.dumps(legs))
+"""
+RESULTS = """
+import json
+from events.models import Announcement, Segment
+from rosbridge_app.models import Collector
+from telemetry.models import Pose
+def stored(master):
+    # When the new segment was committed: its first row in the change feed.
+    row = Announcement.objects.filter(kind="segment", payload__id=master.pk).order_by("id").first()
+    return row.created.timestamp() if row else None
+out = {{}}
+for leg in {legs!r}:
+    masters = Segment.objects.filter(leg_id=leg, parent__isnull=True).order_by("start")
+    inputs = (Collector.objects.filter(leg_id=leg).values_list("inputs", flat=True).first()) or {{}}
+    out[leg] = {{
+        "masters": [
+            [m.segment_type_id, m.start.timestamp(), m.start_uncertainty, stored(m)]
+            for m in masters
+        ],
+        "poses": Pose.objects.filter(segment__leg_id=leg).count(),
+        "missed": (inputs.get("gps_fix") or {{}}).get("missed"),
+    }}
+print("RESULTS", json.dumps(out))
+"""
+# Notes when each vehicle's entry in the fleet list shows a new mode.
+OBSERVE = """() => {
+  window.__modes = [];
+  const shown = new Map();
+  const list = document.querySelector("#fleet-list");
+  const note = () => {
+    for (const b of list.querySelectorAll(".fleet-vehicle")) {
+      if (shown.get(b.dataset.vehicle) !== b.dataset.mode) {
+        shown.set(b.dataset.vehicle, b.dataset.mode);
+        window.__modes.push([b.dataset.vehicle, b.dataset.mode, Date.now()]);
+      }
+    }
+  };
+  new MutationObserver(note).observe(list, { childList: true, subtree: true, attributes: true });
+  note();
+}"""
+
+
+def pct(values, q):
+    values = sorted(values)
+    return values[max(0, round(len(values) * q) - 1)] if values else float("nan")
+
+
+def descendants(pid: int) -> list[int]:
+    children: dict[int, list[int]] = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                ppid = int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1])
+            except (OSError, IndexError, ValueError):
+                continue
+            children.setdefault(ppid, []).append(int(entry.name))
+    found, todo = [], [pid]
+    while todo:
+        p = todo.pop()
+        found.append(p)
+        todo += children.get(p, [])
+    return found
+
+
+def usage(pids) -> tuple[float, float]:
+    """CPU seconds and RSS (MB) of ``pids`` now."""
+    cpu = rss = 0.0
+    for pid in pids:
+        try:
+            fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+            cpu += (int(fields[11]) + int(fields[12])) / TICK
+            rss += int(fields[21]) * os.sysconf("SC_PAGE_SIZE") / 1e6
+        except (OSError, IndexError, ValueError):
+            pass
+    return cpu, rss
+
+
+def run(n: int, args) -> dict:
+    import requests
+    from playwright.sync_api import sync_playwright
+
+    from rosbridge_app.collector import params as P
+
+    work = Path(tempfile.mkdtemp(prefix=f"ftt-fleet{n}-"))
+    url = fresh_database(args.database_url, f"fleet{n}")
+    server = Server(work, "", url, name=f"fleet-bench-{n}")
+    server.workers = 2
+    if args.redis_url:
+        server.env["FTT_REDIS_URL"] = args.redis_url
+    server.start()
+    procs: dict[str, list[subprocess.Popen]] = {"collector": [], "robot": []}
+    try:
+        out = server.python(session_code("director", "viewer") + SETUP.format(n=n))
+        _, key, legs = next(x for x in out.splitlines() if x.startswith("SETUP")).split(" ", 2)
+        legs = json.loads(legs)
+        defaults = P.read_file(P.DEFAULT_FILE)
+        for i in range(n):
+            env = {**server.env, "ROS_DOMAIN_ID": str(args.domain + i)}
+            env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+            values = dict(defaults, vehicle=f"fleet-{i}")
+            values["params.pose_min_distance"] = values["params.pose_min_period"] = 0.0
+            P.write_file(work / f"c{i}.yaml", values)
+            log = open(work / f"collector{i}.log", "wb")
+            procs["collector"].append(
+                subprocess.Popen(
+                    [sys.executable, "manage.py", "ftt_collect", "--params-file"]
+                    + [str(work / f"c{i}.yaml"), "--name", f"fleet-{i}", "--start-logging"]
+                    + ["--spool", str(work / f"spool{i}.sqlite3")],
+                    cwd=ROOT,
+                    env=env,
+                    stdout=log,
+                    stderr=subprocess.STDOUT,
+                )
+            )
+            procs["robot"].append(
+                subprocess.Popen(
+                    [sys.executable, "manage.py", "ftt_simulate", "--switch-every"]
+                    + [str(args.switch_every), "--gps-rate", "10", "--tf-rate", "10"]
+                    + ["--camera-rate", "1", "--camera-size", "320x240", "--map-size", "40"]
+                    + ["--duration", str(args.seconds), "--wait-for-subscriber", "120"]
+                    + ["--latitude", str(50.6160 + i * 0.0005)],
+                    cwd=ROOT,
+                    env=env,
+                    stdout=subprocess.PIPE,
+                    stderr=subprocess.STDOUT,
+                    text=True,
+                )
+            )
+        with sync_playwright() as pw:
+            chromium = os.environ.get("FTT_CHROMIUM") or system_chromium()
+            browser = pw.chromium.launch(**({"executable_path": chromium} if chromium else {}))
+            context = browser.new_context(viewport={"width": 1366, "height": 768})
+            context.add_cookies([{"name": "sessionid", "value": key, "url": server.url}])
+            page = context.new_page()
+            # Once every robot logs, the fleet view is opened and timed.
+            deadline = time.monotonic() + 150
+            while time.monotonic() < deadline:
+                api = requests.get(f"{server.url}/gui/api/fleet/", cookies={"sessionid": key})
+                if len([v for v in api.json()["vehicles"] if v["position"]]) == n:
+                    break
+                time.sleep(1)
+            opened = time.monotonic()
+            page.goto(f"{server.url}/?view=fleet")
+            page.wait_for_function(
+                "(n) => document.querySelectorAll('.fleet-vehicle').length >= n", arg=n
+            )
+            open_s = time.monotonic() - opened
+            page.evaluate(OBSERVE)
+            api_times = []
+            pids = {
+                "server": descendants(server.process.pid) + [server.worker.pid],
+                "collectors": [p.pid for p in procs["collector"]],
+                "robots (simulators)": [p.pid for p in procs["robot"]],
+            }
+            # Playwright's driver and Chromium: this process's other descendants.
+            ours = {pid for group in pids.values() for pid in group}
+            pids["browser"] = [p for p in descendants(os.getpid())[1:] if p not in ours]
+            before = {kind: usage(p) for kind, p in pids.items()}
+            t_start = time.monotonic()
+            rss_max = dict.fromkeys(pids, 0.0)
+            cpu = dict.fromkeys(pids, 0.0)
+            # Sampled while every robot still runs (an ended process has no CPU time left).
+            while all(p.poll() is None for p in procs["robot"]):
+                t = time.monotonic()
+                requests.get(f"{server.url}/gui/api/fleet/", cookies={"sessionid": key})
+                api_times.append(time.monotonic() - t)
+                for kind, p in pids.items():
+                    seconds, rss = usage(p)
+                    rss_max[kind] = max(rss_max[kind], rss)
+                    cpu[kind] = (seconds - before[kind][0]) / (time.monotonic() - t_start)
+                time.sleep(2)
+            for p in procs["robot"]:
+                p.wait(60)
+            shown = page.evaluate("window.__modes")
+            browser.close()
+        starts, published = [], []
+        for p in procs["robot"]:
+            text = p.stdout.read()
+            starts.append(float(text.split("started at ")[1].split(";")[0]))
+            published.append(json.loads(text.split("published ")[1].strip().replace("'", '"')))
+        for p in procs["collector"]:
+            p.send_signal(2)
+            p.wait(60)
+        results = server.python(RESULTS.format(legs=legs))
+        results = json.loads(next(x for x in results.splitlines() if x.startswith("RESULTS"))[8:])
+        vehicles = json.loads(
+            server.python(
+                "import json\nfrom events.models import Vehicle\n"
+                "print(json.dumps({v.key: v.pk for v in Vehicle.objects.all()}))"
+            ).splitlines()[-1]
+        )
+    finally:
+        for kind in procs.values():
+            for p in kind:
+                if p.poll() is None:
+                    p.kill()
+        server.stop()
+        errors = (ARTIFACTS / f"fleet-bench-{n}.log").read_text(errors="replace")
+        drop_database(url)
+    return summarise(n, args, legs, starts, published, results, vehicles, shown) | {
+        "open_s": open_s,
+        "api_p95": pct(api_times, 0.95),
+        "cpu": cpu,
+        "rss": rss_max,
+        "errors": errors.count("Traceback") + errors.count(" ERROR "),
+    }
+
+
+def summarise(n, args, legs, starts, published, results, vehicles, shown) -> dict:
+    errors, bounds, screen, stored, expected, stored_after = [], [], [], 0, 0, []
+    missing_pub = missing_stored = estimated = 0
+    for i, leg in enumerate(legs):
+        r = results[str(leg)]
+        t0, every = starts[i], args.switch_every
+        masters = r["masters"][1:]  # the first one opened when logging started
+        expected += int(args.seconds // every)
+        stored += len(masters)
+        for mode, start, uncertainty, modified in masters:
+            k = round((start - t0) / every)
+            if modified is not None:
+                stored_after.append(modified - (t0 + k * every))
+            errors.append(abs(start - (t0 + k * every)))
+            bounds.append(uncertainty or 0.0)
+            vehicle = vehicles[f"fleet-{i}"]
+            seen = [at / 1000 for v, m, at in shown if int(v) == vehicle and m == mode]
+            later = [at for at in seen if at >= t0 + k * every]
+            if later:
+                screen.append(min(later) - (t0 + k * every))
+        missing_pub += published[i]["gps"]
+        missing_stored += r["poses"]
+        estimated += r["missed"] or 0
+    lost = max(0, missing_pub - missing_stored)
+    return {
+        "n": n,
+        "switches": f"{stored}/{expected}",
+        "error_max": max(errors, default=float("nan")),
+        "errors_over_0_5": sum(e > 0.5 for e in errors),
+        "errors_beyond_bound": sum(e > b + 0.05 for e, b in zip(errors, bounds, strict=True)),
+        "bound_max": max(bounds, default=0.0),
+        "fixes_missing": f"{lost} of {missing_pub} ({100 * lost / max(missing_pub, 1):.2f} %)",
+        "estimated": estimated,
+        "stored_p50": pct(stored_after, 0.5),
+        "stored_p95": pct(stored_after, 0.95),
+        "screen_p50": pct(screen, 0.5),
+        "screen_p95": pct(screen, 0.95),
+    }
+
+
+def main():
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--database-url", required=True)
+    parser.add_argument("--redis-url", default="")
+    parser.add_argument("--robots", type=int, nargs="+", default=[3, 6, 10])
+    parser.add_argument("--seconds", type=float, default=150)
+    parser.add_argument("--switch-every", type=float, default=10)
+    parser.add_argument("--domain", type=int, default=90, help="robot i: ROS domain DOMAIN + i")
+    args = parser.parse_args()
+    rows = [run(n, args) for n in args.robots]
+    load = os.getloadavg()
+    print(f"{os.cpu_count()} cores, load average {load[0]:.1f} / {load[1]:.1f} / {load[2]:.1f}")
+    keys = [
+        ("switches stored / robot switches", "switches"),
+        ("switch time error, max (s)", "error_max"),
+        ("switch time errors > 0.5 s", "errors_over_0_5"),
+        ("errors beyond the stored bound", "errors_beyond_bound"),
+        ("largest stored uncertainty (s)", "bound_max"),
+        ("GPS fixes missing", "fixes_missing"),
+        ("fixes missed, collectors' estimate", "estimated"),
+        ("switch -> stored p50 (s)", "stored_p50"),
+        ("switch -> stored p95 (s)", "stored_p95"),
+        ("switch -> fleet view p50 (s)", "screen_p50"),
+        ("switch -> fleet view p95 (s)", "screen_p95"),
+        ("fleet view open (s)", "open_s"),
+        ("fleet API p95 (s)", "api_p95"),
+        ("server errors logged", "errors"),
+    ]
+    print("| | " + " | ".join(f"{r['n']} robots" for r in rows) + " |")
+    print("|---|" + "---|" * len(rows))
+    for label, key in keys:
+        cells = [f"{r[key]:.3f}" if isinstance(r[key], float) else str(r[key]) for r in rows]
+        print(f"| {label} | " + " | ".join(cells) + " |")
+    for kind in rows[0]["cpu"]:
+        cells = [f"{r['cpu'][kind] * 100:.0f} % / {r['rss'][kind]:.0f} MB" for r in rows]
+        print(f"| CPU / RSS: {kind} | " + " | ".join(cells) + " |")
+    print(
+        "Robots' share (simulators + collectors, on the robots in a real fleet) vs the server's: "
+        + "; ".join(
+            f"{r['n']}: {100 * (r['cpu']['collectors'] + r['cpu']['robots (simulators)']):.0f} % "
+            f"vs {100 * r['cpu']['server']:.0f} %"
+            for r in rows
+        )
+    )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,53 @@
+"""When the robot switched: the start time of a segment from its mode message.
+
+The collector may be starved by the robot's own work, so the time a mode
+message is received can be seconds after the switch.  The message's header
+stamp is the robot's own time of the switch; a message without a header still
+carries the time its publisher sent it (the DDS source timestamp), and the
+switch happened between the previous message (still the old mode) and this
+one: that interval is the start's uncertainty, stored with the segment.
+Free of ROS.
+"""
+
+from datetime import datetime, timedelta
+
+# A stamp further ahead of the receive time than this comes from another clock.
+MAX_AHEAD = timedelta(seconds=1)
+# ... and one older than this is not believed either (a robot clock that was
+# never set); the receive time is taken and the uncertainty is unknown.
+MAX_DELAY = timedelta(seconds=60)
+
+
+def plausible(stamp: datetime | None, at: datetime) -> bool:
+    return stamp is not None and at - MAX_DELAY <= stamp <= at + MAX_AHEAD
+
+
+class ModeClock:
+    """Places each mode message in time; remembers the previous one."""
+
+    def __init__(self):
+        self.last_key: datetime | None = None
+        self.last_sent: datetime | None = None
+        self.last_mode: str | None = None
+
+    def place(
+        self, mode: str, stamp: datetime | None, sent: datetime | None, at: datetime
+    ) -> tuple[datetime, datetime | None, float | None] | None:
+        """(start, robot stamp, start uncertainty in seconds or None if unknown)
+        of a message saying ``mode``, received at ``at``; None for a copy of a
+        message already placed (the latched subscription) or an older one."""
+        key = stamp or sent
+        if key is not None and self.last_key is not None:
+            # A robot clock set back by more than MAX_DELAY starts afresh.
+            if self.last_key - MAX_DELAY < key <= self.last_key:
+                return None
+        previous_sent, previous_mode = self.last_sent, self.last_mode
+        self.last_key, self.last_sent, self.last_mode = key, sent, mode
+        if plausible(stamp, at):
+            return stamp, stamp, 0.0
+        if plausible(sent, at):
+            bound = None
+            if previous_mode is not None and previous_mode != mode and previous_sent is not None:
+                bound = round(max((sent - previous_sent).total_seconds(), 0.0), 3)
+            return sent, sent, bound
+        return at, None, None
