@@ -9,7 +9,7 @@ from django.db import migrations, models
 class Migration(migrations.Migration):
 
     dependencies = [
-        ('events', '0011_feed_rows_wake_readers_from_the_writers_process'),
+        ('events', '0012_segment_start_uncertainty'),
         migrations.swappable_dependency(settings.AUTH_USER_MODEL),
     ]
 
