@@ -14,6 +14,8 @@ from pathlib import Path
 
 import yaml
 
+from rosbridge_app.collector import mode_sources
+from rosbridge_app.collector.message_fields import installed_fields
 from rosbridge_app.collector.modes import MODE_TYPES
 
 NODE_NAME = "ftt_collector"
@@ -100,6 +102,12 @@ SPECS: dict[str, Spec] = {
         "bool",
         "bool (std_msgs/Bool, true = autonomous) or industrial (industrial_msgs/RobotMode).",
         choices=MODE_TYPES,
+    ),
+    "params.mode_sources": Spec(
+        "",
+        "Mode from any topics (YAML: rule, sources with topic, type, field, auto, ito, "
+        "default, hysteresis; presets in docs/collector.md); empty: topics.robot_mode "
+        "with params.robot_mode_type.",
     ),
     "params.use_tf": Spec(True, "Local position from TF map_frame→robot_frame, else local_pose."),
     "params.map_frame": Spec("map", "Frame of local positions."),
@@ -213,6 +221,11 @@ def _checked(name: str, spec: Spec, value) -> object:
         raise InvalidParameter(f"{name} must be <= {spec.maximum:g}")
     if spec.choices is not None and value not in spec.choices:
         raise InvalidParameter(f"{name} must be one of {', '.join(spec.choices)}")
+    if name == "params.mode_sources":
+        try:
+            mode_sources.parse(value, installed_fields)
+        except mode_sources.InvalidModeSources as exc:
+            raise InvalidParameter(f"{name}: {exc}") from None
     if name.endswith("_service") and not value:
         raise InvalidParameter(f"{name} cannot be empty")
     return value

@@ -29,6 +29,8 @@ from datetime import datetime
 from rosbridge_app.collector import conversions as conv
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.events import Event
+from rosbridge_app.collector.mode_sources import Combiner
+from rosbridge_app.collector.mode_sources import parse as parse_mode_sources
 from rosbridge_app.collector.modes import mode_of
 from rosbridge_app.collector.params import SPECS
 from rosbridge_app.collector.tf_buffer import TfBuffer, TfLookupError
@@ -60,6 +62,7 @@ class Pipeline:
         self.local_thinner = Thinner()
         self.tf = TfBuffer()
         self.images: deque = deque(maxlen=1)
+        self.mode_sources: Combiner | None = None
         self.update_params(params or {})
         self.logging = False
         self.last_mode: str | None = None  # from the robot, logging or not
@@ -91,6 +94,10 @@ class Pipeline:
         size = max(0, int(p["params.image_buffer_size"]))
         if self.images.maxlen != size:
             self.images = deque(self.images, maxlen=size)
+        if "params.mode_sources" in changes:
+            # Checked where the value was set; here it is only read.
+            config = parse_mode_sources(p.get("params.mode_sources", ""))
+            self.mode_sources = Combiner(config) if config else None
         if any(k in changes for k in ("params.map_frame", "params.robot_frame", "params.use_tf")):
             self.last_local = None
             self.local_thinner.reset()
@@ -127,6 +134,11 @@ class Pipeline:
         if mode is None:
             return
         self.on_mode_value(mode, at)
+
+    def on_mode_source(self, index: int, msg, at: datetime) -> None:
+        """A message of mode source ``index`` (params.mode_sources)."""
+        for mode, when in self.mode_sources.offer(index, msg, at):
+            self.on_mode_value(mode, when)
 
     def on_mode_value(self, mode: str, at: datetime) -> None:
         self.last_mode = mode
@@ -304,7 +316,11 @@ class Pipeline:
             self._maybe_store_map(at)
 
     def tick(self, at: datetime) -> None:
-        """Called about once a second: stores a map held back by send_map_period."""
+        """Called about once a second: stores a map held back by send_map_period
+        and confirms mode source values that held for their hysteresis."""
+        if self.mode_sources is not None:
+            for mode, when in self.mode_sources.tick(at):
+                self.on_mode_value(mode, when)
         if self.map_pending:
             self._maybe_store_map(at)
 
