@@ -160,6 +160,7 @@ def report_mode(
     local: LocalPosition | None = None,
     reason: str = ItoReason.UNASSIGNED,
     uid=None,
+    suggested_reason: str | None = None,
 ) -> ModeReport:
     """The robot (or an importer) says which mode it is in now.
 
@@ -182,7 +183,17 @@ def report_mode(
     else:
         require_not_before(leg, at, str(leg))
     master = _start_master(leg, mode, at, robot_stamp, _position_fields(gps, local), reason, uid)
+    if suggested_reason and mode == SegmentType.ITO:
+        _suggest(master, suggested_reason)
     return ModeReport(announce_and_return(master), changed=True)
+
+
+def _suggest(master: Segment, reason_key: str) -> None:
+    """The robot's reason for the take-over, waiting for the operator's confirmation;
+    a key the catalogue does not have is no suggestion."""
+    suggestion = ItoReason.objects.filter(pk=reason_key).first()
+    if suggestion is not None:
+        master.children.update(suggested_reason=suggestion)
 
 
 @transaction.atomic

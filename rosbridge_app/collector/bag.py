@@ -98,6 +98,10 @@ def route(pipeline: Pipeline, topic: str, msgtype: str):
                 return lambda m, at, i=i: pipeline.on_mode_source(i, m, at)
         if msgtype == ROBOT_MODE or _same_topic(topic, p["topics.robot_mode"]):
             return None
+    if pipeline.reasons is not None:
+        for rule_topic, rule_type in pipeline.reasons.topics().items():
+            if _same_topic(topic, rule_topic) and msgtype == rule_type:
+                return lambda m, at: pipeline.on_reason_signal(topic, m, at)
     if msgtype == ROBOT_MODE:
         return lambda m, at: _mode(pipeline, m, at, INDUSTRIAL)
     if msgtype == BOOL_TYPE and _same_topic(topic, p["topics.robot_mode"]):

@@ -51,19 +51,35 @@ def wanted_inputs(get, pipe) -> list[tuple]:
     parameters ask for (``get(name)``: a parameter's value), handled by the
     pipeline ``pipe``."""
     reliable = get("params.sensor_reliable")
-    wanted = mode_inputs(get, pipe) + [
-        ("gps_fix", NavSatFix, get("topics.gps_fix"), qos(POSITION_DEPTH, reliable), pipe.on_fix),
-        ("map", OccupancyGrid, get("topics.map"), RELIABLE_LATCHED, pipe.on_grid),
-        ("map_jpeg", CompressedImage, get("topics.map_jpeg"), RELIABLE_LATCHED, pipe.on_map_jpeg),
-        ("image", Image, get("topics.image"), qos(2, reliable), pipe.on_image),
-        (
-            "image_compressed",
-            CompressedImage,
-            get("topics.image_compressed"),
-            qos(2, reliable),
-            lambda m, at: pipe.on_image(m, at, compressed=True),
-        ),
-    ]
+    wanted = (
+        mode_inputs(get, pipe)
+        + reason_inputs(pipe)
+        + [
+            (
+                "gps_fix",
+                NavSatFix,
+                get("topics.gps_fix"),
+                qos(POSITION_DEPTH, reliable),
+                pipe.on_fix,
+            ),
+            ("map", OccupancyGrid, get("topics.map"), RELIABLE_LATCHED, pipe.on_grid),
+            (
+                "map_jpeg",
+                CompressedImage,
+                get("topics.map_jpeg"),
+                RELIABLE_LATCHED,
+                pipe.on_map_jpeg,
+            ),
+            ("image", Image, get("topics.image"), qos(2, reliable), pipe.on_image),
+            (
+                "image_compressed",
+                CompressedImage,
+                get("topics.image_compressed"),
+                qos(2, reliable),
+                lambda m, at: pipe.on_image(m, at, compressed=True),
+            ),
+        ]
+    )
     if get("params.use_tf"):
         wanted += [
             ("tf", TFMessage, get("topics.tf"), qos(POSITION_DEPTH, True), pipe.on_tf),
@@ -111,6 +127,28 @@ def mode_inputs(get, pipe) -> list[tuple]:
             continue
         handler = functools.partial(pipe.on_mode_source, i)
         wanted.append((f"mode_source_{i}", cls, source.topic, qos(50, True), handler))
+    return wanted
+
+
+def reason_inputs(pipe) -> list[tuple]:
+    """One input per topic of params.reason_rules that is not a mode source
+    (a mode source hands its messages to the rules itself)."""
+    if pipe.reasons is None:
+        return []
+    taken = set()
+    if pipe.mode_sources is not None:
+        taken = {s.topic.lstrip("/") for s in pipe.mode_sources.config.sources}
+    wanted = []
+    for i, (topic, typename) in enumerate(pipe.reasons.topics().items()):
+        if topic.lstrip("/") in taken:
+            continue
+        try:
+            cls = message_class(typename)
+        except (ImportError, AttributeError):
+            log.error("reason rule %s: message type %s is not installed", topic, typename)
+            continue
+        handler = functools.partial(pipe.on_reason_signal, topic)
+        wanted.append((f"reason_{i}", cls, topic, qos(50, True), handler))
     return wanted
 
 

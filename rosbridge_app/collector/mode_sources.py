@@ -36,7 +36,7 @@ from rosbridge_app.collector.modes import AUTO, ITO
 
 RULES = ("any_ito", "first")
 DEFAULTS = (AUTO, ITO, "unknown")
-_TYPE = re.compile(r"^[A-Za-z][\w]*/msg/[A-Za-z][\w]*$")
+TYPE_NAME = re.compile(r"^[A-Za-z][\w]*/msg/[A-Za-z][\w]*$")
 _STEP = re.compile(r"([A-Za-z_]\w*)((?:\[\d+\])*)")
 _KEYS = {"topic", "type", "field", "auto", "ito", "default", "hysteresis"}
 
@@ -71,7 +71,7 @@ class Source:
     def mode_of(self, value) -> str | None:
         """'auto', 'ito' or None (the source says nothing) for a field value."""
         for mode, matchers in ((ITO, self.ito), (AUTO, self.auto)):
-            if any(_matches(m, value) for m in matchers):
+            if any(matches(m, value) for m in matchers):
                 return mode
         return None if self.default == "unknown" else self.default
 
@@ -82,7 +82,7 @@ class ModeSources:
     sources: tuple[Source, ...] = field(default=())
 
 
-def _matches(matcher, value) -> bool:
+def matches(matcher, value) -> bool:
     if isinstance(matcher, Range):
         return value in matcher
     if isinstance(matcher, bool) or isinstance(value, bool):
@@ -116,7 +116,7 @@ def field_value(msg, path: tuple):
     return value
 
 
-def _matchers(name: str, index: int, raw) -> tuple:
+def matchers(name: str, index: int, raw) -> tuple:
     if raw is None:
         return ()
     items = raw if isinstance(raw, list) else [raw]
@@ -175,7 +175,7 @@ def parse(text: str, fields_of: Callable[[str], dict] | None = None) -> ModeSour
         topic, typename = str(raw.get("topic") or ""), str(raw.get("type") or "")
         if not topic:
             raise InvalidModeSources(_("source %(n)d has no topic") % {"n": n})
-        if not _TYPE.match(typename):
+        if not TYPE_NAME.match(typename):
             raise InvalidModeSources(
                 _("source %(n)d: type %(type)r is not package/msg/Name")
                 % {"n": n, "type": typename}
@@ -196,8 +196,8 @@ def parse(text: str, fields_of: Callable[[str], dict] | None = None) -> ModeSour
             topic=topic,
             type=typename,
             path=path,
-            auto=_matchers("auto", n, raw.get("auto")),
-            ito=_matchers("ito", n, raw.get("ito")),
+            auto=matchers("auto", n, raw.get("auto")),
+            ito=matchers("ito", n, raw.get("ito")),
             default=default,
             hysteresis=float(hysteresis),
             text=path_text,

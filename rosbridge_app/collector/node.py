@@ -140,6 +140,7 @@ class CollectorNode(Node):
                 in (
                     "params.robot_mode_type",
                     "params.mode_sources",
+                    "params.reason_rules",
                     "params.use_tf",
                     "params.sensor_reliable",
                 )

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import yaml
 
-from rosbridge_app.collector import mode_sources
+from rosbridge_app.collector import mode_sources, reason_rules
 from rosbridge_app.collector.message_fields import installed_fields
 from rosbridge_app.collector.modes import MODE_TYPES
 
@@ -108,6 +108,11 @@ SPECS: dict[str, Spec] = {
         "Mode from any topics (YAML: rule, sources with topic, type, field, auto, ito, "
         "default, hysteresis; presets in docs/collector.md); empty: topics.robot_mode "
         "with params.robot_mode_type.",
+    ),
+    "params.reason_rules": Spec(
+        "",
+        "Reasons the robot knows (YAML: window, rules with topic, type, field and values, "
+        "or silent, and reason); the take-over gets the reason as a suggestion to confirm.",
     ),
     "params.use_tf": Spec(True, "Local position from TF map_frame→robot_frame, else local_pose."),
     "params.map_frame": Spec("map", "Frame of local positions."),
@@ -221,9 +226,10 @@ def _checked(name: str, spec: Spec, value) -> object:
         raise InvalidParameter(f"{name} must be <= {spec.maximum:g}")
     if spec.choices is not None and value not in spec.choices:
         raise InvalidParameter(f"{name} must be one of {', '.join(spec.choices)}")
-    if name == "params.mode_sources":
+    if name in ("params.mode_sources", "params.reason_rules"):
+        parse = mode_sources.parse if name == "params.mode_sources" else reason_rules.parse
         try:
-            mode_sources.parse(value, installed_fields)
+            parse(value, installed_fields)
         except mode_sources.InvalidModeSources as exc:
             raise InvalidParameter(f"{name}: {exc}") from None
     if name.endswith("_service") and not value:

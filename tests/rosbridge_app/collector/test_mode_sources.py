@@ -11,8 +11,9 @@ from rosbags.typesys import Stores, get_typestore
 
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector import params as P
+from rosbridge_app.collector import reason_rules
 from rosbridge_app.collector.bag import bag_events
-from rosbridge_app.collector.message_fields import folder_types
+from rosbridge_app.collector.message_fields import folder_types, installed_fields
 from rosbridge_app.collector.mode_sources import Combiner, parse
 
 T0 = datetime(2026, 5, 4, 10, 0, tzinfo=UTC)
@@ -169,3 +170,37 @@ def test_a_recording_with_the_robots_own_type_gives_the_scripted_segments(tmp_pa
         ("auto", 33.02),
     ]
     assert sum(e.kind == ev.GPS for e in events) > 30
+
+
+def test_reason_rules_suggest_the_first_that_fired_within_the_window():
+    rules = reason_rules.parse(
+        """
+        window: 2.0
+        rules:
+          - {topic: /estop, type: std_msgs/msg/Bool, field: data, values: [true], reason: safety}
+          - {topic: /planner, type: std_msgs/msg/Int32, field: data, values: [{min: 3}],
+             reason: planner}
+          - {topic: /loc, type: std_msgs/msg/Empty, silent: 1.0, reason: other}
+        """,
+        installed_fields,
+    )
+    watcher = reason_rules.ReasonWatcher(rules)
+    watcher.offer("/loc", NS(), at(0))
+    watcher.offer("/planner", NS(data=4), at(0.5))
+    assert watcher.reason_at(at(0.8)) == "planner"
+    watcher.offer("/planner", NS(data=0), at(0.9))
+    watcher.offer("estop", NS(data=True), at(1.0))  # the same topic without its slash
+    assert watcher.reason_at(at(1.0)) == "safety"
+    watcher.offer("/estop", NS(data=False), at(1.2))  # a short press still counts
+    assert watcher.reason_at(at(2.5)) == "safety"
+    assert watcher.reason_at(at(3.5)) == "other"  # e-stop pressed too long ago; /loc silent
+    watcher.offer("/loc", NS(), at(3.6))
+    assert watcher.reason_at(at(3.7)) is None
+
+
+def test_a_reason_rule_on_a_field_the_type_lacks_is_refused():
+    with pytest.raises(P.InvalidParameter, match="std_msgs/msg/Bool has no field value"):
+        P.check(
+            "params.reason_rules",
+            "rules: [{topic: /e, type: std_msgs/msg/Bool, field: value, values: [1], reason: x}]",
+        )

@@ -29,26 +29,34 @@ sources:
   - {topic: /estop, type: std_msgs/msg/Bool, field: data, ito: [true]}
 """
 STATE, OPERATION, TEXT, ESTOP = "/mavros/state", "/autoware/operation_mode", "/mode_text", "/estop"
+ALIVE = "/localization/alive"
+REASONS = f"""
+window: 2.0
+rules:
+  - {{topic: {ESTOP}, type: std_msgs/msg/Bool, field: data, values: [true], reason: safety}}
+  - {{topic: {ALIVE}, type: std_msgs/msg/Empty, silent: 1.0, reason: other}}
+"""
 AUTO_ALL = {
     STATE: {"mode": "OFFBOARD"},
     OPERATION: {"mode": 2},
     TEXT: {"data": "AUTO"},
     ESTOP: {"data": False},
 }
-# (seconds, changes, the combined mode the script means). Topics change one per
-# phase where that matters: they are published one after the other.
+# (seconds, changes, the combined mode the script means, the reason the robot
+# suggests at a switch to ITO). Topics change one per phase where that
+# matters: they are published one after the other; None: the topic falls silent.
 PHASES = [
     (1.5, {STATE: {"mode": "MANUAL"}, OPERATION: {"mode": 1}, TEXT: {"data": "MANUAL"},
-           ESTOP: {"data": False}}, "ito"),
-    (1.5, AUTO_ALL, "auto"),
-    (1.5, {ESTOP: {"data": True}}, "ito"),
-    (1.5, {STATE: {"mode": "POSCTL"}}, "ito"),  # a switch during the e-stop
-    (1.5, {STATE: {"mode": "OFFBOARD"}}, "ito"),
-    (1.5, {ESTOP: {"data": False}}, "auto"),
-    (1.5, {OPERATION: {"mode": 4}}, "ito"),  # REMOTE
-    (1.5, {TEXT: {"data": "TELEOP"}}, "ito"),
-    (1.5, {OPERATION: {"mode": 2}}, "ito"),
-    (1.5, {TEXT: {"data": "AUTO"}}, "auto"),
+           ESTOP: {"data": False}, ALIVE: {}}, "ito", None),
+    (1.5, AUTO_ALL, "auto", None),
+    (1.5, {ESTOP: {"data": True}}, "ito", "safety"),
+    (1.5, {STATE: {"mode": "POSCTL"}}, "ito", None),  # a switch during the e-stop
+    (1.5, {STATE: {"mode": "OFFBOARD"}}, "ito", None),
+    (1.5, {ESTOP: {"data": False}, ALIVE: None}, "auto", None),
+    (1.5, {OPERATION: {"mode": 4}}, "ito", "other"),  # REMOTE, localisation silent
+    (1.5, {TEXT: {"data": "TELEOP"}}, "ito", None),
+    (1.5, {OPERATION: {"mode": 2}}, "ito", None),
+    (1.5, {TEXT: {"data": "AUTO"}}, "auto", None),
 ]  # fmt: skip
 
 
@@ -82,7 +90,10 @@ def robot_interfaces() -> dict:
 def test_modes_from_the_robots_own_topics_and_an_estop(
     ros, procs, start_collector, robot_leg, robot_interfaces, tmp_path
 ):
-    start_collector(params={"params.mode_sources": SOURCES}, env=robot_interfaces)
+    start_collector(
+        params={"params.mode_sources": SOURCES, "params.reason_rules": REASONS},
+        env=robot_interfaces,
+    )
     assert ros.set_logging(True).success
     script = tmp_path / "script.json"
     topics = {
@@ -90,6 +101,7 @@ def test_modes_from_the_robots_own_topics_and_an_estop(
         OPERATION: "ftt_robot_msgs/msg/OperationModeState",
         TEXT: "std_msgs/msg/String",
         ESTOP: "std_msgs/msg/Bool",
+        ALIVE: "std_msgs/msg/Empty",
     }
     script.write_text(json.dumps({"topics": topics, "rate": 10, "phases": [p[:2] for p in PHASES]}))
     robot = subprocess.run(
@@ -109,7 +121,12 @@ def test_modes_from_the_robots_own_topics_and_an_estop(
             .values_list("segment_type_id", flat=True)
         )
 
-    truth = [p[2] for p in PHASES]
-    expected = [mode for i, mode in enumerate(truth) if i == 0 or mode != truth[i - 1]]
+    switches = [p for i, p in enumerate(PHASES) if i == 0 or p[2] != PHASES[i - 1][2]]
+    expected = [p[2] for p in switches]
     wait_for(lambda: len(masters()) >= len(expected), 20, what="the scripted switches")
     assert masters() == expected
+    # Suggestions only: the reasons stay unassigned until the operator confirms.
+    takeovers = Segment.objects.filter(leg=robot_leg, parent__isnull=False).order_by("start")
+    assert [(t.suggested_reason_id, t.ito_reason_id) for t in takeovers] == [
+        (p[3], "unassigned") for p in switches if p[2] == "ito"
+    ]
