@@ -146,40 +146,56 @@ def matchers(name: str, index: int, raw) -> tuple:
     return tuple(out)
 
 
-def parse(text: str, fields_of: Callable[[str], dict] | None = None) -> ModeSources | None:
-    """The mode sources of ``params.mode_sources`` (None when empty: the classic
-    ``topics.robot_mode``), or InvalidModeSources naming what is wrong.
-
-    ``fields_of(type)`` ({field: kind}, see message_fields.py) checks each
-    field path against its type; it raises KeyError for an unknown type."""
+def load_entries(text: str, key: str, allowed: set) -> tuple[dict, list] | None:
+    """The YAML document of a parameter and its entries under ``key``, each
+    (number, mapping, topic, type) with only ``allowed`` keys, a topic and a
+    type; None when the text is empty."""
     if not str(text or "").strip():
         return None
     try:
         data = yaml.safe_load(text)
     except yaml.YAMLError as exc:
         raise InvalidModeSources(_("not valid YAML: %(error)s") % {"error": exc}) from None
-    if not isinstance(data, dict) or not isinstance(data.get("sources"), list):
-        raise InvalidModeSources(_("expected 'sources:' with a list of sources"))
+    if not isinstance(data, dict) or not isinstance(data.get(key), list):
+        raise InvalidModeSources(_("expected '%(key)s:' with a list") % {"key": key})
+    entries = []
+    for n, raw in enumerate(data[key], start=1):
+        where = {"n": n, "key": key}
+        if not isinstance(raw, dict):
+            raise InvalidModeSources(_("%(key)s entry %(n)d is not a mapping") % where)
+        extra = sorted(set(raw) - allowed)
+        if extra:
+            raise InvalidModeSources(
+                _("%(key)s entry %(n)d: unknown keys %(keys)s")
+                % {**where, "keys": ", ".join(extra)}
+            )
+        topic, typename = str(raw.get("topic") or ""), str(raw.get("type") or "")
+        if not topic:
+            raise InvalidModeSources(_("%(key)s entry %(n)d has no topic") % where)
+        if not TYPE_NAME.match(typename):
+            raise InvalidModeSources(
+                _("%(key)s entry %(n)d: type %(type)r is not package/msg/Name")
+                % {**where, "type": typename}
+            )
+        entries.append((n, raw, topic, typename))
+    return data, entries
+
+
+def parse(text: str, fields_of: Callable[[str], dict] | None = None) -> ModeSources | None:
+    """The mode sources of ``params.mode_sources`` (None when empty: the classic
+    ``topics.robot_mode``), or InvalidModeSources naming what is wrong.
+
+    ``fields_of(type)`` ({field: kind}, see message_fields.py) checks each
+    field path against its type; it raises KeyError for an unknown type."""
+    loaded = load_entries(text, "sources", _KEYS)
+    if loaded is None:
+        return None
+    data, entries = loaded
     rule = data.get("rule", "any_ito")
     if rule not in RULES:
         raise InvalidModeSources(_("rule must be one of %(rules)s") % {"rules": ", ".join(RULES)})
     sources = []
-    for n, raw in enumerate(data["sources"], start=1):
-        if not isinstance(raw, dict):
-            raise InvalidModeSources(_("source %(n)d is not a mapping") % {"n": n})
-        extra = sorted(set(raw) - _KEYS)
-        if extra:
-            raise InvalidModeSources(
-                _("source %(n)d: unknown keys %(keys)s") % {"n": n, "keys": ", ".join(extra)}
-            )
-        topic, typename = str(raw.get("topic") or ""), str(raw.get("type") or "")
-        if not topic:
-            raise InvalidModeSources(_("source %(n)d has no topic") % {"n": n})
-        if not TYPE_NAME.match(typename):
-            raise InvalidModeSources(
-                _("source %(n)d: type %(type)r is not package/msg/Name")
-                % {"n": n, "type": typename}
-            )
+    for n, raw, topic, typename in entries:
         path_text = str(raw.get("field") or "")
         path = parse_path(path_text)
         default = raw.get("default", "unknown")

@@ -20,15 +20,14 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import datetime
 
-import yaml
 from django.utils.translation import gettext as _
 
 from rosbridge_app.collector.mode_sources import (
-    TYPE_NAME,
     InvalidModeSources,
     Source,
     check_path,
     field_value,
+    load_entries,
     matchers,
     matches,
     parse_path,
@@ -56,34 +55,18 @@ class ReasonRules:
 def parse(text: str, fields_of: Callable[[str], dict] | None = None) -> ReasonRules | None:
     """The rules of ``params.reason_rules`` (None when empty), or
     InvalidModeSources naming what is wrong."""
-    if not str(text or "").strip():
+    loaded = load_entries(text, "rules", _KEYS)
+    if loaded is None:
         return None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise InvalidModeSources(_("not valid YAML: %(error)s") % {"error": exc}) from None
-    if not isinstance(data, dict) or not isinstance(data.get("rules"), list):
-        raise InvalidModeSources(_("expected 'rules:' with a list of rules"))
+    data, entries = loaded
     window = data.get("window", 2.0)
     if isinstance(window, bool) or not isinstance(window, int | float) or not 0 <= window <= 60:
         raise InvalidModeSources(_("window must be 0–60 s"))
     rules = []
-    for n, raw in enumerate(data["rules"], start=1):
-        if not isinstance(raw, dict):
-            raise InvalidModeSources(_("rule %(n)d is not a mapping") % {"n": n})
-        extra = sorted(set(raw) - _KEYS)
-        if extra:
-            raise InvalidModeSources(
-                _("rule %(n)d: unknown keys %(keys)s") % {"n": n, "keys": ", ".join(extra)}
-            )
-        topic, typename = str(raw.get("topic") or ""), str(raw.get("type") or "")
+    for n, raw, topic, typename in entries:
         reason = str(raw.get("reason") or "")
-        if not topic or not reason:
-            raise InvalidModeSources(_("rule %(n)d needs a topic and a reason") % {"n": n})
-        if not TYPE_NAME.match(typename):
-            raise InvalidModeSources(
-                _("rule %(n)d: type %(type)r is not package/msg/Name") % {"n": n, "type": typename}
-            )
+        if not reason:
+            raise InvalidModeSources(_("rule %(n)d has no reason") % {"n": n})
         silent = raw.get("silent")
         if silent is not None:
             if isinstance(silent, bool) or not isinstance(silent, int | float) or silent <= 0:
