@@ -43,6 +43,8 @@ class Spec:
     topic: bool = False
     # Message types a topic parameter takes, so the editor suggests only those.
     message_types: tuple[str, ...] = ()
+    # A YAML document: the editor gives it a text area.
+    multiline: bool = False
 
     @property
     def kind(self) -> str:
@@ -108,11 +110,13 @@ SPECS: dict[str, Spec] = {
         "Mode from any topics (YAML: rule, sources with topic, type, field, auto, ito, "
         "default, hysteresis; presets in docs/collector.md); empty: topics.robot_mode "
         "with params.robot_mode_type.",
+        multiline=True,
     ),
     "params.reason_rules": Spec(
         "",
         "Reasons the robot knows (YAML: window, rules with topic, type, field and values, "
         "or silent, and reason); the take-over gets the reason as a suggestion to confirm.",
+        multiline=True,
     ),
     "params.use_tf": Spec(True, "Local position from TF map_frame→robot_frame, else local_pose."),
     "params.map_frame": Spec("map", "Frame of local positions."),
