@@ -190,6 +190,15 @@ class Segment(ChangeStamped):
         blank=True,
         related_name="segments",
     )
+    # The robot's reason for a take-over (params.reason_rules): shown to be
+    # confirmed with one tap; statistics count ito_reason, the confirmed one.
+    suggested_reason = models.ForeignKey(
+        ItoReason,
+        on_delete=models.SET_NULL,
+        null=True,
+        blank=True,
+        related_name="+",
+    )
     obstacle = models.CharField(max_length=500, blank=True)
     lighting = models.CharField(max_length=500, blank=True)
     slope = models.CharField(max_length=500, blank=True)

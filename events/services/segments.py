@@ -167,6 +167,7 @@ def report_mode(
     reason: str = ItoReason.UNASSIGNED,
     uid=None,
     start_uncertainty: float | None = None,
+    suggested_reason: str | None = None,
 ) -> ModeReport:
     """The robot (or an importer) says which mode it is in now.
 
@@ -192,7 +193,17 @@ def report_mode(
     master = _start_master(
         leg, mode, at, robot_stamp, positions, reason, uid, start_uncertainty=start_uncertainty
     )
+    if suggested_reason and mode == SegmentType.ITO:
+        _suggest(master, suggested_reason)
     return ModeReport(announce_and_return(master), changed=True)
+
+
+def _suggest(master: Segment, reason_key: str) -> None:
+    """The robot's reason for the take-over, waiting for the operator's confirmation;
+    a key the catalogue does not have is no suggestion."""
+    suggestion = ItoReason.objects.filter(pk=reason_key).first()
+    if suggestion is not None:
+        master.children.update(suggested_reason=suggestion)
 
 
 @transaction.atomic

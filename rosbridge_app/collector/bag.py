@@ -91,6 +91,17 @@ def route(pipeline: Pipeline, topic: str, msgtype: str):
     """The pipeline method for a bag topic, chosen by the configured topic
     names first and by message type otherwise; None: not something we record."""
     p = pipeline.params
+    if pipeline.mode_sources is not None:
+        # The same mode sources as live; the classic mode topic is not read then.
+        for i, source in enumerate(pipeline.mode_sources.config.sources):
+            if _same_topic(topic, source.topic) and msgtype == source.type:
+                return lambda m, at, i=i: pipeline.on_mode_source(i, m, at)
+        if msgtype == ROBOT_MODE or _same_topic(topic, p["topics.robot_mode"]):
+            return None
+    if pipeline.reasons is not None:
+        for rule_topic, rule_type in pipeline.reasons.topics().items():
+            if _same_topic(topic, rule_topic) and msgtype == rule_type:
+                return lambda m, at: pipeline.on_reason_signal(topic, m, at)
     if msgtype == ROBOT_MODE:
         return lambda m, at: _mode(pipeline, m, at, INDUSTRIAL)
     if msgtype == BOOL_TYPE and _same_topic(topic, p["topics.robot_mode"]):

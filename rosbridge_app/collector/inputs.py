@@ -5,6 +5,9 @@ positions, maps, camera); the node subscribes to each through
 :func:`drained_subscription`.
 """
 
+import functools
+import logging
+
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
 from rclpy.qos import (
@@ -16,8 +19,10 @@ from rclpy.qos import (
 from sensor_msgs.msg import CompressedImage, Image, NavSatFix
 from tf2_msgs.msg import TFMessage
 
+from rosbridge_app.collector.blackbox import message_class
 from rosbridge_app.collector.modes import message_type
 
+log = logging.getLogger("ftt.collector")
 # Positions may come at 1 kHz: the subscription's history holds 2 s of them, so
 # a moment in which this process's other threads hold the interpreter loses nothing.
 POSITION_DEPTH = 2000
@@ -50,26 +55,35 @@ def wanted_inputs(get, pipe) -> list[tuple]:
     parameters ask for (``get(name)``: a parameter's value), handled by the
     pipeline ``pipe``."""
     reliable = get("params.sensor_reliable")
-    wanted = [
-        (
-            "robot_mode",
-            message_type(get("params.robot_mode_type")),
-            get("topics.robot_mode"),
-            qos(MODE_DEPTH, True),
-            pipe.on_mode,
-        ),
-        ("gps_fix", NavSatFix, get("topics.gps_fix"), qos(POSITION_DEPTH, reliable), pipe.on_fix),
-        ("map", OccupancyGrid, get("topics.map"), RELIABLE_LATCHED, pipe.on_grid),
-        ("map_jpeg", CompressedImage, get("topics.map_jpeg"), RELIABLE_LATCHED, pipe.on_map_jpeg),
-        ("image", Image, get("topics.image"), qos(2, reliable), pipe.on_image),
-        (
-            "image_compressed",
-            CompressedImage,
-            get("topics.image_compressed"),
-            qos(2, reliable),
-            lambda m, at: pipe.on_image(m, at, compressed=True),
-        ),
-    ]
+    wanted = (
+        mode_inputs(get, pipe)
+        + reason_inputs(pipe)
+        + [
+            (
+                "gps_fix",
+                NavSatFix,
+                get("topics.gps_fix"),
+                qos(POSITION_DEPTH, reliable),
+                pipe.on_fix,
+            ),
+            ("map", OccupancyGrid, get("topics.map"), RELIABLE_LATCHED, pipe.on_grid),
+            (
+                "map_jpeg",
+                CompressedImage,
+                get("topics.map_jpeg"),
+                RELIABLE_LATCHED,
+                pipe.on_map_jpeg,
+            ),
+            ("image", Image, get("topics.image"), qos(2, reliable), pipe.on_image),
+            (
+                "image_compressed",
+                CompressedImage,
+                get("topics.image_compressed"),
+                qos(2, reliable),
+                lambda m, at: pipe.on_image(m, at, compressed=True),
+            ),
+        ]
+    )
     if get("params.use_tf"):
         wanted += [
             ("tf", TFMessage, get("topics.tf"), qos(POSITION_DEPTH, True), pipe.on_tf),
@@ -91,6 +105,54 @@ def wanted_inputs(get, pipe) -> list[tuple]:
                 pipe.on_pose,
             )
         )
+    return wanted
+
+
+def mode_inputs(get, pipe) -> list[tuple]:
+    """The mode topic, or one input per mode source (params.mode_sources)."""
+    combiner = pipe.mode_sources
+    if combiner is None:
+        return [
+            (
+                "robot_mode",
+                message_type(get("params.robot_mode_type")),
+                get("topics.robot_mode"),
+                qos(MODE_DEPTH, True),
+                pipe.on_mode,
+            )
+        ]
+    wanted = []
+    for i, source in enumerate(combiner.config.sources):
+        try:
+            cls = message_class(source.type)
+        except (ImportError, AttributeError):
+            # The parameter check refuses such types; this is one removed since.
+            log.error("mode source %s: message type %s is not installed", source.topic, source.type)
+            continue
+        handler = functools.partial(pipe.on_mode_source, i)
+        wanted.append((f"mode_source_{i}", cls, source.topic, qos(MODE_DEPTH, True), handler))
+    return wanted
+
+
+def reason_inputs(pipe) -> list[tuple]:
+    """One input per topic of params.reason_rules that is not a mode source
+    (a mode source hands its messages to the rules itself)."""
+    if pipe.reasons is None:
+        return []
+    taken = set()
+    if pipe.mode_sources is not None:
+        taken = {s.topic.lstrip("/") for s in pipe.mode_sources.config.sources}
+    wanted = []
+    for i, (topic, typename) in enumerate(pipe.reasons.topics().items()):
+        if topic.lstrip("/") in taken:
+            continue
+        try:
+            cls = message_class(typename)
+        except (ImportError, AttributeError):
+            log.error("reason rule %s: message type %s is not installed", topic, typename)
+            continue
+        handler = functools.partial(pipe.on_reason_signal, topic)
+        wanted.append((f"reason_{i}", cls, topic, qos(MODE_DEPTH, True), handler))
     return wanted
 
 

@@ -160,7 +160,14 @@ class CollectorNode(Node):
                 self._make_services()
             if any(
                 n.startswith("topics.")
-                or n in ("params.robot_mode_type", "params.use_tf", "params.sensor_reliable")
+                or n
+                in (
+                    "params.robot_mode_type",
+                    "params.mode_sources",
+                    "params.reason_rules",
+                    "params.use_tf",
+                    "params.sensor_reliable",
+                )
                 for n in changed
             ):
                 self._subscribe()

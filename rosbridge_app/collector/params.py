@@ -14,6 +14,8 @@ from pathlib import Path
 
 import yaml
 
+from rosbridge_app.collector import mode_sources, reason_rules
+from rosbridge_app.collector.message_fields import installed_fields
 from rosbridge_app.collector.modes import MODE_TYPES
 
 NODE_NAME = "ftt_collector"
@@ -41,6 +43,8 @@ class Spec:
     topic: bool = False
     # Message types a topic parameter takes, so the editor suggests only those.
     message_types: tuple[str, ...] = ()
+    # A YAML document: the editor gives it a text area.
+    multiline: bool = False
 
     @property
     def kind(self) -> str:
@@ -100,6 +104,19 @@ SPECS: dict[str, Spec] = {
         "bool",
         "bool (std_msgs/Bool, true = autonomous) or industrial (industrial_msgs/RobotMode).",
         choices=MODE_TYPES,
+    ),
+    "params.mode_sources": Spec(
+        "",
+        "Mode from any topics (YAML: rule, sources with topic, type, field, auto, ito, "
+        "default, hysteresis; presets in docs/collector.md); empty: topics.robot_mode "
+        "with params.robot_mode_type.",
+        multiline=True,
+    ),
+    "params.reason_rules": Spec(
+        "",
+        "Reasons the robot knows (YAML: window, rules with topic, type, field and values, "
+        "or silent, and reason); the take-over gets the reason as a suggestion to confirm.",
+        multiline=True,
     ),
     "params.use_tf": Spec(True, "Local position from TF map_frame→robot_frame, else local_pose."),
     "params.map_frame": Spec("map", "Frame of local positions."),
@@ -227,6 +244,12 @@ def _checked(name: str, spec: Spec, value) -> object:
         raise InvalidParameter(f"{name} must be <= {spec.maximum:g}")
     if spec.choices is not None and value not in spec.choices:
         raise InvalidParameter(f"{name} must be one of {', '.join(spec.choices)}")
+    if name in ("params.mode_sources", "params.reason_rules"):
+        parse = mode_sources.parse if name == "params.mode_sources" else reason_rules.parse
+        try:
+            parse(value, installed_fields)
+        except mode_sources.InvalidModeSources as exc:
+            raise InvalidParameter(f"{name}: {exc}") from None
     if name.endswith("_service") and not value:
         raise InvalidParameter(f"{name} cannot be empty")
     return value

@@ -29,9 +29,13 @@ from datetime import datetime
 from rosbridge_app.collector import conversions as conv
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.events import Event
+from rosbridge_app.collector.mode_sources import Combiner
+from rosbridge_app.collector.mode_sources import parse as parse_mode_sources
 from rosbridge_app.collector.mode_timing import ModeClock
-from rosbridge_app.collector.modes import mode_of
+from rosbridge_app.collector.modes import ITO, mode_of
 from rosbridge_app.collector.params import SPECS
+from rosbridge_app.collector.reason_rules import ReasonWatcher
+from rosbridge_app.collector.reason_rules import parse as parse_reason_rules
 from rosbridge_app.collector.tf_buffer import TfBuffer, TfLookupError
 from rosbridge_app.collector.thinning import Thinner
 
@@ -62,6 +66,8 @@ class Pipeline:
         self.local_thinner = Thinner()
         self.tf = TfBuffer()
         self.images: deque = deque(maxlen=1)
+        self.mode_sources: Combiner | None = None
+        self.reasons: ReasonWatcher | None = None
         self.update_params(params or {})
         self.logging = False
         self.last_mode: str | None = None  # from the robot, logging or not
@@ -93,6 +99,13 @@ class Pipeline:
         size = max(0, int(p["params.image_buffer_size"]))
         if self.images.maxlen != size:
             self.images = deque(self.images, maxlen=size)
+        if "params.mode_sources" in changes:
+            # Checked where the value was set; here it is only read.
+            config = parse_mode_sources(p.get("params.mode_sources", ""))
+            self.mode_sources = Combiner(config) if config else None
+        if "params.reason_rules" in changes:
+            rules = parse_reason_rules(p.get("params.reason_rules", ""))
+            self.reasons = ReasonWatcher(rules) if rules else None
         if any(k in changes for k in ("params.map_frame", "params.robot_frame", "params.use_tf")):
             self.last_local = None
             self.local_thinner.reset()
@@ -138,6 +151,18 @@ class Pipeline:
         self.on_mode_value(mode, start, robot_stamp=robot_stamp, uncertainty=uncertainty)
         return None
 
+    def on_mode_source(self, index: int, msg, at: datetime) -> None:
+        """A message of mode source ``index`` (params.mode_sources)."""
+        # A reason rule on the same topic sees the message before the switch it causes.
+        self.on_reason_signal(self.mode_sources.config.sources[index].topic, msg, at)
+        for mode, when in self.mode_sources.offer(index, msg, at):
+            self.on_mode_value(mode, when)
+
+    def on_reason_signal(self, topic: str, msg, at: datetime) -> None:
+        """A message on a topic of params.reason_rules."""
+        if self.reasons is not None:
+            self.reasons.offer(topic, msg, at)
+
     def on_mode_value(
         self, mode: str, at: datetime, *, robot_stamp=None, uncertainty: float | None = None
     ) -> None:
@@ -169,6 +194,9 @@ class Pipeline:
                     "start_uncertainty": uncertainty,
                     "gps": [fix["lon"], fix["lat"]] if fix else None,
                     "local": [local["x"], local["y"], local["frame"]] if local else None,
+                    "suggested_reason": (
+                        self.reasons.reason_at(at) if self.reasons and mode == ITO else None
+                    ),
                 },
                 uid=master,
             )
@@ -317,7 +345,11 @@ class Pipeline:
             self._maybe_store_map(at)
 
     def tick(self, at: datetime) -> None:
-        """Called about once a second: stores a map held back by send_map_period."""
+        """Called about once a second: stores a map held back by send_map_period
+        and confirms mode source values that held for their hysteresis."""
+        if self.mode_sources is not None:
+            for mode, when in self.mode_sources.tick(at):
+                self.on_mode_value(mode, when)
         if self.map_pending:
             self._maybe_store_map(at)
 

@@ -267,6 +267,7 @@ class Recorder:
             gps=gps,
             local=local,
             uid=event.uid,
+            suggested_reason=data.get("suggested_reason"),
         )
 
     def _store_positions(self, fixes: list[Event], locals_: list[Event]) -> None:

@@ -65,6 +65,7 @@ def parameter_rows(collector: Collector) -> list[dict]:
                 "minimum": spec.minimum if spec else None,
                 "maximum": spec.maximum if spec else None,
                 "choices": list(spec.choices) if spec and spec.choices else None,
+                "multiline": bool(spec and spec.multiline),
                 "expects": list(expected),
                 "suggestions": sorted(
                     t["name"] for t in topics if set(t.get("types", ())) & set(expected)

@@ -6,6 +6,8 @@
 # when the interpreter already imports both packages from elsewhere (a native
 # /opt/ros/jazzy), or when there is no rclpy at all (e.g. an aarch64 machine
 # without ROS: the collector cannot run there anyway).
+# FTT_ROS_INTERFACES=DIR[:DIR...] adds the robot team's own interface packages
+# or folders of .msg/.srv files (docs/collector.md: custom message types).
 if [ -z "${FTT_ROOT:-}" ]; then
     FTT_SCRIPT=ros-interfaces
     # shellcheck source=scripts/lib.sh
@@ -14,7 +16,7 @@ if [ -z "${FTT_ROOT:-}" ]; then
 fi
 
 _ftt_ros_interfaces() {
-    local src=$FTT_ROOT/ros_interfaces build venv_site stamp pkg
+    local src=$FTT_ROOT/ros_interfaces venv_site stamp extra
     if ! "$FTT_PY" -c 'import rclpy' >/dev/null 2>&1; then
         ftt_log "no rclpy in $FTT_PY: skipping the ROS interface build"
         return 0
@@ -29,8 +31,14 @@ PY
         ftt_log "tf2_msgs and industrial_msgs come from the system ROS install"
         return 0
     fi
+    local dirs=("$src/tf2_msgs" "$src/industrial_msgs") dir
+    # The robot team's own interfaces: ROS 2 packages or folders of .msg files.
+    IFS=: read -r -a extra <<<"${FTT_ROS_INTERFACES:-}"
+    for dir in "${extra[@]}"; do
+        [ -n "$dir" ] && dirs+=("$dir")
+    done
     stamp=$({ "$FTT_PY" -VV; cat "$FTT_ROOT/requirements-rosidl.txt";
-        find "$src" -type f | LC_ALL=C sort | xargs cat; } | sha256sum | cut -d' ' -f1)
+        find "${dirs[@]}" -type f | LC_ALL=C sort | xargs cat; } | sha256sum | cut -d' ' -f1)
     if ftt_stamp_ok ros-interfaces "$stamp" &&
         "$FTT_PY" -c 'import tf2_msgs.msg, industrial_msgs.msg' >/dev/null 2>&1; then
         ftt_log "ROS interfaces: already built"
@@ -50,24 +58,10 @@ PY
         xargs -0 -r sed -i -E \
             -e "s#/opt/python/cp[0-9]+-cp[0-9]+/include/python[0-9.]+#$py_inc#g" \
             -e "s#/opt/python/cp[0-9]+-cp[0-9]+/lib/python[0-9.]+/site-packages/numpy/_core/include#$np_inc#g"
-    build=$(mktemp -d "${TMPDIR:-/tmp}/ftt-rosidl.XXXXXX")
-    for pkg in tf2_msgs industrial_msgs; do
-        ftt_log "building $pkg"
-        (
-            export AMENT_PREFIX_PATH=$FTT_VENV CMAKE_PREFIX_PATH=$FTT_VENV
-            cmake -S "$src/$pkg" -B "$build/$pkg" -DCMAKE_INSTALL_PREFIX="$FTT_VENV" \
-                -DPython3_EXECUTABLE="$FTT_PY" -DBUILD_TESTING=OFF \
-                -DCMAKE_BUILD_TYPE=Release >"$build/$pkg.log" 2>&1 &&
-                cmake --build "$build/$pkg" -j "$(nproc)" >>"$build/$pkg.log" 2>&1 &&
-                cmake --install "$build/$pkg" >>"$build/$pkg.log" 2>&1
-        ) || {
-            tail -n 30 "$build/$pkg.log" >&2
-            ftt_die "building $pkg failed (log: $build/$pkg.log)"
-        }
-    done
+    bash "$FTT_ROOT/scripts/build_interfaces.sh" "$FTT_VENV" "${dirs[@]}" ||
+        ftt_die "building the ROS interfaces failed (see above)"
     "$FTT_PY" -c 'import tf2_msgs.msg, industrial_msgs.msg' ||
         ftt_die "tf2_msgs/industrial_msgs were built but do not import"
-    rm -rf "$build"
     ftt_stamp_write ros-interfaces "$stamp"
     ftt_log "ROS interfaces built into $FTT_VENV"
 }

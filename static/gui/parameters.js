@@ -17,6 +17,11 @@ const Parameters = {
       input = document.createElement("select");
       input.append(new Option("true", "true"), new Option("false", "false"));
       input.value = String(row.value);
+    } else if (row.multiline) {
+      input = document.createElement("textarea");
+      input.rows = 6;
+      input.spellcheck = false;
+      input.value = row.value;
     } else if (row.choices) {
       input = document.createElement("select");
       input.append(...row.choices.map((c) => new Option(c, c)));

@@ -244,6 +244,14 @@ function updateSegmentButtons() {
     b.disabled = !CONFIG.canOperate || !target;
     b.title = target ? `Give ${segmentLabel(target)} this reason` : "Reasons of earlier take-overs: Edit the row.";
   }
+  // The robot's reason (params.reason_rules) waits for one tap to become the reason.
+  const t = byId(state.segments, target);
+  const suggested = $("#reason-suggested");
+  const open = t && t.suggested_reason && t.ito_reason === "unassigned" ? t.suggested_reason : "";
+  suggested.hidden = !open;
+  suggested.dataset.reason = open;
+  suggested.disabled = !CONFIG.canOperate || !open;
+  suggested.textContent = open ? `${suggested.dataset.label}: ${reasonName(open)} ✓` : "";
   $("#segment-end").disabled = !CONFIG.canOperate || !(s && s.is_open);
   $("#segment-edit").disabled = !s;
 }
@@ -260,6 +268,7 @@ async function setReason(key) {
 }
 
 $$("[data-quick]").forEach((b) => b.addEventListener("click", () => segmentAction(() => setReason(b.dataset.quick))));
+$("#reason-suggested").addEventListener("click", () => segmentAction(() => setReason($("#reason-suggested").dataset.reason)));
 $("#reason-apply").addEventListener("click", () => segmentAction(() => setReason($("#reason-any").value)));
 $("#segment-new").addEventListener("click", () => segmentAction(async () => {
   const m = openMaster();

@@ -254,9 +254,12 @@ for line in sys.stdin:
     word = line.split()[0]
     with lock:
         leg = open_leg_for_vehicle(vehicle)
-        if word in ("auto", "ito"):
+        if word.split(":")[0] in ("auto", "ito"):
+            # ito:safety: a take-over whose reason the robot suggests
+            mode, _, suggested = word.partition(":")
             segments.report_mode(
-                leg, word, gps=GpsPosition(lon, lat), local=LocalPosition(x, y, "map")
+                leg, mode, gps=GpsPosition(lon, lat), local=LocalPosition(x, y, "map"),
+                suggested_reason=suggested or None,
             )
         elif word == "poses":
             fixes, local = [], []

@@ -19,15 +19,27 @@ from tests.support.images import grey_png, jpeg
 pytestmark = pytest.mark.django_db
 
 
+# The industrial_msgs/RobotMode preset of docs/collector.md ("Mode presets").
+INDUSTRIAL_PRESET = """
+sources:
+  - {topic: robot_mode, type: industrial_msgs/msg/RobotMode, field: val, auto: [2], ito: [1]}
+"""
+
+
 @pytest.mark.skipif(not FKIE_BAG.exists(), reason="fkie_test.bag not available")
-def test_fkie_bag_gives_five_masters_and_its_path_once(vehicle, media_root):
+@pytest.mark.parametrize(
+    "params",
+    [{"params.robot_mode_type": "industrial"}, {"params.mode_sources": INDUSTRIAL_PRESET}],
+    ids=["robot_mode_type", "mode_source_preset"],
+)
+def test_fkie_bag_gives_five_masters_and_its_path_once(vehicle, media_root, params):
     # The leg must start before the bag (2019) to take its segments.
     start = datetime(2019, 4, 8, tzinfo=UTC)
     event = logs.create_test_event(at=start)
     leg = logs.create_leg(
         shift=logs.create_shift(test_event=event, vehicle=vehicle, at=start), at=start
     )
-    events = bag_events(FKIE_BAG, {"params.robot_mode_type": "industrial"})
+    events = bag_events(FKIE_BAG, params)
     record_events(leg, events)
     masters = list(Segment.objects.filter(leg=leg, parent__isnull=True).order_by("start"))
     assert [m.segment_type_id for m in masters] == ["ito", "auto", "ito", "auto", "ito"]

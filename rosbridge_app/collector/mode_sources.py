@@ -1,0 +1,327 @@
+"""Mode from any topic: mode sources, their checks and how they combine; free of ROS.
+
+``params.mode_sources`` holds a small YAML document (docs/collector.md has the
+presets)::
+
+    rule: any_ito            # or: first
+    sources:
+      - topic: /mavros/state
+        type: mavros_msgs/msg/State
+        field: mode            # a path: state.autonomy.level, buttons[4]
+        auto: [OFFBOARD, AUTO.MISSION]
+        ito: [MANUAL, POSCTL, {min: 10, max: 20}]
+        default: unknown       # auto, ito or unknown for any other value
+        hysteresis: 0.5        # s a new value must hold before it counts
+
+Combination rules (the one place they are decided):
+
+* ``any_ito``: ITO as soon as any source says ITO (an e-stop source maps
+  "pressed" to ITO and nothing else, so it only ever vetoes); else AUTO if a
+  source says AUTO; else unknown;
+* ``first``: the first source, in the listed order, that says something.
+
+While the combination is unknown the last known mode stays (a silent or
+"says nothing" source never opens a segment by itself).
+"""
+
+import re
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from datetime import datetime, timedelta
+
+import yaml
+from django.utils.translation import gettext as _
+
+from rosbridge_app.collector.modes import AUTO, ITO
+
+RULES = ("any_ito", "first")
+DEFAULTS = (AUTO, ITO, "unknown")
+TYPE_NAME = re.compile(r"^[A-Za-z][\w]*/msg/[A-Za-z][\w]*$")
+_STEP = re.compile(r"([A-Za-z_]\w*)((?:\[\d+\])*)")
+_KEYS = {"topic", "type", "field", "auto", "ito", "default", "hysteresis"}
+
+
+class InvalidModeSources(ValueError):
+    pass
+
+
+@dataclass(frozen=True)
+class Range:
+    minimum: float | None
+    maximum: float | None
+
+    def __contains__(self, value) -> bool:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            return False
+        low = self.minimum is None or value >= self.minimum
+        return low and (self.maximum is None or value <= self.maximum)
+
+
+@dataclass(frozen=True)
+class Source:
+    topic: str
+    type: str
+    path: tuple  # field names (str) and indices (int)
+    auto: tuple
+    ito: tuple
+    default: str = "unknown"
+    hysteresis: float = 0.0
+    text: str = ""  # the field path as written, for messages
+
+    def mode_of(self, value) -> str | None:
+        """'auto', 'ito' or None (the source says nothing) for a field value."""
+        for mode, matchers in ((ITO, self.ito), (AUTO, self.auto)):
+            if any(matches(m, value) for m in matchers):
+                return mode
+        return None if self.default == "unknown" else self.default
+
+
+@dataclass(frozen=True)
+class ModeSources:
+    rule: str
+    sources: tuple[Source, ...] = field(default=())
+
+
+def matches(matcher, value) -> bool:
+    if isinstance(matcher, Range):
+        return value in matcher
+    if isinstance(matcher, bool) or isinstance(value, bool):
+        return isinstance(matcher, bool) and isinstance(value, bool) and matcher == value
+    if isinstance(matcher, int | float) and isinstance(value, int | float):
+        return matcher == value
+    return str(matcher) == str(value)
+
+
+def parse_path(text: str) -> tuple:
+    """``state.autonomy.level`` → ("state", "autonomy", "level"), ``buttons[4]`` → ("buttons", 4)"""
+    parts: list = []
+    for step in str(text).split("."):
+        m = _STEP.fullmatch(step)
+        if not m:
+            raise InvalidModeSources(_("field path %(path)r is not valid") % {"path": text})
+        parts.append(m.group(1))
+        parts += [int(i) for i in re.findall(r"\d+", m.group(2))]
+    return tuple(parts)
+
+
+def field_value(msg, path: tuple):
+    """The value at ``path`` in a message (rclpy or rosbags), as a plain Python value."""
+    value = msg
+    for step in path:
+        value = value[step] if isinstance(step, int) else getattr(value, step)
+    if hasattr(value, "item"):  # numpy scalars of rosbags messages
+        value = value.item()
+    if isinstance(value, bytes) and len(value) == 1:  # rclpy byte/char fields
+        value = value[0]
+    return value
+
+
+def matchers(name: str, index: int, raw) -> tuple:
+    if raw is None:
+        return ()
+    items = raw if isinstance(raw, list) else [raw]
+    out = []
+    for item in items:
+        if isinstance(item, dict):
+            unknown = set(item) - {"min", "max"}
+            bounds = [item.get("min"), item.get("max")]
+            if unknown or not any(b is not None for b in bounds):
+                raise InvalidModeSources(
+                    _("source %(n)d: a range in %(key)s is {min: …, max: …}")
+                    % {"n": index, "key": name}
+                )
+            if any(b is not None and not isinstance(b, int | float) for b in bounds):
+                raise InvalidModeSources(
+                    _("source %(n)d: range bounds in %(key)s must be numbers")
+                    % {"n": index, "key": name}
+                )
+            out.append(Range(*bounds))
+        elif isinstance(item, str | int | float | bool):
+            out.append(item)
+        else:
+            raise InvalidModeSources(
+                _("source %(n)d: %(key)s takes values, lists of values and ranges")
+                % {"n": index, "key": name}
+            )
+    return tuple(out)
+
+
+def load_entries(text: str, key: str, allowed: set) -> tuple[dict, list] | None:
+    """The YAML document of a parameter and its entries under ``key``, each
+    (number, mapping, topic, type) with only ``allowed`` keys, a topic and a
+    type; None when the text is empty."""
+    if not str(text or "").strip():
+        return None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise InvalidModeSources(_("not valid YAML: %(error)s") % {"error": exc}) from None
+    if not isinstance(data, dict) or not isinstance(data.get(key), list):
+        raise InvalidModeSources(_("expected '%(key)s:' with a list") % {"key": key})
+    entries = []
+    for n, raw in enumerate(data[key], start=1):
+        where = {"n": n, "key": key}
+        if not isinstance(raw, dict):
+            raise InvalidModeSources(_("%(key)s entry %(n)d is not a mapping") % where)
+        extra = sorted(set(raw) - allowed)
+        if extra:
+            raise InvalidModeSources(
+                _("%(key)s entry %(n)d: unknown keys %(keys)s")
+                % {**where, "keys": ", ".join(extra)}
+            )
+        topic, typename = str(raw.get("topic") or ""), str(raw.get("type") or "")
+        if not topic:
+            raise InvalidModeSources(_("%(key)s entry %(n)d has no topic") % where)
+        if not TYPE_NAME.match(typename):
+            raise InvalidModeSources(
+                _("%(key)s entry %(n)d: type %(type)r is not package/msg/Name")
+                % {**where, "type": typename}
+            )
+        entries.append((n, raw, topic, typename))
+    return data, entries
+
+
+def parse(text: str, fields_of: Callable[[str], dict] | None = None) -> ModeSources | None:
+    """The mode sources of ``params.mode_sources`` (None when empty: the classic
+    ``topics.robot_mode``), or InvalidModeSources naming what is wrong.
+
+    ``fields_of(type)`` ({field: kind}, see message_fields.py) checks each
+    field path against its type; it raises KeyError for an unknown type."""
+    loaded = load_entries(text, "sources", _KEYS)
+    if loaded is None:
+        return None
+    data, entries = loaded
+    rule = data.get("rule", "any_ito")
+    if rule not in RULES:
+        raise InvalidModeSources(_("rule must be one of %(rules)s") % {"rules": ", ".join(RULES)})
+    sources = []
+    for n, raw, topic, typename in entries:
+        path_text = str(raw.get("field") or "")
+        path = parse_path(path_text)
+        default = raw.get("default", "unknown")
+        if default not in DEFAULTS:
+            raise InvalidModeSources(
+                _("source %(n)d: default must be auto, ito or unknown") % {"n": n}
+            )
+        hysteresis = raw.get("hysteresis", 0.0)
+        if isinstance(hysteresis, bool) or not isinstance(hysteresis, int | float):
+            raise InvalidModeSources(_("source %(n)d: hysteresis is seconds") % {"n": n})
+        if not 0 <= hysteresis <= 60:
+            raise InvalidModeSources(_("source %(n)d: hysteresis must be 0–60 s") % {"n": n})
+        source = Source(
+            topic=topic,
+            type=typename,
+            path=path,
+            auto=matchers("auto", n, raw.get("auto")),
+            ito=matchers("ito", n, raw.get("ito")),
+            default=default,
+            hysteresis=float(hysteresis),
+            text=path_text,
+        )
+        if not source.auto and not source.ito and default == "unknown":
+            raise InvalidModeSources(_("source %(n)d maps no value to auto or ito") % {"n": n})
+        if fields_of is not None:
+            check_path(source, fields_of)
+        sources.append(source)
+    if not sources:
+        raise InvalidModeSources(_("sources is empty"))
+    topics = [s.topic.lstrip("/") for s in sources]
+    if len(set(topics)) != len(topics):
+        raise InvalidModeSources(_("each topic can be one source only"))
+    return ModeSources(rule, tuple(sources))
+
+
+def check_path(source: Source, fields_of: Callable[[str], dict]) -> None:
+    """InvalidModeSources naming the type or field that does not exist."""
+    typename = source.type
+    kind: tuple = ("msg", typename)
+    for step in source.path:
+        if isinstance(step, int):
+            if kind[0] != "array":
+                raise InvalidModeSources(
+                    _("%(type)s: %(path)s indexes a field that is not an array")
+                    % {"type": source.type, "path": source.text}
+                )
+            kind = kind[1]
+            continue
+        if kind[0] != "msg":
+            raise InvalidModeSources(
+                _("%(type)s: %(path)s goes into a field that is not a message")
+                % {"type": source.type, "path": source.text}
+            )
+        try:
+            fields = fields_of(kind[1])
+        except KeyError:
+            raise InvalidModeSources(
+                _(
+                    "unknown message type %(type)s: not installed in FTT's environment "
+                    "(docs/collector.md: custom message types)"
+                )
+                % {"type": kind[1]}
+            ) from None
+        if step not in fields:
+            raise InvalidModeSources(
+                _("%(type)s has no field %(field)s (it has %(fields)s)")
+                % {"type": kind[1], "field": step, "fields": ", ".join(fields) or "none"}
+            )
+        kind = fields[step]
+    if kind[0] != "base":
+        raise InvalidModeSources(
+            _("%(type)s: %(path)s is not a single value")
+            % {"type": source.type, "path": source.text}
+        )
+
+
+class Combiner:
+    """The mode the sources say together, with each source's hysteresis."""
+
+    def __init__(self, config: ModeSources):
+        self.config = config
+        n = len(config.sources)
+        self.said: list[str | None] = [None] * n  # confirmed, per source
+        self.pending: list[tuple | None] = [None] * n  # (mode, since) within hysteresis
+        self.mode: str | None = None
+
+    def offer(self, index: int, msg, at: datetime) -> list[tuple[str, datetime]]:
+        """(mode, at) of each change of the combined mode this message causes."""
+        source = self.config.sources[index]
+        mode = source.mode_of(field_value(msg, source.path))
+        if not source.hysteresis:
+            self.said[index], self.pending[index] = mode, None
+            return self._combine(at)
+        if mode == self.said[index]:
+            self.pending[index] = None  # a flicker shorter than the hysteresis
+            return []
+        pending = self.pending[index]
+        if pending is None or pending[0] != mode:
+            self.pending[index] = (mode, at)
+        return self.tick(at)
+
+    def tick(self, at: datetime) -> list[tuple[str, datetime]]:
+        """Confirm values that held for their source's hysteresis; the switch
+        happens when the hysteresis ran out, not when it was noticed."""
+        changes = []
+        due = []
+        for i, pending in enumerate(self.pending):
+            if pending is None:
+                continue
+            until = pending[1] + timedelta(seconds=self.config.sources[i].hysteresis)
+            if until <= at:
+                due.append((until, i, pending[0]))
+        for until, i, mode in sorted(due, key=lambda d: d[0]):
+            self.said[i], self.pending[i] = mode, None
+            changes += self._combine(until)
+        return changes
+
+    def _combine(self, at: datetime) -> list[tuple[str, datetime]]:
+        said = self.said
+        if self.config.rule == "first":
+            mode = next((m for m in said if m is not None), None)
+        elif ITO in said:
+            mode = ITO
+        else:
+            mode = AUTO if AUTO in said else None
+        if mode is None or mode == self.mode:
+            return []
+        self.mode = mode
+        return [(mode, at)]

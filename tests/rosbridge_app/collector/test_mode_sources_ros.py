@@ -1,0 +1,132 @@
+"""Mode from the robot's own topics over DDS: one drill with a MAVROS-like State
+and an Autoware-like OperationModeState (built from the .msg files of
+robot_msgs/, not installed packages), a String and an e-stop that vetoes."""
+
+import hashlib
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import pytest
+
+from events.models import Segment
+from tests.support.ros import ROOT, requires_ros, wait_for
+
+pytestmark = [pytest.mark.ros, requires_ros]
+ROBOT_MSGS = Path(__file__).parent / "robot_msgs" / "ftt_robot_msgs"
+SOURCES = """
+rule: any_ito
+sources:
+  - {topic: /mavros/state, type: ftt_robot_msgs/msg/State, field: mode,
+     auto: [OFFBOARD, AUTO.MISSION], ito: [MANUAL, POSCTL]}
+  - {topic: /autoware/operation_mode, type: ftt_robot_msgs/msg/OperationModeState,
+     field: mode, auto: [2], ito: [{min: 3, max: 4}, 1]}
+  - {topic: /mode_text, type: std_msgs/msg/String, field: data,
+     auto: [AUTO], ito: [MANUAL, TELEOP]}
+  - {topic: /estop, type: std_msgs/msg/Bool, field: data, ito: [true]}
+"""
+STATE, OPERATION, TEXT, ESTOP = "/mavros/state", "/autoware/operation_mode", "/mode_text", "/estop"
+ALIVE = "/localization/alive"
+REASONS = f"""
+window: 2.0
+rules:
+  - {{topic: {ESTOP}, type: std_msgs/msg/Bool, field: data, values: [true], reason: safety}}
+  - {{topic: {ALIVE}, type: std_msgs/msg/Empty, silent: 1.0, reason: other}}
+"""
+AUTO_ALL = {
+    STATE: {"mode": "OFFBOARD"},
+    OPERATION: {"mode": 2},
+    TEXT: {"data": "AUTO"},
+    ESTOP: {"data": False},
+}
+# (seconds, changes, the combined mode the script means, the reason the robot
+# suggests at a switch to ITO). Topics change one per phase where that
+# matters: they are published one after the other; None: the topic falls silent.
+PHASES = [
+    (1.5, {STATE: {"mode": "MANUAL"}, OPERATION: {"mode": 1}, TEXT: {"data": "MANUAL"},
+           ESTOP: {"data": False}, ALIVE: {}}, "ito", None),
+    (1.5, AUTO_ALL, "auto", None),
+    (1.5, {ESTOP: {"data": True}}, "ito", "safety"),
+    (1.5, {STATE: {"mode": "POSCTL"}}, "ito", None),  # a switch during the e-stop
+    (1.5, {STATE: {"mode": "OFFBOARD"}}, "ito", None),
+    (1.5, {ESTOP: {"data": False}, ALIVE: None}, "auto", None),
+    (1.5, {OPERATION: {"mode": 4}}, "ito", "other"),  # REMOTE, localisation silent
+    (1.5, {TEXT: {"data": "TELEOP"}}, "ito", None),
+    (1.5, {OPERATION: {"mode": 2}}, "ito", None),
+    (1.5, {TEXT: {"data": "AUTO"}}, "auto", None),
+]  # fmt: skip
+
+
+@pytest.fixture(scope="session")
+def robot_interfaces() -> dict:
+    """Environment of processes that use ftt_robot_msgs, built once per
+    definition set (about 40 s) the way setup builds a team's folder."""
+    digest = hashlib.sha256(
+        b"".join(p.read_bytes() for p in sorted(ROBOT_MSGS.rglob("*.msg")))
+    ).hexdigest()[:12]
+    prefix = Path(tempfile.gettempdir()) / f"ftt-test-interfaces-{digest}"
+    if not (prefix / ".built").exists():
+        subprocess.run(
+            ["bash", str(ROOT / "scripts/build_interfaces.sh"), str(prefix), str(ROBOT_MSGS)],
+            check=True,
+            timeout=600,
+        )
+        (prefix / ".built").touch()
+    version = f"python{sys.version_info.major}.{sys.version_info.minor}"
+
+    def joined(name, value):
+        return os.pathsep.join(p for p in (value, os.environ.get(name)) if p)
+
+    return {
+        "PYTHONPATH": joined("PYTHONPATH", str(prefix / "lib" / version / "site-packages")),
+        "LD_LIBRARY_PATH": joined("LD_LIBRARY_PATH", str(prefix / "lib")),
+        "AMENT_PREFIX_PATH": joined("AMENT_PREFIX_PATH", f"{prefix}{os.pathsep}{sys.prefix}"),
+    }
+
+
+def test_modes_from_the_robots_own_topics_and_an_estop(
+    ros, procs, start_collector, robot_leg, robot_interfaces, tmp_path
+):
+    start_collector(
+        params={"params.mode_sources": SOURCES, "params.reason_rules": REASONS},
+        env=robot_interfaces,
+    )
+    assert ros.set_logging(True).success
+    script = tmp_path / "script.json"
+    topics = {
+        STATE: "ftt_robot_msgs/msg/State",
+        OPERATION: "ftt_robot_msgs/msg/OperationModeState",
+        TEXT: "std_msgs/msg/String",
+        ESTOP: "std_msgs/msg/Bool",
+        ALIVE: "std_msgs/msg/Empty",
+    }
+    script.write_text(json.dumps({"topics": topics, "rate": 10, "phases": [p[:2] for p in PHASES]}))
+    robot = subprocess.run(
+        [sys.executable, "-m", "tests.support.scripted_robot", str(script)],
+        cwd=ROOT,
+        env={**procs.env, **robot_interfaces},
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert robot.returncode == 0, robot.stderr
+
+    def masters():
+        return list(
+            Segment.objects.filter(leg=robot_leg, parent__isnull=True)
+            .order_by("start")
+            .values_list("segment_type_id", flat=True)
+        )
+
+    switches = [p for i, p in enumerate(PHASES) if i == 0 or p[2] != PHASES[i - 1][2]]
+    expected = [p[2] for p in switches]
+    wait_for(lambda: len(masters()) >= len(expected), 20, what="the scripted switches")
+    assert masters() == expected
+    # Suggestions only: the reasons stay unassigned until the operator confirms.
+    takeovers = Segment.objects.filter(leg=robot_leg, parent__isnull=False).order_by("start")
+    assert [(t.suggested_reason_id, t.ito_reason_id) for t in takeovers] == [
+        (p[3], "unassigned") for p in switches if p[2] == "ito"
+    ]
