@@ -38,8 +38,7 @@ from scipy.stats import chi2
 
 from events.models import ItoReason, Segment, SegmentType, TestEvent
 from events.selectors.labels import label, numbers
-from telemetry.models import SegmentFigures
-from telemetry.selectors.distances import kept_distances, measured_paths, start_points
+from telemetry.selectors.distances import kept_paths, measured_paths
 from telemetry.selectors.tracks import GPS, Track
 
 CONFIDENCE = 0.90
@@ -127,6 +126,8 @@ class Run:
     # The polyline the distance was measured on, joins included.
     path_x: np.ndarray = field(default_factory=lambda: np.empty(0))
     path_y: np.ndarray = field(default_factory=lambda: np.empty(0))
+    # The path's first point (where a take-over happened), None when unknown.
+    origin: tuple[float, float] | None = None
     # The GUI's name of the segment ("Leg 2 · #7"), see events.selectors.labels.
     label: str = ""
 
@@ -297,23 +298,16 @@ def event_runs(event: TestEvent, mode: str = GPS, *, tracks: bool = True) -> lis
     for s in segments:
         if s.parent_id is not None:
             children[s.parent_id].append(s)
-    distances = kept_distances(masters, mode)
-    starts = start_points(masters, mode)
-    kept = {
-        f.segment_id: f
-        for f in SegmentFigures.objects.filter(
-            segment_id__in=[m.pk for m in masters], mode=mode
-        ).only("segment_id", "points", "last_stamp")
-    }
+    kept = kept_paths(masters, mode)
     paths = measured_paths(masters, mode) if tracks else {}
     labels = segment_labels(segments)
 
     runs = []
     for master in masters:
         path = paths.get(master.id)
-        figures = kept.get(master.id)
+        figures = kept[master.id]
         kids = children.get(master.id, [])
-        end = _effective_end(master, figures and figures.last_stamp, kids)
+        end = _effective_end(master, figures.last_stamp, kids)
         spans = [
             ReasonSpan(
                 id=c.id,
@@ -337,12 +331,13 @@ def event_runs(event: TestEvent, mode: str = GPS, *, tracks: bool = True) -> lis
                 start=master.start,
                 end=end,
                 is_open=master.end is None,
-                distance=distances[master.id] or 0.0,
-                pose_count=figures.points if figures is not None else 0,
+                distance=figures.distance or 0.0,
+                pose_count=figures.points,
                 reasons=spans,
                 counted_reasons=[s.reason for s in spans if s.reason in counted],
                 track=path and path.track,
-                has_start_position=master.pk in starts,
+                has_start_position=figures.has_start_position,
+                origin=figures.origin,
                 **({"path_x": path.x, "path_y": path.y} if path else {}),
                 label=labels[master.id],
             )

@@ -22,6 +22,7 @@ track is drawn anyway, from its poses (``measured_paths``).
 
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from datetime import datetime
 
 import numpy as np
 from pyproj import Geod
@@ -224,12 +225,24 @@ def _fill(x: np.ndarray, y: np.ndarray, start, track: Track | None, after) -> No
         y[first : first + len(track)] = track.y
 
 
-def kept_distances(masters: Iterable[Segment], mode: str = GPS) -> dict[int, float | None]:
+@dataclass
+class KeptPath:
+    """A master's path as the figures kept at write time describe it."""
+
+    distance: float | None
+    points: int = 0
+    has_start_position: bool = False
+    # The path's first point: the start position, else the first pose, else the next start.
+    origin: tuple[float, float] | None = None
+    last_stamp: datetime | None = None
+
+
+def kept_paths(masters: Iterable[Segment], mode: str = GPS) -> dict[int, KeptPath]:
     """The distance rule on the figures kept at write time (SegmentFigures): the
     join from the start position to the first point, the kept length of the
     track, the join from its last point to the next start.  No pose is read, so
     the time does not depend on how many are stored.  Pass whole legs, as for
-    ``measured_paths``; None where fewer than two points are known."""
+    ``measured_paths``; distance None where fewer than two points are known."""
     neighbours = _neighbours(masters, mode)
     kept = {
         f.segment_id: f
@@ -238,18 +251,25 @@ def kept_distances(masters: Iterable[Segment], mode: str = GPS) -> dict[int, flo
         )
     }
     joins: list[tuple[int, tuple, tuple]] = []
-    distances: dict[int, float | None] = {}
+    paths: dict[int, KeptPath] = {}
     for master, start, after in neighbours:
         figures = kept.get(master.pk)
         if figures is None:
-            distances[master.pk] = None
+            paths[master.pk] = KeptPath(None, 0, start is not None, start or after)
             if start is not None and after is not None:
                 joins.append((master.pk, start, after))
             continue
+        first = (figures.first_x, figures.first_y)
         known = figures.points + (start is not None) + (after is not None)
-        distances[master.pk] = figures.length if known >= 2 else None
+        paths[master.pk] = KeptPath(
+            figures.length if known >= 2 else None,
+            figures.points,
+            start is not None,
+            start or first,
+            figures.last_stamp,
+        )
         if start is not None:
-            joins.append((master.pk, start, (figures.first_x, figures.first_y)))
+            joins.append((master.pk, start, first))
         if after is not None:
             joins.append((master.pk, (figures.last_x, figures.last_y), after))
     if joins:
@@ -257,8 +277,13 @@ def kept_distances(masters: Iterable[Segment], mode: str = GPS) -> dict[int, flo
         y = np.array([c for _, a, b in joins for c in (a[1], b[1])], dtype=float)
         lengths = _path_lengths(x, y, np.full(len(joins), 2, dtype=np.int64), mode)
         for (pk, _, _), length in zip(joins, lengths, strict=True):
-            distances[pk] = (distances[pk] or 0.0) + length
-    return distances
+            paths[pk].distance = (paths[pk].distance or 0.0) + length
+    return paths
+
+
+def kept_distances(masters: Iterable[Segment], mode: str = GPS) -> dict[int, float | None]:
+    """{master id: distance} by ``kept_paths``."""
+    return {pk: path.distance for pk, path in kept_paths(masters, mode).items()}
 
 
 def displayed_distances(masters: list[Segment]) -> dict[int, float | None]:

@@ -9,20 +9,20 @@ The figures row is locked first, so two writers on one segment take turns,
 and the second sees the first's poses when it measures.
 """
 
-import uuid
 from collections.abc import Iterable
 from dataclasses import dataclass
 from datetime import UTC, datetime
 
 import numpy as np
-from django.db.models import F, Max, Min
+from django.db.models import Max, Min
 from django.db.models.functions import Coalesce
 
 from telemetry.models import LocalPose, Pose, SegmentFigures
 from telemetry.models.poses import FixStatus
 from telemetry.selectors import driving_order
 from telemetry.selectors.distances import path_length
-from telemetry.selectors.tracks import GPS, LOCAL, MODES, Coordinate, load_tracks
+from telemetry.selectors.tracks import GPS, LOCAL, MODES, load_tracks
+from telemetry.services.pose_rows import NewPoint
 
 # Figures are float sums taken in another order than a measurement of the
 # whole track: they may differ in the last bits, never by more than this.
@@ -30,8 +30,6 @@ TOLERANCE_M = 1e-6
 
 # Sorts before every stamp: a point without the robot's clock comes last.
 _NEVER = datetime(1, 1, 1, tzinfo=UTC)
-# How many uids one query names (SQLite allows 32 766 parameters).
-_CHUNK = 5000
 
 
 def _model(mode):
@@ -48,54 +46,46 @@ def _usable(mode):
     return rows.exclude(fix_status=FixStatus.NO_FIX) if mode == GPS else rows
 
 
-def _xy(queryset, mode):
-    if mode == GPS:
-        return queryset.annotate(
-            _x=Coordinate("point", function="ST_X"), _y=Coordinate("point", function="ST_Y")
-        )
-    return queryset.annotate(_x=F("x"), _y=F("y"))
+# Creates the row or takes it as it is, and locks it either way (an upsert
+# locks the row it meets), in one statement.
+_LOCK = """
+INSERT INTO {table} (segment_id, mode, points, no_fix, length) VALUES (%s, %s, 0, 0, 0)
+ON CONFLICT (segment_id, mode) DO UPDATE SET mode = excluded.mode
+RETURNING *
+"""
 
 
 def _locked(master_id: int, mode: str) -> SegmentFigures:
-    SegmentFigures.objects.bulk_create(
-        [SegmentFigures(segment_id=master_id, mode=mode)], ignore_conflicts=True
-    )
-    return SegmentFigures.objects.select_for_update().get(segment_id=master_id, mode=mode)
+    query = _LOCK.format(table=SegmentFigures._meta.db_table)
+    return next(iter(SegmentFigures.objects.raw(query, [master_id, mode])))
 
 
-def keep_figures(master_id: int, mode: str, new_uids: Iterable[uuid.UUID]) -> None:
-    """Add the poses just stored under ``new_uids`` on ``master_id`` to its
-    figures.  Call inside the transaction that stored them."""
-    new_uids = list(new_uids)
-    if not new_uids:
+def keep_figures(master_id: int, mode: str, new: list[NewPoint]) -> None:
+    """Add the points just stored on ``master_id`` (pose_rows' answer) to its
+    figures: two statements, whatever the size of the batch or the segment.
+    Call inside the transaction that stored them."""
+    if not new:
         return
     figures = _locked(master_id, mode)
-    rows = []
-    no_fix = 0
-    for begin in range(0, len(new_uids), _CHUNK):
-        chunk = _model(mode).objects.filter(
-            segment_id=master_id, uid__in=new_uids[begin : begin + _CHUNK]
-        )
-        if mode == GPS:
-            no_fix += chunk.filter(fix_status=FixStatus.NO_FIX).count()
-            chunk = chunk.exclude(fix_status=FixStatus.NO_FIX)
-        rows.extend(_xy(chunk, mode).values_list("robot_stamp", "received", "id", "_x", "_y"))
-    rows.sort(key=lambda r: _key(*r[:3]))
+    rows = sorted((p for p in new if p.usable), key=lambda p: _key(p.robot_stamp, p.received, p.id))
     last = (figures.last_robot_stamp, figures.last_received, figures.last_id)
-    if rows and figures.points and _key(*rows[0][:3]) <= _key(*last):
+    if (
+        rows
+        and figures.points
+        and _key(rows[0].robot_stamp, rows[0].received, rows[0].id) <= _key(*last)
+    ):
         _measure(figures)
-        figures.save()
-        return
-    figures.no_fix += no_fix
-    if rows:
-        _append(figures, rows, mode)
+    else:
+        figures.no_fix += len(new) - len(rows)
+        if rows:
+            _append(figures, rows, mode)
     figures.save()
 
 
-def _append(figures: SegmentFigures, rows: list[tuple], mode: str) -> None:
-    x = np.array([r[3] for r in rows], dtype=float)
-    y = np.array([r[4] for r in rows], dtype=float)
-    stamps = [r[0] or r[1] for r in rows]
+def _append(figures: SegmentFigures, rows: list[NewPoint], mode: str) -> None:
+    x = np.array([r.x for r in rows], dtype=float)
+    y = np.array([r.y for r in rows], dtype=float)
+    stamps = [r.robot_stamp or r.received for r in rows]
     if figures.points:
         figures.length += path_length(
             np.concatenate(([figures.last_x], x)), np.concatenate(([figures.last_y], y)), mode
@@ -105,7 +95,11 @@ def _append(figures: SegmentFigures, rows: list[tuple], mode: str) -> None:
         figures.first_x, figures.first_y = float(x[0]), float(y[0])
     figures.points += len(rows)
     figures.last_x, figures.last_y = float(x[-1]), float(y[-1])
-    figures.last_robot_stamp, figures.last_received, figures.last_id = rows[-1][:3]
+    figures.last_robot_stamp, figures.last_received, figures.last_id = (
+        rows[-1][2],
+        rows[-1][3],
+        rows[-1].id,
+    )
     figures.first_stamp = min(filter(None, [figures.first_stamp, *stamps]))
     figures.last_stamp = max(filter(None, [figures.last_stamp, *stamps]))
     figures.min_x = float(min(x.min(), figures.min_x if figures.min_x is not None else np.inf))
