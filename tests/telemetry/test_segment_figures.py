@@ -8,6 +8,7 @@ from datetime import UTC, datetime, timedelta
 import pytest
 from django.core.management import CommandError, call_command
 from django.db import connection, connections
+from django.db.migrations.executor import MigrationExecutor
 from django.test.utils import CaptureQueriesContext
 
 from events.models import Segment, SegmentType
@@ -23,7 +24,12 @@ from telemetry.selectors.distances import displayed_distances, kept_distances, m
 from telemetry.selectors.tracks import GPS, LOCAL, masters
 from telemetry.services import recording
 from telemetry.services.recording import GpsFix, MapPose
-from telemetry.services.segment_figures import TOLERANCE_M, measure_figures, recount_figures
+from telemetry.services.segment_figures import (
+    TOLERANCE_M,
+    differences,
+    measure_figures,
+    recount_figures,
+)
 
 pytestmark = pytest.mark.django_db
 
@@ -156,10 +162,9 @@ def test_import_merging_poses_into_a_track_measures_it_again(leg, tmp_path, medi
     _assert_kept_equal_poses(leg)
 
 
+@pytest.mark.postgis_only
 @pytest.mark.django_db(transaction=True)
 def test_two_writers_on_one_segment_at_once(leg):
-    if connection.vendor != "postgresql":
-        pytest.skip("SpatiaLite has one writer at a time")
     master = _open_master(leg)
     fixes = _fixes(200, 7)
     # Interleaved stamps: each writer's batches fall between the other's.
@@ -185,3 +190,21 @@ def test_two_writers_on_one_segment_at_once(leg):
     assert errors == []
     assert Pose.objects.filter(segment=master).count() == 200
     _assert_kept_equal_poses(leg)
+
+
+@pytest.mark.django_db(transaction=True)
+def test_migration_measures_the_tracks_of_an_existing_database(leg):
+    master = _open_master(leg)
+    recording.record_poses(master, _fixes(30, 8))
+    recording.record_local_poses(
+        master, [MapPose(x=i, y=i * i * 0.1, frame="map") for i in range(5)]
+    )
+    kept = {(f.segment_id, f.mode): f for f in SegmentFigures.objects.all()}
+    executor = MigrationExecutor(connection)
+    executor.migrate([("telemetry", "0006_localpose_order_covering_index")])
+    executor.loader.build_graph()
+    executor.migrate(executor.loader.graph.leaf_nodes())
+    again = {(f.segment_id, f.mode): f for f in SegmentFigures.objects.all()}
+    assert again.keys() == kept.keys() == {(master.pk, GPS), (master.pk, LOCAL)}
+    for key, figures in kept.items():
+        assert differences(figures, again[key]) == []
