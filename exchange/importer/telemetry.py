@@ -14,8 +14,10 @@ from exchange.importer.plan import MalformedRecord, describe
 from exchange.importer.session import ImportSession
 from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 from telemetry.pictures import MAP_FORMATS, PHOTO_FORMATS, checked_picture
+from telemetry.selectors.tracks import GPS, LOCAL
 from telemetry.services.map_images import check_map_placement
 from telemetry.services.recording import GpsFix, MapPose
+from telemetry.services.segment_figures import measure_figures
 
 BATCH = 2000
 # Every MCAP file starts with these bytes (the format's magic).
@@ -44,6 +46,9 @@ def _add_track_points(session: ImportSession, table, model, build):
         for row in fresh:
             session.track_points[(table, row.segment_id)] += 1
         session.plan.note(table, "unchanged", len(batch) - len(fresh))
+    # An archive's poses may fall anywhere in a stored track: measure it again.
+    mode = GPS if model is Pose else LOCAL
+    measure_figures({seg for kind, seg in session.track_points if kind == table}, [mode])
 
 
 def import_poses(session: ImportSession):

@@ -133,7 +133,7 @@ class LegTracks(GuiView):
         for mode, loaded in ((GPS, gps), (LOCAL, local)):
             if zooms[mode] is None and "fit" in q:
                 zooms[mode] = fit_zoom(mode, list(loaded.values()), *q["fit"])
-        distances = displayed_distances(masters, gps, local)
+        distances = displayed_distances(masters)
         segments = {}
         for master in masters:
             segment_id, mode = master.pk, master.segment_type_id
@@ -159,8 +159,8 @@ class LegTracks(GuiView):
 
 
 def read_ahead(leg: Leg) -> threading.Thread | None:
-    """Starts reading what LegTracks answers from (the kept tracks of both maps,
-    the displayed distances) in a thread of its own, and returns the thread.
+    """Starts reading what LegTracks answers from (the kept tracks of both maps)
+    in a thread of its own, and returns the thread.
 
     The cockpit's page calls it for the leg it opens: its scripts ask for the
     tracks about half a second after the page, and a process that has not kept
@@ -180,8 +180,7 @@ def read_ahead(leg: Leg) -> threading.Thread | None:
 
 def _read_leg(masters: list[Segment]) -> None:
     try:
-        kept = kept_tracks(masters)
-        displayed_distances(masters, kept[GPS], kept[LOCAL])
+        kept_tracks(masters)
     except DatabaseError:
         # Only a head start: the tracks request reads whatever is not kept yet.
         pass

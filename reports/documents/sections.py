@@ -73,7 +73,7 @@ class Sections:
         event = self.event
         self.progress(0.02, "statistics")
         with self.time_stage("statistics (queries and distances)"):
-            stats = event_statistics(event, self.mode)
+            stats = event_statistics(event, self.mode, tracks=True)
         shifts = content.shifts_of(event)
         self.legs = content.legs_by_shift(shifts)
         self.notes = content.notes_by_master(event)

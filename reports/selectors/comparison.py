@@ -78,7 +78,7 @@ def _group(extra: dict, runs: list[Run]) -> dict:
 def compare(events: list[TestEvent], mode: str = GPS) -> dict:
     """JSON-ready comparison of the given test events, oldest first."""
     events = sorted(events, key=lambda e: (e.start, e.pk))
-    runs_of = {e.pk: event_runs(e, mode) for e in events}
+    runs_of = {e.pk: event_runs(e, mode, tracks=False) for e in events}
     every = [run for e in events for run in runs_of[e.pk]]
     by_version: dict[str, list[Run]] = defaultdict(list)
     by_vehicle: dict[int, list[Run]] = defaultdict(list)

@@ -44,10 +44,10 @@ class TakeOver:
 def take_overs(runs_of: dict[int, list[Run]]) -> list[TakeOver]:
     """The interventions with a known position, per test event in driving order."""
     return [
-        TakeOver(event_id, run, float(run.path_x[0]), float(run.path_y[0]))
+        TakeOver(event_id, run, float(run.origin[0]), float(run.origin[1]))
         for event_id, runs in runs_of.items()
         for run in runs
-        if run.is_intervention and len(run.path_x)
+        if run.is_intervention and run.origin is not None
     ]
 
 

@@ -38,7 +38,7 @@ from scipy.stats import chi2
 
 from events.models import ItoReason, Segment, SegmentType, TestEvent
 from events.selectors.labels import label, numbers
-from telemetry.selectors.distances import measured_paths
+from telemetry.selectors.distances import kept_paths, measured_paths
 from telemetry.selectors.tracks import GPS, Track
 
 CONFIDENCE = 0.90
@@ -131,6 +131,8 @@ class Run:
     # The polyline the distance was measured on, joins included.
     path_x: np.ndarray = field(default_factory=lambda: np.empty(0))
     path_y: np.ndarray = field(default_factory=lambda: np.empty(0))
+    # The path's first point (where a take-over happened), None when unknown.
+    origin: tuple[float, float] | None = None
     # The GUI's name of the segment ("Leg 2 · #7"), see events.selectors.labels.
     label: str = ""
     # Seconds the robot may have switched before `start` (a mode message without a stamp).
@@ -266,12 +268,12 @@ def _longest_without_intervention(runs: list[Run]) -> float:
     return longest
 
 
-def _effective_end(segment: Segment, track: Track | None, children: list[Segment]):
+def _effective_end(segment: Segment, last_stamp: datetime | None, children: list[Segment]):
     if segment.end is not None:
         return segment.end
     known = [segment.start]
-    if track is not None and track.last_stamp is not None:
-        known.append(track.last_stamp)
+    if last_stamp is not None:
+        known.append(last_stamp)
     for child in children:
         known.append(child.end or child.start)
     return max(known)
@@ -296,8 +298,12 @@ RUN_FIELDS = (
 )
 
 
-def event_runs(event: TestEvent, mode: str = GPS) -> list[Run]:
-    """All master segments of a test event as runs, ordered by leg and time."""
+def event_runs(event: TestEvent, mode: str = GPS, *, tracks: bool = True) -> list[Run]:
+    """All master segments of a test event as runs, ordered by leg and time.
+
+    Distances, pose counts and the end of an open segment come from the
+    figures kept at write time; only ``tracks`` (for drawing and the
+    exports) reads the poses."""
     segments = list(
         Segment.objects.filter(leg__shift__test_event=event)
         .select_related("leg__shift")
@@ -315,15 +321,16 @@ def event_runs(event: TestEvent, mode: str = GPS) -> list[Run]:
     for s in segments:
         if s.parent_id is not None:
             children[s.parent_id].append(s)
-    paths = measured_paths(masters, mode)
+    kept = kept_paths(masters, mode)
+    paths = measured_paths(masters, mode) if tracks else {}
     labels = segment_labels(segments)
 
     runs = []
     for master in masters:
-        path = paths[master.id]
-        track = path.track
+        path = paths.get(master.id)
+        figures = kept[master.id]
         kids = children.get(master.id, [])
-        end = _effective_end(master, track, kids)
+        end = _effective_end(master, figures.last_stamp, kids)
         spans = [
             ReasonSpan(
                 id=c.id,
@@ -347,15 +354,15 @@ def event_runs(event: TestEvent, mode: str = GPS) -> list[Run]:
                 start=master.start,
                 end=end,
                 is_open=master.end is None,
-                distance=path.distance or 0.0,
-                pose_count=len(track) if track is not None else 0,
+                distance=figures.distance or 0.0,
+                pose_count=figures.points,
                 reasons=spans,
                 counted_reasons=[s.reason for s in spans if s.reason in counted],
-                track=track,
-                has_start_position=path.has_start_position,
+                track=path and path.track,
+                has_start_position=figures.has_start_position,
+                origin=figures.origin,
                 start_uncertainty=master.start_uncertainty,
-                path_x=path.x,
-                path_y=path.y,
+                **({"path_x": path.x, "path_y": path.y} if path else {}),
                 label=labels[master.id],
             )
         )
@@ -434,10 +441,11 @@ def _grouped(runs: list[Run], key) -> dict[int, Figures]:
 
 
 def event_statistics(
-    event: TestEvent, mode: str = GPS, runs: list[Run] | None = None
+    event: TestEvent, mode: str = GPS, runs: list[Run] | None = None, *, tracks: bool = False
 ) -> EventStatistics:
-    """Figures for the whole test event and each leg, shift and vehicle in it."""
-    runs = event_runs(event, mode) if runs is None else runs
+    """Figures for the whole test event and each leg, shift and vehicle in it
+    (``tracks``: with each run's track, for the report's drawings)."""
+    runs = event_runs(event, mode, tracks=tracks) if runs is None else runs
     return EventStatistics(
         test_event_id=event.pk,
         mode=mode,

@@ -15,18 +15,20 @@ differ by less than 0.2 micrometres up to 85 degrees latitude, and on the
 equator the formula is exactly a * dlambda.
 
 The GUI's segment list, the API, the statistics, the report and the exports
-all read distances from here.
+all read distances from here: from the figures kept at write time
+(``kept_distances``, telemetry.services.segment_figures) or, where the
+track is drawn anyway, from its poses (``measured_paths``).
 """
 
-import threading
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from datetime import datetime
 
 import numpy as np
-from cachetools import LRUCache
 from pyproj import Geod
 
 from events.models import Segment
+from telemetry.models import SegmentFigures
 from telemetry.selectors.tracks import GPS, LOCAL, Coordinate, Track, load_tracks
 
 WGS84 = Geod(ellps="WGS84")
@@ -152,28 +154,37 @@ def start_points(masters: list[Segment], mode: str) -> dict[int, tuple[float, fl
     return found
 
 
+def _neighbours(
+    masters: Iterable[Segment], mode: str
+) -> list[tuple[Segment, tuple | None, tuple | None]]:
+    """(master, its start position, the next master's start position) in driving
+    order; the next master is looked up among the given ones of the same leg."""
+    masters = sorted(masters, key=lambda m: (m.leg_id, m.start, m.pk))
+    starts = start_points(masters, mode)
+    found = []
+    for i, master in enumerate(masters):
+        follower = masters[i + 1] if i + 1 < len(masters) else None
+        if follower is not None and follower.leg_id != master.leg_id:
+            follower = None
+        after = starts.get(follower.pk) if follower is not None else None
+        found.append((master, starts.get(master.pk), after))
+    return found
+
+
 def measured_paths(
     masters: Iterable[Segment], mode: str = GPS, tracks: dict[int, Track] | None = None
 ) -> dict[int, MeasuredPath]:
-    """Paths of the given master segments, keyed by id.
+    """Paths of the given master segments, keyed by id, measured on their poses
+    (for drawing them; ``kept_distances`` gives the distances without reading poses).
 
     The next master of each is looked up among the given ones of the same
     leg, so pass whole legs.  ``distance`` is None when fewer than two points
     are known: nothing was measured, which is not the same as standing still.
     """
-    masters = sorted(masters, key=lambda m: (m.leg_id, m.start, m.pk))
+    neighbours = _neighbours(masters, mode)
     if tracks is None:
-        tracks = load_tracks([m.pk for m in masters], mode)
-    starts = start_points(masters, mode)
-    parts = []
-    for i, master in enumerate(masters):
-        follower = masters[i + 1] if i + 1 < len(masters) else None
-        if follower is not None and follower.leg_id != master.leg_id:
-            follower = None
-        track = tracks.get(master.pk)
-        start = starts.get(master.pk)
-        after = starts.get(follower.pk) if follower is not None else None
-        parts.append((master, track, start, after))
+        tracks = load_tracks([m.pk for m, _, _ in neighbours], mode)
+    parts = [(master, tracks.get(master.pk), start, after) for master, start, after in neighbours]
     sizes = np.array(
         [
             (start is not None) + (len(track) if track is not None else 0) + (after is not None)
@@ -214,65 +225,70 @@ def _fill(x: np.ndarray, y: np.ndarray, start, track: Track | None, after) -> No
         y[first : first + len(track)] = track.y
 
 
-def displayed_distances(
-    masters: list[Segment],
-    gps: dict[int, Track] | None = None,
-    local: dict[int, Track] | None = None,
-) -> dict[int, float | None]:
-    """What a list shows for one leg's masters: the GPS distance where one was
-    measured, else the local one, else None (nothing measured).
+@dataclass
+class KeptPath:
+    """A master's path as the figures kept at write time describe it."""
 
-    For tracks the map keeps (``kept_tracks.kept_tracks``) the answer is kept too,
-    by everything it is measured from: each master's id, leg, start, start
-    positions and its tracks' keys, so a late pose or a moved start measures
-    again."""
-    inputs = _measured_from(masters, gps, local)
-    if inputs is not None:
-        with _displayed_lock:
-            found = _displayed.get(inputs)
-        if found is not None:
-            return dict(found)
-    by_gps = measured_paths(masters, GPS, gps)
-    by_local = measured_paths(masters, LOCAL, local)
-    distances = {
-        pk: path.distance if path.distance is not None else by_local[pk].distance
-        for pk, path in by_gps.items()
-    }
-    if inputs is not None:
-        with _displayed_lock:
-            _displayed[inputs] = dict(distances)
-    return distances
+    distance: float | None
+    points: int = 0
+    has_start_position: bool = False
+    # The path's first point: the start position, else the first pose, else the next start.
+    origin: tuple[float, float] | None = None
+    last_stamp: datetime | None = None
 
 
-# Answers of displayed_distances kept in each process, one per leg the map shows
-# (64 legs), least recently read dropped first.
-_displayed: LRUCache[tuple, dict[int, float | None]] = LRUCache(maxsize=64)
-_displayed_lock = threading.Lock()
-
-
-def _measured_from(masters, gps, local) -> tuple | None:
-    """The inputs of displayed_distances as a key, or None unless both maps'
-    tracks are kept ones (whose keys change with every added pose)."""
-    if gps is None or local is None:
-        return None
-    parts = []
-    for m in masters:
-        if "start_position" in m.get_deferred_fields():
-            return None
-        tracks = [gps.get(m.pk), local.get(m.pk)]
-        keys = [None if t is None else t.memo.get("kept") for t in tracks]
-        if any(t is not None and k is None for t, k in zip(tracks, keys, strict=True)):
-            return None
-        position = m.start_position
-        parts.append(
-            (
-                m.pk,
-                m.leg_id,
-                m.start,
-                None if position is None else (position.x, position.y),
-                m.start_local_x,
-                m.start_local_y,
-                *keys,
-            )
+def kept_paths(masters: Iterable[Segment], mode: str = GPS) -> dict[int, KeptPath]:
+    """The distance rule on the figures kept at write time (SegmentFigures): the
+    join from the start position to the first point, the kept length of the
+    track, the join from its last point to the next start.  No pose is read, so
+    the time does not depend on how many are stored.  Pass whole legs, as for
+    ``measured_paths``; distance None where fewer than two points are known."""
+    neighbours = _neighbours(masters, mode)
+    kept = {
+        f.segment_id: f
+        for f in SegmentFigures.objects.filter(
+            segment_id__in=[m.pk for m, _, _ in neighbours], mode=mode, points__gt=0
         )
-    return tuple(parts)
+    }
+    joins: list[tuple[int, tuple, tuple]] = []
+    paths: dict[int, KeptPath] = {}
+    for master, start, after in neighbours:
+        figures = kept.get(master.pk)
+        if figures is None:
+            paths[master.pk] = KeptPath(None, 0, start is not None, start or after)
+            if start is not None and after is not None:
+                joins.append((master.pk, start, after))
+            continue
+        first = (figures.first_x, figures.first_y)
+        known = figures.points + (start is not None) + (after is not None)
+        paths[master.pk] = KeptPath(
+            figures.length if known >= 2 else None,
+            figures.points,
+            start is not None,
+            start or first,
+            figures.last_stamp,
+        )
+        if start is not None:
+            joins.append((master.pk, start, first))
+        if after is not None:
+            joins.append((master.pk, (figures.last_x, figures.last_y), after))
+    if joins:
+        x = np.array([c for _, a, b in joins for c in (a[0], b[0])], dtype=float)
+        y = np.array([c for _, a, b in joins for c in (a[1], b[1])], dtype=float)
+        lengths = _path_lengths(x, y, np.full(len(joins), 2, dtype=np.int64), mode)
+        for (pk, _, _), length in zip(joins, lengths, strict=True):
+            paths[pk].distance = (paths[pk].distance or 0.0) + length
+    return paths
+
+
+def kept_distances(masters: Iterable[Segment], mode: str = GPS) -> dict[int, float | None]:
+    """{master id: distance} by ``kept_paths``."""
+    return {pk: path.distance for pk, path in kept_paths(masters, mode).items()}
+
+
+def displayed_distances(masters: list[Segment]) -> dict[int, float | None]:
+    """What a list shows for one leg's masters: the GPS distance where one was
+    measured, else the local one, else None (nothing measured)."""
+    by_gps = kept_distances(masters, GPS)
+    by_local = kept_distances(masters, LOCAL)
+    return {pk: d if d is not None else by_local[pk] for pk, d in by_gps.items()}

@@ -7,12 +7,35 @@ retried pose or batch is stored once even when two retries race.
 
 import uuid
 from dataclasses import dataclass
+from datetime import datetime
+from typing import NamedTuple
 
 from django.db import connection
 
 from common.sql import bound_cursor
 from events.models import PoseSource, Segment
 from telemetry.models import LocalPose, Pose
+from telemetry.models.poses import FixStatus
+
+
+class NewPoint(NamedTuple):
+    """A point an insert stored, with what its segment's figures need
+    (telemetry.services.segment_figures); ``usable``: not a fix without a position."""
+
+    uid: uuid.UUID
+    id: int
+    robot_stamp: datetime | None
+    received: datetime
+    x: float
+    y: float
+    usable: bool
+
+
+# What a GPS insert returns of each new row (NewPoint's fields).
+_GPS_RETURNING = (
+    "RETURNING uid, id, robot_stamp, received, ST_X(point), ST_Y(point), "
+    f"fix_status <> {int(FixStatus.NO_FIX)}"
+)
 
 # The columns of a GPS pose row, in the order every insert below gives them.
 POSE_COLUMNS = (
@@ -65,19 +88,24 @@ def insert_pose(master_id: int, fix, source_id: int | None, received) -> int | N
     return None if row is None else row[0]
 
 
-def insert_fixes(master, source_id, fixes, received) -> set[uuid.UUID]:
-    """Store checked fixes on ``master``; the uids of the new rows."""
+def insert_fixes(master, source_id, fixes, received) -> list[NewPoint]:
+    """Store checked fixes on ``master``; the new rows."""
     if connection.vendor == "postgresql":
         return _insert_fixes_postgres(master, fixes, source_id, received)
     rows = [fix.row(master, source_id, received) for fix in fixes]
-    return {row.uid for row in insert_new(Pose, rows)}
+    return [
+        NewPoint(r.uid, r.pk, r.robot_stamp, r.received, r.point.x, r.point.y,
+                 r.fix_status != FixStatus.NO_FIX)
+        for r in insert_new(Pose, rows)
+    ]  # fmt: skip
 
 
-def insert_local_poses(master, poses, received) -> list:
-    """Store checked map-frame poses on ``master``; those that were new."""
+def insert_local_poses(master, poses, received) -> list[NewPoint]:
+    """Store checked map-frame poses on ``master``; the new rows."""
     if connection.vendor == "postgresql":
         return _insert_local_postgres(master, poses, received)
-    return insert_new(LocalPose, [pose.to_local_pose(master, received) for pose in poses])
+    rows = insert_new(LocalPose, [pose.to_local_pose(master, received) for pose in poses])
+    return [NewPoint(r.uid, r.pk, r.robot_stamp, r.received, r.x, r.y, True) for r in rows]
 
 
 # One statement with one array per column: its cost does not grow with the
@@ -92,7 +120,7 @@ SELECT u, %b, ST_SetSRID(ST_MakePoint(x, y), 4326), a, f, h, %b, r, %b
 FROM unnest(%b::uuid[], %b::float8[], %b::float8[], %b::float8[], %b::int2[],
             %b::float8[], %b::timestamptz[]) AS t(u, x, y, a, f, h, r)
 ON CONFLICT (uid) DO NOTHING
-RETURNING uid
+{returning}
 """
 
 
@@ -102,7 +130,7 @@ def _floats(values) -> list[float | None]:
     return [None if v is None else float(v) for v in values]
 
 
-def _insert_fixes_postgres(master, fixes, source_id, received) -> set[uuid.UUID]:
+def _insert_fixes_postgres(master, fixes, source_id, received) -> list[NewPoint]:
     columns = (
         [as_uuid(f.uid) for f in fixes],
         _floats(f.longitude for f in fixes),
@@ -112,19 +140,21 @@ def _insert_fixes_postgres(master, fixes, source_id, received) -> set[uuid.UUID]
         _floats(f.horizontal_accuracy for f in fixes),
         [f.robot_stamp for f in fixes],
     )
-    insert = _POSTGRES_INSERT.format(table=Pose._meta.db_table, columns=POSE_COLUMNS)
+    insert = _POSTGRES_INSERT.format(
+        table=Pose._meta.db_table, columns=POSE_COLUMNS, returning=_GPS_RETURNING
+    )
     return _insert_columns(_POSE_STAGING, insert, columns, [master.pk, source_id, received])
 
 
-def _insert_columns(staging, insert: str, columns, params) -> set[uuid.UUID]:
+def _insert_columns(staging, insert: str, columns, params) -> list[NewPoint]:
     """Store the rows given as column lists (the uid's first, in the staging
-    table's order) whose uid is new; returns their uids.  ``params`` come before
+    table's order) whose uid is new; returns them.  ``params`` come before
     the columns in ``insert`` and are the staging insert's own parameters."""
     if len(columns[0]) >= COPY_FROM:
         return _copy_new(staging, zip(*columns, strict=True), params)
     with bound_cursor() as cursor:
         cursor.execute(insert, [*params, *columns])
-        return {as_uuid(row[0]) for row in cursor.fetchall()}
+        return _new_points(cursor.fetchall())
 
 
 # From this many rows on, a batch goes to PostgreSQL by COPY into a temporary
@@ -166,7 +196,7 @@ WITH moved AS (DELETE FROM ftt_pose_in RETURNING *)
 INSERT INTO {Pose._meta.db_table} ({POSE_COLUMNS})
 SELECT u, %s, ST_SetSRID(ST_MakePoint(x, y), 4326), a, f, h, %s, r, %s FROM moved
 ON CONFLICT (uid) DO NOTHING
-RETURNING uid
+{_GPS_RETURNING}
 """,
 )
 
@@ -179,14 +209,14 @@ WITH moved AS (DELETE FROM ftt_local_pose_in RETURNING *)
 INSERT INTO {LocalPose._meta.db_table} (uid, segment_id, frame, x, y, yaw, robot_stamp, received)
 SELECT u, %s, frame, x, y, yaw, r, %s FROM moved
 ON CONFLICT (uid) DO NOTHING
-RETURNING uid
+RETURNING uid, id, robot_stamp, received, x, y, true
 """,
 )
 
 
-def _copy_new(staging: _Staging, rows, params) -> set[uuid.UUID]:
+def _copy_new(staging: _Staging, rows, params) -> list[NewPoint]:
     """Copy ``rows`` (tuples in the staging table's column order) and store those
-    whose uid is new; returns their uids."""
+    whose uid is new; returns them."""
     with bound_cursor() as cursor:
         cursor.execute(staging.create())
         with cursor.copy(f"COPY {staging.name} FROM STDIN (FORMAT BINARY)") as copy:
@@ -194,7 +224,11 @@ def _copy_new(staging: _Staging, rows, params) -> set[uuid.UUID]:
             for row in rows:
                 copy.write_row(row)
         cursor.execute(staging.insert, params)
-        return {as_uuid(uid) for (uid,) in cursor.fetchall()}
+        return _new_points(cursor.fetchall())
+
+
+def _new_points(rows) -> list[NewPoint]:
+    return [NewPoint(as_uuid(row[0]), *row[1:]) for row in rows]
 
 
 def as_uuid(value) -> uuid.UUID:
@@ -210,11 +244,11 @@ SELECT u, %b, f, x, y, w, r, %b
 FROM unnest(%b::uuid[], %b::text[], %b::float8[], %b::float8[], %b::float8[],
             %b::timestamptz[]) AS t(u, f, x, y, w, r)
 ON CONFLICT (uid) DO NOTHING
-RETURNING uid
+RETURNING uid, id, robot_stamp, received, x, y, true
 """
 
 
-def _insert_local_postgres(master, poses, received) -> list:
+def _insert_local_postgres(master, poses, received) -> list[NewPoint]:
     for pose in poses:
         pose.check()
     uids = [as_uuid(p.uid) for p in poses]
@@ -227,8 +261,7 @@ def _insert_local_postgres(master, poses, received) -> list:
         [p.robot_stamp for p in poses],
     )
     insert = _POSTGRES_LOCAL_INSERT.format(table=LocalPose._meta.db_table)
-    new = _insert_columns(_LOCAL_POSE_STAGING, insert, columns, [master.pk, received])
-    return [p for p, uid in zip(poses, uids, strict=True) if uid in new]
+    return _insert_columns(_LOCAL_POSE_STAGING, insert, columns, [master.pk, received])
 
 
 def insert_new(model, rows) -> list:

@@ -27,7 +27,9 @@ from events.selectors.segments import pose_target
 from events.services.segments import GpsPosition
 from telemetry.models import LocalPose, Pose
 from telemetry.models.poses import FixStatus
+from telemetry.selectors.tracks import GPS, LOCAL
 from telemetry.services import pose_rows
+from telemetry.services.segment_figures import keep_figures
 
 # The fix statuses a pose may carry and the one it gets when none is sent; every
 # check of a sent fix reads these.  (FixStatus.values builds a new list on each
@@ -125,7 +127,9 @@ def store_poses(
         return set()
     master = segment.master
     source_id = pose_source_id(master, pose_source.pk if pose_source is not None else None)
-    new = pose_rows.insert_fixes(master, source_id, fixes, timezone.now())
+    stored = pose_rows.insert_fixes(master, source_id, fixes, timezone.now())
+    keep_figures(master.pk, GPS, stored)
+    new = {p.uid for p in stored}
     points = [(f.longitude, f.latitude) for f in fixes if pose_rows.as_uuid(f.uid) in new]
     announce_track(master, points, local=False)
     return new
@@ -154,6 +158,11 @@ def store_pose(
     with transaction.atomic():
         pk = pose_rows.insert_pose(master.pk, fix, source_id, received)
         if pk is not None:
+            point = pose_rows.NewPoint(
+                fix.uid, pk, fix.robot_stamp, received, fix.longitude, fix.latitude,
+                fix.fix_status != FixStatus.NO_FIX,
+            )  # fmt: skip
+            keep_figures(master.pk, GPS, [point])
             announce_track(master, [(fix.longitude, fix.latitude)], local=False)
     if pk is None:
         return known_pose(master, fix, source_id), False
@@ -178,5 +187,6 @@ def known_pose(master: Segment, fix: GpsFix, source_id: int | None) -> Pose:
 def record_local_poses(segment: Segment, poses: list[MapPose]) -> int:
     master = segment.master
     fresh = pose_rows.insert_local_poses(master, poses, timezone.now()) if poses else []
+    keep_figures(master.pk, LOCAL, fresh)
     announce_track(master, [(p.x, p.y) for p in fresh], local=True)
     return len(fresh)

@@ -30,7 +30,7 @@ from events.models import (
     Vehicle,
     Weather,
 )
-from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
+from telemetry.models import Image, LocalPose, MapImage, Pose, Recording, SegmentFigures
 
 TABLES = {
     "weather": Weather,
@@ -54,8 +54,9 @@ TABLES = {
 
 # The change feed only tells open browsers what changed; it is not test data.
 # Robot accounts bind this installation's logins to vehicles, like the accounts
-# themselves they stay where they were made.
-NOT_RECORDED = {Announcement, RobotAccount}
+# themselves they stay where they were made.  Segment figures are measured
+# from the poses (tests/telemetry/test_segment_figures.py checks them).
+NOT_RECORDED = {Announcement, RobotAccount, SegmentFigures}
 
 # Login accounts belong to one installation; archives do not carry them.
 LOCAL_COLUMNS = {(Personnel, "user")}

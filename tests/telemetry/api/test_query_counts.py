@@ -112,6 +112,9 @@ def test_a_single_pose_is_one_short_transaction_of_two_inserts(api_client, leg):
     assert len(every) == len(in_transaction) + 2, every  # nothing outside it
     assert [q.split()[:3] for q in in_transaction] == [
         ["INSERT", "INTO", "telemetry_pose"],
+        # The segment's figures, locked and brought up to date.
+        ["INSERT", "INTO", "telemetry_segmentfigures"],
+        ["UPDATE", '"telemetry_segmentfigures"', "SET"],
         ["INSERT", "INTO", '"rosbridge_app_announcement"'],
     ], in_transaction
     stored = Pose.objects.get(uid=body["uid"])
@@ -204,11 +207,11 @@ def test_a_deleted_segment_is_noticed_although_it_was_kept(api_client, leg):
 @pytest.mark.parametrize(
     "size, queries",
     [
-        # The insert of unnested arrays, the feed row.
-        (10, 2),
-        # The staging table, COPY, the insert from it, the feed row.
-        (COPY_FROM, 4),
-        (5000, 4),
+        # The insert of unnested arrays, the segment's figures (lock, update), the feed row.
+        (10, 4),
+        # The staging table, COPY, the insert from it, the figures, the feed row.
+        (COPY_FROM, 6),
+        (5000, 6),
     ],
 )
 def test_a_batch_costs_the_same_queries_whatever_its_size(size, queries, api_client, auto_master):
