@@ -150,7 +150,8 @@ def run(*, relay, leg, name, log: Path, listener, full_seconds, after_seconds, a
     cut = time.time()
     say("database cut; waiting for the spool's disk to fill")
     wait(lambda: "robot disk full" in log.read_text(errors="replace"), 300, "a full disk")
-    figures["disk full after"] = time.time() - cut
+    full = time.time()
+    figures["disk full after"] = full - cut
     say(
         f"disk full {figures['disk full after']:.0f} s after the cut; "
         f"database away {full_seconds} s more"
@@ -195,6 +196,9 @@ def run(*, relay, leg, name, log: Path, listener, full_seconds, after_seconds, a
         {
             "switches published": len(listener.changes) - 1,
             "switches lost": len(lost),
+            "switches while the disk was full": sum(
+                1 for t, _ in listener.changes if full < t < up
+            ),
             "masters in order": [kind for _, kind in stored],
             "positions published": len(listener.fixes),
             "positions stored": len(inside),

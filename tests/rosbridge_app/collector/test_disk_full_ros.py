@@ -44,7 +44,7 @@ def test_a_full_disk_during_an_outage_loses_no_switch_and_the_collector_goes_on(
             "ftt_simulate",
             *diskfull.ROBOT,
             "--switch-every",
-            "4",
+            "2",
             "--duration",
             "300",
             name="robot",
@@ -55,7 +55,7 @@ def test_a_full_disk_during_an_outage_loses_no_switch_and_the_collector_goes_on(
             name="diskfull",
             log=collector.log,
             listener=listener,
-            full_seconds=3,
+            full_seconds=4,
             after_seconds=2,
             alive=collector.alive,
             say=lambda line: None,
@@ -69,6 +69,7 @@ def test_a_full_disk_during_an_outage_loses_no_switch_and_the_collector_goes_on(
         procs.stop_all()
         mount.__exit__(None, None, None)
     assert not figures["collector exited"], output
+    assert figures["switches while the disk was full"] >= 1, figures
     assert figures["switches published"] >= 5 and figures["switches lost"] == 0, figures
     assert figures["live stored after"] < 2.0, figures
     # Positions cover the whole run, thinned where the disk was full.
