@@ -50,7 +50,7 @@ def field(server):
 
 
 @pytest.mark.parametrize("screen", list(VIEWPORTS))
-def test_cockpit_dialogs_fleet_and_compare_pass_axe(browser, server, field, screen):
+def test_cockpit_dialogs_fleet_and_compare_pass_axe(browser, server, field, shot, screen):
     assert AXE.exists(), "run npm ci (scripts/setup.sh --test) for axe-core"
     # The site's CSP rightly refuses injected scripts; axe is the test's own tool.
     context = browser.new_context(bypass_csp=True, **VIEWPORTS[screen])
@@ -62,6 +62,7 @@ def test_cockpit_dialogs_fleet_and_compare_pass_axe(browser, server, field, scre
     expect(page.locator("#timeline .bar")).not_to_have_count(0)
     page.add_script_tag(path=str(AXE))
     assert_clean(page, "cockpit")
+    shot(page, f"{screen}-cockpit-ito")
 
     dialogs = {
         "form-dialog": lambda: page.locator('[data-action="new"][data-level="shift"]').click(),
@@ -77,6 +78,7 @@ def test_cockpit_dialogs_fleet_and_compare_pass_axe(browser, server, field, scre
         # The dialog's lists arrive from the API.
         expect(dialog.locator("select:empty")).to_have_count(0)
         assert_clean(page, name)
+        shot(page, f"{screen}-{name}")
         page.keyboard.press("Escape")
         expect(dialog).to_be_hidden()
 
@@ -84,6 +86,7 @@ def test_cockpit_dialogs_fleet_and_compare_pass_axe(browser, server, field, scre
     expect(page.locator(".fleet-vehicle", has_text="Axe Rover")).to_be_visible()
     page.add_script_tag(path=str(AXE))
     assert_clean(page, "fleet")
+    shot(page, f"{screen}-fleet")
 
     page.goto(f"{server.url}/compare/?event={done['event']}&event={live['event']}")
     expect(page.locator("#by-event article")).to_have_count(2)
