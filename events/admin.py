@@ -5,12 +5,16 @@ with links up and down; its state changes (close, re-open) are admin actions
 that call the service layer, and robot-recorded data is read-only.
 """
 
+from django import forms
 from django.contrib import admin, messages
 from django.contrib.auth import get_user_model
 from django.contrib.auth.admin import UserAdmin
+from django.contrib.auth.forms import AdminUserCreationForm
+from django.contrib.auth.models import Group
 from django.core.exceptions import ValidationError
 from django.urls import reverse
 from django.utils.html import format_html
+from django.utils.translation import gettext_lazy as _
 from leaflet.admin import LeafletGeoAdminMixin
 
 from common import roles
@@ -29,6 +33,7 @@ from events.models import (
     Vehicle,
     Weather,
 )
+from events.selectors import labels
 from events.services import configuration, deletion, logs, notes, segments
 
 # Shown, never edited: the services and the importer set them.
@@ -136,15 +141,68 @@ class RobotAccountInline(admin.StackedInline):
     can_delete = True
     filter_horizontal = ["vehicles"]
     verbose_name = "robot account (vehicles it logs for)"
+    # Folded: most logins are people's; a robot's is made with ftt_robot_account.
+    classes = ["collapse"]
 
 
 User = get_user_model()
 admin.site.unregister(User)
 
 
+class PersonCreationForm(AdminUserCreationForm):
+    """A person's login, role and name on one page (the name signs their notes)."""
+
+    role = forms.ChoiceField(
+        label=_("Role"),
+        choices=[("", _("— none yet —"))] + [(role, _(role.title())) for role in roles.ORDER],
+        required=False,
+        help_text=_("Administrators also get into this configuration site."),
+    )
+    person_name = forms.CharField(
+        label=_("Person's name"),
+        max_length=200,
+        required=False,
+        help_text=_("Signs the notes this login writes; leave empty for no person record."),
+    )
+    institution = forms.CharField(label=_("Institution"), max_length=200, required=False)
+
+    def save(self, commit=True):
+        user = super().save(commit=False)
+        user.is_staff = self.cleaned_data["role"] == roles.ADMINISTRATOR
+        if commit:
+            user.save()
+            self.save_person(user)
+        return user
+
+    def save_person(self, user):
+        if self.cleaned_data["role"]:
+            user.groups.add(Group.objects.get(name=self.cleaned_data["role"]))
+        if self.cleaned_data["person_name"]:
+            configuration.create_configuration(
+                Personnel,
+                name=self.cleaned_data["person_name"],
+                institution=self.cleaned_data["institution"],
+                user=user,
+            )
+
+
 @admin.register(User)
 class FttUserAdmin(UserAdmin):
+    add_form = PersonCreationForm
+    add_fieldsets = (
+        *UserAdmin.add_fieldsets,
+        (_("Role and person"), {"fields": ("role", "person_name", "institution")}),
+    )
     inlines = [*UserAdmin.inlines, RobotAccountInline]
+
+    def get_inlines(self, request, obj):
+        # A new login is a person's; a robot's block appears once it exists.
+        return self.inlines if obj is not None else []
+
+    def save_model(self, request, obj, form, change):
+        super().save_model(request, obj, form, change)
+        if not change:
+            form.save_person(obj)
 
 
 @admin.register(PoseSource)
@@ -366,7 +424,7 @@ class LegAdmin(ServiceDeleteMixin, admin.ModelAdmin):
 
 @admin.register(Segment)
 class SegmentAdmin(ServiceDeleteMixin, LeafletGeoAdminMixin, admin.ModelAdmin):
-    list_display = ["__str__", "leg_link", "segment_type", "ito_reason", "start", "end"]
+    list_display = ["number", "leg_link", "segment_type", "ito_reason", "start", "end"]
     list_filter = ["segment_type", "ito_reason", ("parent", admin.EmptyFieldListFilter)]
     search_fields = ["obstacle", "lighting", "slope"]
     list_select_related = ["leg__shift__test_event", "segment_type", "ito_reason"]
@@ -397,13 +455,34 @@ class SegmentAdmin(ServiceDeleteMixin, LeafletGeoAdminMixin, admin.ModelAdmin):
         editable = set(Segment.ANNOTATION_FIELDS) if obj and obj.parent_id else set()
         return [f for f in self.fields if f not in editable]
 
+    def get_changelist_instance(self, request):
+        # The GUI's numbers ("#7.1"), for the whole page in one query.
+        changelist = super().get_changelist_instance(request)
+        rows = list(changelist.result_list)
+        numbers = labels.legs_numbers({row.leg_id for row in rows})
+        for row in rows:
+            leg_number, number = numbers[row.pk]
+            row.label = labels.label(leg_number, number)
+        return changelist
+
+    @admin.display(description=_("segment"))
+    def number(self, obj):
+        kind = _("reason") if obj.parent_id else _("run")
+        return f"{obj} {obj.segment_type_id.upper()} {kind}"
+
+    def get_object(self, request, object_id, from_field=None):
+        segment = super().get_object(request, object_id, from_field)
+        if segment is not None:
+            segment.label = labels.segment_label(segment)
+        return segment
+
     @admin.display(description="leg")
     def leg_link(self, obj):
         return admin_link(obj.leg, f"{obj.leg} of {obj.leg.shift}")
 
     @admin.display(description="master")
     def parent_link(self, obj):
-        return admin_link(obj.parent)
+        return admin_link(obj.parent, obj.parent and labels.segment_label(obj.parent))
 
     def save_model(self, request, obj, form, change):
         values = {name: form.cleaned_data[name] for name in form.changed_data}

@@ -40,6 +40,11 @@ GROUPS = (
 )
 
 
+# Libraries' own records (sign-in failures, background tasks, API tokens): only a
+# superuser looks after them; to everyone else they are noise beside the logbook.
+LIBRARY_APPS = {"axes", "authtoken", "django_tasks_db", "django_tasks"}
+
+
 class FttAdminSite(admin.AdminSite):
     site_header = "FTT administration"
     site_title = "FTT administration"
@@ -76,6 +81,8 @@ class FttAdminSite(admin.AdminSite):
                     }
                 )
         for app in apps:
+            if app["app_label"] in LIBRARY_APPS and not request.user.is_superuser:
+                continue
             rest = [m for m in app["models"] if id(m) not in claimed]
             if rest:
                 grouped.append({**app, "models": rest})

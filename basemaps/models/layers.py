@@ -92,6 +92,7 @@ class EventBasemap(models.Model):
 
     class Meta:
         verbose_name = "default basemap of a test event"
+        verbose_name_plural = "default basemaps of test events"
 
     def __str__(self):
         return f"{self.test_event}: {self.layer}"

@@ -1,18 +1,23 @@
 """Which layers there are and which one a test event starts on."""
 
+from collections import Counter
+
 from django.urls import reverse
 from django.utils.html import escape
 
 from basemaps.models import BasemapLayer, EventBasemap
 
 
-def default_layer(test_event_id) -> BasemapLayer | None:
-    found = (
-        EventBasemap.objects.select_related("layer")
-        .filter(test_event_id=test_event_id, layer__enabled=True)
-        .first()
-    )
-    return found.layer if found else None
+def default_layer(test_events) -> BasemapLayer | None:
+    """The layer a test event (an id) or several (ids) start on; where several
+    differ (a fleet logging into several events), the one most of them start on."""
+    ids = [test_events] if isinstance(test_events, int) else list(test_events)
+    found = Counter(
+        EventBasemap.objects.filter(test_event_id__in=ids, layer__enabled=True)
+        .order_by("test_event_id")
+        .values_list("layer_id", flat=True)
+    ).most_common(1)
+    return BasemapLayer.objects.get(pk=found[0][0]) if found else None
 
 
 def tile_url_template(layer: BasemapLayer, fmt: str = "png") -> str:
@@ -22,9 +27,9 @@ def tile_url_template(layer: BasemapLayer, fmt: str = "png") -> str:
     return base.replace("/0/0/0.", "/{z}/{x}/{y}.")
 
 
-def layer_list(test_event_id=None) -> list[dict]:
-    """What the GUI's layer switcher offers; the event's default is marked."""
-    default = default_layer(test_event_id) if test_event_id else None
+def layer_list(test_event_ids=()) -> list[dict]:
+    """What the GUI's layer switcher offers; the test events' default is marked."""
+    default = default_layer(test_event_ids) if test_event_ids else None
     return [
         {
             "key": layer.key,

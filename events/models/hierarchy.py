@@ -83,8 +83,14 @@ class TestEvent(LogEntry):
         constraints = [_ends_after_start("testevent")]
 
     def __str__(self):
+        # Location and day may repeat (two runs of one field test): the version
+        # and the number tell them apart in admin's choice lists.
         label = self.location or "Test event"
-        return f"{label} {self.start:%Y-%m-%d}" if self.start else label
+        if self.start:
+            label = f"{label} {self.start:%Y-%m-%d}"
+        if self.version:
+            label = f"{label} · {self.version}"
+        return f"{label} (#{self.pk})" if self.pk else label
 
     @property
     def tzinfo(self) -> zoneinfo.ZoneInfo:
@@ -254,6 +260,10 @@ class Segment(ChangeStamped):
         ]
 
     def __str__(self):
+        # The GUI's "Leg 2 · #7.1" where a reader put it there (events.selectors.labels);
+        # the model alone knows only its id.
+        if label := getattr(self, "label", None):
+            return label
         kind = "child" if self.parent_id else "master"
         return f"{self.segment_type_id.upper()} {kind} #{self.pk}"
 

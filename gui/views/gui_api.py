@@ -369,13 +369,14 @@ class ShiftLocalMap(GuiView):
 
 
 class Basemaps(GuiView):
-    """The layers of the map's switcher; ``?event=`` marks that test event's default."""
+    """The layers of the map's switcher; ``?event=`` (repeatable: the fleet's events)
+    marks the default those test events start on."""
 
     def get(self, request):
-        event = request.query_params.get("event", "")
-        if event and not event.isdigit():
-            raise ValidationError({"event": ["Give the test event's id."]})
-        return Response({"layers": layer_list(int(event) if event else None)})
+        events = request.query_params.getlist("event")
+        if not all(event.isdigit() for event in events):
+            raise ValidationError({"event": ["Give test event ids."]})
+        return Response({"layers": layer_list([int(event) for event in events])})
 
 
 class CollectorStatus(GuiView):

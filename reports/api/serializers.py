@@ -1,7 +1,7 @@
 from rest_framework import serializers
 
 from events.models import Criterion, Leg
-from reports.documents.options import MAX_TIMELINE_HOURS
+from reports.documents.options import LEVELS, MAX_TIMELINE_HOURS, STANDARD
 from reports.figures.tiles import MAX_ZOOM
 from reports.models import Report
 from reports.services.generation import COMPARE
@@ -84,6 +84,14 @@ class ReportFormSerializer(serializers.Serializer):
     recipient_address = _lines("Recipient address")
     creator = serializers.CharField(label="Creator", required=False, allow_blank=True)
     creator_address = _lines("Creator address")
+    # Compact by default: the full level gives every segment a page (62 pages for
+    # five minutes of driving in the field), which is seldom what is wanted first.
+    level = serializers.ChoiceField(label="Detail", choices=LEVELS, initial=STANDARD)
+    image_appendix = serializers.ChoiceField(
+        label="Camera images",
+        choices=[("false", "Leave out"), ("true", "Appendix with every image")],
+        initial="false",
+    )
     local = serializers.ChoiceField(
         label="Positions",
         choices=[("false", "GPS"), ("true", "Local (map frame)")],

@@ -59,9 +59,11 @@ class SimulatedRobot(Node):
         config: SimConfig,
         name: str = "ftt_simulated_robot",
         clock: Callable[[], float] = time.time,
+        context=None,
     ):
-        """``clock``: the robot's time; a benchmark drives it faster than real time."""
-        super().__init__(name)
+        """``clock``: the robot's time; a benchmark drives it faster than real time.
+        ``context``: an rclpy context of its own (a test's), else the default one."""
+        super().__init__(name, context=context)
         self.c = config
         self.clock = clock
         self.t0 = clock()
@@ -75,8 +77,10 @@ class SimulatedRobot(Node):
             modes.message_type(config.mode_type), f"{p}/robot_mode", 10
         )
         self.pub_fix = self.create_publisher(NavSatFix, f"{p}/gps_fix", 50)
-        self.pub_tf = self.create_publisher(TFMessage, "/tf", 100)
-        self.pub_tf_static = self.create_publisher(TFMessage, "/tf_static", latched)
+        # Transforms in the robot's namespace too: two robots on one /tf share the
+        # frame names (map, base_link) and garble each other's local track.
+        self.pub_tf = self.create_publisher(TFMessage, f"{p}/tf", 100)
+        self.pub_tf_static = self.create_publisher(TFMessage, f"{p}/tf_static", latched)
         self.pub_map = self.create_publisher(OccupancyGrid, f"{p}/map", latched)
         if config.camera_format == "jpeg":
             self.pub_image = self.create_publisher(CompressedImage, f"{p}/image_compressed", 5)

@@ -24,6 +24,12 @@ export function buildField(spec, value) {
   if (spec.type === "select") {
     input = document.createElement("select");
     if (!spec.required) input.append(new Option("—", ""));
+    else if (value === null || value === undefined || value === "") {
+      // A required choice not made yet says so (and what to do when there is none).
+      const hint = new Option(spec.choices.length ? "— choose —" : "none configured yet: ask an administrator", "");
+      hint.disabled = true;
+      input.append(hint);
+    }
     input.append(...spec.choices.map(([v, text]) => new Option(text, v)));
     input.value = value === null || value === undefined ? "" : String(value);
   } else if (spec.type === "textarea") {
@@ -77,8 +83,8 @@ export function formDialog({ title, subtitle, specs, values, save }) {
     const body = Object.fromEntries(specs.map((s) => [s.name, readField(s, form)]));
     clearError(errorBox);
     try {
-      await save(body);
-      dialog.close();
+      // A save the operator called off at a question leaves the dialog open.
+      if ((await save(body)) !== false) dialog.close();
     } catch (err) {
       showError(err, errorBox);
     }

@@ -27,6 +27,7 @@ export const Fleet = {
   lastRead: 0,
   timer: null,
   frame: null,
+  basemapsOf: null, // the test events (ids, joined) whose basemaps the switcher offers
 
   visible() {
     return state.view === "fleet";
@@ -35,9 +36,6 @@ export const Fleet = {
   ensureMap() {
     if (!this.map) {
       this.map = new GpsMap($("#fleet-map"), $("#fleet-tile-message"));
-      api("GET", "basemaps/", undefined, { root: CONFIG.guiApiRoot })
-        .then((data) => this.map.setBasemaps(data.layers))
-        .catch(showError);
     }
     if (this.tiles !== tileUrl()) {
       this.tiles = tileUrl();
@@ -46,9 +44,10 @@ export const Fleet = {
   },
 
   /* Switches between the fleet and the cockpit; the choice is kept in the address. */
-  async show(on) {
+  async show(on, { fromHistory = false } = {}) {
+    const switching = (state.view === "fleet") !== on;
     state.view = on ? "fleet" : null;
-    saveUrl();
+    saveUrl({ push: switching && !fromHistory });
     $("#fleet-view").hidden = !on;
     $("#cockpit").hidden = on;
     // The button names where it leads.
@@ -80,6 +79,7 @@ export const Fleet = {
     this.lastRead = Date.now();
     const data = await api("GET", "fleet/", undefined, { root: CONFIG.guiApiRoot });
     this.vehicles = data.vehicles;
+    await this.loadBasemaps();
     this.render();
   },
 
@@ -118,6 +118,18 @@ export const Fleet = {
         this.render();
       });
     }
+  },
+
+  /* The switcher's layers, starting on the basemap the logging robots' test events
+   * start on (the server decides which); asked again when those events change. */
+  async loadBasemaps() {
+    const events = [...new Set(this.vehicles.map((v) => v.leg.test_event))].sort((a, b) => a - b);
+    const key = events.join(",");
+    if (this.basemapsOf === key) return;
+    this.basemapsOf = key;
+    const query = new URLSearchParams(events.map((e) => ["event", e]));
+    const data = await api("GET", `basemaps/?${query}`, undefined, { root: CONFIG.guiApiRoot });
+    this.map.setBasemaps(data.layers);
   },
 
   color(v) {
@@ -199,8 +211,9 @@ export const Fleet = {
       const where = v.position ? "" : " · no position yet";
       const offline = v.collector.online ? "" : " · collector offline";
       details.textContent = `${takeover} · ${leg}${where}${offline}`;
-      b.append(dot, name, modeWord, details);
-      b.setAttribute("aria-label", `${v.vehicle.name}, ${mode}, ${takeover}, ${leg}: open its cockpit`);
+      // Its visible text is its name, so speech control finds it by what is shown.
+      b.append(dot, name, " ", modeWord, " ", details);
+      b.title = `${v.vehicle.name}: open its cockpit`;
       b.addEventListener("click", () => this.open(v));
       const li = document.createElement("li");
       li.append(b);
@@ -223,6 +236,20 @@ export const Fleet = {
     await loadLevel("event");
   },
 };
+
+/* Back and Forward between the fleet and a cockpit opened from it. */
+window.addEventListener("popstate", async () => {
+  const q = new URLSearchParams(location.search);
+  const fleet = q.get("view") === "fleet";
+  try {
+    if (fleet) return await Fleet.show(true, { fromHistory: true });
+    for (const k of ["event", "shift", "leg"]) state.selected[k] = /^\d+$/.test(q.get(k) || "") ? Number(q.get(k)) : null;
+    await Fleet.show(false, { fromHistory: true });
+    await loadLevel("event");
+  } catch (err) {
+    showError(err);
+  }
+});
 
 $("#toggle-fleet")?.addEventListener("click", () => Fleet.show(!Fleet.visible()).catch(showError));
 $("#fleet-fit")?.addEventListener("click", () => Fleet.fitAll());

@@ -6,19 +6,42 @@ function zoneOptions() {
   const event = byId(state.rows.event, state.selected.event);
   return event && event.time_zone ? { timeZone: event.time_zone, timeZoneName: "short" } : {};
 }
-export function fmtTime(iso, options = {}) {
-  if (!iso) return "—";
+/* One way of writing a date per language, 24-hour clock, whatever the browser's
+   locale: the page's language decides (German 26.11.2026, else 2026-11-26). */
+const DAY_ORDER = { de: (p) => `${p.day}.${p.month}.${p.year}` };
+const isoDay = (p) => `${p.year}-${p.month}-${p.day}`;
+function language() {
+  return (document.documentElement.lang || "en").slice(0, 2);
+}
+function parts(iso, options) {
+  const format = new Intl.DateTimeFormat("en-GB", {
+    year: "numeric", month: "2-digit", day: "2-digit",
+    hour: "2-digit", minute: "2-digit", second: "2-digit", hourCycle: "h23", ...options,
+  });
+  const out = {};
+  for (const part of format.formatToParts(new Date(iso))) out[part.type] = part.value;
+  return out;
+}
+function zoned(iso, options) {
   try {
-    return new Date(iso).toLocaleString(undefined, { ...zoneOptions(), ...options });
+    return parts(iso, { ...zoneOptions(), ...options });
   } catch {
-    return new Date(iso).toLocaleString(undefined, options);
+    return parts(iso, options);
   }
+}
+const writeDay = (p) => (DAY_ORDER[language()] || isoDay)(p);
+const writeClock = (p) => `${p.hour}:${p.minute}:${p.second}`;
+const writeZone = (p) => (p.timeZoneName ? ` ${p.timeZoneName}` : "");
+
+export function fmtTime(iso) {
+  if (!iso) return "—";
+  const p = zoned(iso, {});
+  return `${writeDay(p)} ${writeClock(p)}${writeZone(p)}`;
 }
 /* Time of day only: in the segment list the date is the leg's and would push
    duration and distance out of sight on a laptop; the full time is the title. */
-const CLOCK = { hour: "2-digit", minute: "2-digit", second: "2-digit", hourCycle: "h23", timeZoneName: undefined };
-export const fmtClock = (iso) => fmtTime(iso, CLOCK);
-export const fmtDay = (iso) => (iso ? new Date(iso).toLocaleDateString() : "");
+export const fmtClock = (iso) => (iso ? writeClock(zoned(iso, { timeZoneName: undefined })) : "—");
+export const fmtDay = (iso) => (iso ? writeDay(parts(iso, {})) : "");
 
 export function fmtDuration(start, end) {
   const seconds = Math.max(0, ((end ? new Date(end) : new Date()) - new Date(start)) / 1000);

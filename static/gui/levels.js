@@ -120,12 +120,20 @@ async function createLevel(level) {
     values: form.initial,
     save: async (body) => {
       if (parent) body[LEVELS[level].parentField] = state.selected[parent];
+      // The server ends a vehicle's other open shift (its rule); the operator is asked first.
+      const ending = level === "shift" && body.vehicle ? await list(LEVELS.shift.path, { vehicle: body.vehicle, open: "true" }) : [];
+      if (ending.length) {
+        const which = ending.map((r) => `Shift ${r.number} (started ${fmtTime(r.start)})`).join(", ");
+        const question = `${vehicleName(body.vehicle)} still has ${which} open. Saving ends it. Create the new shift?`;
+        if (!(await confirmDialog(question, { yes: "End it and create", no: "Cancel", warn: false }))) return false;
+      }
       const row = await api("POST", LEVELS[level].path, body);
       state.selected[level] = row.id;
       const child = LEVELS[level].child;
       if (child) state.selected[child] = null;
       await loadLevel(level);
-      notice(`${LEVELS[level].label.charAt(0).toUpperCase()}${LEVELS[level].label.slice(1)} created.`);
+      const ended = ending.length ? ` ${ending.map((r) => `Shift ${r.number}`).join(", ")} of ${vehicleName(body.vehicle)} ended.` : "";
+      notice(`${LEVELS[level].label.charAt(0).toUpperCase()}${LEVELS[level].label.slice(1)} created.${ended}`);
     },
   });
 }

@@ -14,6 +14,7 @@ const AffineImage = L.Layer.extend({
   },
   onAdd(map) {
     this._img = L.DomUtil.create("img", "leaflet-zoom-hide ftt-affine");
+    this._img.alt = this.options.alt ?? "";
     this._img.style.position = "absolute";
     this._img.style.transformOrigin = "0 0";
     this._img.style.opacity = this.options.opacity ?? 1;
@@ -241,6 +242,10 @@ class GpsMap extends TrackMap {
     this.tileLayer = null;
     this.overlay = null;
     this.layers = L.control.layers(null, null, { collapsed: true });
+    // The site's tile server is asked only once the basemaps are known: when the
+    // event starts on an offline layer, nothing goes to the internet.
+    this.basemapsKnown = false;
+    this.chosenBasemap = null;
   }
   setTiles(url, attribution) {
     if (this.tileLayer) this.tileLayer.remove();
@@ -265,7 +270,8 @@ class GpsMap extends TrackMap {
       this.tileErrors += 1;
       if (!this.tilesLoaded) this.noTiles("Map tiles are unavailable (the tile server cannot be reached). Tracks are still shown on a plain background.");
     });
-    this.tileLayer.addTo(this.map);
+    if (this.basemapsKnown && !this.chosenBasemap) this.tileLayer.addTo(this.map);
+    if (this.basemapsKnown && this.basemaps.length) this.layers.addBaseLayer(this.tileLayer, "Tile server");
   }
   /* The layer switcher: FTT's own basemaps, which work offline, next to the
    * site's tile server; the test event's default basemap starts selected.
@@ -277,7 +283,12 @@ class GpsMap extends TrackMap {
     }
     if (this.tileLayer) this.layers.removeLayer(this.tileLayer);
     this.basemaps = [];
-    if (!specs.length) return;
+    this.basemapsKnown = true;
+    this.chosenBasemap = null;
+    if (!specs.length) {
+      this.tileLayer?.addTo(this.map);
+      return;
+    }
     let chosen = null;
     for (const spec of specs) {
       const options = { attribution: spec.attribution, minZoom: spec.minZoom, maxZoom: 21, maxNativeZoom: spec.maxZoom };
@@ -293,10 +304,11 @@ class GpsMap extends TrackMap {
     }
     if (this.tileLayer) this.layers.addBaseLayer(this.tileLayer, "Tile server");
     this.layers.addTo(this.map);
+    this.chosenBasemap = chosen;
     if (chosen) {
       if (this.tileLayer) this.tileLayer.remove();
       chosen.addTo(this.map);
-    }
+    } else this.tileLayer?.addTo(this.map);
   }
   noTiles(message) {
     this.element.classList.add("no-tiles");
@@ -309,7 +321,7 @@ class GpsMap extends TrackMap {
       this.overlay.setImage(url, c);
       return;
     }
-    this.overlay = new AffineImage(url, c, { opacity: 0.45 });
+    this.overlay = new AffineImage(url, c, { opacity: 0.45, alt: "Robot's local map over the GPS map" });
     this.layers.addOverlay(this.overlay, "Local map");
     this.layers.addTo(this.map);
   }
@@ -334,7 +346,7 @@ class LocalMap extends TrackMap {
     const c = { topLeft: corner(info.corners.top_left), topRight: corner(info.corners.top_right), bottomLeft: corner(info.corners.bottom_left) };
     if (this.image) this.image.setImage(info.url, c);
     else {
-      this.image = new AffineImage(info.url, c, { opacity: 0.9 }).addTo(this.map);
+      this.image = new AffineImage(info.url, c, { opacity: 0.9, alt: "Robot's local map" }).addTo(this.map);
     }
     if (!this.fitted) {
       const b = L.latLngBounds([c.topLeft, c.topRight, c.bottomLeft]);

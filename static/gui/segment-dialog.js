@@ -36,7 +36,20 @@ export async function openSegmentDialog(id) {
   showNotes(data.notes);
   showImages(data.images);
   showSnapshots(data.master, data.recordings);
-  if (!segmentDialog.open) segmentDialog.showModal();
+  if (!segmentDialog.open) {
+    keepBannerInSight();
+    segmentDialog.showModal();
+  }
+}
+
+/* The dialog opens below the mode banner when the banner is on screen, so the
+ * mode (a robot switching while a note is typed) stays in sight. */
+function keepBannerInSight() {
+  const banner = $("#mode-panel .mode-now").getBoundingClientRect();
+  const below = banner.height && banner.top >= 0 && banner.bottom < window.innerHeight / 2 ? Math.ceil(banner.bottom) + 6 : null;
+  segmentDialog.style.marginTop = below === null ? "" : `${below}px`;
+  segmentDialog.style.maxHeight = below === null ? "" : `calc(100vh - ${below + 6}px)`;
+  segmentDialog.classList.toggle("under-banner", below !== null);
 }
 
 $(".close", segmentDialog).addEventListener("click", () => segmentDialog.close());

@@ -12,7 +12,9 @@ import { Live, onSelectedLeg } from "./live.js";
 import { Collector } from "./collector.js";
 import { openSegmentDialog } from "./segment-dialog.js";
 
-/* The leg's AUTO/ITO bars over time; ITO bars take their reason's colour. */
+/* The leg's AUTO/ITO bars over a time axis; ITO bars take their reason's colour and
+ * stripes, and say what they are in words where they are wide enough.  Each bar is
+ * at least 44 px wide to tap; its coloured part keeps its true length. */
 const Timeline = {
   render() {
     const strip = $("#timeline");
@@ -23,24 +25,40 @@ const Timeline = {
     const now = Date.now();
     const t0 = new Date(masters[0].start).getTime();
     const t1 = Math.max(...masters.map((m) => (m.end ? new Date(m.end).getTime() : now)), t0 + 1000);
-    strip.replaceChildren(...masters.map((m) => {
+    const track = document.createElement("div");
+    track.className = "track";
+    track.append(...masters.map((m) => {
       const start = new Date(m.start).getTime();
       const end = m.end ? new Date(m.end).getTime() : now;
       const child = state.segments.find((c) => c.parent === m.id);
       const target = child || m;
       const b = document.createElement("button");
       b.type = "button";
-      b.className = `bar ${m.segment_type}${[m.id, target.id].includes(state.segment) ? " selected" : ""}`;
-      b.style.left = `${((start - t0) / (t1 - t0)) * 100}%`;
-      b.style.width = `${Math.max(((end - start) / (t1 - t0)) * 100, 0.6)}%`;
+      const unassigned = child && child.ito_reason === "unassigned" ? " unassigned" : "";
+      b.className = `bar ${m.segment_type}${unassigned}${[m.id, target.id].includes(state.segment) ? " selected" : ""}`;
+      b.style.setProperty("--x", ((start - t0) / (t1 - t0)) * 100);
+      b.style.setProperty("--w", Math.max(((end - start) / (t1 - t0)) * 100, 0.6));
+      const fill = document.createElement("span");
+      fill.className = "fill";
       const reason = child && (state.catalogue.reasons || []).find((r) => r.key === child.ito_reason);
-      if (reason && reason.color) b.style.background = `rgb(${reason.color})`;
-      const what = child ? `ITO, ${reasonName(child.ito_reason)}` : m.segment_type.toUpperCase();
-      b.setAttribute("aria-label", `${segmentLabel(target.id)}: ${what}, ${fmtDuration(m.start, m.end)}`);
+      if (reason && reason.color) fill.style.backgroundColor = `rgb(${reason.color})`;
+      fill.textContent = child ? `ITO · ${reasonName(child.ito_reason)}` : m.segment_type.toUpperCase();
+      b.append(fill);
+      // The name holds the visible words, so speech control finds the bar by them.
+      b.setAttribute("aria-label", `${segmentLabel(target.id)}: ${fill.textContent}, ${fmtDuration(m.start, m.end)}`);
       b.title = b.getAttribute("aria-label");
       b.addEventListener("click", () => selectSegment(target.id));
       return b;
     }));
+    // The time axis: start, middle and end of the leg so far.
+    const axis = document.createElement("div");
+    axis.className = "axis";
+    axis.append(...[t0, (t0 + t1) / 2, t1].map((t) => {
+      const tick = document.createElement("span");
+      tick.textContent = fmtClock(new Date(t).toISOString());
+      return tick;
+    }));
+    strip.replaceChildren(track, axis);
   },
 };
 
@@ -231,7 +249,8 @@ export function renderMode() {
     return;
   }
   $("#mode-name").textContent = m ? mode.toUpperCase() : "No open segment";
-  $("#mode-since").textContent = m ? `for ${fmtDuration(m.start, null)} · ${segmentLabel(m.id)}` : "";
+  const reasonless = m && m.segment_type === "ito" && !state.segments.some((c) => c.parent === m.id && c.is_open);
+  $("#mode-since").textContent = m ? `for ${fmtDuration(m.start, null)} · ${segmentLabel(m.id)}${reasonless ? " · no open reason" : ""}` : "";
 }
 
 /* Quick reasons annotate the leg's open take-over, which the server names;
@@ -284,7 +303,10 @@ $("#segment-end").addEventListener("click", () => segmentAction(async () => {
   const id = requireSegment();
   // Ending a master ends its reasons too: the answer brings them all.
   await segmentWrite(`segments/${id}/close/`);
-  notice(`Ended ${segmentLabel(id)}.`);
+  // Ending a reason leaves its take-over (the ITO run) open: the banner stays ITO, and says why.
+  const m = openMaster();
+  const still = m && m.segment_type === "ito" && byId(state.segments, id)?.parent === m.id;
+  notice(still ? `Ended the reason ${segmentLabel(id)}. The take-over ${segmentLabel(m.id)} goes on (ITO) until the robot reports AUTO or you end ${shortLabel(m.id)}.` : `Ended ${segmentLabel(id)}.`);
 }));
 $("#segment-edit").addEventListener("click", () => segmentAction(async () => openSegmentDialog(requireSegment())));
 // The dialog's saves put their answers into the list (segment-dialog.js): shown once it closes.

@@ -17,13 +17,16 @@ export const fromUrl = (() => {
   return { event: n("event"), shift: n("shift"), leg: n("leg"), segment: n("segment"), view };
 })();
 
-export function saveUrl() {
+/* push: a new history entry (switching between fleet and cockpit), so that the
+   browser's Back returns to the view before instead of leaving the app. */
+export function saveUrl({ push = false } = {}) {
   const q = new URLSearchParams();
   for (const k of ["event", "shift", "leg"]) if (state.selected[k]) q.set(k, state.selected[k]);
   if (state.segment) q.set("segment", state.segment);
   if (state.view) q.set("view", state.view);
   const next = q.toString() ? `?${q}` : location.pathname;
-  if (next !== location.search) history.replaceState(null, "", next || location.pathname);
+  if (push && next !== location.search) history.pushState(null, "", next || location.pathname);
+  else if (next !== location.search) history.replaceState(null, "", next || location.pathname);
   // The cockpit shown, for the server to open again at a bare address (a year).
   const { event, shift, leg } = state.selected;
   if (event && shift && leg) document.cookie = `${CONFIG.cockpitCookie}=${event}.${shift}.${leg}; path=/; max-age=31536000; SameSite=Lax`;

@@ -86,3 +86,32 @@ def test_the_orthophoto_shows_under_the_track_with_no_internet(
     # Blocked were only the site's (unplugged) tile server's tiles, asked before the
     # event's default basemap replaced it.
     assert all(url.startswith("http://127.0.0.1:9/") for url in outside), outside
+
+    # Opened on this event, the cockpit asks the internet for nothing.
+    outside.clear()
+    page.reload()
+    expect(own.first).to_be_attached()
+    page.wait_for_load_state("networkidle")
+    assert outside == []
+
+    # The fleet, with this robot logging, starts on the event's orthophoto too.
+    server.python(
+        f"""
+        from events.models import Leg
+        from rosbridge_app.services import collectors
+        leg = Leg.objects.get(shift__vehicle__key="{leg_on_orthophoto}")
+        vehicle = leg.shift.vehicle
+        collectors.heartbeat(vehicle.key, vehicle=vehicle, logging=True, leg=leg)
+        """
+    )
+    page.goto(f"{server.url}/?view=fleet")
+    fleet = page.locator("#fleet-map")
+    expect(
+        fleet.locator(f"img.leaflet-tile-loaded[src*='/tiles/{leg_on_orthophoto}/']").first
+    ).to_be_attached()
+    expect(
+        fleet.locator(".leaflet-control-layers-base label", has_text="Orthophoto")
+    ).to_have_count(1)
+    page.wait_for_load_state("networkidle")
+    assert outside == []
+    shot(page, "fleet-on-orthophoto")

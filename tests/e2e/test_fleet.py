@@ -84,7 +84,10 @@ def two_robots(postgres_server, tmp_path_factory):
                 "40",
                 name=f"sim-{name}",
             )
-            params = copy_default_params(tmp, vehicle=robot["key"]).rename(tmp / f"{name}.yaml")
+            # Each robot's transforms in its namespace (docs/collector.md, Tools).
+            params = copy_default_params(
+                tmp, vehicle=robot["key"], **{"topics.tf": "tf", "topics.tf_static": "tf_static"}
+            ).rename(tmp / f"{name}.yaml")
             processes.start(
                 "ftt_collect",
                 "--vehicle",

@@ -109,7 +109,12 @@ def test_new_take_over_and_end_show_every_changed_row_without_reading_the_list(
     expect(page.locator("#notice")).to_contain_text("Take-over recorded")
     page.locator("#segment-end").click()
     expect(reason.locator("td").nth(7)).to_have_text("CLOSED")
-    expect(page.locator("#notice")).to_have_text(re.compile(r"Ended Leg \d+ · #2\.1"))
+    # Ending the reason leaves the take-over (ITO) running, and the page says so.
+    expect(page.locator("#notice")).to_have_text(
+        re.compile(r"Ended the reason Leg \d+ · #2\.1\. The take-over Leg \d+ · #2 goes on")
+    )
+    expect(page.locator("#mode-name")).to_have_text("ITO")
+    expect(page.locator("#mode-since")).to_contain_text("no open reason")
     shot(page, "take-over-ended")
     assert reads == []
 

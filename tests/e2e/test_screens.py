@@ -6,17 +6,18 @@ Runs after test_field_walk.py (file order), whose first step needs a server
 without any vehicle."""
 
 import json
+import re
 
 import pytest
 from playwright.sync_api import expect
 
 from tests.support.browser import login
-from tests.support.screens import AXE, OVERFLOWING, SERIOUS, SMALL, VIEWPORTS
+from tests.support.screens import OVERFLOWING, SMALL, VIEWPORTS
 
 MAIN_ACTIONS = (
     "#mode-panel .quick button, #mode-panel select, #segment-new, #segment-end, #segment-edit, "
     "#logging-toggle, .log-row button, .log-row select, #segment-table tbody tr, label.switch, "
-    ".topbar nav a, .topbar nav button, #fit-track"
+    ".topbar nav a, .topbar nav button, #fit-track, #timeline .bar, .leaflet-control-zoom a"
 )
 
 
@@ -67,10 +68,17 @@ def test_cockpit_fits_the_screen(browser, server, driven_leg, shot, screen):
     expect(whom).to_have_text("Cockpit Rover · Cockpit field · Shift 1 · Leg 1")
     box = whom.bounding_box()
     assert box["y"] >= 0 and box["y"] + box["height"] <= page.viewport_size["height"]
+    # The strip says what each bar is in words and has a time axis (24 h clock).
     expect(page.locator("#timeline .bar")).to_have_count(3)
+    expect(page.locator("#timeline .bar.ito")).to_have_attribute("aria-label", re.compile("ITO"))
+    expect(page.locator("#timeline .axis span")).to_have_count(3)
+    expect(page.locator("#timeline .axis span").first).to_have_text(re.compile(r"^\d\d:\d\d:\d\d$"))
     expect(page.locator("#collector")).to_be_visible()
     page.wait_for_timeout(300)  # the map's fit animation
     shot(page, f"{screen}-cockpit")
+    if screen == "phone":
+        # The header leaves the phone's screen to the cockpit.
+        assert page.locator(".topbar").bounding_box()["height"] <= 0.2 * 844
 
     assert page.evaluate(OVERFLOWING) == []
     assert page.evaluate(SMALL, MAIN_ACTIONS) == []
@@ -128,37 +136,6 @@ def test_dialogs_write_nothing_until_save(browser, server, driven_leg, shot):
     page.close()
 
 
-def test_main_page_and_dialogs_have_no_serious_accessibility_problem(
-    browser, server, driven_leg, shot
-):
-    assert AXE.exists(), "run npm ci (scripts/setup.sh --test) for axe-core"
-    # The site's CSP rightly refuses injected scripts; axe is the test's own tool.
-    context = browser.new_context(bypass_csp=True, **VIEWPORTS["tablet"])
-    page = context.new_page()
-    login(page, server, "otto")
-    ids = driven_leg
-    page.goto(f"{server.url}/?event={ids['event']}&shift={ids['shift']}&leg={ids['leg']}")
-    expect(page.locator("#segment-table tbody tr")).not_to_have_count(0)
-    page.add_script_tag(path=str(AXE))
-    assert page.evaluate(SERIOUS) == [], "main page"
-    dialogs = {
-        "form-dialog": lambda: page.locator('[data-action="new"][data-level="leg"]').click(),
-        "confirm-dialog": lambda: page.locator('[data-action="delete"][data-level="leg"]').click(),
-        "segment-dialog": lambda: page.locator("#segment-table tbody tr").first.dblclick(),
-        "reports-dialog": lambda: page.get_by_role("button", name="Reports & exports").click(),
-        "map-settings-dialog": lambda: page.get_by_role("button", name="Map settings").click(),
-    }
-    for name, open_it in dialogs.items():
-        open_it()
-        dialog = page.locator(f"#{name}")
-        expect(dialog).to_be_visible()
-        page.wait_for_timeout(200)  # the dialog's lists arrive from the API
-        assert page.evaluate(SERIOUS) == [], name
-        page.keyboard.press("Escape")
-        expect(dialog).to_be_hidden()
-    context.close()
-
-
 # Every vehicle name on the fleet map, with how far it sticks out of the map (px).
 LABELS_OUTSIDE = """() => {
   const map = document.querySelector("#fleet-map").getBoundingClientRect();
@@ -201,4 +178,47 @@ def test_fleet_names_stay_on_the_map_on_a_phone(browser, server, shot):
     labels = page.evaluate(LABELS_OUTSIDE)
     assert {name for name, _ in labels} >= {"Edge rover West", "Edge rover East"}
     assert [name for name, out in labels if out > 0] == []
+    # A cockpit opened from the fleet: the browser's Back returns to the fleet.
+    page.locator(".fleet-vehicle", has_text="Edge rover West").click()
+    expect(page.locator("#cockpit")).to_be_visible()
+    page.go_back()
+    expect(page.locator("#fleet-view")).to_be_visible()
+    expect(page).to_have_url(re.compile(r"view=fleet"))
+    page.close()
+
+
+def test_new_shift_says_it_ends_the_vehicles_open_shift(browser, server, driven_leg, shot):
+    """Last of the driven leg's tests: it ends that shift."""
+    # A second vehicle, so that none is preselected.
+    server.python(
+        """
+        from events.models import Vehicle
+        Vehicle.objects.get_or_create(key="spare-rover", defaults={"short_description": "Spare"})
+        """
+    )
+    page = browser.new_page(**VIEWPORTS["tablet"])
+    login(page, server, "otto")
+    ids = driven_leg
+    page.goto(f"{server.url}/?event={ids['event']}&shift={ids['shift']}&leg={ids['leg']}")
+    expect(page.locator("#pick-shift option")).to_have_count(2)
+    page.locator('[data-action="new"][data-level="shift"]').click()
+    dialog = page.locator("#form-dialog")
+    vehicle = dialog.get_by_label("Vehicle")
+    # No choice made yet is said so; Save is in the tablet's screen without scrolling.
+    expect(vehicle.locator("option:checked")).to_have_text("— choose —")
+    save = dialog.get_by_role("button", name="Save")
+    box = save.bounding_box()
+    assert box["y"] + box["height"] <= page.viewport_size["height"]
+    vehicle.select_option(label="Cockpit Rover")
+    shot(page, "new-shift-dialog")
+    save.click()
+    confirm = page.locator("#confirm-dialog")
+    expect(confirm).to_contain_text("Cockpit Rover still has Shift 1")
+    confirm.get_by_role("button", name="Cancel").click()
+    expect(dialog).to_be_visible()
+    expect(page.locator("#pick-shift option")).to_have_count(2)
+    save.click()
+    confirm.get_by_role("button", name="End it and create").click()
+    expect(page.locator("#notice")).to_have_text("Shift created. Shift 1 of Cockpit Rover ended.")
+    expect(page.locator("#pick-shift option")).to_have_count(3)
     page.close()

@@ -96,7 +96,18 @@ def test_without_a_vehicle_a_shift_cannot_be_started_and_the_dialog_says_why(cli
 def test_the_report_dialog_offers_gps_or_local_with_gps_first_and_says_the_zoom_range(client):
     report = forms_of(client)["report"]
 
-    assert report["initial"] == {"version": "1.0", "local": "false"}
+    # A compact report without the camera appendix unless asked for.
+    assert report["initial"] == {
+        "version": "1.0",
+        "local": "false",
+        "level": "standard",
+        "image_appendix": "false",
+    }
+    assert [value for value, _ in field(report, "level")["choices"]] == [
+        "summary",
+        "standard",
+        "full",
+    ]
     assert field(report, "local")["choices"] == [["false", "GPS"], ["true", "Local (map frame)"]]
     assert field(report, "max_zoom")["type"] == "number"
     assert "1–19" in field(report, "max_zoom")["label"]

@@ -41,7 +41,8 @@ def test_administrator_gets_first_run_hint_until_configured(client, vehicle):
     assert "Before the first shift" in page
     assert "Add a performer" in page and "Add a pose source" in page
     assert "Add a vehicle" not in page
-    assert "/admin/" in page
+    # Accounts and people are named too: the add page takes login, role and name at once.
+    assert "Add an account for a person" in page and "/admin/auth/user/add/" in page
     Performer.objects.create(institution="FKIE")
     PoseSource.objects.create(key="gps", short_description="GPS")
     assert "Before the first shift" not in client.get("/").content.decode()
