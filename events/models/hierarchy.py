@@ -142,6 +142,9 @@ class Leg(LogEntry):
     default_pose_source = models.ForeignKey(
         PoseSource, on_delete=models.PROTECT, null=True, blank=True, related_name="legs"
     )
+    # GPS fixes the robot's collector estimated lost while logging into this leg
+    # (rosbridge_app.collector.losses, added up from its heartbeats).
+    fixes_missed = models.PositiveIntegerField(default=0, editable=False)
     recording = models.CharField(
         max_length=500,
         blank=True,
