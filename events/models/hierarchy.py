@@ -12,6 +12,7 @@ from django.contrib.gis.db import models
 from django.core.exceptions import ValidationError
 from django.db.models import F, Q
 from django.utils import timezone
+from django.utils.translation import gettext_lazy as _
 
 from events.models.catalogues import ItoReason, SegmentType, Weather
 from events.models.configuration import Performer, Personnel, PoseSource, Vehicle
@@ -148,6 +149,9 @@ class Leg(LogEntry):
     default_pose_source = models.ForeignKey(
         PoseSource, on_delete=models.PROTECT, null=True, blank=True, related_name="legs"
     )
+    # GPS fixes the robot's collector estimated lost while logging into this leg
+    # (rosbridge_app.collector.losses, added up from its heartbeats).
+    fixes_missed = models.PositiveIntegerField(default=0, editable=False)
     recording = models.CharField(
         max_length=500,
         blank=True,
@@ -221,7 +225,7 @@ class Segment(ChangeStamped):
     # stamp of its own (rosbridge_app.collector.mode_timing); null: not known
     # or not needed (a stamped message, an operator's entry).
     start_uncertainty = models.FloatField(
-        null=True, blank=True, help_text="Seconds before its start the segment may have begun."
+        null=True, blank=True, help_text=_("Seconds before its start the segment may have begun.")
     )
     # When an operator last set reason, obstacle, lighting or slope (never: null).
     # Imports merge the annotation by this stamp, the rest of the row by `modified`.

@@ -5,6 +5,7 @@ from datetime import datetime
 
 from django.core.exceptions import ValidationError
 from django.db import transaction
+from django.db.models import F
 from django.dispatch import Signal
 
 from common.errors import RuleViolation
@@ -232,3 +233,10 @@ def _close_leg(leg: Leg, at: datetime) -> Leg:
     leg.end = at
     leg.save(update_fields=["end"])
     return leg
+
+
+def count_missed_fixes(leg_id: int, count: int) -> None:
+    """Add ``count`` fixes a collector estimated lost to the leg's tally (the
+    report's data quality); not an operator's change, so no change stamp."""
+    if count > 0:
+        Leg.objects.filter(pk=leg_id).update(fixes_missed=F("fixes_missed") + count)

@@ -418,6 +418,7 @@ class Sections:
             "no_fix": no_fix,
             "no_start": no_start,
             "uncertain_starts": len(uncertain),
+            "fixes_missed": sum(leg.fixes_missed for legs in self.legs.values() for leg in legs),
             "uncertainty_max": f"{max(uncertain, default=0):.1f}",
             "tiles": self.maps.tiles_note(),
             "fonts": FONT_NOTE,

@@ -168,14 +168,15 @@ def volatile_map_inputs(pipe) -> list[tuple]:
 
 
 def drained_subscription(
-    node, msg_type, topic, callback, qos_profile, raw=False, with_info=False, ahead=None
+    node, msg_type, topic, callback, qos_profile, raw=False, with_info=False, ahead=None, **options
 ):
     """A subscription of ``node`` whose callback also takes the messages waiting
     behind its own (at most DRAIN): the executor builds a new wait set for every
     message it takes, which in Python costs more than converting a fix.
     ``with_info``: the callback also gets rmw's message info (its source
     timestamp); ``ahead()`` is called every AHEAD_EVERY messages, so that the
-    mode is taken before a long backlog of sensor data."""
+    mode is taken before a long backlog of sensor data.  ``options`` go to
+    ``create_subscription`` (event callbacks)."""
     subscription = None
 
     def take() -> bool:
@@ -201,7 +202,12 @@ def drained_subscription(
         receive(msg, info)
 
     subscription = node.create_subscription(
-        msg_type, topic, receive_with_info if with_info else receive_message, qos_profile, raw=raw
+        msg_type,
+        topic,
+        receive_with_info if with_info else receive_message,
+        qos_profile,
+        raw=raw,
+        **options,
     )
 
     def take_waiting() -> None:

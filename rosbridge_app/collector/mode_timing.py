@@ -9,13 +9,20 @@ one: that interval is the start's uncertainty, stored with the segment.
 Free of ROS.
 """
 
-from datetime import datetime, timedelta
+from datetime import UTC, datetime, timedelta
 
 # A stamp further ahead of the receive time than this comes from another clock.
 MAX_AHEAD = timedelta(seconds=1)
 # ... and one older than this is not believed either (a robot clock that was
 # never set); the receive time is taken and the uncertainty is unknown.
 MAX_DELAY = timedelta(seconds=60)
+
+
+def sent_at(info) -> datetime | None:
+    """The publisher's send time from rmw's message info; None where the
+    middleware does not give it."""
+    ns = info.get("source_timestamp") if isinstance(info, dict) else None
+    return datetime.fromtimestamp(ns / 1e9, tz=UTC) if ns else None
 
 
 def plausible(stamp: datetime | None, at: datetime) -> bool:

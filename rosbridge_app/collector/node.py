@@ -16,6 +16,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from std_srvs.srv import SetBool, Trigger
@@ -32,6 +33,7 @@ from rosbridge_app.collector.inputs import (
     wanted_inputs,
 )
 from rosbridge_app.collector.losses import LossCounter
+from rosbridge_app.collector.mode_timing import sent_at
 from rosbridge_app.collector.modes import ITO
 from rosbridge_app.collector.pipeline import SECOND_COPY, Pipeline
 
@@ -48,11 +50,8 @@ def now() -> datetime:
     return datetime.now(UTC)
 
 
-def sent_at(info) -> datetime | None:
-    """The publisher's send time from rmw's message info; None where the
-    middleware does not give it."""
-    ns = info.get("source_timestamp") if isinstance(info, dict) else None
-    return datetime.fromtimestamp(ns / 1e9, tz=UTC) if ns else None
+def _ignore(event) -> None:
+    pass
 
 
 class Status:
@@ -400,6 +399,9 @@ class CollectorNode(Node):
                         self._input(name, handler),
                         qos(1, True, latched=True),
                         with_info=True,
+                        # A volatile publisher is heard by the other subscription:
+                        # rclpy's "no messages will be received" warning would mislead.
+                        event_callbacks=SubscriptionEventCallbacks(incompatible_qos=_ignore),
                     )
             except Exception as exc:
                 log.error("cannot subscribe to %s (%s): %s", topic, name, exc)

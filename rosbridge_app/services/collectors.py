@@ -12,7 +12,7 @@ from django.utils import timezone
 from common.errors import RuleViolation
 from events import feed
 from events.models import Announcement, Leg
-from events.services.logs import closing
+from events.services.logs import closing, count_missed_fixes
 from rosbridge_app.models import Collector, CollectorCommand
 from rosbridge_app.selectors.control import (
     check_parameter_values,
@@ -109,12 +109,28 @@ def connect() -> None:
 _ANNOUNCED = ("logging", "leg_id", "state", "stopped", "vehicle_id", "disk")
 
 
+def _newly_missed(before: dict | None, collector: Collector) -> int:
+    """GPS fixes estimated lost since the last heartbeat of this run of the collector."""
+
+    def missed(inputs) -> int:
+        return int(((inputs or {}).get("gps_fix") or {}).get("missed") or 0)
+
+    now = missed(collector.inputs)
+    if before is None or before["pid"] != collector.pid:
+        return now  # a new run counts from 0
+    return max(0, now - missed(before["inputs"]))
+
+
 @transaction.atomic
 def heartbeat(name: str, **fields) -> Collector:
     """Register or refresh a collector; ``fields`` are Collector columns."""
     fields["last_seen"] = timezone.now()
-    before = Collector.objects.filter(name=name).values(*_ANNOUNCED).first()
+    before = Collector.objects.filter(name=name).values(*_ANNOUNCED, "pid", "inputs").first()
     collector, _ = Collector.objects.update_or_create(name=name, defaults=fields)
+    if collector.leg_id is not None and collector.logging:
+        count_missed_fixes(collector.leg_id, _newly_missed(before, collector))
+    if before is not None:
+        before = {key: before[key] for key in _ANNOUNCED}
     after = {key: getattr(collector, key) for key in _ANNOUNCED}
     if before != after:
         announce(

@@ -179,6 +179,7 @@ def test_methods_appendix_lists_reasons_formulas_and_gaps(report, scenario):
     assert "11:00:20 – 11:00:40 (0:00:20)" in text
     assert "Map tiles: http://127.0.0.1" in text
     assert "the stored start): 1, at most 0.8 s" in text  # A4's mode message had no stamp
+    assert "from gaps in the robot’s stamps): 12" in text  # leg 2's collector lost 12 fixes
 
 
 def test_pages_are_rendered_as_png_artifacts(report, tmp_path):

@@ -140,6 +140,7 @@ def build_scenario(vehicle, other_vehicle, performer, text=HOSTILE) -> Scenario:
     recording.record_poses(m["A4"], _fixes(T1, [(340, 0.017), (350, 0.018), (360, 0.019)]))
     m["I3"] = _switch(leg2, "ito", T1, 630, 0.020, reason="unexpected")
     recording.record_poses(m["I3"], _fixes(T1, [(640, 0.021)]))
+    logs.count_missed_fixes(leg2.pk, 12)  # as the robot's collector estimated
     logs.close_leg(leg2, at=_at(T1, 700))
     logs.close_shift(s2, at=_at(T1, 700))
     for seg in m.values():

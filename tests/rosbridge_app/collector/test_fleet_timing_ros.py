@@ -56,3 +56,5 @@ def test_switch_time_is_when_the_robot_sent_it_and_missed_fixes_are_counted(
     )
     assert status.inputs["gps_fix"]["missed"] == 3
     assert status.inputs["gps_fix"]["rate"] == pytest.approx(20, rel=0.05)
+    robot_leg.refresh_from_db()
+    assert robot_leg.fixes_missed == 3  # for the report's data quality
