@@ -9,7 +9,7 @@ from django.db import migrations, models
 class Migration(migrations.Migration):
 
     dependencies = [
-        ('events', '0012_segment_start_uncertainty'),
+        ('events', '0013_leg_fixes_missed'),
         migrations.swappable_dependency(settings.AUTH_USER_MODEL),
     ]
 

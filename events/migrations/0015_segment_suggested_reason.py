@@ -7,7 +7,7 @@ from django.db import migrations, models
 class Migration(migrations.Migration):
 
     dependencies = [
-        ('events', '0013_test_plans'),
+        ('events', '0014_test_plans'),
     ]
 
     operations = [
