@@ -1,7 +1,10 @@
 /* How times, durations, distances and numbers are written on the page. */
 import { byId, state } from "./state.js";
+import { LANGUAGE } from "./i18n.js";
 
-/* Times are shown in the selected test event's time zone, as the model says. */
+/* Dates and numbers follow the page's language (LANGUAGE), not the browser's:
+   a German page writes 26.11.2026 and 1,25 km wherever it is opened.
+   Times are shown in the selected test event's time zone, as the model says. */
 function zoneOptions() {
   const event = byId(state.rows.event, state.selected.event);
   return event && event.time_zone ? { timeZone: event.time_zone, timeZoneName: "short" } : {};
@@ -9,16 +12,16 @@ function zoneOptions() {
 export function fmtTime(iso, options = {}) {
   if (!iso) return "—";
   try {
-    return new Date(iso).toLocaleString(undefined, { ...zoneOptions(), ...options });
+    return new Date(iso).toLocaleString(LANGUAGE, { ...zoneOptions(), ...options });
   } catch {
-    return new Date(iso).toLocaleString(undefined, options);
+    return new Date(iso).toLocaleString(LANGUAGE, options);
   }
 }
 /* Time of day only: in the segment list the date is the leg's and would push
    duration and distance out of sight on a laptop; the full time is the title. */
 const CLOCK = { hour: "2-digit", minute: "2-digit", second: "2-digit", hourCycle: "h23", timeZoneName: undefined };
 export const fmtClock = (iso) => fmtTime(iso, CLOCK);
-export const fmtDay = (iso) => (iso ? new Date(iso).toLocaleDateString() : "");
+export const fmtDay = (iso) => (iso ? new Date(iso).toLocaleDateString(LANGUAGE) : "");
 
 export function fmtDuration(start, end) {
   const seconds = Math.max(0, ((end ? new Date(end) : new Date()) - new Date(start)) / 1000);
@@ -28,7 +31,13 @@ export function fmtDuration(start, end) {
 
 export function fmtDistance(metres) {
   if (metres === null || metres === undefined) return "—";
-  return metres >= 1000 ? `${(metres / 1000).toFixed(2)} km` : `${metres.toFixed(1)} m`;
+  return metres >= 1000 ? `${fmtNumber(metres / 1000, 2)} km` : `${fmtNumber(metres, 1)} m`;
+}
+
+/* A number in the page's language; with `digits`, exactly that many decimals. */
+export function fmtNumber(value, digits) {
+  const fixed = digits === undefined ? {} : { minimumFractionDigits: digits, maximumFractionDigits: digits };
+  return new Intl.NumberFormat(LANGUAGE, fixed).format(value);
 }
 
 /* ROS floats are 32-bit: 0.10000000149011612 is shown as 0.1. */

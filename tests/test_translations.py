@@ -1,0 +1,94 @@
+"""Every user-facing string of FTT has a German translation, and German is what a
+German browser or account gets."""
+
+import subprocess
+from pathlib import Path
+
+import pytest
+from django.conf import settings
+from django.core.management import call_command
+
+from common.models import AccountPreference
+
+ROOT = Path(settings.BASE_DIR)
+CATALOGUES = ROOT / "locale" / "de" / "LC_MESSAGES"
+# What scripts/messages.sh leaves out, as makemessages ignore patterns.
+IGNORED = [".venv", "node_modules", "data", "tests", "tmp", "benchmarks", "test-artifacts"]
+
+
+@pytest.fixture(scope="module")
+def fresh_catalogues(tmp_path_factory):
+    """makemessages over the source into a temporary locale/, the real one untouched:
+    the source folders are linked into a temporary tree, so makemessages writes
+    beside them."""
+    tree = tmp_path_factory.mktemp("messages")
+    for entry in ROOT.iterdir():
+        if entry.name not in {"locale", *IGNORED} and not entry.name.startswith("."):
+            (tree / entry.name).symlink_to(entry)
+    (tree / "locale").mkdir()
+    mp = pytest.MonkeyPatch()
+    mp.chdir(tree)
+    mp.setattr(settings, "LOCALE_PATHS", [tree / "locale"])
+    try:
+        for domain in ("django", "djangojs"):
+            call_command(
+                "makemessages",
+                locale=["de"],
+                domain=domain,
+                symlinks=True,
+                ignore_patterns=[*IGNORED, "eslint.config.js"],
+                verbosity=0,
+            )
+    finally:
+        mp.undo()
+    return tree / "locale" / "de" / "LC_MESSAGES"
+
+
+def gettext_tool(*args) -> subprocess.CompletedProcess:
+    return subprocess.run(args, capture_output=True, text=True, check=False)
+
+
+@pytest.mark.parametrize("domain", ["django", "djangojs"])
+def test_every_string_in_the_source_has_a_german_translation(fresh_catalogues, domain):
+    committed, fresh = CATALOGUES / f"{domain}.po", fresh_catalogues / f"{domain}.po"
+    assert fresh.exists(), f"makemessages found no {domain} strings"
+    # msgcmp: every msgid of the source is in the catalogue, translated and not fuzzy.
+    compared = gettext_tool("msgcmp", str(committed), str(fresh))
+    assert compared.returncode == 0, (
+        "strings without German translation (run bash scripts/messages.sh, translate, "
+        f"see README 'Translations'):\n{compared.stderr}"
+    )
+    untranslated = gettext_tool("msgattrib", "--untranslated", "--no-obsolete", str(committed))
+    assert untranslated.stdout.count("msgid ") <= 1, untranslated.stdout  # the header only
+    fuzzy = gettext_tool("msgattrib", "--only-fuzzy", "--no-obsolete", str(committed))
+    assert "msgid " not in fuzzy.stdout, fuzzy.stdout
+    # Placeholders of each translation match the English ones.
+    checked = gettext_tool("msgfmt", "--check", "-o", "/dev/null", str(committed))
+    assert checked.returncode == 0, checked.stderr
+
+
+@pytest.mark.django_db
+def test_a_german_browser_gets_german_pages(client):
+    page = client.get("/login/", HTTP_ACCEPT_LANGUAGE="de-DE,de;q=0.9,en;q=0.5")
+    text = page.content.decode()
+    assert '<html lang="de">' in text
+    assert "Benutzername" in text and "Anmelden" in text
+    english = client.get("/login/", HTTP_ACCEPT_LANGUAGE="en-GB").content.decode()
+    assert "User name" in english and "Benutzername" not in english
+
+
+@pytest.mark.django_db
+def test_the_accounts_language_outranks_the_browser(client, django_user_model):
+    user = django_user_model.objects.create_user("anna", password="pw-Xy7-long")
+    client.force_login(user)
+    chosen = client.post("/language/", {"language": "de", "next": "/"})
+    assert chosen.status_code == 302 and chosen["Location"] == "/"
+    assert AccountPreference.objects.get(user=user).language == "de"
+    # Another browser that asks for English: the account's German wins after sign-in.
+    client.logout()
+    client.cookies.clear()
+    client.force_login(user)
+    page = client.get("/", HTTP_ACCEPT_LANGUAGE="en-US,en;q=0.9").content.decode()
+    assert '<html lang="de">' in page and "Abmelden" in page
+    refused = client.post("/language/", {"language": "xx"})
+    assert refused.status_code == 400
