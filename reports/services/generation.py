@@ -147,6 +147,7 @@ REQUESTABLE = {
     "max_zoom": int,
     "level": str,
     "image_appendix": bool,
+    "language": str,
 }
 
 
