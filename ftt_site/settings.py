@@ -236,7 +236,9 @@ AUTH_PASSWORD_VALIDATORS = [
     {"NAME": "django.contrib.auth.password_validation.NumericPasswordValidator"},
 ]
 
-LANGUAGE_CODE = "en"
+# The language of pages whose browser asks for neither English nor German, of the
+# collector's log and of the service messages outside a request.
+LANGUAGE_CODE = env_str("FTT_LANGUAGE", "en")
 # English and German; the catalogues are locale/<lang>/LC_MESSAGES/django.po and
 # djangojs.po (README: "Translations"), compiled to .mo by scripts/setup.sh.
 LANGUAGES = [("en", "English"), ("de", "Deutsch")]

@@ -1,14 +1,17 @@
 """Every user-facing string of FTT has a German translation, and German is what a
 German browser or account gets."""
 
+import logging
 import subprocess
 from pathlib import Path
 
 import pytest
 from django.conf import settings
 from django.core.management import call_command
+from django.utils import translation
 
 from common.models import AccountPreference
+from rosbridge_app.collector.hearing import RESUBSCRIBE, Hearing
 
 ROOT = Path(settings.BASE_DIR)
 CATALOGUES = ROOT / "locale" / "de" / "LC_MESSAGES"
@@ -92,3 +95,17 @@ def test_the_accounts_language_outranks_the_browser(client, django_user_model):
     assert '<html lang="de">' in page and "Abmelden" in page
     refused = client.post("/language/", {"language": "xx"})
     assert refused.status_code == 400
+
+
+def test_the_collectors_words_follow_the_sites_language(caplog):
+    """What an operator reads from the collector (its log, its hearing text in the
+    GUI) is in FTT_LANGUAGE (settings.LANGUAGE_CODE), German here."""
+    with translation.override("de"), caplog.at_level(logging.WARNING):
+        hearing = Hearing(0.0)
+        step = hearing.check(10.0, 0, 5.0, True, lambda: ["/fix"])
+    assert step == RESUBSCRIBE
+    assert (
+        hearing.text
+        == "Roboter sendet, Collector empfängt nichts (/fix) seit 5 s: Abonnements neu angelegt"
+    )
+    assert hearing.text in caplog.text

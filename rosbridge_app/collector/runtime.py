@@ -37,6 +37,7 @@ from pathlib import Path
 import rclpy
 from django.db import InterfaceError, OperationalError, close_old_connections, connections
 from django.utils import timezone
+from django.utils.translation import gettext
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.parameter import Parameter
 
@@ -150,7 +151,7 @@ class CollectorRuntime:
         finally:
             rclpy.try_shutdown()
         if self.renew.is_set():
-            log.warning("renewing the collector: starting again in place")
+            log.warning(gettext("renewing the collector: starting again in place"))
             os.environ[RENEWED_ENV] = str(time.time())
             os.execv(sys.executable, sys.orig_argv)
         return code
@@ -159,7 +160,7 @@ class CollectorRuntime:
         """The node's hearing watchdog gave up on re-created subscriptions."""
         renewed = float(os.environ.get(RENEWED_ENV) or 0.0)
         if time.time() - renewed < RENEW_AT_MOST_EVERY_S:
-            log.warning("renewed %.0f s ago already: not again yet", time.time() - renewed)
+            log.warning(gettext("renewed %.0f s ago already: not again yet"), time.time() - renewed)
             return
         self.renew.set()
 
@@ -205,7 +206,7 @@ class CollectorRuntime:
         self.node.blackbox.directory = self.outbox.path.with_suffix(".snapshots")
         pending = len(self.outbox)
         log.info(
-            "collector %s for vehicle '%s'; spool %s (%d records pending)",
+            gettext("collector %s for vehicle '%s'; spool %s (%d records pending)"),
             self.name,
             self.vehicle_key,
             self.outbox.path,
@@ -245,7 +246,7 @@ class CollectorRuntime:
         # another vehicle with `ros2 param set` or from the GUI.
         key = self.node.get_parameter("vehicle").value
         if key != self.vehicle_key:
-            log.info("vehicle changed from '%s' to '%s'", self.vehicle_key, key)
+            log.info(gettext("vehicle changed from '%s' to '%s'"), self.vehicle_key, key)
             self.vehicle_key = key
         return Vehicle.objects.filter(key=key).first() if key else None
 
@@ -307,8 +308,10 @@ class CollectorRuntime:
         self._said_no_leg = key
         if leg is None:
             log.warning(
-                "no open leg for vehicle '%s': nothing is stored until one is opened "
-                "(still running)",
+                gettext(
+                    "no open leg for vehicle '%s': nothing is stored until one is opened "
+                    "(still running)"
+                ),
                 self.vehicle_key,
             )
 
@@ -318,7 +321,9 @@ class CollectorRuntime:
         if self._db_down_since is None:
             self._db_down_since = timezone.now()
             log.warning(
-                "database unreachable (%s); spooling to %s", str(exc).strip(), self.outbox.path
+                gettext("database unreachable (%s); spooling to %s"),
+                str(exc).strip(),
+                self.outbox.path,
             )
         for conn in connections.all():
             try:
@@ -329,7 +334,7 @@ class CollectorRuntime:
     def _database_up(self) -> None:
         if self._db_down_since is not None:
             log.warning(
-                "database back after %.0f s; replaying %d spooled records",
+                gettext("database back after %.0f s; replaying %d spooled records"),
                 (timezone.now() - self._db_down_since).total_seconds(),
                 len(self.outbox),
             )
@@ -398,7 +403,7 @@ class CollectorRuntime:
     # --- exit ---------------------------------------------------------------------------
 
     def _shutdown(self) -> None:
-        log.info("stopping: spooling what is still in memory")
+        log.info(gettext("stopping: spooling what is still in memory"))
         self.executor.shutdown(timeout_sec=2)
         self.node.blackbox.close()  # windows still open are written with what they have
         self.spooler.stop.set()
@@ -411,12 +416,12 @@ class CollectorRuntime:
                 self._heartbeat()  # the final counts
                 link.mark_stopped(self.collector)
         except Exception as exc:
-            log.warning("database not reachable at exit (%s)", exc)
+            log.warning(gettext("database not reachable at exit (%s)"), exc)
         left = len(self.outbox)
         if left:
-            log.warning("%d records stay in %s for the next start", left, self.outbox.path)
+            log.warning(gettext("%d records stay in %s for the next start"), left, self.outbox.path)
         else:
-            log.info("everything written")
+            log.info(gettext("everything written"))
         self.outbox.close()
         try:
             self.node.destroy_node()
