@@ -109,3 +109,15 @@ def test_the_collectors_words_follow_the_sites_language(caplog):
         == "Roboter sendet, Collector empfängt nichts (/fix) seit 5 s: Abonnements neu angelegt"
     )
     assert hearing.text in caplog.text
+
+
+@pytest.mark.django_db
+def test_dialog_and_admin_labels_come_from_the_models_in_german(client, django_user_model):
+    user = django_user_model.objects.create_superuser("ada", password="pw-Xy7-long")
+    client.force_login(user)
+    german = {"HTTP_ACCEPT_LANGUAGE": "de"}
+    forms = client.get("/gui/api/forms/", **german).json()
+    labels = {f["name"]: f["label"] for f in forms["event"]["fields"]}
+    assert labels["time_zone"] == "Zeitzone" and labels["location"] == "Ort"
+    admin = client.get("/admin/", **german).content.decode()
+    assert "Testveranstaltungen" in admin and "Etappen" in admin and "Konfiguration" in admin
