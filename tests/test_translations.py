@@ -2,6 +2,7 @@
 German browser or account gets."""
 
 import logging
+import re
 import subprocess
 from pathlib import Path
 
@@ -121,3 +122,44 @@ def test_dialog_and_admin_labels_come_from_the_models_in_german(client, django_u
     assert labels["time_zone"] == "Zeitzone" and labels["location"] == "Ort"
     admin = client.get("/admin/", **german).content.decode()
     assert "Testveranstaltungen" in admin and "Etappen" in admin and "Konfiguration" in admin
+
+
+# Words that stay as they are in every language.
+UNTRANSLATED = {"Field Test Tool", "GPS", "ITO", "AUTO", "MDBI", "MTBI"}
+
+
+def _template_words(text: str) -> list[str]:
+    """Words a template shows outside {% translate %} and {% blocktranslate %}."""
+    text = re.sub(r"{%\s*blocktranslate.*?endblocktranslate\s*%}", "", text, flags=re.S)
+    text = re.sub(r"{%.*?%}|{{.*?}}|{#.*?#}", "", text, flags=re.S)
+    text = re.sub(r"<(script|style)\b.*?</\1>", "", text, flags=re.S)
+    shown = re.findall(r">([^<]+)<", text)
+    shown += re.findall(r'\b(?:title|aria-label|placeholder|alt)="([^"]*)"', text)
+    words = [s.strip() for s in shown if re.search(r"[A-Za-z]{2}", s)]
+    return [w for w in words if w not in UNTRANSLATED and not w.startswith("https://")]
+
+
+def test_templates_show_no_words_outside_translate_tags():
+    found = {
+        str(path.relative_to(ROOT)): words
+        for path in sorted((ROOT / "templates").rglob("*.html"))
+        if (words := _template_words(path.read_text()))
+    }
+    assert found == {}
+
+
+# A literal sentence handed to the page by the GUI's scripts without _().
+SCRIPT_WORDS = re.compile(
+    r"""(?:\.(?:textContent|title|alt|placeholder)\s*=\s*|"""
+    r"""\b(?:notice|say|ApiError|confirmDialog|noTiles|setStatus)\(\s*)["'`][A-Za-z]"""
+)
+
+
+def test_the_gui_scripts_hand_no_untranslated_words_to_the_page():
+    found = [
+        f"{path.name}:{number}: {line.strip()}"
+        for path in sorted((ROOT / "static" / "gui").glob("*.js"))
+        for number, line in enumerate(path.read_text().splitlines(), 1)
+        if SCRIPT_WORDS.search(line)
+    ]
+    assert found == []
