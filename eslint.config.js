@@ -10,7 +10,8 @@ module.exports = [
       ecmaVersion: 2022,
       sourceType: "module",
       // Leaflet comes from django-leaflet's static files as the global L.
-      globals: { ...globals.browser, L: "readonly" },
+      // gettext and ngettext come from Django's JavaScriptCatalog (/jsi18n/, static/gui/i18n.js).
+      globals: { ...globals.browser, L: "readonly", gettext: "readonly", ngettext: "readonly" },
     },
     rules: {
       "no-unused-vars": ["error", { args: "none" }],

@@ -1,12 +1,13 @@
 from django.apps import AppConfig
 from django.conf import settings
+from django.utils.translation import gettext_lazy as _
 
 from basemaps.confinement import confine_gdal
 
 
 class BasemapsConfig(AppConfig):
     name = "basemaps"
-    verbose_name = "Basemaps"
+    verbose_name = _("Basemaps")
 
     def ready(self):
         confine_gdal()

@@ -13,6 +13,7 @@ from urllib.parse import urlsplit
 
 from django.conf import settings
 from django.core.exceptions import ValidationError
+from django.utils.translation import gettext as _
 
 LOCAL_NAMES = ("localhost", ".localhost", ".local", ".internal")
 
@@ -39,9 +40,11 @@ def check_tile_url(url: str) -> None:
     except ValueError:
         parts, host = None, ""
     if parts is None or parts.scheme not in ("http", "https") or not host:
-        raise ValidationError("A tile server address starts with http:// or https:// and a host.")
+        raise ValidationError(
+            _("A tile server address starts with http:// or https:// and a host.")
+        )
     if parts.username or parts.password:
-        raise ValidationError("A tile server address carries no user name or password.")
+        raise ValidationError(_("A tile server address carries no user name or password."))
     allowed = [entry.strip().lower() for entry in settings.FTT_TILE_HOSTS]
     if not any(_matches(host, entry) for entry in allowed):
         raise ValidationError(

@@ -2,11 +2,12 @@ from django.apps import AppConfig
 from django.core.signals import request_finished
 from django.db import connection
 from django.db.models.signals import m2m_changed, post_delete, post_save
+from django.utils.translation import gettext_lazy as _
 
 
 class CommonConfig(AppConfig):
     name = "common"
-    verbose_name = "Shared plumbing"
+    verbose_name = _("Shared plumbing")
 
     def ready(self):
         from django.contrib.auth import get_user_model

@@ -8,6 +8,7 @@ from collections import Counter
 
 from django.core.exceptions import ValidationError
 from django.db.models import ProtectedError, RestrictedError
+from django.utils.translation import gettext as _
 
 
 class RuleViolation(ValidationError):
@@ -30,4 +31,7 @@ def describe_protected(exc: ProtectedError | RestrictedError) -> str:
     examples = ", ".join(str(obj) for obj in blockers[:3])
     where = ", ".join(f"{n} {name}" for name, n in counts.items())
     more = "" if len(blockers) <= 3 else ", …"
-    return f"Still in use by {where} ({examples}{more}); change or delete those first."
+    return _("Still in use by %(where)s (%(examples)s); change or delete those first.") % {
+        "where": where,
+        "examples": examples + more,
+    }

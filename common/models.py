@@ -1,7 +1,9 @@
-"""The one table of the shared plumbing: which job workers are alive."""
+"""The tables of the shared plumbing: which job workers are alive, and each
+account's preferences."""
 
 from django.conf import settings
 from django.db import models
+from django.utils.translation import gettext_lazy as _
 
 
 class JobWorker(models.Model):
@@ -11,11 +13,11 @@ class JobWorker(models.Model):
     this row is how another worker tells a dead worker from a busy one.
     """
 
-    worker_id = models.CharField(max_length=64, primary_key=True)
-    host = models.CharField(max_length=255)
-    pid = models.IntegerField()
-    started = models.DateTimeField()
-    beat = models.DateTimeField()
+    worker_id = models.CharField(max_length=64, primary_key=True, verbose_name=_("worker id"))
+    host = models.CharField(max_length=255, verbose_name=_("host"))
+    pid = models.IntegerField(verbose_name=_("pid"))
+    started = models.DateTimeField(verbose_name=_("started"))
+    beat = models.DateTimeField(verbose_name=_("beat"))
 
     def __str__(self):
         return f"job worker {self.worker_id}"
@@ -25,24 +27,29 @@ class Job(models.Model):
     """What every row that a background job works on shows: its state and outcome."""
 
     class Status(models.TextChoices):
-        QUEUED = "queued", "queued"
-        RUNNING = "running", "running"
-        DONE = "done", "done"
-        FAILED = "failed", "failed"
+        QUEUED = "queued", _("queued")
+        RUNNING = "running", _("running")
+        DONE = "done", _("done")
+        FAILED = "failed", _("failed")
 
-    status = models.CharField(max_length=10, choices=Status.choices, default=Status.QUEUED)
-    message = models.CharField(max_length=200, blank=True, help_text="The step running now.")
-    error = models.TextField(blank=True)
+    status = models.CharField(
+        max_length=10, choices=Status.choices, default=Status.QUEUED, verbose_name=_("status")
+    )
+    message = models.CharField(
+        max_length=200, blank=True, help_text=_("The step running now."), verbose_name=_("message")
+    )
+    error = models.TextField(blank=True, verbose_name=_("error"))
     requested_by = models.ForeignKey(
         settings.AUTH_USER_MODEL,
         null=True,
         blank=True,
         on_delete=models.SET_NULL,
         related_name="+",
+        verbose_name=_("requested by"),
     )
-    created = models.DateTimeField(auto_now_add=True)
-    updated = models.DateTimeField(auto_now=True)
-    finished = models.DateTimeField(null=True, blank=True)
+    created = models.DateTimeField(auto_now_add=True, verbose_name=_("created"))
+    updated = models.DateTimeField(auto_now=True, verbose_name=_("updated"))
+    finished = models.DateTimeField(null=True, blank=True, verbose_name=_("finished"))
 
     class Meta:
         abstract = True
@@ -51,3 +58,28 @@ class Job(models.Model):
     @property
     def is_finished(self) -> bool:
         return self.status in (self.Status.DONE, self.Status.FAILED)
+
+
+class AccountPreference(models.Model):
+    """What an account chose for itself; read by ftt_site.language."""
+
+    user = models.OneToOneField(
+        settings.AUTH_USER_MODEL,
+        on_delete=models.CASCADE,
+        related_name="preference",
+        verbose_name=_("account"),
+    )
+    language = models.CharField(
+        max_length=8,
+        choices=settings.LANGUAGES,
+        blank=True,
+        help_text=_("Empty: the language the browser asks for."),
+        verbose_name=_("language"),
+    )
+
+    class Meta:
+        verbose_name = _("account preference")
+        verbose_name_plural = _("account preferences")
+
+    def __str__(self):
+        return f"{self.user}: {self.language or '-'}"

@@ -329,7 +329,7 @@ class TestEventAdmin(ServiceDeleteMixin, admin.ModelAdmin):
     search_fields = ["location", "version", "note"]
     date_hierarchy = "start"
     readonly_fields = ENTRY_STAMPS
-    fields = ["location", "version", "time_zone", "note", *ENTRY_STAMPS]
+    fields = ["location", "version", "time_zone", "language", "note", *ENTRY_STAMPS]
     inlines = [ShiftInline]
     actions = ["close_selected", "reopen_selected"]
 

@@ -7,6 +7,7 @@ Both ask the same questions here, so the rules exist once.
 
 from django.core.exceptions import PermissionDenied
 from django.db.models import QuerySet
+from django.utils.translation import gettext as _
 
 from common import roles
 from events.models import Leg, Segment, SegmentType, Shift, Vehicle
@@ -90,16 +91,24 @@ def check_robot_target(user, entry) -> None:
     name = user.get_username()
     if not own:
         raise PermissionDenied(
-            f"Robot account '{name}' is bound to no vehicle, so it may not log anything; "
-            "an administrator binds it to its vehicle in Django admin."
+            _(
+                "Robot account '%(name)s' is bound to no vehicle, so it may not log anything; "
+                "an administrator binds it to its vehicle in Django admin."
+            )
+            % {"name": name}
         )
     bound = ", ".join(sorted(own.values()))
     key = Vehicle.objects.filter(pk=vehicle_id).values_list("key", flat=True).first()
     if isinstance(entry, Vehicle):
         raise PermissionDenied(
-            f"Robot account '{name}' logs only for vehicle {bound}, not for vehicle {key}."
+            _("Robot account '%(name)s' logs only for vehicle %(bound)s, not for vehicle %(key)s.")
+            % {"name": name, "bound": bound, "key": key}
         )
     what = f"{entry._meta.verbose_name} {entry.pk}"
     raise PermissionDenied(
-        f"Robot account '{name}' logs only for vehicle {bound}; {what} belongs to vehicle {key}."
+        _(
+            "Robot account '%(name)s' logs only for vehicle %(bound)s; "
+            "%(what)s belongs to vehicle %(key)s."
+        )
+        % {"name": name, "bound": bound, "what": what, "key": key}
     )

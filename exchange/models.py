@@ -1,21 +1,26 @@
 """Archive imports asked for in the GUI or the API: queued jobs, kept with their outcome."""
 
 from django.db import models
+from django.utils.translation import gettext_lazy as _
 
 from common.models import Job
 
 
 class ArchiveImport(Job):
-    filename = models.CharField(max_length=255, help_text="The uploaded file's name.")
+    filename = models.CharField(
+        max_length=255, help_text=_("The uploaded file's name."), verbose_name=_("filename")
+    )
     # Absolute, so a worker started with another FTT_DATA_DIR still finds it;
     # emptied once the import ran (the file is deleted then).
-    path = models.CharField(max_length=1000, blank=True)
-    verdict = models.CharField(max_length=200, blank=True)
-    changes = models.IntegerField(null=True, blank=True)
-    counts = models.JSONField(default=dict, blank=True)
-    lines = models.JSONField(default=list, blank=True)
+    path = models.CharField(max_length=1000, blank=True, verbose_name=_("path"))
+    verdict = models.CharField(max_length=200, blank=True, verbose_name=_("verdict"))
+    changes = models.IntegerField(null=True, blank=True, verbose_name=_("changes"))
+    counts = models.JSONField(default=dict, blank=True, verbose_name=_("counts"))
+    lines = models.JSONField(default=list, blank=True, verbose_name=_("lines"))
 
     class Meta(Job.Meta):
+        verbose_name = _("archive import")
+        verbose_name_plural = _("archive imports")
         pass
 
     def __str__(self):

@@ -112,6 +112,7 @@ def test_event_record(event) -> dict:
         "location": event.location,
         "version": event.version,
         "time_zone": event.time_zone,
+        "language": event.language,
     }
 
 

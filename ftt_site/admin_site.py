@@ -3,13 +3,14 @@ what is configured before a test apart from what the field test recorded."""
 
 from django.contrib import admin
 from django.contrib.admin.apps import SimpleAdminConfig
+from django.utils.translation import gettext_lazy as _
 
 from common import roles
 
 # Model names (object_name) per group; anything not named keeps Django's app grouping.
 GROUPS = (
     (
-        "Configuration",
+        _("Configuration"),
         "configuration",
         (
             "Personnel",
@@ -23,7 +24,7 @@ GROUPS = (
         ),
     ),
     (
-        "Recorded data",
+        _("Recorded data"),
         "recorded-data",
         (
             "TestEvent",
@@ -46,9 +47,9 @@ LIBRARY_APPS = {"axes", "authtoken", "django_tasks_db", "django_tasks"}
 
 
 class FttAdminSite(admin.AdminSite):
-    site_header = "FTT administration"
-    site_title = "FTT administration"
-    index_title = "Set-up and records"
+    site_header = _("FTT administration")
+    site_title = _("FTT administration")
+    index_title = _("Set-up and records")
 
     def has_permission(self, request):
         # A robot account is never let in, even if someone ticked "staff status".

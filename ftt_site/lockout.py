@@ -21,6 +21,8 @@ from django.db.models import Max, Sum
 from django.http import JsonResponse
 from django.shortcuts import render
 from django.utils import timezone
+from django.utils.translation import gettext as _
+from django.utils.translation import ngettext
 
 
 def account_wait(username: str) -> int:
@@ -56,16 +58,16 @@ class AccountPace:
 
 def _in_words(seconds: int) -> str:
     if seconds < 60:
-        return f"{seconds} second{'s' if seconds != 1 else ''}"
+        return ngettext("%(n)s second", "%(n)s seconds", seconds) % {"n": seconds}
     minutes = math.ceil(seconds / 60)
-    return f"{minutes} minute{'s' if minutes != 1 else ''}"
+    return ngettext("%(n)s minute", "%(n)s minutes", minutes) % {"n": minutes}
 
 
 def locked_out(request, original_response=None, credentials=None):
     seconds = getattr(request, "ftt_account_wait", None) or int(
         get_cool_off(request).total_seconds()
     )
-    message = f"Too many failed sign-ins. Try again in {_in_words(seconds)}."
+    message = _("Too many failed sign-ins. Try again in %(wait)s.") % {"wait": _in_words(seconds)}
     if request.path.startswith("/api/"):
         response = JsonResponse({"detail": message, "errors": {}}, status=429)
     else:

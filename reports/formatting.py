@@ -1,15 +1,43 @@
 """How figures are written in the report, CSV and GUI: one place, one precision."""
 
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from datetime import datetime, tzinfo
+
+from django.utils import translation
 
 from reports.selectors.statistics import Estimate
 
 DASH = "–"
 
+# The language figures are written in. Only the PDF report sets it (written_in):
+# CSV and the API keep the decimal point whatever the reader's language.
+_LANGUAGE: ContextVar[str] = ContextVar("ftt_report_language", default="en")
+# Per language: the decimal mark and how a date and time are written.
+_DECIMAL = {"de": ","}
+_TIMESTAMP = {"de": "%d.%m.%Y %H:%M:%S"}
+
+
+@contextmanager
+def written_in(language: str) -> Iterator[None]:
+    """Words (gettext) and figures in ``language`` until the block ends."""
+    token = _LANGUAGE.set(language)
+    try:
+        with translation.override(language):
+            yield
+    finally:
+        _LANGUAGE.reset(token)
+
+
+def _number(text: str) -> str:
+    mark = _DECIMAL.get(_LANGUAGE.get())
+    return text.replace(".", mark) if mark else text
+
 
 def metres(value: float | None) -> str:
-    return DASH if value is None else f"{value:.2f} m"
+    return DASH if value is None else _number(f"{value:.2f}") + " m"
 
 
 def duration(seconds: float | None) -> str:
@@ -23,19 +51,20 @@ def duration(seconds: float | None) -> str:
 
 
 def percent(ratio: float | None) -> str:
-    return DASH if ratio is None else f"{100 * ratio:.1f} %"
+    return DASH if ratio is None else _number(f"{100 * ratio:.1f}") + " %"
 
 
 def rate(value: float | None) -> str:
-    return DASH if value is None else f"{value:.3f}"
+    return DASH if value is None else _number(f"{value:.3f}")
 
 
 def speed(distance: float, seconds: float) -> str:
-    return DASH if seconds <= 0 else f"{distance / seconds:.2f} m/s"
+    return DASH if seconds <= 0 else _number(f"{distance / seconds:.2f}") + " m/s"
 
 
 def timestamp(value: datetime | None, tz: tzinfo) -> str:
-    return DASH if value is None else value.astimezone(tz).strftime("%Y-%m-%d %H:%M:%S")
+    pattern = _TIMESTAMP.get(_LANGUAGE.get(), "%Y-%m-%d %H:%M:%S")
+    return DASH if value is None else value.astimezone(tz).strftime(pattern)
 
 
 def clock(value: datetime | None, tz: tzinfo) -> str:

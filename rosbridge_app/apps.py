@@ -1,11 +1,12 @@
 from django.apps import AppConfig
+from django.utils.translation import gettext_lazy as _
 
 from rosbridge_app import sessions, wakeup
 
 
 class RosbridgeAppConfig(AppConfig):
     name = "rosbridge_app"
-    verbose_name = "Robot bridge"
+    verbose_name = _("Robot bridge")
 
     def ready(self):
         # Django's documented place for signal wiring: models load first.

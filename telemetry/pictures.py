@@ -11,6 +11,7 @@ import warnings
 
 from django.conf import settings
 from django.core.exceptions import ValidationError
+from django.utils.translation import gettext as _
 from PIL import Image as PilImage
 
 PHOTO_FORMATS = {"JPEG": "jpg", "PNG": "png", "WEBP": "webp"}
@@ -28,7 +29,8 @@ def checked_picture(content: bytes, formats: dict[str, str] = PHOTO_FORMATS) -> 
             warnings.simplefilter("ignore", PilImage.DecompressionBombWarning)
             with PilImage.open(io.BytesIO(content), formats=list(formats)) as picture:
                 if picture.width * picture.height > limit:
-                    raise ValidationError({"image": [f"The image has more than {limit} pixels."]})
+                    message = _("The image has more than %(limit)s pixels.") % {"limit": limit}
+                    raise ValidationError({"image": [message]})
                 if picture.format == "PNG":
                     # Every chunk's CRC, the pixel data's included, and the end
                     # marker: a truncated or damaged file is refused without
@@ -41,7 +43,8 @@ def checked_picture(content: bytes, formats: dict[str, str] = PHOTO_FORMATS) -> 
     except ValidationError:
         raise
     except (OSError, SyntaxError, ValueError, EOFError, PilImage.DecompressionBombError, KeyError):
-        raise ValidationError({"image": [f"Not a readable {names} image."]}) from None
+        message = _("Not a readable %(kinds)s image.") % {"kinds": names}
+        raise ValidationError({"image": [message]}) from None
 
 
 def greyscale_png(content: bytes) -> bytes:

@@ -2,6 +2,7 @@
 
 from django.core.validators import MaxValueValidator, MinValueValidator, RegexValidator
 from django.db import models
+from django.utils.translation import gettext_lazy as _
 
 from basemaps.hosts import check_tile_url
 
@@ -24,11 +25,14 @@ class BasemapLayer(models.Model):
     key = models.SlugField(
         unique=True,
         max_length=60,
-        help_text="Short name used in tile URLs: /tiles/<key>/{z}/{x}/{y}.png",
+        help_text=_("Short name used in tile URLs: /tiles/<key>/{z}/{x}/{y}.png"),
+        verbose_name=_("key"),
     )
-    name = models.CharField(max_length=200)
-    kind = models.CharField(max_length=10, choices=KINDS)
-    file = models.FileField(upload_to="basemaps/", blank=True, max_length=300)
+    name = models.CharField(max_length=200, verbose_name=_("name"))
+    kind = models.CharField(max_length=10, choices=KINDS, verbose_name=_("kind"))
+    file = models.FileField(
+        upload_to="basemaps/", blank=True, max_length=300, verbose_name=_("file")
+    )
     url = models.CharField(
         max_length=500,
         blank=True,
@@ -36,27 +40,39 @@ class BasemapLayer(models.Model):
             RegexValidator(r"^https?://.*\{z\}.*\{x\}.*\{y\}", "Needs {z}, {x} and {y}."),
             check_tile_url,
         ],
-        help_text="Only for external layers, e.g. https://tile.openstreetmap.org/{z}/{x}/{y}.png",
+        help_text=_(
+            "Only for external layers, e.g. https://tile.openstreetmap.org/{z}/{x}/{y}.png"
+        ),
+        verbose_name=_("url"),
     )
-    attribution = models.CharField(max_length=300, blank=True)
+    attribution = models.CharField(max_length=300, blank=True, verbose_name=_("attribution"))
     enabled = models.BooleanField(
         default=True,
-        help_text="Offered in the maps and used as a test event's default. An external "
-        "layer that came with an imported archive arrives off until an administrator "
-        "checks its address and turns it on.",
+        help_text=_(
+            "Offered in the maps and used as a test event's default. An external "
+            "layer that came with an imported archive arrives off until an administrator "
+            "checks its address and turns it on."
+        ),
+        verbose_name=_("enabled"),
     )
-    min_zoom = models.PositiveSmallIntegerField(default=0, validators=zoom_validators)
-    max_zoom = models.PositiveSmallIntegerField(default=19, validators=zoom_validators)
+    min_zoom = models.PositiveSmallIntegerField(
+        default=0, validators=zoom_validators, verbose_name=_("min zoom")
+    )
+    max_zoom = models.PositiveSmallIntegerField(
+        default=19, validators=zoom_validators, verbose_name=_("max zoom")
+    )
     # Bounds in WGS 84 degrees, read from the file; empty for external layers.
-    west = models.FloatField(null=True, blank=True)
-    south = models.FloatField(null=True, blank=True)
-    east = models.FloatField(null=True, blank=True)
-    north = models.FloatField(null=True, blank=True)
+    west = models.FloatField(null=True, blank=True, verbose_name=_("west"))
+    south = models.FloatField(null=True, blank=True, verbose_name=_("south"))
+    east = models.FloatField(null=True, blank=True, verbose_name=_("east"))
+    north = models.FloatField(null=True, blank=True, verbose_name=_("north"))
     # What an archive stores ("png", "jpg", "webp"); rasters render on demand.
-    tile_format = models.CharField(max_length=10, blank=True)
-    modified = models.DateTimeField(auto_now=True)
+    tile_format = models.CharField(max_length=10, blank=True, verbose_name=_("tile format"))
+    modified = models.DateTimeField(auto_now=True, verbose_name=_("modified"))
 
     class Meta:
+        verbose_name = _("basemap layer")
+        verbose_name_plural = _("basemap layers")
         ordering = ["name"]
         constraints = [
             models.CheckConstraint(
@@ -86,13 +102,18 @@ class EventBasemap(models.Model):
     """
 
     test_event = models.OneToOneField(
-        "events.TestEvent", on_delete=models.CASCADE, related_name="basemap"
+        "events.TestEvent",
+        on_delete=models.CASCADE,
+        related_name="basemap",
+        verbose_name=_("test event"),
     )
-    layer = models.ForeignKey(BasemapLayer, on_delete=models.CASCADE, related_name="events")
+    layer = models.ForeignKey(
+        BasemapLayer, on_delete=models.CASCADE, related_name="events", verbose_name=_("layer")
+    )
 
     class Meta:
-        verbose_name = "default basemap of a test event"
-        verbose_name_plural = "default basemaps of test events"
+        verbose_name = _("default basemap of a test event")
+        verbose_name_plural = _("default basemaps of test events")
 
     def __str__(self):
         return f"{self.test_event}: {self.layer}"

@@ -2,32 +2,37 @@
 
 from django.conf import settings
 from django.db import models
+from django.utils.translation import gettext_lazy as _
 
 
 class Personnel(models.Model):
-    name = models.CharField(max_length=200)
-    institution = models.CharField(max_length=200, blank=True)
+    name = models.CharField(max_length=200, verbose_name=_("name"))
+    institution = models.CharField(max_length=200, blank=True, verbose_name=_("institution"))
     user = models.OneToOneField(
         settings.AUTH_USER_MODEL,
         null=True,
         blank=True,
         on_delete=models.SET_NULL,
         related_name="personnel",
-        help_text="Login account of this person; notes they write are attributed to them.",
+        help_text=_("Login account of this person; notes they write are attributed to them."),
+        verbose_name=_("user"),
     )
 
     class Meta:
+        verbose_name = _("person")
+        verbose_name_plural = _("personnel")
         ordering = ["name"]
-        verbose_name_plural = "personnel"
 
     def __str__(self):
         return f"{self.name} ({self.institution})" if self.institution else self.name
 
 
 class Performer(models.Model):
-    institution = models.CharField(max_length=200, unique=True)
+    institution = models.CharField(max_length=200, unique=True, verbose_name=_("institution"))
 
     class Meta:
+        verbose_name = _("performer")
+        verbose_name_plural = _("performers")
         ordering = ["institution"]
 
     def __str__(self):
@@ -35,9 +40,9 @@ class Performer(models.Model):
 
 
 class KeyedConfiguration(models.Model):
-    key = models.SlugField(max_length=64, unique=True)
-    short_description = models.CharField(max_length=200)
-    long_description = models.TextField(blank=True)
+    key = models.SlugField(max_length=64, unique=True, verbose_name=_("key"))
+    short_description = models.CharField(max_length=200, verbose_name=_("short description"))
+    long_description = models.TextField(blank=True, verbose_name=_("long description"))
 
     class Meta:
         abstract = True
@@ -51,12 +56,15 @@ class Vehicle(KeyedConfiguration):
     key = models.SlugField(
         max_length=64,
         unique=True,
-        help_text="Name the collector is started with: ftt_collect --vehicle <key>.",
+        help_text=_("Name the collector is started with: ftt_collect --vehicle <key>."),
+        verbose_name=_("key"),
     )
-    institution = models.CharField(max_length=200, blank=True)
-    configuration = models.TextField(blank=True)
+    institution = models.CharField(max_length=200, blank=True, verbose_name=_("institution"))
+    configuration = models.TextField(blank=True, verbose_name=_("configuration"))
 
     class Meta(KeyedConfiguration.Meta):
+        verbose_name = _("vehicle")
+        verbose_name_plural = _("vehicles")
         pass
 
 
@@ -64,8 +72,11 @@ class PoseSource(KeyedConfiguration):
     key = models.SlugField(
         max_length=64,
         unique=True,
-        help_text="Stable name of this source; archives refer to it by this key.",
+        help_text=_("Stable name of this source; archives refer to it by this key."),
+        verbose_name=_("key"),
     )
 
     class Meta(KeyedConfiguration.Meta):
+        verbose_name = _("pose source")
+        verbose_name_plural = _("pose sources")
         pass

@@ -8,6 +8,7 @@ rules those services enforce, so that even a raw write cannot break them.
 import uuid
 import zoneinfo
 
+from django.conf import settings
 from django.contrib.gis.db import models
 from django.core.exceptions import ValidationError
 from django.db.models import F, Q
@@ -20,7 +21,9 @@ from events.models.configuration import Performer, Personnel, PoseSource, Vehicl
 
 def validate_time_zone(value: str) -> None:
     if value not in zoneinfo.available_timezones():
-        raise ValidationError(f"'{value}' is not an IANA time zone name such as Europe/Berlin.")
+        raise ValidationError(
+            _("'%(value)s' is not an IANA time zone name such as Europe/Berlin.") % {"value": value}
+        )
 
 
 def _ends_after_start(name: str) -> models.CheckConstraint:
@@ -38,7 +41,9 @@ class ChangeStamped(models.Model):
     copy of a row from a stale one: the later change wins.
     """
 
-    modified = models.DateTimeField(default=timezone.now, editable=False)
+    modified = models.DateTimeField(
+        default=timezone.now, editable=False, verbose_name=_("modified")
+    )
 
     class Meta:
         abstract = True
@@ -54,10 +59,10 @@ class ChangeStamped(models.Model):
 class LogEntry(ChangeStamped):
     """Shared shape of every level: a global id, an interval and a note."""
 
-    uid = models.UUIDField(default=uuid.uuid4, unique=True, editable=False)
-    start = models.DateTimeField(db_index=True)
-    end = models.DateTimeField(null=True, blank=True)
-    note = models.TextField(blank=True)
+    uid = models.UUIDField(default=uuid.uuid4, unique=True, editable=False, verbose_name=_("uid"))
+    start = models.DateTimeField(db_index=True, verbose_name=_("start"))
+    end = models.DateTimeField(null=True, blank=True, verbose_name=_("end"))
+    note = models.TextField(blank=True, verbose_name=_("note"))
 
     class Meta:
         abstract = True
@@ -70,23 +75,33 @@ class LogEntry(ChangeStamped):
 class TestEvent(LogEntry):
     __test__ = False  # pytest would otherwise try to collect it as a test class
 
-    location = models.CharField(max_length=500, blank=True)
-    version = models.CharField(max_length=200, blank=True)
+    location = models.CharField(max_length=500, blank=True, verbose_name=_("location"))
+    version = models.CharField(max_length=200, blank=True, verbose_name=_("version"))
     time_zone = models.CharField(
         max_length=64,
         default="UTC",
         validators=[validate_time_zone],
-        help_text="IANA name, e.g. Europe/Berlin; every time of this event is shown in it.",
+        help_text=_("IANA name, e.g. Europe/Berlin; every time of this event is shown in it."),
+        verbose_name=_("time zone"),
+    )
+    language = models.CharField(
+        max_length=8,
+        choices=settings.LANGUAGES,
+        default="en",
+        verbose_name=_("language"),
+        help_text=_("The language of this test event's PDF reports."),
     )
 
     class Meta:
+        verbose_name = _("test event")
+        verbose_name_plural = _("test events")
         ordering = ["-start", "-id"]
         constraints = [_ends_after_start("testevent")]
 
     def __str__(self):
         # Location and day may repeat (two runs of one field test): the version
         # and the number tell them apart in admin's choice lists.
-        label = self.location or "Test event"
+        label = self.location or str(_("Test event"))
         if self.start:
             label = f"{label} {self.start:%Y-%m-%d}"
         if self.version:
@@ -99,32 +114,59 @@ class TestEvent(LogEntry):
 
 
 class Shift(LogEntry):
-    test_event = models.ForeignKey(TestEvent, on_delete=models.CASCADE, related_name="shifts")
-    number = models.PositiveIntegerField(editable=False)
-    vehicle = models.ForeignKey(Vehicle, on_delete=models.PROTECT, related_name="shifts")
+    test_event = models.ForeignKey(
+        TestEvent, on_delete=models.CASCADE, related_name="shifts", verbose_name=_("test event")
+    )
+    number = models.PositiveIntegerField(editable=False, verbose_name=_("number"))
+    vehicle = models.ForeignKey(
+        Vehicle, on_delete=models.PROTECT, related_name="shifts", verbose_name=_("vehicle")
+    )
     performer = models.ForeignKey(
         Performer,
         on_delete=models.PROTECT,
         null=True,
         blank=True,
         related_name="shifts",
+        verbose_name=_("performer"),
     )
     test_administrator = models.ForeignKey(
-        Personnel, on_delete=models.PROTECT, null=True, blank=True, related_name="+"
+        Personnel,
+        on_delete=models.PROTECT,
+        null=True,
+        blank=True,
+        related_name="+",
+        verbose_name=_("test administrator"),
     )
     test_director = models.ForeignKey(
-        Personnel, on_delete=models.PROTECT, null=True, blank=True, related_name="+"
+        Personnel,
+        on_delete=models.PROTECT,
+        null=True,
+        blank=True,
+        related_name="+",
+        verbose_name=_("test director"),
     )
     safety_officer = models.ForeignKey(
-        Personnel, on_delete=models.PROTECT, null=True, blank=True, related_name="+"
+        Personnel,
+        on_delete=models.PROTECT,
+        null=True,
+        blank=True,
+        related_name="+",
+        verbose_name=_("safety officer"),
     )
     robot_operator = models.ForeignKey(
-        Personnel, on_delete=models.PROTECT, null=True, blank=True, related_name="+"
+        Personnel,
+        on_delete=models.PROTECT,
+        null=True,
+        blank=True,
+        related_name="+",
+        verbose_name=_("robot operator"),
     )
-    test_intent = models.CharField(max_length=500, blank=True)
-    workspace = models.CharField(max_length=500, blank=True)
+    test_intent = models.CharField(max_length=500, blank=True, verbose_name=_("test intent"))
+    workspace = models.CharField(max_length=500, blank=True, verbose_name=_("workspace"))
 
     class Meta:
+        verbose_name = _("shift")
+        verbose_name_plural = _("shifts")
         ordering = ["-start", "-id"]
         constraints = [
             _ends_after_start("shift"),
@@ -137,17 +179,29 @@ class Shift(LogEntry):
         ]
 
     def __str__(self):
-        return f"Shift {self.number}"
+        return str(_("Shift %(number)s") % {"number": self.number})
 
 
 class Leg(LogEntry):
-    shift = models.ForeignKey(Shift, on_delete=models.CASCADE, related_name="legs")
-    number = models.PositiveIntegerField(editable=False)
+    shift = models.ForeignKey(
+        Shift, on_delete=models.CASCADE, related_name="legs", verbose_name=_("shift")
+    )
+    number = models.PositiveIntegerField(editable=False, verbose_name=_("number"))
     weather = models.ForeignKey(
-        Weather, on_delete=models.PROTECT, null=True, blank=True, related_name="+"
+        Weather,
+        on_delete=models.PROTECT,
+        null=True,
+        blank=True,
+        related_name="+",
+        verbose_name=_("weather"),
     )
     default_pose_source = models.ForeignKey(
-        PoseSource, on_delete=models.PROTECT, null=True, blank=True, related_name="legs"
+        PoseSource,
+        on_delete=models.PROTECT,
+        null=True,
+        blank=True,
+        related_name="legs",
+        verbose_name=_("default pose source"),
     )
     # GPS fixes the robot's collector estimated lost while logging into this leg
     # (rosbridge_app.collector.losses, added up from its heartbeats).
@@ -155,7 +209,8 @@ class Leg(LogEntry):
     recording = models.CharField(
         max_length=500,
         blank=True,
-        help_text="Where the robot's recording (bag) of this leg is.",
+        help_text=_("Where the robot's recording (bag) of this leg is."),
+        verbose_name=_("recording"),
     )
     test_case = models.ForeignKey(
         "events.TestCase",
@@ -167,6 +222,8 @@ class Leg(LogEntry):
     )
 
     class Meta:
+        verbose_name = _("leg")
+        verbose_name_plural = _("legs")
         ordering = ["-start", "-id"]
         constraints = [
             _ends_after_start("leg"),
@@ -179,7 +236,7 @@ class Leg(LogEntry):
         ]
 
     def __str__(self):
-        return f"Leg {self.number}"
+        return str(_("Leg %(number)s") % {"number": self.number})
 
 
 class Segment(ChangeStamped):
@@ -187,18 +244,28 @@ class Segment(ChangeStamped):
 
     ANNOTATION_FIELDS = ("ito_reason", "obstacle", "lighting", "slope")
 
-    uid = models.UUIDField(default=uuid.uuid4, unique=True, editable=False)
-    leg = models.ForeignKey(Leg, on_delete=models.CASCADE, related_name="segments")
-    parent = models.ForeignKey(
-        "self", on_delete=models.CASCADE, null=True, blank=True, related_name="children"
+    uid = models.UUIDField(default=uuid.uuid4, unique=True, editable=False, verbose_name=_("uid"))
+    leg = models.ForeignKey(
+        Leg, on_delete=models.CASCADE, related_name="segments", verbose_name=_("leg")
     )
-    segment_type = models.ForeignKey(SegmentType, on_delete=models.PROTECT, related_name="+")
+    parent = models.ForeignKey(
+        "self",
+        on_delete=models.CASCADE,
+        null=True,
+        blank=True,
+        related_name="children",
+        verbose_name=_("parent"),
+    )
+    segment_type = models.ForeignKey(
+        SegmentType, on_delete=models.PROTECT, related_name="+", verbose_name=_("segment type")
+    )
     ito_reason = models.ForeignKey(
         ItoReason,
         on_delete=models.PROTECT,
         null=True,
         blank=True,
         related_name="segments",
+        verbose_name=_("ito reason"),
     )
     # The robot's reason for a take-over (params.reason_rules): shown to be
     # confirmed with one tap; statistics count ito_reason, the confirmed one.
@@ -208,18 +275,26 @@ class Segment(ChangeStamped):
         null=True,
         blank=True,
         related_name="+",
+        verbose_name=_("suggested reason"),
     )
-    obstacle = models.CharField(max_length=500, blank=True)
-    lighting = models.CharField(max_length=500, blank=True)
-    slope = models.CharField(max_length=500, blank=True)
-    start_position = models.PointField(srid=4326, null=True, blank=True)
-    start_local_x = models.FloatField(null=True, blank=True)
-    start_local_y = models.FloatField(null=True, blank=True)
-    start_local_frame = models.CharField(max_length=200, blank=True)
-    start = models.DateTimeField()
-    end = models.DateTimeField(null=True, blank=True)
+    obstacle = models.CharField(max_length=500, blank=True, verbose_name=_("obstacle"))
+    lighting = models.CharField(max_length=500, blank=True, verbose_name=_("lighting"))
+    slope = models.CharField(max_length=500, blank=True, verbose_name=_("slope"))
+    start_position = models.PointField(
+        srid=4326, null=True, blank=True, verbose_name=_("start position")
+    )
+    start_local_x = models.FloatField(null=True, blank=True, verbose_name=_("start local x"))
+    start_local_y = models.FloatField(null=True, blank=True, verbose_name=_("start local y"))
+    start_local_frame = models.CharField(
+        max_length=200, blank=True, verbose_name=_("start local frame")
+    )
+    start = models.DateTimeField(verbose_name=_("start"))
+    end = models.DateTimeField(null=True, blank=True, verbose_name=_("end"))
     robot_stamp = models.DateTimeField(
-        null=True, blank=True, help_text="The robot's own clock at the mode switch."
+        null=True,
+        blank=True,
+        help_text=_("The robot's own clock at the mode switch."),
+        verbose_name=_("robot stamp"),
     )
     # Seconds the start may lie before `start`: the robot's mode message had no
     # stamp of its own (rosbridge_app.collector.mode_timing); null: not known
@@ -229,9 +304,13 @@ class Segment(ChangeStamped):
     )
     # When an operator last set reason, obstacle, lighting or slope (never: null).
     # Imports merge the annotation by this stamp, the rest of the row by `modified`.
-    annotated = models.DateTimeField(null=True, blank=True, editable=False)
+    annotated = models.DateTimeField(
+        null=True, blank=True, editable=False, verbose_name=_("annotated")
+    )
 
     class Meta:
+        verbose_name = _("segment")
+        verbose_name_plural = _("segments")
         ordering = ["-start", "-id"]
         indexes = [models.Index(fields=["leg", "start"], name="segment_leg_start")]
         constraints = [

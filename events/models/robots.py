@@ -2,6 +2,7 @@
 
 from django.conf import settings
 from django.db import models
+from django.utils.translation import gettext_lazy as _
 
 from events.models.configuration import Vehicle
 
@@ -17,16 +18,20 @@ class RobotAccount(models.Model):
         settings.AUTH_USER_MODEL,
         on_delete=models.CASCADE,
         related_name="robot_account",
-        help_text="The robot's login; put it in the robot group and give it a token.",
+        help_text=_("The robot's login; put it in the robot group and give it a token."),
+        verbose_name=_("user"),
     )
     vehicles = models.ManyToManyField(
         Vehicle,
         blank=True,
         related_name="robot_accounts",
-        help_text="Vehicles whose legs this robot writes into; no others.",
+        help_text=_("Vehicles whose legs this robot writes into; no others."),
+        verbose_name=_("vehicles"),
     )
 
     class Meta:
+        verbose_name = _("robot account")
+        verbose_name_plural = _("robot accounts")
         ordering = ["user__username"]
 
     def __str__(self):

@@ -8,6 +8,8 @@ database id stays a technical detail.
 
 from collections import defaultdict
 
+from django.utils.translation import gettext as _
+
 from events.models import Segment
 
 
@@ -56,7 +58,7 @@ def numbers(rows) -> dict[int, str]:
 
 
 def label(leg_number: int, number: str) -> str:
-    return f"Leg {leg_number} · {short_label(number)}"
+    return _("Leg %(leg)s · %(segment)s") % {"leg": leg_number, "segment": short_label(number)}
 
 
 def short_label(number: str) -> str:

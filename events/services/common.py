@@ -4,6 +4,7 @@ from datetime import datetime
 
 from django.db.models import Max, Model
 from django.utils import timezone
+from django.utils.translation import gettext as _
 
 from common.errors import RuleViolation
 
@@ -33,13 +34,17 @@ def next_number(queryset) -> int:
 
 def require_open(entry, label: str) -> None:
     if entry.end is not None:
-        raise RuleViolation(f"{label} is closed; re-open it or pick an open one.", code="closed")
+        raise RuleViolation(
+            _("%(entry)s is closed; re-open it or pick an open one.") % {"entry": label},
+            code="closed",
+        )
 
 
 def require_not_before(entry, at: datetime, label: str) -> None:
     if at < entry.start:
         raise RuleViolation(
-            f"{label} started at {entry.start.isoformat()}, after {at.isoformat()}."
+            _("%(entry)s started at %(start)s, after %(at)s.")
+            % {"entry": label, "start": entry.start.isoformat(), "at": at.isoformat()}
         )
 
 

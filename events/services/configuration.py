@@ -3,6 +3,7 @@ and to the seeded catalogues."""
 
 from django.db import transaction
 from django.db.models import Model
+from django.utils.translation import gettext as _
 
 from common.errors import RuleViolation
 from events.models import ItoReason, SegmentType
@@ -28,7 +29,7 @@ def update_configuration(instance: Model, **fields) -> Model:
     instance = type(instance).objects.select_for_update().get(pk=instance.pk)
     if instance._meta.pk.name in fields and fields[instance._meta.pk.name] != instance.pk:
         # Saving a changed primary key would copy the row, not rename it.
-        raise RuleViolation({instance._meta.pk.name: ["A catalogue key cannot be changed."]})
+        raise RuleViolation({instance._meta.pk.name: [_("A catalogue key cannot be changed.")]})
     for name, value in fields.items():
         setattr(instance, name, value)
     instance.full_clean()
@@ -44,6 +45,7 @@ def is_used_by_rules(instance: Model) -> bool:
 def delete_configuration(instance: Model) -> None:
     if is_used_by_rules(instance):
         raise RuleViolation(
-            f"'{instance.pk}' is used by the logging rules themselves and cannot be deleted."
+            _("'%(key)s' is used by the logging rules themselves and cannot be deleted.")
+            % {"key": instance.pk}
         )
     deletion.delete(instance)

@@ -4,6 +4,7 @@ that are still referenced are refused with a message saying where."""
 
 from django.db import transaction
 from django.db.models import Model, ProtectedError, RestrictedError
+from django.utils.translation import gettext as _
 
 from common.errors import RuleViolation, describe_protected
 from events.feed import announce_row
@@ -15,4 +16,7 @@ def delete(instance: Model) -> None:
         announce_row(instance, deleted=True)
         instance.delete()
     except (ProtectedError, RestrictedError) as exc:
-        raise RuleViolation(f"Cannot delete '{instance}': {describe_protected(exc)}") from None
+        raise RuleViolation(
+            _("Cannot delete '%(row)s': %(why)s")
+            % {"row": instance, "why": describe_protected(exc)}
+        ) from None

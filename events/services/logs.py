@@ -7,6 +7,7 @@ from django.core.exceptions import ValidationError
 from django.db import transaction
 from django.db.models import F
 from django.dispatch import Signal
+from django.utils.translation import gettext as _
 
 from common.errors import RuleViolation
 from events import rules
@@ -22,7 +23,7 @@ from events.services.common import (
     require_open,
 )
 
-TEST_EVENT_FIELDS = ("location", "version", "time_zone", "note")
+TEST_EVENT_FIELDS = ("location", "version", "time_zone", "language", "note")
 SHIFT_FIELDS = (
     "performer",
     "test_administrator",
@@ -88,8 +89,8 @@ def update_test_event(event: TestEvent, **fields) -> TestEvent:
 def close_test_event(event: TestEvent, at: datetime | None = None) -> TestEvent:
     event = lock(event)
     at = instant(at)
-    require_open(event, f"Test event '{event}'")
-    require_not_before(event, at, f"Test event '{event}'")
+    require_open(event, _("Test event '%(name)s'") % {"name": event})
+    require_not_before(event, at, _("Test event '%(name)s'") % {"name": event})
     _announce_closing(Leg.objects.filter(shift__test_event=event, end__isnull=True))
     # Top-down locks (event, shift, leg), the order the writers below use too.
     for shift in event.shifts.select_for_update().filter(end__isnull=True):
@@ -104,7 +105,9 @@ def reopen_test_event(event: TestEvent) -> TestEvent:
     """Only test events re-open; their shifts stay closed, new ones can be added."""
     event = lock(event)
     if event.end is None:
-        raise RuleViolation(f"Test event '{event}' is already open.", code="open")
+        raise RuleViolation(
+            _("Test event '%(name)s' is already open.") % {"name": event}, code="open"
+        )
     event.end = None
     event.save(update_fields=["end"])
     return announce_and_return(event)
@@ -129,8 +132,8 @@ def create_shift(
     # operators starting a shift at once end with one open shift, not two.
     vehicle = lock(vehicle)
     at = instant(at)
-    require_open(event, f"Test event '{event}'")
-    require_not_before(event, at, f"Test event '{event}'")
+    require_open(event, _("Test event '%(name)s'") % {"name": event})
+    require_not_before(event, at, _("Test event '%(name)s'") % {"name": event})
     for open_shift in rules.open_shifts_of_vehicle(vehicle.pk).select_for_update():
         _close_shift(open_shift, max(at, open_shift.start))
     check_fields(fields, SHIFT_FIELDS)
@@ -154,7 +157,12 @@ def update_shift(shift: Shift, **fields) -> Shift:
         vehicle = lock(fields["vehicle"])
         if rules.open_shifts_of_vehicle(vehicle.pk).exclude(pk=shift.pk).exists():
             raise RuleViolation(
-                {"vehicle": [f"Vehicle '{vehicle}' already has an open shift; end it first."]}
+                {
+                    "vehicle": [
+                        _("Vehicle '%(vehicle)s' already has an open shift; end it first.")
+                        % {"vehicle": vehicle}
+                    ]
+                }
             )
     apply_fields(shift, fields, SHIFT_FIELDS)
     shift.save(update_fields=list(fields))

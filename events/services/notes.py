@@ -1,6 +1,7 @@
 from django.core.exceptions import PermissionDenied, ValidationError
 from django.db import transaction
 from django.utils import timezone
+from django.utils.translation import gettext as _
 
 from common import roles
 from events.feed import announce_and_return, announce_row
@@ -13,7 +14,7 @@ from events.models import Note, Personnel, Segment
 def _clean_text(text: str) -> str:
     if not isinstance(text, str) or not text.strip():
         # A bad value, not a state conflict: callers answer 400, not 409.
-        raise ValidationError({"text": ["A note needs some text."]})
+        raise ValidationError({"text": [_("A note needs some text.")]})
     return text
 
 
@@ -31,7 +32,7 @@ def may_change_note(user, note: Note) -> bool:
 
 def _check_may_change(by, note: Note) -> None:
     if by is not None and not may_change_note(by, note):
-        raise PermissionDenied("Only its author and administrators may change or delete a note.")
+        raise PermissionDenied(_("Only its author and administrators may change or delete a note."))
 
 
 @transaction.atomic
@@ -44,7 +45,9 @@ def add_note(
     if by is not None:
         own = _person_of(by)
         if author is not None and author != own and not roles.has_role(by, roles.ADMINISTRATOR):
-            raise PermissionDenied("Only administrators may write a note in someone else's name.")
+            raise PermissionDenied(
+                _("Only administrators may write a note in someone else's name.")
+            )
         author = author or own
     now = timezone.now()
     note = Note(segment=segment, author=author, text=_clean_text(text), created=now, edited=now)

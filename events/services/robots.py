@@ -6,6 +6,7 @@ from django.contrib.auth import get_user_model
 from django.contrib.auth.models import Group
 from django.core.exceptions import ValidationError
 from django.db import transaction
+from django.utils.translation import gettext
 from rest_framework.authtoken.models import Token
 
 from common import roles
@@ -37,7 +38,12 @@ def ensure_robot_account(
         roles.user_role_rank(user) >= 0 or user.is_staff or user.has_usable_password()
     ):
         raise ValidationError(
-            {"username": [f"'{username}' is a person's account; give the robot its own name."]}
+            {
+                "username": [
+                    gettext("'%(name)s' is a person's account; give the robot its own name.")
+                    % {"name": username}
+                ]
+            }
         )
     user.groups.add(Group.objects.get(name=roles.ROBOT))
     account, _ = RobotAccount.objects.get_or_create(user=user)

@@ -13,6 +13,7 @@ from datetime import datetime
 from django.contrib.gis.geos import Point
 from django.db import transaction
 from django.utils import timezone
+from django.utils.translation import gettext as _
 
 from common.errors import RuleViolation
 from common.retries import stored_row
@@ -45,11 +46,14 @@ class GpsPosition:
         errors = {}
         for name, (low, high) in (("longitude", LONGITUDE_RANGE), ("latitude", LATITUDE_RANGE)):
             value = getattr(self, name)
-            label = name.capitalize()
+            label = {"longitude": _("Longitude"), "latitude": _("Latitude")}[name]
             if not (isinstance(value, int | float) and math.isfinite(value)):
-                errors[name] = [f"{label} must be a finite number."]
+                errors[name] = [_("%(name)s must be a finite number.") % {"name": label}]
             elif not low <= value <= high:
-                errors[name] = [f"{label} must be between {low:g} and {high:g} degrees."]
+                errors[name] = [
+                    _("%(name)s must be between %(low)s and %(high)s degrees.")
+                    % {"name": label, "low": f"{low:g}", "high": f"{high:g}"}
+                ]
         if errors:
             raise RuleViolation(errors)
 
@@ -68,7 +72,7 @@ class LocalPosition:
             value = getattr(self, name)
             if not (isinstance(value, int | float) and math.isfinite(value)):
                 raise RuleViolation(
-                    {f"local_{name}": ["Local coordinates must be finite numbers."]}
+                    {f"local_{name}": [_("Local coordinates must be finite numbers.")]}
                 )
 
 
@@ -94,7 +98,9 @@ def _reason(key: str) -> ItoReason:
     try:
         return ItoReason.objects.get(pk=key)
     except ItoReason.DoesNotExist:
-        raise RuleViolation({"ito_reason": [f"Unknown ITO reason '{key}'."]}) from None
+        raise RuleViolation(
+            {"ito_reason": [_("Unknown ITO reason '%(key)s'.") % {"key": key}]}
+        ) from None
 
 
 def _lock_with_leg(segment: Segment) -> Segment:
@@ -175,7 +181,12 @@ def report_mode(
     nothing, so publishers that repeat their state are harmless.
     """
     if mode not in MODES:
-        raise RuleViolation({"mode": [f"Mode must be one of {', '.join(MODES)}, not '{mode}'."]})
+        modes = ", ".join(MODES)
+        message = _("Mode must be one of %(modes)s, not '%(mode)s'.") % {
+            "modes": modes,
+            "mode": mode,
+        }
+        raise RuleViolation({"mode": [message]})
     if existing := stored_row(Segment, uid, leg_id=leg.pk):
         return ModeReport(existing, changed=False)
     leg = lock(leg)
@@ -185,7 +196,9 @@ def report_mode(
     if current is not None and current.segment_type_id == mode:
         return ModeReport(current, changed=False)
     if current is not None:
-        require_not_before(current, at, f"The open {current.segment_type_id.upper()} segment")
+        require_not_before(
+            current, at, _("The open %(mode)s segment") % {"mode": current.segment_type_id.upper()}
+        )
         _close(current, at)
     else:
         require_not_before(leg, at, str(leg))
@@ -222,7 +235,7 @@ def new_manual_segment(
     require_open(leg, str(leg))
     current = _open_master(leg)
     if current is not None and current.segment_type_id == SegmentType.ITO:
-        require_not_before(current, at, "The open ITO segment")
+        require_not_before(current, at, _("The open ITO segment"))
         return announce_and_return(_add_child(current, _reason(reason), at))
     outcome = report_mode(leg, SegmentType.ITO, at=at, gps=gps, local=local, reason=reason)
     return outcome.master.children.get()
@@ -235,11 +248,11 @@ def add_ito_child(
     master = _lock_with_leg(master)
     at = instant(at)
     if master.parent_id is not None:
-        raise RuleViolation("Reasons are added to the ITO master segment, not to a reason.")
+        raise RuleViolation(_("Reasons are added to the ITO master segment, not to a reason."))
     if master.segment_type_id != SegmentType.ITO:
-        raise RuleViolation("An AUTO segment has no take-over reasons.")
-    require_open(master, "This ITO segment")
-    require_not_before(master, at, "This ITO segment")
+        raise RuleViolation(_("An AUTO segment has no take-over reasons."))
+    require_open(master, _("This ITO segment"))
+    require_not_before(master, at, _("This ITO segment"))
     return announce_and_return(_add_child(master, _reason(reason), at))
 
 
@@ -248,7 +261,7 @@ def close_segment(segment: Segment, at: datetime | None = None) -> Segment:
     """Closing a child ends only that reason; closing a master ends its children too."""
     segment = _lock_with_leg(segment)
     at = instant(at)
-    require_open(segment, "This segment")
+    require_open(segment, _("This segment"))
     _close(segment, at)
     return announce_and_return(segment)
 
@@ -272,14 +285,18 @@ def annotate_segment(segment: Segment, **fields) -> Segment:
     """
     segment = lock(segment)
     if segment.parent_id is None:
-        kind = "an AUTO segment" if segment.segment_type_id == SegmentType.AUTO else "a master"
+        if segment.segment_type_id == SegmentType.AUTO:
+            what = _("they cannot be set on an AUTO segment.")
+        else:
+            what = _("they cannot be set on a master.")
         raise RuleViolation(
-            f"Reason, obstacle, lighting and slope describe an ITO take-over reason; "
-            f"they cannot be set on {kind}."
+            _("Reason, obstacle, lighting and slope describe an ITO take-over reason;") + " " + what
         )
     if "ito_reason" in fields and not isinstance(fields["ito_reason"], ItoReason):
         if fields["ito_reason"] is None:
-            raise RuleViolation({"ito_reason": ["An ITO reason cannot be empty; use Unassigned."]})
+            raise RuleViolation(
+                {"ito_reason": [_("An ITO reason cannot be empty; use Unassigned.")]}
+            )
         fields["ito_reason"] = _reason(fields["ito_reason"])
     apply_fields(segment, fields, Segment.ANNOTATION_FIELDS)
     segment.annotated = timezone.now()
@@ -296,7 +313,9 @@ def annotate_open_take_over(leg: Leg, **fields) -> Segment:
     take_over = rules.open_take_overs([leg.pk]).first()
     if take_over is None:
         raise RuleViolation(
-            "No take-over is open in this leg; give an earlier take-over its reason "
-            "in its segment's dialog."
+            _(
+                "No take-over is open in this leg; give an earlier take-over its reason "
+                "in its segment's dialog."
+            )
         )
     return annotate_segment(take_over, **fields)

@@ -116,6 +116,8 @@ def import_test_events(session: ImportSession):
             "location": r["location"],
             "version": r["version"],
             "time_zone": r["time_zone"],
+            # Archives written before reports had a language are English.
+            "language": r.get("language", "en"),
         }
         session.events[r["uid"]] = save_entry(session, "test_events", TestEvent, r, values).pk
 

@@ -11,6 +11,7 @@ import numpy as np
 from django.db import DatabaseError, connections
 from django.shortcuts import get_object_or_404
 from django.utils.decorators import method_decorator
+from django.utils.translation import gettext as _
 from django.views.decorators.gzip import gzip_page
 from drf_spectacular.utils import extend_schema
 from rest_framework import serializers
@@ -80,7 +81,7 @@ class TrackQuery(serializers.Serializer):
     def validate_fit(self, value):
         parts = value.split(",")
         if len(parts) != 2 or not all(p.isdigit() and 0 < int(p) <= 20000 for p in parts):
-            raise serializers.ValidationError("Give the map's size in pixels as width,height.")
+            raise serializers.ValidationError(_("Give the map's size in pixels as width,height."))
         return tuple(int(p) for p in parts)
 
     def validate_bbox(self, value):
@@ -89,20 +90,20 @@ class TrackQuery(serializers.Serializer):
         except ValueError:
             box = ()
         if len(box) != 4 or not all(np.isfinite(box)) or box[0] > box[2] or box[1] > box[3]:
-            raise serializers.ValidationError("Give the area in view as xmin,ymin,xmax,ymax.")
+            raise serializers.ValidationError(_("Give the area in view as xmin,ymin,xmax,ymax."))
         return box
 
     def validate(self, attrs):
         # Only the local map zooms below 0: ``zoom`` is the GPS map's unless map=local.
         for name in () if attrs.get("map") == LOCAL else ("zoom", "bbox_zoom"):
             if attrs.get(name, 0) < 0:
-                message = f"Give a zoom level from 0 to {MAX_ZOOM}."
+                message = _("Give a zoom level from 0 to %(max)s.") % {"max": MAX_ZOOM}
                 raise serializers.ValidationError({name: message})
         detail = ("map", "bbox", "bbox_zoom")
         missing = [name for name in detail if name not in attrs]
         if missing and len(missing) < len(detail):
             raise serializers.ValidationError(
-                {missing[0]: "The area in view needs map, bbox and bbox_zoom together."}
+                {missing[0]: _("The area in view needs map, bbox and bbox_zoom together.")}
             )
         return attrs
 
@@ -375,7 +376,7 @@ class Basemaps(GuiView):
     def get(self, request):
         events = request.query_params.getlist("event")
         if not all(event.isdigit() for event in events):
-            raise ValidationError({"event": ["Give test event ids."]})
+            raise ValidationError({"event": [_("Give test event ids.")]})
         return Response({"layers": layer_list([int(event) for event in events])})
 
 
@@ -386,7 +387,7 @@ class CollectorStatus(GuiView):
         vehicle = request.query_params.get("vehicle")
         leg_id = request.query_params.get("leg")
         if not (vehicle or "").isdigit():
-            raise ValidationError({"vehicle": ["Give the vehicle id."]})
+            raise ValidationError({"vehicle": [_("Give the vehicle id.")]})
         collector = (
             collectors(Vehicle.objects.filter(pk=int(vehicle)).first())
             .order_by("-last_seen")
@@ -431,7 +432,7 @@ class CollectorCommands(GuiView):
         kind = request.data.get("kind")
         arguments = request.data.get("arguments") or {}
         if not isinstance(arguments, dict):
-            raise ValidationError({"arguments": ["Give the arguments as an object."]})
+            raise ValidationError({"arguments": [_("Give the arguments as an object.")]})
         leg_id = request.data.get("leg")
         leg = Leg.objects.filter(pk=leg_id).first() if isinstance(leg_id, int) else None
         command = issue_command(collector, kind, arguments, user=request.user, leg=leg)

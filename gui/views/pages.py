@@ -14,6 +14,7 @@ from django.contrib.staticfiles import finders
 from django.shortcuts import redirect, render
 from django.templatetags.static import static
 from django.urls import reverse
+from django.utils.translation import gettext as _
 
 from common import roles
 from common.api.pagination import Pagination
@@ -27,9 +28,9 @@ from rosbridge_app.selectors.collectors import is_online, logging_into
 def missing_configuration() -> list[str]:
     """What an administrator must add before the first shift can start."""
     checks = (
-        (Performer, "a performer", "admin:events_performer_add"),
-        (Vehicle, "a vehicle", "admin:events_vehicle_add"),
-        (PoseSource, "a pose source", "admin:events_posesource_add"),
+        (Performer, _("a performer"), "admin:events_performer_add"),
+        (Vehicle, _("a vehicle"), "admin:events_vehicle_add"),
+        (PoseSource, _("a pose source"), "admin:events_posesource_add"),
     )
     missing = []
     for model, label, url_name in checks:
@@ -148,7 +149,7 @@ def index(request):
         "can_operate": roles.has_role(user, roles.OPERATOR),
         "is_admin": is_admin,
         "missing": missing_configuration() if is_admin else [],
-        "levels": [("event", "Test event"), ("shift", "Shift"), ("leg", "Leg")],
+        "levels": [("event", _("Test event")), ("shift", _("Shift")), ("leg", _("Leg"))],
         # The catalogue says which reasons get a button (ItoReason.quick, set in admin).
         "quick_reasons": ItoReason.objects.filter(quick=True).order_by("short_description"),
         "modules": module_graph("gui/main.js"),

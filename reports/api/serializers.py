@@ -1,3 +1,7 @@
+from django.conf import settings
+from django.utils.functional import lazy
+from django.utils.translation import gettext, gettext_noop
+from django.utils.translation import gettext_lazy as _
 from rest_framework import serializers
 
 from events.models import Criterion, Leg
@@ -63,6 +67,11 @@ class ReportRequestSerializer(serializers.Serializer):
         return attrs
 
 
+def _filled(text: str, **values):
+    """``text`` translated when shown (the dialog's language), then filled in."""
+    return lazy(lambda: gettext(text) % values, str)()
+
+
 def _lines(label: str) -> serializers.CharField:
     return serializers.CharField(
         label=label,
@@ -78,32 +87,43 @@ class ReportFormSerializer(serializers.Serializer):
     sent is checked by the report service (``generation.REQUESTABLE`` and
     ``ReportOptions.problems``), not here."""
 
-    name = serializers.CharField(label="Report name", required=False, allow_blank=True)
-    version = serializers.CharField(label="Report version", required=False, initial="1.0")
-    recipient = serializers.CharField(label="Recipient", required=False, allow_blank=True)
-    recipient_address = _lines("Recipient address")
-    creator = serializers.CharField(label="Creator", required=False, allow_blank=True)
-    creator_address = _lines("Creator address")
+    name = serializers.CharField(label=_("Report name"), required=False, allow_blank=True)
+    version = serializers.CharField(label=_("Report version"), required=False, initial="1.0")
+    recipient = serializers.CharField(label=_("Recipient"), required=False, allow_blank=True)
+    recipient_address = _lines(_("Recipient address"))
+    creator = serializers.CharField(label=_("Creator"), required=False, allow_blank=True)
+    creator_address = _lines(_("Creator address"))
     # Compact by default: the full level gives every segment a page (62 pages for
     # five minutes of driving in the field), which is seldom what is wanted first.
-    level = serializers.ChoiceField(label="Detail", choices=LEVELS, initial=STANDARD)
+    level = serializers.ChoiceField(label=_("Detail"), choices=LEVELS, initial=STANDARD)
     image_appendix = serializers.ChoiceField(
-        label="Camera images",
-        choices=[("false", "Leave out"), ("true", "Appendix with every image")],
+        label=_("Camera images"),
+        choices=[("false", _("Leave out")), ("true", _("Appendix with every image"))],
         initial="false",
     )
     local = serializers.ChoiceField(
-        label="Positions",
-        choices=[("false", "GPS"), ("true", "Local (map frame)")],
+        label=_("Positions"),
+        choices=[("false", "GPS"), ("true", _("Local (map frame)"))],
         initial="false",
     )
     min_timeline_hours = serializers.FloatField(
-        label="Timeline at least (hours, optional)",
+        label=_("Timeline at least (hours, optional)"),
         required=False,
-        help_text=f"0 to {MAX_TIMELINE_HOURS}; the timelines of several reports then compare.",
+        help_text=_filled(
+            gettext_noop("0 to %(max)s; the timelines of several reports then compare."),
+            max=MAX_TIMELINE_HOURS,
+        ),
     )
     max_zoom = serializers.IntegerField(
-        label=f"Closest map zoom (1–{MAX_ZOOM}, optional)", required=False
+        label=_filled(gettext_noop("Closest map zoom (1–%(max)s, optional)"), max=MAX_ZOOM),
+        required=False,
+    )
+    # Empty: the test event's own language (TestEvent.language).
+    language = serializers.ChoiceField(
+        label=_("Language"),
+        choices=[("", _("The test event's language")), *settings.LANGUAGES],
+        required=False,
+        initial="",
     )
 
 

@@ -7,6 +7,7 @@ import json
 
 from django.http import FileResponse, HttpResponse
 from django.shortcuts import get_object_or_404
+from django.utils.translation import gettext as _
 from drf_spectacular.utils import OpenApiParameter, extend_schema
 from rest_framework import status
 from rest_framework.exceptions import ValidationError
@@ -43,7 +44,8 @@ MODE_PARAM = OpenApiParameter("mode", str, enum=list(MODES), description="gps (d
 def _mode(request) -> str:
     mode = request.query_params.get("mode", "gps")
     if mode not in MODES:
-        raise ValidationError({"mode": [f"mode must be one of {', '.join(MODES)}."]})
+        message = _("mode must be one of %(modes)s.") % {"modes": ", ".join(MODES)}
+        raise ValidationError({"mode": [message]})
     return mode
 
 
@@ -108,7 +110,9 @@ class ComparisonView(APIView):
     def get(self, request):
         ids = request.query_params.getlist("test_event")
         if len(ids) < 2 or not all(i.isdigit() for i in ids):
-            raise ValidationError({"test_event": ["Give at least two test event ids (numbers)."]})
+            raise ValidationError(
+                {"test_event": [_("Give at least two test event ids (numbers).")]}
+            )
         return Response(compare(_events([int(i) for i in ids], "test_event"), _mode(request)))
 
 
@@ -151,7 +155,7 @@ def _events(ids: list[int], field: str) -> list[TestEvent]:
     events = list(TestEvent.objects.filter(pk__in=ids))
     missing = sorted(set(ids) - {e.pk for e in events})
     if missing:
-        raise ValidationError({field: [f"No test event with id {missing[0]}."]})
+        raise ValidationError({field: [_("No test event with id %(id)s.") % {"id": missing[0]}]})
     return events
 
 
@@ -186,7 +190,7 @@ class ReportListView(APIView):
     def get(self, request):
         event_id = request.query_params.get("test_event")
         if event_id is not None and not event_id.isdigit():
-            raise ValidationError({"test_event": ["A test event id is a number."]})
+            raise ValidationError({"test_event": [_("A test event id is a number.")]})
         rows = reports_of(int(event_id) if event_id else None)
         return Response(ReportSerializer(rows, many=True, context={"request": request}).data)
 

@@ -12,6 +12,7 @@ from reports.documents.options import ReportError, ReportOptions
 from reports.documents.sections import Sections
 from reports.documents.typesetting import typeset
 from reports.figures import style
+from reports.formatting import written_in
 from reports.selectors.content import has_segments
 
 Progress = Callable[[float, str], None]
@@ -56,7 +57,10 @@ def render_report(
     started = time.perf_counter()
     check_reportable(event)
     style.apply()
-    with tempfile.TemporaryDirectory(prefix="ftt-report-") as tmp:
+    with (
+        tempfile.TemporaryDirectory(prefix="ftt-report-") as tmp,
+        written_in(options.language or event.language),
+    ):
         sections = Sections(event, options, Path(tmp), progress, time_stage)
         data = sections.document()
         progress(0.95, "typesetting")

@@ -4,6 +4,7 @@ methods page's note on the tiles."""
 from pathlib import Path
 
 from django.conf import settings
+from django.utils.translation import gettext as _
 
 from basemaps.selectors.layers import default_layer
 from reports.documents.options import ReportOptions
@@ -11,8 +12,6 @@ from reports.documents.pictures import Pictures
 from reports.figures.maps import Line, MapPainter
 from reports.figures.tiles import LayerTiles, TileSource
 from telemetry.selectors.tracks import GPS, LOCAL
-
-NO_POSITIONS = "No positions recorded."
 
 
 def tile_source(event, options: ReportOptions, mode: str) -> TileSource | LayerTiles | None:
@@ -55,7 +54,7 @@ class TrackMaps:
                 if len(run.path_x)
             ]
             if not lines:
-                return None, NO_POSITIONS
+                return None, _("No positions recorded.")
             path = str(new_file("map"))
             if self.mode == GPS:
                 result = self.painter.gps_map(lines, path, size=size)
@@ -63,7 +62,7 @@ class TrackMaps:
                 background = self.pictures.background(shift)
                 result = self.painter.local_map(lines, background, path, size=size)
             if result is None:
-                return None, NO_POSITIONS
+                return None, _("No positions recorded.")
             if self.mode == GPS and result.tiles:
                 self.tiles_used = True
             return Path(result.path).name, result.note
@@ -72,19 +71,20 @@ class TrackMaps:
         if self.mode != GPS:
             return ""
         if self.tiles is None:
-            return (
+            return _(
                 "Map tiles were switched off: maps show a plain background with a "
                 "metric grid, scale bar and north arrow."
             )
         if not self.tiles_used:
-            return (
+            return _(
                 "Map tiles were unavailable (tile server unreachable): maps show a plain "
                 "background with a metric grid, scale bar and north arrow."
             )
         if isinstance(self.tiles, LayerTiles):
-            return f"Map: {self.tiles.url}, drawn by FTT from its own basemap file."
-        return (
-            f"Map tiles: {self.tiles.url} ({self.tiles.fetched} fetched, "
-            f"{self.tiles.from_cache} from the local cache). Map data © their owners, "
-            "e.g. OpenStreetMap contributors."
-        )
+            return _("Map: %(url)s, drawn by FTT from its own basemap file.") % {
+                "url": self.tiles.url
+            }
+        return _(
+            "Map tiles: %(url)s (%(fetched)s fetched, %(cached)s from the local cache). "
+            "Map data © their owners, e.g. OpenStreetMap contributors."
+        ) % {"url": self.tiles.url, "fetched": self.tiles.fetched, "cached": self.tiles.from_cache}

@@ -2,6 +2,8 @@
 
 from dataclasses import dataclass, field
 
+from django.conf import settings
+
 from reports.figures.tiles import MAX_ZOOM
 
 MAX_TIMELINE_HOURS = 48
@@ -42,6 +44,8 @@ class ReportOptions:
     # Camera frames appear as thumbnails; with this each links to a full-size
     # copy in an appendix (without it the report stays shorter).
     image_appendix: bool = True
+    # The report's language (settings.LANGUAGES); empty: the test event's.
+    language: str = ""
 
     def problems(self) -> list[str]:
         """What is out of range, in words for the person who asked."""
@@ -52,6 +56,8 @@ class ReportOptions:
             )
         if not 1 <= self.max_zoom <= MAX_ZOOM:
             found.append(f"The maximum map zoom must be between 1 and {MAX_ZOOM}.")
+        if self.language and self.language not in dict(settings.LANGUAGES):
+            found.append(f"The language must be one of {', '.join(dict(settings.LANGUAGES))}.")
         if self.level not in dict(LEVELS):
             found.append(f"The level must be one of {', '.join(dict(LEVELS))}.")
         return found

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from django.conf import settings
 from django.utils import timezone
+from django.utils.translation import gettext as _
 
 from reports import formatting as fmt
 from reports.documents import tables
@@ -15,6 +16,7 @@ from reports.documents.maps import TrackMaps, tile_source
 from reports.documents.options import FULL, STANDARD, ReportOptions
 from reports.documents.pictures import Pictures
 from reports.documents.typesetting import TEMPLATE_DIR
+from reports.documents.wording import report_text, shift_name
 from reports.figures import charts
 from reports.figures.sketch import track_sketch
 from reports.figures.timeline import draw_timeline
@@ -104,6 +106,7 @@ class Sections:
             "level": self.options.level,
             "appendix": self.appendix,
             "methods": self._methods(stats, shifts),
+            "text": report_text(),
         }
 
     def _title(self) -> dict:
@@ -115,9 +118,11 @@ class Sections:
             logo_name = "logo" + logo.suffix.lower()
             shutil.copy(logo, self.root / logo_name)
         else:
-            self.warnings.append(f"Logo {logo} not found; the title page has none.")
+            self.warnings.append(
+                _("Logo %(file)s not found; the title page has none.") % {"file": logo}
+            )
         return {
-            "name": o.name or f"Field test report: {self.event}",
+            "name": o.name or _("Field test report: %(event)s") % {"event": self.event},
             "version": o.version,
             "recipient": o.recipient,
             "recipient_address": list(o.recipient_address),
@@ -132,27 +137,27 @@ class Sections:
         e = self.event
         return tables.label_rows(
             [
-                ("Test event", str(e.pk)),
-                ("Location", e.location or fmt.DASH),
-                ("Software version", e.version or fmt.DASH),
-                ("Start", fmt.timestamp(e.start, self.tz)),
-                ("End", fmt.timestamp(e.end, self.tz) if e.end else "open"),
-                ("Time zone", e.time_zone),
-                ("Positions", "GPS (WGS84)" if self.mode == GPS else "local map frame"),
-                ("Note", e.note or fmt.DASH),
+                (_("Test event"), str(e.pk)),
+                (_("Location"), e.location or fmt.DASH),
+                (_("Software version"), e.version or fmt.DASH),
+                (_("Start"), fmt.timestamp(e.start, self.tz)),
+                (_("End"), fmt.timestamp(e.end, self.tz) if e.end else _("open")),
+                (_("Time zone"), e.time_zone),
+                (_("Positions"), "GPS (WGS84)" if self.mode == GPS else "local map frame"),
+                (_("Note"), e.note or fmt.DASH),
             ]
         )
 
     def _global(self, stats: EventStatistics, shifts) -> dict:
         empty = stats.overall  # same shape, used for shifts without runs
-        labels = [f"Shift {s.number}" for s in shifts]
+        labels = [shift_name(s.number) for s in shifts]
         per_shift = [stats.by_shift.get(s.id, empty) for s in shifts]
         has = [s.id in stats.by_shift for s in shifts]
         distance_rows = []
         reliability_rows = []
         for shift, f, present in zip(shifts, per_shift, has, strict=True):
             head = [
-                f"Shift {shift.number}",
+                shift_name(shift.number),
                 shift.vehicle.short_description,
                 tables.weather_text(self.legs[shift.id]),
             ]
@@ -256,19 +261,19 @@ class Sections:
         ends = [r.end for r in runs] + ([shift.end] if shift.end else [])
         summary_rows = tables.label_rows(
             [
-                ("Shift", str(shift.number)),
-                ("Start", fmt.timestamp(min(starts), tz)),
-                ("End", fmt.timestamp(max(ends), tz) if shift.end else "open"),
-                ("Test director", tables.person_text(shift.test_director)),
-                ("Test administrator", tables.person_text(shift.test_administrator)),
-                ("Robot operator", tables.person_text(shift.robot_operator)),
-                ("Safety officer", tables.person_text(shift.safety_officer)),
-                ("Performer", shift.performer.institution if shift.performer else fmt.DASH),
-                ("Vehicle", shift.vehicle.short_description),
-                ("Test intent", shift.test_intent or fmt.DASH),
-                ("Workspace", shift.workspace or fmt.DASH),
-                ("Weather", tables.weather_text(self.legs[shift.id])),
-                ("Note", shift.note or fmt.DASH),
+                (_("Shift"), str(shift.number)),
+                (_("Start"), fmt.timestamp(min(starts), tz)),
+                (_("End"), fmt.timestamp(max(ends), tz) if shift.end else _("open")),
+                (_("Test director"), tables.person_text(shift.test_director)),
+                (_("Test administrator"), tables.person_text(shift.test_administrator)),
+                (_("Robot operator"), tables.person_text(shift.robot_operator)),
+                (_("Safety officer"), tables.person_text(shift.safety_officer)),
+                (_("Performer"), shift.performer.institution if shift.performer else fmt.DASH),
+                (_("Vehicle"), shift.vehicle.short_description),
+                (_("Test intent"), shift.test_intent or fmt.DASH),
+                (_("Workspace"), shift.workspace or fmt.DASH),
+                (_("Weather"), tables.weather_text(self.legs[shift.id])),
+                (_("Note"), shift.note or fmt.DASH),
             ]
         )
         overview, overview_note = self.maps.draw(runs, shift, self._file, OVERVIEW_SIZE)
@@ -282,15 +287,15 @@ class Sections:
                 segments.append(self._segment(run, legs[run.leg_id], full=level == FULL))
             tick(f"shift {shift.number}, segment {index}")
         return {
-            "title": f"Shift {shift.number}: {fmt.timestamp(min(starts), tz)} – "
-            + (fmt.timestamp(max(ends), tz) if shift.end else "open"),
+            "title": f"{shift_name(shift.number)}: {fmt.timestamp(min(starts), tz)} – "
+            + (fmt.timestamp(max(ends), tz) if shift.end else _("open")),
             "summary": summary_rows,
             "figures": tables.figure_rows(f) if f is not None else [],
             "mode_rows": tables.mode_rows(f) if f is not None else [],
             "map": overview,
             "map_note": overview_note,
             "timeline": timeline,
-            "timeline_note": "" if timeline else "No segments to draw.",
+            "timeline_note": "" if timeline else _("No segments to draw."),
             "segments": segments,
         }
 
@@ -309,22 +314,25 @@ class Sections:
         )
         rows = tables.label_rows(
             [
-                ("Segment", run.label),
-                ("Type", run.kind.upper()),
-                ("Start", fmt.timestamp(run.start, tz)),
-                ("End", fmt.timestamp(run.end, tz) + (" (still open)" if run.is_open else "")),
-                ("Duration", fmt.duration(run.seconds)),
-                ("Distance", fmt.metres(run.distance)),
-                ("Poses", str(run.pose_count)),
-                ("Database id", str(run.id)),
-                ("Reason(s)", reasons or fmt.DASH),
-                ("Obstacle", joined("obstacle")),
-                ("Lighting", joined("lighting")),
-                ("Slope", joined("slope")),
-                ("Weather", leg.weather.short_description if leg.weather else "unknown"),
+                (_("Segment"), run.label),
+                (_("Type"), run.kind.upper()),
+                (_("Start"), fmt.timestamp(run.start, tz)),
+                (
+                    _("End"),
+                    fmt.timestamp(run.end, tz) + ((" " + _("(still open)")) if run.is_open else ""),
+                ),
+                (_("Duration"), fmt.duration(run.seconds)),
+                (_("Distance"), fmt.metres(run.distance)),
+                (_("Poses"), str(run.pose_count)),
+                (_("Database id"), str(run.id)),
+                (_("Reason(s)"), reasons or fmt.DASH),
+                (_("Obstacle"), joined("obstacle")),
+                (_("Lighting"), joined("lighting")),
+                (_("Slope"), joined("slope")),
+                (_("Weather"), leg.weather.short_description if leg.weather else _("unknown")),
             ]
             + [
-                ("Snapshot", f"{summary(r)}, {fmt.clock(r.start, tz)}–{fmt.clock(r.end, tz)}")
+                (_("Snapshot"), f"{summary(r)}, {fmt.clock(r.start, tz)}–{fmt.clock(r.end, tz)}")
                 for r in self.recordings.get(run.id, [])
             ]
         )
@@ -341,12 +349,13 @@ class Sections:
             sketch = track_sketch(run.path_x, run.path_y, self.mode, *SKETCH_SIZE)
         return {
             "anchor": f"segment-{run.id}",
-            "title": f"{run.label} · {run.kind.upper()} at {fmt.clock(run.start, tz)}",
+            "title": _("%(segment)s · %(mode)s at %(time)s")
+            % {"segment": run.label, "mode": run.kind.upper(), "time": fmt.clock(run.start, tz)},
             "open": run.is_open,
             "rows": rows,
             "notes": notes,
             "sketch": sketch,
-            "map_note": "" if sketch or not full else "No positions recorded.",
+            "map_note": "" if sketch or not full else _("No positions recorded."),
             "images": self._images(run),
         }
 
@@ -357,7 +366,7 @@ class Sections:
             picture = self.pictures.camera(image)
             if picture is None:
                 continue
-            caption = image.description or "Camera image"
+            caption = image.description or _("Camera image")
             entry = {"thumb": picture[0], "caption": caption, "anchor": None}
             if self.options.image_appendix:
                 entry["anchor"] = f"image-{len(self.appendix) + 1}"
@@ -376,7 +385,7 @@ class Sections:
         number = {s.id: s.number for s in shifts}
         runs = stats.runs
         without_poses = [
-            f"Shift {number[r.shift_id]}, {r.label} ({r.kind.upper()}) "
+            f"{shift_name(number[r.shift_id])}, {r.label} ({r.kind.upper()}) "
             f"({fmt.timestamp(r.start, self.tz)})"
             for r in runs
             if r.pose_count == 0
@@ -389,13 +398,13 @@ class Sections:
             no_fix += r.track.no_fix
             for a, b in r.track.gaps:
                 gaps.append(
-                    f"Shift {number[r.shift_id]}, {r.label}: "
+                    f"{shift_name(number[r.shift_id])}, {r.label}: "
                     f"{fmt.timestamp(a, self.tz)} – {fmt.clock(b, self.tz)} "
                     f"({fmt.duration((b - a).total_seconds())})"
                 )
         uncertain = [r.start_uncertainty for r in runs if r.start_uncertainty]
         no_start = [
-            f"Shift {number[r.shift_id]}, {r.label}" for r in runs if not r.has_start_position
+            f"{shift_name(number[r.shift_id])}, {r.label}" for r in runs if not r.has_start_position
         ]
         counted = [
             self.reasons[k].short_description for k in stats.counted_reasons if k in self.reasons

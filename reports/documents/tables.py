@@ -1,5 +1,7 @@
 """The report's tables: rows of labels and formatted figures."""
 
+from django.utils.translation import gettext as _
+
 from reports import formatting as fmt
 from reports.selectors.statistics import CONFIDENCE, Figures
 
@@ -28,24 +30,30 @@ def figure_rows(f: Figures) -> list:
     conf = f"{round(CONFIDENCE * 100)} %"
     return label_rows(
         [
-            ("Total distance", fmt.metres(f.total_distance)),
-            ("Autonomous distance", fmt.metres(f.auto_distance)),
-            ("Manual (ITO) distance", fmt.metres(f.manual_distance)),
-            ("Autonomy by distance", fmt.percent(f.autonomy_ratio_distance)),
-            ("Autonomous time", fmt.duration(f.auto_seconds)),
-            ("Manual (ITO) time", fmt.duration(f.manual_seconds)),
-            ("Autonomy by time", fmt.percent(f.autonomy_ratio_time)),
-            ("Autonomous runs", str(f.auto_runs)),
-            ("Mean autonomous run", fmt.metres(f.mean_auto_run)),
-            ("Longest autonomous run", fmt.metres(f.max_auto_run)),
-            ("Longest without intervention", fmt.metres(f.longest_without_intervention)),
-            ("Interventions", str(f.interventions)),
+            (_("Total distance"), fmt.metres(f.total_distance)),
+            (_("Autonomous distance"), fmt.metres(f.auto_distance)),
+            (_("Manual (ITO) distance"), fmt.metres(f.manual_distance)),
+            (_("Autonomy by distance"), fmt.percent(f.autonomy_ratio_distance)),
+            (_("Autonomous time"), fmt.duration(f.auto_seconds)),
+            (_("Manual (ITO) time"), fmt.duration(f.manual_seconds)),
+            (_("Autonomy by time"), fmt.percent(f.autonomy_ratio_time)),
+            (_("Autonomous runs"), str(f.auto_runs)),
+            (_("Mean autonomous run"), fmt.metres(f.mean_auto_run)),
+            (_("Longest autonomous run"), fmt.metres(f.max_auto_run)),
+            (_("Longest without intervention"), fmt.metres(f.longest_without_intervention)),
+            (_("Interventions"), str(f.interventions)),
             ("MDBI", fmt.estimate(f.mdbi, fmt.metres)),
-            (f"MDBI {conf} bounds", fmt.bounds(f.mdbi, fmt.metres)),
+            (
+                _("MDBI %(confidence)s bounds") % {"confidence": conf},
+                fmt.bounds(f.mdbi, fmt.metres),
+            ),
             ("MTBI", fmt.estimate(f.mtbi, fmt.duration)),
-            (f"MTBI {conf} bounds", fmt.bounds(f.mtbi, fmt.duration)),
-            ("Interventions per km", fmt.rate(f.interventions_per_km)),
-            ("Interventions per hour", fmt.rate(f.interventions_per_hour)),
+            (
+                _("MTBI %(confidence)s bounds") % {"confidence": conf},
+                fmt.bounds(f.mtbi, fmt.duration),
+            ),
+            (_("Interventions per km"), fmt.rate(f.interventions_per_km)),
+            (_("Interventions per hour"), fmt.rate(f.interventions_per_hour)),
         ]
     )
 
@@ -81,7 +89,9 @@ def mode_rows(f: Figures) -> list:
         ("AUTO", f.auto_runs, f.auto_seconds, f.auto_distance, fmt.DASH),
         ("ITO", f.ito_runs, f.manual_seconds, f.manual_distance, str(f.interventions)),
     ):
-        kmh = fmt.DASH if seconds <= 0 else f"{distance / seconds * 3.6:.2f} km/h"
+        kmh = (
+            fmt.DASH if seconds <= 0 else fmt.speed(distance * 3.6, seconds).replace("m/s", "km/h")
+        )
         rows.append(
             [
                 label,

@@ -21,6 +21,7 @@ from django.core.exceptions import ValidationError
 from django.core.files.base import ContentFile
 from django.db import transaction
 from django.utils import timezone
+from django.utils.translation import gettext as _
 from django_tasks import task
 
 from common import jobs
@@ -68,7 +69,7 @@ def request_comparison(
     is kept with the first of them and lists all under ``options["compare"]``."""
     options = options or {}
     if not isinstance(options, dict):
-        raise ValidationError({"options": ["Options must be an object."]})
+        raise ValidationError({"options": [_("Options must be an object.")]})
     unknown = sorted(set(options) - {"local"})
     errors = [f"Unknown or not requestable option '{key}' for a comparison." for key in unknown]
     if "local" in options and not isinstance(options["local"], bool):
@@ -76,7 +77,7 @@ def request_comparison(
     if errors:
         raise ValidationError({"options": errors})
     if len({e.pk for e in test_events}) < 2:
-        raise ValidationError({"compare": ["Give at least two different test events."]})
+        raise ValidationError({"compare": [_("Give at least two different test events.")]})
     events = sorted(test_events, key=lambda e: (e.start, e.pk))
     with transaction.atomic():
         check_waiting(user)
@@ -147,26 +148,27 @@ REQUESTABLE = {
     "max_zoom": int,
     "level": str,
     "image_appendix": bool,
+    "language": str,
 }
 
 
 def _checked_options(options: dict) -> ReportOptions:
     if not isinstance(options, dict):
-        raise ValidationError({"options": ["Options must be an object."]})
+        raise ValidationError({"options": [_("Options must be an object.")]})
     errors = []
     for key, value in options.items():
         kind = REQUESTABLE.get(key)
         if kind is None:
-            errors.append(f"Unknown or not requestable option '{key}'.")
+            errors.append(_("Unknown or not requestable option '%(key)s'.") % {"key": key})
         elif not _is_a(value, kind):
             expected = {
-                str: "text",
-                list: "a list of text lines",
-                bool: "true or false",
-                float: "a number",
-                int: "a whole number",
+                str: _("Option '%(key)s' must be text."),
+                list: _("Option '%(key)s' must be a list of text lines."),
+                bool: _("Option '%(key)s' must be true or false."),
+                float: _("Option '%(key)s' must be a number."),
+                int: _("Option '%(key)s' must be a whole number."),
             }[kind]
-            errors.append(f"Option '{key}' must be {expected}.")
+            errors.append(expected % {"key": key})
     if errors:
         raise ValidationError({"options": errors})
     checked = ReportOptions.from_dict(options)

@@ -22,6 +22,8 @@ from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
 
+from django.utils.translation import gettext
+
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.disk_guard import TIGHT
 from rosbridge_app.collector.events import Event
@@ -136,7 +138,9 @@ class Blackbox:
         said, said_at = self._dropped_said
         if self.buffer.dropped > said and time.monotonic() - said_at > 60:
             log.warning(
-                "snapshot buffer full (snapshot.buffer_mb): %d oldest messages dropped so far",
+                gettext(
+                    "snapshot buffer full (snapshot.buffer_mb): %d oldest messages dropped so far"
+                ),
                 self.buffer.dropped,
             )
             self._dropped_said = (self.buffer.dropped, time.monotonic())
@@ -164,7 +168,7 @@ class Blackbox:
         try:
             self._write_file(snap, types)
         except WriterDied as exc:
-            log.error("snapshot %s lost: %s", snap.uid, exc)
+            log.error(gettext("snapshot %s lost: %s"), snap.uid, exc)
         except Exception:
             log.exception("could not write the snapshot %s", snap.uid)
 
@@ -182,7 +186,7 @@ class Blackbox:
             return
         if not self._make_room(snap.size):
             log.warning(
-                "snapshot %s dropped: %.1f MB is more than the disk budget",
+                gettext("snapshot %s dropped: %.1f MB is more than the disk budget"),
                 snap.uid,
                 snap.size / MB,
             )
@@ -201,7 +205,9 @@ class Blackbox:
             "topics": topics,
         }
         self.sink(Event(ev.RECORDING, _at(snap.end), data, uid=snap.uid))
-        log.info("snapshot %s: %d messages on %d topics", path.name, len(messages), len(topics))
+        log.info(
+            gettext("snapshot %s: %d messages on %d topics"), path.name, len(messages), len(topics)
+        )
 
     def _make_room(self, size: int) -> bool:
         """Drop the oldest pending files until ``size`` more bytes fit the budget."""
@@ -214,7 +220,9 @@ class Blackbox:
                 oldest = files.pop(0)
                 used -= oldest.stat().st_size
                 oldest.unlink(missing_ok=True)
-                log.warning("disk budget for snapshots full: dropped the pending %s", oldest.name)
+                log.warning(
+                    gettext("disk budget for snapshots full: dropped the pending %s"), oldest.name
+                )
         return True
 
 

@@ -8,12 +8,14 @@ if that does not help within another timeout, the collector renews itself.
 
 import logging
 
+from django.utils.translation import gettext, gettext_noop
+
 log = logging.getLogger("ftt.collector")
 
 # Inputs a robot publishes all the time while it runs; the mode and maps may
 # come only on a change, so their silence says nothing about the collector.
 STREAMS = ("gps_fix", "tf", "local_pose", "image", "image_compressed")
-DEAF = "robot publishes, collector hears nothing"
+DEAF = gettext_noop("robot publishes, collector hears nothing")
 
 RESUBSCRIBE = "resubscribe"
 RENEW = "renew"
@@ -35,7 +37,7 @@ class Hearing:
         count, since = self._heard
         if received != count or not timeout or not logging_on:
             if self.text and received != count:
-                log.warning("the collector hears its topics again")
+                log.warning(gettext("the collector hears its topics again"))
             self._heard = (received, t)
             self.text, self._steps = "", 0
             return None
@@ -49,10 +51,20 @@ class Hearing:
         self._steps += 1
         names = ", ".join(topics)
         if self._steps == 1:
-            self.text = f"{DEAF} ({names}) for {timeout:g} s: subscriptions re-created"
+            self.text = gettext(
+                "%(deaf)s (%(topics)s) for %(seconds)s s: subscriptions re-created"
+            ) % {
+                "deaf": gettext(DEAF),
+                "topics": names,
+                "seconds": f"{timeout:g}",
+            }
             log.warning("%s", self.text)
             return RESUBSCRIBE
-        self.text = f"{DEAF} ({names}) for {timeout * 2:g} s: the collector restarts"
+        self.text = gettext("%(deaf)s (%(topics)s) for %(seconds)s s: the collector restarts") % {
+            "deaf": gettext(DEAF),
+            "topics": names,
+            "seconds": f"{timeout * 2:g}",
+        }
         log.warning("%s", self.text)
         self._steps = 0  # if it stays, re-created subscriptions come first again
         return RENEW

@@ -15,6 +15,7 @@ import time
 from datetime import UTC, datetime
 from pathlib import Path
 
+from django.utils.translation import gettext
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
@@ -113,7 +114,7 @@ class CollectorNode(Node):
             try:
                 P.check(name, value)
             except P.InvalidParameter as exc:
-                log.warning("%s; using the default %r", exc, spec.default)
+                log.warning(gettext("%s; using the default %r"), exc, spec.default)
                 self.set_parameters([Parameter(name, value=spec.default)])
         self.blackbox = Blackbox(sink, self.current_parameters())
         self.disk = None  # the runtime's DiskGuard, once it knows where the spool is
@@ -170,7 +171,7 @@ class CollectorNode(Node):
                 for n in changed
             ):
                 self._subscribe()
-            log.info("parameters changed: %s", changed)
+            log.info(gettext("parameters changed: %s"), changed)
         except Exception:
             log.exception("applying parameter changes failed")
 
@@ -297,7 +298,9 @@ class CollectorNode(Node):
                     raw=True,
                 )
             except Exception as exc:
-                log.error("cannot subscribe to %s (%s) for snapshots: %s", topic, typename, exc)
+                log.error(
+                    gettext("cannot subscribe to %s (%s) for snapshots: %s"), topic, typename, exc
+                )
                 continue
             self.blackbox.types[topic] = typename
             if latched:
@@ -316,7 +319,7 @@ class CollectorNode(Node):
                 last = self._errors.get(name, 0.0)
                 if time.monotonic() - last > 10:
                     self._errors[name] = time.monotonic()
-                    log.warning("%s: ignored a message that failed: %r", name, exc)
+                    log.warning(gettext("%s: ignored a message that failed: %r"), name, exc)
 
         return wrapper
 
@@ -404,7 +407,7 @@ class CollectorNode(Node):
                         event_callbacks=SubscriptionEventCallbacks(incompatible_qos=_ignore),
                     )
             except Exception as exc:
-                log.error("cannot subscribe to %s (%s): %s", topic, name, exc)
+                log.error(gettext("cannot subscribe to %s (%s): %s"), topic, name, exc)
                 continue
             old = self.inputs.get(name, {})
             resolved = self.resolve_topic_name(topic)

@@ -26,6 +26,8 @@ from collections import deque
 from collections.abc import Callable
 from datetime import datetime
 
+from django.utils.translation import gettext
+
 from rosbridge_app.collector import conversions as conv
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.events import Event
@@ -315,7 +317,7 @@ class Pipeline:
         self.grid_quick = (quick, _seconds(at))
         if not conv.grid_is_usable(msg):
             log.warning(
-                "ignored an empty or inconsistent map (%dx%d, %d cells)",
+                gettext("ignored an empty or inconsistent map (%dx%d, %d cells)"),
                 msg.info.width,
                 msg.info.height,
                 len(msg.data),
@@ -335,7 +337,7 @@ class Pipeline:
         try:
             data, _ = conv.compressed_image(msg)
         except conv.UnsupportedImage as exc:
-            log.warning("ignored map image: %s", exc)
+            log.warning(gettext("ignored map image: %s"), exc)
             return
         if data == self.map_jpeg:
             return

@@ -10,6 +10,7 @@ import logging
 import time
 from pathlib import Path
 
+from django.utils.translation import gettext
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
@@ -71,7 +72,9 @@ class BagPlayer(Node):
                 self.publishers_[m.topic].publish(to_rclpy(m.msg, self.types[m.topic]))
                 count += 1
             except Exception as exc:
-                log.warning("could not publish a %s message on %s: %s", m.msgtype, m.topic, exc)
+                log.warning(
+                    gettext("could not publish a %s message on %s: %s"), m.msgtype, m.topic, exc
+                )
         return count
 
 

@@ -21,6 +21,7 @@ from pathlib import Path
 
 from django.db import InterfaceError, OperationalError, transaction
 from django.utils import timezone
+from django.utils.translation import gettext
 
 from common.errors import RuleViolation
 from events.models import Leg, Segment
@@ -97,7 +98,9 @@ class Recorder:
             if _unavailable(exc):
                 raise DatabaseUnavailable(str(exc)) from exc
             log.warning(
-                "a batch of %d events failed (%s); storing them one by one", len(events), exc
+                gettext("a batch of %d events failed (%s); storing them one by one"),
+                len(events),
+                exc,
             )
             if self._left_open is not None:
                 self._left_open = []
@@ -157,7 +160,7 @@ class Recorder:
                 if _unavailable(exc):
                     raise DatabaseUnavailable(str(exc)) from exc
                 self.skipped += 1
-                log.warning("dropped a %s event: %s", event.kind, exc)
+                log.warning(gettext("dropped a %s event: %s"), event.kind, exc)
                 if event.kind in SEGMENT_CHANGES:
                     self._note_left_open()
                 if event.kind == ev.MODE:
@@ -189,7 +192,7 @@ class Recorder:
         self.state["leg_id"] = leg_id
         if leg is None:
             return
-        log.info("logging into %s of %s", leg, leg.shift)
+        log.info(gettext("logging into %s of %s"), leg, leg.shift)
         mode = self.state["mode"]
         if self.state["logging"] and mode is not None:
             report_mode(leg, mode["mode"], at=timezone.now())
@@ -251,7 +254,7 @@ class Recorder:
             if data.get("local"):
                 local = LocalPosition(*data["local"])
         except RuleViolation as exc:
-            log.warning("mode switch recorded without its bad start position: %s", exc)
+            log.warning(gettext("mode switch recorded without its bad start position: %s"), exc)
         at = event.at
         current = self._master()
         if current is not None and at < current.start:
@@ -376,7 +379,7 @@ class Recorder:
             # No segment to hang it on, or the file was dropped for the disk budget.
             self.skipped += 1
             why = "its file is gone" if master else "no segment"
-            log.warning("snapshot %s not stored: %s", path.name, why)
+            log.warning(gettext("snapshot %s not stored: %s"), path.name, why)
             return
         attach_recording(
             master,
@@ -399,6 +402,6 @@ def record_events(leg: Leg, events: list[Event]) -> Recorder:
         try:
             batch.append(event.prepare())
         except Exception as exc:
-            log.warning("dropped a %s event: %s", event.kind, exc)
+            log.warning(gettext("dropped a %s event: %s"), event.kind, exc)
     recorder.apply(batch)
     return recorder

@@ -37,6 +37,8 @@ import json
 import logging
 import time
 
+from django.utils.translation import gettext
+
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.held import Held
 from rosbridge_app.collector.outbox import Outbox
@@ -150,7 +152,7 @@ class ReplayOrder:
         total = sum(kinds.values())
         # benchmarks/collector_endurance.py reads this line.
         log.info(
-            "backlog of %d spooled records stored in %.2f s: %.0f records/s (%s)",
+            gettext("backlog of %d spooled records stored in %.2f s: %.0f records/s (%s)"),
             total,
             took,
             total / took,

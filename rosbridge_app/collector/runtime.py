@@ -37,6 +37,7 @@ from pathlib import Path
 import rclpy
 from django.db import InterfaceError, OperationalError, close_old_connections, connections
 from django.utils import timezone
+from django.utils.translation import gettext
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.parameter import Parameter
 
@@ -153,7 +154,7 @@ class CollectorRuntime:
         finally:
             rclpy.try_shutdown()
         if self.renew.is_set():
-            log.warning("renewing the collector: starting again in place")
+            log.warning(gettext("renewing the collector: starting again in place"))
             os.environ[RENEWED_ENV] = str(time.time())
             os.execv(sys.executable, sys.orig_argv)
         return code
@@ -162,7 +163,7 @@ class CollectorRuntime:
         """The node's hearing watchdog gave up on re-created subscriptions."""
         renewed = float(os.environ.get(RENEWED_ENV) or 0.0)
         if time.time() - renewed < RENEW_AT_MOST_EVERY_S:
-            log.warning("renewed %.0f s ago already: not again yet", time.time() - renewed)
+            log.warning(gettext("renewed %.0f s ago already: not again yet"), time.time() - renewed)
             return
         self.renew.set()
 
@@ -214,7 +215,7 @@ class CollectorRuntime:
         self.order = ReplayOrder(self.outbox, WRITE_BATCH, held=self.spooler.held)
         pending = len(self.outbox)
         log.info(
-            "collector %s for vehicle '%s'; spool %s (%d records pending)",
+            gettext("collector %s for vehicle '%s'; spool %s (%d records pending)"),
             self.name,
             self.vehicle_key,
             self.outbox.path,
@@ -257,7 +258,7 @@ class CollectorRuntime:
         # another vehicle with `ros2 param set` or from the GUI.
         key = self.node.get_parameter("vehicle").value
         if key != self.vehicle_key:
-            log.info("vehicle changed from '%s' to '%s'", self.vehicle_key, key)
+            log.info(gettext("vehicle changed from '%s' to '%s'"), self.vehicle_key, key)
             self.vehicle_key = key
         return Vehicle.objects.filter(key=key).first() if key else None
 
@@ -328,8 +329,10 @@ class CollectorRuntime:
         self._said_no_leg = key
         if leg is None:
             log.warning(
-                "no open leg for vehicle '%s': nothing is stored until one is opened "
-                "(still running)",
+                gettext(
+                    "no open leg for vehicle '%s': nothing is stored until one is opened "
+                    "(still running)"
+                ),
                 self.vehicle_key,
             )
 
@@ -339,7 +342,9 @@ class CollectorRuntime:
         if self._db_down_since is None:
             self._db_down_since = timezone.now()
             log.warning(
-                "database unreachable (%s); spooling to %s", str(exc).strip(), self.outbox.path
+                gettext("database unreachable (%s); spooling to %s"),
+                str(exc).strip(),
+                self.outbox.path,
             )
         for conn in connections.all():
             try:
@@ -350,7 +355,7 @@ class CollectorRuntime:
     def _database_up(self) -> None:
         if self._db_down_since is not None:
             log.warning(
-                "database back after %.0f s; replaying %d spooled records",
+                gettext("database back after %.0f s; replaying %d spooled records"),
                 (timezone.now() - self._db_down_since).total_seconds(),
                 len(self.outbox),
             )
@@ -420,7 +425,7 @@ class CollectorRuntime:
     # --- exit ---------------------------------------------------------------------------
 
     def _shutdown(self) -> None:
-        log.info("stopping: spooling what is still in memory")
+        log.info(gettext("stopping: spooling what is still in memory"))
         self.executor.shutdown(timeout_sec=2)
         # Windows still open are written with what they have, unless the disk is
         # full or the writer is stuck: neither holds the exit.
@@ -436,22 +441,24 @@ class CollectorRuntime:
                 self._heartbeat()  # the final counts
                 link.mark_stopped(self.collector)
         except Exception as exc:
-            log.warning("database not reachable at exit (%s)", exc)
+            log.warning(gettext("database not reachable at exit (%s)"), exc)
         held = list(self.spooler.held.events)
         if held:
             try:
                 self.outbox.append(held)
             except SpoolFull:
                 log.error(
-                    "%d records held in memory are lost: the robot disk is full and the "
-                    "database unreachable",
+                    gettext(
+                        "%d records held in memory are lost: the robot disk is full and the "
+                        "database unreachable"
+                    ),
                     len(held),
                 )
         left = len(self.outbox)
         if left:
-            log.warning("%d records stay in %s for the next start", left, self.outbox.path)
+            log.warning(gettext("%d records stay in %s for the next start"), left, self.outbox.path)
         else:
-            log.info("everything written")
+            log.info(gettext("everything written"))
         self.outbox.close()
         try:
             self.node.destroy_node()

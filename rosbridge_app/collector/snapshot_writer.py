@@ -18,6 +18,8 @@ import traceback
 from multiprocessing import reduction
 from pathlib import Path
 
+from django.utils.translation import gettext
+
 from rosbridge_app.collector.mcap_files import McapFile, MessageDefinitions, part_path
 
 log = logging.getLogger("ftt.collector")
@@ -194,12 +196,15 @@ class WriterProcess:
         with self._lock:
             old = self._child
             if old is not None and not old.process.is_alive():
-                log.error("the snapshot writer process (pid %d) died; starting a new one", old.pid)
+                log.error(
+                    gettext("the snapshot writer process (pid %d) died; starting a new one"),
+                    old.pid,
+                )
                 old.close(wait=0)
                 self._child = None
             if self._child is None:
                 self._child = _Child()
-                log.info("snapshot writer process started (pid %d)", self._child.pid)
+                log.info(gettext("snapshot writer process started (pid %d)"), self._child.pid)
                 # multiprocessing joins its children at exit: a writer whose pipe
                 # is still open would keep the collector from ever exiting.
                 atexit.unregister(self.close)
@@ -222,7 +227,7 @@ class WriterProcess:
                     raise WriterDied(stopped) from None
                 what = f"was stuck ({child.stuck}) and was killed" if child.stuck else "died"
                 log.error(
-                    "the snapshot writer process (pid %s) %s before it finished %s; %s",
+                    gettext("the snapshot writer process (pid %s) %s before it finished %s; %s"),
                     child.pid,
                     what,
                     path.name,

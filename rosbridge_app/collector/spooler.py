@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 from django.conf import settings
+from django.utils.translation import gettext
 
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.disk_guard import FULL, TIGHT, DiskGuard
@@ -69,7 +70,9 @@ class Spooler(threading.Thread):
                     batch.append(event.prepare())
                 except Exception as exc:
                     self.dropped += 1
-                    log.warning("dropped a %s that cannot be converted: %s", event.kind, exc)
+                    log.warning(
+                        gettext("dropped a %s that cannot be converted: %s"), event.kind, exc
+                    )
             if event.kind in _URGENT:
                 deadline = 0.0  # take only what is already queued
         if batch or len(self.held):

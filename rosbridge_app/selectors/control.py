@@ -7,6 +7,8 @@ were closed elsewhere in the meantime.  A snapshot on request needs an online,
 logging collector with snapshots on: it is stored on the open segment.
 """
 
+from django.utils.translation import gettext as _
+
 from common.errors import RuleViolation
 from events.models import Leg
 from rosbridge_app.collector.params import SPECS, InvalidParameter, check, expected_types
@@ -17,35 +19,40 @@ from rosbridge_app.selectors.collectors import is_online
 def logging_control(collector: Collector | None, leg: Leg | None) -> tuple[bool, str]:
     """(may the button be pressed, why not / what it does) for the selected leg."""
     if collector is None:
-        return False, "No collector has reported for this vehicle."
+        return False, _("No collector has reported for this vehicle.")
     if collector.logging:
-        return True, "Stopping ends the open segment."
+        return True, _("Stopping ends the open segment.")
     if not is_online(collector):
-        return False, "The collector is offline."
+        return False, _("The collector is offline.")
     if leg is None:
-        return False, "Select a test event, shift and leg."
+        return False, _("Select a test event, shift and leg.")
     shift = leg.shift
     if not (leg.is_open and shift.is_open and shift.test_event.is_open):
-        return False, "Logging needs an open test event, shift and leg."
+        return False, _("Logging needs an open test event, shift and leg.")
     if shift.vehicle_id != collector.vehicle_id:
-        return False, "This collector belongs to another vehicle."
+        return False, _("This collector belongs to another vehicle.")
     return True, ""
 
 
 def snapshot_control(collector: Collector | None) -> tuple[bool, str]:
     """(may "Snapshot now" be pressed, why not / what it does)."""
     if collector is None:
-        return False, "No collector has reported for this vehicle."
+        return False, _("No collector has reported for this vehicle.")
     if not is_online(collector):
-        return False, "The collector is offline."
+        return False, _("The collector is offline.")
     values = collector.parameters or {}
     if not values.get("snapshot.enabled"):
-        return False, "Snapshots are off on this robot (snapshot.enabled)."
+        return False, _("Snapshots are off on this robot (snapshot.enabled).")
     if not collector.logging:
-        return False, "A snapshot is stored on the open segment: start logging first."
+        return False, _("A snapshot is stored on the open segment: start logging first.")
     before = values.get("snapshot.before", SPECS["snapshot.before"].default)
     after = values.get("snapshot.after", SPECS["snapshot.after"].default)
-    return True, f"Saves the robot's messages from {before:g} s before to {after:g} s after now."
+    return True, _(
+        "Saves the robot's messages from %(before)s s before to %(after)s s after now."
+    ) % {
+        "before": f"{before:g}",
+        "after": f"{after:g}",
+    }
 
 
 def parameter_rows(collector: Collector) -> list[dict]:

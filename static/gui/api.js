@@ -2,8 +2,9 @@
  * through the server, which applies the rules; errors become ApiError with
  * plain words and the server's field messages. */
 import { CONFIG } from "./dom.js";
+import { _ } from "./i18n.js";
 
-const NETWORK_MESSAGE = "The server cannot be reached. Check the network connection and try again.";
+const NETWORK_MESSAGE = _("The server cannot be reached. Check the network connection and try again.");
 
 export class ApiError extends Error {
   constructor(message, status, errors) {
@@ -16,7 +17,7 @@ export class ApiError extends Error {
 export function plainMessage(error) {
   if (error instanceof ApiError) return error.message;
   if (error instanceof TypeError) return NETWORK_MESSAGE;
-  return "Something went wrong: " + (error && error.message ? error.message : String(error));
+  return _("Something went wrong: %(error)s", { error: error && error.message ? error.message : String(error) });
 }
 
 function csrfToken() {
@@ -25,11 +26,11 @@ function csrfToken() {
 }
 
 const STATUS_WORDS = {
-  401: "You are signed out. Reload the page and sign in again.",
-  403: "Your account may not do this. Ask an administrator for the operator role.",
-  404: "This entry no longer exists; somebody may have deleted it.",
-  413: "The file is too large for the server.",
-  500: "The server failed to do this. Please try again; if it keeps failing, tell the administrator.",
+  401: _("You are signed out. Reload the page and sign in again."),
+  403: _("Your account may not do this. Ask an administrator for the operator role."),
+  404: _("This entry no longer exists; somebody may have deleted it."),
+  413: _("The file is too large for the server."),
+  500: _("The server failed to do this. Please try again; if it keeps failing, tell the administrator."),
   502: NETWORK_MESSAGE,
   503: NETWORK_MESSAGE,
 };
@@ -66,7 +67,7 @@ export async function api(method, path, body, { root = CONFIG.apiRoot, signal } 
   if (type.includes("json")) data = await response.json().catch(() => null);
   if (!response.ok) {
     let message = data && data.detail ? describeErrors(data) : STATUS_WORDS[response.status];
-    if (!message) message = `The server refused this (error ${response.status}).`;
+    if (!message) message = _("The server refused this (error %(status)s).", { status: response.status });
     throw new ApiError(message, response.status, data && data.errors);
   }
   return data;

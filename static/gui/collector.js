@@ -4,6 +4,8 @@ import { CONFIG, $ } from "./dom.js";
 import { ApiError, api, plainMessage } from "./api.js";
 import { clearError, notice, showError } from "./feedback.js";
 import { current, state, vehicleName } from "./state.js";
+import { _ } from "./i18n.js";
+import { fmtNumber } from "./format.js";
 
 export const Collector = {
   status: null,
@@ -14,19 +16,19 @@ export const Collector = {
     $("#collector").hidden = !shift;
     if (!shift) {
       this.vehicle = null;
-      box.textContent = "Select a shift to see its robot.";
+      box.textContent = _("Select a shift to see its robot.");
       button.disabled = true;
       return;
     }
     if (this.vehicle !== shift.vehicle) {
       this.vehicle = shift.vehicle;
-      box.textContent = "Asking for the robot's status…";
+      box.textContent = _("Asking for the robot's status…");
     }
     try {
       this.status = await api("GET", `collectors/?vehicle=${shift.vehicle}&leg=${state.selected.leg || ""}`, undefined, { root: CONFIG.guiApiRoot });
     } catch (err) {
       this.status = null;
-      box.textContent = err.status === 404 ? "Collector status is not available on this server." : plainMessage(err);
+      box.textContent = err.status === 404 ? _("Collector status is not available on this server.") : plainMessage(err);
       button.disabled = true;
       $("#snapshot-now").disabled = true;
       return;
@@ -38,52 +40,51 @@ export const Collector = {
     const button = $("#logging-toggle");
     const inputs = $("#collector-inputs");
     if (!s || !s.collector) {
-      $("#collector-status").textContent = `No collector has reported for ${vehicleName(current("shift").vehicle)}.`;
+      $("#collector-status").textContent = _("No collector has reported for %(vehicle)s.", { vehicle: vehicleName(current("shift").vehicle) });
       inputs.replaceChildren();
       button.disabled = true;
-      button.textContent = "Start logging";
+      button.textContent = _("Start logging");
       $("#logging-why").textContent = "";
       $("#snapshot-now").disabled = true;
       $("#snapshot-why").textContent = "";
       return;
     }
     const c = s.collector;
-    const into = c.leg === state.selected.leg ? "this leg" : c.leg ? "another leg" : "no leg";
-    const doing = c.logging ? `logging into ${into}` : "not logging";
-    const queue = c.pending ? ` · ${c.pending} records not yet stored` : "";
+    const doing = !c.logging ? _("not logging") : c.leg === state.selected.leg ? _("logging into this leg") : c.leg ? _("logging into another leg") : _("logging into no leg");
+    const queue = c.pending ? ` · ${_("%(count)s records not yet stored", { count: fmtNumber(c.pending) })}` : "";
     // Set by the collector's watchdog, e.g. "robot publishes, collector hears nothing (…)".
     const hearing = c.online && c.hearing ? ` · ${c.hearing}` : "";
     // Set by the collector's disk guard, e.g. "robot disk full: positions thinned since 14:03, …";
     // shown offline too, as the robot's last word (like the records not yet stored).
     const disk = c.disk ? ` · ${c.disk}` : "";
-    $("#collector-status").textContent = `${vehicleName(current("shift").vehicle)} (collector ${c.name}): ${c.online ? "online" : "offline"}, ${doing}${queue}${hearing}${disk}`;
+    $("#collector-status").textContent = _("%(vehicle)s (collector %(name)s): %(online)s, %(doing)s", { vehicle: vehicleName(current("shift").vehicle), name: c.name, online: c.online ? _("online") : _("offline"), doing }) + queue + hearing + disk;
     inputs.replaceChildren(...Object.entries(c.inputs || {}).map(([name, info]) => {
       const li = document.createElement("li");
-      const age = info && typeof info.age === "number" ? `${info.age.toFixed(1)} s ago` : "no data yet";
+      const age = info && typeof info.age === "number" ? _("%(age)s s ago", { age: fmtNumber(info.age, 1) }) : _("no data yet");
       // Estimated by the collector from gaps in the robot's stamps (losses.py).
-      const missed = info && info.missed ? ` · about ${info.missed} missed` : "";
+      const missed = info && info.missed ? " · " + _("about %(count)s missed", { count: info.missed }) : "";
       li.textContent = `${name}: ${age}${missed}`;
       return li;
     }));
-    button.textContent = c.logging ? "Stop logging" : "Start logging";
+    button.textContent = c.logging ? _("Stop logging") : _("Start logging");
     button.disabled = !CONFIG.canOperate || !s.can_toggle;
     $("#logging-why").textContent = s.reason || "";
     $("#snapshot-now").disabled = !CONFIG.canOperate || !s.can_snapshot;
-    $("#snapshot-why").textContent = `Snapshot: ${s.snapshot_reason}`;
+    $("#snapshot-why").textContent = _("Snapshot: %(why)s", { why: s.snapshot_reason });
     $("#open-parameters").hidden = !CONFIG.canOperate || !c.online;
   },
   /* The robot's answer to a command, from the change feed. */
   commandAnswered(e) {
     const c = this.status && this.status.collector;
     if (c && e.collector === c.id) {
-      if (e.payload.success === false) showError(new ApiError(`The robot refused: ${e.payload.message}`));
-      else if (e.payload.message) notice(`Robot: ${e.payload.message}`);
+      if (e.payload.success === false) showError(new ApiError(_("The robot refused: %(message)s", { message: e.payload.message })));
+      else if (e.payload.message) notice(_("Robot: %(message)s", { message: e.payload.message }));
     }
     this.refresh();
   },
   async command(kind, args = {}) {
     const c = this.status && this.status.collector;
-    if (!c) throw new ApiError("No collector is connected for this vehicle.");
+    if (!c) throw new ApiError(_("No collector is connected for this vehicle."));
     const result = await api("POST", `collectors/${c.id}/commands/`, { kind, arguments: args, leg: state.selected.leg }, { root: CONFIG.guiApiRoot });
     await this.refresh();
     return result;
@@ -104,7 +105,7 @@ $("#logging-toggle").addEventListener("click", async () => {
 // it may come before the request's own reply does.
 $("#snapshot-now").addEventListener("click", async () => {
   clearError();
-  notice("Asking the robot for a snapshot…");
+  notice(_("Asking the robot for a snapshot…"));
   try {
     await Collector.command("snapshot");
   } catch (err) {

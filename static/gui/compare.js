@@ -6,6 +6,7 @@
 
 import { CONFIG, $ } from "./dom.js";
 import { api, list, plainMessage } from "./api.js";
+import { LANGUAGE, _, plural } from "./i18n.js";
 
 const POLL_MS = 1000;
 
@@ -54,7 +55,7 @@ function updateButtons() {
   const enough = state.chosen.size >= 2;
   $("#compare-run").disabled = !enough;
   $("#compare-pdf").disabled = !enough || !CONFIG.canOperate;
-  $("#compare-pdf").title = CONFIG.canOperate ? "" : "Making a PDF needs the operator role.";
+  $("#compare-pdf").title = CONFIG.canOperate ? "" : _("Making a PDF needs the operator role.");
 }
 
 function showEvents() {
@@ -67,25 +68,27 @@ function showEvents() {
       writeAddress();
       updateButtons();
     });
-    const when = (e.start || "").slice(0, 10);
-    const text = `#${e.id} ${e.location || "no location"} · ${when}${e.version ? ` · ${e.version}` : ""}`;
+    const when = e.start ? new Date(e.start).toLocaleDateString(LANGUAGE) : "";
+    const text = `#${e.id} ${e.location || _("no location")} · ${when}${e.version ? ` · ${e.version}` : ""}`;
     return element("label", {}, [box, element("span", { textContent: text })]);
   });
   list.replaceChildren(...rows);
-  if (!rows.length) list.append(element("p", { className: "muted", textContent: "No test events yet." }));
+  if (!rows.length) list.append(element("p", { className: "muted", textContent: _("No test events yet.") }));
   updateButtons();
 }
 
 const FIGURE_ROWS = [
-  ["Interventions", "interventions"],
-  ["Autonomous distance", "auto_distance"],
-  ["Autonomous time", "auto_time"],
+  [_("Interventions"), "interventions"],
+  [_("Autonomous distance"), "auto_distance"],
+  [_("Autonomous time"), "auto_time"],
   ["MDBI", "mdbi"],
-  ["MDBI 90 % bounds", "mdbi_bounds"],
+  // xgettext:no-javascript-format
+  [_("MDBI 90 % bounds"), "mdbi_bounds"],
   ["MTBI", "mtbi"],
-  ["MTBI 90 % bounds", "mtbi_bounds"],
-  ["Interventions per km", "per_km"],
-  ["Interventions per hour", "per_hour"],
+  // xgettext:no-javascript-format
+  [_("MTBI 90 % bounds"), "mtbi_bounds"],
+  [_("Interventions per km"), "per_km"],
+  [_("Interventions per hour"), "per_hour"],
 ];
 
 function figureCards(target, groups, title) {
@@ -109,8 +112,8 @@ function showComparison(data) {
   figureCards("#by-version", data.versions, (v) => v.version);
   figureCards("#by-vehicle", data.vehicles, (v) => v.name);
   const fit = data.growth.fit_rows;
-  $("#growth-fit").replaceChildren(...(fit.length ? pairs(fit).childNodes : [element("dd", { textContent: "Fewer than two interventions: no growth fit." })]));
-  $("#hotspot-note").textContent = `Take-overs at most ${data.hotspot_radius} m apart form one hotspot; numbers as on the PDF's map.`;
+  $("#growth-fit").replaceChildren(...(fit.length ? pairs(fit).childNodes : [element("dd", { textContent: _("Fewer than two interventions: no growth fit.") })]));
+  $("#hotspot-note").textContent = _("Take-overs at most %(radius)s m apart form one hotspot; numbers as on the PDF's map.", { radius: data.hotspot_radius });
   const reasonName = (key) => (data.reasons[key] ? data.reasons[key].name : key);
   const spots = data.hotspots.map((spot) => {
     const reasons = Object.entries(spot.reasons).map(([key, n]) => {
@@ -118,26 +121,26 @@ function showComparison(data) {
       return element("span", {}, [element("span", { className: "swatch", style: `background:${colour}` }), `${reasonName(key)} (${n}) `]);
     });
     return element("li", {}, [
-      element("strong", { textContent: `${spot.count} take-over${spot.count === 1 ? "" : "s"}: ` }),
+      element("strong", { textContent: `${plural(ngettext("%(count)s take-over", "%(count)s take-overs", spot.count), spot.count)}: ` }),
       ...reasons,
       element("div", {}, spot.members.map(segmentLink)),
     ]);
   });
   $("#hotspots").replaceChildren(...spots);
-  if (!spots.length) $("#hotspots").append(element("li", { className: "muted", textContent: "No take-over with a position." }));
+  if (!spots.length) $("#hotspots").append(element("li", { className: "muted", textContent: _("No take-over with a position.") }));
   $("#compare-results").hidden = false;
 }
 
 async function runComparison() {
   const ids = chosenInOrder();
   if (ids.length < 2) return;
-  say("Comparing…");
+  say(_("Comparing…"));
   const q = new URLSearchParams(ids.map((id) => ["test_event", id]));
   q.set("mode", state.mode);
   try {
     state.data = await api("GET", `reports/compare/?${q}`);
     showComparison(state.data);
-    say(`Compared ${ids.length} test events.`);
+    say(_("Compared %(count)s test events.", { count: ids.length }));
   } catch (err) {
     say(plainMessage(err), true);
   }
@@ -146,16 +149,16 @@ async function runComparison() {
 function showJob(job) {
   const line = $("#compare-status");
   if (job.status === "done") {
-    const link = element("a", { className: "download", href: job.download, textContent: "Download the comparison PDF" });
+    const link = element("a", { className: "download", href: job.download, textContent: _("Download the comparison PDF") });
     line.classList.remove("error");
     line.replaceChildren(link);
     return true;
   }
   if (job.status === "failed") {
-    say(`The PDF failed: ${job.error}`, true);
+    say(_("The PDF failed: %(error)s", { error: job.error }), true);
     return true;
   }
-  say(`Making the PDF: ${job.status}, ${Math.round(job.progress * 100)} %`);
+  say(_("Making the PDF: %(status)s, %(percent)s", { status: job.status, percent: `${Math.round(job.progress * 100)} %` }));
   return false;
 }
 
@@ -175,7 +178,7 @@ async function followJob() {
 
 async function makePdf() {
   $("#compare-pdf").disabled = true;
-  say("Asking for the PDF…");
+  say(_("Asking for the PDF…"));
   try {
     const job = await api("POST", "reports/", { compare: chosenInOrder(), options: { local: state.mode === "local" } });
     state.job = job.id;

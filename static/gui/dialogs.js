@@ -2,6 +2,7 @@
  * discards, and the server's refusals appear next to their fields. */
 import { CONFIG, $, $$ } from "./dom.js";
 import { clearError, showError } from "./feedback.js";
+import { _ } from "./i18n.js";
 
 /* Typed values with suggestions (time zones): one datalist per field name. */
 function suggestionList(spec) {
@@ -93,7 +94,7 @@ export function formDialog({ title, subtitle, specs, values, save }) {
   dialog.showModal();
 }
 
-export function confirmDialog(message, { yes = "Delete", no = "Keep it", warn = true } = {}) {
+export function confirmDialog(message, { yes = _("Delete"), no = _("Keep it"), warn = true } = {}) {
   const dialog = $("#confirm-dialog");
   $(".message", dialog).textContent = message;
   $(".undo-warning", dialog).hidden = !warn;

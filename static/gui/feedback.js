@@ -2,11 +2,12 @@
  * to their fields inside dialogs. */
 import { $, $$ } from "./dom.js";
 import { ApiError, plainMessage } from "./api.js";
+import { _ } from "./i18n.js";
 
 export function showError(error, where) {
   // Inside a dialog, field errors go next to their fields; the rest to the dialog's box.
   if (where && error instanceof ApiError && showFieldErrors(error, where.closest("dialog"))) {
-    where.textContent = "Please correct the marked fields.";
+    where.textContent = _("Please correct the marked fields.");
     where.hidden = false;
     where.scrollIntoView({ block: "nearest" });
     return;

@@ -9,6 +9,7 @@ import { api } from "./api.js";
 import { showError } from "./feedback.js";
 import { saveUrl, state } from "./state.js";
 import { fmtDuration } from "./format.js";
+import { _ } from "./i18n.js";
 import { COLORS, GpsMap } from "./maps.js";
 import { gpsMap, localMap, showMaps, tileUrl } from "./mapview.js";
 import { Live } from "./live.js";
@@ -52,8 +53,8 @@ export const Fleet = {
     $("#cockpit").hidden = on;
     // The button names where it leads.
     const toggle = $("#toggle-fleet");
-    toggle.textContent = on ? "Cockpit" : "Fleet";
-    toggle.title = on ? "Back to the selected leg" : "Every vehicle that is logging, on one map";
+    toggle.textContent = on ? _("Cockpit") : _("Fleet");
+    toggle.title = on ? _("Back to the selected leg") : _("Every vehicle that is logging, on one map");
     Live.subscribe();
     if (!on) {
       // The cockpit's maps were measured (and fitted) while hidden.
@@ -137,9 +138,10 @@ export const Fleet = {
   },
 
   describe(v) {
-    const mode = v.mode ? v.mode.toUpperCase() : "no open segment";
-    const takeover = v.last_takeover ? `last take-over ${fmtDuration(v.last_takeover, null)} ago` : "no take-over yet";
-    const leg = `${v.leg.location || `Test event #${v.leg.test_event}`} · Shift ${v.leg.shift_number} · Leg ${v.leg.number}`;
+    const mode = v.mode ? v.mode.toUpperCase() : _("no open segment");
+    const takeover = v.last_takeover ? _("last take-over %(duration)s ago", { duration: fmtDuration(v.last_takeover, null) }) : _("no take-over yet");
+    const where = v.leg.location || _("Test event #%(id)s", { id: v.leg.test_event });
+    const leg = `${where} · ${_("Shift %(number)s", { number: v.leg.shift_number })} · ${_("Leg %(number)s", { number: v.leg.number })}`;
     return { mode, takeover, leg };
   },
 

@@ -1,5 +1,6 @@
 /* How times, durations, distances and numbers are written on the page. */
 import { byId, state } from "./state.js";
+import { LANGUAGE } from "./i18n.js";
 
 /* Times are shown in the selected test event's time zone, as the model says. */
 function zoneOptions() {
@@ -7,12 +8,9 @@ function zoneOptions() {
   return event && event.time_zone ? { timeZone: event.time_zone, timeZoneName: "short" } : {};
 }
 /* One way of writing a date per language, 24-hour clock, whatever the browser's
-   locale: the page's language decides (German 26.11.2026, else 2026-11-26). */
+   locale: the page's language (LANGUAGE) decides (German 26.11.2026, else 2026-11-26). */
 const DAY_ORDER = { de: (p) => `${p.day}.${p.month}.${p.year}` };
 const isoDay = (p) => `${p.year}-${p.month}-${p.day}`;
-function language() {
-  return (document.documentElement.lang || "en").slice(0, 2);
-}
 function parts(iso, options) {
   const format = new Intl.DateTimeFormat("en-GB", {
     year: "numeric", month: "2-digit", day: "2-digit",
@@ -29,7 +27,7 @@ function zoned(iso, options) {
     return parts(iso, options);
   }
 }
-const writeDay = (p) => (DAY_ORDER[language()] || isoDay)(p);
+const writeDay = (p) => (DAY_ORDER[LANGUAGE.slice(0, 2)] || isoDay)(p);
 const writeClock = (p) => `${p.hour}:${p.minute}:${p.second}`;
 const writeZone = (p) => (p.timeZoneName ? ` ${p.timeZoneName}` : "");
 
@@ -51,7 +49,13 @@ export function fmtDuration(start, end) {
 
 export function fmtDistance(metres) {
   if (metres === null || metres === undefined) return "—";
-  return metres >= 1000 ? `${(metres / 1000).toFixed(2)} km` : `${metres.toFixed(1)} m`;
+  return metres >= 1000 ? `${fmtNumber(metres / 1000, 2)} km` : `${fmtNumber(metres, 1)} m`;
+}
+
+/* A number in the page's language; with `digits`, exactly that many decimals. */
+export function fmtNumber(value, digits) {
+  const fixed = digits === undefined ? {} : { minimumFractionDigits: digits, maximumFractionDigits: digits };
+  return new Intl.NumberFormat(LANGUAGE, fixed).format(value);
 }
 
 /* ROS floats are 32-bit: 0.10000000149011612 is shown as 0.1. */

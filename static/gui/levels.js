@@ -6,16 +6,17 @@ import { take } from "./bootstrap.js";
 import { clearError, notice, showError } from "./feedback.js";
 import { LEVELS, byId, current, saveUrl, state, vehicleName } from "./state.js";
 import { fmtDay, fmtTime } from "./format.js";
+import { _ } from "./i18n.js";
 import { confirmDialog, formDialog } from "./dialogs.js";
 import { Live } from "./live.js";
 import { Collector } from "./collector.js";
 import { selectionChanged } from "./segments.js";
 
 function rowLabel(level, row) {
-  const status = row.is_open ? "open" : "closed";
-  if (level === "event") return `#${row.id} ${row.location || "(no location)"} · ${fmtDay(row.start)} · ${status}`;
-  if (level === "shift") return `Shift ${row.number} · ${vehicleName(row.vehicle)} · ${fmtTime(row.start)} · ${status}`;
-  return `Leg ${row.number} · ${fmtTime(row.start)} · ${status}`;
+  const status = row.is_open ? _("open") : _("closed");
+  if (level === "event") return `#${row.id} ${row.location || _("(no location)")} · ${fmtDay(row.start)} · ${status}`;
+  if (level === "shift") return `${_("Shift %(number)s", { number: row.number })} · ${vehicleName(row.vehicle)} · ${fmtTime(row.start)} · ${status}`;
+  return `${_("Leg %(number)s", { number: row.number })} · ${fmtTime(row.start)} · ${status}`;
 }
 
 export async function loadCatalogues() {
@@ -41,7 +42,7 @@ export async function loadLevel(level, keepSelection = true) {
   state.rows[level] = rows;
   let chosen = keepSelection && byId(rows, state.selected[level]) ? state.selected[level] : null;
   if (chosen === null && rows.length === 1) chosen = rows[0].id; // one child: take it
-  const placeholder = new Option(rows.length ? `— choose a ${info.label} —` : `no ${info.label} yet`, "");
+  const placeholder = new Option(rows.length ? info.choose() : info.none(), "");
   select.replaceChildren(placeholder, ...rows.map((r) => {
     const o = new Option(rowLabel(level, r), r.id);
     o.className = r.is_open ? "open-log" : "closed-log";
@@ -64,7 +65,7 @@ export async function loadLevel(level, keepSelection = true) {
 function updateLevelState(level) {
   const row = current(level);
   const badge = $(`[data-state="${level}"]`);
-  badge.textContent = row ? (row.is_open ? "open" : "closed") : "";
+  badge.textContent = row ? (row.is_open ? _("open") : _("closed")) : "";
   badge.className = "state" + (row ? (row.is_open ? " open" : " closed") : "");
   const parentRow = LEVELS[level].parent ? current(LEVELS[level].parent) : true;
   const can = CONFIG.canOperate;
@@ -114,8 +115,8 @@ async function createLevel(level) {
   if (form.unavailable) throw new ApiError(form.unavailable);
   const parent = LEVELS[level].parent;
   formDialog({
-    title: `New ${LEVELS[level].label}`,
-    subtitle: "Created when you press Save.",
+    title: LEVELS[level].newTitle(),
+    subtitle: _("Created when you press Save."),
     specs: form.fields,
     values: form.initial,
     save: async (body) => {
@@ -123,17 +124,17 @@ async function createLevel(level) {
       // The server ends a vehicle's other open shift (its rule); the operator is asked first.
       const ending = level === "shift" && body.vehicle ? await list(LEVELS.shift.path, { vehicle: body.vehicle, open: "true" }) : [];
       if (ending.length) {
-        const which = ending.map((r) => `Shift ${r.number} (started ${fmtTime(r.start)})`).join(", ");
-        const question = `${vehicleName(body.vehicle)} still has ${which} open. Saving ends it. Create the new shift?`;
-        if (!(await confirmDialog(question, { yes: "End it and create", no: "Cancel", warn: false }))) return false;
+        const which = ending.map((r) => _("Shift %(number)s (started %(start)s)", { number: r.number, start: fmtTime(r.start) })).join(", ");
+        const question = _("%(vehicle)s still has %(shifts)s open. Saving ends it. Create the new shift?", { vehicle: vehicleName(body.vehicle), shifts: which });
+        if (!(await confirmDialog(question, { yes: _("End it and create"), no: _("Cancel"), warn: false }))) return false;
       }
       const row = await api("POST", LEVELS[level].path, body);
       state.selected[level] = row.id;
       const child = LEVELS[level].child;
       if (child) state.selected[child] = null;
       await loadLevel(level);
-      const ended = ending.length ? ` ${ending.map((r) => `Shift ${r.number}`).join(", ")} of ${vehicleName(body.vehicle)} ended.` : "";
-      notice(`${LEVELS[level].label.charAt(0).toUpperCase()}${LEVELS[level].label.slice(1)} created.${ended}`);
+      const ended = ending.length ? " " + _("%(shifts)s of %(vehicle)s ended.", { shifts: ending.map((r) => _("Shift %(number)s", { number: r.number })).join(", "), vehicle: vehicleName(body.vehicle) }) : "";
+      notice(LEVELS[level].created() + ended);
     },
   });
 }
@@ -142,24 +143,31 @@ async function editLevel(level) {
   const row = current(level);
   if (!row) return;
   const form = await formOf(level);
-  const name = level === "event" ? `Test event #${row.id}` : level === "shift" ? `Shift ${row.number}` : `Leg ${row.number}`;
+  const name = level === "event" ? _("Test event #%(id)s", { id: row.id }) : level === "shift" ? _("Shift %(number)s", { number: row.number }) : _("Leg %(number)s", { number: row.number });
   formDialog({
     title: name,
-    subtitle: `Started ${fmtTime(row.start)}${row.end ? `, ended ${fmtTime(row.end)}` : ""}`,
+    subtitle: row.end ? _("Started %(start)s, ended %(end)s", { start: fmtTime(row.start), end: fmtTime(row.end) }) : _("Started %(start)s", { start: fmtTime(row.start) }),
     specs: form.fields,
     values: row,
     save: async (body) => {
       await api("PATCH", `${LEVELS[level].path}${row.id}/`, body);
       await loadLevel(level);
-      notice("Saved.");
+      notice(_("Saved."));
     },
   });
 }
 
-function describe(level, row) {
-  if (level === "event") return `test event #${row.id} (${row.location || "no location"}) with all its shifts, legs, segments, notes and images`;
-  if (level === "shift") return `shift ${row.number} with all its legs, segments, notes, images and maps`;
-  return `leg ${row.number} with all its segments, notes and images`;
+function nameOf(level, row) {
+  if (level === "event") return _("test event #%(id)s (%(location)s)", { id: row.id, location: row.location || _("no location") });
+  if (level === "shift") return _("shift %(number)s", { number: row.number });
+  return _("leg %(number)s", { number: row.number });
+}
+
+function deleteQuestion(level, row) {
+  const name = nameOf(level, row);
+  if (level === "event") return _("Delete %(name)s with all its shifts, legs, segments, notes and images?", { name });
+  if (level === "shift") return _("Delete %(name)s with all its legs, segments, notes, images and maps?", { name });
+  return _("Delete %(name)s with all its segments, notes and images?", { name });
 }
 
 async function levelAction(level, action) {
@@ -168,17 +176,17 @@ async function levelAction(level, action) {
   if (action === "edit") return editLevel(level);
   if (!row) return;
   if (action === "delete") {
-    if (!(await confirmDialog(`Delete ${describe(level, row)}?`))) return;
+    if (!(await confirmDialog(deleteQuestion(level, row)))) return;
     await api("DELETE", `${LEVELS[level].path}${row.id}/`);
     state.selected[level] = null;
     await loadLevel(level, true);
-    return notice(`Deleted ${describe(level, row).split(" with ")[0]}.`);
+    return notice(_("Deleted %(name)s.", { name: nameOf(level, row) }));
   }
   // The server stops logging into what ends (one rule, in its services).
   if (action === "end") await api("POST", `${LEVELS[level].path}${row.id}/close/`, {});
   if (action === "reopen") await api("POST", `${LEVELS[level].path}${row.id}/reopen/`, {});
   await loadLevel(level);
-  return notice(action === "end" ? `Ended ${describe(level, row).split(" with ")[0]}.` : "Re-opened.");
+  return notice(action === "end" ? _("Ended %(name)s.", { name: nameOf(level, row) }) : _("Re-opened."));
 }
 
 $$(".log-row [data-action]").forEach((b) =>

@@ -3,6 +3,7 @@
  * connection and batches refreshes; what each kind of event changes on the
  * page is registered with on() and onRefresh(). */
 import { CONFIG, $ } from "./dom.js";
+import { _ } from "./i18n.js";
 import { showError } from "./feedback.js";
 import { state } from "./state.js";
 
@@ -37,7 +38,7 @@ export const Live = {
     socket.onclose = (e) => {
       if (this.socket !== socket) return;
       if (e.code === 4403) {
-        this.setStatus("no live updates (no role)", "bad");
+        this.setStatus(_("no live updates (no role)"), "bad");
         return;
       }
       this.setLink("down");
@@ -69,7 +70,7 @@ export const Live = {
   },
   setLink(link) {
     this.link = link;
-    const words = { live: ["live", "ok"], stale: ["stale", "stale"], down: ["reconnecting…", "bad"] };
+    const words = { live: [_("live"), "ok"], stale: [_("stale"), "stale"], down: [_("reconnecting…"), "bad"] };
     this.setStatus(...words[link]);
     this.onLink(link);
   },

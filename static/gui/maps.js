@@ -2,6 +2,8 @@
  * map-frame metres.  Tracks are polylines that grow point by point, so live
  * updates never redraw what is already on screen.  Leaflet is the page's global
  * L (django-leaflet's static files, loaded before the modules). */
+import { _ } from "./i18n.js";
+
 const COLORS = { auto: "#1a9c3a", ito: "#d22020", selected: "#1f5fbf" };
 
 /* An image placed by three corners (top-left, top-right, bottom-left), so it
@@ -68,7 +70,7 @@ class TrackMap {
     this.selectedId = null;
     this.fitted = false;
     this.follow = false; // pan to each new point of the vehicle
-    this.labelOf = (id) => `Segment ${id}`;
+    this.labelOf = (id) => _("Segment %(id)s", { id });
     this.overviewZoom = null; // the zoom the server thinned the whole tracks for
     this.detail = null; // {zoom, controller, shown}: the area in view in detail
   }
@@ -124,7 +126,7 @@ class TrackMap {
     this.markers.clearLayers();
     for (const [id, point] of spots) {
       L.circleMarker(this.toLatLngs([point])[0], { radius: 7, color: COLORS.ito, weight: 2, fillOpacity: 0.2, renderer: this.renderer })
-        .bindTooltip(() => `Take-over, ${this.labelOf(id)}`)
+        .bindTooltip(() => _("Take-over, %(segment)s", { segment: this.labelOf(id) }))
         .addTo(this.markers);
     }
     this.markDrawn();
@@ -253,7 +255,7 @@ class GpsMap extends TrackMap {
     this.tilesLoaded = 0;
     this.tileErrors = 0;
     if (!url) {
-      this.noTiles("No tile server is set: the map shows tracks on a plain background.");
+      this.noTiles(_("No tile server is set: the map shows tracks on a plain background."));
       return;
     }
     this.element.classList.remove("no-tiles");
@@ -268,7 +270,7 @@ class GpsMap extends TrackMap {
     });
     this.tileLayer.on("tileerror", () => {
       this.tileErrors += 1;
-      if (!this.tilesLoaded) this.noTiles("Map tiles are unavailable (the tile server cannot be reached). Tracks are still shown on a plain background.");
+      if (!this.tilesLoaded) this.noTiles(_("Map tiles are unavailable (the tile server cannot be reached). Tracks are still shown on a plain background."));
     });
     if (this.basemapsKnown && !this.chosenBasemap) this.tileLayer.addTo(this.map);
     if (this.basemapsKnown && this.basemaps.length) this.layers.addBaseLayer(this.tileLayer, "Tile server");
@@ -302,7 +304,7 @@ class GpsMap extends TrackMap {
       this.basemaps.push(layer);
       if (spec.default) chosen = layer;
     }
-    if (this.tileLayer) this.layers.addBaseLayer(this.tileLayer, "Tile server");
+    if (this.tileLayer) this.layers.addBaseLayer(this.tileLayer, _("Tile server"));
     this.layers.addTo(this.map);
     this.chosenBasemap = chosen;
     if (chosen) {
@@ -321,8 +323,8 @@ class GpsMap extends TrackMap {
       this.overlay.setImage(url, c);
       return;
     }
-    this.overlay = new AffineImage(url, c, { opacity: 0.45, alt: "Robot's local map over the GPS map" });
-    this.layers.addOverlay(this.overlay, "Local map");
+    this.overlay = new AffineImage(url, c, { opacity: 0.45, alt: _("Robot's local map over the GPS map") });
+    this.layers.addOverlay(this.overlay, _("Local map"));
     this.layers.addTo(this.map);
   }
   removeOverlay() {

@@ -4,7 +4,8 @@ import { CONFIG, $ } from "./dom.js";
 import { api } from "./api.js";
 import { showError } from "./feedback.js";
 import { segmentLabel, state } from "./state.js";
-import { roundFloat } from "./format.js";
+import { fmtNumber, roundFloat } from "./format.js";
+import { _ } from "./i18n.js";
 import { GpsMap, LocalMap } from "./maps.js";
 
 export const gpsMap = new GpsMap($("#gps-map"), $("#tile-message"));
@@ -177,19 +178,19 @@ export async function loadLocalMap() {
   const message = $("#local-message");
   if (data.map) {
     localMap.setMapImage(data.map);
-    message.textContent = `Map "${data.map.frame}", ${data.map.width}×${data.map.height} cells of ${roundFloat(data.map.resolution)} m.`;
+    message.textContent = _("Map \"%(frame)s\", %(width)s×%(height)s cells of %(resolution)s m.", { frame: data.map.frame, width: data.map.width, height: data.map.height, resolution: fmtNumber(roundFloat(data.map.resolution)) });
     if (!$("#show-local").checked) {
       $("#show-local").checked = true;
       showMaps();
     }
   } else {
     localMap.removeMapImage();
-    message.textContent = "No map received for this shift yet.";
+    message.textContent = _("No map received for this shift yet.");
   }
   const o = data.overlay;
   if (o.available && o.corners && data.map) {
     gpsMap.setOverlay(data.map.url, o.corners);
-    $("#overlay-message").textContent = `Local map over GPS: fitted from ${o.pairs} segments, scale ${o.scale.toFixed(3)}, rotation ${o.rotation_deg.toFixed(1)}°, error ${o.rms_m.toFixed(2)} m.`;
+    $("#overlay-message").textContent = _("Local map over GPS: fitted from %(pairs)s segments, scale %(scale)s, rotation %(rotation)s°, error %(error)s m.", { pairs: o.pairs, scale: fmtNumber(o.scale, 3), rotation: fmtNumber(o.rotation_deg, 1), error: fmtNumber(o.rms_m, 2) });
   } else {
     gpsMap.removeOverlay();
     $("#overlay-message").textContent = data.map ? o.detail || "" : "";

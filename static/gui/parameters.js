@@ -1,5 +1,6 @@
 /* The collector's ROS parameters dialog. */
 import { $ } from "./dom.js";
+import { _ } from "./i18n.js";
 import { ApiError } from "./api.js";
 import { notice, showError } from "./feedback.js";
 import { roundFloat } from "./format.js";
@@ -83,7 +84,7 @@ const Parameters = {
     const apply = document.createElement("button");
     apply.type = "button";
     apply.className = "primary";
-    apply.textContent = "Apply";
+    apply.textContent = _("Apply");
     apply.addEventListener("click", async () => {
       errorBox.hidden = true;
       const changes = {};
@@ -91,9 +92,9 @@ const Parameters = {
         const value = this.read(row, input);
         if (value !== row.value) changes[name] = value;
       }
-      if (!Object.keys(changes).length) return showError(new ApiError("Nothing was changed."), errorBox);
+      if (!Object.keys(changes).length) return showError(new ApiError(_("Nothing was changed.")), errorBox);
       // The robot's answer replaces this toast; it may come before the request's own reply.
-      notice("Sending the parameters to the robot…");
+      notice(_("Sending the parameters to the robot…"));
       try {
         await Collector.command("set_parameters", { parameters: changes });
       } catch (err) {
@@ -102,10 +103,10 @@ const Parameters = {
     });
     const save = document.createElement("button");
     save.type = "button";
-    save.textContent = "Save to the node's YAML file";
+    save.textContent = _("Save to the node's YAML file");
     save.addEventListener("click", async () => {
       errorBox.hidden = true;
-      notice("Asking the robot to save its parameters…");
+      notice(_("Asking the robot to save its parameters…"));
       try {
         await Collector.command("save_parameters");
       } catch (err) {
@@ -116,7 +117,7 @@ const Parameters = {
     buttons.className = "buttons";
     buttons.append(apply, save);
     const empty = document.createElement("p");
-    empty.textContent = "The collector has not reported its parameters yet.";
+    empty.textContent = _("The collector has not reported its parameters yet.");
     body.replaceChildren(rows.length ? table : empty, buttons);
     $(".close", d).onclick = () => d.close();
     d.showModal();

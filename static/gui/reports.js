@@ -1,5 +1,6 @@
 /* Reports and exports of the selected test event. */
 import { CONFIG, $ } from "./dom.js";
+import { _ } from "./i18n.js";
 import { api } from "./api.js";
 import { showError } from "./feedback.js";
 import { current } from "./state.js";
@@ -8,10 +9,12 @@ import { buildField } from "./dialogs.js";
 
 $("#open-reports").addEventListener("click", () => Reports.open().catch(showError));
 
+/* A report job's state, as the page words it. */
+const JOB_STATUS = { queued: _("queued"), running: _("running"), done: _("done"), failed: _("failed") };
 const EXPORTS = [
-  ["segments.csv", "Segments (CSV)"],
-  ["tracks.geojson", "Tracks (GeoJSON)"],
-  ["tracks.gpx", "Tracks (GPX)"],
+  ["segments.csv", _("Segments (CSV)")],
+  ["tracks.geojson", _("Tracks (GeoJSON)")],
+  ["tracks.gpx", _("Tracks (GPX)")],
 ];
 
 /* The report itself is made by the server (reports app); this dialog asks for
@@ -27,7 +30,7 @@ const Reports = {
     $(".close", d).onclick = () => d.close();
     if (!event) {
       const p = document.createElement("p");
-      p.textContent = "Select a test event first.";
+      p.textContent = _("Select a test event first.");
       body.append(p);
     } else {
       // The form's fields are the server's (gui/api/forms/, "report").
@@ -39,8 +42,8 @@ const Reports = {
   },
   downloads(event) {
     const p = document.createElement("p");
-    p.append(`Data of test event #${event.id}: `);
-    const archive = [`test-events/${event.id}/archive/`, "Everything (FTT archive, ZIP)"];
+    p.append(`${_("Data of test event #%(id)s:", { id: event.id })} `);
+    const archive = [`test-events/${event.id}/archive/`, _("Everything (FTT archive, ZIP)")];
     for (const [path, label] of [...EXPORTS.map(([f, l]) => [`reports/exports/${event.id}/${f}`, l]), archive]) {
       const a = document.createElement("a");
       a.href = CONFIG.apiRoot + path;
@@ -58,7 +61,7 @@ const Reports = {
     const go = document.createElement("button");
     go.type = "submit";
     go.className = "primary";
-    go.textContent = "Generate report";
+    go.textContent = _("Generate report");
     go.disabled = !CONFIG.canOperate;
     form.append(go);
     form.addEventListener("submit", async (e) => {
@@ -100,15 +103,15 @@ const Reports = {
       if (r.download) {
         const a = document.createElement("a");
         a.href = r.download;
-        a.textContent = `Report of ${when} (PDF)`;
-        li.append(a, r.provisional ? " — provisional: the test event was still open" : "");
+        a.textContent = _("Report of %(when)s (PDF)", { when });
+        li.append(a, r.provisional ? ` — ${_("provisional: the test event was still open")}` : "");
       } else {
-        li.textContent = `Report of ${when}: ${r.status}${r.progress !== null && r.progress !== undefined ? ` ${Math.round(r.progress * 100)} %` : ""}${r.error ? ` — ${r.error}` : r.message ? ` — ${r.message}` : ""}`;
+        li.textContent = `${_("Report of %(when)s: %(status)s", { when, status: JOB_STATUS[r.status] || r.status })}${r.progress !== null && r.progress !== undefined ? ` ${Math.round(r.progress * 100)} %` : ""}${r.error ? ` — ${r.error}` : r.message ? ` — ${r.message}` : ""}`;
       }
       ul.append(li);
     }
     const h = document.createElement("h3");
-    h.textContent = list.length ? "Reports of this test event" : "No reports of this test event yet.";
+    h.textContent = list.length ? _("Reports of this test event") : _("No reports of this test event yet.");
     box.replaceChildren(h, ul);
     if (list.some((r) => r.status === "queued" || r.status === "running")) {
       this.timer = setTimeout(() => this.refresh(event).catch(showError), 1000);

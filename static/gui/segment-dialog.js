@@ -1,10 +1,11 @@
 /* The segment dialog: annotation of a take-over reason, notes, images and
  * black-box snapshots (snapshots.js). */
 import { CONFIG, $, $$ } from "./dom.js";
+import { _ } from "./i18n.js";
 import { api, list } from "./api.js";
 import { notice, showError } from "./feedback.js";
 import { byId, putSegment, segmentLabel, state } from "./state.js";
-import { fmtTime } from "./format.js";
+import { fmtNumber, fmtTime } from "./format.js";
 import { confirmDialog } from "./dialogs.js";
 import { showSnapshots } from "./snapshots.js";
 
@@ -17,11 +18,11 @@ export async function openSegmentDialog(id) {
   dialogSegment = s;
   const errorBox = $(".dialog-error", segmentDialog);
   errorBox.hidden = true;
-  const kind = s.segment_type === "ito" ? (s.parent === null ? "ITO (take-over)" : "ITO reason") : "AUTO";
+  const kind = s.segment_type === "ito" ? (s.parent === null ? _("ITO (take-over)") : _("ITO reason")) : "AUTO";
   $(".title", segmentDialog).textContent = `${segmentLabel(s.id)} · ${kind}`;
   // Set when the robot's mode message had no stamp: the switch lies within this interval.
-  const uncertain = s.start_uncertainty > 0 ? ` (switched up to ${s.start_uncertainty.toFixed(1)} s earlier; the robot's mode message has no time stamp)` : "";
-  $(".subtitle", segmentDialog).textContent = `Start ${fmtTime(s.start)}${uncertain} · End ${s.end ? fmtTime(s.end) : "still open"}`;
+  const uncertain = s.start_uncertainty > 0 ? " " + _("(switched up to %(seconds)s s earlier; the robot's mode message has no time stamp)", { seconds: fmtNumber(s.start_uncertainty, 1) }) : "";
+  $(".subtitle", segmentDialog).textContent = _("Start %(start)s · End %(end)s", { start: fmtTime(s.start) + uncertain, end: s.end ? fmtTime(s.end) : _("still open") });
   const form = $("#annotation-form");
   form.elements.ito_reason.replaceChildren(...state.catalogue.reasons.map((r) => new Option(r.short_description, r.key)));
   form.elements.ito_reason.value = s.ito_reason || "unassigned";
@@ -92,7 +93,7 @@ function showNotes(notes) {
   if (!notes.length) {
     const li = document.createElement("li");
     li.className = "muted";
-    li.textContent = "No notes yet.";
+    li.textContent = _("No notes yet.");
     ul.replaceChildren(li);
     return;
   }
@@ -101,8 +102,8 @@ function showNotes(notes) {
     li.dataset.id = n.id;
     const meta = document.createElement("div");
     meta.className = "meta";
-    const edited = n.edited && n.edited !== n.created ? ` · edited ${fmtTime(n.edited)}` : "";
-    meta.textContent = `${n.author_name || "unknown author"} · ${fmtTime(n.created)}${edited}`;
+    const edited = n.edited && n.edited !== n.created ? ` · ${_("edited %(when)s", { when: fmtTime(n.edited) })}` : "";
+    meta.textContent = `${n.author_name || _("unknown author")} · ${fmtTime(n.created)}${edited}`;
     const text = document.createElement("div");
     text.className = "text";
     text.textContent = n.text;
@@ -110,14 +111,14 @@ function showNotes(notes) {
     if (CONFIG.canOperate) {
       const edit = document.createElement("button");
       edit.type = "button";
-      edit.textContent = "Edit";
+      edit.textContent = _("Edit");
       edit.addEventListener("click", () => editNote(li, n));
       const del = document.createElement("button");
       del.type = "button";
-      del.textContent = "Delete";
+      del.textContent = _("Delete");
       del.className = "danger";
       del.addEventListener("click", dialogAction(async () => {
-        if (!(await confirmDialog(`Delete this note by ${n.author_name || "unknown author"}?`))) return;
+        if (!(await confirmDialog(_("Delete this note by %(author)s?", { author: n.author_name || _("unknown author") })))) return;
         await api("DELETE", `notes/${n.id}/`);
         await loadNotes();
       }));
@@ -134,18 +135,18 @@ function editNote(li, note) {
   const area = document.createElement("textarea");
   area.value = note.text;
   area.rows = 3;
-  area.setAttribute("aria-label", "Note text");
+  area.setAttribute("aria-label", _("Note text"));
   const save = document.createElement("button");
   save.type = "button";
   save.className = "primary";
-  save.textContent = "Save note";
+  save.textContent = _("Save note");
   save.addEventListener("click", dialogAction(async () => {
     await api("PATCH", `notes/${note.id}/`, { text: area.value });
     await loadNotes();
   }));
   const cancel = document.createElement("button");
   cancel.type = "button";
-  cancel.textContent = "Cancel";
+  cancel.textContent = _("Cancel");
   cancel.addEventListener("click", () => loadNotes());
   const buttons = document.createElement("div");
   buttons.className = "buttons";
@@ -178,7 +179,7 @@ function showImages(images) {
   if (!images.length) {
     const p = document.createElement("p");
     p.className = "muted";
-    p.textContent = "No images yet.";
+    p.textContent = _("No images yet.");
     box.replaceChildren(p);
     return;
   }
@@ -186,7 +187,7 @@ function showImages(images) {
     const fig = document.createElement("figure");
     const img = document.createElement("img");
     img.src = im.url || im.image;
-    img.alt = im.description || `Image ${im.id}`;
+    img.alt = im.description || _("Image %(id)s", { id: im.id });
     img.loading = "lazy";
     img.addEventListener("click", () => {
       const d = $("#image-dialog");
@@ -201,9 +202,9 @@ function showImages(images) {
       const del = document.createElement("button");
       del.type = "button";
       del.className = "danger";
-      del.textContent = "Delete";
+      del.textContent = _("Delete");
       del.addEventListener("click", dialogAction(async () => {
-        if (!(await confirmDialog("Delete this image?"))) return;
+        if (!(await confirmDialog(_("Delete this image?")))) return;
         await api("DELETE", `images/${im.id}/`);
         await loadImages();
       }));
@@ -220,10 +221,10 @@ $$(".upload input[type=file]", segmentDialog).forEach((input) =>
     const body = new FormData();
     body.append("segment", masterOf(dialogSegment));
     body.append("image", file, file.name);
-    body.append("description", `Uploaded by ${CONFIG.user}`);
+    body.append("description", _("Uploaded by %(user)s", { user: CONFIG.user }));
     await api("POST", "images/", body);
     input.value = "";
     await loadImages();
-    notice("Image uploaded.");
+    notice(_("Image uploaded."));
   })),
 );

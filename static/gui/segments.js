@@ -1,6 +1,7 @@
 /* The selected leg: its segments (list, timeline strip, current mode), their
  * tracks on the maps, and the segment actions (reasons, New, End, Edit). */
 import { CONFIG, $, $$ } from "./dom.js";
+import { _ } from "./i18n.js";
 import { ApiError, api } from "./api.js";
 import { take } from "./bootstrap.js";
 import { clearError, notice, showError } from "./feedback.js";
@@ -244,13 +245,13 @@ export function renderMode() {
   const lost = Live.lost();
   panel.dataset.link = lost === null ? "live" : "lost";
   if (lost !== null) {
-    $("#mode-name").textContent = `last known: ${m ? mode.toUpperCase() : "no open segment"}, ${lost} s ago`;
-    $("#mode-since").textContent = `${m ? `${segmentLabel(m.id)} · ` : ""}no word from the server, reconnecting`;
+    $("#mode-name").textContent = _("last known: %(mode)s, %(seconds)s s ago", { mode: m ? mode.toUpperCase() : _("no open segment"), seconds: lost });
+    $("#mode-since").textContent = `${m ? `${segmentLabel(m.id)} · ` : ""}${_("no word from the server, reconnecting")}`;
     return;
   }
-  $("#mode-name").textContent = m ? mode.toUpperCase() : "No open segment";
+  $("#mode-name").textContent = m ? mode.toUpperCase() : _("No open segment");
   const reasonless = m && m.segment_type === "ito" && !state.segments.some((c) => c.parent === m.id && c.is_open);
-  $("#mode-since").textContent = m ? `for ${fmtDuration(m.start, null)} · ${segmentLabel(m.id)}${reasonless ? " · no open reason" : ""}` : "";
+  $("#mode-since").textContent = m ? _("for %(duration)s · %(segment)s", { duration: fmtDuration(m.start, null), segment: segmentLabel(m.id) }) + (reasonless ? " · " + _("no open reason") : "") : "";
 }
 
 /* Quick reasons annotate the leg's open take-over, which the server names;
@@ -258,10 +259,10 @@ export function renderMode() {
 function updateSegmentButtons() {
   const s = byId(state.segments, state.segment);
   const target = state.openTakeOver;
-  $("#quick-target").textContent = target ? `Reason for ${shortLabel(target)}:` : "No open take-over";
+  $("#quick-target").textContent = target ? _("Reason for %(segment)s:", { segment: shortLabel(target) }) : _("No open take-over");
   for (const b of $$("[data-quick], #reason-apply")) {
     b.disabled = !CONFIG.canOperate || !target;
-    b.title = target ? `Give ${segmentLabel(target)} this reason` : "Reasons of earlier take-overs: Edit the row.";
+    b.title = target ? _("Give %(segment)s this reason", { segment: segmentLabel(target) }) : _("Reasons of earlier take-overs: Edit the row.");
   }
   // The robot's reason (params.reason_rules) waits for one tap to become the reason.
   const t = byId(state.segments, target);
@@ -276,14 +277,14 @@ function updateSegmentButtons() {
 }
 
 function requireSegment() {
-  if (!state.segment) throw new ApiError("Select a segment in the list first.");
+  if (!state.segment) throw new ApiError(_("Select a segment in the list first."));
   return state.segment;
 }
 
 async function setReason(key) {
   // The server picks the take-over (the robot may have started a new one a moment ago).
   const row = await segmentWrite(`legs/${state.selected.leg}/quick-reason/`, { reason: key });
-  notice(`Reason of ${segmentLabel(row.id)} set to ${reasonName(key)}.`);
+  notice(_("Reason of %(segment)s set to %(reason)s.", { segment: segmentLabel(row.id), reason: reasonName(key) }));
 }
 
 $$("[data-quick]").forEach((b) => b.addEventListener("click", () => segmentAction(() => setReason(b.dataset.quick))));
@@ -292,12 +293,12 @@ $("#reason-apply").addEventListener("click", () => segmentAction(() => setReason
 $("#segment-new").addEventListener("click", () => segmentAction(async () => {
   const m = openMaster();
   if (m && m.segment_type === "auto") {
-    const ok = await confirmDialog("The robot is in AUTO. Record a take-over (ITO) now?", { yes: "Record take-over", no: "Cancel", warn: false });
+    const ok = await confirmDialog(_("The robot is in AUTO. Record a take-over (ITO) now?"), { yes: _("Record take-over"), no: _("Cancel"), warn: false });
     if (!ok) return;
   }
   const child = await segmentWrite(`legs/${state.selected.leg}/manual-segment/`);
   selectSegment(child.id);
-  notice("Take-over recorded.");
+  notice(_("Take-over recorded."));
 }));
 $("#segment-end").addEventListener("click", () => segmentAction(async () => {
   const id = requireSegment();
@@ -306,7 +307,7 @@ $("#segment-end").addEventListener("click", () => segmentAction(async () => {
   // Ending a reason leaves its take-over (the ITO run) open: the banner stays ITO, and says why.
   const m = openMaster();
   const still = m && m.segment_type === "ito" && byId(state.segments, id)?.parent === m.id;
-  notice(still ? `Ended the reason ${segmentLabel(id)}. The take-over ${segmentLabel(m.id)} goes on (ITO) until the robot reports AUTO or you end ${shortLabel(m.id)}.` : `Ended ${segmentLabel(id)}.`);
+  notice(still ? _("Ended the reason %(reason)s. The take-over %(take_over)s goes on (ITO) until the robot reports AUTO or you end %(short)s.", { reason: segmentLabel(id), take_over: segmentLabel(m.id), short: shortLabel(m.id) }) : _("Ended %(name)s.", { name: segmentLabel(id) }));
 }));
 $("#segment-edit").addEventListener("click", () => segmentAction(async () => openSegmentDialog(requireSegment())));
 // The dialog's saves put their answers into the list (segment-dialog.js): shown once it closes.

@@ -2,6 +2,7 @@
  * take-over or a request) in the segment dialog: what each holds, and a
  * download.  The collector writes them; the API lists and serves them. */
 import { $ } from "./dom.js";
+import { _ } from "./i18n.js";
 import { list } from "./api.js";
 import { fmtClock } from "./format.js";
 
@@ -34,8 +35,8 @@ function snapshotItem(r) {
   download.className = "button";
   download.href = r.file;
   download.setAttribute("download", r.name);
-  download.textContent = "Download";
-  download.setAttribute("aria-label", `Download ${r.name}`);
+  download.textContent = _("Download");
+  download.setAttribute("aria-label", _("Download %(name)s", { name: r.name }));
   li.append(name, meta, topics, download);
   return li;
 }
@@ -52,7 +53,7 @@ export function showSnapshots(master, rows) {
   if (!rows.length) {
     const li = document.createElement("li");
     li.className = "muted";
-    li.textContent = "No snapshots.";
+    li.textContent = _("No snapshots.");
     box.replaceChildren(li);
     return;
   }

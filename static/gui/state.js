@@ -2,11 +2,25 @@
  * segments, tracks and catalogues, with the look-ups that read it. */
 
 import { CONFIG } from "./dom.js";
+import { _ } from "./i18n.js";
 
+/* Each level's words are whole sentences: German declines "Testveranstaltung", "Schicht", "Etappe" differently. */
 export const LEVELS = {
-  event: { path: "test-events/", label: "test event", parent: null, child: "shift" },
-  shift: { path: "shifts/", label: "shift", parent: "event", parentField: "test_event", child: "leg" },
-  leg: { path: "legs/", label: "leg", parent: "shift", parentField: "shift", child: null },
+  event: {
+    path: "test-events/", parent: null, child: "shift",
+    newTitle: () => _("New test event"), created: () => _("Test event created."),
+    choose: () => _("— choose a test event —"), none: () => _("no test event yet"),
+  },
+  shift: {
+    path: "shifts/", parent: "event", parentField: "test_event", child: "leg",
+    newTitle: () => _("New shift"), created: () => _("Shift created."),
+    choose: () => _("— choose a shift —"), none: () => _("no shift yet"),
+  },
+  leg: {
+    path: "legs/", parent: "shift", parentField: "shift", child: null,
+    newTitle: () => _("New leg"), created: () => _("Leg created."),
+    choose: () => _("— choose a leg —"), none: () => _("no leg yet"),
+  },
 };
 
 /* Event, shift, leg, segment and the view live in the address, so reload and shared links restore them. */

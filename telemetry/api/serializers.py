@@ -4,6 +4,7 @@ import re
 import uuid
 from typing import Annotated
 
+from django.utils.translation import gettext as _
 from pydantic import (
     AwareDatetime,
     BaseModel,
@@ -235,7 +236,7 @@ class BatchSerializer(serializers.Serializer):
     def validate_poses(self, poses):
         uids = [p["uid"] for p in poses if p.get("uid") is not None]
         if len(uids) != len(set(uids)):
-            raise serializers.ValidationError("Each pose in a batch needs its own uid.")
+            raise serializers.ValidationError(_("Each pose in a batch needs its own uid."))
         return poses
 
 
@@ -286,7 +287,7 @@ class MapImageSerializer(ClientUidMixin, ServiceSerializer):
 
     def validate_image(self, upload):
         if getattr(getattr(upload, "image", None), "format", None) != "PNG":
-            raise serializers.ValidationError("Upload the map as a PNG image.")
+            raise serializers.ValidationError(_("Upload the map as a PNG image."))
         return upload
 
     def validate(self, attrs):

@@ -2,6 +2,7 @@ import uuid
 
 from django.db import models
 from django.utils import timezone
+from django.utils.translation import gettext_lazy as _
 
 from events.models import Segment
 
@@ -12,14 +13,18 @@ def image_upload_to(instance, filename):
 
 
 class Image(models.Model):
-    uid = models.UUIDField(default=uuid.uuid4, unique=True, editable=False)
-    segment = models.ForeignKey(Segment, on_delete=models.CASCADE, related_name="images")
-    image = models.ImageField(upload_to=image_upload_to)
-    description = models.CharField(max_length=500, blank=True)
-    robot_stamp = models.DateTimeField(null=True, blank=True)
-    received = models.DateTimeField(default=timezone.now)
+    uid = models.UUIDField(default=uuid.uuid4, unique=True, editable=False, verbose_name=_("uid"))
+    segment = models.ForeignKey(
+        Segment, on_delete=models.CASCADE, related_name="images", verbose_name=_("segment")
+    )
+    image = models.ImageField(upload_to=image_upload_to, verbose_name=_("image"))
+    description = models.CharField(max_length=500, blank=True, verbose_name=_("description"))
+    robot_stamp = models.DateTimeField(null=True, blank=True, verbose_name=_("robot stamp"))
+    received = models.DateTimeField(default=timezone.now, verbose_name=_("received"))
 
     class Meta:
+        verbose_name = _("image")
+        verbose_name_plural = _("images")
         ordering = ["robot_stamp", "received", "id"]
         indexes = [models.Index(fields=["segment", "received"], name="image_segment_received")]
 

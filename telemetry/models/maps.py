@@ -3,6 +3,7 @@ import uuid
 from django.db import models
 from django.db.models import Q
 from django.utils import timezone
+from django.utils.translation import gettext_lazy as _
 
 from events.models import Shift
 
@@ -26,25 +27,32 @@ class MapImage(models.Model):
         "origin_yaw",
     )
 
-    uid = models.UUIDField(default=uuid.uuid4, unique=True, editable=False)
-    shift = models.ForeignKey(Shift, on_delete=models.CASCADE, related_name="maps")
-    frame = models.CharField(max_length=200)
-    width = models.PositiveIntegerField(help_text="Cells.")
-    height = models.PositiveIntegerField(help_text="Cells.")
-    resolution = models.FloatField(help_text="Metres per cell.")
-    origin_x = models.FloatField()
-    origin_y = models.FloatField()
-    origin_yaw = models.FloatField(default=0.0, help_text="Radians.")
-    image = models.ImageField(upload_to=map_upload_to)
+    uid = models.UUIDField(default=uuid.uuid4, unique=True, editable=False, verbose_name=_("uid"))
+    shift = models.ForeignKey(
+        Shift, on_delete=models.CASCADE, related_name="maps", verbose_name=_("shift")
+    )
+    frame = models.CharField(max_length=200, verbose_name=_("frame"))
+    width = models.PositiveIntegerField(help_text=_("Cells."), verbose_name=_("width"))
+    height = models.PositiveIntegerField(help_text=_("Cells."), verbose_name=_("height"))
+    resolution = models.FloatField(help_text=_("Metres per cell."), verbose_name=_("resolution"))
+    origin_x = models.FloatField(verbose_name=_("origin x"))
+    origin_y = models.FloatField(verbose_name=_("origin y"))
+    origin_yaw = models.FloatField(
+        default=0.0, help_text=_("Radians."), verbose_name=_("origin yaw")
+    )
+    image = models.ImageField(upload_to=map_upload_to, verbose_name=_("image"))
     checksum = models.CharField(
         max_length=64,
         blank=True,
-        help_text="SHA-256 of the grid, to store only changed maps.",
+        help_text=_("SHA-256 of the grid, to store only changed maps."),
+        verbose_name=_("checksum"),
     )
-    robot_stamp = models.DateTimeField(null=True, blank=True)
-    received = models.DateTimeField(default=timezone.now)
+    robot_stamp = models.DateTimeField(null=True, blank=True, verbose_name=_("robot stamp"))
+    received = models.DateTimeField(default=timezone.now, verbose_name=_("received"))
 
     class Meta:
+        verbose_name = _("map image")
+        verbose_name_plural = _("map images")
         ordering = ["-received", "-id"]
         get_latest_by = ["received", "id"]
         indexes = [models.Index(fields=["shift", "received"], name="map_shift_received")]

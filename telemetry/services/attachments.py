@@ -9,6 +9,7 @@ from pathlib import Path
 from django.core.files import File
 from django.core.files.base import ContentFile
 from django.db import transaction
+from django.utils.translation import gettext as _
 
 from common.errors import RuleViolation
 from common.retries import stored_row
@@ -31,7 +32,7 @@ def attach_image(
     if existing := stored_row(Image, uid, segment_id=segment.master_id):
         return existing
     if not content:
-        raise RuleViolation({"image": ["The image is empty."]})
+        raise RuleViolation({"image": [_("The image is empty.")]})
     suffix = checked_picture(content)
     image = Image(segment=segment.master, description=description, robot_stamp=robot_stamp)
     if uid is not None:
@@ -56,7 +57,7 @@ def attach_recording(
     if existing := stored_row(Recording, uid, segment_id=segment.master_id):
         return existing
     if end < start:
-        raise RuleViolation({"end": ["The window ends before it starts."]})
+        raise RuleViolation({"end": [_("The window ends before it starts.")]})
     path = Path(path)
     recording = Recording(
         segment=segment.master,

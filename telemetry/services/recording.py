@@ -17,6 +17,7 @@ from django.contrib.gis.geos import Point
 from django.core.exceptions import ValidationError
 from django.db import transaction
 from django.utils import timezone
+from django.utils.translation import gettext as _
 
 from common.errors import RuleViolation
 from common.retries import stored_row
@@ -54,9 +55,11 @@ class GpsFix:
         for name in ("altitude", "horizontal_accuracy"):
             value = getattr(self, name)
             if value is not None and not math.isfinite(value):
-                raise RuleViolation({name: [f"{name.replace('_', ' ')} must be a finite number."]})
+                message = _("%(name)s must be a finite number.") % {"name": name.replace("_", " ")}
+                raise RuleViolation({name: [message]})
         if self.fix_status not in FIX_STATUSES:
-            raise RuleViolation({"fix_status": [f"Unknown fix status {self.fix_status}."]})
+            message = _("Unknown fix status %(status)s.") % {"status": self.fix_status}
+            raise RuleViolation({"fix_status": [message]})
 
     def to_pose(self, segment: Segment, source: PoseSource | None, received) -> Pose:
         """The checked, unsaved row (the archive import inserts these itself)."""
@@ -90,9 +93,11 @@ class MapPose:
         for name in ("x", "y", "yaw"):
             value = getattr(self, name)
             if value is not None and not math.isfinite(value):
-                raise RuleViolation({name: [f"{name} must be a finite number."]})
+                raise RuleViolation(
+                    {name: [_("%(name)s must be a finite number.") % {"name": name}]}
+                )
         if not self.frame:
-            raise RuleViolation({"frame": ["A local pose needs the name of its map frame."]})
+            raise RuleViolation({"frame": [_("A local pose needs the name of its map frame.")]})
 
     def to_local_pose(self, segment: Segment, received) -> LocalPose:
         self.check()
@@ -149,7 +154,9 @@ def store_pose(
     checked against the segment (a robot reaches its own vehicles only)."""
     master = pose_target(segment_id)
     if master is None:
-        raise ValidationError({"segment": [f'Invalid pk "{segment_id}" - object does not exist.']})
+        raise ValidationError(
+            {"segment": [_('Invalid pk "%(pk)s" - object does not exist.') % {"pk": segment_id}]}
+        )
     if writer is not None:
         rules.check_robot_target(writer, master)
     fix.check()
@@ -177,9 +184,9 @@ def known_pose(master: Segment, fix: GpsFix, source_id: int | None) -> Pose:
     if row is None:
         # The insert found no segment or no pose source.
         if source_id is not None and not PoseSource.objects.filter(pk=source_id).exists():
-            message = f'Invalid pk "{source_id}" - object does not exist.'
+            message = _('Invalid pk "%(pk)s" - object does not exist.') % {"pk": source_id}
             raise ValidationError({"pose_source": [message]})
-        raise ValidationError({"segment": ["The segment has just been deleted."]})
+        raise ValidationError({"segment": [_("The segment has just been deleted.")]})
     return row
 
 

@@ -30,6 +30,7 @@ def test_every_log_field_is_described_with_its_label_and_kind(client, vehicle):
         "location",
         "version",
         "time_zone",
+        "language",
         "note",
     ]
     time_zone = field(forms["event"], "time_zone")

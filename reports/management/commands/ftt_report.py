@@ -10,6 +10,7 @@ Without -o and without any export option the PDF goes to report.pdf.
 import sys
 from pathlib import Path
 
+from django.conf import settings
 from django.core.management.base import BaseCommand, CommandError
 
 from common.progress import ProgressBar
@@ -74,6 +75,12 @@ class Command(BaseCommand):
             choices=[value for value, _ in LEVELS],
             default=FULL,
             help="; ".join(text for _, text in LEVELS),
+        )
+        parser.add_argument(
+            "--language",
+            choices=[code for code, _ in settings.LANGUAGES],
+            default="",
+            help="Language of the report (default: the test event's language).",
         )
         parser.add_argument(
             "--no-image-appendix",
@@ -150,6 +157,7 @@ class Command(BaseCommand):
             max_zoom=o["max_zoom"],
             level=o["level"],
             image_appendix=not o["no_image_appendix"],
+            language=o["language"],
         )
         if problems := options.problems():
             raise CommandError(" ".join(problems))

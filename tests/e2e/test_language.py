@@ -1,0 +1,33 @@
+"""A German browser gets the cockpit in German: the page, its scripts' words
+(Django's JavaScript catalogue) and dates written the German way."""
+
+import re
+
+import pytest
+from playwright.sync_api import expect
+
+from tests.support.browser import PASSWORD, choose_event
+
+pytestmark = pytest.mark.e2e
+
+
+def test_a_german_browser_gets_the_cockpit_in_german(browser, server, open_leg):
+    context = browser.new_context(locale="de-DE")
+    try:
+        page = context.new_page()
+        page.goto(f"{server.url}/login/")
+        page.get_by_label("Benutzername").fill("vera")
+        page.get_by_label("Passwort").fill(PASSWORD)
+        page.get_by_role("button", name="Anmelden").click()
+        page.wait_for_url(f"{server.url}/")
+        choose_event(page, open_leg)
+        expect(page.locator("html")).to_have_attribute("lang", "de")
+        expect(page.get_by_role("button", name="Abmelden")).to_be_visible()
+        # Written by the script: its words from /jsi18n/, the date by Intl in German.
+        event = page.locator("#pick-event option", has_text=f"Gelände {open_leg}")
+        expect(event).to_have_text(re.compile(r" · \d{1,2}\.\d{1,2}\.\d{4} · offen$"))
+        expect(page.locator("#pick-shift option:checked")).to_have_text(
+            re.compile(r"^Schicht 1 · ")
+        )
+    finally:
+        context.close()
