@@ -178,5 +178,6 @@ def known_pose(master: Segment, fix: GpsFix, source_id: int | None) -> Pose:
 def record_local_poses(segment: Segment, poses: list[MapPose]) -> int:
     master = segment.master
     fresh = pose_rows.insert_local_poses(master, poses, timezone.now()) if poses else []
-    announce_track(master, [(p.x, p.y) for p in fresh], local=True)
+    heading = fresh[-1].yaw if fresh else None
+    announce_track(master, [(p.x, p.y) for p in fresh], local=True, heading=heading)
     return len(fresh)
