@@ -25,7 +25,8 @@ function kept(request) {
   return ["/static/", "/api/", "/gui/api/"].some((p) => url.pathname.startsWith(p));
 }
 
-async function fromNetwork(request) {
+/* The server's answer, handed on at once; `stored` gets the promise of keeping it. */
+async function fromNetwork(request, stored = () => {}) {
   const controller = new AbortController();
   const timer = setTimeout(() => controller.abort(), WAIT_MS);
   try {
@@ -33,7 +34,7 @@ async function fromNetwork(request) {
     // A redirect to the sign-in page is no cockpit to keep.
     if (response.ok && !response.redirected) {
       const copy = response.clone();
-      await caches.open(CACHE).then((cache) => cache.put(request, copy));
+      stored(caches.open(CACHE).then((cache) => cache.put(request, copy)));
     }
     return response;
   } finally {
@@ -46,17 +47,22 @@ async function fromNetwork(request) {
 self.addEventListener("message", (event) => {
   const urls = (event.data && event.data.keep) || [];
   const same = urls.filter((u) => new URL(u).origin === self.location.origin);
-  event.waitUntil(Promise.all(same.map((u) => fromNetwork(new Request(u)).catch(() => null))));
+  const keeping = same.map(async (u) => {
+    let put = null;
+    await fromNetwork(new Request(u), (p) => (put = p)).catch(() => null);
+    await put;
+  });
+  event.waitUntil(Promise.all(keeping));
 });
 
-async function answer(request) {
+async function answer(request, stored) {
   const cache = await caches.open(CACHE);
   if (Date.now() < deadUntil) {
     const hit = await keptAnswer(cache, request);
     if (hit) return hit;
   }
   try {
-    const response = await fromNetwork(request);
+    const response = await fromNetwork(request, stored);
     deadUntil = 0;
     return response;
   } catch (err) {
@@ -76,5 +82,5 @@ async function keptAnswer(cache, request) {
 }
 
 self.addEventListener("fetch", (event) => {
-  if (kept(event.request)) event.respondWith(answer(event.request));
+  if (kept(event.request)) event.respondWith(answer(event.request, (p) => event.waitUntil(p)));
 });
