@@ -15,12 +15,16 @@ let deadUntil = 0;
 self.addEventListener("install", () => self.skipWaiting());
 self.addEventListener("activate", (event) => event.waitUntil(self.clients.claim()));
 
+// Reads that say what is true now (robot online, fleet): a kept copy would lie.
+const LIVE_ONLY = ["/gui/api/collectors/", "/gui/api/fleet/"];
+
 /* What is worth keeping: the cockpit page and what it reads; not media, tiles,
  * the admin or a map's detail for one view (its bbox changes with every pan). */
 function kept(request) {
   if (request.method !== "GET") return false;
   const url = new URL(request.url);
   if (url.origin !== self.location.origin || url.searchParams.has("bbox")) return false;
+  if (LIVE_ONLY.some((p) => url.pathname.startsWith(p))) return false;
   if (request.mode === "navigate") return url.pathname === "/";
   return ["/static/", "/api/", "/gui/api/"].some((p) => url.pathname.startsWith(p));
 }

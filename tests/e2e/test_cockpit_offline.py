@@ -53,6 +53,7 @@ def test_writes_made_during_a_cut_are_stored_once_after_it_and_survive_a_reload(
         expect(local).to_have_attribute("data-robot", "fresh")
         # The local map knows the heading: its marker carries the arrow.
         expect(local.locator(".robot-marker .robot-heading")).to_have_count(1)
+        shot(page, "tablet-robot-marker")
 
         link.cut()
         expect(badge).not_to_have_text("live", timeout=5000)
@@ -85,6 +86,8 @@ def test_writes_made_during_a_cut_are_stored_once_after_it_and_survive_a_reload(
         )
         expect(row(page, "#1.1")).to_be_visible()
         expect(waiting).to_have_text("3 waiting to send")
+        # What the robot does now cannot be known offline: no kept "online".
+        expect(page.locator("#collector-status")).not_to_contain_text("online")
         shot(page, "tablet-reloaded-offline")
 
         link.restore()
