@@ -53,6 +53,7 @@ def test_writes_made_during_a_cut_are_stored_once_after_it_and_survive_a_reload(
         expect(local).to_have_attribute("data-robot", "fresh")
         # The local map knows the heading: its marker carries the arrow.
         expect(local.locator(".robot-marker .robot-heading")).to_have_count(1)
+        page.locator("#show-local").check()
         shot(page, "tablet-robot-marker")
 
         link.cut()
