@@ -17,4 +17,9 @@ module.exports = [
       "no-unused-vars": ["error", { args: "none" }],
     },
   },
+  {
+    // The service worker runs in its own scope (self, caches, clients).
+    files: ["static/gui/sw.js"],
+    languageOptions: { sourceType: "script", globals: { ...globals.serviceworker } },
+  },
 ];

@@ -87,12 +87,15 @@ def announce_row(obj, *, deleted: bool = False) -> Announcement:
     return announce(kind, obj, **payload)
 
 
-def announce_track(segment, points, *, local: bool) -> Announcement | None:
+def announce_track(segment, points, *, local: bool, heading=None) -> Announcement | None:
     """New track points, given as (x, y) or (longitude, latitude) pairs: inlined so that
-    browsers append them without a fetch."""
+    browsers append them without a fetch.  ``heading`` (radians, map frame) is the
+    last point's, where known: the cockpit turns the robot's marker by it."""
     if not points:
         return None
     payload = {"segment": segment.pk, "mode": segment.segment_type_id, "count": len(points)}
+    if heading is not None:
+        payload["heading"] = heading
     if len(points) <= MAX_INLINE_POINTS:
         payload["points"] = [[x, y] for x, y in points]
     return announce("local_poses" if local else "poses", segment, **payload)

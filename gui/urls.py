@@ -8,6 +8,7 @@ from gui.views import archive_import, gui_api, media, pages
 urlpatterns = [
     path("", pages.index, name="gui-index"),
     path("favicon.ico", pages.favicon, name="favicon"),
+    path("sw.js", pages.service_worker, name="gui-service-worker"),
     path("compare/", pages.compare, name="gui-compare"),
     path(
         "login/",

@@ -333,6 +333,11 @@ class ModeReportSerializer(PositionSerializer):
 
 class ManualSegmentSerializer(PositionSerializer):
     reason = ReasonField()
+    uid = serializers.UUIDField(
+        required=False,
+        allow_null=True,
+        help_text="Id of the take-over (ITO child) recorded; the same uid again answers it.",
+    )
 
 
 class ChildSerializer(serializers.Serializer):

@@ -232,8 +232,9 @@ class LegViewSet(ServiceViewSet):
         Answers with the new ITO child segment."""
         leg = self.get_object()
         payload = self.payload(s.ManualSegmentSerializer)
+        data = payload.validated_data
         child = segments.new_manual_segment(
-            leg, reason=s.reason_key(payload.validated_data), **payload.positions()
+            leg, reason=s.reason_key(data), uid=data.get("uid"), **payload.positions()
         )
         return self.respond(child, s.SegmentSerializer, status.HTTP_201_CREATED)
 

@@ -15,7 +15,7 @@ from django.db import transaction
 from django.utils import timezone
 from django.utils.translation import gettext as _
 
-from common.errors import RuleViolation
+from common.errors import NotFound, RuleViolation
 from common.retries import stored_row
 from events import rules
 from events.feed import announce_and_return
@@ -125,7 +125,7 @@ def _close(segment: Segment, at: datetime) -> None:
 
 
 def _start_master(
-    leg, mode, at, robot_stamp, positions, reason_key, uid, start_uncertainty=None
+    leg, mode, at, robot_stamp, positions, reason_key, uid, start_uncertainty=None, reason_uid=None
 ) -> Segment:
     master = Segment(
         leg=leg,
@@ -139,14 +139,21 @@ def _start_master(
         master.uid = uid
     master.save()
     if mode == SegmentType.ITO:
-        _add_child(master, _reason(reason_key), at, robot_stamp, start_uncertainty)
+        _add_child(master, _reason(reason_key), at, robot_stamp, start_uncertainty, uid=reason_uid)
     return master
 
 
 def _add_child(
-    master: Segment, reason: ItoReason, at: datetime, robot_stamp=None, start_uncertainty=None
+    master: Segment,
+    reason: ItoReason,
+    at: datetime,
+    robot_stamp=None,
+    start_uncertainty=None,
+    uid=None,
 ) -> Segment:
+    # A uid of None would be stored as NULL instead of the model's default.
     return Segment.objects.create(
+        **({} if uid is None else {"uid": uid}),
         start_uncertainty=start_uncertainty,
         leg_id=master.leg_id,
         parent=master,
@@ -174,11 +181,13 @@ def report_mode(
     uid=None,
     start_uncertainty: float | None = None,
     suggested_reason: str | None = None,
+    reason_uid=None,
 ) -> ModeReport:
     """The robot (or an importer) says which mode it is in now.
 
     Reporting the mode that is already open is not an error and changes
-    nothing, so publishers that repeat their state are harmless.
+    nothing, so publishers that repeat their state are harmless.  ``uid`` is
+    the new master's, ``reason_uid`` that of the reason a switch to ITO opens.
     """
     if mode not in MODES:
         modes = ", ".join(MODES)
@@ -204,7 +213,15 @@ def report_mode(
         require_not_before(leg, at, str(leg))
     positions = _position_fields(gps, local)
     master = _start_master(
-        leg, mode, at, robot_stamp, positions, reason, uid, start_uncertainty=start_uncertainty
+        leg,
+        mode,
+        at,
+        robot_stamp,
+        positions,
+        reason,
+        uid,
+        start_uncertainty=start_uncertainty,
+        reason_uid=reason_uid,
     )
     if suggested_reason and mode == SegmentType.ITO:
         _suggest(master, suggested_reason)
@@ -227,17 +244,25 @@ def new_manual_segment(
     at: datetime | None = None,
     gps: GpsPosition | None = None,
     local: LocalPosition | None = None,
+    uid=None,
 ) -> Segment:
     """An operator records a take-over: a new reason under the open ITO master,
-    or, while AUTO runs (or nothing is open), a switch to ITO.  Returns the child."""
+    or, while AUTO runs (or nothing is open), a switch to ITO.  Returns the child.
+
+    ``uid`` is the child's: a page that kept the take-over while offline sends it
+    again until it hears an answer, and a uid already stored answers that row."""
+    if existing := stored_row(Segment, uid, leg_id=leg.pk):
+        return existing
     leg = lock(leg)
     at = instant(at)
     require_open(leg, str(leg))
     current = _open_master(leg)
     if current is not None and current.segment_type_id == SegmentType.ITO:
         require_not_before(current, at, _("The open ITO segment"))
-        return announce_and_return(_add_child(current, _reason(reason), at))
-    outcome = report_mode(leg, SegmentType.ITO, at=at, gps=gps, local=local, reason=reason)
+        return announce_and_return(_add_child(current, _reason(reason), at, uid=uid))
+    outcome = report_mode(
+        leg, SegmentType.ITO, at=at, gps=gps, local=local, reason=reason, reason_uid=uid
+    )
     return outcome.master.children.get()
 
 
@@ -305,11 +330,23 @@ def annotate_segment(segment: Segment, **fields) -> Segment:
 
 
 @transaction.atomic
-def annotate_open_take_over(leg: Leg, **fields) -> Segment:
+def annotate_open_take_over(leg: Leg, *, seen: int | None = None, **fields) -> Segment:
     """A quick reason: annotates the leg's open take-over (events.rules.open_take_overs),
     which the robot may have started a moment ago; an older take-over is annotated
-    through :func:`annotate_segment`."""
+    through :func:`annotate_segment`.
+
+    ``seen`` is the take-over that was open when the operator tapped, sent by a page
+    that kept the tap while offline: by the time it arrives another take-over may
+    be open, and the reason belongs to the one the operator saw."""
     leg = lock(leg)
+    if seen is not None:
+        take_over = Segment.objects.filter(leg=leg, pk=seen, parent__isnull=False).first()
+        if take_over is None:
+            raise NotFound(
+                "The take-over this reason was given to no longer exists; "
+                "somebody may have deleted it."
+            )
+        return annotate_segment(take_over, **fields)
     take_over = rules.open_take_overs([leg.pk]).first()
     if take_over is None:
         raise RuleViolation(

@@ -300,7 +300,8 @@ class ManualSegment(SegmentWrite):
         leg = get_object_or_404(Leg, pk=pk)
         payload = checked(s.ManualSegmentSerializer, request)
         reason = s.reason_key(payload.validated_data)
-        return rules.new_manual_segment(leg, reason=reason, **payload.positions())
+        uid = payload.validated_data.get("uid")
+        return rules.new_manual_segment(leg, reason=reason, uid=uid, **payload.positions())
 
 
 class SegmentClose(SegmentWrite):
@@ -312,6 +313,10 @@ class SegmentClose(SegmentWrite):
 
 class QuickReasonBody(serializers.Serializer):
     reason = s.ReasonField(required=True, help_text="ITO reason key.")
+    take_over = serializers.IntegerField(
+        required=False,
+        help_text="The take-over open when the operator tapped (a tap kept while offline).",
+    )
 
 
 class QuickReason(SegmentWrite):
@@ -319,8 +324,9 @@ class QuickReason(SegmentWrite):
 
     def write(self, request, pk):
         leg = get_object_or_404(Leg, pk=pk)
-        reason = checked(QuickReasonBody, request).validated_data["reason"]
-        return rules.annotate_open_take_over(leg, ito_reason=reason)
+        body = checked(QuickReasonBody, request).validated_data
+        seen = body.get("take_over")
+        return rules.annotate_open_take_over(leg, seen=seen, ito_reason=body["reason"])
 
 
 class SegmentAttachments(GuiView):

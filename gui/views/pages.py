@@ -11,6 +11,7 @@ import re
 from django.conf import settings
 from django.contrib.auth.decorators import login_required
 from django.contrib.staticfiles import finders
+from django.http import HttpResponse
 from django.shortcuts import redirect, render
 from django.templatetags.static import static
 from django.urls import reverse
@@ -188,6 +189,17 @@ def compare(request):
         },
     }
     return render(request, "gui/compare.html", context)
+
+
+def service_worker(request):
+    """static/gui/sw.js from the site's root: a service worker controls only the
+    addresses under its own, and the cockpit is ``/``."""
+    path = finders.find("gui/sw.js")
+    with open(path, encoding="utf-8") as source:
+        response = HttpResponse(source.read(), content_type="text/javascript")
+    # The browser checks for a new worker on each visit; no stale copy in between.
+    response["Cache-Control"] = "no-cache"
+    return response
 
 
 def favicon(request):

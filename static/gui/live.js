@@ -11,7 +11,8 @@ export const Live = {
   socket: null,
   retry: 500,
   // When the server last spoke, and how long a silence means a dead link (its heartbeat says).
-  heard: Date.now(),
+  heard: Number(localStorage.getItem("ftt.heard")) || Date.now(),
+  kept: 0, // when `heard` was last written to localStorage
   staleAfter: 3,
   link: "connecting", // "live", "stale" (silent though open) or "down" (closed, reconnecting)
   pending: new Set(),
@@ -31,7 +32,12 @@ export const Live = {
     socket.onmessage = (e) => {
       // A socket given up as dead says nothing about the link now.
       if (this.socket !== socket) return;
+      // Kept (once a second), so that a reload on a dead link still says how long ago.
       this.heard = Date.now();
+      if (this.heard - this.kept > 1000) {
+        this.kept = this.heard;
+        localStorage.setItem("ftt.heard", String(this.heard));
+      }
       if (this.link !== "live") this.setLink("live");
       this.receive(JSON.parse(e.data));
     };
@@ -147,7 +153,9 @@ export const Live = {
     try {
       for (const { keys, run } of this.refreshers) if (keys.some((k) => what.has(k))) await run(what);
     } catch (err) {
-      showError(err);
+      // On a dead link a refresh cannot succeed; the badge and banner say so, and
+      // the page catches up once the link is back.
+      if (this.link === "live" || !(err instanceof TypeError)) showError(err);
     }
   },
 };

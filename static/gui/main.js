@@ -9,11 +9,12 @@ import { current, fromUrl, state } from "./state.js";
 import { Live, onSelectedLeg } from "./live.js";
 import { loadCatalogues, loadLevel } from "./levels.js";
 import { appendPoses, applySegments, drawTakeOvers, loadSegments, refreshDistances, renderMode, renderSegments } from "./segments.js";
-import { loadLocalMap } from "./mapview.js";
+import { gpsMap, loadLocalMap, localMap } from "./mapview.js";
 import { dialogSegment, loadImages, loadNotes } from "./segment-dialog.js";
 import { Collector } from "./collector.js";
 import { refreshSnapshots } from "./snapshots.js";
 import { Fleet } from "./fleet.js";
+import { Outbox } from "./outbox.js";
 import "./parameters.js";
 import "./reports.js";
 
@@ -72,6 +73,19 @@ Live.onRefresh(["images"], async () => {
 Live.onRefresh(["recordings"], refreshSnapshots);
 Live.onRefresh(["fleet"], () => Fleet.refresh());
 
+/* The service worker keeps the cockpit's files and last answers, so that a
+ * reload on a dead link opens it (static/gui/sw.js); what this page loaded
+ * before the worker ran is named to it. */
+function keepCockpit() {
+  const sw = navigator.serviceWorker;
+  if (!sw) return; // plain http off localhost: no service worker, the outbox still works
+  sw.register("/sw.js").catch(() => {});
+  sw.ready.then((registration) => {
+    const files = $$("script[src], link[rel=stylesheet], link[rel=modulepreload], link[rel=icon]").map((el) => el.src || el.href);
+    registration.active.postMessage({ keep: [location.href, ...files] });
+  });
+}
+
 async function boot() {
   const catalogues = loadCatalogues();
   if (!CONFIG.canOperate) $$(".op").forEach((b) => (b.disabled = true));
@@ -81,10 +95,18 @@ async function boot() {
   const opening = !fromUrl.event && !fromUrl.view ? CONFIG.opening : null;
   if (opening && opening.view) state.view = opening.view;
   else if (opening) Object.assign(state.selected, opening);
-  Live.onLink = renderMode;
+  Live.onLink = (link) => {
+    renderMode();
+    // Writes kept while the link was dead go as soon as it is back.
+    if (link === "live") Outbox.flush().catch(showError);
+  };
+  Outbox.show().catch(showError);
+  keepCockpit();
   setInterval(() => {
     Live.watch();
     renderMode();
+    gpsMap.tickRobot();
+    localMap.tickRobot();
     Fleet.tick();
   }, 1000);
   if (state.view === "fleet") Fleet.show(true).catch(showError);
@@ -102,6 +124,8 @@ async function boot() {
     if (current("shift")) Collector.refresh();
     // Collectors that stop beating turn offline without a change-feed event.
     Fleet.refresh().catch(showError);
+    // A flush cut short by the link (it may look live a moment longer) tries again.
+    if (Live.link === "live") Outbox.flush().catch(showError);
   }, 5000);
 }
 

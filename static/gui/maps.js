@@ -5,6 +5,8 @@
 import { _ } from "./i18n.js";
 
 const COLORS = { auto: "#1a9c3a", ito: "#d22020", selected: "#1f5fbf" };
+// A fix older than this, and the robot's marker is greyed: where it was, not where it is.
+const FIX_FRESH_S = 5;
 
 /* An image placed by three corners (top-left, top-right, bottom-left), so it
  * can be rotated and scaled; Leaflet's own imageOverlay only takes a box. */
@@ -78,6 +80,10 @@ class TrackMap {
     for (const t of this.tracks.values()) t.line.remove();
     this.tracks.clear();
     this.markers.clearLayers();
+    if (this.robot) this.robot.remove();
+    this.robot = null;
+    this.robotFix = null;
+    this.element.dataset.robot = "";
     this.takeOversKey = null;
     this.fitted = false;
     this.dropDetail();
@@ -117,6 +123,31 @@ class TrackMap {
     this.markDrawn();
     if (!this.fitted) this.fitAll();
     else if (this.follow && points.length) this.map.panTo(this.toLatLngs(points.slice(-1))[0]);
+  }
+  /* The robot now: a dot at `point` (the map's own order), an arrow where its heading
+   * (radians, counter-clockwise from east) is known; `fixedAt` is when the page heard
+   * the fix (Date.now()), null when it does not know, as after a reload. */
+  setRobot(point, heading = null, fixedAt = null) {
+    const at = this.toLatLngs([point])[0];
+    if (!this.robot) {
+      this.robot = L.marker(at, { interactive: false, keyboard: false, zIndexOffset: 1000 }).addTo(this.map);
+    } else this.robot.setLatLng(at);
+    if (heading !== this.robotHeading || !this.robot.getIcon().options.html) {
+      this.robotHeading = heading;
+      // Screen angles turn clockwise; the arrow is drawn pointing east.
+      const arrow = heading === null ? "" : `<span class="robot-heading" style="transform: rotate(${(-heading * 180) / Math.PI}deg)"></span>`;
+      this.robot.setIcon(L.divIcon({ className: "robot-marker", html: `<span class="robot-dot"></span>${arrow}`, iconSize: [22, 22] }));
+    }
+    if (fixedAt !== null) this.robotFix = fixedAt;
+    this.tickRobot();
+  }
+  /* Called every second: greys the marker once its fix is old. */
+  tickRobot() {
+    if (!this.robot) return;
+    const fresh = this.robotFix !== null && (Date.now() - this.robotFix) / 1000 <= FIX_FRESH_S;
+    const el = this.robot.getElement();
+    if (el) el.classList.toggle("stale", !fresh);
+    this.element.dataset.robot = fresh ? "fresh" : "stale";
   }
   /* spots: [[segment id, point], ...]; the same spots again leave the canvas as it is. */
   setTakeOvers(spots) {

@@ -60,6 +60,7 @@ function firstDrawing(leg, data) {
   if (drawnLeg === leg) return;
   drawnLeg = leg;
   drawLegTracks(data);
+  placeRobot(data.segments);
   showTakeOvers(null, data.segments);
   const anyLocal = Object.values(data.segments).some((t) => t.local.length);
   if (anyLocal && !$("#show-local").checked) {
@@ -71,6 +72,22 @@ function firstDrawing(leg, data) {
     // At once: an animated zoom would draw the canvas again a quarter second later.
     m.fitAll({ animate: false });
   }
+}
+
+/* The robot's marker at the end of the newest track of each map; when that
+ * fix was made the answer does not say, so the marker starts greyed until the
+ * live feed brings the next one (showPosition). */
+function placeRobot(segments) {
+  const newest = Object.keys(segments).map(Number).sort((a, b) => b - a);
+  for (const [map, key] of [[gpsMap, "gps"], [localMap, "local"]]) {
+    const id = newest.find((i) => segments[i][key].length);
+    if (id !== undefined) map.setRobot(segments[id][key].at(-1));
+  }
+}
+
+/* A live fix: the marker moves there, fresh, turned by the heading where known. */
+export function showPosition(map, point, heading) {
+  map.setRobot(point, heading ?? null, Date.now());
 }
 
 /* Empties both maps for another leg; the leg drawn (or about to be drawn)

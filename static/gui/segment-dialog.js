@@ -3,6 +3,7 @@
 import { CONFIG, $, $$ } from "./dom.js";
 import { _ } from "./i18n.js";
 import { api, list } from "./api.js";
+import { Outbox, newUid } from "./outbox.js";
 import { notice, showError } from "./feedback.js";
 import { byId, putSegment, segmentLabel, state } from "./state.js";
 import { fmtNumber, fmtTime } from "./format.js";
@@ -32,11 +33,22 @@ export async function openSegmentDialog(id) {
   $$("input, select, button", form).forEach((el) => (el.disabled = !CONFIG.canOperate));
   $$(".op-block", segmentDialog).forEach((el) => (el.hidden = !CONFIG.canOperate));
   // One read for notes, images and snapshots: three would queue one behind the other.
-  const data = await api("GET", `segments/${s.id}/attachments/`, undefined, { root: CONFIG.guiApiRoot });
+  let data = null;
+  try {
+    data = await api("GET", `segments/${s.id}/attachments/`, undefined, { root: CONFIG.guiApiRoot });
+  } catch (err) {
+    // On a dead link the dialog still opens: notes and photos made now are kept (outbox.js).
+    if (!(err instanceof TypeError)) throw err;
+  }
   if (dialogSegment !== s) return;
-  showNotes(data.notes);
-  showImages(data.images);
-  showSnapshots(data.master, data.recordings);
+  if (data) {
+    showNotes(data.notes);
+    showImages(data.images);
+    showSnapshots(data.master, data.recordings);
+  } else {
+    errorBox.textContent = _("The server cannot be reached: the notes and images stored cannot be shown now. What you add is kept in this browser and sent later.");
+    errorBox.hidden = false;
+  }
   if (!segmentDialog.open) {
     keepBannerInSight();
     segmentDialog.showModal();
@@ -76,8 +88,11 @@ $("#annotation-form").addEventListener("submit", dialogAction(async () => {
   const form = $("#annotation-form");
   const body = {};
   for (const f of ["ito_reason", "obstacle", "lighting", "slope"]) body[f] = form.elements[f].value;
-  putSegment(await api("PATCH", `segments/${dialogSegment.id}/`, body));
-  notice(`${segmentLabel(dialogSegment.id)} saved.`);
+  const id = dialogSegment.id;
+  const { answer } = await Outbox.write({ method: "PATCH", path: `segments/${id}/`, body, what: `the edit of ${segmentLabel(id)}` });
+  if (!answer) return;
+  putSegment(answer);
+  notice(`${segmentLabel(id)} saved.`);
 }));
 
 export async function loadNotes({ keepEditing = false } = {}) {
@@ -158,11 +173,11 @@ function editNote(li, note) {
 
 $("#note-form").addEventListener("submit", dialogAction(async () => {
   const form = $("#note-form");
-  const body = { segment: dialogSegment.id, text: form.elements.text.value };
+  const body = { uid: newUid(), segment: dialogSegment.id, text: form.elements.text.value };
   if (CONFIG.personnel) body.author = CONFIG.personnel;
-  await api("POST", "notes/", body);
+  const { answer } = await Outbox.write({ method: "POST", path: "notes/", body, what: `a note on ${segmentLabel(dialogSegment.id)}` });
   form.reset();
-  await loadNotes();
+  if (answer) await loadNotes();
 }));
 
 function masterOf(s) {
@@ -218,12 +233,11 @@ $$(".upload input[type=file]", segmentDialog).forEach((input) =>
   input.addEventListener("change", dialogAction(async () => {
     const file = input.files[0];
     if (!file) return;
-    const body = new FormData();
-    body.append("segment", masterOf(dialogSegment));
-    body.append("image", file, file.name);
-    body.append("description", _("Uploaded by %(user)s", { user: CONFIG.user }));
-    await api("POST", "images/", body);
+    const fields = { uid: newUid(), segment: masterOf(dialogSegment), description: _("Uploaded by %(user)s", { user: CONFIG.user }) };
+    const form = { fields, fileField: "image", file, fileName: file.name };
+    const { answer } = await Outbox.write({ method: "POST", path: "images/", form, what: _("a photo of %(segment)s", { segment: segmentLabel(dialogSegment.id) }) });
     input.value = "";
+    if (!answer) return;
     await loadImages();
     notice(_("Image uploaded."));
   })),

@@ -3,12 +3,13 @@
 import { CONFIG, $, $$ } from "./dom.js";
 import { _ } from "./i18n.js";
 import { ApiError, api } from "./api.js";
+import { Outbox, newUid } from "./outbox.js";
 import { take } from "./bootstrap.js";
 import { clearError, notice, showError } from "./feedback.js";
 import { byId, current, fromUrl, putSegment, reasonName, saveUrl, segmentLabel, shortLabel, state, vehicleName } from "./state.js";
 import { fmtClock, fmtDistance, fmtDuration, fmtTime } from "./format.js";
 import { confirmDialog } from "./dialogs.js";
-import { clearMaps, drawLegTracks, showTakeOvers, gpsMap, loadBasemaps, loadLegTracks, loadLocalMap, localMap, showLegTracks } from "./mapview.js";
+import { clearMaps, drawLegTracks, showPosition, showTakeOvers, gpsMap, loadBasemaps, loadLegTracks, loadLocalMap, localMap, showLegTracks } from "./mapview.js";
 import { Live, onSelectedLeg } from "./live.js";
 import { Collector } from "./collector.js";
 import { openSegmentDialog } from "./segment-dialog.js";
@@ -133,10 +134,16 @@ function applyRows(answer) {
   drawTakeOvers();
 }
 
-/* A write through /gui/api/ answers with the row it wrote and every row it touched. */
-async function segmentWrite(path, body = {}) {
+/* A write through /gui/api/ answers with the row it wrote and every row it touched.
+ * One described by `what` is kept on a dead link to be sent later (outbox.js):
+ * then there is no row yet.  Ending a segment is not kept: sent later, it would
+ * end it at the wrong time. */
+async function segmentWrite(path, body, what, kept) {
   const leg = state.selected.leg;
-  const answer = await api("POST", path, body, { root: CONFIG.guiApiRoot });
+  const answer = what
+    ? (await Outbox.write({ method: "POST", path, body, gui: true, what, kept })).answer
+    : await api("POST", path, body, { root: CONFIG.guiApiRoot });
+  if (!answer) return null;
   if (leg === state.selected.leg) applyRows(answer);
   return answer.segment;
 }
@@ -283,8 +290,11 @@ function requireSegment() {
 
 async function setReason(key) {
   // The server picks the take-over (the robot may have started a new one a moment ago).
-  const row = await segmentWrite(`legs/${state.selected.leg}/quick-reason/`, { reason: key });
-  notice(_("Reason of %(segment)s set to %(reason)s.", { segment: segmentLabel(row.id), reason: reasonName(key) }));
+  const seen = state.openTakeOver;
+  const what = _("%(reason)s for %(take_over)s", { reason: reasonName(key), take_over: segmentLabel(seen) });
+  // Kept while offline, it names the take-over seen: another may be open by the time it is sent.
+  const row = await segmentWrite(`legs/${state.selected.leg}/quick-reason/`, { reason: key }, what, { reason: key, take_over: seen });
+  if (row) notice(_("Reason of %(segment)s set to %(reason)s.", { segment: segmentLabel(row.id), reason: reasonName(key) }));
 }
 
 $$("[data-quick]").forEach((b) => b.addEventListener("click", () => segmentAction(() => setReason(b.dataset.quick))));
@@ -296,14 +306,16 @@ $("#segment-new").addEventListener("click", () => segmentAction(async () => {
     const ok = await confirmDialog(_("The robot is in AUTO. Record a take-over (ITO) now?"), { yes: _("Record take-over"), no: _("Cancel"), warn: false });
     if (!ok) return;
   }
-  const child = await segmentWrite(`legs/${state.selected.leg}/manual-segment/`);
+  const leg = current("leg");
+  const child = await segmentWrite(`legs/${leg.id}/manual-segment/`, { uid: newUid() }, `a new take-over in Leg ${leg.number}`);
+  if (!child) return;
   selectSegment(child.id);
   notice(_("Take-over recorded."));
 }));
 $("#segment-end").addEventListener("click", () => segmentAction(async () => {
   const id = requireSegment();
   // Ending a master ends its reasons too: the answer brings them all.
-  await segmentWrite(`segments/${id}/close/`);
+  await segmentWrite(`segments/${id}/close/`, {});
   // Ending a reason leaves its take-over (the ITO run) open: the banner stays ITO, and says why.
   const m = openMaster();
   const still = m && m.segment_type === "ito" && byId(state.segments, id)?.parent === m.id;
@@ -343,6 +355,7 @@ export function appendPoses(e) {
   const map = e.kind === "poses" ? gpsMap : localMap;
   const pts = e.kind === "poses" ? p.points.map(([lon, lat]) => [lat, lon]) : p.points;
   map.appendPoints(p.segment, p.mode, pts);
+  if (pts.length) showPosition(map, pts.at(-1), p.heading);
   const t = state.tracks[p.segment] || (state.tracks[p.segment] = { mode: p.mode, gps: [], local: [], distance_m: null });
   (e.kind === "poses" ? t.gps : t.local).push(...pts);
   Live.later("distances");

@@ -195,5 +195,8 @@ def record_local_poses(segment: Segment, poses: list[MapPose]) -> int:
     master = segment.master
     fresh = pose_rows.insert_local_poses(master, poses, timezone.now()) if poses else []
     keep_figures(master.pk, LOCAL, fresh)
-    announce_track(master, [(p.x, p.y) for p in fresh], local=True)
+    # The robot's heading for its marker: the yaw of the newest pose stored.
+    stored = {point.uid for point in fresh}
+    heading = next((p.yaw for p in reversed(poses) if pose_rows.as_uuid(p.uid) in stored), None)
+    announce_track(master, [(p.x, p.y) for p in fresh], local=True, heading=heading)
     return len(fresh)

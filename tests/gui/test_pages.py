@@ -398,3 +398,11 @@ def test_a_bare_address_opens_the_last_cockpit_or_asks_which_robot(
     del logging["field-2"]
     Collector.objects.filter(name="field-2").update(last_seen=timezone.now() - timedelta(hours=1))
     assert opening() == mine
+
+
+def test_the_service_worker_is_served_from_the_sites_root(client):
+    # Its scope is the folder it is served from: under /static/ it could not keep "/".
+    answer = client.get("/sw.js")
+    assert answer.status_code == 200
+    assert answer["Content-Type"].startswith("text/javascript")
+    assert b'addEventListener("fetch"' in answer.content

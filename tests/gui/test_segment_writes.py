@@ -113,3 +113,33 @@ def test_a_quick_reason_without_an_open_take_over_is_refused_in_words(api_client
     assert missing.status_code == 400 and "reason" in missing.json()["errors"]
     assert api_client("viewer").post(url, {"reason": "safety"}, format="json").status_code == 403
     assert client.get(f"/gui/api/legs/{leg.pk}/segments/").json()["open_take_over"] is None
+
+
+def test_writes_kept_offline_are_stored_once_and_land_where_the_operator_tapped(api_client, leg):
+    """A page that kept writes on a dead link sends them again until it hears an
+    answer: a take-over under its uid is stored once, and a quick reason goes to
+    the take-over the operator saw, though another is open by the time it arrives."""
+    client = api_client("operator")
+    url = f"/gui/api/legs/{leg.pk}/manual-segment/"
+    uid = "6f1c3b1e-1b7a-4c55-9a51-2a0d6f1e2b3c"
+    first = client.post(url, {"uid": uid}, format="json")
+    again = client.post(url, {"uid": uid}, format="json")
+    assert first.status_code == 201 and again.status_code == 201, again.content
+    assert again.json()["segment"]["id"] == first.json()["segment"]["id"]
+    assert Segment.objects.filter(leg=leg, parent__isnull=False).count() == 1
+    seen = Segment.objects.get(uid=uid)
+    segments.report_mode(leg, SegmentType.AUTO)
+    newer = segments.report_mode(leg, SegmentType.ITO).master.children.get()
+    reason = f"/gui/api/legs/{leg.pk}/quick-reason/"
+    kept = {"reason": "safety", "take_over": seen.pk}
+    for _ in range(2):
+        answer = client.post(reason, kept, format="json")
+        assert answer.status_code == 200, answer.content
+        assert answer.json()["segment"]["id"] == seen.pk
+    seen.refresh_from_db()
+    newer.refresh_from_db()
+    assert (seen.ito_reason_id, newer.ito_reason_id) == ("safety", "unassigned")
+    # The take-over was deleted meanwhile: the page is told why in words.
+    gone = client.post(reason, {"reason": "safety", "take_over": 999999}, format="json")
+    assert gone.status_code == 404
+    assert "no longer exists" in gone.json()["detail"]

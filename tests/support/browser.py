@@ -269,7 +269,7 @@ for line in sys.stdin:
                 x += 7.07
                 y += 5.56
                 fixes.append(recording.GpsFix(lon, lat))
-                local.append(recording.MapPose(x, y, "map"))
+                local.append(recording.MapPose(x, y, "map", yaw=0.666))
             recording.record_poses(open_master(leg), fixes)
             recording.record_local_poses(open_master(leg), local)
         elif word == "map":

@@ -1,0 +1,132 @@
+/* Writes kept while the server cannot be reached: quick reasons, new take-overs,
+ * notes, segment edits and photos wait in this browser (IndexedDB, so a reload
+ * keeps them), shown as "N waiting to send", and go to the server in the order
+ * they were made once the live link is back.  Each carries the uid its row will
+ * have (or, for a reason, the take-over the operator saw), so that a write sent
+ * again after a lost answer is stored once: the server decides (common/retries.py).
+ * A write the server refuses is dropped and the operator is told why. */
+import { CONFIG, $ } from "./dom.js";
+import { ApiError, api, plainMessage } from "./api.js";
+import { notice, showError } from "./feedback.js";
+import { Live } from "./live.js";
+
+const DB_NAME = "ftt-outbox";
+const STORE = "writes";
+// How long a write may wait for its answer before it is kept for later.
+const WAIT_MS = 8000;
+const WAIT_FILE_MS = 60000;
+
+/* A uid for a new row.  crypto.randomUUID exists only on https (and localhost);
+ * field laptops may reach the server over plain http. */
+export function newUid() {
+  if (crypto.randomUUID) return crypto.randomUUID();
+  const b = crypto.getRandomValues(new Uint8Array(16));
+  b[6] = (b[6] & 0x0f) | 0x40;
+  b[8] = (b[8] & 0x3f) | 0x80;
+  const h = Array.from(b, (x) => x.toString(16).padStart(2, "0")).join("");
+  return `${h.slice(0, 8)}-${h.slice(8, 12)}-${h.slice(12, 16)}-${h.slice(16, 20)}-${h.slice(20)}`;
+}
+
+let opened = null;
+function database() {
+  opened ||= new Promise((resolve, reject) => {
+    const request = indexedDB.open(DB_NAME, 1);
+    request.onupgradeneeded = () => request.result.createObjectStore(STORE, { keyPath: "seq", autoIncrement: true });
+    request.onsuccess = () => resolve(request.result);
+    request.onerror = () => reject(request.error);
+  });
+  return opened;
+}
+
+/* One request on the store, resolved once its transaction has committed. */
+async function onStore(mode, call) {
+  const db = await database();
+  return new Promise((resolve, reject) => {
+    const tx = db.transaction(STORE, mode);
+    const request = call(tx.objectStore(STORE));
+    tx.oncomplete = () => resolve(request.result);
+    tx.onerror = () => reject(tx.error);
+    tx.onabort = () => reject(tx.error);
+  });
+}
+
+/* A failure that says nothing about the write: the link, not the server's rules. */
+function unreachable(err) {
+  if (err instanceof ApiError) return [502, 503, 504].includes(err.status);
+  return err instanceof TypeError || ["AbortError", "TimeoutError"].includes(err && err.name);
+}
+
+function send(entry) {
+  let body = entry.body;
+  if (entry.form) {
+    body = new FormData();
+    for (const [k, v] of Object.entries(entry.form.fields)) body.append(k, v);
+    body.append(entry.form.fileField, entry.form.file, entry.form.fileName);
+  }
+  const root = entry.gui ? CONFIG.guiApiRoot : CONFIG.apiRoot;
+  const signal = AbortSignal.timeout(entry.form ? WAIT_FILE_MS : WAIT_MS);
+  return api(entry.method, entry.path, body, { root, signal });
+}
+
+export const Outbox = {
+  busy: false,
+  /* Sends `entry` ({method, path, body or form, gui, what, kept}) now if the
+   * server can be reached: {answer}.  Otherwise, or while earlier writes still
+   * wait (they go first), keeps it: {kept: true}.  `kept` replaces `body` in
+   * what is kept (a quick reason names the take-over seen).  Refusals throw. */
+  async write(entry) {
+    const waiting = await this.count();
+    // A dead link is not tried: its request would only wait out WAIT_MS.
+    if (!waiting && ["live", "connecting"].includes(Live.link)) {
+      try {
+        return { answer: await send(entry) };
+      } catch (err) {
+        if (!unreachable(err)) throw err;
+      }
+    }
+    const { kept, ...rest } = entry;
+    if (kept) rest.body = kept;
+    rest.made = new Date().toISOString();
+    await onStore("readwrite", (s) => s.add(rest));
+    await this.show();
+    notice(`Kept in this browser: ${entry.what}. It is sent when the server can be reached.`);
+    if (Live.link === "live") this.flush();
+    return { kept: true };
+  },
+  count() {
+    return onStore("readonly", (s) => s.count());
+  },
+  /* The kept writes, oldest first, one at a time: a take-over before the reason given to it. */
+  async flush() {
+    if (this.busy) return;
+    this.busy = true;
+    const refused = [];
+    let sent = 0;
+    try {
+      for (const entry of await onStore("readonly", (s) => s.getAll())) {
+        try {
+          await send(entry);
+          sent += 1;
+        } catch (err) {
+          // Still cut: this and the later ones wait for the next try, in order.
+          if (unreachable(err)) return;
+          refused.push(`${entry.what}: ${plainMessage(err)}`);
+        }
+        await onStore("readwrite", (s) => s.delete(entry.seq));
+        await this.show();
+      }
+    } finally {
+      this.busy = false;
+      await this.show();
+      if (sent) notice(sent === 1 ? "1 kept write sent." : `${sent} kept writes sent.`);
+      if (refused.length) showError(new ApiError(`Not sent, kept while offline: ${refused.join(" · ")}`));
+    }
+  },
+  async show() {
+    const n = await this.count();
+    const badge = $("#outbox");
+    badge.hidden = n === 0;
+    badge.textContent = `${n} waiting to send`;
+    badge.dataset.count = n;
+  },
+};
