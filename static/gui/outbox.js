@@ -9,6 +9,7 @@ import { CONFIG, $ } from "./dom.js";
 import { ApiError, api, plainMessage } from "./api.js";
 import { notice, showError } from "./feedback.js";
 import { Live } from "./live.js";
+import { _, plural } from "./i18n.js";
 
 const DB_NAME = "ftt-outbox";
 const STORE = "writes";
@@ -89,7 +90,7 @@ export const Outbox = {
     rest.made = new Date().toISOString();
     await onStore("readwrite", (s) => s.add(rest));
     await this.show();
-    notice(`Kept in this browser: ${entry.what}. It is sent when the server can be reached.`);
+    notice(_("Kept in this browser: %(what)s. It is sent when the server can be reached.", { what: entry.what }));
     if (Live.link === "live") this.flush();
     return { kept: true };
   },
@@ -118,15 +119,15 @@ export const Outbox = {
     } finally {
       this.busy = false;
       await this.show();
-      if (sent) notice(sent === 1 ? "1 kept write sent." : `${sent} kept writes sent.`);
-      if (refused.length) showError(new ApiError(`Not sent, kept while offline: ${refused.join(" · ")}`));
+      if (sent) notice(plural(ngettext("%(count)s kept write sent.", "%(count)s kept writes sent.", sent), sent));
+      if (refused.length) showError(new ApiError(_("Not sent, kept while offline: %(writes)s", { writes: refused.join(" · ") })));
     }
   },
   async show() {
     const n = await this.count();
     const badge = $("#outbox");
     badge.hidden = n === 0;
-    badge.textContent = `${n} waiting to send`;
+    badge.textContent = plural(ngettext("%(count)s waiting to send", "%(count)s waiting to send", n), n);
     badge.dataset.count = n;
   },
 };

@@ -26,7 +26,8 @@ function kept(request) {
   if (url.origin !== self.location.origin || url.searchParams.has("bbox")) return false;
   if (LIVE_ONLY.some((p) => url.pathname.startsWith(p))) return false;
   if (request.mode === "navigate") return url.pathname === "/";
-  return ["/static/", "/api/", "/gui/api/"].some((p) => url.pathname.startsWith(p));
+  // The catalogue of the page's language (/jsi18n/) too: the scripts call its gettext.
+  return ["/static/", "/api/", "/gui/api/", "/jsi18n/"].some((p) => url.pathname.startsWith(p));
 }
 
 /* The server's answer, handed on at once; `stored` gets the promise of keeping it. */
