@@ -204,3 +204,47 @@ def test_a_reason_rule_on_a_field_the_type_lacks_is_refused():
             "params.reason_rules",
             "rules: [{topic: /e, type: std_msgs/msg/Bool, field: value, values: [1], reason: x}]",
         )
+
+
+def _fix(seconds: float, lat: float):
+    ns = int(at(seconds).timestamp() * 1e9)
+    return NS(
+        header=NS(stamp=NS(sec=ns // 10**9, nanosec=ns % 10**9)),
+        status=NS(status=0),
+        latitude=lat,
+        longitude=8.0,
+        altitude=0.0,
+        position_covariance=[0.0] * 9,
+        position_covariance_type=0,
+    )
+
+
+def _drive(pipe, mode_at: float) -> list:
+    """7 s of driving north at 10 Hz with the mode (AUTO) said at ``mode_at``."""
+    events = []
+    pipe.sink = events.append
+    pipe.start_logging(at(0))
+    for tenth in range(70):
+        if tenth / 10 == mode_at:
+            pipe.on_mode_value("auto", at(mode_at))
+        pipe.on_fix(_fix(tenth / 10, 50.0 + tenth * 1e-5), at(tenth / 10))
+    if mode_at >= 7:
+        pipe.on_mode_value("auto", at(mode_at))
+    return events
+
+
+@pytest.mark.parametrize("live", [True, False], ids=["live", "bag_import"])
+def test_fixes_before_the_first_mode_start_the_first_segment_live(live):
+    from rosbridge_app.collector.pipeline import Pipeline
+
+    known = [e for e in _drive(Pipeline(print), 0) if e.kind == ev.GPS]
+    late = Pipeline(print)
+    late.hold_unknown = live
+    events = _drive(late, 7)
+    mode = next(e for e in events if e.kind == ev.MODE)
+    fixes = [e for e in events if e.kind == ev.GPS]
+    if live:  # the same segment and track as if the mode had been known from the start
+        assert mode.at == at(0) and mode.data["gps"] == [8.0, 50.0]
+        assert [f.at for f in fixes] == [f.at for f in known]
+    else:  # a recording keeps the original rule: the track starts at the first mode
+        assert mode.at == at(7) and len(fixes) == 1
