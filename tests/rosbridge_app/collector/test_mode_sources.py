@@ -9,6 +9,7 @@ import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
+from exchange.bag import import_bag
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector import params as P
 from rosbridge_app.collector import reason_rules
@@ -145,7 +146,10 @@ def _write_bag(path: Path, script: list) -> None:
             writer.write(conns[topic], ns, store.serialize_cdr(msg, msg.__msgtype__))
 
 
-def test_a_recording_with_the_robots_own_type_gives_the_scripted_segments(tmp_path):
+@pytest.mark.django_db
+def test_a_recording_with_the_robots_own_type_gives_the_scripted_segments(
+    tmp_path, vehicle, media_root
+):
     flight = {0: "MANUAL", 10: "AUTO.MISSION", 20: "POSCTL", 30: "OFFBOARD"}
     script = []
     for tenth in range(400):
@@ -170,6 +174,15 @@ def test_a_recording_with_the_robots_own_type_gives_the_scripted_segments(tmp_pa
         ("auto", 33.02),
     ]
     assert sum(e.kind == ev.GPS for e in events) > 30
+    # The importer checks the sources against the recording's own definitions
+    # (ftt_robot_msgs is not installed) and stores the same segments.
+    result = import_bag(
+        tmp_path / "flight", vehicle=vehicle, params={"params.mode_sources": MAVROS_WITH_ESTOP}
+    )
+    stored = result.leg.segments.filter(parent__isnull=True).order_by("start")
+    assert [(m.segment_type_id, m.start) for m in stored] == [
+        (mode, T0 + timedelta(seconds=t)) for mode, t in modes
+    ]
 
 
 def test_reason_rules_suggest_the_first_that_fired_within_the_window():
