@@ -90,6 +90,15 @@ def test_sets_ranges_defaults_and_the_estop_veto():
     assert said == [("auto", at(1)), ("ito", at(3)), ("auto", at(5)), ("ito", at(6))]
 
 
+def test_an_index_the_message_does_not_have_says_nothing():
+    config = parse(
+        "sources: [{topic: /joy, type: sensor_msgs/msg/Joy, field: 'buttons[4]', ito: [1]}]"
+    )
+    combiner = Combiner(config)
+    assert combiner.offer(0, NS(buttons=[0, 1]), at(0)) == []
+    assert combiner.offer(0, NS(buttons=[0, 0, 0, 0, 1]), at(1)) == [("ito", at(1))]
+
+
 def test_hysteresis_ignores_flicker_and_switches_when_it_ran_out():
     config = parse(
         "sources: [{topic: /m, type: std_msgs/msg/String, field: data,"
