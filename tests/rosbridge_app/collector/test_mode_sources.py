@@ -270,3 +270,20 @@ def test_fixes_before_the_first_mode_start_the_first_segment_live(live):
         assert [f.at for f in fixes] == [f.at for f in known]
     else:  # a recording keeps the original rule: the track starts at the first mode
         assert mode.at == at(7) and len(fixes) == 1
+
+
+def test_every_preset_of_the_docs_passes_the_check():
+    import re
+
+    docs = (Path(__file__).parents[3] / "docs" / "collector.md").read_text()
+    section = docs.split("### Mode presets")[1].split("###")[0]
+    presets = re.findall(r"```yaml\n(.*?)```", section, re.S)
+    assert len(presets) == 6
+    for text in presets:
+        config = parse(text)  # the types of MAVROS and Autoware are not installed here
+        for source in config.sources:
+            try:
+                installed_fields(source.type)
+            except KeyError:
+                continue
+            P.check("params.mode_sources", text)
