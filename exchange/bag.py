@@ -31,6 +31,7 @@ from rosbridge_app.collector.bag import bag_events, open_bag
 from rosbridge_app.collector.blackbox import snapshot_topics
 from rosbridge_app.collector.events import Event
 from rosbridge_app.collector.mcap_files import MessageDefinitions, write_mcap
+from rosbridge_app.collector.message_fields import installed_fields, recorded_fields
 from rosbridge_app.collector.modes import ITO
 from rosbridge_app.collector.params import SPECS, InvalidParameter, check
 from rosbridge_app.collector.recorder import Recorder
@@ -79,14 +80,20 @@ def bag_info(path) -> BagInfo:
     )
 
 
-def collector_params(overrides: dict) -> dict:
-    """The collector's defaults with the given ``topics.*``/``params.*`` changed."""
+def collector_params(overrides: dict, path: Path | None = None) -> dict:
+    """The collector's defaults with the given ``topics.*``/``params.*`` changed;
+    mode sources and reason rules are checked against the types recorded in
+    the bag at ``path`` too (ROS 1 bags and MCAP carry their definitions)."""
+    fields_of = installed_fields
+    if path is not None:
+        with open_bag(path) as reader:
+            fields_of = recorded_fields(reader.typestore)
     params = {name: spec.default for name, spec in SPECS.items()}
     for name, value in overrides.items():
         if name not in SPECS:
             raise BagImportError(f"Unknown collector parameter '{name}'.")
         try:
-            params[name] = check(name, value)
+            params[name] = check(name, value, fields_of)
         except InvalidParameter as exc:
             raise BagImportError(str(exc)) from None
     return params
@@ -209,7 +216,7 @@ def import_bag(
     "storing" the collector events made from them.  ``snapshots``: also cut the
     black box's window (``snapshot.*`` in ``params``) around every take-over."""
     info = bag_info(path)
-    settings = collector_params(params or {})
+    settings = collector_params(params or {}, info.path)
     reading = None if progress is None else functools.partial(progress, "reading")
     events = bag_events(info.path, settings, progress=reading)
     before = _counts(snapshots)

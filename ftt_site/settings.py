@@ -159,6 +159,9 @@ FTT_LOGIN_ACCOUNT_PACE_SECONDS = env_int("FTT_LOGIN_ACCOUNT_PACE_SECONDS", 10)
 # How long a web process keeps an API token (with its account's roles) and a
 # robot account's vehicles after reading them (common.api.authentication).
 FTT_TOKEN_CACHE_SECONDS = env_int("FTT_TOKEN_CACHE_SECONDS", 5)
+# Statistics count the robot's suggested reason of a take-over nobody has
+# annotated yet (params.reason_rules); off: confirmed reasons only.
+FTT_COUNT_ROBOT_REASONS = env_bool("FTT_COUNT_ROBOT_REASONS", False)
 AXES_RESET_ON_SUCCESS = True
 AXES_LOCKOUT_CALLABLE = "ftt_site.lockout.locked_out"
 AXES_CLIENT_IP_CALLABLE = "ftt_site.lockout.client_address"

@@ -34,6 +34,7 @@ from dataclasses import asdict, dataclass, field
 from datetime import datetime
 
 import numpy as np
+from django.conf import settings
 from scipy.stats import chi2
 
 from events.models import ItoReason, Segment, SegmentType, TestEvent
@@ -283,6 +284,7 @@ RUN_FIELDS = (
     "parent",
     "segment_type",
     "ito_reason",
+    "suggested_reason",
     "start",
     "start_uncertainty",
     "end",
@@ -296,6 +298,15 @@ RUN_FIELDS = (
     "leg__shift",
     "leg__shift__vehicle",
 )
+
+
+def counted_reason(child: Segment) -> str:
+    """The reason statistics count: the operator's; the robot's suggestion only
+    for a take-over still Unassigned and with settings.FTT_COUNT_ROBOT_REASONS."""
+    reason = child.ito_reason_id or ItoReason.UNASSIGNED
+    if reason == ItoReason.UNASSIGNED and settings.FTT_COUNT_ROBOT_REASONS:
+        return child.suggested_reason_id or reason
+    return reason
 
 
 def event_runs(event: TestEvent, mode: str = GPS, *, tracks: bool = True) -> list[Run]:
@@ -334,7 +345,7 @@ def event_runs(event: TestEvent, mode: str = GPS, *, tracks: bool = True) -> lis
         spans = [
             ReasonSpan(
                 id=c.id,
-                reason=c.ito_reason_id or ItoReason.UNASSIGNED,
+                reason=counted_reason(c),
                 start=c.start,
                 end=c.end or max(end, c.start),
                 is_open=c.end is None,

@@ -63,6 +63,18 @@ def installed_fields(typename: str) -> dict:
     return {field: _rosidl_kind(text) for field, text in fields.items()}
 
 
+def recorded_fields(typestore):
+    """fields_of for a recording: its own type definitions, then the installed ones."""
+
+    def fields_of(typename: str) -> dict:
+        try:
+            return typestore_fields(typestore, typename)
+        except KeyError:
+            return installed_fields(typename)
+
+    return fields_of
+
+
 def folder_types(folder) -> dict:
     """{"pkg/msg/Name": definition} of a ROS 2 package or a folder of .msg files
     (the package is the folder's name), for rosbags' ``register``."""

@@ -285,7 +285,11 @@ class Combiner:
     def offer(self, index: int, msg, at: datetime) -> list[tuple[str, datetime]]:
         """(mode, at) of each change of the combined mode this message causes."""
         source = self.config.sources[index]
-        mode = source.mode_of(field_value(msg, source.path))
+        try:
+            value = field_value(msg, source.path)
+        except (IndexError, AttributeError):
+            return []  # buttons[4] of a joystick with three buttons says nothing
+        mode = source.mode_of(value)
         if not source.hysteresis:
             self.said[index], self.pending[index] = mode, None
             return self._combine(at)

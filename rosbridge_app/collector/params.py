@@ -205,12 +205,12 @@ class InvalidParameter(ValueError):
     pass
 
 
-def check(name: str, value) -> object:
+def check(name: str, value, fields_of=installed_fields) -> object:
     """The value to keep, or InvalidParameter with a reason a person understands."""
     spec = SPECS.get(name)
     if spec is None:
         return value
-    return _checked(name, spec, value)
+    return _checked(name, spec, value, fields_of)
 
 
 def expected_types(name: str, values: dict) -> tuple[str, ...]:
@@ -222,7 +222,7 @@ def expected_types(name: str, values: dict) -> tuple[str, ...]:
     return spec.message_types if spec else ()
 
 
-def _checked(name: str, spec: Spec, value) -> object:
+def _checked(name: str, spec: Spec, value, fields_of=installed_fields) -> object:
     default = spec.default
     if isinstance(default, bool):
         if not isinstance(value, bool):
@@ -247,7 +247,7 @@ def _checked(name: str, spec: Spec, value) -> object:
     if name in ("params.mode_sources", "params.reason_rules"):
         parse = mode_sources.parse if name == "params.mode_sources" else reason_rules.parse
         try:
-            parse(value, installed_fields)
+            parse(value, fields_of)
         except mode_sources.InvalidModeSources as exc:
             raise InvalidParameter(f"{name}: {exc}") from None
     if name.endswith("_service") and not value:

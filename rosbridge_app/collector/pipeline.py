@@ -43,6 +43,9 @@ from rosbridge_app.collector.thinning import Thinner
 
 log = logging.getLogger("ftt.collector")
 
+# Thinned fixes kept while logging before the mode is known (hours at the default thinning).
+UNKNOWN_MODE_FIXES = 50_000
+
 # Returned by a handler for a second copy of a message it has already had, so
 # the node does not count that copy as received (see Node._input).
 SECOND_COPY = object()
@@ -69,6 +72,10 @@ class Pipeline:
         self.tf = TfBuffer()
         self.images: deque = deque(maxlen=1)
         self.mode_sources: Combiner | None = None
+        # Live: fixes that arrive while logging before the first mode are kept and
+        # start the first segment (a bag import keeps the original's rule).
+        self.hold_unknown = False
+        self.unknown: deque = deque(maxlen=UNKNOWN_MODE_FIXES)
         self.reasons: ReasonWatcher | None = None
         self.update_params(params or {})
         self.logging = False
@@ -119,6 +126,7 @@ class Pipeline:
             return
         self.logging = True
         self.open_mode = None
+        self.unknown.clear()
         self.gps_thinner.reset()
         self.local_thinner.reset()
         self.stored_map_checksum = None
@@ -183,7 +191,12 @@ class Pipeline:
     def _switch(self, mode: str, at: datetime, robot_stamp=None, uncertainty=None) -> None:
         if self.open_mode is not None:
             self._close_track(at)
-        fix = self._fresh(self.last_fix, at)
+        held = list(self.unknown) if self.open_mode is None else []
+        self.unknown.clear()
+        if held:
+            # The track driven before the mode was known belongs to this segment.
+            at = min(at, held[0][0])
+        fix = held[0][1] if held else self._fresh(self.last_fix, at)
         local = self._fresh(self.last_local, at)
         master = uuid.uuid4()
         self.sink(
@@ -207,7 +220,9 @@ class Pipeline:
         # The new segment's track starts where the robot is now.
         self.gps_thinner.reset()
         self.local_thinner.reset()
-        if fix is not None:
+        for when, kept in held:
+            self._record_fix(when, kept)
+        if fix is not None and not held:
             self._record_fix(self.last_fix[0], fix)
         if local is not None:
             self._record_local(self.last_local[0], local)
@@ -231,6 +246,9 @@ class Pipeline:
         if self.logging and self.open_mode is not None:
             if self.gps_thinner.offer(fix["lon"], fix["lat"], _measured(at, fix)):
                 self._emit_fix(at, fix)
+        elif self.logging and self.hold_unknown:
+            if self.gps_thinner.offer(fix["lon"], fix["lat"], _measured(at, fix)):
+                self.unknown.append((at, fix))
 
     def _record_fix(self, at: datetime, fix: dict) -> None:
         self.gps_thinner.keep(fix["lon"], fix["lat"], _measured(at, fix))

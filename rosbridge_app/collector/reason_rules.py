@@ -109,7 +109,10 @@ class ReasonWatcher:
                 continue
             self.heard[i] = at
             if rule.silent is None:
-                value = field_value(msg, rule.path)
+                try:
+                    value = field_value(msg, rule.path)
+                except (IndexError, AttributeError):
+                    continue
                 holds = any(matches(m, value) for m in rule.values)
                 if holds and not self.holds[i]:
                     self.began[i] = at

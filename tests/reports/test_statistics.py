@@ -100,3 +100,17 @@ def test_event_without_poses_still_has_times_and_joins(scenario):
     assert overall.auto_seconds == T_A
     # Only straight joins between start positions remain: A1 0->.003, A2 none, ...
     assert overall.auto_distance == approx((3 + 0 + 4 + 4) * STEP_M)
+
+
+def test_the_robots_suggested_reason_counts_only_when_confirmed_or_by_setting(scenario, settings):
+    from events.models import Segment
+
+    # I3's take-over as the collector stores it: Unassigned, the robot suggesting Safety.
+    Segment.objects.filter(parent=scenario.masters["I3"]).update(
+        ito_reason="unassigned", suggested_reason="safety"
+    )
+    by_reason = event_statistics(scenario.event).overall.interventions_by_reason
+    assert by_reason.get("safety") == 1 and by_reason.get("unassigned") == 1
+    settings.FTT_COUNT_ROBOT_REASONS = True
+    by_reason = event_statistics(scenario.event).overall.interventions_by_reason
+    assert by_reason.get("safety") == 2 and "unassigned" not in by_reason

@@ -9,6 +9,7 @@ import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
+from exchange.bag import import_bag
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector import params as P
 from rosbridge_app.collector import reason_rules
@@ -89,6 +90,15 @@ def test_sets_ranges_defaults_and_the_estop_veto():
     assert said == [("auto", at(1)), ("ito", at(3)), ("auto", at(5)), ("ito", at(6))]
 
 
+def test_an_index_the_message_does_not_have_says_nothing():
+    config = parse(
+        "sources: [{topic: /joy, type: sensor_msgs/msg/Joy, field: 'buttons[4]', ito: [1]}]"
+    )
+    combiner = Combiner(config)
+    assert combiner.offer(0, NS(buttons=[0, 1]), at(0)) == []
+    assert combiner.offer(0, NS(buttons=[0, 0, 0, 0, 1]), at(1)) == [("ito", at(1))]
+
+
 def test_hysteresis_ignores_flicker_and_switches_when_it_ran_out():
     config = parse(
         "sources: [{topic: /m, type: std_msgs/msg/String, field: data,"
@@ -145,7 +155,10 @@ def _write_bag(path: Path, script: list) -> None:
             writer.write(conns[topic], ns, store.serialize_cdr(msg, msg.__msgtype__))
 
 
-def test_a_recording_with_the_robots_own_type_gives_the_scripted_segments(tmp_path):
+@pytest.mark.django_db
+def test_a_recording_with_the_robots_own_type_gives_the_scripted_segments(
+    tmp_path, vehicle, media_root
+):
     flight = {0: "MANUAL", 10: "AUTO.MISSION", 20: "POSCTL", 30: "OFFBOARD"}
     script = []
     for tenth in range(400):
@@ -170,6 +183,15 @@ def test_a_recording_with_the_robots_own_type_gives_the_scripted_segments(tmp_pa
         ("auto", 33.02),
     ]
     assert sum(e.kind == ev.GPS for e in events) > 30
+    # The importer checks the sources against the recording's own definitions
+    # (ftt_robot_msgs is not installed) and stores the same segments.
+    result = import_bag(
+        tmp_path / "flight", vehicle=vehicle, params={"params.mode_sources": MAVROS_WITH_ESTOP}
+    )
+    stored = result.leg.segments.filter(parent__isnull=True).order_by("start")
+    assert [(m.segment_type_id, m.start) for m in stored] == [
+        (mode, T0 + timedelta(seconds=t)) for mode, t in modes
+    ]
 
 
 def test_reason_rules_suggest_the_first_that_fired_within_the_window():
@@ -204,3 +226,64 @@ def test_a_reason_rule_on_a_field_the_type_lacks_is_refused():
             "params.reason_rules",
             "rules: [{topic: /e, type: std_msgs/msg/Bool, field: value, values: [1], reason: x}]",
         )
+
+
+def _fix(seconds: float, lat: float):
+    ns = int(at(seconds).timestamp() * 1e9)
+    return NS(
+        header=NS(stamp=NS(sec=ns // 10**9, nanosec=ns % 10**9)),
+        status=NS(status=0),
+        latitude=lat,
+        longitude=8.0,
+        altitude=0.0,
+        position_covariance=[0.0] * 9,
+        position_covariance_type=0,
+    )
+
+
+def _drive(pipe, mode_at: float) -> list:
+    """7 s of driving north at 10 Hz with the mode (AUTO) said at ``mode_at``."""
+    events = []
+    pipe.sink = events.append
+    pipe.start_logging(at(0))
+    for tenth in range(70):
+        if tenth / 10 == mode_at:
+            pipe.on_mode_value("auto", at(mode_at))
+        pipe.on_fix(_fix(tenth / 10, 50.0 + tenth * 1e-5), at(tenth / 10))
+    if mode_at >= 7:
+        pipe.on_mode_value("auto", at(mode_at))
+    return events
+
+
+@pytest.mark.parametrize("live", [True, False], ids=["live", "bag_import"])
+def test_fixes_before_the_first_mode_start_the_first_segment_live(live):
+    from rosbridge_app.collector.pipeline import Pipeline
+
+    known = [e for e in _drive(Pipeline(print), 0) if e.kind == ev.GPS]
+    late = Pipeline(print)
+    late.hold_unknown = live
+    events = _drive(late, 7)
+    mode = next(e for e in events if e.kind == ev.MODE)
+    fixes = [e for e in events if e.kind == ev.GPS]
+    if live:  # the same segment and track as if the mode had been known from the start
+        assert mode.at == at(0) and mode.data["gps"] == [8.0, 50.0]
+        assert [f.at for f in fixes] == [f.at for f in known]
+    else:  # a recording keeps the original rule: the track starts at the first mode
+        assert mode.at == at(7) and len(fixes) == 1
+
+
+def test_every_preset_of_the_docs_passes_the_check():
+    import re
+
+    docs = (Path(__file__).parents[3] / "docs" / "collector.md").read_text()
+    section = docs.split("### Mode presets")[1].split("###")[0]
+    presets = re.findall(r"```yaml\n(.*?)```", section, re.S)
+    assert len(presets) == 6
+    for text in presets:
+        config = parse(text)  # the types of MAVROS and Autoware are not installed here
+        for source in config.sources:
+            try:
+                installed_fields(source.type)
+            except KeyError:
+                continue
+            P.check("params.mode_sources", text)
