@@ -1,3 +1,4 @@
+from django.utils.translation import gettext as _
 from rest_framework import serializers
 
 from events.models import Criterion, Leg
@@ -47,9 +48,12 @@ class ReportSerializer(serializers.ModelSerializer):
 
 
 class ReportRequestSerializer(serializers.Serializer):
-    """Either one test event, or ``compare``: the ids of two or more to compare."""
+    """Either one test event (or only its ``shift`` or ``leg``), or ``compare``:
+    the ids of two or more to compare."""
 
     test_event = serializers.IntegerField(required=False)
+    shift = serializers.IntegerField(required=False, allow_null=True)
+    leg = serializers.IntegerField(required=False, allow_null=True)
     compare = serializers.ListField(
         child=serializers.IntegerField(), required=False, min_length=2, max_length=50
     )
@@ -59,6 +63,10 @@ class ReportRequestSerializer(serializers.Serializer):
         if ("test_event" in attrs) == ("compare" in attrs):
             raise serializers.ValidationError(
                 {"test_event": ["Give either test_event or compare (two or more ids)."]}
+            )
+        if "compare" in attrs and (attrs.get("shift") or attrs.get("leg")):
+            raise serializers.ValidationError(
+                {"compare": [_("A comparison covers whole test events: leave out shift and leg.")]}
             )
         return attrs
 

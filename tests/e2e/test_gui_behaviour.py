@@ -212,6 +212,8 @@ def test_reports_dialog_offers_exports_and_makes_a_report(page, server, open_leg
     assert page.request.get(server.url + archive).body()[:2] == b"PK"
     # A new user meets the GPS report preselected, not an empty choice.
     expect(dialog.get_by_label("Positions")).to_have_value("false")
+    # The cockpit's leg is the report's scope unless the person widens it.
+    expect(dialog.get_by_label("Report of")).to_have_value("leg")
     dialog.get_by_label("Report name").fill("Abnahme Übung")
     # A zoom no tile server has is refused in words, and nothing is queued.
     dialog.get_by_label("Closest map zoom").fill("30")
@@ -231,7 +233,8 @@ def test_reports_dialog_offers_exports_and_makes_a_report(page, server, open_leg
     href = link.first.get_attribute("href")
     pdf = page.request.get(href if href.startswith("http") else server.url + href)
     assert pdf.ok
-    assert "Abnahme Übung" in flat(pdf_text(pdf.body(), tmp_path))
+    text = flat(pdf_text(pdf.body(), tmp_path))
+    assert "Abnahme Übung" in text and "Report of Shift 1 · Leg 1" in text
     shot(page, "report-ready")
 
 
