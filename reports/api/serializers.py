@@ -5,6 +5,7 @@ from events.models import Criterion, Leg
 from reports.documents.options import LEVELS, MAX_TIMELINE_HOURS, STANDARD
 from reports.figures.tiles import MAX_ZOOM
 from reports.models import Report
+from reports.selectors.content import scope_name
 from reports.services.generation import COMPARE
 
 
@@ -12,6 +13,7 @@ class ReportSerializer(serializers.ModelSerializer):
     download = serializers.SerializerMethodField()
     kind = serializers.SerializerMethodField()
     compare = serializers.SerializerMethodField()
+    scope = serializers.SerializerMethodField()
 
     class Meta:
         model = Report
@@ -29,8 +31,14 @@ class ReportSerializer(serializers.ModelSerializer):
             "download",
             "kind",
             "compare",
+            "scope",
         )
         read_only_fields = fields
+
+    def get_scope(self, report) -> str:
+        """What the report covers: "Test event", "Shift 2" or "Shift 2 · Leg 1"."""
+        o = report.options
+        return scope_name(shift=o.get("shift"), leg=o.get("leg"))
 
     def get_kind(self, report) -> str:
         return "comparison" if report.options.get(COMPARE) else "test_event"

@@ -62,13 +62,16 @@ def reasons_by_key() -> dict[str, ItoReason]:
 def scope_name(*, shift: int | None = None, leg: int | None = None) -> str:
     """What a report covers, as a person reads it: "Shift 2 · Leg 1"."""
     if leg is not None:
-        row = Leg.objects.select_related("shift").get(pk=leg)
+        row = Leg.objects.select_related("shift").filter(pk=leg).first()
+        if row is None:
+            return _("a deleted leg")
         return _("Shift %(shift)s · Leg %(leg)s") % {
             "shift": row.shift.number,
             "leg": row.number,
         }
     if shift is not None:
-        return _("Shift %(shift)s") % {"shift": Shift.objects.get(pk=shift).number}
+        row = Shift.objects.filter(pk=shift).first()
+        return _("Shift %(shift)s") % {"shift": row.number} if row else _("a deleted shift")
     return _("Test event")
 
 

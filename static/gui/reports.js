@@ -111,7 +111,7 @@ const Reports = {
     const ul = document.createElement("ul");
     for (const r of list) {
       const li = document.createElement("li");
-      const when = fmtTime(r.created);
+      const when = `${fmtTime(r.created)}${r.scope && r.kind !== "comparison" ? ` · ${r.scope}` : ""}`;
       if (r.download) {
         const a = document.createElement("a");
         a.href = r.download;

@@ -224,7 +224,7 @@ def test_reports_dialog_offers_exports_and_makes_a_report(page, server, open_leg
     dialog.get_by_label("Timeline at least").fill("1.5")
     dialog.get_by_role("button", name="Generate report").click()
     entry = dialog.locator("#report-list li")
-    expect(entry.first).to_be_visible(timeout=5000)
+    expect(entry.first).to_contain_text("Shift 1 · Leg 1", timeout=5000)
     shot(page, "report-requested")
     # The background job finishes while the dialog is open; what it made is
     # the PDF a person downloads, so read that back.

@@ -38,6 +38,7 @@ def test_a_shift_report_over_the_api_has_only_that_shift(scenario, api_client, t
         format="json",
     )
     assert response.status_code == 202, response.json()
+    assert response.json()["scope"] == "Shift 2"  # what the GUI's report list shows
     report = run_job(response.json()["id"])
     assert report.status == Report.Status.DONE, report.error
     text = pdf_text(report.pdf.read(), tmp_path)
