@@ -100,7 +100,11 @@ class Sections:
             shift_sections.append(self._shift(shift, stats.by_shift.get(shift.id), runs, tick))
         return {
             "title": self._title(),
-            "test_plan": tables.test_plan_rows(test_plan(event, self.mode, runs=stats.runs)),
+            # The plan judges whole cases over the whole test event: a report of a
+            # shift or leg has only part of its runs, so it leaves the plan out.
+            "test_plan": None
+            if self.options.shift
+            else tables.test_plan_rows(test_plan(event, self.mode, runs=stats.runs)),
             "provisional": stats.provisional,
             "event": self._event_rows(),
             "mode": "GPS (WGS84)" if self.mode == GPS else "local map frame",
