@@ -21,37 +21,21 @@ def report_scope(
     leg; a leg brings its shift.  Raises ``ValueError`` with {field: [message]}
     for a shift or leg that is not part of this test event."""
     if leg is not None:
-        found = Leg.objects.filter(pk=leg, shift__test_event=event).values_list(
-            "shift_id", flat=True
+        leg_shift = (
+            Leg.objects.filter(pk=leg, shift__test_event=event)
+            .values_list("shift_id", flat=True)
+            .first()
         )
-        if not found:
-            raise ValueError(
-                {
-                    "leg": [
-                        _("Leg %(leg)s is not part of test event %(event)s.")
-                        % {"leg": leg, "event": event.pk}
-                    ]
-                }
-            )
-        if shift is not None and shift != found[0]:
-            raise ValueError(
-                {
-                    "leg": [
-                        _("Leg %(leg)s is not part of shift %(shift)s.")
-                        % {"leg": leg, "shift": shift}
-                    ]
-                }
-            )
-        return found[0], leg
+        if leg_shift is None:
+            message = _("Leg %(leg)s is not part of test event %(event)s.")
+            raise ValueError({"leg": [message % {"leg": leg, "event": event.pk}]})
+        if shift is not None and shift != leg_shift:
+            message = _("Leg %(leg)s is not part of shift %(shift)s.")
+            raise ValueError({"leg": [message % {"leg": leg, "shift": shift}]})
+        return leg_shift, leg
     if shift is not None and not event.shifts.filter(pk=shift).exists():
-        raise ValueError(
-            {
-                "shift": [
-                    _("Shift %(shift)s is not part of test event %(event)s.")
-                    % {"shift": shift, "event": event.pk}
-                ]
-            }
-        )
+        message = _("Shift %(shift)s is not part of test event %(event)s.")
+        raise ValueError({"shift": [message % {"shift": shift, "event": event.pk}]})
     return shift, None
 
 
