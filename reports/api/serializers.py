@@ -8,6 +8,7 @@ from events.models import Criterion, Leg
 from reports.documents.options import LEVELS, MAX_TIMELINE_HOURS, STANDARD
 from reports.figures.tiles import MAX_ZOOM
 from reports.models import Report
+from reports.selectors.content import scope_name
 from reports.services.generation import COMPARE
 
 
@@ -15,6 +16,7 @@ class ReportSerializer(serializers.ModelSerializer):
     download = serializers.SerializerMethodField()
     kind = serializers.SerializerMethodField()
     compare = serializers.SerializerMethodField()
+    scope = serializers.SerializerMethodField()
 
     class Meta:
         model = Report
@@ -32,8 +34,14 @@ class ReportSerializer(serializers.ModelSerializer):
             "download",
             "kind",
             "compare",
+            "scope",
         )
         read_only_fields = fields
+
+    def get_scope(self, report) -> str:
+        """What the report covers: "Test event", "Shift 2" or "Shift 2 · Leg 1"."""
+        o = report.options
+        return scope_name(shift=o.get("shift"), leg=o.get("leg"))
 
     def get_kind(self, report) -> str:
         return "comparison" if report.options.get(COMPARE) else "test_event"
@@ -51,9 +59,12 @@ class ReportSerializer(serializers.ModelSerializer):
 
 
 class ReportRequestSerializer(serializers.Serializer):
-    """Either one test event, or ``compare``: the ids of two or more to compare."""
+    """Either one test event (or only its ``shift`` or ``leg``), or ``compare``:
+    the ids of two or more to compare."""
 
     test_event = serializers.IntegerField(required=False)
+    shift = serializers.IntegerField(required=False, allow_null=True)
+    leg = serializers.IntegerField(required=False, allow_null=True)
     compare = serializers.ListField(
         child=serializers.IntegerField(), required=False, min_length=2, max_length=50
     )
@@ -63,6 +74,10 @@ class ReportRequestSerializer(serializers.Serializer):
         if ("test_event" in attrs) == ("compare" in attrs):
             raise serializers.ValidationError(
                 {"test_event": ["Give either test_event or compare (two or more ids)."]}
+            )
+        if "compare" in attrs and (attrs.get("shift") or attrs.get("leg")):
+            raise serializers.ValidationError(
+                {"compare": [_("A comparison covers whole test events: leave out shift and leg.")]}
             )
         return attrs
 

@@ -204,7 +204,13 @@ class ReportListView(APIView):
             report = request_comparison(events, options, user=request.user)
         else:
             event = get_object_or_404(TestEvent, pk=body.validated_data["test_event"])
-            report = request_report(event, options, user=request.user)
+            report = request_report(
+                event,
+                options,
+                user=request.user,
+                shift=body.validated_data.get("shift"),
+                leg=body.validated_data.get("leg"),
+            )
         data = ReportSerializer(report, context={"request": request}).data
         return Response(data, status=status.HTTP_202_ACCEPTED)
 

@@ -7,13 +7,15 @@ from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 
+from django.utils.translation import gettext as _
+
 from events.models import TestEvent
 from reports.documents.options import ReportError, ReportOptions
 from reports.documents.sections import Sections
 from reports.documents.typesetting import typeset
 from reports.figures import style
 from reports.formatting import written_in
-from reports.selectors.content import has_segments
+from reports.selectors.content import has_segments, report_scope, scope_name
 
 Progress = Callable[[float, str], None]
 # Wraps each stage of making a report (statistics, maps, charts, timelines, image
@@ -39,8 +41,23 @@ def _untimed(_stage: str) -> AbstractContextManager:
     return nullcontext()
 
 
-def check_reportable(event: TestEvent) -> None:
-    if not has_segments(event):
+def check_reportable(event: TestEvent, options: ReportOptions | None = None) -> None:
+    """Raises ReportError when the test event, or the shift or leg asked for, is not
+    part of it or has no segments; sets the shift of a leg asked for alone."""
+    scope = options.scope if options is not None else {}
+    try:
+        found = report_scope(event, **scope)
+    except ValueError as exc:
+        raise ReportError(" ".join(m for ms in exc.args[0].values() for m in ms)) from None
+    if options is not None:
+        options.shift, options.leg = found
+        scope = options.scope
+    if not has_segments(event, **scope):
+        if options is not None and (options.shift or options.leg):
+            raise ReportError(
+                _("%(scope)s of test event %(event)s has no segments yet: nothing to report.")
+                % {"scope": scope_name(**scope), "event": event.pk}
+            )
         raise ReportError(
             f"Test event {event.pk} ('{event}') has no segments yet: nothing to report."
         )
@@ -55,7 +72,7 @@ def render_report(
 ) -> ReportResult:
     """The finished PDF as bytes; raises ReportError for a test event without data."""
     started = time.perf_counter()
-    check_reportable(event)
+    check_reportable(event, options)
     style.apply()
     with (
         tempfile.TemporaryDirectory(prefix="ftt-report-") as tmp,

@@ -46,6 +46,15 @@ class ReportOptions:
     image_appendix: bool = True
     # The report's language (settings.LANGUAGES); empty: the test event's.
     language: str = ""
+    # A report of one shift or one leg (ids) instead of the whole test event; a
+    # leg brings its shift (reports/selectors/content.py report_scope checks both).
+    shift: int | None = None
+    leg: int | None = None
+
+    @property
+    def scope(self) -> dict:
+        """The shift and leg the report is narrowed to, as selectors take them."""
+        return {"shift": self.shift, "leg": self.leg}
 
     def problems(self) -> list[str]:
         """What is out of range, in words for the person who asked."""

@@ -27,6 +27,7 @@ from reports.selectors.statistics import (
     EventStatistics,
     Figures,
     event_statistics,
+    segment_scope,
 )
 from reports.selectors.test_plans import test_plan
 from telemetry.selectors.recordings import recordings_by_master, summary
@@ -74,13 +75,16 @@ class Sections:
     def document(self) -> dict:
         event = self.event
         self.progress(0.02, "statistics")
+        scope = self.options.scope
+        # What the report covers, read once: the whole test event, a shift or a leg.
+        self.scope_name = content.scope_name(**scope)
         with self.time_stage("statistics (queries and distances)"):
-            stats = event_statistics(event, self.mode, tracks=True)
-        shifts = content.shifts_of(event)
-        self.legs = content.legs_by_shift(shifts)
-        self.notes = content.notes_by_master(event)
-        self.images = content.images_by_segment(event)
-        self.recordings = recordings_by_master(segment__leg__shift__test_event=event)
+            stats = event_statistics(event, self.mode, tracks=True, **scope)
+        shifts = content.shifts_of(event, self.options.shift)
+        self.legs = content.legs_by_shift(shifts, self.options.leg)
+        self.notes = content.notes_by_master(event, **scope)
+        self.images = content.images_by_segment(event, **scope)
+        self.recordings = recordings_by_master(**segment_scope(event, **scope, via="segment__"))
         runs_by_shift = stats.runs_by_shift()
         total_steps = 2 + len(shifts) + len(stats.runs)
         self.step = 0
@@ -97,7 +101,11 @@ class Sections:
             shift_sections.append(self._shift(shift, stats.by_shift.get(shift.id), runs, tick))
         return {
             "title": self._title(),
-            "test_plan": tables.test_plan_rows(test_plan(event, self.mode, runs=stats.runs)),
+            # The plan judges whole cases over the whole test event: a report of a
+            # shift or leg has only part of its runs, so it leaves the plan out.
+            "test_plan": None
+            if self.options.shift
+            else tables.test_plan_rows(test_plan(event, self.mode, runs=stats.runs)),
             "provisional": stats.provisional,
             "event": self._event_rows(),
             "mode": "GPS (WGS84)" if self.mode == GPS else "local map frame",
@@ -121,8 +129,11 @@ class Sections:
             self.warnings.append(
                 _("Logo %(file)s not found; the title page has none.") % {"file": logo}
             )
+        name = o.name or _("Field test report: %(event)s") % {"event": self.event}
+        if o.shift is not None:
+            name = f"{name} · {self.scope_name}"
         return {
-            "name": o.name or _("Field test report: %(event)s") % {"event": self.event},
+            "name": name,
             "version": o.version,
             "recipient": o.recipient,
             "recipient_address": list(o.recipient_address),
@@ -138,6 +149,7 @@ class Sections:
         return tables.label_rows(
             [
                 (_("Test event"), str(e.pk)),
+                (_("Report of"), self.scope_name if self.options.shift else _("whole test event")),
                 (_("Location"), e.location or fmt.DASH),
                 (_("Software version"), e.version or fmt.DASH),
                 (_("Start"), fmt.timestamp(e.start, self.tz)),
@@ -168,8 +180,8 @@ class Sections:
             distance_rows.append(head + tables.distance_cells(f))
             reliability_rows.append(tables.reliability_row(head[0], f))
         o = stats.overall
-        distance_rows.append(["Test event", "", ""] + tables.distance_cells(o))
-        reliability_rows.append(tables.reliability_row("Test event", o))
+        distance_rows.append([self.scope_name, "", ""] + tables.distance_cells(o))
+        reliability_rows.append(tables.reliability_row(self.scope_name, o))
         vehicles = {s.vehicle_id: s.vehicle for s in shifts}
         vehicle_rows = [
             tables.reliability_row(vehicles[vid].short_description, f)
@@ -257,13 +269,16 @@ class Sections:
 
     def _shift(self, shift, f: Figures | None, runs, tick) -> dict:
         tz = self.tz
-        starts = [r.start for r in runs] + [shift.start]
-        ends = [r.end for r in runs] + ([shift.end] if shift.end else [])
+        # A leg's report spans the leg, not its whole shift.
+        span = self.legs[shift.id][0] if self.options.leg else shift
+        starts = [r.start for r in runs] + [span.start]
+        ends = [r.end for r in runs] + ([span.end] if span.end else [])
         summary_rows = tables.label_rows(
             [
                 (_("Shift"), str(shift.number)),
+                *([(_("Leg"), str(span.number))] if self.options.leg else []),
                 (_("Start"), fmt.timestamp(min(starts), tz)),
-                (_("End"), fmt.timestamp(max(ends), tz) if shift.end else _("open")),
+                (_("End"), fmt.timestamp(max(ends), tz) if span.end else _("open")),
                 (_("Test director"), tables.person_text(shift.test_director)),
                 (_("Test administrator"), tables.person_text(shift.test_administrator)),
                 (_("Robot operator"), tables.person_text(shift.robot_operator)),
@@ -287,8 +302,9 @@ class Sections:
                 segments.append(self._segment(run, legs[run.leg_id], full=level == FULL))
             tick(f"shift {shift.number}, segment {index}")
         return {
-            "title": f"{shift_name(shift.number)}: {fmt.timestamp(min(starts), tz)} – "
-            + (fmt.timestamp(max(ends), tz) if shift.end else _("open")),
+            "title": f"{self.scope_name if self.options.leg else shift_name(shift.number)}: "
+            + f"{fmt.timestamp(min(starts), tz)} – "
+            + (fmt.timestamp(max(ends), tz) if span.end else _("open")),
             "summary": summary_rows,
             "figures": tables.figure_rows(f) if f is not None else [],
             "mode_rows": tables.mode_rows(f) if f is not None else [],

@@ -309,14 +309,35 @@ def counted_reason(child: Segment) -> str:
     return reason
 
 
-def event_runs(event: TestEvent, mode: str = GPS, *, tracks: bool = True) -> list[Run]:
-    """All master segments of a test event as runs, ordered by leg and time.
+def segment_scope(
+    event: TestEvent, *, shift: int | None = None, leg: int | None = None, via: str = ""
+) -> dict:
+    """The ORM filter of a test event's segments, narrowed to one shift or leg
+    (ids); ``via`` is the path to the segment, e.g. ``"segment__"``."""
+    found = {f"{via}leg__shift__test_event": event}
+    if shift is not None:
+        found[f"{via}leg__shift_id"] = shift
+    if leg is not None:
+        found[f"{via}leg_id"] = leg
+    return found
+
+
+def event_runs(
+    event: TestEvent,
+    mode: str = GPS,
+    *,
+    tracks: bool = True,
+    shift: int | None = None,
+    leg: int | None = None,
+) -> list[Run]:
+    """All master segments of a test event as runs, ordered by leg and time;
+    ``shift`` or ``leg`` (ids) narrow them to one shift or leg.
 
     Distances, pose counts and the end of an open segment come from the
     figures kept at write time; only ``tracks`` (for drawing and the
     exports) reads the poses."""
     segments = list(
-        Segment.objects.filter(leg__shift__test_event=event)
+        Segment.objects.filter(**segment_scope(event, shift=shift, leg=leg))
         .select_related("leg__shift")
         # Only what a run needs: parsing the other timestamps of 1 000 segments, their
         # legs and shifts took longer than measuring their million steps.  Start
@@ -452,11 +473,19 @@ def _grouped(runs: list[Run], key) -> dict[int, Figures]:
 
 
 def event_statistics(
-    event: TestEvent, mode: str = GPS, runs: list[Run] | None = None, *, tracks: bool = False
+    event: TestEvent,
+    mode: str = GPS,
+    runs: list[Run] | None = None,
+    *,
+    tracks: bool = False,
+    shift: int | None = None,
+    leg: int | None = None,
 ) -> EventStatistics:
-    """Figures for the whole test event and each leg, shift and vehicle in it
-    (``tracks``: with each run's track, for the report's drawings)."""
-    runs = event_runs(event, mode, tracks=tracks) if runs is None else runs
+    """Figures for the whole test event, or only its ``shift`` or ``leg`` (ids),
+    and each leg, shift and vehicle in it (``tracks``: with each run's track,
+    for the report's drawings)."""
+    if runs is None:
+        runs = event_runs(event, mode, tracks=tracks, shift=shift, leg=leg)
     return EventStatistics(
         test_event_id=event.pk,
         mode=mode,

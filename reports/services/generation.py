@@ -31,6 +31,7 @@ from reports.documents.comparison import render_comparison
 from reports.documents.event_report import ReportResult, check_reportable, render_report
 from reports.documents.options import ReportError, ReportOptions
 from reports.models import Report
+from reports.selectors.content import report_scope
 
 log = logging.getLogger(__name__)
 
@@ -39,12 +40,22 @@ PROGRESS_INTERVAL_S = 0.5
 
 
 def request_report(
-    test_event: TestEvent, options: dict | ReportOptions | None = None, *, user=None
+    test_event: TestEvent,
+    options: dict | ReportOptions | None = None,
+    *,
+    user=None,
+    shift: int | None = None,
+    leg: int | None = None,
 ) -> Report:
-    """Queue a report of the test event; returns the new row."""
+    """Queue a report of the test event, or of one ``shift`` or ``leg`` of it
+    (ids); returns the new row."""
     opts = options if isinstance(options, ReportOptions) else _checked_options(options or {})
     try:
-        check_reportable(test_event)
+        opts.shift, opts.leg = report_scope(test_event, shift=shift, leg=leg)
+    except ValueError as exc:
+        raise ValidationError(exc.args[0]) from None
+    try:
+        check_reportable(test_event, opts)
     except ReportError as exc:
         raise RuleViolation(str(exc), code="empty") from None
     with transaction.atomic():

@@ -57,6 +57,8 @@ const Reports = {
     const form = document.createElement("form");
     form.id = "report-form";
     const saved = JSON.parse(localStorage.getItem("ftt.reportFields") || "{}");
+    const scope = this.scopeField();
+    form.append(scope.field);
     for (const spec of fields) form.append(buildField(spec, saved[spec.name] ?? initial[spec.name] ?? ""));
     const go = document.createElement("button");
     go.type = "submit";
@@ -82,13 +84,26 @@ const Reports = {
         } else options[spec.name] = raw;
       }
       try {
-        await api("POST", "reports/", { test_event: event.id, options });
+        await api("POST", "reports/", { test_event: event.id, ...scope.chosen(form), options });
         await this.refresh(event);
       } catch (err) {
         showError(err, errorBox);
       }
     });
     return form;
+  },
+  /* The whole test event, or the shift or leg selected when the dialog opened
+   * (the narrowest by default); the server checks that they belong together. */
+  scopeField() {
+    const shift = current("shift");
+    const leg = shift && current("leg");
+    const choices = [["event", "This test event"]];
+    if (shift) choices.push(["shift", `This shift (Shift ${shift.number ?? shift.id})`]);
+    if (leg) choices.push(["leg", `This leg (Shift ${shift.number ?? shift.id} · Leg ${leg.number ?? leg.id})`]);
+    const spec = { name: "scope", label: "Report of", type: "select", required: true, choices };
+    const field = buildField(spec, choices[choices.length - 1][0]);
+    const chosen = (form) => ({ event: {}, shift: { shift: shift?.id }, leg: { leg: leg?.id } })[form.elements.scope.value];
+    return { field, chosen };
   },
   async refresh(event) {
     clearTimeout(this.timer);
@@ -99,7 +114,7 @@ const Reports = {
     const ul = document.createElement("ul");
     for (const r of list) {
       const li = document.createElement("li");
-      const when = fmtTime(r.created);
+      const when = `${fmtTime(r.created)}${r.scope && r.kind !== "comparison" ? ` · ${r.scope}` : ""}`;
       if (r.download) {
         const a = document.createElement("a");
         a.href = r.download;

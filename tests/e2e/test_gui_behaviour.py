@@ -212,6 +212,8 @@ def test_reports_dialog_offers_exports_and_makes_a_report(page, server, open_leg
     assert page.request.get(server.url + archive).body()[:2] == b"PK"
     # A new user meets the GPS report preselected, not an empty choice.
     expect(dialog.get_by_label("Positions")).to_have_value("false")
+    # The cockpit's leg is the report's scope unless the person widens it.
+    expect(dialog.get_by_label("Report of")).to_have_value("leg")
     dialog.get_by_label("Report name").fill("Abnahme Übung")
     # A zoom no tile server has is refused in words, and nothing is queued.
     dialog.get_by_label("Closest map zoom").fill("30")
@@ -222,7 +224,7 @@ def test_reports_dialog_offers_exports_and_makes_a_report(page, server, open_leg
     dialog.get_by_label("Timeline at least").fill("1.5")
     dialog.get_by_role("button", name="Generate report").click()
     entry = dialog.locator("#report-list li")
-    expect(entry.first).to_be_visible(timeout=5000)
+    expect(entry.first).to_contain_text("Shift 1 · Leg 1", timeout=5000)
     shot(page, "report-requested")
     # The background job finishes while the dialog is open; what it made is
     # the PDF a person downloads, so read that back.
@@ -231,7 +233,8 @@ def test_reports_dialog_offers_exports_and_makes_a_report(page, server, open_leg
     href = link.first.get_attribute("href")
     pdf = page.request.get(href if href.startswith("http") else server.url + href)
     assert pdf.ok
-    assert "Abnahme Übung" in flat(pdf_text(pdf.body(), tmp_path))
+    text = flat(pdf_text(pdf.body(), tmp_path))
+    assert "Abnahme Übung" in text and "Report of Shift 1 · Leg 1" in text
     shot(page, "report-ready")
 
 

@@ -2,6 +2,7 @@
 
     manage.py ftt_report --test-event 3 -o report.pdf --name "Trial 3" --recipient ACME
     manage.py ftt_report --test-event 3 --csv segments.csv --geojson tracks.geojson --gpx t.gpx
+    manage.py ftt_report --shift 5 -o shift.pdf     # one shift (or --leg ID: one leg)
     manage.py ftt_report --job 17        # worker for a report requested from the GUI
 
 Without -o and without any export option the PDF goes to report.pdf.
@@ -14,7 +15,7 @@ from django.conf import settings
 from django.core.management.base import BaseCommand, CommandError
 
 from common.progress import ProgressBar
-from events.models import TestEvent
+from events.models import Leg, Shift, TestEvent
 from reports.documents.comparison import render_comparison
 from reports.documents.event_report import render_report
 from reports.documents.options import FULL, LEVELS, ReportError, ReportOptions
@@ -34,6 +35,8 @@ class Command(BaseCommand):
 
     def add_arguments(self, parser):
         parser.add_argument("--test-event", type=int, help="Id of the test event.")
+        parser.add_argument("--shift", type=int, help="Report only this shift (id).")
+        parser.add_argument("--leg", type=int, help="Report only this leg (id).")
         parser.add_argument("--job", type=int, help="Make the queued report with this id.")
         parser.add_argument("-o", "--output", help="PDF file to write (default report.pdf).")
         parser.add_argument("--local", action="store_true", help="Use local (map-frame) poses.")
@@ -96,11 +99,14 @@ class Command(BaseCommand):
             return self._job(o["job"])
         if o["compare"]:
             return self._compare(o)
-        if o["test_event"] is None:
-            raise CommandError("Give --test-event ID (or --job ID).")
-        event = TestEvent.objects.filter(pk=o["test_event"]).first()
+        event_id = o["test_event"] or _event_of(o["shift"], o["leg"])
+        if event_id is None and (o["shift"] or o["leg"]):
+            raise CommandError(f"No {'leg' if o['leg'] else 'shift'} with this id.")
+        if event_id is None:
+            raise CommandError("Give --test-event ID, --shift ID or --leg ID (or --job ID).")
+        event = TestEvent.objects.filter(pk=event_id).first()
         if event is None:
-            raise CommandError(f"Test event {o['test_event']} does not exist.")
+            raise CommandError(f"Test event {event_id} does not exist.")
         exported = self._exports(event, o)
         if o["output"] or not exported:
             self._pdf(event, o)
@@ -158,6 +164,8 @@ class Command(BaseCommand):
             level=o["level"],
             image_appendix=not o["no_image_appendix"],
             language=o["language"],
+            shift=o["shift"],
+            leg=o["leg"],
         )
         if problems := options.problems():
             raise CommandError(" ".join(problems))
@@ -173,3 +181,12 @@ class Command(BaseCommand):
             self.stderr.write(f"warning: {warning}")
         note = " (provisional: open segments)" if result.provisional else ""
         self.stdout.write(f"{output}: written in {result.seconds:.1f} s{note}")
+
+
+def _event_of(shift: int | None, leg: int | None) -> int | None:
+    """The test event of the shift or leg asked for (None: none given or unknown)."""
+    if leg is not None:
+        return Leg.objects.filter(pk=leg).values_list("shift__test_event_id", flat=True).first()
+    if shift is not None:
+        return Shift.objects.filter(pk=shift).values_list("test_event_id", flat=True).first()
+    return None
