@@ -147,7 +147,7 @@ class SnapshotError(Exception):
     """The writer process could not write a file (and is still there)."""
 
 
-class _Child:
+class WriterChild:
     """One writer process and the collector's end of its pipe."""
 
     def __init__(self):
@@ -182,7 +182,7 @@ class WriterProcess:
     starts a new one for the next file."""
 
     def __init__(self):
-        self._child: _Child | None = None
+        self._child: WriterChild | None = None
         self._lock = threading.Lock()
         self._given_up = False
 
@@ -191,7 +191,7 @@ class WriterProcess:
         child = self._child
         return child.pid if child is not None else None
 
-    def start(self) -> _Child:
+    def start(self) -> WriterChild:
         """The running writer, started if needed (without waiting for it to be ready)."""
         with self._lock:
             old = self._child
@@ -203,7 +203,7 @@ class WriterProcess:
                 old.close(wait=0)
                 self._child = None
             if self._child is None:
-                self._child = _Child()
+                self._child = WriterChild()
                 log.info(gettext("snapshot writer process started (pid %d)"), self._child.pid)
                 # multiprocessing joins its children at exit: a writer whose pipe
                 # is still open would keep the collector from ever exiting.
@@ -244,7 +244,7 @@ class WriterProcess:
                 child.close(wait=5)
         raise WriterDied(f"the snapshot writer failed twice while writing {path.name}")
 
-    def _write(self, child: _Child, path: Path, messages, types, timeout: float) -> dict:
+    def _write(self, child: WriterChild, path: Path, messages, types, timeout: float) -> dict:
         conn = child.conn
         if not child.ready:
             # Starting an interpreter and loading the type store: seconds on a
@@ -272,7 +272,7 @@ class WriterProcess:
         return result
 
     @staticmethod
-    def _within(child: _Child, seconds: float, what: str, work):
+    def _within(child: WriterChild, seconds: float, what: str, work):
         """Run ``work``; a child not done by then is killed, which ends whatever
         ``work`` waits for (a full pipe, a reply) with an OSError or EOFError."""
 

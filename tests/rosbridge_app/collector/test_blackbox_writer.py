@@ -201,14 +201,14 @@ def test_a_snapshot_whose_writers_are_stuck_is_lost_and_the_next_one_is_written(
     from rosbridge_app.collector import snapshot_writer
 
     box, sent = quick_box
-    started = snapshot_writer._Child.__init__
+    started = snapshot_writer.WriterChild.__init__
 
     def stopped_at_start(child):
         started(child)
         os.kill(child.pid, signal.SIGSTOP)
 
     monkeypatch.setattr(snapshot_writer, "START_TIMEOUT", 3.0)
-    monkeypatch.setattr(snapshot_writer._Child, "__init__", stopped_at_start)
+    monkeypatch.setattr(snapshot_writer.WriterChild, "__init__", stopped_at_start)
     snapshot_of(box, range(0, 200))
     stuck = [int(pid) for pid in re.findall(r"pid (\d+)\) was stuck", caplog.text)]
     assert len(stuck) == 2 and all(gone(pid) for pid in stuck)
