@@ -18,20 +18,23 @@ function say(text, isError = false) {
 
 const metres = (value) => `${value.toFixed(1)} m`;
 
+/* Routes are A and B on the map, in the legend and in the figures. */
+const LETTERS = ["A", "B"];
+
 function pairCard(pair, names) {
   const rows = [["Discrete Fréchet distance", metres(pair.frechet)]];
   for (const name of pair.routes) {
     const d = pair.deviation[name];
-    const other = names[pair.routes.find((n) => n !== name)];
+    const other = pair.routes.find((n) => n !== name);
     rows.push(
-      [`${names[name]} from ${other}: mean`, metres(d.mean)],
+      [`${names[name].letter} from ${names[other].letter}: mean`, metres(d.mean)],
       ["95th percentile", metres(d.p95)],
       ["maximum", metres(d.max)],
       ["beyond the threshold", `${Math.round(d.share_beyond * 100)} % of its points`],
     );
   }
   return element("article", { className: "card route-pair" }, [
-    element("h3", { textContent: `${names[pair.routes[0]]} and ${names[pair.routes[1]]}` }),
+    element("h3", { textContent: `${names[pair.routes[0]].letter} and ${names[pair.routes[1]].letter}` }),
     element("dl", { className: "pairs" }, rows.flatMap(([k, v]) => [element("dt", { textContent: k }), element("dd", { textContent: v })])),
   ]);
 }
@@ -42,21 +45,27 @@ function draw(data, names) {
   routes.map.invalidateSize();
   if (routes.drawn) routes.drawn.remove();
   routes.drawn = L.featureGroup().addTo(routes.map);
-  Object.entries(data.routes).forEach(([name, points], i) => {
-    L.polyline(latLngs(points), { color: COLOURS[i % COLOURS.length], weight: 4, opacity: 0.8 })
-      .bindTooltip(names[name])
+  // Wide route lines with the red stretches narrower on top: both stay visible.
+  Object.entries(data.routes).forEach(([name, points]) => {
+    L.polyline(latLngs(points), { color: names[name].colour, weight: 9, opacity: 0.75 })
+      .bindTooltip(`${names[name].letter}: ${names[name].text}`)
       .addTo(routes.drawn);
   });
   for (const pair of data.pairs) {
     for (const name of pair.routes) {
       for (const stretch of pair.deviation[name].beyond) {
-        L.polyline(latLngs(stretch), { color: BEYOND, weight: 7, opacity: 0.9, className: "beyond" })
-          .bindTooltip(`${names[name]}: more than ${data.threshold} m off`)
+        L.polyline(latLngs(stretch), { color: BEYOND, weight: 3, opacity: 1, className: "beyond" })
+          .bindTooltip(`${names[name].letter}: more than ${data.threshold} m off`)
           .addTo(routes.drawn);
       }
     }
   }
   routes.map.fitBounds(routes.drawn.getBounds(), { padding: [20, 20] });
+  const key = (colour, text) => element("li", {}, [element("span", { className: "swatch", style: `background:${colour}` }), text]);
+  $("#routes-legend").replaceChildren(
+    ...Object.values(names).map((n) => key(n.colour, `${n.letter}: ${n.text}`)),
+    key(BEYOND, `more than ${data.threshold} m from the other route`),
+  );
   $("#routes-figures").replaceChildren(...data.pairs.map((pair) => pairCard(pair, names)));
 }
 
@@ -65,11 +74,10 @@ async function compare(e) {
   const form = $("#routes-form").elements;
   const [a, b] = [form.leg_a, form.leg_b];
   const q = new URLSearchParams([["leg", a.value], ["leg", b.value], ["threshold", form.threshold.value]]);
-  // The server names routes "leg <id>"; the page shows the picker's words.
-  const names = {
-    [`leg ${a.value}`]: a.selectedOptions[0].textContent,
-    [`leg ${b.value}`]: b.selectedOptions[0].textContent,
-  };
+  // The server names routes "leg <id>"; the page shows A and B with the picker's words.
+  const names = Object.fromEntries(
+    [a, b].map((select, i) => [`leg ${select.value}`, { letter: LETTERS[i], colour: COLOURS[i], text: select.selectedOptions[0].textContent }]),
+  );
   say("Comparing the routes…");
   try {
     const data = await api("GET", `reports/routes/?${q}`);

@@ -87,17 +87,21 @@ def test_test_case_progress_search_and_route_comparison(browser, server, open_le
     form = page.locator("#search-form")
     form.get_by_label("Vehicle").select_option(str(ids["vehicle"]))
     # The case's area frames the map; the rectangle drawn inside it holds the take-over.
-    form.get_by_label("Test case's area").select_option(label=f"#{ids['event']} gravel-loop: Gravel loop")
+    form.get_by_label("Test case's area").select_option(
+        label=f"#{ids['event']} gravel-loop: Gravel loop"
+    )
     page.get_by_role("button", name="Draw area").click()
     map_box = page.locator("#search-map").bounding_box()
     for fx, fy in ((0.1, 0.1), (0.9, 0.9)):
-        page.mouse.click(map_box["x"] + fx * map_box["width"], map_box["y"] + fy * map_box["height"])
+        page.mouse.click(
+            map_box["x"] + fx * map_box["width"], map_box["y"] + fy * map_box["height"]
+        )
     expect(page.locator("#search-status")).to_have_text("Area drawn. Press Search.")
     page.get_by_role("button", name="Search", exact=True).click()
     expect(page.locator("#search-status")).to_have_text("1 take-over found.")
     expect(page.locator("#search-results li")).to_have_count(1)
     expect(page.locator("#search-results li")).to_contain_text(f"Gelände {open_leg} · Leg 2 · #")
-    csv = page.request.get(page.locator("#search-csv").get_attribute("href"))
+    csv = page.request.get(server.url + page.locator("#search-csv").get_attribute("href"))
     assert csv.ok and len(csv.text().strip().splitlines()) == 2  # header and the take-over
     shot(page, "search")
 
@@ -118,6 +122,13 @@ def test_test_case_progress_search_and_route_comparison(browser, server, open_le
     expect(card).to_contain_text(f"Discrete Fréchet distance{frechet}")
     # The second leg drove on beyond the first: its far stretch is drawn in red.
     expect(page.locator("#routes-map path.beyond").first).to_be_visible()
+    expect(page.locator("#routes-legend li")).to_have_text(
+        [
+            re.compile(r"^A: .*Leg 2"),
+            re.compile(r"^B: .*Leg 3"),
+            "more than 5 m from the other route",
+        ]
+    )
     shot(page, "routes")
 
     for screen in ("laptop", "tablet", "phone"):
