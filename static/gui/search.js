@@ -31,12 +31,15 @@ function showArea(geometry) {
   search.area = geometry;
   if (search.outline) search.outline.remove();
   search.outline = L.geoJSON(geometry, { style: { color: "#1f5fbf", weight: 2, fillOpacity: 0.08 }, interactive: false }).addTo(search.map);
-  search.map.fitBounds(search.outline.getBounds(), { maxZoom: 18 });
+  // At once, not animated: a corner clicked while the map still zooms would be lost.
+  search.map.fitBounds(search.outline.getBounds(), { maxZoom: 18, animate: false });
 }
 
 function startDrawing() {
   search.drawing = true;
   search.corner = null;
+  // Two corners tapped in quick succession are not a double tap that zooms.
+  search.map.doubleClickZoom.disable();
   $("#search-map").classList.add("drawing");
   say("Click the first corner of the area on the map.");
 }
@@ -49,6 +52,7 @@ function mapClicked(e) {
     return;
   }
   search.drawing = false;
+  search.map.doubleClickZoom.enable();
   $("#search-map").classList.remove("drawing");
   $("#search-form").elements.case_area.value = "";
   showArea(boxPolygon(search.corner, e.latlng));

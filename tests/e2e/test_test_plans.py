@@ -91,12 +91,17 @@ def test_test_case_progress_search_and_route_comparison(browser, server, open_le
         label=f"#{ids['event']} gravel-loop: Gravel loop"
     )
     page.get_by_role("button", name="Draw area").click()
+    # Mouse clicks are in the window's coordinates: the whole map in sight first.
+    page.locator("#search-map").evaluate("(map) => map.scrollIntoView({block: 'center'})")
     map_box = page.locator("#search-map").bounding_box()
-    for fx, fy in ((0.1, 0.1), (0.9, 0.9)):
+    for (fx, fy), then in (
+        ((0.1, 0.1), "Click the opposite corner."),
+        ((0.9, 0.9), "Area drawn. Press Search."),
+    ):
         page.mouse.click(
             map_box["x"] + fx * map_box["width"], map_box["y"] + fy * map_box["height"]
         )
-    expect(page.locator("#search-status")).to_have_text("Area drawn. Press Search.")
+        expect(page.locator("#search-status")).to_have_text(then)
     page.get_by_role("button", name="Search", exact=True).click()
     expect(page.locator("#search-status")).to_have_text("1 take-over found.")
     expect(page.locator("#search-results li")).to_have_count(1)
