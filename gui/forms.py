@@ -68,16 +68,21 @@ def report_form() -> dict:
     }
 
 
-def gui_forms(person) -> dict:
+def gui_forms(person, test_event_id: int | None = None) -> dict:
     """Every dialog of the page; log levels with what a new entry starts with."""
-    return {**log_forms(person), "report": report_form()}
+    return {**log_forms(person, test_event_id), "report": report_form()}
 
 
-def log_forms(person) -> dict:
-    """The dialogs of test events, shifts and legs, with what a new one starts with."""
+def log_forms(person, test_event_id: int | None = None) -> dict:
+    """The dialogs of test events, shifts and legs, with what a new one starts with.
+    With a test event, a leg's test cases are that event's only (the ones the
+    server accepts for its legs)."""
     forms, choices = {}, {}
     for level, (serializer_class, names) in LEVELS.items():
         fields = serializer_class().fields
+        if level == "leg" and test_event_id is not None:
+            field = fields["test_case"]
+            field.queryset = field.get_queryset().filter(test_event_id=test_event_id)
         forms[level] = {
             "fields": [field_description(name, fields[name], choices) for name in names],
             "initial": new_entry_values(level, person),

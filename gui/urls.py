@@ -44,6 +44,7 @@ urlpatterns = [
     path("gui/api/collectors/", gui_api.CollectorStatus.as_view(), name="gui-collectors"),
     path("gui/api/fleet/", gui_api.Fleet.as_view(), name="gui-fleet"),
     path("gui/api/forms/", gui_api.Forms.as_view(), name="gui-forms"),
+    path("gui/api/test-case-areas/", gui_api.TestCaseAreas.as_view(), name="gui-test-case-areas"),
     path(
         "gui/api/collectors/<int:pk>/commands/",
         gui_api.CollectorCommands.as_view(),

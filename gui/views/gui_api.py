@@ -30,6 +30,7 @@ from events.api.serializers import (
 )
 from events.models import Leg, Note, Segment, SegmentType, Shift, Vehicle
 from events.selectors.labels import label, leg_numbers, short_label
+from events.selectors.test_cases import test_case_areas
 from events.services import segments as rules
 from gui.forms import gui_forms
 from rosbridge_app.models import Collector
@@ -418,7 +419,17 @@ class Forms(GuiView):
     """The fields of the dialogs (test event, shift, leg, report), from serializers."""
 
     def get(self, request):
-        return Response(gui_forms(getattr(request.user, "personnel", None)))
+        # ?event=<id>: the leg dialog offers that test event's test cases.
+        event = request.query_params.get("event", "")
+        test_event_id = int(event) if event.isdigit() else None
+        return Response(gui_forms(getattr(request.user, "personnel", None), test_event_id))
+
+
+class TestCaseAreas(GuiView):
+    """The test cases with an area, for the place search to pick one."""
+
+    def get(self, request):
+        return Response({"cases": test_case_areas()})
 
 
 class Fleet(GuiView):

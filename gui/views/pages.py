@@ -185,7 +185,11 @@ def compare(request):
         "gui_config": {
             "canOperate": roles.has_role(user, roles.OPERATOR),
             "apiRoot": "/api/",
+            "guiApiRoot": "/gui/api/",
             "pageSize": Pagination.max_page_size,
+            # The search and route maps draw on the same tiles as the cockpit.
+            "tileUrl": settings.FTT_TILE_URL,
+            "tileAttribution": getattr(settings, "FTT_TILE_ATTRIBUTION", ""),
         },
     }
     return render(request, "gui/compare.html", context)

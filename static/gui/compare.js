@@ -4,7 +4,7 @@
  * Every figure and its wording comes from the server (/api/reports/compare/ formats them
  * as the PDF does); this script only shows them and asks for the PDF job. */
 
-import { CONFIG, $ } from "./dom.js";
+import { CONFIG, $, element } from "./dom.js";
 import { api, list, plainMessage } from "./api.js";
 import { LANGUAGE, _, plural } from "./i18n.js";
 
@@ -35,12 +35,6 @@ function say(text, isError = false) {
   const line = $("#compare-status");
   line.replaceChildren(document.createTextNode(text));
   line.classList.toggle("error", isError);
-}
-
-function element(tag, props = {}, children = []) {
-  const node = Object.assign(document.createElement(tag), props);
-  node.append(...children);
-  return node;
 }
 
 function pairs(rows) {

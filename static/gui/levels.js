@@ -11,6 +11,7 @@ import { confirmDialog, formDialog } from "./dialogs.js";
 import { Live } from "./live.js";
 import { Collector } from "./collector.js";
 import { selectionChanged } from "./segments.js";
+import { TestPlan } from "./testplan.js";
 
 function rowLabel(level, row) {
   const status = row.is_open ? _("open") : _("closed");
@@ -54,11 +55,14 @@ export async function loadLevel(level, keepSelection = true) {
   updateLevelState(level);
   saveUrl();
   if (info.child) await loadLevel(info.child, keepSelection && !changed);
-  else if (state.selected.leg !== state.shownLeg) await selectionChanged();
   else {
-    // Same leg as before: only the labels and states changed, keep the drawing.
-    Live.subscribe();
-    Collector.refresh();
+    TestPlan.later();
+    if (state.selected.leg !== state.shownLeg) await selectionChanged();
+    else {
+      // Same leg as before: only the labels and states changed, keep the drawing.
+      Live.subscribe();
+      Collector.refresh();
+    }
   }
 }
 
@@ -94,7 +98,10 @@ for (const level of Object.keys(LEVELS)) {
       if (child) {
         state.selected[child] = null;
         await loadLevel(child, false);
-      } else await selectionChanged();
+      } else {
+        TestPlan.later();
+        await selectionChanged();
+      }
     } catch (err) {
       showError(err);
     }
@@ -105,7 +112,9 @@ for (const level of Object.keys(LEVELS)) {
  * new entry starts with (only unambiguous choices).  Read at each opening, so a
  * vehicle configured a minute ago is offered. */
 async function formOf(level) {
-  const forms = await api("GET", "forms/", undefined, { root: CONFIG.guiApiRoot });
+  // The leg dialog offers the selected test event's test cases (the server's list).
+  const event = state.selected.event ? `?event=${state.selected.event}` : "";
+  const forms = await api("GET", `forms/${event}`, undefined, { root: CONFIG.guiApiRoot });
   return forms[level];
 }
 

@@ -15,6 +15,7 @@ import { Collector } from "./collector.js";
 import { refreshSnapshots } from "./snapshots.js";
 import { Fleet } from "./fleet.js";
 import { Outbox } from "./outbox.js";
+import { TestPlan } from "./testplan.js";
 import "./parameters.js";
 import "./reports.js";
 
@@ -31,6 +32,12 @@ Live.on("deleted", (e) => {
 Live.on("segment", (e) => {
   if (onSelectedLeg(e) && !applySegments(e)) Live.later("segments");
 });
+// The open leg's test-case progress moves with its segments and positions.
+for (const kind of ["segment", "poses", "log"]) {
+  Live.on(kind, (e) => {
+    if (onSelectedLeg(e) || kind === "log") TestPlan.later();
+  });
+}
 Live.on("note", () => Live.later("notes"));
 Live.on("image", () => Live.later("images"));
 Live.on("recording", () => Live.later("recordings"));

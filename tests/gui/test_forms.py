@@ -113,3 +113,23 @@ def test_the_report_dialog_offers_gps_or_local_with_gps_first_and_says_the_zoom_
     assert field(report, "max_zoom")["type"] == "number"
     assert "1–19" in field(report, "max_zoom")["label"]
     assert field(report, "creator_address")["type"] == "textarea"
+
+
+def test_the_leg_dialog_offers_the_chosen_test_events_cases_only(client, test_event):
+    from django.contrib.gis.geos import MultiPolygon, Polygon
+
+    from events.models import TestCase
+    from events.services import logs
+
+    other = logs.create_test_event(location="Elsewhere", time_zone="UTC")
+    area = MultiPolygon(Polygon.from_bbox((7.0, 50.0, 7.1, 50.1)))
+    mine = TestCase.objects.create(test_event=test_event, key="loop", title="Loop", area=area)
+    TestCase.objects.create(test_event=other, key="hill", title="Hill")
+    forms_of(client)
+
+    chosen = client.get(f"/gui/api/forms/?event={test_event.pk}").json()
+    assert field(chosen["leg"], "test_case")["choices"] == [[mine.pk, "Loop: Loop"]]
+    # The place search offers the cases with an area, with the area as GeoJSON.
+    (case,) = client.get("/gui/api/test-case-areas/").json()["cases"]
+    assert case["id"] == mine.pk and case["test_event"] == test_event.pk
+    assert case["area"]["type"] == "MultiPolygon"

@@ -1,0 +1,20 @@
+"""Test cases as the GUI's place search offers them: those with an area."""
+
+import json
+
+from events.models import TestCase
+
+
+def test_case_areas() -> list[dict]:
+    """Each test case with an area: id, names, its test event and the area as GeoJSON."""
+    cases = TestCase.objects.filter(area__isnull=False).select_related("test_event")
+    return [
+        {
+            "id": case.pk,
+            "key": case.key,
+            "title": case.title,
+            "test_event": case.test_event_id,
+            "area": json.loads(case.area.geojson),
+        }
+        for case in cases.order_by("test_event_id", "key")
+    ]

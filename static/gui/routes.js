@@ -1,0 +1,110 @@
+/* Route comparison on the comparison page: two legs' GPS routes on one map,
+ * per pair the deviation of each from the other (mean, 95th percentile,
+ * maximum, share beyond the threshold), the discrete Fréchet distance, and the
+ * stretches beyond the threshold in red.  GET /api/reports/routes/ computes it all. */
+import { $, element } from "./dom.js";
+import { api, list, plainMessage } from "./api.js";
+import { latLngs, plainMap } from "./comparemap.js";
+
+const COLOURS = ["#1f5fbf", "#e07b00"];
+const BEYOND = "#d00000";
+const routes = { map: null, drawn: null };
+
+function say(text, isError = false) {
+  const line = $("#routes-status");
+  line.textContent = text;
+  line.classList.toggle("error", isError);
+}
+
+const metres = (value) => `${value.toFixed(1)} m`;
+
+/* Routes are A and B on the map, in the legend and in the figures. */
+const LETTERS = ["A", "B"];
+
+function pairCard(pair, names) {
+  const rows = [["Discrete Fréchet distance", metres(pair.frechet)]];
+  for (const name of pair.routes) {
+    const d = pair.deviation[name];
+    const other = pair.routes.find((n) => n !== name);
+    rows.push(
+      [`${names[name].letter} from ${names[other].letter}: mean`, metres(d.mean)],
+      ["95th percentile", metres(d.p95)],
+      ["maximum", metres(d.max)],
+      ["beyond the threshold", `${Math.round(d.share_beyond * 100)} % of its points`],
+    );
+  }
+  return element("article", { className: "card route-pair" }, [
+    element("h3", { textContent: `${names[pair.routes[0]].letter} and ${names[pair.routes[1]].letter}` }),
+    element("dl", { className: "pairs" }, rows.flatMap(([k, v]) => [element("dt", { textContent: k }), element("dd", { textContent: v })])),
+  ]);
+}
+
+function draw(data, names) {
+  $("#routes-map").hidden = false;
+  if (!routes.map) routes.map = plainMap($("#routes-map"));
+  routes.map.invalidateSize();
+  if (routes.drawn) routes.drawn.remove();
+  routes.drawn = L.featureGroup().addTo(routes.map);
+  // Wide route lines with the red stretches narrower on top: both stay visible.
+  Object.entries(data.routes).forEach(([name, points]) => {
+    L.polyline(latLngs(points), { color: names[name].colour, weight: 9, opacity: 0.75 })
+      .bindTooltip(`${names[name].letter}: ${names[name].text}`)
+      .addTo(routes.drawn);
+  });
+  for (const pair of data.pairs) {
+    for (const name of pair.routes) {
+      for (const stretch of pair.deviation[name].beyond) {
+        L.polyline(latLngs(stretch), { color: BEYOND, weight: 3, opacity: 1, className: "beyond" })
+          .bindTooltip(`${names[name].letter}: more than ${data.threshold} m off`)
+          .addTo(routes.drawn);
+      }
+    }
+  }
+  routes.map.fitBounds(routes.drawn.getBounds(), { padding: [20, 20] });
+  const key = (colour, text) => element("li", {}, [element("span", { className: "swatch", style: `background:${colour}` }), text]);
+  $("#routes-legend").replaceChildren(
+    ...Object.values(names).map((n) => key(n.colour, `${n.letter}: ${n.text}`)),
+    key(BEYOND, `more than ${data.threshold} m from the other route`),
+  );
+  $("#routes-figures").replaceChildren(...data.pairs.map((pair) => pairCard(pair, names)));
+}
+
+async function compare(e) {
+  e.preventDefault();
+  const form = $("#routes-form").elements;
+  const [a, b] = [form.leg_a, form.leg_b];
+  const q = new URLSearchParams([["leg", a.value], ["leg", b.value], ["threshold", form.threshold.value]]);
+  // The server names routes "leg <id>"; the page shows A and B with the picker's words.
+  const names = Object.fromEntries(
+    [a, b].map((select, i) => [`leg ${select.value}`, { letter: LETTERS[i], colour: COLOURS[i], text: select.selectedOptions[0].textContent }]),
+  );
+  say("Comparing the routes…");
+  try {
+    const data = await api("GET", `reports/routes/?${q}`);
+    draw(data, names);
+    say(`Routes compared; threshold ${data.threshold} m.`);
+  } catch (err) {
+    say(plainMessage(err), true);
+  }
+}
+
+async function main() {
+  $("#routes-form").addEventListener("submit", compare);
+  try {
+    const [legs, shifts] = await Promise.all([list("legs/"), list("shifts/")]);
+    const shiftOf = new Map(shifts.map((s) => [s.id, s]));
+    legs.sort((x, y) => (x.start < y.start ? 1 : -1));
+    const options = legs.map((leg) => {
+      const shift = shiftOf.get(leg.shift);
+      const where = shift ? `#${shift.test_event} · Shift ${shift.number} · ` : "";
+      return [leg.id, `${where}Leg ${leg.number} (${(leg.start || "").slice(0, 10)})`];
+    });
+    const form = $("#routes-form").elements;
+    for (const select of [form.leg_a, form.leg_b]) select.replaceChildren(...options.map(([v, t]) => new Option(t, v)));
+    if (options.length > 1) form.leg_b.selectedIndex = 1;
+  } catch (err) {
+    say(plainMessage(err), true);
+  }
+}
+
+if ($("#routes-form")) main();
