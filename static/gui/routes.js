@@ -5,6 +5,7 @@
 import { $, element } from "./dom.js";
 import { api, list, plainMessage } from "./api.js";
 import { latLngs, plainMap } from "./comparemap.js";
+import { _ } from "./i18n.js";
 
 const COLOURS = ["#1f5fbf", "#e07b00"];
 const BEYOND = "#d00000";
@@ -22,19 +23,19 @@ const metres = (value) => `${value.toFixed(1)} m`;
 const LETTERS = ["A", "B"];
 
 function pairCard(pair, names) {
-  const rows = [["Discrete Fréchet distance", metres(pair.frechet)]];
+  const rows = [[_("Discrete Fréchet distance"), metres(pair.frechet)]];
   for (const name of pair.routes) {
     const d = pair.deviation[name];
     const other = pair.routes.find((n) => n !== name);
     rows.push(
-      [`${names[name].letter} from ${names[other].letter}: mean`, metres(d.mean)],
-      ["95th percentile", metres(d.p95)],
-      ["maximum", metres(d.max)],
-      ["beyond the threshold", `${Math.round(d.share_beyond * 100)} % of its points`],
+      [_("%(route)s from %(other)s: mean", { route: names[name].letter, other: names[other].letter }), metres(d.mean)],
+      [_("95th percentile"), metres(d.p95)],
+      [_("maximum"), metres(d.max)],
+      [_("beyond the threshold"), _("%(share)s of its points", { share: `${Math.round(d.share_beyond * 100)} %` })],
     );
   }
   return element("article", { className: "card route-pair" }, [
-    element("h3", { textContent: `${names[pair.routes[0]].letter} and ${names[pair.routes[1]].letter}` }),
+    element("h3", { textContent: _("%(first)s and %(second)s", { first: names[pair.routes[0]].letter, second: names[pair.routes[1]].letter }) }),
     element("dl", { className: "pairs" }, rows.flatMap(([k, v]) => [element("dt", { textContent: k }), element("dd", { textContent: v })])),
   ]);
 }
@@ -78,11 +79,11 @@ async function compare(e) {
   const names = Object.fromEntries(
     [a, b].map((select, i) => [`leg ${select.value}`, { letter: LETTERS[i], colour: COLOURS[i], text: select.selectedOptions[0].textContent }]),
   );
-  say("Comparing the routes…");
+  say(_("Comparing the routes…"));
   try {
     const data = await api("GET", `reports/routes/?${q}`);
     draw(data, names);
-    say(`Routes compared; threshold ${data.threshold} m.`);
+    say(_("Routes compared; threshold %(metres)s m.", { metres: data.threshold }));
   } catch (err) {
     say(plainMessage(err), true);
   }

@@ -5,6 +5,7 @@
 import { CONFIG, $, element } from "./dom.js";
 import { api, list, plainMessage } from "./api.js";
 import { plainMap } from "./comparemap.js";
+import { _, plural } from "./i18n.js";
 
 const SHOWN_IN_LIST = 200; // the downloads hold every take-over found
 
@@ -41,14 +42,14 @@ function startDrawing() {
   // Two corners tapped in quick succession are not a double tap that zooms.
   search.map.doubleClickZoom.disable();
   $("#search-map").classList.add("drawing");
-  say("Click the first corner of the area on the map.");
+  say(_("Click the first corner of the area on the map."));
 }
 
 function mapClicked(e) {
   if (!search.drawing) return;
   if (!search.corner) {
     search.corner = e.latlng;
-    say("Click the opposite corner.");
+    say(_("Click the opposite corner."));
     return;
   }
   search.drawing = false;
@@ -56,7 +57,7 @@ function mapClicked(e) {
   $("#search-map").classList.remove("drawing");
   $("#search-form").elements.case_area.value = "";
   showArea(boxPolygon(search.corner, e.latlng));
-  say("Area drawn. Press Search.");
+  say(_("Area drawn. Press Search."));
 }
 
 function query() {
@@ -95,14 +96,14 @@ function showFound(collection) {
   });
   $("#search-results").replaceChildren(...items);
   const n = collection.features.length;
-  const more = n > SHOWN_IN_LIST ? ` The list shows the first ${SHOWN_IN_LIST}; the downloads hold all.` : "";
-  say(`${n} take-over${n === 1 ? "" : "s"} found.${more}`);
+  const more = n > SHOWN_IN_LIST ? " " + _("The list shows the first %(count)s; the downloads hold all.", { count: SHOWN_IN_LIST }) : "";
+  say(plural(ngettext("%(count)s take-over found.", "%(count)s take-overs found.", n), n) + more);
 }
 
 async function runSearch(e) {
   e.preventDefault();
   const q = query();
-  say("Searching…");
+  say(_("Searching…"));
   try {
     const found = await api("GET", `segments/found/?${q}&as=geojson`);
     showFound(found);
