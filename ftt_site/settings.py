@@ -106,6 +106,7 @@ INSTALLED_APPS = [
     "django_tasks",
     "django_tasks_db",
     "django_prometheus",
+    "simple_history",
     "ftt_site",
     "common",
     "events",
@@ -132,6 +133,8 @@ MIDDLEWARE = [
     "django.contrib.messages.middleware.MessageMiddleware",
     "django.middleware.clickjacking.XFrameOptionsMiddleware",
     "csp.middleware.CSPMiddleware",
+    # Who changed a row and through what (events.history).
+    "ftt_site.change_origin.ChangeOriginMiddleware",
     # Last: turns a lockout on any login path into one answer (ftt_site.lockout).
     "axes.middleware.AxesMiddleware",
     "django_prometheus.middleware.PrometheusAfterMiddleware",
@@ -467,3 +470,7 @@ if env_str("FTT_LDAP_SERVER_URI"):
     if "administrator" in FTT_LDAP_ROLE_GROUPS:
         AUTH_LDAP_USER_FLAGS_BY_GROUP = {"is_staff": FTT_LDAP_ROLE_GROUPS["administrator"]}
     AUTH_LDAP_CACHE_TIMEOUT = 300
+
+# Change history (events.models.changes): a file field is kept as its name, so
+# deleting an old history row never deletes a file (django-cleanup).
+SIMPLE_HISTORY_FILEFIELD_TO_CHARFIELD = True

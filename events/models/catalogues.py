@@ -4,6 +4,8 @@ installations refers to the same rows without any id mapping."""
 from django.core.validators import RegexValidator
 from django.db import models
 
+from events.models.changes import tracked
+
 rgb_validator = RegexValidator(r"^\d{1,3},\d{1,3},\d{1,3}$", "Colour must be 'R,G,B' (0-255 each).")
 
 
@@ -49,6 +51,7 @@ class ItoReason(Catalogue):
         default=False,
         help_text="Offered as a one-tap button in the cockpit (the others are in its list).",
     )
+    history = tracked()
 
     class Meta(Catalogue.Meta):
         verbose_name = "ITO reason"

@@ -3,6 +3,8 @@
 from django.conf import settings
 from django.db import models
 
+from events.models.changes import tracked
+
 
 class Personnel(models.Model):
     name = models.CharField(max_length=200)
@@ -15,6 +17,7 @@ class Personnel(models.Model):
         related_name="personnel",
         help_text="Login account of this person; notes they write are attributed to them.",
     )
+    history = tracked(excluded_fields=["user"])
 
     class Meta:
         ordering = ["name"]
@@ -55,6 +58,7 @@ class Vehicle(KeyedConfiguration):
     )
     institution = models.CharField(max_length=200, blank=True)
     configuration = models.TextField(blank=True)
+    history = tracked()
 
     class Meta(KeyedConfiguration.Meta):
         pass

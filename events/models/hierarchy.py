@@ -14,6 +14,7 @@ from django.db.models import F, Q
 from django.utils import timezone
 
 from events.models.catalogues import ItoReason, SegmentType, Weather
+from events.models.changes import tracked
 from events.models.configuration import Performer, Personnel, PoseSource, Vehicle
 
 
@@ -77,10 +78,18 @@ class TestEvent(LogEntry):
         validators=[validate_time_zone],
         help_text="IANA name, e.g. Europe/Berlin; every time of this event is shown in it.",
     )
+    # Set once by events.services.logs.finalise_test_event; from then on
+    # operators may not change the event and its figures use `taxonomy`.
+    finalised = models.DateTimeField(null=True, blank=True, editable=False)
+    finalised_by = models.CharField(max_length=200, blank=True, editable=False)
+    # The ITO reasons as they were at finalisation: {key: {name, color, counts}}.
+    taxonomy = models.JSONField(null=True, blank=True, editable=False)
+    history = tracked()
 
     class Meta:
         ordering = ["-start", "-id"]
         constraints = [_ends_after_start("testevent")]
+        permissions = [("finalise_testevent", "Can finalise a closed test event")]
 
     def __str__(self):
         label = self.location or "Test event"
@@ -116,6 +125,7 @@ class Shift(LogEntry):
     )
     test_intent = models.CharField(max_length=500, blank=True)
     workspace = models.CharField(max_length=500, blank=True)
+    history = tracked()
 
     class Meta:
         ordering = ["-start", "-id"]
@@ -147,6 +157,7 @@ class Leg(LogEntry):
         blank=True,
         help_text="Where the robot's recording (bag) of this leg is.",
     )
+    history = tracked()
 
     class Meta:
         ordering = ["-start", "-id"]
@@ -197,6 +208,7 @@ class Segment(ChangeStamped):
     # When an operator last set reason, obstacle, lighting or slope (never: null).
     # Imports merge the annotation by this stamp, the rest of the row by `modified`.
     annotated = models.DateTimeField(null=True, blank=True, editable=False)
+    history = tracked()
 
     class Meta:
         ordering = ["-start", "-id"]

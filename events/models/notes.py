@@ -2,6 +2,7 @@ import uuid
 
 from django.db import models
 
+from events.models.changes import tracked
 from events.models.configuration import Personnel
 from events.models.hierarchy import Segment
 
@@ -15,6 +16,7 @@ class Note(models.Model):
     text = models.TextField()
     created = models.DateTimeField()
     edited = models.DateTimeField()
+    history = tracked()
 
     class Meta:
         ordering = ["created", "id"]

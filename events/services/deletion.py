@@ -7,10 +7,12 @@ from django.db.models import Model, ProtectedError, RestrictedError
 
 from common.errors import RuleViolation, describe_protected
 from events.feed import announce_row
+from events.services.finality import require_amendable_row
 
 
 @transaction.atomic
 def delete(instance: Model) -> None:
+    require_amendable_row(instance)
     try:
         announce_row(instance, deleted=True)
         instance.delete()

@@ -23,6 +23,7 @@ from django.db import InterfaceError, OperationalError, transaction
 from django.utils import timezone
 
 from common.errors import RuleViolation
+from events.history import authored
 from events.models import Leg, Segment
 from events.selectors.logs import open_master
 from events.services.segments import (
@@ -80,6 +81,7 @@ class Recorder:
 
     # --- public -------------------------------------------------------------------------
 
+    @authored("collector")
     def apply(self, events: list[Event], master: GivenMaster | None = None) -> None:
         """Store events in order.  Raises DatabaseUnavailable with nothing stored
         (and this object's state unchanged) when the database cannot be used."""
@@ -105,6 +107,7 @@ class Recorder:
         finally:
             self.given = None
 
+    @authored("collector")
     def open_master_uid(self) -> str | None:
         """The uid of the master open now (after following leg changes)."""
         with transaction.atomic():
@@ -131,6 +134,7 @@ class Recorder:
         if self._left_open is not None:
             self._left_open.append(self._master_uid())
 
+    @authored("collector")
     def sync(self) -> Leg | None:
         """Follow leg changes now (called periodically while no events arrive)."""
         saved = copy.copy(self.state), self.leg

@@ -4,6 +4,7 @@ from django.db import models
 from django.utils import timezone
 
 from events.models import Segment
+from events.models.changes import tracked
 
 
 def image_upload_to(instance, filename):
@@ -18,6 +19,7 @@ class Image(models.Model):
     description = models.CharField(max_length=500, blank=True)
     robot_stamp = models.DateTimeField(null=True, blank=True)
     received = models.DateTimeField(default=timezone.now)
+    history = tracked()
 
     class Meta:
         ordering = ["robot_stamp", "received", "id"]
