@@ -167,3 +167,18 @@ def robot_client(db):
         return client
 
     return make
+
+
+@pytest.fixture
+def wipe():
+    """Forget everything, as on a freshly installed base station (catalogues stay)."""
+    from events.models import TestEvent
+    from tests.support.snapshot import snapshot
+
+    def _wipe():
+        TestEvent.objects.all().delete()
+        for model in (Vehicle, PoseSource, Performer, Personnel):
+            model.objects.all().delete()
+        assert all(not rows for rows in snapshot().values())
+
+    return _wipe

@@ -50,6 +50,8 @@ def finalise_test_event(event: TestEvent, *, by=None) -> TestEvent:
     event.finalised = timezone.now()
     event.finalised_by = by.get_username() if by is not None else ""
     event.taxonomy = current_taxonomy()
+    # Dated like the finalisation itself, so it is not listed as an amendment after it.
+    event._history_date = event.finalised
     event.save(update_fields=["finalised", "finalised_by", "taxonomy"])
     return announce_and_return(event)
 

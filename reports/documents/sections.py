@@ -19,6 +19,7 @@ from reports.figures import charts
 from reports.figures.sketch import track_sketch
 from reports.figures.timeline import draw_timeline
 from reports.selectors import content
+from reports.selectors.provenance import keywords, provenance
 from reports.selectors.statistics import (
     CONFIDENCE,
     FORMULAS,
@@ -53,7 +54,7 @@ class Sections:
         self.tz = event.tzinfo
         self.mode = LOCAL if options.local else GPS
         self.warnings: list[str] = []
-        self.reasons = content.reasons_by_key()
+        self.reasons = content.reasons_by_key(event)
         self.pictures = Pictures(root, options.image_appendix, self.warnings, time_stage)
         tiles = tile_source(event, options, self.mode)
         self.maps = TrackMaps(self.mode, tiles, self.pictures, time_stage)
@@ -102,6 +103,22 @@ class Sections:
             "level": self.options.level,
             "appendix": self.appendix,
             "methods": self._methods(stats, shifts),
+            "provenance": self._provenance(),
+        }
+
+    def _provenance(self) -> dict:
+        stamp = provenance(self.event, self.options.as_dict(), timezone.now())
+        final = self.event.finalised
+        return {
+            **stamp,
+            "keywords": keywords(stamp),
+            "final": fmt.timestamp(final, self.tz) if final else None,
+            "amendments": [
+                f"{a['at']}: {a['record']} by {a['by'] or a['channel']}"
+                + (f" ({a['reason']})" if a["reason"] else "")
+                for a in stamp["amendments"]
+            ],
+            "options": [[k, str(v)] for k, v in stamp["options"].items()],
         }
 
     def _title(self) -> dict:

@@ -4,6 +4,7 @@ people, the legs with their weather, notes, camera images and the ITO reasons.""
 from collections import defaultdict
 
 from events.models import ItoReason, Leg, Note, Segment, Shift, TestEvent
+from events.selectors.taxonomy import taxonomy_of
 from telemetry.models import Image
 
 
@@ -11,8 +12,18 @@ def has_segments(event: TestEvent) -> bool:
     return Segment.objects.filter(leg__shift__test_event=event).exists()
 
 
-def reasons_by_key() -> dict[str, ItoReason]:
-    return {r.key: r for r in ItoReason.objects.all()}
+def reasons_by_key(event: TestEvent) -> dict[str, ItoReason]:
+    """The reasons with the names and colours the event's report uses: a final
+    event's frozen taxonomy (events.selectors.taxonomy), else the catalogue."""
+    return {
+        key: ItoReason(
+            key=key,
+            short_description=entry["name"],
+            color=entry["color"],
+            counts_as_intervention=entry["counts"],
+        )
+        for key, entry in taxonomy_of(event).items()
+    }
 
 
 def shifts_of(event: TestEvent) -> list[Shift]:

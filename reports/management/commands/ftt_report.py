@@ -3,6 +3,8 @@
     manage.py ftt_report --test-event 3 -o report.pdf --name "Trial 3" --recipient ACME
     manage.py ftt_report --test-event 3 --csv segments.csv --geojson tracks.geojson --gpx t.gpx
     manage.py ftt_report --job 17        # worker for a report requested from the GUI
+    manage.py ftt_report --test-event 3 --json figures.json   # figures with their provenance
+    manage.py ftt_report --verify report.pdf   # (or figures.json) is the data still the same?
 
 Without -o and without any export option the PDF goes to report.pdf.
 """
@@ -20,6 +22,7 @@ from reports.documents.options import FULL, LEVELS, ReportError, ReportOptions
 from reports.figures.tiles import MAX_ZOOM
 from reports.models import Report
 from reports.selectors import exports
+from reports.selectors.provenance import json_report, stamp_of_report, verify
 from reports.services.generation import run_job
 
 
@@ -83,8 +86,18 @@ class Command(BaseCommand):
         parser.add_argument("--csv", help="Write the segments as CSV to this file.")
         parser.add_argument("--geojson", help="Write the GPS tracks as GeoJSON to this file.")
         parser.add_argument("--gpx", help="Write the GPS tracks as GPX to this file.")
+        parser.add_argument(
+            "--json", help="Write the figures with their provenance (digest) as JSON to this file."
+        )
+        parser.add_argument(
+            "--verify",
+            metavar="REPORT",
+            help="Check a PDF or JSON report against the data: exit 1 when it changed.",
+        )
 
     def handle(self, *args, **o):
+        if o["verify"]:
+            return self._verify(Path(o["verify"]))
         if o["job"] is not None:
             return self._job(o["job"])
         if o["compare"]:
@@ -97,6 +110,21 @@ class Command(BaseCommand):
         exported = self._exports(event, o)
         if o["output"] or not exported:
             self._pdf(event, o)
+
+    def _verify(self, path: Path):
+        if not path.is_file():
+            raise CommandError(f"{path} does not exist.")
+        stamp = stamp_of_report(path.read_bytes())
+        if stamp is None:
+            raise CommandError(f"{path} carries no FTT data digest (made before FTT stamped it?).")
+        verdict = verify(stamp)
+        self.stdout.write(("OK: " if verdict.ok else "CHANGED: ") + verdict.message)
+        for change in verdict.changes:
+            reason = f" ({change['reason']})" if change["reason"] else ""
+            who = f"{change['by'] or 'FTT'} via {change['channel']}"
+            self.stdout.write(f"  {change['record']} changed {change['at']} by {who}{reason}")
+        if not verdict.ok:
+            raise CommandError("The data differs from the report.", returncode=1)
 
     def _compare(self, o):
         ids = o["compare"]
@@ -125,6 +153,7 @@ class Command(BaseCommand):
             ("csv", lambda: exports.segments_csv(event, "local" if o["local"] else "gps")),
             ("geojson", lambda: exports.tracks_geojson_text(event)),
             ("gpx", lambda: exports.tracks_gpx(event)),
+            ("json", lambda: json_report(event, "local" if o["local"] else "gps")),
         )
         done = False
         for key, make in writers:
