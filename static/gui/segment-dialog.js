@@ -24,6 +24,10 @@ export async function openSegmentDialog(id) {
   form.elements.ito_reason.replaceChildren(...state.catalogue.reasons.map((r) => new Option(r.short_description, r.key)));
   form.elements.ito_reason.value = s.ito_reason || "unassigned";
   for (const f of ["obstacle", "lighting", "slope"]) form.elements[f].value = s[f] || "";
+  form.elements.change_reason.value = "";
+  const history = $(".history", segmentDialog);
+  history.open = false;
+  $(".history-list", history).replaceChildren();
   // Annotation belongs to take-over reasons; the server says so too if tried elsewhere.
   form.hidden = s.parent === null;
   $$("input, select, button", form).forEach((el) => (el.disabled = !CONFIG.canOperate));
@@ -60,9 +64,25 @@ $("#annotation-form").addEventListener("submit", dialogAction(async () => {
   const form = $("#annotation-form");
   const body = {};
   for (const f of ["ito_reason", "obstacle", "lighting", "slope"]) body[f] = form.elements[f].value;
-  putSegment(await api("PATCH", `segments/${dialogSegment.id}/`, body));
+  const reason = form.elements.change_reason.value.trim();
+  putSegment(await api("PATCH", `segments/${dialogSegment.id}/`, body, { reason }));
   notice(`${segmentLabel(dialogSegment.id)} saved.`);
 }));
+
+// The change history is read when it is opened: most dialogs never show it.
+$(".history", segmentDialog).addEventListener("toggle", dialogAction(async (e) => {
+  if (!e.target.open || !dialogSegment) return;
+  const entries = await api("GET", `segments/${dialogSegment.id}/history/`);
+  $(".history-list", segmentDialog).replaceChildren(...entries.map(historyItem));
+}));
+
+function historyItem(entry) {
+  const li = document.createElement("li");
+  const changes = entry.changes.map((c) => `${c.field}: ${c.before ?? "—"} → ${c.after ?? "—"}`).join("; ");
+  const why = entry.reason ? ` (${entry.reason})` : "";
+  li.textContent = `${fmtTime(entry.at)} · ${entry.author} via ${entry.channel} · ${entry.kind}${changes ? ": " + changes : ""}${why}`;
+  return li;
+}
 
 export async function loadNotes({ keepEditing = false } = {}) {
   if (!dialogSegment) return;
