@@ -474,3 +474,9 @@ if env_str("FTT_LDAP_SERVER_URI"):
 # Change history (events.models.changes): a file field is kept as its name, so
 # deleting an old history row never deletes a file (django-cleanup).
 SIMPLE_HISTORY_FILEFIELD_TO_CHARFIELD = True
+
+# Suggestions for a take-over's location type (free text; docs/report.md, DMV CSV).
+FTT_LOCATION_TYPES = env_list("FTT_LOCATION_TYPES", "field,road,yard")
+# The disengagement report's manufacturer and permit columns (ftt_report --dmv).
+FTT_DMV_MANUFACTURER = env_str("FTT_DMV_MANUFACTURER", "")
+FTT_DMV_PERMIT = env_str("FTT_DMV_PERMIT", "")

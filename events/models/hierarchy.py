@@ -178,7 +178,29 @@ class Leg(LogEntry):
 class Segment(ChangeStamped):
     """A master is one continuous run in one mode; ITO children carry reasons."""
 
-    ANNOTATION_FIELDS = ("ito_reason", "obstacle", "lighting", "slope")
+    # Who initiated a take-over and how severe it was: the fields regulators'
+    # disengagement reports ask for (California DMV); defaults need no tap.
+    INITIATORS = (
+        ("autonomous_system", "autonomous system"),
+        ("safety_driver", "safety driver"),
+        ("remote_operator", "remote operator"),
+        ("other", "other"),
+    )
+    SEVERITIES = (
+        ("critical", "critical"),
+        ("problem", "problem"),
+        ("desired", "desired"),
+        ("not_applicable", "not applicable"),
+    )
+    ANNOTATION_FIELDS = (
+        "ito_reason",
+        "obstacle",
+        "lighting",
+        "slope",
+        "initiator",
+        "severity",
+        "location_type",
+    )
 
     uid = models.UUIDField(default=uuid.uuid4, unique=True, editable=False)
     leg = models.ForeignKey(Leg, on_delete=models.CASCADE, related_name="segments")
@@ -196,6 +218,10 @@ class Segment(ChangeStamped):
     obstacle = models.CharField(max_length=500, blank=True)
     lighting = models.CharField(max_length=500, blank=True)
     slope = models.CharField(max_length=500, blank=True)
+    initiator = models.CharField(max_length=32, choices=INITIATORS, default="safety_driver")
+    severity = models.CharField(max_length=32, choices=SEVERITIES, default="not_applicable")
+    # Free text with suggestions (settings.FTT_LOCATION_TYPES: field, road, yard, …).
+    location_type = models.CharField(max_length=64, blank=True)
     start_position = models.PointField(srid=4326, null=True, blank=True)
     start_local_x = models.FloatField(null=True, blank=True)
     start_local_y = models.FloatField(null=True, blank=True)

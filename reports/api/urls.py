@@ -14,7 +14,7 @@ urlpatterns = [
         name="report-statistics",
     ),
     re_path(
-        r"^exports/(?P<test_event_id>\d+)/(?P<filename>segments\.csv|tracks\.geojson|tracks\.gpx)$",
+        r"^exports/(?P<test_event_id>\d+)/(?P<filename>segments\.csv|disengagements\.csv|tracks\.geojson|tracks\.gpx)$",
         views.ExportView.as_view(),
         name="report-export",
     ),

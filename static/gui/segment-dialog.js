@@ -23,7 +23,9 @@ export async function openSegmentDialog(id) {
   const form = $("#annotation-form");
   form.elements.ito_reason.replaceChildren(...state.catalogue.reasons.map((r) => new Option(r.short_description, r.key)));
   form.elements.ito_reason.value = s.ito_reason || "unassigned";
-  for (const f of ["obstacle", "lighting", "slope"]) form.elements[f].value = s[f] || "";
+  for (const f of ["obstacle", "lighting", "slope", "location_type"]) form.elements[f].value = s[f] || "";
+  form.elements.initiator.value = s.initiator || "safety_driver";
+  form.elements.severity.value = s.severity || "not_applicable";
   form.elements.change_reason.value = "";
   const history = $(".history", segmentDialog);
   history.open = false;
@@ -63,7 +65,9 @@ function dialogAction(fn) {
 $("#annotation-form").addEventListener("submit", dialogAction(async () => {
   const form = $("#annotation-form");
   const body = {};
-  for (const f of ["ito_reason", "obstacle", "lighting", "slope"]) body[f] = form.elements[f].value;
+  for (const f of ["ito_reason", "obstacle", "lighting", "slope", "initiator", "severity", "location_type"]) {
+    body[f] = form.elements[f].value;
+  }
   const reason = form.elements.change_reason.value.trim();
   putSegment(await api("PATCH", `segments/${dialogSegment.id}/`, body, { reason }));
   notice(`${segmentLabel(dialogSegment.id)} saved.`);

@@ -56,6 +56,7 @@ def test_reason_changed_in_admin_is_recorded_as_admin(take_over, client):
     client.force_login(staff_user("administrator"))
     url = reverse("admin:events_segment_change", args=[take_over.pk])
     data = {"ito_reason": "safety", "obstacle": "", "lighting": "", "slope": ""}
+    data.update(initiator="safety_driver", severity="not_applicable", location_type="")
     data.update({f"{p}-{k}": v for p in ("children", "notes") for k, v in _empty_inline().items()})
     assert client.post(url, data).status_code == 302
     _assert_reason_entry(take_over, "admin", "administrator-staff")

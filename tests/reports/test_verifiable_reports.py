@@ -1,5 +1,6 @@
 """Reports state the digest of their data and can be verified against it (issue 26)."""
 
+import csv
 import io
 import json
 
@@ -7,7 +8,7 @@ import pytest
 from django.core.management import CommandError, call_command
 
 from events.history import authored
-from events.models import Segment
+from events.models import Vehicle
 from events.services import finality, logs, segments
 from exchange.archive import open_archive
 from exchange.export import export_events, select_events
@@ -17,7 +18,8 @@ from tests.support.pdf import flat, pdf_text
 
 
 def _take_over(scenario):
-    return Segment.objects.filter(leg__shift__test_event=scenario.event, parent__isnull=False)[0]
+    """The first reason (safety, counted) of the scenario's first take-over."""
+    return scenario.masters["I1"].children.order_by("start", "id").first()
 
 
 def _verify(path):
@@ -69,3 +71,28 @@ def test_json_digest_is_the_same_on_another_installation(scenario, tmp_path, wip
         import_bundle(bundle)
     assert _verify(report)[0]
     assert json.loads(report.read_text())["provenance"]["digest"] == digest
+
+
+def test_dmv_csv_has_the_columns_and_the_statistics_figures(scenario, tmp_path):
+    from reports.selectors.disengagements import DMV_COLUMNS
+    from reports.selectors.statistics import event_statistics
+
+    event = scenario.event
+    take_over = _take_over(scenario)
+    segments.annotate_segment(take_over, initiator="autonomous_system", location_type="field")
+    out = tmp_path / "dmv.csv"
+    call_command("ftt_report", "--test-event", str(event.pk), "--dmv", str(out))
+    header, *rows = list(csv.reader(out.open(encoding="utf-8")))
+    assert tuple(header) == DMV_COLUMNS
+    stats = event_statistics(event)
+    assert len(rows) == stats.overall.interventions > 0
+    km = {row[3]: float(row[9]) for row in rows}
+    for vehicle_id, figures in stats.by_vehicle.items():
+        key = Vehicle.objects.get(pk=vehicle_id).key
+        if key in km:
+            assert km[key] == pytest.approx(figures.auto_distance / 1000, abs=0.001)
+    assert ["AV System", "field"] in [row[4:6] for row in rows]
+    month = f"{event.start:%Y-%m}"
+    by_month = tmp_path / "month.csv"
+    call_command("ftt_report", "--dmv", str(by_month), "--month", month)
+    assert by_month.read_text(encoding="utf-8") == out.read_text(encoding="utf-8")

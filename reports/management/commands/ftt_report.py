@@ -22,6 +22,7 @@ from reports.documents.options import FULL, LEVELS, ReportError, ReportOptions
 from reports.figures.tiles import MAX_ZOOM
 from reports.models import Report
 from reports.selectors import exports
+from reports.selectors.disengagements import disengagements_csv, events_in_month
 from reports.selectors.provenance import json_report, stamp_of_report, verify
 from reports.services.generation import run_job
 
@@ -90,6 +91,15 @@ class Command(BaseCommand):
             "--json", help="Write the figures with their provenance (digest) as JSON to this file."
         )
         parser.add_argument(
+            "--dmv",
+            help="Write the disengagement report (California DMV columns) as CSV to this file.",
+        )
+        parser.add_argument(
+            "--month",
+            metavar="YYYY-MM",
+            help="With --dmv and without --test-event: every test event of that month.",
+        )
+        parser.add_argument(
             "--verify",
             metavar="REPORT",
             help="Check a PDF or JSON report against the data: exit 1 when it changed.",
@@ -100,6 +110,8 @@ class Command(BaseCommand):
             return self._verify(Path(o["verify"]))
         if o["job"] is not None:
             return self._job(o["job"])
+        if o["dmv"] and o["test_event"] is None:
+            return self._dmv_month(o)
         if o["compare"]:
             return self._compare(o)
         if o["test_event"] is None:
@@ -125,6 +137,27 @@ class Command(BaseCommand):
             self.stdout.write(f"  {change['record']} changed {change['at']} by {who}{reason}")
         if not verdict.ok:
             raise CommandError("The data differs from the report.", returncode=1)
+
+    @staticmethod
+    def _month(o) -> tuple[int, int] | None:
+        if not o["month"]:
+            return None
+        try:
+            year, month = (int(part) for part in o["month"].split("-"))
+        except ValueError:
+            raise CommandError("Give the month as YYYY-MM, e.g. 2026-05.") from None
+        if not 1 <= month <= 12:
+            raise CommandError("Give the month as YYYY-MM, e.g. 2026-05.")
+        return year, month
+
+    def _dmv_month(self, o):
+        month = self._month(o)
+        if month is None:
+            raise CommandError("Give --test-event ID or --month YYYY-MM with --dmv.")
+        Path(o["dmv"]).write_text(
+            disengagements_csv(events_in_month(*month), month), encoding="utf-8"
+        )
+        self.stdout.write(f"dmv: {o['dmv']}")
 
     def _compare(self, o):
         ids = o["compare"]
@@ -154,6 +187,7 @@ class Command(BaseCommand):
             ("geojson", lambda: exports.tracks_geojson_text(event)),
             ("gpx", lambda: exports.tracks_gpx(event)),
             ("json", lambda: json_report(event, "local" if o["local"] else "gps")),
+            ("dmv", lambda: disengagements_csv([event], self._month(o))),
         )
         done = False
         for key, make in writers:
