@@ -6,11 +6,12 @@ from django.db import connection
 
 from common import memo
 from events import seeds
-from events.models import Performer, Personnel, PoseSource, Vehicle
+from events.models import Performer, Personnel, PoseSource, TestEvent, Vehicle
 from events.services import logs
 from events.services.robots import ensure_robot_account
 from rosbridge_app import wakeup
 from tests.support.modes import start_auto
+from tests.support.snapshot import snapshot
 
 
 def pytest_runtest_setup(item):
@@ -172,8 +173,6 @@ def robot_client(db):
 @pytest.fixture
 def wipe():
     """Forget everything, as on a freshly installed base station (catalogues stay)."""
-    from events.models import TestEvent
-    from tests.support.snapshot import snapshot
 
     def _wipe():
         TestEvent.objects.all().delete()

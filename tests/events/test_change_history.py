@@ -6,12 +6,14 @@ import pytest
 from django.urls import reverse
 from django.utils import timezone
 
-from events.models import ItoReason, Segment
+from events.models import ItoReason, Segment, Vehicle
 from events.services import finality, logs, segments
 from exchange.archive import open_archive
 from exchange.export import export_events, select_events
 from exchange.importer import import_bundle
 from reports.selectors.statistics import event_statistics
+from rosbridge_app.collector import events as ev
+from rosbridge_app.collector.recorder import record_events
 from tests.support.accounts import signed_in, staff_user
 
 pytestmark = pytest.mark.django_db
@@ -142,6 +144,17 @@ def test_final_event_keeps_its_taxonomy_when_the_catalogue_changes(take_over, ot
 
 
 def _new_vehicle():
-    from events.models import Vehicle
-
     return Vehicle.objects.create(key="moose", short_description="Moose")
+
+
+def test_the_collector_records_its_mode_changes_as_collector(leg):
+    now = timezone.now()
+    record_events(
+        leg,
+        [
+            ev.Event(ev.START, now),
+            ev.Event(ev.MODE, now, {"mode": "ito", "gps": None, "local": None}),
+        ],
+    )
+    take = Segment.objects.get(leg=leg, parent__isnull=False)
+    assert [e.history_channel for e in take.history.all()] == ["collector"]

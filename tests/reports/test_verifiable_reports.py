@@ -13,6 +13,8 @@ from events.services import finality, logs, segments
 from exchange.archive import open_archive
 from exchange.export import export_events, select_events
 from exchange.importer import import_bundle
+from reports.selectors.disengagements import DMV_COLUMNS
+from reports.selectors.statistics import event_statistics
 from tests.support.accounts import staff_user
 from tests.support.pdf import flat, pdf_text
 
@@ -74,9 +76,6 @@ def test_json_digest_is_the_same_on_another_installation(scenario, tmp_path, wip
 
 
 def test_dmv_csv_has_the_columns_and_the_statistics_figures(scenario, tmp_path):
-    from reports.selectors.disengagements import DMV_COLUMNS
-    from reports.selectors.statistics import event_statistics
-
     event = scenario.event
     take_over = _take_over(scenario)
     segments.annotate_segment(take_over, initiator="autonomous_system", location_type="field")
