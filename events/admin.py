@@ -92,6 +92,8 @@ class AmendmentForm(forms.ModelForm):
                     finality.require_amendable_row(self.instance)
             except PermissionDenied as exc:
                 raise ValidationError(str(exc)) from None
+            except ValidationError as exc:
+                raise ValidationError({"change_reason": exc.messages}) from None
         return data
 
 
@@ -303,14 +305,14 @@ class NoteInline(ReadOnlyInline):
 
 @admin.register(TestEvent)
 class TestEventAdmin(ServiceDeleteMixin, HistoryAdmin):
-    list_display = ["__str__", "location", "version", "time_zone", "start", "end"]
+    list_display = ["__str__", "location", "version", "time_zone", "start", "end", "finalised"]
     list_filter = ["time_zone", ("end", admin.EmptyFieldListFilter)]
     search_fields = ["location", "version", "note"]
     date_hierarchy = "start"
-    readonly_fields = ENTRY_STAMPS
-    fields = ["location", "version", "time_zone", "note", *ENTRY_STAMPS]
+    readonly_fields = [*ENTRY_STAMPS, "finalised", "finalised_by"]
+    fields = ["location", "version", "time_zone", "note", *readonly_fields]
     inlines = [ShiftInline]
-    actions = ["close_selected", "reopen_selected"]
+    actions = ["close_selected", "reopen_selected", "finalise_selected"]
 
     def save_model(self, request, obj, form, change):
         values = {name: form.cleaned_data[name] for name in logs.TEST_EVENT_FIELDS}
@@ -326,6 +328,16 @@ class TestEventAdmin(ServiceDeleteMixin, HistoryAdmin):
     @admin.action(description="Re-open selected test events")
     def reopen_selected(self, request, queryset):
         run_service(self, request, queryset, logs.reopen_test_event, "test events re-opened")
+
+    @admin.action(description=_("Finalise selected closed test events (freezes their taxonomy)"))
+    def finalise_selected(self, request, queryset):
+        def finalise(event):
+            try:
+                return finality.finalise_test_event(event, by=request.user)
+            except PermissionDenied as exc:
+                raise ValidationError(str(exc)) from None
+
+        run_service(self, request, queryset, finalise, "test events finalised")
 
 
 @admin.register(Shift)
@@ -443,7 +455,7 @@ class SegmentAdmin(ServiceDeleteMixin, LeafletGeoAdminMixin, HistoryAdmin):
         return admin_link(obj.parent)
 
     def save_model(self, request, obj, form, change):
-        values = {name: form.cleaned_data[name] for name in form.changed_data}
+        values = {n: form.cleaned_data[n] for n in form.changed_data if n != "change_reason"}
         if values:
             segments.annotate_segment(obj, **values)
 

@@ -158,3 +158,23 @@ def test_the_collector_records_its_mode_changes_as_collector(leg):
     )
     take = Segment.objects.get(leg=leg, parent__isnull=False)
     assert [e.history_channel for e in take.history.all()] == ["collector"]
+
+
+def test_admin_finalises_and_amends_only_with_a_reason(take_over, client):
+    client.force_login(staff_user("administrator"))
+    event = logs.close_test_event(take_over.leg.shift.test_event)
+    client.post(
+        reverse("admin:events_testevent_changelist"),
+        {"action": "finalise_selected", "_selected_action": [event.pk]},
+    )
+    event.refresh_from_db()
+    assert event.finalised is not None and event.taxonomy["safety"]["counts"] is True
+    url = reverse("admin:events_segment_change", args=[take_over.pk])
+    data = {"ito_reason": "safety", "obstacle": "", "lighting": "", "slope": ""}
+    data.update(initiator="safety_driver", severity="not_applicable", location_type="")
+    data.update({f"{p}-{k}": v for p in ("children", "notes") for k, v in _empty_inline().items()})
+    refused = client.post(url, data)
+    assert refused.status_code == 200 and "needs a reason" in refused.content.decode()
+    assert client.post(url, {**data, "change_reason": "typo"}).status_code == 302
+    entry = take_over.history.order_by("-history_id").first()
+    assert (entry.ito_reason_id, entry.history_change_reason) == ("safety", "typo")
