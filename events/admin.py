@@ -102,6 +102,12 @@ class HistoryAdmin(SimpleHistoryAdmin):
 
     form = AmendmentForm
 
+    def changeform_view(self, request, *args, **kwargs):
+        # The reason reaches every history row the save writes (events.history).
+        reason = request.POST.get("change_reason", "") if request.method == "POST" else ""
+        with authored(reason=reason.strip()):
+            return super().changeform_view(request, *args, **kwargs)
+
     def get_fields(self, request, obj=None):
         fields = list(super().get_fields(request, obj))
         if obj is not None and "change_reason" not in fields:

@@ -7,16 +7,13 @@ from django.utils.decorators import sync_and_async_middleware
 
 from events.history import authored
 
-# An amendment of a final test event names its reason in this header (API, GUI)
-# or, in admin, in the change form's "change_reason" field.
+# An amendment of a final test event names its reason in this header (API, GUI);
+# admin's change forms have a field for it (events.admin.HistoryAdmin).
 REASON_HEADER = "X-FTT-Change-Reason"
 
 
 def reason_of(request) -> str:
-    reason = request.headers.get(REASON_HEADER, "")
-    if not reason and request.path.startswith("/admin/") and request.method == "POST":
-        reason = request.POST.get("change_reason", "")
-    return reason.strip()
+    return request.headers.get(REASON_HEADER, "").strip()
 
 
 def channel_of(request) -> str:
