@@ -11,8 +11,14 @@ import { Live } from "./live.js";
 import { Collector } from "./collector.js";
 import { selectionChanged } from "./segments.js";
 
+// A final test event (docs/report.md) is read-only for operators; the server decides.
+function stateOf(row) {
+  if (row.finalised) return "final";
+  return row.is_open ? "open" : "closed";
+}
+
 function rowLabel(level, row) {
-  const status = row.is_open ? "open" : "closed";
+  const status = stateOf(row);
   if (level === "event") return `#${row.id} ${row.location || "(no location)"} · ${fmtDay(row.start)} · ${status}`;
   if (level === "shift") return `Shift ${row.number} · ${vehicleName(row.vehicle)} · ${fmtTime(row.start)} · ${status}`;
   return `Leg ${row.number} · ${fmtTime(row.start)} · ${status}`;
@@ -64,7 +70,7 @@ export async function loadLevel(level, keepSelection = true) {
 function updateLevelState(level) {
   const row = current(level);
   const badge = $(`[data-state="${level}"]`);
-  badge.textContent = row ? (row.is_open ? "open" : "closed") : "";
+  badge.textContent = row ? stateOf(row) : "";
   badge.className = "state" + (row ? (row.is_open ? " open" : " closed") : "");
   const parentRow = LEVELS[level].parent ? current(LEVELS[level].parent) : true;
   const can = CONFIG.canOperate;
