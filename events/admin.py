@@ -11,13 +11,15 @@ from django.contrib.auth import get_user_model
 from django.contrib.auth.admin import UserAdmin
 from django.contrib.auth.forms import AdminUserCreationForm
 from django.contrib.auth.models import Group
-from django.core.exceptions import ValidationError
+from django.core.exceptions import PermissionDenied, ValidationError
 from django.urls import reverse
 from django.utils.html import format_html
 from django.utils.translation import gettext_lazy as _
 from leaflet.admin import LeafletGeoAdminMixin
+from simple_history.admin import SimpleHistoryAdmin
 
 from common import roles
+from events.history import authored
 from events.models import (
     ItoReason,
     Leg,
@@ -34,7 +36,7 @@ from events.models import (
     Weather,
 )
 from events.selectors import labels
-from events.services import configuration, deletion, logs, notes, segments
+from events.services import configuration, deletion, finality, logs, notes, segments
 
 # Shown, never edited: the services and the importer set them.
 ENTRY_STAMPS = ["uid", "start", "end", "modified"]
@@ -75,11 +77,52 @@ def run_service(modeladmin, request, queryset, service, done):
         modeladmin.message_user(request, f"{changed} {done}.", messages.SUCCESS)
 
 
+class AmendmentForm(forms.ModelForm):
+    """A change of a row of a final test event needs a reason (events.services.finality);
+    refused here as a form error rather than after saving."""
+
+    change_reason = forms.CharField(
+        required=False,
+        widget=forms.Textarea(attrs={"rows": 2}),
+        help_text=_("Why this is changed; required for a final test event."),
+    )
+
+    def clean(self):
+        data = super().clean()
+        if self.instance.pk is not None:
+            try:
+                with authored(reason=data.get("change_reason", "")):
+                    finality.require_amendable_row(self.instance)
+            except PermissionDenied as exc:
+                raise ValidationError(str(exc)) from None
+            except ValidationError as exc:
+                raise ValidationError({"change_reason": exc.messages}) from None
+        return data
+
+
+class HistoryAdmin(SimpleHistoryAdmin):
+    """Every tracked model: its history page, and a reason field when it is changed."""
+
+    form = AmendmentForm
+
+    def changeform_view(self, request, *args, **kwargs):
+        # The reason reaches every history row the save writes (events.history).
+        reason = request.POST.get("change_reason", "") if request.method == "POST" else ""
+        with authored(reason=reason.strip()):
+            return super().changeform_view(request, *args, **kwargs)
+
+    def get_fields(self, request, obj=None):
+        fields = list(super().get_fields(request, obj))
+        if obj is not None and "change_reason" not in fields:
+            fields.append("change_reason")
+        return fields
+
+
 # --- configuration ----------------------------------------------------------------------------
 
 
 @admin.register(Personnel)
-class PersonnelAdmin(ServiceDeleteMixin, admin.ModelAdmin):
+class PersonnelAdmin(ServiceDeleteMixin, HistoryAdmin):
     list_display = ["name", "institution", "user"]
     search_fields = ["name", "institution", "user__username"]
     list_filter = ["institution"]
@@ -103,7 +146,7 @@ class RobotBindingInline(admin.TabularInline):
 
 
 @admin.register(Vehicle)
-class VehicleAdmin(ServiceDeleteMixin, admin.ModelAdmin):
+class VehicleAdmin(ServiceDeleteMixin, HistoryAdmin):
     list_display = ["key", "short_description", "institution"]
     search_fields = ["key", "short_description", "long_description", "institution"]
     list_filter = ["institution"]
@@ -259,7 +302,7 @@ class WeatherAdmin(CatalogueAdmin):
 
 
 @admin.register(ItoReason)
-class ItoReasonAdmin(CatalogueAdmin):
+class ItoReasonAdmin(CatalogueAdmin, HistoryAdmin):
     list_display = ["key", "short_description", colour_swatch, "counts_as_intervention", "quick"]
     list_filter = ["counts_as_intervention", "quick"]
 
@@ -323,15 +366,15 @@ class NoteInline(ReadOnlyInline):
 
 
 @admin.register(TestEvent)
-class TestEventAdmin(ServiceDeleteMixin, admin.ModelAdmin):
-    list_display = ["__str__", "location", "version", "time_zone", "start", "end"]
+class TestEventAdmin(ServiceDeleteMixin, HistoryAdmin):
+    list_display = ["__str__", "location", "version", "time_zone", "start", "end", "finalised"]
     list_filter = ["time_zone", ("end", admin.EmptyFieldListFilter)]
     search_fields = ["location", "version", "note"]
     date_hierarchy = "start"
-    readonly_fields = ENTRY_STAMPS
-    fields = ["location", "version", "time_zone", "language", "note", *ENTRY_STAMPS]
+    readonly_fields = [*ENTRY_STAMPS, "finalised", "finalised_by"]
+    fields = ["location", "version", "time_zone", "language", "note", *readonly_fields]
     inlines = [ShiftInline]
-    actions = ["close_selected", "reopen_selected"]
+    actions = ["close_selected", "reopen_selected", "finalise_selected"]
 
     def save_model(self, request, obj, form, change):
         values = {name: form.cleaned_data[name] for name in logs.TEST_EVENT_FIELDS}
@@ -348,9 +391,19 @@ class TestEventAdmin(ServiceDeleteMixin, admin.ModelAdmin):
     def reopen_selected(self, request, queryset):
         run_service(self, request, queryset, logs.reopen_test_event, "test events re-opened")
 
+    @admin.action(description=_("Finalise selected closed test events (freezes their taxonomy)"))
+    def finalise_selected(self, request, queryset):
+        def finalise(event):
+            try:
+                return finality.finalise_test_event(event, by=request.user)
+            except PermissionDenied as exc:
+                raise ValidationError(str(exc)) from None
+
+        run_service(self, request, queryset, finalise, "test events finalised")
+
 
 @admin.register(Shift)
-class ShiftAdmin(ServiceDeleteMixin, admin.ModelAdmin):
+class ShiftAdmin(ServiceDeleteMixin, HistoryAdmin):
     list_display = ["__str__", "test_event_link", "vehicle", "performer", "start", "end"]
     list_filter = ["vehicle", "performer", ("end", admin.EmptyFieldListFilter)]
     search_fields = ["test_intent", "workspace", "note", "test_event__location"]
@@ -387,7 +440,7 @@ class ShiftAdmin(ServiceDeleteMixin, admin.ModelAdmin):
 
 
 @admin.register(Leg)
-class LegAdmin(ServiceDeleteMixin, admin.ModelAdmin):
+class LegAdmin(ServiceDeleteMixin, HistoryAdmin):
     list_display = ["__str__", "shift_link", "weather", "default_pose_source", "start", "end"]
     list_filter = ["weather", ("end", admin.EmptyFieldListFilter)]
     search_fields = ["note", "recording"]
@@ -423,7 +476,7 @@ class LegAdmin(ServiceDeleteMixin, admin.ModelAdmin):
 
 
 @admin.register(Segment)
-class SegmentAdmin(ServiceDeleteMixin, LeafletGeoAdminMixin, admin.ModelAdmin):
+class SegmentAdmin(ServiceDeleteMixin, LeafletGeoAdminMixin, HistoryAdmin):
     list_display = ["number", "leg_link", "segment_type", "ito_reason", "start", "end"]
     list_filter = ["segment_type", "ito_reason", ("parent", admin.EmptyFieldListFilter)]
     search_fields = ["obstacle", "lighting", "slope"]
@@ -485,7 +538,7 @@ class SegmentAdmin(ServiceDeleteMixin, LeafletGeoAdminMixin, admin.ModelAdmin):
         return admin_link(obj.parent, obj.parent and labels.segment_label(obj.parent))
 
     def save_model(self, request, obj, form, change):
-        values = {name: form.cleaned_data[name] for name in form.changed_data}
+        values = {n: form.cleaned_data[n] for n in form.changed_data if n != "change_reason"}
         if values:
             segments.annotate_segment(obj, **values)
 
@@ -495,7 +548,7 @@ class SegmentAdmin(ServiceDeleteMixin, LeafletGeoAdminMixin, admin.ModelAdmin):
 
 
 @admin.register(Note)
-class NoteAdmin(ServiceDeleteMixin, admin.ModelAdmin):
+class NoteAdmin(ServiceDeleteMixin, HistoryAdmin):
     list_display = ["__str__", "author", "segment", "created", "edited"]
     search_fields = ["text", "author__name"]
     list_select_related = ["author", "segment__segment_type"]

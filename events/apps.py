@@ -9,8 +9,10 @@ class EventsConfig(AppConfig):
 
     def ready(self):
         from django.contrib.auth import get_user_model
+        from simple_history.signals import pre_create_historical_record
 
         from events import checks  # noqa: F401  (registers system checks)
+        from events.history import stamp_origin
         from events.models import Leg, RobotAccount, Segment, Vehicle
         from events.selectors.robots import forget_bindings
         from events.selectors.segments import forget_pose_targets
@@ -24,3 +26,4 @@ class EventsConfig(AppConfig):
         for sender in (Segment, Leg):
             post_save.connect(forget_pose_targets, sender=sender, weak=False)
             post_delete.connect(forget_pose_targets, sender=sender, weak=False)
+        pre_create_historical_record.connect(stamp_origin, weak=False)

@@ -106,6 +106,7 @@ INSTALLED_APPS = [
     "django_tasks",
     "django_tasks_db",
     "django_prometheus",
+    "simple_history",
     "ftt_site",
     "common",
     "events",
@@ -136,6 +137,8 @@ MIDDLEWARE = [
     "django.contrib.messages.middleware.MessageMiddleware",
     "django.middleware.clickjacking.XFrameOptionsMiddleware",
     "csp.middleware.CSPMiddleware",
+    # Who changed a row and through what (events.history).
+    "ftt_site.change_origin.ChangeOriginMiddleware",
     # Last: turns a lockout on any login path into one answer (ftt_site.lockout).
     "axes.middleware.AxesMiddleware",
     "django_prometheus.middleware.PrometheusAfterMiddleware",
@@ -480,3 +483,13 @@ if env_str("FTT_LDAP_SERVER_URI"):
     if "administrator" in FTT_LDAP_ROLE_GROUPS:
         AUTH_LDAP_USER_FLAGS_BY_GROUP = {"is_staff": FTT_LDAP_ROLE_GROUPS["administrator"]}
     AUTH_LDAP_CACHE_TIMEOUT = 300
+
+# Change history (events.models.changes): a file field is kept as its name, so
+# deleting an old history row never deletes a file (django-cleanup).
+SIMPLE_HISTORY_FILEFIELD_TO_CHARFIELD = True
+
+# Suggestions for a take-over's location type (free text; docs/report.md, DMV CSV).
+FTT_LOCATION_TYPES = env_list("FTT_LOCATION_TYPES", "field,road,yard")
+# The disengagement report's manufacturer and permit columns (ftt_report --dmv).
+FTT_DMV_MANUFACTURER = env_str("FTT_DMV_MANUFACTURER", "")
+FTT_DMV_PERMIT = env_str("FTT_DMV_PERMIT", "")

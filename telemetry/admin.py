@@ -2,6 +2,7 @@
 
 from django.contrib import admin
 from django.utils.html import format_html
+from simple_history.admin import SimpleHistoryAdmin
 
 from events.admin import ServiceDeleteMixin, admin_link
 from telemetry.models import Image, LocalPose, MapImage, Pose
@@ -59,6 +60,6 @@ class MapImageAdmin(ServiceDeleteMixin, RecordedDataAdmin):
 
 
 @admin.register(Image)
-class ImageAdmin(ServiceDeleteMixin, RecordedDataAdmin):
+class ImageAdmin(ServiceDeleteMixin, RecordedDataAdmin, SimpleHistoryAdmin):
     list_display = ["__str__", "segment_link", "received", thumbnail]
     list_select_related = ["segment__segment_type"]

@@ -6,11 +6,12 @@ from django.db import connection
 
 from common import memo
 from events import seeds
-from events.models import Performer, Personnel, PoseSource, Vehicle
+from events.models import Performer, Personnel, PoseSource, TestEvent, Vehicle
 from events.services import logs
 from events.services.robots import ensure_robot_account
 from rosbridge_app import wakeup
 from tests.support.modes import start_auto
+from tests.support.snapshot import snapshot
 
 
 def pytest_runtest_setup(item):
@@ -167,3 +168,16 @@ def robot_client(db):
         return client
 
     return make
+
+
+@pytest.fixture
+def wipe():
+    """Forget everything, as on a freshly installed base station (catalogues stay)."""
+
+    def _wipe():
+        TestEvent.objects.all().delete()
+        for model in (Vehicle, PoseSource, Performer, Personnel):
+            model.objects.all().delete()
+        assert all(not rows for rows in snapshot().values())
+
+    return _wipe

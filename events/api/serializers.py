@@ -143,7 +143,17 @@ class LogEntrySerializer(ClientUidMixin, ServiceSerializer):
 class TestEventSerializer(LogEntrySerializer):
     class Meta:
         model = TestEvent
-        fields = ["id", "uid", *logs.TEST_EVENT_FIELDS, "start", "end", "is_open", "modified"]
+        fields = [
+            "id",
+            "uid",
+            *logs.TEST_EVENT_FIELDS,
+            "start",
+            "end",
+            "is_open",
+            "modified",
+            "finalised",
+            "finalised_by",
+        ]
         read_only_fields = ["start", "end"]
         create_only_fields = ["uid"]
 

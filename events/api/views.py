@@ -11,6 +11,7 @@ from drf_spectacular.utils import (
 from rest_framework import status
 from rest_framework.decorators import action
 from rest_framework.exceptions import NotFound
+from rest_framework.response import Response
 
 from events.api import serializers as s
 from events.api.filters import (
@@ -39,7 +40,8 @@ from events.models import (
 )
 from events.selectors import logs as log_selectors
 from events.selectors.found_segments import found_rows
-from events.services import configuration, logs, notes, segments
+from events.selectors.history import history_of
+from events.services import configuration, finality, logs, notes, segments
 
 NO_BODY = {"request": None}
 
@@ -140,7 +142,16 @@ class SegmentTypeViewSet(CatalogueViewSet):
 # --- log hierarchy ------------------------------------------------------------------------
 
 
-class TestEventViewSet(ServiceViewSet):
+class HistoryMixin:
+    """``…/{id}/history/``: who changed the row, when, through what and why."""
+
+    @extend_schema(responses={200: OpenApiResponse(description="Change history, newest first")})
+    @action(detail=True, methods=["get"])
+    def history(self, request, pk=None):
+        return Response(history_of(self.get_object()))
+
+
+class TestEventViewSet(HistoryMixin, ServiceViewSet):
     queryset = TestEvent.objects.all()
     serializer_class = s.TestEventSerializer
     filterset_class = TestEventFilter
@@ -163,8 +174,14 @@ class TestEventViewSet(ServiceViewSet):
         """Open a closed test event again; its shifts stay closed."""
         return self.respond(logs.reopen_test_event(self.get_object()))
 
+    @extend_schema(**NO_BODY)
+    @action(detail=True, methods=["post"])
+    def finalise(self, request, pk=None):
+        """Make a closed test event final: read-only for operators, taxonomy frozen."""
+        return self.respond(finality.finalise_test_event(self.get_object(), by=request.user))
 
-class ShiftViewSet(ServiceViewSet):
+
+class ShiftViewSet(HistoryMixin, ServiceViewSet):
     queryset = Shift.objects.all()
     serializer_class = s.ShiftSerializer
     filterset_class = ShiftFilter
@@ -183,7 +200,7 @@ class ShiftViewSet(ServiceViewSet):
         return self.respond(logs.close_shift(self.get_object()))
 
 
-class LegViewSet(ServiceViewSet):
+class LegViewSet(HistoryMixin, ServiceViewSet):
     # The shift tells a leg's vehicle (a robot account's check) without another query.
     queryset = Leg.objects.select_related("shift")
     serializer_class = s.LegSerializer
@@ -245,7 +262,7 @@ class LegViewSet(ServiceViewSet):
         "slope. Masters and AUTO segments answer 409."
     )
 )
-class SegmentViewSet(ServiceUpdateMixin, ServiceBaseViewSet):
+class SegmentViewSet(HistoryMixin, ServiceUpdateMixin, ServiceBaseViewSet):
     """Segments are opened by ``legs/{id}/mode``, ``legs/{id}/manual-segment`` and
     ``segments/{id}/children``; PATCH annotates an ITO reason."""
 
@@ -287,7 +304,7 @@ class SegmentViewSet(ServiceUpdateMixin, ServiceBaseViewSet):
         return self.respond(child, s.SegmentSerializer, status.HTTP_201_CREATED)
 
 
-class NoteViewSet(ServiceViewSet):
+class NoteViewSet(HistoryMixin, ServiceViewSet):
     queryset = Note.objects.select_related("author")
     serializer_class = s.NoteSerializer
     filterset_class = NoteFilter

@@ -5,6 +5,8 @@ from django.core.validators import RegexValidator
 from django.db import models
 from django.utils.translation import gettext_lazy as _
 
+from events.models.changes import tracked
+
 rgb_validator = RegexValidator(r"^\d{1,3},\d{1,3},\d{1,3}$", "Colour must be 'R,G,B' (0-255 each).")
 
 
@@ -54,6 +56,7 @@ class ItoReason(Catalogue):
         help_text=_("Offered as a one-tap button in the cockpit (the others are in its list)."),
         verbose_name=_("quick"),
     )
+    history = tracked()
 
     class Meta(Catalogue.Meta):
         verbose_name = _("ITO reason")

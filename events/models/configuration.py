@@ -4,6 +4,8 @@ from django.conf import settings
 from django.db import models
 from django.utils.translation import gettext_lazy as _
 
+from events.models.changes import tracked
+
 
 class Personnel(models.Model):
     name = models.CharField(max_length=200, verbose_name=_("name"))
@@ -17,6 +19,7 @@ class Personnel(models.Model):
         help_text=_("Login account of this person; notes they write are attributed to them."),
         verbose_name=_("user"),
     )
+    history = tracked(excluded_fields=["user"])
 
     class Meta:
         verbose_name = _("person")
@@ -61,6 +64,7 @@ class Vehicle(KeyedConfiguration):
     )
     institution = models.CharField(max_length=200, blank=True, verbose_name=_("institution"))
     configuration = models.TextField(blank=True, verbose_name=_("configuration"))
+    history = tracked()
 
     class Meta(KeyedConfiguration.Meta):
         verbose_name = _("vehicle")

@@ -16,6 +16,7 @@ from django.utils import timezone
 from django.utils.translation import gettext_lazy as _
 
 from events.models.catalogues import ItoReason, SegmentType, Weather
+from events.models.changes import tracked
 from events.models.configuration import Performer, Personnel, PoseSource, Vehicle
 
 
@@ -91,12 +92,20 @@ class TestEvent(LogEntry):
         verbose_name=_("language"),
         help_text=_("The language of this test event's PDF reports."),
     )
+    # Set once by events.services.logs.finalise_test_event; from then on
+    # operators may not change the event and its figures use `taxonomy`.
+    finalised = models.DateTimeField(null=True, blank=True, editable=False)
+    finalised_by = models.CharField(max_length=200, blank=True, editable=False)
+    # The ITO reasons as they were at finalisation: {key: {name, color, counts}}.
+    taxonomy = models.JSONField(null=True, blank=True, editable=False)
+    history = tracked()
 
     class Meta:
         verbose_name = _("test event")
         verbose_name_plural = _("test events")
         ordering = ["-start", "-id"]
         constraints = [_ends_after_start("testevent")]
+        permissions = [("finalise_testevent", "Can finalise a closed test event")]
 
     def __str__(self):
         # Location and day may repeat (two runs of one field test): the version
@@ -163,6 +172,7 @@ class Shift(LogEntry):
     )
     test_intent = models.CharField(max_length=500, blank=True, verbose_name=_("test intent"))
     workspace = models.CharField(max_length=500, blank=True, verbose_name=_("workspace"))
+    history = tracked()
 
     class Meta:
         verbose_name = _("shift")
@@ -220,6 +230,7 @@ class Leg(LogEntry):
         related_name="legs",
         help_text="The planned trial of the test event that this leg drives.",
     )
+    history = tracked()
 
     class Meta:
         verbose_name = _("leg")
@@ -242,7 +253,29 @@ class Leg(LogEntry):
 class Segment(ChangeStamped):
     """A master is one continuous run in one mode; ITO children carry reasons."""
 
-    ANNOTATION_FIELDS = ("ito_reason", "obstacle", "lighting", "slope")
+    # Who initiated a take-over and how severe it was: the fields regulators'
+    # disengagement reports ask for (California DMV); defaults need no tap.
+    INITIATORS = (
+        ("autonomous_system", "autonomous system"),
+        ("safety_driver", "safety driver"),
+        ("remote_operator", "remote operator"),
+        ("other", "other"),
+    )
+    SEVERITIES = (
+        ("critical", "critical"),
+        ("problem", "problem"),
+        ("desired", "desired"),
+        ("not_applicable", "not applicable"),
+    )
+    ANNOTATION_FIELDS = (
+        "ito_reason",
+        "obstacle",
+        "lighting",
+        "slope",
+        "initiator",
+        "severity",
+        "location_type",
+    )
 
     uid = models.UUIDField(default=uuid.uuid4, unique=True, editable=False, verbose_name=_("uid"))
     leg = models.ForeignKey(
@@ -280,6 +313,14 @@ class Segment(ChangeStamped):
     obstacle = models.CharField(max_length=500, blank=True, verbose_name=_("obstacle"))
     lighting = models.CharField(max_length=500, blank=True, verbose_name=_("lighting"))
     slope = models.CharField(max_length=500, blank=True, verbose_name=_("slope"))
+    initiator = models.CharField(
+        max_length=32, choices=INITIATORS, default="safety_driver", verbose_name=_("initiator")
+    )
+    severity = models.CharField(
+        max_length=32, choices=SEVERITIES, default="not_applicable", verbose_name=_("severity")
+    )
+    # Free text with suggestions (settings.FTT_LOCATION_TYPES: field, road, yard, …).
+    location_type = models.CharField(max_length=64, blank=True, verbose_name=_("location type"))
     start_position = models.PointField(
         srid=4326, null=True, blank=True, verbose_name=_("start position")
     )
@@ -307,6 +348,7 @@ class Segment(ChangeStamped):
     annotated = models.DateTimeField(
         null=True, blank=True, editable=False, verbose_name=_("annotated")
     )
+    history = tracked()
 
     class Meta:
         verbose_name = _("segment")

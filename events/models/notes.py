@@ -3,6 +3,7 @@ import uuid
 from django.db import models
 from django.utils.translation import gettext_lazy as _
 
+from events.models.changes import tracked
 from events.models.configuration import Personnel
 from events.models.hierarchy import Segment
 
@@ -23,6 +24,7 @@ class Note(models.Model):
     text = models.TextField(verbose_name=_("text"))
     created = models.DateTimeField(verbose_name=_("created"))
     edited = models.DateTimeField(verbose_name=_("edited"))
+    history = tracked()
 
     class Meta:
         verbose_name = _("note")

@@ -8,10 +8,12 @@ from django.utils.translation import gettext as _
 
 from common.errors import RuleViolation, describe_protected
 from events.feed import announce_row
+from events.services.finality import require_amendable_row
 
 
 @transaction.atomic
 def delete(instance: Model) -> None:
+    require_amendable_row(instance)
     try:
         announce_row(instance, deleted=True)
         instance.delete()

@@ -22,6 +22,7 @@ from events.services.common import (
     require_not_before,
     require_open,
 )
+from events.services.finality import require_amendable
 
 TEST_EVENT_FIELDS = ("location", "version", "time_zone", "language", "note")
 SHIFT_FIELDS = (
@@ -80,6 +81,7 @@ def create_test_event(*, uid=None, at: datetime | None = None, **fields) -> Test
 @transaction.atomic
 def update_test_event(event: TestEvent, **fields) -> TestEvent:
     event = lock(event)
+    require_amendable(pk=event.pk)
     apply_fields(event, fields, TEST_EVENT_FIELDS)
     event.save(update_fields=list(fields))
     return announce_and_return(event)
@@ -107,6 +109,11 @@ def reopen_test_event(event: TestEvent) -> TestEvent:
     if event.end is None:
         raise RuleViolation(
             _("Test event '%(name)s' is already open.") % {"name": event}, code="open"
+        )
+    if event.finalised is not None:
+        raise RuleViolation(
+            _("Test event '%(event)s' is final; it cannot be re-opened.") % {"event": event},
+            code="final",
         )
     event.end = None
     event.save(update_fields=["end"])
@@ -151,6 +158,7 @@ def create_shift(
 @transaction.atomic
 def update_shift(shift: Shift, **fields) -> Shift:
     shift = lock(shift)
+    require_amendable(pk=shift.test_event_id)
     if "vehicle_id" in fields:
         fields["vehicle"] = Vehicle.objects.get(pk=fields.pop("vehicle_id"))
     if "vehicle" in fields and fields["vehicle"] != shift.vehicle and shift.is_open:
@@ -208,6 +216,7 @@ def create_leg(*, shift: Shift, uid=None, at: datetime | None = None, **fields) 
 @transaction.atomic
 def update_leg(leg: Leg, **fields) -> Leg:
     leg = lock(leg)
+    require_amendable(shifts__legs=leg.pk)
     _require_own_test_case(leg.shift, fields)
     apply_fields(leg, fields, LEG_FIELDS)
     leg.save(update_fields=list(fields))

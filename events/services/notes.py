@@ -6,6 +6,7 @@ from django.utils.translation import gettext as _
 from common import roles
 from events.feed import announce_and_return, announce_row
 from events.models import Note, Personnel, Segment
+from events.services.finality import require_amendable, require_amendable_row
 
 # ``by`` is the signed-in user a request acts for; None is FTT itself (imports,
 # seeds, the simulator), which writes what it was given.
@@ -42,6 +43,7 @@ def add_note(
     """The author is the person of ``by``; only administrators name someone else."""
     if uid is not None and (existing := Note.objects.filter(uid=uid).first()):
         return existing
+    require_amendable(shifts__legs__segments=segment.pk)
     if by is not None:
         own = _person_of(by)
         if author is not None and author != own and not roles.has_role(by, roles.ADMINISTRATOR):
@@ -63,6 +65,7 @@ def edit_note(note: Note, *, text: str, by=None) -> Note:
     # whoever edited them last.
     note = Note.objects.select_for_update().get(pk=note.pk)
     _check_may_change(by, note)
+    require_amendable_row(note)
     note.text = _clean_text(text)
     note.edited = timezone.now()
     note.save(update_fields=["text", "edited"])
@@ -72,5 +75,6 @@ def edit_note(note: Note, *, text: str, by=None) -> Note:
 @transaction.atomic
 def delete_note(note: Note, *, by=None) -> None:
     _check_may_change(by, note)
+    require_amendable_row(note)
     announce_row(note, deleted=True)
     note.delete()

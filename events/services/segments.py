@@ -27,6 +27,7 @@ from events.services.common import (
     require_not_before,
     require_open,
 )
+from events.services.finality import require_amendable
 
 MODES = (SegmentType.ITO, SegmentType.AUTO)
 
@@ -119,7 +120,10 @@ def _close(segment: Segment, at: datetime) -> None:
     end = max(at, segment.start)
     if segment.parent_id is None:
         # A bulk update bypasses save(), which stamps `modified` everywhere else.
-        segment.children.filter(end__isnull=True).update(end=end, modified=timezone.now())
+        # One save per child (a master has a few), so each leaves its history entry.
+        for child in segment.children.filter(end__isnull=True):
+            child.end = max(end, child.start)
+            child.save(update_fields=["end"])
     segment.end = end
     segment.save(update_fields=["end"])
 
@@ -309,6 +313,7 @@ def annotate_segment(segment: Segment, **fields) -> Segment:
     Empty strings clear the text fields; ``ito_reason`` takes a catalogue key.
     """
     segment = lock(segment)
+    require_amendable(shifts__legs=segment.leg_id)
     if segment.parent_id is None:
         if segment.segment_type_id == SegmentType.AUTO:
             what = _("they cannot be set on an AUTO segment.")

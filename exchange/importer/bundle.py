@@ -5,6 +5,7 @@ from django.core.exceptions import ValidationError
 from django.db import DatabaseError, IntegrityError, transaction
 
 from events import feed
+from events.history import authored
 from events.models import Segment
 from exchange import records as rec
 from exchange.archive import ArchiveError
@@ -47,7 +48,7 @@ def import_bundle(bundle, *, dry_run: bool = False) -> Plan:
     ``read_file(name)``).  Raises :class:`ImportRefused`; then nothing changed."""
     session = ImportSession(bundle, dry_run)
     try:
-        with transaction.atomic():
+        with authored("import"), transaction.atomic():
             for step in STEPS:
                 step(session)
             announce_changes(session)

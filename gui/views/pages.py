@@ -21,7 +21,16 @@ from common import roles
 from common.api.pagination import Pagination
 from events import feed
 from events.api import serializers as s
-from events.models import ItoReason, Leg, Performer, PoseSource, Shift, TestEvent, Vehicle
+from events.models import (
+    ItoReason,
+    Leg,
+    Performer,
+    PoseSource,
+    Segment,
+    Shift,
+    TestEvent,
+    Vehicle,
+)
 from gui.views.gui_api import leg_segments, read_ahead
 from rosbridge_app.selectors.collectors import is_online, logging_into
 
@@ -153,6 +162,10 @@ def index(request):
         "levels": [("event", _("Test event")), ("shift", _("Shift")), ("leg", _("Leg"))],
         # The catalogue says which reasons get a button (ItoReason.quick, set in admin).
         "quick_reasons": ItoReason.objects.filter(quick=True).order_by("short_description"),
+        # A take-over's regulator fields (segment dialog).
+        "initiators": Segment.INITIATORS,
+        "severities": Segment.SEVERITIES,
+        "location_types": settings.FTT_LOCATION_TYPES,
         "modules": module_graph("gui/main.js"),
         "gui_config": {
             "tileUrl": settings.FTT_TILE_URL,

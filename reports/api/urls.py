@@ -17,8 +17,8 @@ urlpatterns = [
     path("test-plan/<int:test_event_id>/", views.TestPlanView.as_view(), name="report-test-plan"),
     path("judgements/", views.JudgementView.as_view(), name="report-judgements"),
     re_path(
-        r"^exports/(?P<test_event_id>\d+)/"
-        r"(?P<filename>segments\.csv|tracks\.geojson|tracks\.gpx|test-plan\.csv|test-plan\.json)$",
+        r"^exports/(?P<test_event_id>\d+)/(?P<filename>segments\.csv|disengagements\.csv"
+        r"|tracks\.geojson|tracks\.gpx|test-plan\.csv|test-plan\.json)$",
         views.ExportView.as_view(),
         name="report-export",
     ),

@@ -27,6 +27,7 @@ from reports.documents.options import FULL, LEVELS
 from reports.models import Report
 from reports.selectors import exports
 from reports.selectors.comparison import compare
+from reports.selectors.disengagements import disengagements_csv
 from reports.selectors.reports import reports_of
 from reports.selectors.routes import DEFAULT_THRESHOLD, compare_routes, leg_route
 from reports.selectors.statistics import event_statistics
@@ -251,6 +252,7 @@ class ExportView(APIView):
         "tracks.gpx": "application/gpx+xml",
         "test-plan.csv": "text/csv; charset=utf-8",
         "test-plan.json": "application/json",
+        "disengagements.csv": "text/csv; charset=utf-8",
     }
 
     @extend_schema(parameters=[MODE_PARAM], responses={(200, "text/csv"): bytes})
@@ -258,6 +260,8 @@ class ExportView(APIView):
         event = get_object_or_404(TestEvent, pk=test_event_id)
         if filename == "segments.csv":
             body = exports.segments_csv(event, _mode(request))
+        elif filename == "disengagements.csv":
+            body = disengagements_csv([event])
         elif filename == "tracks.geojson":
             body = exports.tracks_geojson_text(event)
         elif filename == "test-plan.csv":

@@ -21,6 +21,7 @@ from reports.figures import charts
 from reports.figures.sketch import track_sketch
 from reports.figures.timeline import draw_timeline
 from reports.selectors import content
+from reports.selectors.provenance import keywords, provenance
 from reports.selectors.statistics import (
     CONFIDENCE,
     FORMULAS,
@@ -57,7 +58,7 @@ class Sections:
         self.tz = event.tzinfo
         self.mode = LOCAL if options.local else GPS
         self.warnings: list[str] = []
-        self.reasons = content.reasons_by_key()
+        self.reasons = content.reasons_by_key(event)
         self.pictures = Pictures(root, options.image_appendix, self.warnings, time_stage)
         tiles = tile_source(event, options, self.mode)
         self.maps = TrackMaps(self.mode, tiles, self.pictures, time_stage)
@@ -115,6 +116,22 @@ class Sections:
             "appendix": self.appendix,
             "methods": self._methods(stats, shifts),
             "text": report_text(),
+            "provenance": self._provenance(),
+        }
+
+    def _provenance(self) -> dict:
+        stamp = provenance(self.event, self.options.as_dict(), timezone.now())
+        final = self.event.finalised
+        return {
+            **stamp,
+            "keywords": keywords(stamp),
+            "final": fmt.timestamp(final, self.tz) if final else None,
+            "amendments": [
+                f"{a['at']}: {a['record']} by {a['by'] or a['channel']}"
+                + (f" ({a['reason']})" if a["reason"] else "")
+                for a in stamp["amendments"]
+            ],
+            "options": [[k, str(v)] for k, v in stamp["options"].items()],
         }
 
     def _title(self) -> dict:

@@ -6,6 +6,7 @@ from collections import defaultdict
 from django.utils.translation import gettext as _
 
 from events.models import ItoReason, Leg, Note, Segment, Shift, TestEvent
+from events.selectors.taxonomy import taxonomy_of
 from reports.selectors.statistics import segment_scope
 from telemetry.models import Image
 
@@ -39,8 +40,18 @@ def report_scope(
     return shift, None
 
 
-def reasons_by_key() -> dict[str, ItoReason]:
-    return {r.key: r for r in ItoReason.objects.all()}
+def reasons_by_key(event: TestEvent) -> dict[str, ItoReason]:
+    """The reasons with the names and colours the event's report uses: a final
+    event's frozen taxonomy (events.selectors.taxonomy), else the catalogue."""
+    return {
+        key: ItoReason(
+            key=key,
+            short_description=entry["name"],
+            color=entry["color"],
+            counts_as_intervention=entry["counts"],
+        )
+        for key, entry in taxonomy_of(event).items()
+    }
 
 
 def scope_name(*, shift: int | None = None, leg: int | None = None) -> str:

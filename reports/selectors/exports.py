@@ -15,7 +15,8 @@ from collections import defaultdict
 from xml.etree import ElementTree as ET
 
 from common.spreadsheet import SafeWriter
-from events.models import ItoReason, Note, Segment, TestEvent
+from events.models import Note, Segment, TestEvent
+from reports.selectors.content import reasons_by_key
 from reports.selectors.statistics import event_runs, segment_labels
 from telemetry.selectors.tracks import GPS
 
@@ -62,7 +63,8 @@ def _name(person) -> str:
 def segments_csv(event: TestEvent, mode: str = GPS) -> str:
     tz = event.tzinfo
     runs = {run.id: run for run in event_runs(event, mode)}
-    reasons = {r.key: r for r in ItoReason.objects.all()}
+    # The event's taxonomy: frozen for a final event (events.selectors.taxonomy).
+    reasons = reasons_by_key(event)
     notes = defaultdict(list)
     for note in Note.objects.filter(segment__leg__shift__test_event=event).select_related("author"):
         notes[note.segment_id].append(

@@ -13,7 +13,8 @@ Definitions (also printed in the report's methods appendix, see ``FORMULAS``):
   straight join from its start to the next start, if both are known, and is
   listed as a data gap.
 * An *intervention* is an ITO master with at least one reason (child) whose
-  catalogue entry ``counts_as_intervention``.  A master with several counted
+  catalogue entry ``counts_as_intervention`` (for a final event: as frozen at
+  finalisation, ``events.selectors.taxonomy``).  A master with several counted
   reasons is one intervention overall and one under each of its reasons.
 * Exposure: autonomous distance D_a and autonomous time T_a (sums over AUTO runs).
   I = number of interventions.
@@ -39,6 +40,7 @@ from scipy.stats import chi2
 
 from events.models import ItoReason, Segment, SegmentType, TestEvent
 from events.selectors.labels import label, numbers
+from events.selectors.taxonomy import counted_reasons
 from telemetry.selectors.distances import kept_paths, measured_paths
 from telemetry.selectors.tracks import GPS, Track
 
@@ -345,9 +347,7 @@ def event_runs(
         .only(*RUN_FIELDS)
         .order_by("leg__shift__start", "leg__shift_id", "leg__start", "leg_id", "start", "id")
     )
-    counted = set(
-        ItoReason.objects.filter(counts_as_intervention=True).values_list("key", flat=True)
-    )
+    counted = counted_reasons(event)
     masters = [s for s in segments if s.parent_id is None]
     children: dict[int, list[Segment]] = defaultdict(list)
     for s in segments:
@@ -493,8 +493,6 @@ def event_statistics(
         by_shift=_grouped(runs, lambda r: r.shift_id),
         by_leg=_grouped(runs, lambda r: r.leg_id),
         by_vehicle=_grouped(runs, lambda r: r.vehicle_id),
-        counted_reasons=sorted(
-            ItoReason.objects.filter(counts_as_intervention=True).values_list("key", flat=True)
-        ),
+        counted_reasons=sorted(counted_reasons(event)),
         runs=runs,
     )

@@ -24,6 +24,7 @@ from django.utils import timezone
 from django.utils.translation import gettext
 
 from common.errors import RuleViolation
+from events.history import authored
 from events.models import Leg, Segment
 from events.selectors.logs import open_master
 from events.services.segments import (
@@ -81,6 +82,7 @@ class Recorder:
 
     # --- public -------------------------------------------------------------------------
 
+    @authored("collector")
     def apply(self, events: list[Event], master: GivenMaster | None = None) -> None:
         """Store events in order.  Raises DatabaseUnavailable with nothing stored
         (and this object's state unchanged) when the database cannot be used."""
@@ -108,6 +110,7 @@ class Recorder:
         finally:
             self.given = None
 
+    @authored("collector")
     def open_master_uid(self) -> str | None:
         """The uid of the master open now (after following leg changes)."""
         with transaction.atomic():
@@ -134,6 +137,7 @@ class Recorder:
         if self._left_open is not None:
             self._left_open.append(self._master_uid())
 
+    @authored("collector")
     def sync(self) -> Leg | None:
         """Follow leg changes now (called periodically while no events arrive)."""
         saved = copy.copy(self.state), self.leg

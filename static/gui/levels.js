@@ -13,8 +13,14 @@ import { Collector } from "./collector.js";
 import { selectionChanged } from "./segments.js";
 import { TestPlan } from "./testplan.js";
 
+// A final test event (docs/report.md) is read-only for operators; the server decides.
+function stateOf(row) {
+  if (row.finalised) return _("final");
+  return row.is_open ? _("open") : _("closed");
+}
+
 function rowLabel(level, row) {
-  const status = row.is_open ? _("open") : _("closed");
+  const status = stateOf(row);
   if (level === "event") return `#${row.id} ${row.location || _("(no location)")} · ${fmtDay(row.start)} · ${status}`;
   if (level === "shift") return `${_("Shift %(number)s", { number: row.number })} · ${vehicleName(row.vehicle)} · ${fmtTime(row.start)} · ${status}`;
   return `${_("Leg %(number)s", { number: row.number })} · ${fmtTime(row.start)} · ${status}`;
@@ -69,7 +75,7 @@ export async function loadLevel(level, keepSelection = true) {
 function updateLevelState(level) {
   const row = current(level);
   const badge = $(`[data-state="${level}"]`);
-  badge.textContent = row ? (row.is_open ? _("open") : _("closed")) : "";
+  badge.textContent = row ? stateOf(row) : "";
   badge.className = "state" + (row ? (row.is_open ? " open" : " closed") : "");
   const parentRow = LEVELS[level].parent ? current(LEVELS[level].parent) : true;
   const can = CONFIG.canOperate;

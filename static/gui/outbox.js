@@ -66,12 +66,12 @@ function send(entry) {
   }
   const root = entry.gui ? CONFIG.guiApiRoot : CONFIG.apiRoot;
   const signal = AbortSignal.timeout(entry.form ? WAIT_FILE_MS : WAIT_MS);
-  return api(entry.method, entry.path, body, { root, signal });
+  return api(entry.method, entry.path, body, { root, signal, reason: entry.reason });
 }
 
 export const Outbox = {
   busy: false,
-  /* Sends `entry` ({method, path, body or form, gui, what, kept}) now if the
+  /* Sends `entry` ({method, path, body or form, gui, what, kept, reason}) now if the
    * server can be reached: {answer}.  Otherwise, or while earlier writes still
    * wait (they go first), keeps it: {kept: true}.  `kept` replaces `body` in
    * what is kept (a quick reason names the take-over seen).  Refusals throw. */

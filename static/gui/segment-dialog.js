@@ -27,7 +27,13 @@ export async function openSegmentDialog(id) {
   const form = $("#annotation-form");
   form.elements.ito_reason.replaceChildren(...state.catalogue.reasons.map((r) => new Option(r.short_description, r.key)));
   form.elements.ito_reason.value = s.ito_reason || "unassigned";
-  for (const f of ["obstacle", "lighting", "slope"]) form.elements[f].value = s[f] || "";
+  for (const f of ["obstacle", "lighting", "slope", "location_type"]) form.elements[f].value = s[f] || "";
+  form.elements.initiator.value = s.initiator || "safety_driver";
+  form.elements.severity.value = s.severity || "not_applicable";
+  form.elements.change_reason.value = "";
+  const history = $(".history", segmentDialog);
+  history.open = false;
+  $(".history-list", history).replaceChildren();
   // Annotation belongs to take-over reasons; the server says so too if tried elsewhere.
   form.hidden = s.parent === null;
   $$("input, select, button", form).forEach((el) => (el.disabled = !CONFIG.canOperate));
@@ -87,13 +93,31 @@ function dialogAction(fn) {
 $("#annotation-form").addEventListener("submit", dialogAction(async () => {
   const form = $("#annotation-form");
   const body = {};
-  for (const f of ["ito_reason", "obstacle", "lighting", "slope"]) body[f] = form.elements[f].value;
+  for (const f of ["ito_reason", "obstacle", "lighting", "slope", "initiator", "severity", "location_type"]) {
+    body[f] = form.elements[f].value;
+  }
+  const reason = form.elements.change_reason.value.trim();
   const id = dialogSegment.id;
-  const { answer } = await Outbox.write({ method: "PATCH", path: `segments/${id}/`, body, what: `the edit of ${segmentLabel(id)}` });
+  const { answer } = await Outbox.write({ method: "PATCH", path: `segments/${id}/`, body, reason, what: _("the edit of %(segment)s", { segment: segmentLabel(id) }) });
   if (!answer) return;
   putSegment(answer);
-  notice(`${segmentLabel(id)} saved.`);
+  notice(_("%(segment)s saved.", { segment: segmentLabel(id) }));
 }));
+
+// The change history is read when it is opened: most dialogs never show it.
+$(".history", segmentDialog).addEventListener("toggle", dialogAction(async (e) => {
+  if (!e.target.open || !dialogSegment) return;
+  const entries = await api("GET", `segments/${dialogSegment.id}/history/`);
+  $(".history-list", segmentDialog).replaceChildren(...entries.map(historyItem));
+}));
+
+function historyItem(entry) {
+  const li = document.createElement("li");
+  const changes = entry.changes.map((c) => `${c.field}: ${c.before ?? "—"} → ${c.after ?? "—"}`).join("; ");
+  const why = entry.reason ? ` (${entry.reason})` : "";
+  li.textContent = `${fmtTime(entry.at)} · ${entry.author} via ${entry.channel} · ${entry.kind}${changes ? ": " + changes : ""}${why}`;
+  return li;
+}
 
 export async function loadNotes({ keepEditing = false } = {}) {
   if (!dialogSegment) return;

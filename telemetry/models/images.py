@@ -5,6 +5,7 @@ from django.utils import timezone
 from django.utils.translation import gettext_lazy as _
 
 from events.models import Segment
+from events.models.changes import tracked
 
 
 def image_upload_to(instance, filename):
@@ -21,6 +22,7 @@ class Image(models.Model):
     description = models.CharField(max_length=500, blank=True, verbose_name=_("description"))
     robot_stamp = models.DateTimeField(null=True, blank=True, verbose_name=_("robot stamp"))
     received = models.DateTimeField(default=timezone.now, verbose_name=_("received"))
+    history = tracked()
 
     class Meta:
         verbose_name = _("image")

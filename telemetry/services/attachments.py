@@ -15,6 +15,7 @@ from common.errors import RuleViolation
 from common.retries import stored_row
 from events.feed import announce_and_return, announce_row
 from events.models import Segment
+from events.services.finality import require_amendable, require_amendable_row
 from telemetry.models import Image, Recording
 from telemetry.pictures import checked_picture
 
@@ -33,6 +34,7 @@ def attach_image(
         return existing
     if not content:
         raise RuleViolation({"image": [_("The image is empty.")]})
+    require_amendable(shifts__legs=segment.leg_id)
     suffix = checked_picture(content)
     image = Image(segment=segment.master, description=description, robot_stamp=robot_stamp)
     if uid is not None:
@@ -103,6 +105,7 @@ def _store_file(recording: Recording, path: Path) -> None:
 
 @transaction.atomic
 def delete_image(image: Image) -> None:
+    require_amendable_row(image)
     announce_row(image, deleted=True)
     image.delete()
 

@@ -4,6 +4,8 @@
     manage.py ftt_report --test-event 3 --csv segments.csv --geojson tracks.geojson --gpx t.gpx
     manage.py ftt_report --shift 5 -o shift.pdf     # one shift (or --leg ID: one leg)
     manage.py ftt_report --job 17        # worker for a report requested from the GUI
+    manage.py ftt_report --test-event 3 --json figures.json   # figures with their provenance
+    manage.py ftt_report --verify report.pdf   # (or figures.json) is the data still the same?
 
 Without -o and without any export option the PDF goes to report.pdf.
 """
@@ -22,6 +24,8 @@ from reports.documents.options import FULL, LEVELS, ReportError, ReportOptions
 from reports.figures.tiles import MAX_ZOOM
 from reports.models import Report
 from reports.selectors import exports
+from reports.selectors.disengagements import disengagements_csv, events_in_month
+from reports.selectors.provenance import json_report, stamp_of_report, verify
 from reports.services.generation import run_job
 
 
@@ -93,10 +97,31 @@ class Command(BaseCommand):
         parser.add_argument("--csv", help="Write the segments as CSV to this file.")
         parser.add_argument("--geojson", help="Write the GPS tracks as GeoJSON to this file.")
         parser.add_argument("--gpx", help="Write the GPS tracks as GPX to this file.")
+        parser.add_argument(
+            "--json", help="Write the figures with their provenance (digest) as JSON to this file."
+        )
+        parser.add_argument(
+            "--dmv",
+            help="Write the disengagement report (California DMV columns) as CSV to this file.",
+        )
+        parser.add_argument(
+            "--month",
+            metavar="YYYY-MM",
+            help="With --dmv and without --test-event: every test event of that month.",
+        )
+        parser.add_argument(
+            "--verify",
+            metavar="REPORT",
+            help="Check a PDF or JSON report against the data: exit 1 when it changed.",
+        )
 
     def handle(self, *args, **o):
+        if o["verify"]:
+            return self._verify(Path(o["verify"]))
         if o["job"] is not None:
             return self._job(o["job"])
+        if o["dmv"] and o["test_event"] is None:
+            return self._dmv_month(o)
         if o["compare"]:
             return self._compare(o)
         event_id = o["test_event"] or _event_of(o["shift"], o["leg"])
@@ -110,6 +135,42 @@ class Command(BaseCommand):
         exported = self._exports(event, o)
         if o["output"] or not exported:
             self._pdf(event, o)
+
+    def _verify(self, path: Path):
+        if not path.is_file():
+            raise CommandError(f"{path} does not exist.")
+        stamp = stamp_of_report(path.read_bytes())
+        if stamp is None:
+            raise CommandError(f"{path} carries no FTT data digest (made before FTT stamped it?).")
+        verdict = verify(stamp)
+        self.stdout.write(("OK: " if verdict.ok else "CHANGED: ") + verdict.message)
+        for change in verdict.changes:
+            reason = f" ({change['reason']})" if change["reason"] else ""
+            who = f"{change['by'] or 'FTT'} via {change['channel']}"
+            self.stdout.write(f"  {change['record']} changed {change['at']} by {who}{reason}")
+        if not verdict.ok:
+            raise CommandError("The data differs from the report.", returncode=1)
+
+    @staticmethod
+    def _month(o) -> tuple[int, int] | None:
+        if not o["month"]:
+            return None
+        try:
+            year, month = (int(part) for part in o["month"].split("-"))
+        except ValueError:
+            raise CommandError("Give the month as YYYY-MM, e.g. 2026-05.") from None
+        if not 1 <= month <= 12:
+            raise CommandError("Give the month as YYYY-MM, e.g. 2026-05.")
+        return year, month
+
+    def _dmv_month(self, o):
+        month = self._month(o)
+        if month is None:
+            raise CommandError("Give --test-event ID or --month YYYY-MM with --dmv.")
+        Path(o["dmv"]).write_text(
+            disengagements_csv(events_in_month(*month), month), encoding="utf-8"
+        )
+        self.stdout.write(f"dmv: {o['dmv']}")
 
     def _compare(self, o):
         ids = o["compare"]
@@ -138,6 +199,8 @@ class Command(BaseCommand):
             ("csv", lambda: exports.segments_csv(event, "local" if o["local"] else "gps")),
             ("geojson", lambda: exports.tracks_geojson_text(event)),
             ("gpx", lambda: exports.tracks_gpx(event)),
+            ("json", lambda: json_report(event, "local" if o["local"] else "gps")),
+            ("dmv", lambda: disengagements_csv([event], self._month(o))),
         )
         done = False
         for key, make in writers:

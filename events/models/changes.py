@@ -1,0 +1,40 @@
+"""The change history of every row that moves a figure or a record.
+
+django-simple-history keeps one historical row per save or delete (values
+after the change; the one before it is the previous entry).  Each entry adds
+through what the change came (``history_channel``); who made it is
+simple-history's ``history_user`` (an account, or the robot account whose
+token wrote it), the reason its ``history_change_reason``.
+``events.history`` fills both from the request or the caller's context.
+Poses are not tracked: they are only ever added, never changed, and a
+history row per pose would double the cost of the busiest write.
+"""
+
+from django.db import models
+from simple_history.models import HistoricalRecords
+
+CHANNELS = (
+    ("gui", "GUI"),
+    ("api", "API"),
+    ("admin", "admin"),
+    ("collector", "collector"),
+    ("import", "import"),
+    ("system", "system"),
+)
+
+
+class ChangeOrigin(models.Model):
+    history_channel = models.CharField(max_length=16, choices=CHANNELS, default="system")
+
+    class Meta:
+        abstract = True
+
+
+def tracked(**options) -> HistoricalRecords:
+    """The history of one model; the user link never blocks deleting an account."""
+    return HistoricalRecords(
+        bases=[ChangeOrigin],
+        user_related_name="+",
+        history_change_reason_field=models.TextField(null=True),
+        **options,
+    )

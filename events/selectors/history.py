@@ -1,0 +1,51 @@
+"""The change history of one row, as people read it (API, GUI dialog, reports)."""
+
+from django.utils.translation import gettext as _
+
+KINDS = {"+": "created", "~": "changed", "-": "deleted"}
+
+
+def _author(entry) -> str:
+    user = entry.history_user
+    return user.get_username() if user is not None else ""
+
+
+def _value(value) -> str | None:
+    return None if value is None else str(value)
+
+
+def describe_entry(entry, previous) -> dict:
+    changes = []
+    if previous is not None:
+        delta = entry.diff_against(previous, foreign_keys_are_objs=False)
+        changes = [
+            {"field": c.field, "before": _value(c.old), "after": _value(c.new)}
+            for c in delta.changes
+            if c.field != "modified"
+        ]
+    return {
+        "at": entry.history_date.isoformat(),
+        "kind": KINDS[entry.history_type],
+        "author": _author(entry) or _("FTT"),
+        "channel": entry.history_channel,
+        "reason": entry.history_change_reason or "",
+        "changes": changes,
+    }
+
+
+def history_of(instance) -> list[dict]:
+    """Newest first: who changed the row, when, through what, why, before → after."""
+    entries = list(instance.history.select_related("history_user").order_by("history_id"))
+    described = [
+        describe_entry(entry, entries[i - 1] if i else None) for i, entry in enumerate(entries)
+    ]
+    return described[::-1]
+
+
+def entries_since(model, since, **filters) -> list:
+    """History rows of ``model`` (a tracked model) changed after ``since``."""
+    return list(
+        model.history.filter(history_date__gt=since, **filters)
+        .select_related("history_user")
+        .order_by("history_date", "history_id")
+    )

@@ -1,0 +1,279 @@
+"""What a report was built from, so that it can be checked later (issue 26).
+
+The digest covers the canonical content of every row in a test event's scope:
+values as people and figures see them, keyed by uid and catalogue keys, never
+database ids or file bytes, so the same data gives the same digest on any
+installation (after export and import too).  Poses are covered by their uids:
+they are only ever added, never changed.  The report carries the digest, its
+build time and the event's uid (PDF keywords, JSON fields); :func:`verify`
+recomputes the digest and, when it differs, lists what the change history
+says changed since.
+"""
+
+import hashlib
+import json
+import re
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+
+from django.conf import settings
+from django.utils import timezone
+
+from events.models import Leg, Note, Segment, Shift, TestEvent
+from events.selectors.history import entries_since
+from events.selectors.taxonomy import taxonomy_of, taxonomy_version
+from reports.selectors.statistics import event_statistics
+from telemetry.models import Image, LocalPose, Pose
+
+DIGEST_PREFIX = "ftt-digest-sha256-"
+BUILT_PREFIX = "ftt-built-"
+EVENT_PREFIX = "ftt-event-"
+_STAMP_FORMAT = "%Y%m%dT%H%M%S.%fZ"
+
+
+def ftt_version() -> str:
+    return settings.SPECTACULAR_SETTINGS["VERSION"]
+
+
+def _text(value) -> str | None:
+    if value is None:
+        return None
+    if isinstance(value, datetime):
+        return value.astimezone(UTC).isoformat(timespec="microseconds").replace("+00:00", "Z")
+    return str(value)
+
+
+def _uid(row) -> str | None:
+    return None if row is None else str(row.uid)
+
+
+def _point(point) -> list[str] | None:
+    return None if point is None else [f"{point.x:.9f}", f"{point.y:.9f}"]
+
+
+def _person(person) -> str | None:
+    return None if person is None else f"{person.name}|{person.institution}"
+
+
+def canonical_records(event: TestEvent) -> list[tuple[str, str, dict]]:
+    """(table, uid, content) of every row in the event's scope, in a fixed order."""
+    records = [
+        (
+            "test_event",
+            str(event.uid),
+            {
+                "location": event.location,
+                "version": event.version,
+                "time_zone": event.time_zone,
+                "note": event.note,
+                "start": _text(event.start),
+                "end": _text(event.end),
+                "taxonomy": taxonomy_of(event),
+            },
+        )
+    ]
+    people = ("test_administrator", "test_director", "safety_officer", "robot_operator")
+    for shift in Shift.objects.filter(test_event=event).select_related(
+        "vehicle", "performer", *people
+    ):
+        content = {
+            "number": shift.number,
+            "vehicle": shift.vehicle.key,
+            "performer": shift.performer.institution if shift.performer else None,
+            "test_intent": shift.test_intent,
+            "workspace": shift.workspace,
+            "note": shift.note,
+            "start": _text(shift.start),
+            "end": _text(shift.end),
+        }
+        content.update({name: _person(getattr(shift, name)) for name in people})
+        records.append(("shift", str(shift.uid), content))
+    for leg in Leg.objects.filter(shift__test_event=event).select_related(
+        "shift", "default_pose_source"
+    ):
+        records.append(
+            (
+                "leg",
+                str(leg.uid),
+                {
+                    "shift": str(leg.shift.uid),
+                    "number": leg.number,
+                    "weather": leg.weather_id,
+                    "pose_source": leg.default_pose_source.key if leg.default_pose_source else None,
+                    "recording": leg.recording,
+                    "note": leg.note,
+                    "start": _text(leg.start),
+                    "end": _text(leg.end),
+                },
+            )
+        )
+    segments = Segment.objects.filter(leg__shift__test_event=event).select_related("leg", "parent")
+    for s in segments:
+        records.append(
+            (
+                "segment",
+                str(s.uid),
+                {
+                    "leg": str(s.leg.uid),
+                    "parent": _uid(s.parent),
+                    "type": s.segment_type_id,
+                    "reason": s.ito_reason_id,
+                    "obstacle": s.obstacle,
+                    "lighting": s.lighting,
+                    "slope": s.slope,
+                    "initiator": s.initiator,
+                    "severity": s.severity,
+                    "location_type": s.location_type,
+                    "start": _text(s.start),
+                    "end": _text(s.end),
+                    "start_position": _point(s.start_position),
+                },
+            )
+        )
+    in_event = {"segment__leg__shift__test_event": event}
+    for note in Note.objects.filter(**in_event).select_related("segment", "author"):
+        records.append(
+            (
+                "note",
+                str(note.uid),
+                {
+                    "segment": str(note.segment.uid),
+                    "author": _person(note.author),
+                    "text": note.text,
+                },
+            )
+        )
+    for image in Image.objects.filter(**in_event).select_related("segment"):
+        records.append(
+            (
+                "image",
+                str(image.uid),
+                {"segment": str(image.segment.uid), "description": image.description},
+            )
+        )
+    for table, model in (("poses", Pose), ("local_poses", LocalPose)):
+        uids = sorted(
+            str(u) for u in model.objects.filter(**in_event).values_list("uid", flat=True)
+        )
+        records.append(
+            (table, "all", {"uids": hashlib.sha256("\n".join(uids).encode()).hexdigest()})
+        )
+    return sorted(records, key=lambda r: (r[0], r[1]))
+
+
+def data_digest(event: TestEvent) -> str:
+    digest = hashlib.sha256()
+    for table, uid, content in canonical_records(event):
+        line = json.dumps([table, uid, content], sort_keys=True, ensure_ascii=False)
+        digest.update(line.encode() + b"\n")
+    return digest.hexdigest()
+
+
+def provenance(event: TestEvent, options: dict, built: datetime) -> dict:
+    """What every report states about its data (PDF and JSON)."""
+    amendments = amendments_of(event)
+    return {
+        "digest": data_digest(event),
+        "built": built.astimezone(UTC).strftime(_STAMP_FORMAT),
+        "event_uid": str(event.uid),
+        "taxonomy": taxonomy_version(event),
+        "ftt_version": ftt_version(),
+        "options": options,
+        "final": _text(event.finalised),
+        "amendments": amendments,
+    }
+
+
+def keywords(stamp: dict) -> list[str]:
+    """The PDF keywords that carry the stamp (read back by :func:`stamp_of_pdf`)."""
+    return [
+        DIGEST_PREFIX + stamp["digest"],
+        BUILT_PREFIX + stamp["built"],
+        EVENT_PREFIX + stamp["event_uid"],
+    ]
+
+
+def stamp_of_pdf(pdf: bytes) -> dict | None:
+    """The stamp written by :func:`keywords` (typst keeps them as plain text in the
+    document information and its XMP metadata)."""
+    found = {}
+    for name, prefix, pattern in (
+        ("digest", DIGEST_PREFIX, rb"[0-9a-f]{64}"),
+        ("built", BUILT_PREFIX, rb"\d{8}T\d{6}\.\d{6}Z"),
+        ("event_uid", EVENT_PREFIX, rb"[0-9a-f-]{36}"),
+    ):
+        match = re.search(re.escape(prefix.encode()) + b"(" + pattern + b")", pdf)
+        if match is None:
+            return None
+        found[name] = match.group(1).decode()
+    return found
+
+
+def stamp_of_report(content: bytes) -> dict | None:
+    """The stamp of a PDF report or of a JSON report (``json_report``)."""
+    if content.startswith(b"%PDF"):
+        return stamp_of_pdf(content)
+    try:
+        stamp = json.loads(content)["provenance"]
+        return {name: stamp[name] for name in ("digest", "built", "event_uid")}
+    except (ValueError, KeyError, TypeError):
+        return None
+
+
+def json_report(event: TestEvent, mode: str) -> str:
+    """The figures (as the API gives them) with the provenance a PDF states."""
+    figures = event_statistics(event, mode).as_dict()
+    figures["provenance"] = provenance(event, {"mode": mode}, timezone.now())
+    return json.dumps(figures, indent=2, ensure_ascii=False)
+
+
+def amendments_of(event: TestEvent) -> list[dict]:
+    """Changes to a final event after it was finalised, oldest first."""
+    if event.finalised is None:
+        return []
+    return [_described(e) for e in changes_since(event, event.finalised)]
+
+
+def changes_since(event: TestEvent, since: datetime) -> list:
+    """History entries of the event's rows written after ``since``."""
+    scope = (
+        (TestEvent, {"id": event.pk}),
+        (Shift, {"test_event_id": event.pk}),
+        (Leg, {"shift__test_event": event.pk}),
+        (Segment, {"leg__shift__test_event": event.pk}),
+        (Note, {"segment__leg__shift__test_event": event.pk}),
+        (Image, {"segment__leg__shift__test_event": event.pk}),
+    )
+    entries = []
+    for model, where in scope:
+        ids = list(model.objects.filter(**where).values_list("id", flat=True))
+        entries += entries_since(model, since, id__in=ids)
+    return sorted(entries, key=lambda e: e.history_date)
+
+
+def _described(entry) -> dict:
+    return {
+        "record": f"{entry.instance_type._meta.verbose_name} {entry.uid}",
+        "at": _text(entry.history_date),
+        "by": entry.history_user.get_username() if entry.history_user else "",
+        "channel": entry.history_channel,
+        "reason": entry.history_change_reason or "",
+    }
+
+
+@dataclass
+class Verdict:
+    ok: bool
+    message: str
+    changes: list[dict] = field(default_factory=list)
+
+
+def verify(stamp: dict) -> Verdict:
+    event = TestEvent.objects.filter(uid=stamp["event_uid"]).first()
+    if event is None:
+        return Verdict(False, f"No test event with uid {stamp['event_uid']} here.")
+    if data_digest(event) == stamp["digest"]:
+        return Verdict(True, f"The data of test event '{event}' is unchanged.")
+    built = datetime.strptime(stamp["built"], _STAMP_FORMAT).replace(tzinfo=UTC)
+    changes = [_described(e) for e in changes_since(event, built)]
+    return Verdict(False, f"The data of test event '{event}' changed since the report.", changes)

@@ -1,0 +1,97 @@
+"""Reports state the digest of their data and can be verified against it (issue 26)."""
+
+import csv
+import io
+import json
+
+import pytest
+from django.core.management import CommandError, call_command
+
+from events.history import authored
+from events.models import Vehicle
+from events.services import finality, logs, segments
+from exchange.archive import open_archive
+from exchange.export import export_events, select_events
+from exchange.importer import import_bundle
+from reports.selectors.disengagements import DMV_COLUMNS
+from reports.selectors.statistics import event_statistics
+from tests.support.accounts import staff_user
+from tests.support.pdf import flat, pdf_text
+
+
+def _take_over(scenario):
+    """The first reason (safety, counted) of the scenario's first take-over."""
+    return scenario.masters["I1"].children.order_by("start", "id").first()
+
+
+def _verify(path):
+    out = io.StringIO()
+    try:
+        call_command("ftt_report", "--verify", str(path), stdout=out)
+    except CommandError:
+        return False, out.getvalue()
+    return True, out.getvalue()
+
+
+def test_pdf_verifies_until_a_reason_changes(scenario, tmp_path):
+    pdf = tmp_path / "r.pdf"
+    event = scenario.event
+    options = ["--level", "summary", "--no-tiles", "--no-image-appendix", "-o", str(pdf)]
+    call_command("ftt_report", "--test-event", str(event.pk), *options, stdout=io.StringIO())
+    assert _verify(pdf) == (True, f"OK: The data of test event '{event}' is unchanged.\n")
+    take_over = _take_over(scenario)
+    with authored("api", user=staff_user("operator")):
+        segments.annotate_segment(take_over, ito_reason="other")
+    ok, said = _verify(pdf)
+    assert not ok
+    assert f"segment {take_over.uid}" in said and "operator-staff via api" in said
+
+
+def test_final_report_says_final_and_lists_amendments(scenario, tmp_path):
+    event = logs.close_test_event(scenario.event)
+    finality.finalise_test_event(event)
+    with authored("admin", user=staff_user("administrator"), reason="wrong reason tapped"):
+        segments.annotate_segment(_take_over(scenario), ito_reason="other")
+    pdf = tmp_path / "final.pdf"
+    options = ["--level", "summary", "--no-tiles", "--no-image-appendix", "-o", str(pdf)]
+    call_command("ftt_report", "--test-event", str(event.pk), *options, stdout=io.StringIO())
+    text = flat(pdf_text(pdf.read_bytes(), tmp_path))
+    assert "FINAL since" in text and "amended 1 times" in text
+    assert "wrong reason tapped" in text and "frozen" in text
+    assert "PROVISIONAL" not in text
+
+
+@pytest.mark.django_db
+def test_json_digest_is_the_same_on_another_installation(scenario, tmp_path, wipe):
+    logs.close_test_event(scenario.event)
+    report = tmp_path / "figures.json"
+    call_command("ftt_report", "--test-event", str(scenario.event.pk), "--json", str(report))
+    digest = json.loads(report.read_text())["provenance"]["digest"]
+    export_events(tmp_path / "a.zip", select_events())
+    wipe()
+    with open_archive(tmp_path / "a.zip") as bundle:
+        import_bundle(bundle)
+    assert _verify(report)[0]
+    assert json.loads(report.read_text())["provenance"]["digest"] == digest
+
+
+def test_dmv_csv_has_the_columns_and_the_statistics_figures(scenario, tmp_path):
+    event = scenario.event
+    take_over = _take_over(scenario)
+    segments.annotate_segment(take_over, initiator="autonomous_system", location_type="field")
+    out = tmp_path / "dmv.csv"
+    call_command("ftt_report", "--test-event", str(event.pk), "--dmv", str(out))
+    header, *rows = list(csv.reader(out.open(encoding="utf-8")))
+    assert tuple(header) == DMV_COLUMNS
+    stats = event_statistics(event)
+    assert len(rows) == stats.overall.interventions > 0
+    km = {row[3]: float(row[9]) for row in rows}
+    for vehicle_id, figures in stats.by_vehicle.items():
+        key = Vehicle.objects.get(pk=vehicle_id).key
+        if key in km:
+            assert km[key] == pytest.approx(figures.auto_distance / 1000, abs=0.001)
+    assert ["AV System", "field"] in [row[4:6] for row in rows]
+    month = f"{event.start:%Y-%m}"
+    by_month = tmp_path / "month.csv"
+    call_command("ftt_report", "--dmv", str(by_month), "--month", month)
+    assert by_month.read_text(encoding="utf-8") == out.read_text(encoding="utf-8")
