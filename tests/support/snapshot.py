@@ -16,7 +16,9 @@ from django.db.models.fields.files import FieldFile
 
 from events.models import (
     Announcement,
+    Criterion,
     ItoReason,
+    Judgement,
     Leg,
     Note,
     Performer,
@@ -26,6 +28,7 @@ from events.models import (
     Segment,
     SegmentType,
     Shift,
+    TestCase,
     TestEvent,
     Vehicle,
     Weather,
@@ -55,8 +58,10 @@ TABLES = {
 # The change feed only tells open browsers what changed; it is not test data.
 # Robot accounts bind this installation's logins to vehicles, like the accounts
 # themselves they stay where they were made.  Segment figures are measured
-# from the poses (tests/telemetry/test_segment_figures.py checks them).
-NOT_RECORDED = {Announcement, RobotAccount, SegmentFigures}
+# from the poses (tests/telemetry/test_segment_figures.py checks them).  Test
+# plans (cases, criteria, judgements) are not carried by archives yet: a base
+# station defines its own (docs/data-exchange.md says so).
+NOT_RECORDED = {Announcement, RobotAccount, SegmentFigures, TestCase, Criterion, Judgement}
 
 # Login accounts belong to one installation; archives do not carry them.
 LOCAL_COLUMNS = {(Personnel, "user")}
