@@ -1,3 +1,6 @@
+from django.conf import settings
+from django.utils.translation import get_language
+
 from events import rules
 from events.models import Leg, Performer, Personnel, PoseSource, Segment, Vehicle
 
@@ -24,7 +27,12 @@ def new_entry_values(level: str, person: Personnel | None) -> dict:
     unambiguous choices (the user's own person; a vehicle, performer or pose
     source when exactly one exists, or the performer of the user's institution)."""
     values = {}
-    if level == "shift":
+    if level == "event":
+        # The report's language: the one this person reads the page in.
+        language = (get_language() or "")[:2]
+        codes = [code for code, _name in settings.LANGUAGES]
+        values["language"] = language if language in codes else settings.LANGUAGE_CODE[:2]
+    elif level == "shift":
         vehicles = list(Vehicle.objects.values_list("pk", flat=True)[:2])
         if len(vehicles) == 1:
             values["vehicle"] = vehicles[0]

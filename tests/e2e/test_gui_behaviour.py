@@ -286,7 +286,7 @@ def test_robot_panel_shows_the_collectors_backlog_and_full_disk_until_gone(page,
     login(page, server, "otto")
     choose(page, open_leg)
     status = page.locator("#collector-status")
-    expect(status).to_contain_text("logging into this leg · 3356 records not yet stored")
+    expect(status).to_contain_text("logging into this leg · 3,356 records not yet stored")
     expect(status).to_contain_text(DISK_FULL)
     server.python(BACKLOG.format(key=open_leg, pending=0, disk=""))
     expect(status).not_to_contain_text("not yet stored", timeout=8000)
