@@ -20,7 +20,8 @@ from django.db import connection
 READ_APPS = ("events", "telemetry", "rosbridge_app")
 # Written by the collector's recording path.
 WRITE_APPS = ("telemetry", "rosbridge_app")
-WRITE_TABLES = ("events_segment", "rosbridge_app_announcement")
+# A segment's change history is written beside it (events.models.changes).
+WRITE_TABLES = ("events_segment", "events_historicalsegment", "rosbridge_app_announcement")
 # Row locks only (SELECT ... FOR UPDATE needs UPDATE): the services lock the
 # leg and shift they write under, so that closing one waits for the write.
 LOCK_TABLES = ("events_leg", "events_shift", "events_testevent")
