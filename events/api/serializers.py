@@ -4,7 +4,10 @@ Whether the request is allowed in the current state is decided by
 ``events.services``; views hand ``validated_data`` to those functions.
 """
 
+from datetime import timedelta
+
 from django.db.models import IntegerField
+from django.utils import timezone
 from rest_framework import serializers
 from rest_framework_gis.fields import GeometryField
 
@@ -348,6 +351,19 @@ class ManualSegmentSerializer(PositionSerializer):
         allow_null=True,
         help_text="Id of the take-over (ITO child) recorded; the same uid again answers it.",
     )
+    seconds_ago = serializers.FloatField(
+        required=False,
+        min_value=0.0,
+        max_value=86400.0,
+        help_text="How long ago the operator recorded it (a page that kept it while offline "
+        "sends this, measured on its own clock, so a wrong tablet clock does not matter); "
+        "default: now.",
+    )
+
+    def recorded_at(self):
+        """When the take-over was recorded: now, or ``seconds_ago`` before now."""
+        ago = self.validated_data.get("seconds_ago")
+        return None if ago is None else timezone.now() - timedelta(seconds=ago)
 
 
 class ChildSerializer(serializers.Serializer):

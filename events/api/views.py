@@ -251,7 +251,11 @@ class LegViewSet(HistoryMixin, ServiceViewSet):
         payload = self.payload(s.ManualSegmentSerializer)
         data = payload.validated_data
         child = segments.new_manual_segment(
-            leg, reason=s.reason_key(data), uid=data.get("uid"), **payload.positions()
+            leg,
+            reason=s.reason_key(data),
+            uid=data.get("uid"),
+            at=payload.recorded_at(),
+            **payload.positions(),
         )
         return self.respond(child, s.SegmentSerializer, status.HTTP_201_CREATED)
 

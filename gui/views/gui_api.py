@@ -302,7 +302,8 @@ class ManualSegment(SegmentWrite):
         payload = checked(s.ManualSegmentSerializer, request)
         reason = s.reason_key(payload.validated_data)
         uid = payload.validated_data.get("uid")
-        return rules.new_manual_segment(leg, reason=reason, uid=uid, **payload.positions())
+        at = payload.recorded_at()
+        return rules.new_manual_segment(leg, reason=reason, uid=uid, at=at, **payload.positions())
 
 
 class SegmentClose(SegmentWrite):

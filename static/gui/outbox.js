@@ -59,6 +59,9 @@ function unreachable(err) {
 
 function send(entry) {
   let body = entry.body;
+  // A take-over kept while offline happened when it was tapped: the server is told
+  // how long ago, by this browser's own clock (a tablet's wrong date cancels out).
+  if (entry.timed && entry.made) body = { ...body, seconds_ago: Math.max(0, (Date.now() - Date.parse(entry.made)) / 1000) };
   if (entry.form) {
     body = new FormData();
     for (const [k, v] of Object.entries(entry.form.fields)) body.append(k, v);
@@ -71,7 +74,7 @@ function send(entry) {
 
 export const Outbox = {
   busy: false,
-  /* Sends `entry` ({method, path, body or form, gui, what, kept, reason}) now if the
+  /* Sends `entry` ({method, path, body or form, gui, what, kept, reason, timed}) now if the
    * server can be reached: {answer}.  Otherwise, or while earlier writes still
    * wait (they go first), keeps it: {kept: true}.  `kept` replaces `body` in
    * what is kept (a quick reason names the take-over seen).  Refusals throw. */

@@ -138,10 +138,10 @@ function applyRows(answer) {
  * One described by `what` is kept on a dead link to be sent later (outbox.js):
  * then there is no row yet.  Ending a segment is not kept: sent later, it would
  * end it at the wrong time. */
-async function segmentWrite(path, body, what, kept) {
+async function segmentWrite(path, body, what, kept, timed = false) {
   const leg = state.selected.leg;
   const answer = what
-    ? (await Outbox.write({ method: "POST", path, body, gui: true, what, kept })).answer
+    ? (await Outbox.write({ method: "POST", path, body, gui: true, what, kept, timed })).answer
     : await api("POST", path, body, { root: CONFIG.guiApiRoot });
   if (!answer) return null;
   if (leg === state.selected.leg) applyRows(answer);
@@ -307,7 +307,7 @@ $("#segment-new").addEventListener("click", () => segmentAction(async () => {
     if (!ok) return;
   }
   const leg = current("leg");
-  const child = await segmentWrite(`legs/${leg.id}/manual-segment/`, { uid: newUid() }, `a new take-over in Leg ${leg.number}`);
+  const child = await segmentWrite(`legs/${leg.id}/manual-segment/`, { uid: newUid() }, _("a new take-over in Leg %(number)s", { number: leg.number }), undefined, true);
   if (!child) return;
   selectSegment(child.id);
   notice(_("Take-over recorded."));

@@ -2,9 +2,13 @@
 REST list shows them, so the page redraws without reading the list again; the
 rules, roles and refusals are the segment rules' own, as the REST actions answer them."""
 
-import pytest
+import uuid
+from datetime import timedelta
 
-from events.models import Segment, SegmentType
+import pytest
+from django.utils import timezone
+
+from events.models import Leg, Segment, SegmentType, Shift, TestEvent
 from events.services import segments
 from tests.support.modes import start_auto
 
@@ -143,3 +147,27 @@ def test_writes_kept_offline_are_stored_once_and_land_where_the_operator_tapped(
     gone = client.post(reason, {"reason": "safety", "take_over": 999999}, format="json")
     assert gone.status_code == 404
     assert "no longer exists" in gone.json()["detail"]
+
+
+def test_a_take_over_kept_offline_starts_when_it_was_tapped(api_client, leg):
+    """The page says how long ago, by its own clock: the take-over is not dated
+    to the moment the link came back, and a wrong tablet date does not matter."""
+    client = api_client("operator")
+    earlier = timezone.now() - timedelta(minutes=10)
+    TestEvent.objects.filter(pk=leg.shift.test_event_id).update(start=earlier)
+    Shift.objects.filter(pk=leg.shift_id).update(start=earlier)
+    Leg.objects.filter(pk=leg.pk).update(start=earlier)
+    leg.refresh_from_db()
+    segments.report_mode(leg, SegmentType.AUTO, at=timezone.now() - timedelta(minutes=5))
+    url = f"/gui/api/legs/{leg.pk}/manual-segment/"
+    before = timezone.now()
+    answer = client.post(url, {"uid": str(uuid.uuid4()), "seconds_ago": 42.5}, format="json")
+    assert answer.status_code == 201, answer.content
+    child = Segment.objects.get(pk=answer.json()["segment"]["id"])
+    assert abs((before - child.start).total_seconds() - 42.5) < 2.0
+    assert child.parent.start == child.start  # the switch to ITO happened then too
+    # Before the open AUTO run began, it cannot have happened: said, not stored.
+    late = client.post(url, {"uid": str(uuid.uuid4()), "seconds_ago": 3600}, format="json")
+    assert late.status_code == 409 and Segment.objects.filter(leg=leg).count() == 3
+    refused = client.post(url, {"seconds_ago": -1}, format="json")
+    assert refused.status_code == 400 and "seconds_ago" in refused.json()["errors"]
