@@ -37,6 +37,7 @@ from rosbridge_app.collector.losses import LossCounter
 from rosbridge_app.collector.mode_timing import sent_at
 from rosbridge_app.collector.modes import ITO
 from rosbridge_app.collector.pipeline import SECOND_COPY, Pipeline
+from rosbridge_app.collector.status import Status
 
 log = logging.getLogger("ftt.collector")
 
@@ -53,27 +54,6 @@ def now() -> datetime:
 
 def _ignore(event) -> None:
     pass
-
-
-class Status:
-    """What the writer thread knows, for service answers (plain attributes: the
-    GIL makes single reads and writes safe)."""
-
-    def __init__(self):
-        self.leg: str | None = None
-        self.database_ok = True
-        self.pending = 0
-        self.note = ""
-
-    def describe(self) -> str:
-        parts = [f"logging into {self.leg}" if self.leg else "no open leg for the vehicle"]
-        if not self.database_ok:
-            parts.append(f"database unreachable, {self.pending} records spooled")
-        elif self.pending:
-            parts.append(f"{self.pending} records waiting")
-        if self.note:
-            parts.append(self.note)
-        return "; ".join(parts)
 
 
 class CollectorNode(Node):

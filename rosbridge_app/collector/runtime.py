@@ -45,11 +45,12 @@ from events import feed
 from events.models import Vehicle
 from events.selectors.logs import open_leg_for_vehicle
 from rosbridge_app.collector.disk_guard import FULL, DiskGuard
-from rosbridge_app.collector.node import CollectorNode, Status
+from rosbridge_app.collector.node import CollectorNode
 from rosbridge_app.collector.outbox import Outbox, SpoolFull
 from rosbridge_app.collector.recorder import DatabaseUnavailable, Recorder
 from rosbridge_app.collector.replay import ReplayOrder
 from rosbridge_app.collector.spooler import Spooler, default_spool
+from rosbridge_app.collector.status import Status
 from rosbridge_app.models import CollectorCommand
 from rosbridge_app.services import collectors as link
 
