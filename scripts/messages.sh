@@ -3,7 +3,7 @@
 #   bash scripts/messages.sh
 # then translate each new or "fuzzy" entry of locale/de/LC_MESSAGES/django.po
 # (Python, templates, the report) and djangojs.po (static/gui), and run the check
-#   bash scripts/test.sh tests/ftt_site/test_translations.py
+#   bash scripts/test.sh tests/test_translations.py
 # scripts/setup.sh compiles the .po files to .mo (scripts/setup.d/45-translations.sh).
 set -euo pipefail
 FTT_SCRIPT="messages"
