@@ -233,7 +233,7 @@ def import_segments(session: ImportSession):
             parent_id = parent.pk
             if not parent.is_master or parent.leg_id != leg_id:
                 session.refuse(f"{session.where}: its parent is not a master of the same leg.")
-        # Archives from before the regulator fields (issue 26) lack them: defaults.
+        # Archives from before the regulator fields lack them: defaults.
         annotation = {
             column: r.get(name, Segment._meta.get_field(name).get_default())
             for name, column in zip(Segment.ANNOTATION_FIELDS, ANNOTATION_COLUMNS, strict=True)
