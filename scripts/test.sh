@@ -181,8 +181,11 @@ else
 fi
 
 core=()
-for dir in tests/events tests/telemetry tests/ftt_site; do
-    [ -d "$dir" ] && core+=("$dir")
+# The core again on SpatiaLite, with the tests written for the embedded database
+# alone (its backup, its wake-up), which the PostGIS run skips.
+for dir in tests/events tests/telemetry tests/ftt_site tests/exchange/test_backup.py \
+    tests/rosbridge_app/test_wakeup.py; do
+    [ -e "$dir" ] && core+=("$dir")
 done
 if [ "${#core[@]}" -gt 0 ] && [ -n "${FTT_DATABASE_URL:-}" ]; then
     step --may-be-empty "pytest core on SpatiaLite" env -u FTT_DATABASE_URL \
