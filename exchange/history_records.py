@@ -79,11 +79,11 @@ class HistoryExport:
         return self.referred.get(model, set())
 
     def _reference(self, model, pk):
-        if model is Personnel:
-            return rec.person_ref(Personnel(pk=pk))
         if model not in self._refs:
             found = model.objects.filter(pk__in=self.referred[model])
-            if model is TestCase:
+            if model is Personnel:
+                self._refs[model] = {p.pk: rec.person_ref(p) for p in found.only("pk")}
+            elif model is TestCase:
                 self._refs[model] = {
                     pk: [str(uid), key]
                     for pk, uid, key in found.values_list("pk", "test_event__uid", "key")

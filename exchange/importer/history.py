@@ -52,6 +52,8 @@ def _import_entries(session: ImportSession, name: str, records: list):
                 f"{session.where}: the {name} is neither in the archive nor here."
             )
         at = rec.time_in(r["at"], "at")
+        if at is None:
+            raise MalformedRecord(f"{session.where}: it has no time.")
         if (pk, at, r["type"]) in known:
             session.plan.note("history", "unchanged")
             continue

@@ -168,6 +168,9 @@ def test_history_names_rows_by_what_every_installation_knows(take_over, tmp_path
     assert {e["values"]["parent"] for e in mine} == {str(take_over.parent.uid)}
     shifts = [e for e in entries if e["model"] == "shift"]
     assert shifts and {e["values"]["vehicle"] for e in shifts} == {take_over.leg.shift.vehicle.key}
+    listed = {json.loads(line)["ref"] for line in members["data/personnel.jsonl"].splitlines()}
+    named = {e["values"][role] for e in shifts for role in ("test_director", "robot_operator")}
+    assert named - {None} and named - {None} <= listed
     assert all("id" not in e["values"] for e in entries)
 
 
