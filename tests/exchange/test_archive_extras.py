@@ -99,10 +99,12 @@ def test_api_change_reaches_the_base_station_with_author_channel_and_values(
     assert _history(api_client, here) == shown
 
 
-def test_robot_suggestion_start_uncertainty_and_missed_fixes_travel(
+def test_robot_suggestion_start_uncertainty_missed_fixes_and_regulator_fields_travel(
     take_over, tmp_path, media_root, base_station
 ):
     leg = take_over.leg
+    regulator = {"initiator": "autonomous_system", "severity": "critical", "location_type": "yard"}
+    segments.annotate_segment(take_over, **regulator)
     logs.count_missed_fixes(leg.pk, 3)
     morning = export(tmp_path / "morning.zip")
     logs.count_missed_fixes(leg.pk, 4)
@@ -118,6 +120,7 @@ def test_robot_suggestion_start_uncertainty_and_missed_fixes_travel(
     child = Segment.objects.get(uid=take_over.uid)
     assert (child.suggested_reason_id, child.ito_reason_id) == ("safety", "unassigned")
     assert child.start_uncertainty == 1.25
+    assert {name: getattr(child, name) for name in regulator} == regulator
     assert Segment.objects.get(uid=master.uid).start_uncertainty == 1.25
 
 
