@@ -26,6 +26,9 @@ from pathlib import Path, PurePosixPath
 from django.conf import settings
 
 FORMAT = "ftt-archive"
+# Raised only when an older FTT would misread an archive.  Added tables and
+# fields keep it: an older FTT passes over them, and this one reads an older
+# archive's missing ones as their defaults (docs/data-exchange.md).
 VERSION = 1
 MANIFEST = "manifest.json"
 CHUNK = 1024 * 1024

@@ -12,6 +12,7 @@ from django.db.models import Q
 from basemaps.models import EventBasemap
 from events.models import (
     ItoReason,
+    Judgement,
     Leg,
     Note,
     Performer,
@@ -20,12 +21,14 @@ from events.models import (
     Segment,
     SegmentType,
     Shift,
+    TestCase,
     TestEvent,
     Vehicle,
     Weather,
 )
 from exchange import records as rec
 from exchange.archive import ArchiveWriter
+from exchange.history_records import HistoryExport
 from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 
 BATCH = 5000
@@ -102,7 +105,7 @@ def export_events(path, events: list[TestEvent], *, since: datetime | None = Non
     )
     legs = list(
         Leg.objects.filter(shift__test_event_id__in=event_ids)
-        .select_related("shift", "default_pose_source")
+        .select_related("shift", "default_pose_source", "test_case")
         .order_by("start", "id")
     )
     # Masters before children so that an importer always meets the parent first.
@@ -138,9 +141,22 @@ def export_events(path, events: list[TestEvent], *, since: datetime | None = Non
             f"e.g. {missing[0]}; restore them or delete those rows before exporting."
         )
 
+    history = HistoryExport(
+        {
+            "test_event": event_ids,
+            "shift": [s.pk for s in shifts],
+            "leg": [leg.pk for leg in legs],
+            "segment": segment_ids,
+            "note": [n.pk for n in notes],
+            "image": [i.pk for i in images],
+        },
+        since,
+    )
     people = {s_person for s in shifts for r in rec.PERSON_ROLES if (s_person := getattr(s, r))}
     people |= {n.author for n in notes if n.author}
+    people |= set(Personnel.objects.filter(pk__in=history.ids_of(Personnel)))
     source_ids = {leg.default_pose_source_id for leg in legs if leg.default_pose_source_id}
+    source_ids |= history.ids_of(PoseSource)
     source_ids |= set(
         Pose.objects.filter(telemetry, pose_source__isnull=False)
         .values_list("pose_source_id", flat=True)
@@ -162,7 +178,7 @@ def export_events(path, events: list[TestEvent], *, since: datetime | None = Non
         out.write_records(
             "ito_reasons", map(rec.catalogue_record, ItoReason.objects.order_by("key"))
         )
-        vehicle_ids = {s.vehicle_id for s in shifts}
+        vehicle_ids = {s.vehicle_id for s in shifts} | history.ids_of(Vehicle)
         out.write_records(
             "vehicles",
             (
@@ -175,6 +191,7 @@ def export_events(path, events: list[TestEvent], *, since: datetime | None = Non
             (rec.keyed_record(p) for p in PoseSource.objects.filter(pk__in=source_ids)),
         )
         performer_ids = {s.performer_id for s in shifts if s.performer_id}
+        performer_ids |= history.ids_of(Performer)
         out.write_records(
             "performers",
             (
@@ -199,8 +216,27 @@ def export_events(path, events: list[TestEvent], *, since: datetime | None = Non
                 .order_by("test_event__start", "test_event_id"),
             ),
         )
+        out.write_records(
+            "test_cases",
+            map(
+                rec.test_case_record,
+                TestCase.objects.filter(test_event_id__in=event_ids)
+                .select_related("test_event")
+                .prefetch_related("criteria__reasons")
+                .order_by("test_event_id", "key"),
+            ),
+        )
         out.write_records("shifts", map(rec.shift_record, shifts))
         out.write_records("legs", map(rec.leg_record, legs))
+        out.write_records(
+            "judgements",
+            (
+                rec.judgement_record(j, uids["leg", j.leg_id] if j.leg_id else None)
+                for j in Judgement.objects.filter(criterion__test_case__test_event_id__in=event_ids)
+                .select_related("criterion__test_case__test_event")
+                .order_by("id")
+            ),
+        )
         out.write_records("segments", (rec.segment_record(s, uids) for s in segments))
         out.write_records("notes", (rec.note_record(n, segment_uid[n.segment_id]) for n in notes))
         out.write_records(
@@ -229,6 +265,7 @@ def export_events(path, events: list[TestEvent], *, since: datetime | None = Non
             "recordings",
             (rec.recording_record(r, segment_uid[r.segment_id]) for r in recordings),
         )
+        out.write_records("history", history.records())
         for stored_file in stored:
             with stored_file.open("rb") as handle:
                 out.write_file(stored_file.name, handle)

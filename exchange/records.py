@@ -7,6 +7,7 @@ an archive-local ``ref`` that other rows use.  Times are ISO 8601 in UTC,
 points are ``[longitude, latitude]`` in WGS 84.
 """
 
+import json
 from datetime import UTC, datetime
 
 from django.contrib.gis.geos import Point
@@ -22,8 +23,10 @@ TABLES = (
     "personnel",
     "test_events",
     "basemaps",
+    "test_cases",
     "shifts",
     "legs",
+    "judgements",
     "segments",
     "notes",
     "poses",
@@ -31,6 +34,7 @@ TABLES = (
     "maps",
     "images",
     "recordings",
+    "history",
 )
 PERSON_ROLES = ("test_administrator", "test_director", "safety_officer", "robot_operator")
 
@@ -155,6 +159,8 @@ def leg_record(leg) -> dict:
         "weather": leg.weather_id,
         "default_pose_source": leg.default_pose_source.key if leg.default_pose_source else None,
         "recording": leg.recording,
+        "fixes_missed": leg.fixes_missed,
+        "test_case": leg.test_case.key if leg.test_case_id else None,
     }
 
 
@@ -167,6 +173,7 @@ def segment_record(segment, uids: dict) -> dict:
         "parent": uids["segment", segment.parent_id] if segment.parent_id else None,
         "segment_type": segment.segment_type_id,
         "ito_reason": segment.ito_reason_id,
+        "suggested_reason": segment.suggested_reason_id,
         "obstacle": segment.obstacle,
         "lighting": segment.lighting,
         "slope": segment.slope,
@@ -181,6 +188,7 @@ def segment_record(segment, uids: dict) -> dict:
         "start": time_out(segment.start),
         "end": time_out(segment.end),
         "robot_stamp": time_out(segment.robot_stamp),
+        "start_uncertainty": segment.start_uncertainty,
     }
 
 
@@ -263,4 +271,46 @@ def recording_record(recording, segment_uid: str) -> dict:
         "reason": recording.reason,
         "received": time_out(recording.received),
         "file": recording.file.name,
+    }
+
+
+def geometry_out(geometry) -> list | None:
+    """A line or multipolygon as its coordinates ([longitude, latitude] pairs)."""
+    return None if geometry is None else json.loads(json.dumps(geometry.coords))
+
+
+def test_case_record(case) -> dict:
+    """A test case with its criteria; test cases are named by test event and key."""
+    return {
+        "test_event": str(case.test_event.uid),
+        "key": case.key,
+        "title": case.title,
+        "description": case.description,
+        "area": geometry_out(case.area),
+        "route": geometry_out(case.route),
+        "planned_runs": case.planned_runs,
+        "criteria": [criterion_record(c) for c in case.criteria.all()],
+    }
+
+
+def criterion_record(criterion) -> dict:
+    """Criteria have no key of their own: a judgement names one by these values."""
+    return {
+        "kind": criterion.kind,
+        "value": criterion.value,
+        "text": criterion.text,
+        "reasons": sorted(r.pk for r in criterion.reasons.all()),
+    }
+
+
+def judgement_record(judgement, leg_uid: str | None) -> dict:
+    criterion = judgement.criterion
+    return {
+        "test_event": str(criterion.test_case.test_event.uid),
+        "test_case": criterion.test_case.key,
+        "criterion": {k: v for k, v in criterion_record(criterion).items() if k != "reasons"},
+        "leg": leg_uid,
+        "passed": judgement.passed,
+        "note": judgement.note,
+        "at": time_out(judgement.at),
     }

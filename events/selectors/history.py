@@ -5,9 +5,10 @@ from django.utils.translation import gettext as _
 KINDS = {"+": "created", "~": "changed", "-": "deleted"}
 
 
-def _author(entry) -> str:
+def author_of(entry) -> str:
+    """The account that made the change here, or the name another installation gave."""
     user = entry.history_user
-    return user.get_username() if user is not None else ""
+    return user.get_username() if user is not None else entry.history_author
 
 
 def _value(value) -> str | None:
@@ -26,7 +27,7 @@ def describe_entry(entry, previous) -> dict:
     return {
         "at": entry.history_date.isoformat(),
         "kind": KINDS[entry.history_type],
-        "author": _author(entry) or _("FTT"),
+        "author": author_of(entry) or _("FTT"),
         "channel": entry.history_channel,
         "reason": entry.history_change_reason or "",
         "changes": changes,
@@ -35,7 +36,10 @@ def describe_entry(entry, previous) -> dict:
 
 def history_of(instance) -> list[dict]:
     """Newest first: who changed the row, when, through what, why, before → after."""
-    entries = list(instance.history.select_related("history_user").order_by("history_id"))
+    # By time, not by id: rows an import brings are added after the import's own.
+    entries = list(
+        instance.history.select_related("history_user").order_by("history_date", "history_id")
+    )
     described = [
         describe_entry(entry, entries[i - 1] if i else None) for i, entry in enumerate(entries)
     ]

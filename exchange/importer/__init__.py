@@ -17,6 +17,10 @@ Rules (docs/data-exchange.md explains them for administrators):
 * Notes change only when the archive's copy was edited later than ours.
   Track points and maps never change once stored; of an image only the
   description can.
+* A leg's missed fixes take the larger count.  A test case that exists here
+  (test event and key) is kept; a judgement follows the later verdict.
+* A history entry is added unless this installation has one of the same
+  record, time and kind.
 * Configuration rows are reused when they match: catalogues, vehicles and pose
   sources by key, performers by institution, personnel by name and institution
   (both ignoring case and surrounding blanks).  Otherwise they are added.
@@ -32,7 +36,8 @@ What changed is announced in the change feed in the same transaction.
 The modules: ``bundle`` runs the steps in one transaction and turns failures
 into :class:`ImportRefused`; ``session`` holds what the steps share (the rows
 met so far, lookups, files written); ``configuration``, ``logbook`` and
-``telemetry`` import those kinds of rows; ``plan`` counts the outcome.
+``test_plans``, ``telemetry`` and ``history`` import those kinds of rows;
+``plan`` counts the outcome.
 """
 
 from exchange.importer.bundle import import_bundle

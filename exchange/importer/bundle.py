@@ -9,7 +9,7 @@ from events.history import authored
 from events.models import Segment
 from exchange import records as rec
 from exchange.archive import ArchiveError
-from exchange.importer import configuration, logbook, telemetry
+from exchange.importer import configuration, history, logbook, telemetry, test_plans
 from exchange.importer.plan import ImportRefused, MalformedRecord, Plan, describe
 from exchange.importer.session import ImportSession
 
@@ -19,8 +19,10 @@ STEPS = (
     configuration.import_configuration,
     logbook.import_test_events,
     logbook.link_basemaps,
+    test_plans.import_test_cases,
     logbook.import_shifts,
     logbook.import_legs,
+    test_plans.import_judgements,
     logbook.import_segments,
     logbook.import_notes,
     telemetry.import_poses,
@@ -28,6 +30,7 @@ STEPS = (
     telemetry.import_maps,
     telemetry.import_images,
     telemetry.import_recordings,
+    history.import_history,
     logbook.refuse_open_under_closed,
 )
 

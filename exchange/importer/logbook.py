@@ -10,6 +10,7 @@ from basemaps.services import layers as basemap_layers
 from events import rules
 from events.models import Leg, Note, Performer, PoseSource, Segment, Shift, TestEvent, Vehicle
 from exchange import records as rec
+from exchange.importer import test_plans
 from exchange.importer.session import ImportSession
 
 # Segment attributes of the annotation, as stored (the reason by its key).
@@ -26,6 +27,7 @@ def save_entry(
     parent=None,
     clashes=(),
     annotation=None,
+    counters=None,
 ):
     """Add or update one log entry.
 
@@ -33,6 +35,8 @@ def save_entry(
     entry may be added.  ``annotation`` holds a segment's reason fields: they
     follow their own stamp (``annotated``), so that an operator's annotation
     survives the robot closing the same segment later on the other side.
+    ``counters`` only ever grow where they are counted (a leg's missed fixes,
+    added without a change stamp): the larger count wins.
     """
     uid = uuid.UUID(record["uid"])
     # A record without change stamps (an archive of an older FTT): the
@@ -40,8 +44,10 @@ def save_entry(
     modified = rec.time_in(record.get("modified"), "modified")
     annotated = rec.time_in(record.get("annotated"), "annotated")
     annotation = annotation or {}
+    counters = counters or {}
     row = model.objects.filter(uid=uid).first()
     if row is None:
+        values = values | counters
         for queryset, message in clashes:
             other = queryset.first()
             if other is not None:
@@ -69,6 +75,7 @@ def save_entry(
         if row.end is not None and values.get("end", row.end) is None:
             values["end"] = row.end  # never re-open; see exchange.importer
         wanted |= values
+    wanted |= {name: n for name, n in counters.items() if n > getattr(row, name)}
     stamps = []
     if annotation and ("annotated" not in record or _later(annotated, row.annotated)):
         wanted |= annotation
@@ -200,6 +207,8 @@ def import_legs(session: ImportSession):
             "default_pose_source_id": source.pk if source else None,
             "recording": r.get("recording", ""),
         }
+        if "test_case" in r:  # archives from before test plans lack it
+            values["test_case_id"] = test_plans.test_case_id(session, shift_id, r["test_case"])
         clashes = [
             (
                 Leg.objects.filter(shift_id=shift_id, number=r["number"]),
@@ -214,8 +223,10 @@ def import_legs(session: ImportSession):
                     "This shift already has another open leg here; close it first",
                 )
             )
+        # Archives from before the count lack it: nothing to add.
+        counters = {"fixes_missed": r["fixes_missed"]} if "fixes_missed" in r else {}
         session.legs[r["uid"]] = save_entry(
-            session, "legs", Leg, r, values, parent="shift_id", clashes=clashes
+            session, "legs", Leg, r, values, parent="shift_id", clashes=clashes, counters=counters
         ).pk
 
 
@@ -250,6 +261,11 @@ def import_segments(session: ImportSession):
             "end": rec.time_in(r["end"], "end"),
             "robot_stamp": rec.time_in(r["robot_stamp"], "robot_stamp"),
         }
+        # Archives from before these fields lack them: what is here stays.
+        if "suggested_reason" in r:
+            values["suggested_reason_id"] = r["suggested_reason"]
+        if "start_uncertainty" in r:
+            values["start_uncertainty"] = r["start_uncertainty"]
         clashes = []
         if parent_id is None and values["end"] is None:
             clashes.append(

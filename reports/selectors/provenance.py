@@ -20,7 +20,7 @@ from django.conf import settings
 from django.utils import timezone
 
 from events.models import Leg, Note, Segment, Shift, TestEvent
-from events.selectors.history import entries_since
+from events.selectors.history import author_of, entries_since
 from events.selectors.taxonomy import taxonomy_of, taxonomy_version
 from reports.selectors.statistics import event_statistics
 from telemetry.models import Image, LocalPose, Pose
@@ -255,7 +255,7 @@ def _described(entry) -> dict:
     return {
         "record": f"{entry.instance_type._meta.verbose_name} {entry.uid}",
         "at": _text(entry.history_date),
-        "by": entry.history_user.get_username() if entry.history_user else "",
+        "by": author_of(entry),
         "channel": entry.history_channel,
         "reason": entry.history_change_reason or "",
     }

@@ -121,6 +121,15 @@ MALFORMED = {
     ),
     "uid-a-list": lambda m: signed_archive(replace_record(m, "legs", lambda r: {**r, "uid": [1]})),
     "file-a-dict": lambda m: signed_archive(replace_record(m, "maps", lambda r: {**r, "file": {}})),
+    "history-channel-unknown": lambda m: signed_archive(
+        replace_record(m, "history", lambda r: {**r, "channel": "fax"})
+    ),
+    "history-reference-a-number": lambda m: signed_archive(
+        replace_record(m, "history", lambda r: {**r, "values": {**r["values"], "leg": 7}})
+    ),
+    "history-without-time": lambda m: signed_archive(
+        replace_record(m, "history", lambda r: {**r, "at": None})
+    ),
 }
 
 

@@ -1,0 +1,231 @@
+"""What an archive carries besides the log: the change history, the robot's reason
+suggestions, start uncertainties and missed fixes, the test plan; and that an
+archive of an older FTT without them still imports."""
+
+import json
+
+import pytest
+from django.contrib.auth import get_user_model
+from django.contrib.gis.geos import LineString, MultiPolygon, Polygon
+from django.urls import reverse
+
+from events.models import (
+    Criterion,
+    ItoReason,
+    Judgement,
+    Leg,
+    Note,
+    Personnel,
+    Segment,
+    Shift,
+    TestCase,
+    TestEvent,
+    Vehicle,
+)
+from events.services import logs, segments, test_plans
+from exchange.archive import open_archive
+from exchange.export import export_events, select_events
+from exchange.importer import import_bundle
+from telemetry.models import Image
+from tests.support.archives import members_of, replace_record, signed_archive
+
+pytestmark = pytest.mark.django_db
+
+TRACKED = (TestEvent, Shift, Leg, Segment, Note, Image, Personnel, Vehicle, ItoReason)
+
+
+def load(path):
+    with open_archive(path) as bundle:
+        return import_bundle(bundle)
+
+
+def export(path):
+    export_events(path, select_events())
+    return path
+
+
+@pytest.fixture
+def base_station(wipe):
+    """Forget everything including the history and the accounts, as on another machine."""
+
+    def _wipe():
+        wipe()
+        for model in TRACKED:
+            model.history.all().delete()
+        get_user_model().objects.all().delete()
+
+    return _wipe
+
+
+@pytest.fixture
+def take_over(leg):
+    return segments.report_mode(
+        leg, "ito", suggested_reason="safety", start_uncertainty=1.25
+    ).master.children.get()
+
+
+def _history(api_client, segment) -> list:
+    client = api_client("viewer")
+    answer = client.get(reverse("segment-history", args=[segment.pk]))
+    assert answer.status_code == 200
+    return answer.json()
+
+
+def test_api_change_reaches_the_base_station_with_author_channel_and_values(
+    take_over, api_client, tmp_path, media_root, base_station
+):
+    operator = api_client("operator")
+    url = reverse("segment-detail", args=[take_over.pk])
+    assert operator.patch(url, {"ito_reason": "planner"}, format="json").status_code == 200
+    logs.close_test_event(take_over.leg.shift.test_event)
+    archive = export(tmp_path / "robot.zip")
+    name = operator.user.username
+    base_station()
+
+    plan = load(archive)
+    here = Segment.objects.get(uid=take_over.uid)
+    shown = _history(api_client, here)
+    api = [e for e in shown if e["channel"] == "api"]
+    assert len(api) == 1 and api[0]["author"] == name and api[0]["kind"] == "changed"
+    assert {"field": "ito_reason", "before": "unassigned", "after": "planner"} in api[0]["changes"]
+    imported = [e for e in shown if e["channel"] == "import"]
+    assert [e["kind"] for e in imported] == ["created"]
+    assert shown[0] == imported[0]  # the import came last
+    assert plan.counts["history"]["added"] > 0
+
+    again = load(archive)
+    assert again.counts["history"] == {"unchanged": plan.counts["history"]["added"]}
+    assert again.changes() == 0
+    assert _history(api_client, here) == shown
+
+
+def test_robot_suggestion_start_uncertainty_missed_fixes_and_regulator_fields_travel(
+    take_over, tmp_path, media_root, base_station
+):
+    leg = take_over.leg
+    regulator = {"initiator": "autonomous_system", "severity": "critical", "location_type": "yard"}
+    segments.annotate_segment(take_over, **regulator)
+    logs.count_missed_fixes(leg.pk, 3)
+    morning = export(tmp_path / "morning.zip")
+    logs.count_missed_fixes(leg.pk, 4)
+    evening = export(tmp_path / "evening.zip")
+    master = take_over.parent
+    base_station()
+
+    load(morning)
+    assert Leg.objects.get(uid=leg.uid).fixes_missed == 3
+    load(evening)
+    load(morning)  # a stale archive counts fewer, which undoes nothing
+    assert Leg.objects.get(uid=leg.uid).fixes_missed == 7
+    child = Segment.objects.get(uid=take_over.uid)
+    assert (child.suggested_reason_id, child.ito_reason_id) == ("safety", "unassigned")
+    assert child.start_uncertainty == 1.25
+    assert {name: getattr(child, name) for name in regulator} == regulator
+    assert Segment.objects.get(uid=master.uid).start_uncertainty == 1.25
+
+
+def _as_older_ftt(path, tmp_path):
+    """The archive as an FTT before these fields wrote it: no history, no new fields."""
+    members = members_of(path.read_bytes())
+    del members["data/history.jsonl"]
+    for table, names in (
+        ("legs", ("fixes_missed",)),
+        ("segments", ("suggested_reason", "start_uncertainty")),
+    ):
+        members = replace_record(
+            members, table, lambda r, names=names: {k: v for k, v in r.items() if k not in names}
+        )
+    older = tmp_path / "older.zip"
+    older.write_bytes(signed_archive(members))
+    return older
+
+
+def test_an_archive_without_history_and_new_fields_still_imports(
+    take_over, tmp_path, media_root, base_station
+):
+    logs.count_missed_fixes(take_over.leg_id, 2)
+    segments.annotate_segment(take_over, ito_reason="planner")
+    older = _as_older_ftt(export(tmp_path / "robot.zip"), tmp_path)
+    assert "suggested_reason" not in members_of(older.read_bytes())["data/segments.jsonl"].decode()
+    base_station()
+
+    plan = load(older)
+    assert "history" not in plan.counts
+    child = Segment.objects.get(uid=take_over.uid)
+    assert (child.ito_reason_id, child.suggested_reason_id, child.start_uncertainty) == (
+        "planner",
+        None,
+        None,
+    )
+    assert Leg.objects.get().fixes_missed == 0
+    assert {e.history_channel for e in child.history.all()} == {"import"}
+
+
+def test_history_names_rows_by_what_every_installation_knows(take_over, tmp_path, media_root):
+    segments.annotate_segment(take_over, ito_reason="planner")
+    members = members_of(export(tmp_path / "robot.zip").read_bytes())
+    entries = [json.loads(line) for line in members["data/history.jsonl"].splitlines()]
+    mine = [e for e in entries if e["uid"] == str(take_over.uid)]
+    assert [e["values"]["ito_reason"] for e in mine] == ["unassigned", "planner"]
+    assert {e["values"]["leg"] for e in mine} == {str(take_over.leg.uid)}
+    assert {e["values"]["parent"] for e in mine} == {str(take_over.parent.uid)}
+    shifts = [e for e in entries if e["model"] == "shift"]
+    assert shifts and {e["values"]["vehicle"] for e in shifts} == {take_over.leg.shift.vehicle.key}
+    listed = {json.loads(line)["ref"] for line in members["data/personnel.jsonl"].splitlines()}
+    named = {e["values"][role] for e in shifts for role in ("test_director", "robot_operator")}
+    assert named - {None} and named - {None} <= listed
+    assert all("id" not in e["values"] for e in entries)
+
+
+def _criteria(case) -> list:
+    return [
+        (c.kind, c.value, c.text, sorted(r.pk for r in c.reasons.all()))
+        for c in case.criteria.all()
+    ]
+
+
+def _plan_of(event) -> list:
+    return [
+        (
+            case.key,
+            case.title,
+            case.planned_runs,
+            case.route.coords,
+            case.area.coords,
+            _criteria(case),
+            sorted(
+                (j.criterion.text, str(j.leg.uid) if j.leg else "", j.passed, j.note, j.at)
+                for j in Judgement.objects.filter(criterion__test_case=case)
+            ),
+            sorted(str(leg.uid) for leg in case.legs.all()),
+        )
+        for case in event.test_cases.order_by("key")
+    ]
+
+
+def test_test_plan_judgements_and_leg_links_travel(shift, tmp_path, media_root, base_station):
+    case = TestCase.objects.create(
+        test_event=shift.test_event,
+        key="gravel",
+        title="Gravel loop",
+        planned_runs=2,
+        route=LineString((7.1000001, 50.7), (7.2, 50.7100002), srid=4326),
+        area=MultiPolygon(Polygon(((7, 50), (7.3, 50), (7.3, 50.8), (7, 50))), srid=4326),
+    )
+    Criterion.objects.create(test_case=case, kind="forbidden_reasons").reasons.set(["safety"])
+    judged = Criterion.objects.create(test_case=case, kind="judged", text="Gate passed cleanly")
+    leg = logs.create_leg(shift=shift, test_case=case)
+    test_plans.judge(judged, passed=True, leg=leg, note="clean")
+    test_plans.judge(judged, passed=False, note="not overall")
+    morning = export(tmp_path / "morning.zip")
+    test_plans.judge(judged, passed=False, leg=leg, note="touched the gate")
+    evening = export(tmp_path / "evening.zip")
+    expected = _plan_of(shift.test_event)
+    base_station()
+
+    load(morning)
+    load(evening)
+    stale = load(morning)
+    assert stale.changes() == 0 and stale.counts["test_cases"] == {"reused": 1}
+    assert _plan_of(TestEvent.objects.get()) == expected
+    assert Leg.objects.get(uid=leg.uid).test_case.key == "gravel"
