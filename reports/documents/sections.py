@@ -464,7 +464,7 @@ class Sections:
             "no_start": no_start,
             "uncertain_starts": len(uncertain),
             "fixes_missed": sum(leg.fixes_missed for legs in self.legs.values() for leg in legs),
-            "uncertainty_max": f"{max(uncertain, default=0):.1f}",
+            "uncertainty_max": fmt.decimal(max(uncertain, default=0), 1),
             "tiles": self.maps.tiles_note(),
             "fonts": _(FONT_NOTE),
             "warnings": self.warnings,

@@ -88,10 +88,10 @@ def report_text() -> dict[str, str]:
         "warnings": _("Warnings while building this report:"),
         "fixes_missed": _(
             "GPS fixes lost on the way to the collector (its estimate from gaps in the "
-            "robot's stamps):"
+            "robot’s stamps):"
         ),
         "uncertain_starts": _(
-            "Segments whose start is uncertain (the robot's mode message had no time stamp; "
+            "Segments whose start is uncertain (the robot’s mode message had no time stamp; "
             "the switch lies up to the given time before the stored start):"
         ),
         "at_most": _(", at most %(seconds)s s"),
@@ -101,7 +101,7 @@ def report_text() -> dict[str, str]:
         "amended": _("amended %(count)s times after finalisation"),
         "test_plan": _("Test plan"),
         "test_plan_intro": _(
-            "Each test case's criteria, judged on the figures above (same rules): pass, fail, "
+            "Each test case’s criteria, judged on the figures above (same rules): pass, fail, "
             "not yet (still being driven) or needs a judgement (decided by a person)."
         ),
         "test_case": _("Test case"),
