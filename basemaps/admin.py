@@ -3,6 +3,7 @@
 from django import forms
 from django.contrib import admin
 from django.core.exceptions import ValidationError
+from django.utils.translation import gettext as _
 
 from basemaps.models import BasemapLayer, EventBasemap
 from basemaps.services import layers
@@ -19,7 +20,7 @@ class BasemapLayerForm(forms.ModelForm):
         upload = self.files.get("file")
         has_file = bool(upload) or bool(self.instance.file and data.get("file"))
         if has_file == bool(data.get("url")):
-            raise ValidationError("Give either a file (GeoTIFF, MBTiles, PMTiles) or a URL.")
+            raise ValidationError(_("Give either a file (GeoTIFF, MBTiles, PMTiles) or a URL."))
         if upload:
             try:
                 layers.check_upload(self.instance, upload)

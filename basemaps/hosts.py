@@ -48,6 +48,9 @@ def check_tile_url(url: str) -> None:
     allowed = [entry.strip().lower() for entry in settings.FTT_TILE_HOSTS]
     if not any(_matches(host, entry) for entry in allowed):
         raise ValidationError(
-            f"{host} is not among the tile servers an administrator allowed (FTT_TILE_HOSTS: "
-            f"{', '.join(allowed) or 'none'})."
+            _(
+                "%(host)s is not among the tile servers an administrator allowed "
+                "(FTT_TILE_HOSTS: %(allowed)s)."
+            )
+            % {"host": host, "allowed": ", ".join(allowed) or "none"}
         )

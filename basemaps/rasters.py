@@ -11,6 +11,7 @@ sibling-file access off (basemaps.confinement, applied when the app loads).
 from pathlib import Path
 
 import rasterio
+from django.utils.translation import gettext as _
 from rasterio.errors import RasterioError
 from rio_tiler.io import Reader
 
@@ -26,10 +27,12 @@ def check_local_file(path) -> Path:
     """The path of a regular local file, never a GDAL virtual path or an address."""
     text = str(path)
     if "/vsi" in text.lower() or "://" in text:
-        raise NotAGeoTiff(f"{text[:200]} is a GDAL virtual path or an address, not a file.")
+        raise NotAGeoTiff(
+            _("%(path)s is a GDAL virtual path or an address, not a file.") % {"path": text[:200]}
+        )
     path = Path(path)
     if not path.is_file():
-        raise NotAGeoTiff(f"{text[:200]} is not a regular file.")
+        raise NotAGeoTiff(_("%(path)s is not a regular file.") % {"path": text[:200]})
     return path
 
 
@@ -38,7 +41,7 @@ def check_geotiff_path(path) -> Path:
     path = check_local_file(path)
     with path.open("rb") as f:
         if not f.read(4).startswith(TIFF_MAGIC):
-            raise NotAGeoTiff("not a TIFF file")
+            raise NotAGeoTiff(_("not a TIFF file"))
     return path
 
 

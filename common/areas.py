@@ -11,6 +11,7 @@ import math
 
 from django.contrib.gis.gdal.error import GDALException
 from django.contrib.gis.geos import GEOSException, GEOSGeometry, MultiPolygon, Polygon
+from django.utils.translation import gettext
 
 # A drawn area may run once around past either side of the antimeridian.
 _LONGITUDE_REACH = 540.0
@@ -26,11 +27,11 @@ def area_from_box(west: float, south: float, east: float, north: float) -> Multi
     """A box in degrees; ``west > east`` is a box across the antimeridian."""
     values = (west, south, east, north)
     if not all(math.isfinite(v) for v in values):
-        raise AreaError("The box needs four finite numbers.")
+        raise AreaError(gettext("The box needs four finite numbers."))
     if not (-90 <= south < north <= 90):
-        raise AreaError("The box needs south < north, both within ±90°.")
+        raise AreaError(gettext("The box needs south < north, both within ±90°."))
     if not all(-180 <= v <= 180 for v in (west, east)) or west == east:
-        raise AreaError("The box needs two different longitudes within ±180°.")
+        raise AreaError(gettext("The box needs two different longitudes within ±180°."))
     if west > east:
         east += 360.0
     return _on_the_globe(Polygon.from_bbox((west, south, east, north)))
@@ -47,20 +48,27 @@ def area_from_text(text: str) -> MultiPolygon:
     try:
         geometry = GEOSGeometry(json.dumps(value) if isinstance(value, dict) else text)
     except (GEOSException, GDALException, ValueError, TypeError):
-        raise AreaError("Give the area as a GeoJSON or WKT polygon.") from None
+        raise AreaError(gettext("Give the area as a GeoJSON or WKT polygon.")) from None
     if geometry.geom_type not in ("Polygon", "MultiPolygon"):
-        raise AreaError(f"The area must be a polygon, not a {geometry.geom_type}.")
+        raise AreaError(
+            gettext("The area must be a polygon, not a %(kind)s.") % {"kind": geometry.geom_type}
+        )
     if geometry.srid not in (None, 4326):
-        raise AreaError("Give the area in WGS84 longitude and latitude.")
+        raise AreaError(gettext("Give the area in WGS84 longitude and latitude."))
     xmin, ymin, xmax, ymax = geometry.extent
     if not all(math.isfinite(v) for v in geometry.extent):
-        raise AreaError("The area's coordinates must be finite numbers.")
+        raise AreaError(gettext("The area's coordinates must be finite numbers."))
     if ymin < -90 or ymax > 90 or xmin < -_LONGITUDE_REACH or xmax > _LONGITUDE_REACH:
-        raise AreaError("The area's latitudes must lie within ±90° and longitudes within ±540°.")
+        raise AreaError(
+            gettext("The area's latitudes must lie within ±90° and longitudes within ±540°.")
+        )
     if not geometry.valid:
-        raise AreaError(f"The area is not a valid polygon ({geometry.valid_reason}).")
+        raise AreaError(
+            gettext("The area is not a valid polygon (%(reason)s).")
+            % {"reason": geometry.valid_reason}
+        )
     if geometry.empty or geometry.area == 0:
-        raise AreaError("The area is empty.")
+        raise AreaError(gettext("The area is empty."))
     return _on_the_globe(geometry)
 
 
@@ -72,7 +80,7 @@ def _on_the_globe(geometry) -> MultiPolygon:
         for polygon in _polygons(part):
             pieces.append(_moved(polygon, shift))
     if not pieces:
-        raise AreaError("The area is empty.")
+        raise AreaError(gettext("The area is empty."))
     area = MultiPolygon(*pieces)
     area.srid = 4326
     return area

@@ -24,6 +24,7 @@ from datetime import UTC, datetime
 from pathlib import Path, PurePosixPath
 
 from django.conf import settings
+from django.utils.translation import gettext as _
 
 FORMAT = "ftt-archive"
 # Raised only when an older FTT would misread an archive.  Added tables and
@@ -156,12 +157,13 @@ class ArchiveReader:
     def __init__(self, path: str | os.PathLike):
         self.path = Path(path)
         if not self.path.is_file():
-            raise ArchiveError(f"{self.path} does not exist or is not a file.")
+            raise ArchiveError(_("%(path)s does not exist or is not a file.") % {"path": self.path})
         try:
             self._zip = zipfile.ZipFile(self.path)
         except (zipfile.BadZipFile, OSError, ValueError) as exc:
             raise ArchiveError(
-                f"{self.path.name} is not an FTT archive (not a readable zip file: {exc})."
+                _("%(archive)s is not an FTT archive (not a readable zip file: %(exc)s).")
+                % {"archive": self.path.name, "exc": exc}
             ) from None
         try:
             self._check_sizes()
@@ -186,14 +188,28 @@ class ArchiveReader:
         infos = [i for i in self._zip.infolist() if not i.is_dir()]
         if len(infos) > settings.FTT_ARCHIVE_MAX_MEMBERS:
             raise ArchiveError(
-                f"{self.path.name} has {len(infos)} members, more than the limit of "
-                f"{settings.FTT_ARCHIVE_MAX_MEMBERS} (FTT_ARCHIVE_MAX_MEMBERS)."
+                _(
+                    "%(archive)s has %(count)s members, more than the limit of "
+                    "%(limit)s (FTT_ARCHIVE_MAX_MEMBERS)."
+                )
+                % {
+                    "archive": self.path.name,
+                    "count": len(infos),
+                    "limit": settings.FTT_ARCHIVE_MAX_MEMBERS,
+                }
             )
         total = sum(i.file_size for i in infos)
         if total > settings.FTT_ARCHIVE_MAX_TOTAL_BYTES:
             raise ArchiveError(
-                f"{self.path.name} unpacks to {total} bytes, more than the limit of "
-                f"{settings.FTT_ARCHIVE_MAX_TOTAL_BYTES} (FTT_ARCHIVE_MAX_TOTAL_BYTES)."
+                _(
+                    "%(archive)s unpacks to %(total)s bytes, more than the limit of "
+                    "%(limit)s (FTT_ARCHIVE_MAX_TOTAL_BYTES)."
+                )
+                % {
+                    "archive": self.path.name,
+                    "total": total,
+                    "limit": settings.FTT_ARCHIVE_MAX_TOTAL_BYTES,
+                }
             )
         for info in infos:
             self._check_method(info)
@@ -202,26 +218,49 @@ class ArchiveReader:
     def _check_method(self, info: zipfile.ZipInfo) -> None:
         if info.flag_bits & _ENCRYPTED:
             raise ArchiveError(
-                f"{self.path.name}: {info.filename} is encrypted; "
-                "FTT reads unencrypted archives only."
+                _("%(archive)s: %(member)s is encrypted; FTT reads unencrypted archives only.")
+                % {"archive": self.path.name, "member": info.filename}
             )
         if info.compress_type not in _METHODS:
             raise ArchiveError(
-                f"{self.path.name}: {info.filename} uses compression method "
-                f"{info.compress_type}; FTT reads stored, deflate, bzip2 and LZMA members only."
+                _(
+                    "%(archive)s: %(member)s uses compression method "
+                    "%(method)s; FTT reads stored, deflate, bzip2 and LZMA "
+                    "members only."
+                )
+                % {
+                    "archive": self.path.name,
+                    "member": info.filename,
+                    "method": info.compress_type,
+                }
             )
 
     def _check_member(self, name: str, size: int, compressed: int) -> None:
         if size > settings.FTT_ARCHIVE_MAX_MEMBER_BYTES:
             raise ArchiveError(
-                f"{self.path.name}: {name} unpacks to more than the limit of "
-                f"{settings.FTT_ARCHIVE_MAX_MEMBER_BYTES} bytes (FTT_ARCHIVE_MAX_MEMBER_BYTES)."
+                _(
+                    "%(archive)s: %(name)s unpacks to more than the limit of "
+                    "%(limit)s bytes "
+                    "(FTT_ARCHIVE_MAX_MEMBER_BYTES)."
+                )
+                % {
+                    "archive": self.path.name,
+                    "name": name,
+                    "limit": settings.FTT_ARCHIVE_MAX_MEMBER_BYTES,
+                }
             )
         if size > _RATIO_FLOOR and size > settings.FTT_ARCHIVE_MAX_RATIO * max(compressed, 1):
             raise ArchiveError(
-                f"{self.path.name}: {name} is compressed more than "
-                f"{settings.FTT_ARCHIVE_MAX_RATIO}:1 (FTT_ARCHIVE_MAX_RATIO); "
-                f"refused as a possible zip bomb."
+                _(
+                    "%(archive)s: %(name)s is compressed more than "
+                    "%(limit)s:1 (FTT_ARCHIVE_MAX_RATIO); refused as a "
+                    "possible zip bomb."
+                )
+                % {
+                    "archive": self.path.name,
+                    "name": name,
+                    "limit": settings.FTT_ARCHIVE_MAX_RATIO,
+                }
             )
 
     def _stream(self, name: str) -> Iterator[bytes]:
@@ -233,7 +272,10 @@ class ArchiveReader:
                 while chunk := member.read(CHUNK):
                     size += len(chunk)
                     if size > info.file_size:
-                        raise ArchiveError(f"{self.path.name} is damaged at {name}.")
+                        raise ArchiveError(
+                            _("%(archive)s is damaged at %(name)s.")
+                            % {"archive": self.path.name, "name": name}
+                        )
                     self._check_member(name, size, info.compress_size)
                     yield chunk
         except (
@@ -245,39 +287,59 @@ class ArchiveReader:
             NotImplementedError,
             RuntimeError,
         ) as exc:
-            raise ArchiveError(f"{self.path.name} is damaged at {name}: {exc}") from None
+            raise ArchiveError(
+                _("%(archive)s is damaged at %(name)s: %(exc)s")
+                % {"archive": self.path.name, "name": name, "exc": exc}
+            ) from None
 
     def _read_small(self, name: str, limit: int, what: str) -> bytes:
         if self._zip.getinfo(name).file_size > limit:
-            raise ArchiveError(f"{self.path.name}: {what} {name} is larger than {limit} bytes.")
+            raise ArchiveError(
+                _("%(archive)s: %(what)s %(name)s is larger than %(limit)s bytes.")
+                % {"archive": self.path.name, "what": what, "name": name, "limit": limit}
+            )
         return b"".join(self._stream(name))
 
     def _read_manifest(self) -> dict:
         try:
-            raw = self._read_small(MANIFEST, MAX_LINE, "the manifest")
+            raw = self._read_small(MANIFEST, MAX_LINE, _("the manifest"))
         except KeyError:
             raise ArchiveError(
-                f"{self.path.name} is not an FTT archive: it has no {MANIFEST}."
+                _("%(archive)s is not an FTT archive: it has no %(manifest)s.")
+                % {"archive": self.path.name, "manifest": MANIFEST}
             ) from None
         try:
             manifest = json.loads(raw)
         except (ValueError, RecursionError):
-            raise ArchiveError(f"{self.path.name}: {MANIFEST} is not valid JSON.") from None
+            raise ArchiveError(
+                _("%(archive)s: %(manifest)s is not valid JSON.")
+                % {"archive": self.path.name, "manifest": MANIFEST}
+            ) from None
         if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
             raise ArchiveError(
-                f"{self.path.name} is not an FTT archive (its manifest names no '{FORMAT}' format)."
+                _("%(archive)s is not an FTT archive (its manifest names no '%(format)s' format).")
+                % {"archive": self.path.name, "format": FORMAT}
             )
         version = manifest.get("version")
         if not isinstance(version, int) or version < 1:
-            raise ArchiveError(f"{self.path.name}: unknown archive format version {version!r}.")
+            raise ArchiveError(
+                _("%(archive)s: unknown archive format version %(version)s.")
+                % {"archive": self.path.name, "version": f"{version!r}"}
+            )
         if version > VERSION:
             raise ArchiveError(
-                f"{self.path.name} was written by a newer FTT (archive format {version}); "
-                f"this installation reads up to format {VERSION}. Update FTT first."
+                _(
+                    "%(archive)s was written by a newer FTT (archive format "
+                    "%(version)s); this installation reads up to format %(supported)s. "
+                    "Update FTT first."
+                )
+                % {"archive": self.path.name, "version": version, "supported": VERSION}
             )
         members = manifest.get("members")
         if not isinstance(members, dict):
-            raise ArchiveError(f"{self.path.name}: the manifest lists no members.")
+            raise ArchiveError(
+                _("%(archive)s: the manifest lists no members.") % {"archive": self.path.name}
+            )
         for name, entry in members.items():
             if not (
                 isinstance(entry, dict)
@@ -285,7 +347,8 @@ class ArchiveReader:
                 and isinstance(entry.get("size"), int)
             ):
                 raise ArchiveError(
-                    f"{self.path.name}: the manifest entry of {name} needs a sha256 and a size."
+                    _("%(archive)s: the manifest entry of %(name)s needs a sha256 and a size.")
+                    % {"archive": self.path.name, "name": name}
                 )
         return manifest
 
@@ -294,18 +357,24 @@ class ArchiveReader:
         present = {i.filename for i in self._zip.infolist() if not i.is_dir()}
         unsafe = [n for n in present | set(listed) if not _safe_name(n)]
         if unsafe:
-            raise ArchiveError(f"{self.path.name} contains unsafe member names: {unsafe[:3]}.")
+            raise ArchiveError(
+                _("%(archive)s contains unsafe member names: %(names)s.")
+                % {"archive": self.path.name, "names": unsafe[:3]}
+            )
         missing = sorted(set(listed) - present)
         if missing:
             raise ArchiveError(
-                f"{self.path.name} is incomplete: {len(missing)} member(s) missing, "
-                f"e.g. {missing[0]}."
+                _("%(archive)s is incomplete: %(count)s member(s) missing, e.g. %(missing)s.")
+                % {"archive": self.path.name, "count": len(missing), "missing": missing[0]}
             )
         extra = sorted(present - set(listed) - {MANIFEST})
         if extra:
             raise ArchiveError(
-                f"{self.path.name} contains member(s) its manifest does not list, "
-                f"e.g. {extra[0]}; it was changed after export."
+                _(
+                    "%(archive)s contains member(s) its manifest does not list, e.g. "
+                    "%(extra)s; it was changed after export."
+                )
+                % {"archive": self.path.name, "extra": extra[0]}
             )
         for name, expected in listed.items():
             digest = hashlib.sha256()
@@ -315,7 +384,8 @@ class ArchiveReader:
                 size += len(chunk)
             if digest.hexdigest() != expected["sha256"] or size != expected["size"]:
                 raise ArchiveError(
-                    f"{self.path.name} is damaged: {name} does not match its checksum."
+                    _("%(archive)s is damaged: %(name)s does not match its checksum.")
+                    % {"archive": self.path.name, "name": name}
                 )
 
     def records(self, table: str) -> Iterator[dict]:
@@ -327,13 +397,22 @@ class ArchiveReader:
             while line := member.readline(MAX_LINE + 1):
                 number += 1
                 if len(line) > MAX_LINE:
-                    raise ArchiveError(f"{name} line {number} is longer than {MAX_LINE} bytes.")
+                    raise ArchiveError(
+                        _("%(name)s line %(number)s is longer than %(limit)s bytes.")
+                        % {"name": name, "number": number, "limit": MAX_LINE}
+                    )
                 try:
                     record = json.loads(line)
                 except (ValueError, RecursionError):
-                    raise ArchiveError(f"{name} line {number} is not valid JSON.") from None
+                    raise ArchiveError(
+                        _("%(name)s line %(number)s is not valid JSON.")
+                        % {"name": name, "number": number}
+                    ) from None
                 if not isinstance(record, dict):
-                    raise ArchiveError(f"{name} line {number} is not a JSON object.")
+                    raise ArchiveError(
+                        _("%(name)s line %(number)s is not a JSON object.")
+                        % {"name": name, "number": number}
+                    )
                 yield record
 
     def read_file(self, storage_name: str) -> bytes:
@@ -341,8 +420,8 @@ class ArchiveReader:
         FTT_MAX_IMAGE_PIXELS bounds what they may be."""
         name = file_member(storage_name)
         if name not in self.manifest["members"]:
-            raise ArchiveError(f"The archive lacks the file {storage_name}.")
-        return self._read_small(name, settings.FTT_ARCHIVE_MAX_FILE_BYTES, "the file")
+            raise ArchiveError(_("The archive lacks the file %(file)s.") % {"file": storage_name})
+        return self._read_small(name, settings.FTT_ARCHIVE_MAX_FILE_BYTES, _("the file"))
 
 
 def open_archive(path: str | os.PathLike) -> ArchiveReader:

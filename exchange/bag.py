@@ -23,6 +23,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from django.db import transaction
+from django.utils.translation import gettext as _
 
 from events.models import Leg, Shift, TestEvent, Vehicle
 from events.services import logs
@@ -68,9 +69,11 @@ def bag_info(path) -> BagInfo:
         with open_bag(path) as reader:
             start, end, count = reader.start_time, reader.end_time, reader.message_count
     except Exception as exc:  # rosbags raises its own reader errors
-        raise BagImportError(f"Cannot read {path}: {exc}") from None
+        raise BagImportError(
+            _("Cannot read %(path)s: %(exc)s") % {"path": path, "exc": exc}
+        ) from None
     if not count:
-        raise BagImportError(f"{path} contains no messages.")
+        raise BagImportError(_("%(path)s contains no messages.") % {"path": path})
     return BagInfo(
         path=path,
         uid=uuid.uuid5(NAMESPACE, f"{start}:{end}:{count}"),
@@ -91,7 +94,7 @@ def collector_params(overrides: dict, path: Path | None = None) -> dict:
     params = {name: spec.default for name, spec in SPECS.items()}
     for name, value in overrides.items():
         if name not in SPECS:
-            raise BagImportError(f"Unknown collector parameter '{name}'.")
+            raise BagImportError(_("Unknown collector parameter '%(name)s'.") % {"name": name})
         try:
             params[name] = check(name, value, fields_of)
         except InvalidParameter as exc:
@@ -117,15 +120,25 @@ def _target_leg(info: BagInfo, vehicle: Vehicle, leg: Leg | None, event: TestEve
     if leg is not None:
         if leg.shift.vehicle_id != vehicle.pk:
             raise BagImportError(
-                f"{leg} belongs to a shift of vehicle '{leg.shift.vehicle.key}', "
-                f"not '{vehicle.key}'."
+                _("%(leg)s belongs to a shift of vehicle '%(owner)s', not '%(vehicle)s'.")
+                % {
+                    "leg": leg,
+                    "owner": leg.shift.vehicle.key,
+                    "vehicle": vehicle.key,
+                }
             )
         if leg.end is not None:
-            raise BagImportError(f"{leg} of {leg.shift} is closed; give an open leg or none.")
+            raise BagImportError(
+                _("%(leg)s of %(shift)s is closed; give an open leg or none.")
+                % {"leg": leg, "shift": leg.shift}
+            )
         if leg.start > info.first:
             raise BagImportError(
-                f"{leg} starts at {leg.start.isoformat()}, after the recording "
-                f"({info.first.isoformat()}); omit --leg to import into a new test event."
+                _(
+                    "%(leg)s starts at %(start)s, after the recording (%(recording)s); omit "
+                    "--leg to import into a new test event."
+                )
+                % {"leg": leg, "start": leg.start.isoformat(), "recording": info.first.isoformat()}
             )
         return leg, False
     shift_uid = uuid.uuid5(info.uid, f"shift:{vehicle.key}")
@@ -136,8 +149,12 @@ def _target_leg(info: BagInfo, vehicle: Vehicle, leg: Leg | None, event: TestEve
             # Starting a shift closes the vehicle's open one; a recording from
             # the past must not end today's logging.
             raise BagImportError(
-                f"Vehicle '{vehicle.key}' has an open shift ({other} of "
-                f"{other.test_event}); end it first or import into its leg with --leg."
+                _(
+                    "Vehicle '%(vehicle)s' has an open shift (%(other)s of "
+                    "%(event)s); end it first or import into its leg with "
+                    "--leg."
+                )
+                % {"vehicle": vehicle.key, "other": other, "event": other.test_event}
             )
     if event is None:
         event = logs.create_test_event(
@@ -146,7 +163,10 @@ def _target_leg(info: BagInfo, vehicle: Vehicle, leg: Leg | None, event: TestEve
             note=f"Imported from {info.path.name}",
         )
     elif event.end is not None or event.start > info.first:
-        raise BagImportError(f"Test event '{event}' must be open and start before the recording.")
+        raise BagImportError(
+            _("Test event '%(event)s' must be open and start before the recording.")
+            % {"event": event}
+        )
     shift = logs.create_shift(test_event=event, vehicle=vehicle, uid=shift_uid, at=info.first)
     leg = logs.create_leg(
         shift=shift,

@@ -8,6 +8,7 @@ from datetime import datetime
 
 from django.db import connection
 from django.db.models import Q
+from django.utils.translation import gettext as _
 
 from basemaps.models import EventBasemap
 from events.models import (
@@ -56,7 +57,9 @@ def select_events(
                 lookup = Q(pk=int(ident)) if ident.isdigit() else Q(uid=uuid.UUID(ident))
                 events.append(TestEvent.objects.get(lookup))
             except (TestEvent.DoesNotExist, ValueError):
-                raise ExportError(f"No test event with id or uid '{ident}'.") from None
+                raise ExportError(
+                    _("No test event with id or uid '%(ident)s'.") % {"ident": ident}
+                ) from None
         return events
     events = TestEvent.objects.all()
     if since is not None:
@@ -137,8 +140,12 @@ def export_events(path, events: list[TestEvent], *, since: datetime | None = Non
     missing = [f.name for f in stored if not f.name or not f.storage.exists(f.name)]
     if missing:
         raise ExportError(
-            f"{len(missing)} image, map or snapshot file(s) are missing from media storage, "
-            f"e.g. {missing[0]}; restore them or delete those rows before exporting."
+            _(
+                "%(count)s image, map or snapshot file(s) are missing from media "
+                "storage, e.g. %(missing)s; restore them or delete those rows before "
+                "exporting."
+            )
+            % {"count": len(missing), "missing": missing[0]}
         )
 
     history = HistoryExport(

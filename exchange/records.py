@@ -11,6 +11,7 @@ import json
 from datetime import UTC, datetime
 
 from django.contrib.gis.geos import Point
+from django.utils.translation import gettext as _
 
 # Import order: everything a row refers to comes before it.
 TABLES = (
@@ -53,9 +54,14 @@ def time_in(value, field: str) -> datetime | None:
     try:
         parsed = datetime.fromisoformat(value)
     except (TypeError, ValueError):
-        raise RecordError(f"{field}: {value!r} is not an ISO 8601 time.") from None
+        raise RecordError(
+            _("%(field)s: %(value)s is not an ISO 8601 time.")
+            % {"field": field, "value": f"{value!r}"}
+        ) from None
     if parsed.tzinfo is None:
-        raise RecordError(f"{field}: {value!r} has no UTC offset.")
+        raise RecordError(
+            _("%(field)s: %(value)s has no UTC offset.") % {"field": field, "value": f"{value!r}"}
+        )
     return parsed
 
 
@@ -71,7 +77,10 @@ def point_in(value, field: str) -> Point | None:
         or len(value) != 2
         or not all(isinstance(v, int | float) for v in value)
     ):
-        raise RecordError(f"{field}: {value!r} is not [longitude, latitude].")
+        raise RecordError(
+            _("%(field)s: %(value)s is not [longitude, latitude].")
+            % {"field": field, "value": f"{value!r}"}
+        )
     return Point(float(value[0]), float(value[1]), srid=4326)
 
 

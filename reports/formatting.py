@@ -4,7 +4,7 @@ import math
 from collections.abc import Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
-from datetime import datetime, tzinfo
+from datetime import date, datetime, tzinfo
 
 from django.utils import translation
 
@@ -18,6 +18,7 @@ _LANGUAGE: ContextVar[str] = ContextVar("ftt_report_language", default="en")
 # Per language: the decimal mark and how a date and time are written.
 _DECIMAL = {"de": ","}
 _TIMESTAMP = {"de": "%d.%m.%Y %H:%M:%S"}
+_DAY = {"de": "%d.%m.%Y"}
 
 
 @contextmanager
@@ -34,6 +35,15 @@ def written_in(language: str) -> Iterator[None]:
 def _number(text: str) -> str:
     mark = _DECIMAL.get(_LANGUAGE.get())
     return text.replace(".", mark) if mark else text
+
+
+def decimal(value: float, places: int = 2) -> str:
+    return _number(f"{value:.{places}f}")
+
+
+def number(value: float) -> str:
+    """A plain figure, as short as it reads (25, 2.5)."""
+    return _number(f"{value:g}")
 
 
 def metres(value: float | None) -> str:
@@ -65,6 +75,10 @@ def speed(distance: float, seconds: float) -> str:
 def timestamp(value: datetime | None, tz: tzinfo) -> str:
     pattern = _TIMESTAMP.get(_LANGUAGE.get(), "%Y-%m-%d %H:%M:%S")
     return DASH if value is None else value.astimezone(tz).strftime(pattern)
+
+
+def day(value: date) -> str:
+    return value.strftime(_DAY.get(_LANGUAGE.get(), "%Y-%m-%d"))
 
 
 def clock(value: datetime | None, tz: tzinfo) -> str:

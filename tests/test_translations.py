@@ -1,6 +1,7 @@
 """Every user-facing string of FTT has a German translation, and German is what a
 German browser or account gets."""
 
+import ast
 import logging
 import re
 import subprocess
@@ -13,6 +14,7 @@ from django.utils import translation
 
 from common.models import AccountPreference
 from rosbridge_app.collector.hearing import RESUBSCRIBE, Hearing
+from tests.support.typst_words import TypstWords
 
 ROOT = Path(settings.BASE_DIR)
 CATALOGUES = ROOT / "locale" / "de" / "LC_MESSAGES"
@@ -163,3 +165,95 @@ def test_the_gui_scripts_hand_no_untranslated_words_to_the_page():
         if SCRIPT_WORDS.search(line)
     ]
     assert found == []
+
+
+# The apps of FTT whose modules a user's messages come from.
+PACKAGES = [
+    "basemaps",
+    "common",
+    "events",
+    "exchange",
+    "ftt_site",
+    "gui",
+    "reports",
+    "rosbridge_app",
+    "telemetry",
+]
+# Errors whose message a person reads: as an API or form field message, the
+# command line's error, an archive's or report's refusal.
+SHOWN_ERRORS = {
+    "ValidationError", "RuleViolation", "NotFound", "ParseError", "CommandError",
+    "ReportError", "ArchiveError", "AreaError", "BagImportError", "ExportError",
+    "ImportRefused", "RecordError", "NotAGeoTiff", "TooManyWaiting",
+}  # fmt: skip
+GETTEXT = {"_", "gettext", "gettext_lazy", "ngettext", "ngettext_lazy", "pgettext"}
+
+
+def _words_outside_gettext(node: ast.AST) -> list[ast.AST]:
+    """Literal text with words in an error's message: a string, an f-string's
+    text parts, or such in a dict or list of field messages."""
+    if isinstance(node, ast.Dict):
+        return [found for value in node.values for found in _words_outside_gettext(value)]
+    if isinstance(node, ast.List | ast.Tuple):
+        return [found for item in node.elts for found in _words_outside_gettext(item)]
+    if isinstance(node, ast.BinOp):
+        return _words_outside_gettext(node.left)
+    parts = node.values if isinstance(node, ast.JoinedStr) else [node]
+    text = " ".join(
+        p.value for p in parts if isinstance(p, ast.Constant) and isinstance(p.value, str)
+    )
+    return [node] if re.search(r"[A-Za-z]{3,}", text) else []
+
+
+def _untranslated_errors(source: str, name: str) -> list[str]:
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if not (isinstance(node, ast.Call) and node.args):
+            continue
+        called = getattr(node.func, "id", None) or getattr(node.func, "attr", None)
+        if called in SHOWN_ERRORS:
+            found += [
+                f"{name}:{text.lineno}: {ast.unparse(text)[:80]}"
+                for text in _words_outside_gettext(node.args[0])
+            ]
+    return found
+
+
+def test_the_errors_a_person_reads_are_marked_for_translation():
+    modules = [
+        path
+        for package in PACKAGES
+        for path in sorted((ROOT / package).rglob("*.py"))
+        if "migrations" not in path.parts
+    ]
+    assert len(modules) > 100
+    found = [
+        line
+        for path in modules
+        for line in _untranslated_errors(path.read_text(), str(path.relative_to(ROOT)))
+    ]
+    assert found == []
+    # The check sees an error's words outside gettext, in a field message too.
+    sample = (
+        'raise CommandError(f"No leg {n}.")\n'
+        'raise ValidationError({"leg": [_("No leg %(n)s.") % {"n": n}, "Give a leg."]})\n'
+    )
+    assert _untranslated_errors(sample, "sample.py") == [
+        "sample.py:1: f'No leg {n}.'",
+        "sample.py:2: 'Give a leg.'",
+    ]
+
+
+def test_the_report_templates_take_every_word_from_the_data():
+    """The typst templates place words only from ``d.text`` (reports/documents/wording.py,
+    translated): no quoted text and no markup text of their own."""
+    templates = sorted((ROOT / "reports" / "templates_typst").glob("*.typ"))
+    assert len(templates) == 2
+    found = {path.name: TypstWords(path.read_text()).found for path in templates}
+    assert found == {path.name: [] for path in templates}
+    # The check sees text where a template has its own.
+    assert TypstWords('#if x [Legs outside] else { text("Check with:") }').found == [
+        "Check with:",
+        "Legs",
+        "outside",
+    ]

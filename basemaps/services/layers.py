@@ -8,6 +8,7 @@ from django.core.exceptions import ValidationError
 from django.core.files import File
 from django.db import transaction
 from django.utils.text import slugify
+from django.utils.translation import gettext as _
 
 from basemaps.files import inspect_file, local_file
 from basemaps.models import BasemapLayer, EventBasemap
@@ -21,8 +22,13 @@ def check_size(size: int) -> None:
     limit = max_upload_bytes()
     if size > limit:
         raise ValidationError(
-            f"The file has {size / 2**20:.0f} MB; basemaps may have at most "
-            f"{limit / 2**20:.0f} MB (FTT_BASEMAP_MAX_UPLOAD_MB).",
+            (
+                _(
+                    "The file has %(size)s MB; basemaps may have at most %(limit)s MB "
+                    "(FTT_BASEMAP_MAX_UPLOAD_MB)."
+                )
+                % {"size": f"{size / 2**20:.0f}", "limit": f"{limit / 2**20:.0f}"}
+            ),
             code="too_large",
         )
 

@@ -1,5 +1,6 @@
 import io
 
+from django.utils.translation import gettext as _
 from rest_framework import parsers
 from rest_framework.exceptions import ParseError
 
@@ -15,7 +16,7 @@ class JSONParser(parsers.JSONParser):
         try:
             data = super().parse(io.BytesIO(body), media_type, parser_context)
         except RecursionError:
-            raise ParseError("JSON parse error - nested too deeply.") from None
+            raise ParseError(_("JSON parse error - nested too deeply.")) from None
         if may_hold_surrogate(body) and holds_lone_surrogate(data):
-            raise ParseError(f"JSON parse error - {LONE_SURROGATE}")
+            raise ParseError(_("JSON parse error - %(reason)s") % {"reason": LONE_SURROGATE})
         return data

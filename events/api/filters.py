@@ -7,6 +7,7 @@ from datetime import UTC
 import django_filters as filters
 from django import forms
 from django.db.models import Q
+from django.utils.translation import gettext as _
 from django_filters.fields import IsoDateTimeField
 from rest_framework import serializers
 from rest_framework_gis.filters import InBBoxFilter
@@ -39,7 +40,7 @@ class StrictBooleanField(forms.NullBooleanField):
             return True
         if str(value).lower() in ("false", "0"):
             return False
-        raise forms.ValidationError("Use true or false.", code="invalid")
+        raise forms.ValidationError(_("Use true or false."), code="invalid")
 
     def validate(self, value):
         pass
@@ -65,7 +66,7 @@ class UtcDateTimeField(IsoDateTimeField):
         try:
             return value.astimezone(UTC)
         except OverflowError:
-            raise forms.ValidationError("Date/time out of range.", code="overflow") from None
+            raise forms.ValidationError(_("Date/time out of range."), code="overflow") from None
 
 
 class DateTimeFilter(filters.IsoDateTimeFilter):
@@ -198,7 +199,7 @@ class BBoxFilter(InBBoxFilter):
         raw = request.query_params.get(self.bbox_param)
         if not raw:
             return None
-        message = "Give in_bbox as min_lon,min_lat,max_lon,max_lat in degrees."
+        message = _("Give in_bbox as min_lon,min_lat,max_lon,max_lat in degrees.")
         try:
             values = [float(n) for n in raw.split(",")]
         except ValueError:

@@ -4,6 +4,7 @@ import io
 import json
 
 from django.http import HttpResponse
+from django.utils.translation import gettext as _
 from rest_framework.exceptions import ValidationError
 
 from common.spreadsheet import SafeWriter
@@ -14,9 +15,13 @@ KINDS = ("geojson", "csv")
 
 def found_file(rows: list[dict], kind: str) -> HttpResponse:
     if kind not in KINDS:
-        raise ValidationError({"as": [f"Choose one of: {', '.join(KINDS)}."]})
+        raise ValidationError(
+            {"as": [(_("Choose one of: %(kinds)s.") % {"kinds": ", ".join(KINDS)})]}
+        )
     if len(rows) > MAX_FOUND:
-        message = f"More than {MAX_FOUND} segments found; narrow the search (area, time, vehicle)."
+        message = _(
+            "More than %(count)s segments found; narrow the search (area, time, vehicle)."
+        ) % {"count": MAX_FOUND}
         raise ValidationError({"detail": [message]})
     if kind == "csv":
         return _csv(rows)

@@ -1,6 +1,7 @@
 """REST endpoints for configuration, catalogues and the log hierarchy."""
 
 from django.http import Http404
+from django.utils.translation import gettext as _
 from django_filters.rest_framework import DjangoFilterBackend
 from drf_spectacular.utils import (
     OpenApiParameter,
@@ -103,7 +104,7 @@ class VehicleViewSet(ConfigurationViewSet):
         """The open leg of the vehicle's open shift (where its robot logs now)."""
         leg = log_selectors.open_leg_for_vehicle(self.get_object())
         if leg is None:
-            raise NotFound("This vehicle has no open leg; start a shift and a leg first.")
+            raise NotFound(_("This vehicle has no open leg; start a shift and a leg first."))
         leg.open_segment = log_selectors.open_master(leg)
         return self.respond(leg, s.CurrentLegSerializer)
 

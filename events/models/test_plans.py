@@ -4,6 +4,8 @@ person records for criteria that figures cannot decide."""
 from django.conf import settings
 from django.contrib.gis.db import models
 from django.db.models import Q
+from django.utils.translation import gettext as _
+from django.utils.translation import gettext_lazy
 
 from events.models.catalogues import ItoReason
 from events.models.hierarchy import Leg, TestEvent
@@ -14,21 +16,40 @@ class TestCase(models.Model):
 
     __test__ = False  # not a pytest class
 
-    test_event = models.ForeignKey(TestEvent, on_delete=models.CASCADE, related_name="test_cases")
-    key = models.SlugField(max_length=50, help_text="Short name, e.g. gravel-loop.")
-    title = models.CharField(max_length=200)
-    description = models.TextField(blank=True)
+    test_event = models.ForeignKey(
+        TestEvent,
+        on_delete=models.CASCADE,
+        related_name="test_cases",
+        verbose_name=gettext_lazy("test event"),
+    )
+    key = models.SlugField(
+        gettext_lazy("key"), max_length=50, help_text=gettext_lazy("Short name, e.g. gravel-loop.")
+    )
+    title = models.CharField(gettext_lazy("title"), max_length=200)
+    description = models.TextField(gettext_lazy("description"), blank=True)
     area = models.MultiPolygonField(
-        srid=4326, null=True, blank=True, help_text="Where the case is driven (optional)."
+        gettext_lazy("area"),
+        srid=4326,
+        null=True,
+        blank=True,
+        help_text=gettext_lazy("Where the case is driven (optional)."),
     )
     route = models.LineStringField(
-        srid=4326, null=True, blank=True, help_text="The planned route (optional)."
+        gettext_lazy("route"),
+        srid=4326,
+        null=True,
+        blank=True,
+        help_text=gettext_lazy("The planned route (optional)."),
     )
     planned_runs = models.PositiveIntegerField(
-        default=1, help_text="How many legs the plan asks for."
+        gettext_lazy("planned runs"),
+        default=1,
+        help_text=gettext_lazy("How many legs the plan asks for."),
     )
 
     class Meta:
+        verbose_name = gettext_lazy("test case")
+        verbose_name_plural = gettext_lazy("test cases")
         ordering = ["test_event", "key"]
         constraints = [
             models.UniqueConstraint(fields=["test_event", "key"], name="test_case_key_unique"),
@@ -45,13 +66,16 @@ class Criterion(models.Model):
     class Kind(models.TextChoices):
         DISTANCE_WITHOUT_INTERVENTION = (
             "distance_without_intervention",
-            ("distance without intervention ≥ value (m)"),
+            gettext_lazy("distance without intervention ≥ value (m)"),
         )
-        INTERVENTIONS_PER_KM = "interventions_per_km", "interventions per km ≤ value"
-        RUNS_COMPLETED = "runs_completed", "runs completed ≥ value"
-        AUTO_TIME_SHARE = "auto_time_share", "time in AUTO ≥ value (%)"
-        FORBIDDEN_REASONS = "forbidden_reasons", "none of the reasons occurs"
-        JUDGED = "judged", "judged by a person (text)"
+        INTERVENTIONS_PER_KM = (
+            "interventions_per_km",
+            gettext_lazy("interventions per km ≤ value"),
+        )
+        RUNS_COMPLETED = "runs_completed", gettext_lazy("runs completed ≥ value")
+        AUTO_TIME_SHARE = "auto_time_share", gettext_lazy("time in AUTO ≥ value (%)")
+        FORBIDDEN_REASONS = "forbidden_reasons", gettext_lazy("none of the reasons occurs")
+        JUDGED = "judged", gettext_lazy("judged by a person (text)")
 
     # Kinds measured per leg; the others only make sense over the whole case.
     PER_LEG = (
@@ -61,41 +85,77 @@ class Criterion(models.Model):
         Kind.FORBIDDEN_REASONS,
     )
 
-    test_case = models.ForeignKey(TestCase, on_delete=models.CASCADE, related_name="criteria")
-    kind = models.CharField(max_length=40, choices=Kind.choices)
-    value = models.FloatField(null=True, blank=True, help_text="The threshold of the kind.")
-    reasons = models.ManyToManyField(
-        ItoReason, blank=True, related_name="+", help_text="For 'none of the reasons occurs'."
+    test_case = models.ForeignKey(
+        TestCase,
+        on_delete=models.CASCADE,
+        related_name="criteria",
+        verbose_name=gettext_lazy("test case"),
     )
-    text = models.TextField(blank=True, help_text="What a person judges, for 'judged'.")
+    kind = models.CharField(gettext_lazy("kind"), max_length=40, choices=Kind.choices)
+    value = models.FloatField(
+        gettext_lazy("value"),
+        null=True,
+        blank=True,
+        help_text=gettext_lazy("The threshold of the kind."),
+    )
+    reasons = models.ManyToManyField(
+        ItoReason,
+        blank=True,
+        related_name="+",
+        verbose_name=gettext_lazy("reasons"),
+        help_text=gettext_lazy("For 'none of the reasons occurs'."),
+    )
+    text = models.TextField(
+        gettext_lazy("text"),
+        blank=True,
+        help_text=gettext_lazy("What a person judges, for 'judged'."),
+    )
 
     class Meta:
         ordering = ["test_case", "id"]
-        verbose_name_plural = "criteria"
+        verbose_name = gettext_lazy("criterion")
+        verbose_name_plural = gettext_lazy("criteria")
 
     def __str__(self):
         if self.kind == self.Kind.JUDGED:
             return self.text[:80]
         if self.kind == self.Kind.FORBIDDEN_REASONS:
             return self.get_kind_display()
-        return self.get_kind_display().replace("value", f"{self.value:g}")
+        # The label names the threshold "value" (in the active language).
+        return str(self.get_kind_display()).replace(_("value"), f"{self.value:g}")
 
 
 class Judgement(models.Model):
     """A person's verdict on a judged criterion, for the whole case or one leg."""
 
-    criterion = models.ForeignKey(Criterion, on_delete=models.CASCADE, related_name="judgements")
+    criterion = models.ForeignKey(
+        Criterion,
+        on_delete=models.CASCADE,
+        related_name="judgements",
+        verbose_name=gettext_lazy("criterion"),
+    )
     leg = models.ForeignKey(
-        Leg, on_delete=models.CASCADE, null=True, blank=True, related_name="judgements"
+        Leg,
+        on_delete=models.CASCADE,
+        null=True,
+        blank=True,
+        related_name="judgements",
+        verbose_name=gettext_lazy("leg"),
     )
-    passed = models.BooleanField()
-    note = models.TextField(blank=True)
+    passed = models.BooleanField(gettext_lazy("passed"))
+    note = models.TextField(gettext_lazy("note"), blank=True)
     by = models.ForeignKey(
-        settings.AUTH_USER_MODEL, on_delete=models.SET_NULL, null=True, related_name="+"
+        settings.AUTH_USER_MODEL,
+        on_delete=models.SET_NULL,
+        null=True,
+        related_name="+",
+        verbose_name=gettext_lazy("judged by"),
     )
-    at = models.DateTimeField(auto_now=True)
+    at = models.DateTimeField(gettext_lazy("judged at"), auto_now=True)
 
     class Meta:
+        verbose_name = gettext_lazy("judgement")
+        verbose_name_plural = gettext_lazy("judgements")
         constraints = [
             models.UniqueConstraint(fields=["criterion", "leg"], name="one_judgement_per_leg"),
             models.UniqueConstraint(

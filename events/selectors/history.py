@@ -1,8 +1,33 @@
 """The change history of one row, as people read it (API, GUI dialog, reports)."""
 
+from django.core.exceptions import FieldDoesNotExist
 from django.utils.translation import gettext as _
+from django.utils.translation import gettext_noop
 
 KINDS = {"+": "created", "~": "changed", "-": "deleted"}
+# What a reader sees for each kind and channel (events.models.changes.CHANNELS).
+WORDS = {
+    "created": gettext_noop("created"),
+    "changed": gettext_noop("changed"),
+    "deleted": gettext_noop("deleted"),
+    "gui": "GUI",
+    "api": "API",
+    "admin": gettext_noop("admin"),
+    "collector": gettext_noop("collector"),
+    "import": gettext_noop("import"),
+    "system": gettext_noop("system"),
+}
+
+
+def _word(value: str) -> str:
+    return _(WORDS[value]) if value in WORDS else value
+
+
+def _field_name(model, field: str) -> str:
+    try:
+        return str(model._meta.get_field(field).verbose_name)
+    except FieldDoesNotExist:
+        return field
 
 
 def author_of(entry) -> str:
@@ -20,15 +45,22 @@ def describe_entry(entry, previous) -> dict:
     if previous is not None:
         delta = entry.diff_against(previous, foreign_keys_are_objs=False)
         changes = [
-            {"field": c.field, "before": _value(c.old), "after": _value(c.new)}
+            {
+                "field": c.field,
+                "field_name": _field_name(entry.instance_type, c.field),
+                "before": _value(c.old),
+                "after": _value(c.new),
+            }
             for c in delta.changes
             if c.field != "modified"
         ]
     return {
         "at": entry.history_date.isoformat(),
         "kind": KINDS[entry.history_type],
+        "kind_text": _word(KINDS[entry.history_type]),
         "author": author_of(entry) or _("FTT"),
         "channel": entry.history_channel,
+        "channel_text": _word(entry.history_channel),
         "reason": entry.history_change_reason or "",
         "changes": changes,
     }

@@ -237,7 +237,11 @@ def _require_own_test_case(shift: Shift, fields: dict) -> None:
     case = fields.get("test_case")
     if case is not None and case.test_event_id != shift.test_event_id:
         raise ValidationError(
-            {"test_case": [f"Test case {case.key} belongs to another test event."]}
+            {
+                "test_case": [
+                    (_("Test case %(case)s belongs to another test event.") % {"case": case.key})
+                ]
+            }
         )
 
 

@@ -348,8 +348,10 @@ def annotate_open_take_over(leg: Leg, *, seen: int | None = None, **fields) -> S
         take_over = Segment.objects.filter(leg=leg, pk=seen, parent__isnull=False).first()
         if take_over is None:
             raise NotFound(
-                "The take-over this reason was given to no longer exists; "
-                "somebody may have deleted it."
+                _(
+                    "The take-over this reason was given to no longer exists; somebody "
+                    "may have deleted it."
+                )
             )
         return annotate_segment(take_over, **fields)
     take_over = rules.open_take_overs([leg.pk]).first()

@@ -2,6 +2,7 @@
 
 from django.core.exceptions import ValidationError
 from django.db import transaction
+from django.utils.translation import gettext
 
 from events.models import Criterion, Judgement, Leg
 
@@ -14,12 +15,17 @@ def judge(criterion: Criterion, *, passed: bool, leg: Leg | None = None, note: s
         raise ValidationError(
             {
                 "criterion": [
-                    "Only criteria judged by a person take a judgement; the others are measured."
+                    gettext(
+                        "Only criteria judged by a person take a judgement; the others are "
+                        "measured."
+                    )
                 ]
             }
         )
     if leg is not None and leg.test_case_id != criterion.test_case_id:
-        raise ValidationError({"leg": [f"Leg {leg.number} does not drive this test case."]})
+        raise ValidationError(
+            {"leg": [(gettext("Leg %(leg)s does not drive this test case.") % {"leg": leg.number})]}
+        )
     judgement, _ = Judgement.objects.update_or_create(
         criterion=criterion, leg=leg, defaults={"passed": passed, "note": note, "by": by}
     )

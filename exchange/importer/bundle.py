@@ -3,6 +3,7 @@ feed, and every failure turned into :class:`ImportRefused` with nothing changed.
 
 from django.core.exceptions import ValidationError
 from django.db import DatabaseError, IntegrityError, transaction
+from django.utils.translation import gettext
 
 from events import feed
 from events.history import authored
@@ -62,7 +63,10 @@ def import_bundle(bundle, *, dry_run: bool = False) -> Plan:
         raise type(exc)(f"{exc} Nothing was imported.") from None
     except ValidationError as exc:
         session.discard_files()
-        raise ImportRefused(f"{session.where}: {describe(exc)}. Nothing was imported.") from None
+        raise ImportRefused(
+            gettext("%(where)s: %(reason)s. Nothing was imported.")
+            % {"where": session.where, "reason": describe(exc)}
+        ) from None
     except (
         ArchiveError,
         rec.RecordError,
@@ -80,7 +84,8 @@ def import_bundle(bundle, *, dry_run: bool = False) -> Plan:
     except (IntegrityError, DatabaseError) as exc:
         session.discard_files()
         raise ImportRefused(
-            f"{session.where}: the database refused it ({str(exc).strip()}). Nothing was imported."
+            gettext("%(where)s: the database refused it (%(reason)s). Nothing was imported.")
+            % {"where": session.where, "reason": str(exc).strip()}
         ) from None
     except BaseException:
         session.discard_files()

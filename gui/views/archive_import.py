@@ -8,6 +8,8 @@ reload (or coming back later) shows how it went.
 from django import forms
 from django.core.exceptions import PermissionDenied
 from django.shortcuts import redirect, render
+from django.utils.translation import gettext as _
+from django.utils.translation import gettext_lazy
 
 from common import roles
 from exchange.archive import ArchiveError
@@ -19,8 +21,10 @@ RECENT = 10
 
 
 class ArchiveImportForm(forms.Form):
-    archive = forms.FileField(label="FTT archive (.zip)")
-    dry_run = forms.BooleanField(label="Only show what would change", required=False, initial=True)
+    archive = forms.FileField(label=gettext_lazy("FTT archive (.zip)"))
+    dry_run = forms.BooleanField(
+        label=gettext_lazy("Only show what would change"), required=False, initial=True
+    )
 
 
 def archive_import(request):
@@ -38,7 +42,7 @@ def archive_import(request):
                 # After a POST, a reload must not send the archive again.
                 return redirect("gui-archive-import")
         except (ArchiveError, ImportRefused) as exc:
-            error = f"Nothing was imported: {exc}"
+            error = _("Nothing was imported: %(reason)s") % {"reason": exc}
     imports = list(ArchiveImport.objects.all()[:RECENT])
     return render(
         request,

@@ -73,7 +73,7 @@ class ReportRequestSerializer(serializers.Serializer):
     def validate(self, attrs):
         if ("test_event" in attrs) == ("compare" in attrs):
             raise serializers.ValidationError(
-                {"test_event": ["Give either test_event or compare (two or more ids)."]}
+                {"test_event": [_("Give either test_event or compare (two or more ids).")]}
             )
         if "compare" in attrs and (attrs.get("shift") or attrs.get("leg")):
             raise serializers.ValidationError(

@@ -135,17 +135,17 @@ class RouteComparisonView(APIView):
     def get(self, request):
         ids = request.query_params.getlist("leg")
         if len(ids) < 2 or not all(i.isdigit() for i in ids):
-            raise ValidationError({"leg": ["Give at least two leg ids (numbers)."]})
+            raise ValidationError({"leg": [_("Give at least two leg ids (numbers).")]})
         legs = {leg.pk: leg for leg in Leg.objects.filter(pk__in=[int(i) for i in ids])}
         missing = [i for i in ids if int(i) not in legs]
         if missing:
-            raise ValidationError({"leg": [f"No leg with id {missing[0]}."]})
+            raise ValidationError({"leg": [(_("No leg with id %(id)s.") % {"id": missing[0]})]})
         try:
             threshold = float(request.query_params.get("threshold", DEFAULT_THRESHOLD))
         except ValueError:
             threshold = -1.0
         if not 0 < threshold < 1e6:
-            raise ValidationError({"threshold": ["Give the threshold in metres, above 0."]})
+            raise ValidationError({"threshold": [_("Give the threshold in metres, above 0.")]})
         try:
             return Response(compare_routes([leg_route(legs[int(i)]) for i in ids], threshold))
         except ValueError as error:

@@ -7,10 +7,15 @@ typst set them, with user text passed as JSON data, never as markup.
 import tempfile
 from pathlib import Path
 
+from django.conf import settings
+from django.utils import timezone
+from django.utils.translation import gettext as _
+
 from events.models import ItoReason, TestEvent
 from reports import formatting as fmt
 from reports.documents.options import ReportError
 from reports.documents.typesetting import typeset
+from reports.documents.wording import comparison_text
 from reports.figures import style
 from reports.figures.growth import growth_chart, hotspot_chart
 from reports.selectors.comparison import compare
@@ -46,27 +51,55 @@ def _hotspot_row(spot: dict, reasons: dict, names: dict) -> list[str]:
     return [str(spot["number"]), str(spot["count"]), reason_text or fmt.DASH, segments]
 
 
-def render_comparison(events: list[TestEvent], mode: str = GPS) -> bytes:
+def comparison_language(events: list[TestEvent]) -> str:
+    """The language the compared test events share, else the site's."""
+    languages = {e.language for e in events}
+    return languages.pop() if len(languages) == 1 else settings.LANGUAGE_CODE
+
+
+def _event_name(event: TestEvent) -> str:
+    """Place, first day (in the reader's date format), version and number."""
+    name = event.location or _("Test event")
+    if event.start:
+        name += " " + fmt.day(event.start.astimezone(event.tzinfo).date())
+    if event.version:
+        name += f" · {event.version}"
+    return f"{name} (#{event.pk})"
+
+
+def render_comparison(events: list[TestEvent], mode: str = GPS, language: str = "") -> bytes:
+    """The comparison PDF in ``language`` (default: comparison_language)."""
     if len(events) < 2:
-        raise ReportError("A comparison needs at least two test events.")
+        raise ReportError(_("A comparison needs at least two test events."))
+    with fmt.written_in(language or comparison_language(events)):
+        return _typeset(events, mode)
+
+
+def _typeset(events: list[TestEvent], mode: str) -> bytes:
     data = compare(events, mode)
     style.apply()
     reasons = {r.key: r for r in ItoReason.objects.all()}
+    first = min(events, key=lambda e: (e.start, e.pk))
     with tempfile.TemporaryDirectory(prefix="ftt-compare-") as tmp:
         root = Path(tmp)
         growth = data["growth"]
         growth_chart(growth["points"], growth["total_distance"], growth["fit"], root / "growth.svg")
         hotspots = hotspot_chart(data["hotspots"], reasons, root / "hotspots.svg")
-        names = {e["id"]: e["name"] for e in data["test_events"]}
+        names = {e.pk: _event_name(e) for e in events}
         document = {
-            "events": [_row(f"{e['id']}: {e['name']}", e) for e in data["test_events"]],
+            "text": comparison_text(),
+            "generated": fmt.timestamp(timezone.now(), first.tzinfo),
+            "events": [_row(names[e["id"]], e) for e in data["test_events"]],
             "versions": [_row(v["version"], v) for v in data["versions"]],
             "vehicles": [_row(v["name"], v) for v in data["vehicles"]],
             "growth": "growth.svg",
             "fit": growth["fit_rows"] or None,
             "hotspots": "hotspots.svg" if hotspots else None,
-            "hotspot_note": f"Take-overs at most {data['hotspot_radius']:g} m apart form "
-            "one hotspot (single linkage); numbers as on the map.",
+            "hotspot_note": _(
+                "Take-overs at most %(radius)s m apart form one hotspot (single linkage); "
+                "numbers as on the map."
+            )
+            % {"radius": fmt.number(data["hotspot_radius"])},
             "hotspot_rows": [_hotspot_row(spot, reasons, names) for spot in data["hotspots"]],
             "formulas": [[k, v] for k, v in data["formulas"].items()],
         }

@@ -59,7 +59,8 @@ def check_reportable(event: TestEvent, options: ReportOptions | None = None) -> 
                 % {"scope": scope_name(**scope), "event": event.pk}
             )
         raise ReportError(
-            f"Test event {event.pk} ('{event}') has no segments yet: nothing to report."
+            _("Test event %(id)s ('%(event)s') has no segments yet: nothing to report.")
+            % {"id": event.pk, "event": event}
         )
 
 

@@ -3,6 +3,8 @@
 from dataclasses import dataclass, field
 
 from django.conf import settings
+from django.utils.translation import gettext as _
+from django.utils.translation import gettext_lazy
 
 from reports.figures.tiles import MAX_ZOOM
 
@@ -12,9 +14,9 @@ MAX_TIMELINE_HOURS = 48
 # command offer these choices (value, what a person reads).
 SUMMARY, STANDARD, FULL = "summary", "standard", "full"
 LEVELS = (
-    (SUMMARY, "Summary: event and shift pages only"),
-    (STANDARD, "Standard: plus one compact block per intervention (ITO)"),
-    (FULL, "Full: every segment with its map"),
+    (SUMMARY, gettext_lazy("Summary: event and shift pages only")),
+    (STANDARD, gettext_lazy("Standard: plus one compact block per intervention (ITO)")),
+    (FULL, gettext_lazy("Full: every segment with its map")),
 )
 
 
@@ -61,14 +63,19 @@ class ReportOptions:
         found = []
         if not 0 <= self.min_timeline_hours <= MAX_TIMELINE_HOURS:
             found.append(
-                f"The minimum timeline length must be between 0 and {MAX_TIMELINE_HOURS} hours."
+                _("The minimum timeline length must be between 0 and %(hours)s hours.")
+                % {"hours": MAX_TIMELINE_HOURS}
             )
         if not 1 <= self.max_zoom <= MAX_ZOOM:
-            found.append(f"The maximum map zoom must be between 1 and {MAX_ZOOM}.")
-        if self.language and self.language not in dict(settings.LANGUAGES):
-            found.append(f"The language must be one of {', '.join(dict(settings.LANGUAGES))}.")
+            found.append(
+                _("The maximum map zoom must be between 1 and %(zoom)s.") % {"zoom": MAX_ZOOM}
+            )
+        if problem := language_problem(self.language):
+            found.append(problem)
         if self.level not in dict(LEVELS):
-            found.append(f"The level must be one of {', '.join(dict(LEVELS))}.")
+            found.append(
+                _("The level must be one of %(levels)s.") % {"levels": ", ".join(dict(LEVELS))}
+            )
         return found
 
     @classmethod
@@ -78,3 +85,12 @@ class ReportOptions:
 
     def as_dict(self) -> dict:
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
+
+
+def language_problem(language: str) -> str | None:
+    """Why ``language`` cannot be a report's language; empty means the default."""
+    if language and language not in dict(settings.LANGUAGES):
+        return _("The language must be one of %(languages)s.") % {
+            "languages": ", ".join(dict(settings.LANGUAGES))
+        }
+    return None

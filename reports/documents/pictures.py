@@ -7,6 +7,7 @@ import io
 from pathlib import Path
 
 import numpy as np
+from django.utils.translation import gettext as _
 from PIL import Image as PILImage
 
 from reports.figures.maps import Background
@@ -35,7 +36,7 @@ class Pictures:
             with image.image.open("rb") as fh:
                 content = fh.read()
         except OSError as exc:
-            self.warnings.append(f"Image {image.pk} unreadable ({exc}); left out.")
+            self.warnings.append(_unreadable(image.pk, exc))
             return None
         digest = hashlib.sha256(content).hexdigest()[:20]
         if digest not in self.encoded:
@@ -49,7 +50,7 @@ class Pictures:
             picture.draft("RGB", (FULL_IMAGE_PX, FULL_IMAGE_PX))
             picture = picture.convert("RGB")
         except (OSError, ValueError) as exc:
-            self.warnings.append(f"Image {pk} unreadable ({exc}); left out.")
+            self.warnings.append(_unreadable(pk, exc))
             return None
         names = []
         sizes = [("thumb", THUMBNAIL_PX)]
@@ -80,6 +81,13 @@ class Pictures:
                         map_image.origin_yaw,
                     )
                 except (OSError, ValueError) as exc:
-                    self.warnings.append(f"Shift {shift.number}: map image unreadable ({exc}).")
+                    self.warnings.append(
+                        _("%(shift)s: map image unreadable (%(reason)s).")
+                        % {"shift": shift, "reason": exc}
+                    )
             self.backgrounds[shift.id] = background
         return self.backgrounds[shift.id]
+
+
+def _unreadable(pk: int, reason: Exception) -> str:
+    return _("Image %(id)s unreadable (%(reason)s); left out.") % {"id": pk, "reason": reason}

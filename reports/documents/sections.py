@@ -9,6 +9,7 @@ from pathlib import Path
 from django.conf import settings
 from django.utils import timezone
 from django.utils.translation import gettext as _
+from django.utils.translation import gettext_noop
 
 from reports import formatting as fmt
 from reports.documents import tables
@@ -21,10 +22,11 @@ from reports.figures import charts
 from reports.figures.sketch import track_sketch
 from reports.figures.timeline import draw_timeline
 from reports.selectors import content
+from reports.selectors.formulas import FORMULAS
+from reports.selectors.formulas import shown as shown_formulas
 from reports.selectors.provenance import keywords, provenance
 from reports.selectors.statistics import (
     CONFIDENCE,
-    FORMULAS,
     EventStatistics,
     Figures,
     event_statistics,
@@ -35,7 +37,7 @@ from telemetry.selectors.recordings import recordings_by_master, summary
 from telemetry.selectors.tracks import GAP_SECONDS, GPS, LOCAL
 
 DEFAULT_LOGO = TEMPLATE_DIR / "logo.svg"
-FONT_NOTE = (
+FONT_NOTE = gettext_noop(
     "DejaVu Sans with WenQuanYi Micro Hei or Noto CJK for Chinese, Japanese and Korean, "
     "and Noto Color Emoji for emoji"
 )
@@ -109,7 +111,7 @@ class Sections:
             else tables.test_plan_rows(test_plan(event, self.mode, runs=stats.runs)),
             "provisional": stats.provisional,
             "event": self._event_rows(),
-            "mode": "GPS (WGS84)" if self.mode == GPS else "local map frame",
+            "mode": _position_mode(self.mode),
             "global": global_section,
             "shifts": shift_sections,
             "level": self.options.level,
@@ -127,7 +129,8 @@ class Sections:
             "keywords": keywords(stamp),
             "final": fmt.timestamp(final, self.tz) if final else None,
             "amendments": [
-                f"{a['at']}: {a['record']} by {a['by'] or a['channel']}"
+                _("%(when)s: %(record)s by %(who)s")
+                % {"when": a["at"], "record": a["record"], "who": a["by"] or a["channel"]}
                 + (f" ({a['reason']})" if a["reason"] else "")
                 for a in stamp["amendments"]
             ],
@@ -156,7 +159,7 @@ class Sections:
             "recipient_address": list(o.recipient_address),
             "creator": o.creator,
             "creator_address": list(o.creator_address),
-            "date": date.today().isoformat(),
+            "date": fmt.day(date.today()),
             "generated": fmt.timestamp(timezone.now(), self.tz),
             "logo": logo_name,
         }
@@ -172,7 +175,7 @@ class Sections:
                 (_("Start"), fmt.timestamp(e.start, self.tz)),
                 (_("End"), fmt.timestamp(e.end, self.tz) if e.end else _("open")),
                 (_("Time zone"), e.time_zone),
-                (_("Positions"), "GPS (WGS84)" if self.mode == GPS else "local map frame"),
+                (_("Positions"), _position_mode(self.mode)),
                 (_("Note"), e.note or fmt.DASH),
             ]
         )
@@ -267,7 +270,7 @@ class Sections:
             weather_changes = [
                 (
                     leg.start,
-                    leg.weather.short_description if leg.weather else "weather unknown",
+                    leg.weather.short_description if leg.weather else _("weather unknown"),
                     leg.weather.icon if leg.weather else "",
                 )
                 for leg in self.legs[shift.id]
@@ -371,7 +374,7 @@ class Sections:
         )
         notes = [
             {
-                "author": note.author.name if note.author else "unknown author",
+                "author": note.author.name if note.author else _("unknown author"),
                 "time": fmt.timestamp(note.created, tz),
                 "text": note.text,
             }
@@ -448,7 +451,7 @@ class Sections:
             if k not in stats.counted_reasons
         ]
         return {
-            "formulas": [list(pair) for pair in FORMULAS],
+            "formulas": [list(pair) for pair in shown_formulas(FORMULAS).items()],
             "counted": counted,
             "not_counted": not_counted,
             "confidence": f"{round(CONFIDENCE * 100)} %",
@@ -461,11 +464,15 @@ class Sections:
             "no_start": no_start,
             "uncertain_starts": len(uncertain),
             "fixes_missed": sum(leg.fixes_missed for legs in self.legs.values() for leg in legs),
-            "uncertainty_max": f"{max(uncertain, default=0):.1f}",
+            "uncertainty_max": fmt.decimal(max(uncertain, default=0), 1),
             "tiles": self.maps.tiles_note(),
-            "fonts": FONT_NOTE,
+            "fonts": _(FONT_NOTE),
             "warnings": self.warnings,
         }
+
+
+def _position_mode(mode: str) -> str:
+    return "GPS (WGS84)" if mode == GPS else _("local map frame")
 
 
 def _name(path) -> str | None:

@@ -4,6 +4,7 @@ from django.utils.translation import gettext as _
 
 from reports import formatting as fmt
 from reports.selectors.statistics import CONFIDENCE, Figures
+from reports.selectors.test_plans import FAIL, JUDGE, NOT_YET, PASS
 
 
 def label_rows(pairs) -> list[list[str]]:
@@ -113,14 +114,21 @@ def test_plan_rows(plan) -> dict | None:
     rows = []
     for case in plan.cases:
         title = f"{case.case.key}: {case.case.title}"
-        rows.append([title, f"{case.progress} · {case.verdict}", "", "", ""])
-        scoped = [("whole case", v) for v in case.verdicts]
+        rows.append([title, f"{case.progress} · {_verdict(case.verdict)}", "", "", ""])
+        scoped = [(_("whole case"), v) for v in case.verdicts]
         for leg in case.legs:
             scoped += [(leg.as_dict()["label"], v) for v in leg.verdicts]
         for scope, v in scoped:
-            rows.append(["", scope, str(v.criterion), _measured(v), v.verdict])
-    unplanned = [f"Shift {leg.shift.number} · Leg {leg.number}" for leg in plan.unplanned_legs]
+            rows.append(["", scope, str(v.criterion), _measured(v), _verdict(v.verdict)])
+    unplanned = [f"{leg.shift} · {leg}" for leg in plan.unplanned_legs]
     return {"rows": rows, "unplanned": ", ".join(unplanned) or fmt.DASH}
+
+
+def _verdict(verdict: str) -> str:
+    """A verdict (an API value) as the report's reader says it."""
+    return {PASS: _("pass"), FAIL: _("fail"), NOT_YET: _("not yet"), JUDGE: _("needs a judgement")}[
+        verdict
+    ]
 
 
 def _measured(v) -> str:
@@ -128,11 +136,11 @@ def _measured(v) -> str:
     if value is None:
         return v.note or fmt.DASH
     if isinstance(value, list):
-        return ", ".join(value) or "none"
+        return ", ".join(value) or _("none")
     if kind == "distance_without_intervention":
         return fmt.metres(value)
     if kind == "auto_time_share":
-        return f"{value:.1f} %"
+        return fmt.percent(value / 100)
     if kind == "runs_completed":
         return f"{value:.0f}"
-    return f"{value:.2f}"
+    return fmt.decimal(value)

@@ -10,6 +10,7 @@ import shutil
 from pathlib import Path
 
 import typst
+from django.utils.translation import gettext as _
 
 from reports.documents.options import ReportError
 
@@ -27,4 +28,4 @@ def typeset(template: str, data: dict, root: Path) -> bytes:
             sys_inputs={"data": json.dumps(data, ensure_ascii=False)},
         )
     except typst.TypstError as exc:  # a template bug, never user text
-        raise ReportError(f"Typesetting failed: {exc}") from exc
+        raise ReportError(_("Typesetting failed: %(exc)s") % {"exc": exc}) from exc

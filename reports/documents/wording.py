@@ -86,8 +86,71 @@ def report_text() -> dict[str, str]:
         ),
         "fonts": _("Fonts:"),
         "warnings": _("Warnings while building this report:"),
+        "fixes_missed": _(
+            "GPS fixes lost on the way to the collector (its estimate from gaps in the "
+            "robot’s stamps):"
+        ),
+        "uncertain_starts": _(
+            "Segments whose start is uncertain (the robot’s mode message had no time stamp; "
+            "the switch lies up to the given time before the stored start):"
+        ),
+        "at_most": _(", at most %(seconds)s s"),
+        "footer_provisional": _("provisional – open segments"),
+        "final_since": _("final since"),
+        "final_title": _("FINAL since %(when)s"),
+        "amended": _("amended %(count)s times after finalisation"),
+        "test_plan": _("Test plan"),
+        "test_plan_intro": _(
+            "Each test case’s criteria, judged on the figures above (same rules): pass, fail, "
+            "not yet (still being driven) or needs a judgement (decided by a person)."
+        ),
+        "test_case": _("Test case"),
+        "scope": _("Scope"),
+        "criterion": _("Criterion"),
+        "measured": _("Measured"),
+        "verdict": _("Verdict"),
+        "unplanned": _("Legs outside the plan:"),
+        "provenance": _("Provenance"),
+        "data_digest": _("Data digest (SHA-256)"),
+        "built": _("Built"),
+        "taxonomy": _("Taxonomy"),
+        "ftt_version": _("FTT version"),
+        "status": _("Status"),
+        "status_provisional": _("provisional (open segments)"),
+        "not_finalised": _("not finalised"),
+        "check_with": _("Check with:"),
+        "report_options": _("Report options:"),
+        "amendments": _("Amendments after finalisation:"),
     }
 
 
 def shift_name(number: int) -> str:
     return _("Shift %(number)s") % {"number": number}
+
+
+def comparison_text() -> dict[str, str]:
+    """The fixed words of reports/templates_typst/compare.typ (``d.text``)."""
+    return {
+        "lang": (get_language() or "en")[:2],
+        "title": _("Reliability across test events"),
+        "interv": _("Interv."),
+        "auto_distance": _("Auto distance"),
+        "per_km": _("per km"),
+        "per_hour": _("per hour"),
+        "per_test_event": _("Per test event"),
+        "test_event": _("Test event"),
+        "per_version": _("Per software version"),
+        "version": _("Version"),
+        "per_vehicle": _("Per vehicle"),
+        "vehicle": _("Vehicle"),
+        "growth": _("Reliability growth"),
+        "no_fit": _("Fewer than two interventions: no growth fit."),
+        "hotspots": _("Take-over hotspots"),
+        "no_hotspot": _("No take-over with a position."),
+        "hotspot": _("Hotspot"),
+        "take_overs": _("Take-overs"),
+        "reasons": _("Reasons"),
+        "hotspot_segments": _("Segments (test event: segment)"),
+        "methods": _("Methods"),
+        "generated": _("generated"),
+    }

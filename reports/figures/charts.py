@@ -10,7 +10,9 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from django.utils.translation import gettext as _  # noqa: E402
 
+from reports import formatting as fmt  # noqa: E402
 from reports.figures.style import fixed_figure, rgb  # noqa: E402
 
 # Inches left of the axes: the y label and tick labels up to seven digits.
@@ -22,13 +24,17 @@ def distance_chart(labels, auto, manual, path, dpi=150) -> str:
     fig, ax = fixed_figure(7.0, 3.0, CHART_LEFT)
     x = np.arange(len(labels))
     ax.bar(x, auto, color="#2ca02c", label="AUTO")
-    ax.bar(x, manual, bottom=auto, color="#d62728", label="ITO (manual)")
+    ax.bar(x, manual, bottom=auto, color="#d62728", label=_("ITO (manual)"))
     for i, (a, m) in enumerate(zip(auto, manual, strict=True)):
-        share = f"{100 * a / (a + m):.1f} % auto" if a + m > 0 else "no distance"
+        share = (
+            _("%(share)s auto") % {"share": fmt.percent(a / (a + m))}
+            if a + m > 0
+            else _("no distance")
+        )
         ax.text(i, a + m, f"{a + m:.0f} m\n{share}", ha="center", va="bottom", fontsize=6)
     ax.set_xticks(x, labels, fontsize=7)
-    ax.set_title("Distance per shift: autonomous and manual")
-    ax.set_ylabel("distance [m]", fontsize=7)
+    ax.set_title(_("Distance per shift: autonomous and manual"))
+    ax.set_ylabel(_("distance [m]"), fontsize=7)
     ax.margins(y=0.25)
     ax.legend(fontsize=7)
     fig.savefig(path, dpi=dpi)
@@ -53,13 +59,13 @@ def reasons_chart(labels, counts_by_shift, reasons, path, dpi=150) -> str:
             label=catalogue.short_description if catalogue else key,
         )
     ax.set_xticks(x, labels, fontsize=7)
-    ax.set_title("Interventions per shift by reason")
-    ax.set_ylabel("interventions [count]", fontsize=7)
+    ax.set_title(_("Interventions per shift by reason"))
+    ax.set_ylabel(_("interventions [count]"), fontsize=7)
     ax.yaxis.get_major_locator().set_params(integer=True)
     if keys:
         ax.legend(fontsize=6, ncols=min(len(keys), 4))
     else:
-        ax.text(0.5, 0.5, "no interventions", transform=ax.transAxes, ha="center")
+        ax.text(0.5, 0.5, _("no interventions"), transform=ax.transAxes, ha="center")
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
     return path
@@ -96,7 +102,10 @@ def estimate_chart(labels, estimates, path, name, unit, scale=1.0, dpi=150) -> s
     ax.set_xticks(range(len(labels)), labels, fontsize=7)
     ax.set_xlim(-0.5, len(labels) - 0.5)
     ax.set_ylim(bottom=0)
-    ax.set_title(f"{name} per shift with 90 % bounds (arrow: no intervention, lower bound)")
+    ax.set_title(
+        _("%(name)s per shift with 90 %% bounds (arrow: no intervention, lower bound)")
+        % {"name": name}
+    )
     ax.set_ylabel(f"{name} [{unit}]", fontsize=7)
     ax.ticklabel_format(axis="y", style="plain", useOffset=False)
     fig.savefig(path, dpi=dpi)

@@ -6,6 +6,7 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from django.utils.translation import gettext as _  # noqa: E402
 
 from reports.figures.style import fixed_figure, rgb  # noqa: E402
 
@@ -15,7 +16,9 @@ def growth_chart(points, total, fit, path) -> str:
     with the Crow-AMSAA fit and its band when there is one."""
     fig, ax = plt.subplots(figsize=(7.0, 3.2), layout="constrained")
     km = [p["distance"] / 1000 for p in points]
-    ax.step(km, [p["interventions"] for p in points], where="post", color="black", label="observed")
+    ax.step(
+        km, [p["interventions"] for p in points], where="post", color="black", label=_("observed")
+    )
     ax.plot(km, [p["interventions"] for p in points], "o", color="black", markersize=3)
     if fit is not None:
         t = np.linspace(total / 200, total, 200)
@@ -29,11 +32,11 @@ def growth_chart(points, total, fit, path) -> str:
             n * (t / total) ** fit["beta_lower"],
             color="#1f77b4",
             alpha=0.2,
-            label="90 % band",
+            label=_("90 % band"),
         )
-    ax.set_title("Reliability growth: cumulative interventions")
-    ax.set_xlabel("cumulative autonomous distance [km]", fontsize=7)
-    ax.set_ylabel("interventions [count]", fontsize=7)
+    ax.set_title(_("Reliability growth: cumulative interventions"))
+    ax.set_xlabel(_("cumulative autonomous distance [km]"), fontsize=7)
+    ax.set_ylabel(_("interventions [count]"), fontsize=7)
     ax.set_xlim(left=0)
     ax.set_ylim(bottom=0)
     ax.legend(fontsize=7)
@@ -63,7 +66,7 @@ def hotspot_chart(spots, reasons, path) -> str | None:
             color=rgb(reason.color) if reason else "grey",
             edgecolors="black",
             linewidths=0.4,
-            label=reason.short_description if reason else key,
+            label=reason.short_description if reason else _("unassigned"),
             zorder=3,
         )
     for spot in spots:
@@ -79,9 +82,9 @@ def hotspot_chart(spots, reasons, path) -> str | None:
         )
     ax.set_aspect("equal", adjustable="datalim")
     ax.margins(0.15)
-    ax.set_title("Take-over hotspots: where interventions started (numbers: table below)")
-    ax.set_xlabel("east [m]", fontsize=7)
-    ax.set_ylabel("north [m]", fontsize=7)
+    ax.set_title(_("Take-over hotspots: where interventions started (numbers: table below)"))
+    ax.set_xlabel(_("east [m]"), fontsize=7)
+    ax.set_ylabel(_("north [m]"), fontsize=7)
     ax.grid(True, linewidth=0.4, alpha=0.6)
     ax.legend(fontsize=7)
     fig.savefig(path)

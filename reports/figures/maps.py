@@ -19,6 +19,7 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from django.utils.translation import gettext as _  # noqa: E402
 from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
 from matplotlib.transforms import Affine2D  # noqa: E402
@@ -86,9 +87,11 @@ class MapPainter:
                 ax.imshow(array, extent=(x0, x1, y0, y1), interpolation="bilinear", zorder=0)
                 tiles = True
         note = (
-            "" if tiles else _plain(ax, "Map tiles unavailable: plain background, grid in metres.")
+            ""
+            if tiles
+            else _plain(ax, _("Map tiles unavailable: plain background, grid in metres."))
         )
-        _finish(ax, projected, bounds, "east [m]", "north [m]", self.dpi)
+        _finish(ax, projected, bounds, _("east [m]"), _("north [m]"), self.dpi)
         _north_arrow(ax)
         _save(fig, path, self.dpi)
         return MapResult(path, tiles, note)
@@ -120,8 +123,8 @@ class MapPainter:
             # The map origin, so a reader can check where the grid is anchored.
             ax.plot([ox], [oy], "k+", markersize=8, zorder=4)
         else:
-            note = _plain(ax, "No occupancy map recorded for this shift.")
-        _finish(ax, lines, bounds, "x [m] (map frame)", "y [m] (map frame)", self.dpi)
+            note = _plain(ax, _("No occupancy map recorded for this shift."))
+        _finish(ax, lines, bounds, _("x [m] (map frame)"), _("y [m] (map frame)"), self.dpi)
         _save(fig, path, self.dpi)
         return MapResult(path, background is not None, note)
 

@@ -9,6 +9,7 @@ matplotlib.use("Agg")
 
 import matplotlib.dates as mdates  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
+from django.utils.translation import gettext  # noqa: E402
 
 from reports.figures import style, weather  # noqa: E402
 from reports.figures.style import rgb  # noqa: E402
@@ -95,7 +96,7 @@ def draw_timeline(
     ax.set_ylim(len(labels) - 0.5, WEATHER_ROW - 0.55 if weather_changes else -0.9)
     ax.xaxis.set_major_formatter(mdates.DateFormatter("%H:%M", tz=tz))
     ax.tick_params(axis="x", labelsize=7)
-    ax.set_xlabel(f"time ({tz.key})", fontsize=7)
+    ax.set_xlabel(gettext("time (%(zone)s)") % {"zone": tz.key}, fontsize=7)
     ax.grid(True, axis="x", linewidth=0.3, alpha=0.6)
     fig.savefig(path, dpi=dpi)
     plt.close(fig)

@@ -7,18 +7,14 @@ comparison never disagrees with the single-event report.
 
 from collections import defaultdict
 
+from django.utils.translation import gettext as _
+
 from events.models import ItoReason, TestEvent, Vehicle
 from reports import formatting as fmt
-from reports.selectors.growth import GROWTH_FORMULAS, crow_amsaa
-from reports.selectors.hotspots import HOTSPOT_FORMULA, HOTSPOT_RADIUS_M, hotspots
-from reports.selectors.statistics import (
-    CONFIDENCE,
-    FORMULAS,
-    Estimate,
-    Run,
-    event_runs,
-    figures,
-)
+from reports.selectors import formulas
+from reports.selectors.growth import crow_amsaa
+from reports.selectors.hotspots import hotspots
+from reports.selectors.statistics import CONFIDENCE, Estimate, Run, event_runs, figures
 from telemetry.selectors.tracks import GPS
 
 
@@ -60,14 +56,18 @@ def fit_rows(fit: dict | None) -> list[list[str]]:
     if fit is None:
         return []
     return [
-        ["Interventions n", str(fit["interventions"])],
-        ["Autonomous distance T", fmt.metres(fit["exposure"])],
-        ["β", f"{fit['beta']:.3f} (90 %: {fit['beta_lower']:.3f} – {fit['beta_upper']:.3f})"],
+        [_("Interventions n"), str(fit["interventions"])],
+        [_("Autonomous distance T"), fmt.metres(fit["exposure"])],
+        ["β", _with_bounds(fit["beta"], fit["beta_lower"], fit["beta_upper"])],
         [
-            "Growth parameter 1 − β",
-            f"{fit['growth']:.3f} (90 %: {fit['growth_lower']:.3f} – {fit['growth_upper']:.3f})",
+            _("Growth parameter 1 − β"),
+            _with_bounds(fit["growth"], fit["growth_lower"], fit["growth_upper"]),
         ],
     ]
+
+
+def _with_bounds(value: float, lower: float, upper: float) -> str:
+    return f"{fmt.rate(value)} (90 %: {fmt.rate(lower)} – {fmt.rate(upper)})"
 
 
 def _group(extra: dict, runs: list[Run]) -> dict:
@@ -84,7 +84,7 @@ def compare(events: list[TestEvent], mode: str = GPS) -> dict:
     by_vehicle: dict[int, list[Run]] = defaultdict(list)
     for e in events:
         for run in runs_of[e.pk]:
-            by_version[e.version or "unknown"].append(run)
+            by_version[e.version or _("unknown")].append(run)
             by_vehicle[run.vehicle_id].append(run)
     vehicles = {v.pk: v.short_description for v in Vehicle.objects.filter(pk__in=by_vehicle)}
     at, total = growth_points(every)
@@ -114,7 +114,9 @@ def compare(events: list[TestEvent], mode: str = GPS) -> dict:
         "reasons": {
             r.key: {"name": r.short_description, "color": r.color} for r in ItoReason.objects.all()
         },
-        "hotspot_radius": HOTSPOT_RADIUS_M,
+        "hotspot_radius": formulas.HOTSPOT_RADIUS_M,
         "hotspots": hotspots(runs_of, mode),
-        "formulas": dict(FORMULAS + GROWTH_FORMULAS + (HOTSPOT_FORMULA,)),
+        "formulas": formulas.shown(
+            formulas.FORMULAS + formulas.GROWTH_FORMULAS + (formulas.HOTSPOT_FORMULA,)
+        ),
     }

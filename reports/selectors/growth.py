@@ -21,17 +21,6 @@ from scipy.stats import chi2
 
 from reports.selectors.statistics import CONFIDENCE
 
-GROWTH_FORMULAS = (
-    ("Crow-AMSAA model", "N(t) = λ t^β, t: cumulative autonomous distance"),
-    ("Growth fit", "β = n / Σ ln(T / t_i), λ = n / T^β (time-terminated at T)"),
-    (
-        "Growth bounds",
-        "β_L = β χ²(α/2; 2n) / (2n), β_U = β χ²(1 − α/2; 2n) / (2n), α = 1 − confidence",
-    ),
-    ("Duane growth parameter", "1 − β"),
-    ("Confidence band", "N(t) = n (t / T)^β for β from β_L to β_U"),
-)
-
 
 @dataclass
 class GrowthFit:

@@ -21,16 +21,9 @@ import numpy as np
 from scipy.cluster.hierarchy import fcluster, linkage
 
 from reports.projection import local_frame
+from reports.selectors.formulas import HOTSPOT_RADIUS_M
 from reports.selectors.statistics import Run
 from telemetry.selectors.tracks import GPS
-
-HOTSPOT_RADIUS_M = 25.0
-HOTSPOT_FORMULA = (
-    "Take-over hotspots",
-    f"Take-overs (start of an intervention's ITO segment) at most {HOTSPOT_RADIUS_M:g} m apart "
-    "are one hotspot, and so is every take-over linked to it through such pairs (single "
-    "linkage). Hotspots are numbered by size, then by their first take-over.",
-)
 
 
 @dataclass

@@ -18,6 +18,7 @@ from datetime import UTC, datetime
 
 from django.conf import settings
 from django.utils import timezone
+from django.utils.translation import gettext as _
 
 from events.models import Leg, Note, Segment, Shift, TestEvent
 from events.selectors.history import author_of, entries_since
@@ -271,9 +272,14 @@ class Verdict:
 def verify(stamp: dict) -> Verdict:
     event = TestEvent.objects.filter(uid=stamp["event_uid"]).first()
     if event is None:
-        return Verdict(False, f"No test event with uid {stamp['event_uid']} here.")
+        return Verdict(
+            False, _("No test event with uid %(uid)s here.") % {"uid": stamp["event_uid"]}
+        )
     if data_digest(event) == stamp["digest"]:
-        return Verdict(True, f"The data of test event '{event}' is unchanged.")
+        return Verdict(
+            True, _("The data of test event '%(event)s' is unchanged.") % {"event": event}
+        )
     built = datetime.strptime(stamp["built"], _STAMP_FORMAT).replace(tzinfo=UTC)
     changes = [_described(e) for e in changes_since(event, built)]
-    return Verdict(False, f"The data of test event '{event}' changed since the report.", changes)
+    message = _("The data of test event '%(event)s' changed since the report.") % {"event": event}
+    return Verdict(False, message, changes)

@@ -2,7 +2,7 @@
 
 Everything the report, the GUI and the API show as a figure comes from here.
 
-Definitions (also printed in the report's methods appendix, see ``FORMULAS``):
+Definitions (also printed in the report's methods appendix, see ``reports.selectors.formulas``):
 
 * A *run* is a master segment: one continuous stretch in one mode (AUTO or ITO).
 * Duration of a run = end - start (server clock).  An open run (no end yet)
@@ -41,60 +41,11 @@ from scipy.stats import chi2
 from events.models import ItoReason, Segment, SegmentType, TestEvent
 from events.selectors.labels import label, numbers
 from events.selectors.taxonomy import counted_reasons
+from reports.selectors.formulas import FORMULAS, shown
 from telemetry.selectors.distances import kept_paths, measured_paths
 from telemetry.selectors.tracks import GPS, Track
 
 CONFIDENCE = 0.90
-
-FORMULAS = (
-    (
-        "Distance",
-        "Sum of geodesic (GPS: WGS84 ellipsoid) or straight (local: map frame) steps along "
-        "[segment start] + positions in time order (robot clock, then arrival) + "
-        "[start of the next master segment of the same leg]. Positions without a fix are "
-        "left out.",
-    ),
-    (
-        "Duration",
-        "end - start of each master segment; an open segment lasts until its newest "
-        "position or reason, and every figure including it is provisional.",
-    ),
-    (
-        "Exposure",
-        "D_a, T_a: autonomous distance and time; D_m, T_m: manual (ITO) distance and time; "
-        "I: number of interventions.",
-    ),
-    (
-        "Intervention",
-        "An ITO master segment with at least one reason that counts as an intervention; "
-        "one with several counted reasons counts once overall and once per reason.",
-    ),
-    ("Autonomy by distance", "D_a / (D_a + D_m)"),
-    ("Autonomy by time", "T_a / (T_a + T_m)"),
-    ("MDBI", "MDBI = D_a / I (mean distance between interventions)"),
-    ("MTBI", "MTBI = T_a / I (mean time between interventions)"),
-    (
-        "Bounds",
-        "Two-sided 90 % bounds for exposure E (homogeneous Poisson process, fixed exposure): "
-        "lower = 2E / chi2(0.95; 2I + 2), upper = 2E / chi2(0.05; 2I).",
-    ),
-    (
-        "No intervention",
-        "I = 0: the estimate is shown as '>= E'; lower bound 2E / chi2(0.95; 2), no upper bound.",
-    ),
-    ("Interventions per km", "I / (D_a / 1000 m)"),
-    ("Interventions per hour", "I / (T_a / 3600 s)"),
-    ("Mean / longest autonomous run", "Mean and maximum distance of the AUTO segments."),
-    (
-        "Longest distance without intervention",
-        "Largest sum of AUTO distance between two interventions of one leg (ITO segments "
-        "that are not interventions do not interrupt it).",
-    ),
-    (
-        "Manual time per reason",
-        "Sum of the durations of the reasons with that key (reasons of one segment may overlap).",
-    ),
-)
 
 
 @dataclass
@@ -444,7 +395,7 @@ class EventStatistics:
             "confidence": CONFIDENCE,
             "provisional": self.provisional,
             "counted_reasons": self.counted_reasons,
-            "formulas": dict(FORMULAS),
+            "formulas": shown(FORMULAS),
             "overall": self.overall.as_dict(),
             "shifts": {str(k): v.as_dict() for k, v in self.by_shift.items()},
             "legs": {str(k): v.as_dict() for k, v in self.by_leg.items()},

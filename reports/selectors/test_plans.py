@@ -14,6 +14,8 @@ reason occurred).
 import io
 from dataclasses import dataclass, field
 
+from django.utils.translation import gettext as _
+
 from common.spreadsheet import SafeWriter
 from events.models import Criterion, Judgement, Leg, TestCase, TestEvent
 from reports.selectors.statistics import Figures, Run, event_runs, figures
@@ -171,13 +173,15 @@ def _judge(criterion: Criterion, f: Figures, is_open: bool, judgement: Judgement
     if kind == Kind.INTERVENTIONS_PER_KM:
         measured = f.interventions_per_km
         if measured is None:
-            return Verdict(criterion, None, NOT_YET if is_open else FAIL, "no autonomous distance")
+            return Verdict(
+                criterion, None, NOT_YET if is_open else FAIL, _("no autonomous distance")
+            )
         return Verdict(criterion, measured, _open_or(measured <= value, is_open))
     if kind == Kind.AUTO_TIME_SHARE:
         share = f.autonomy_ratio_time
         measured = None if share is None else 100.0 * share
         if measured is None:
-            return Verdict(criterion, None, NOT_YET if is_open else FAIL, "no driving time")
+            return Verdict(criterion, None, NOT_YET if is_open else FAIL, _("no driving time"))
         return Verdict(criterion, measured, _open_or(measured >= value, is_open))
     raise ValueError(f"criterion kind {kind} is judged per case")
 
@@ -202,13 +206,19 @@ def _progress(case: TestCase, result: CaseResult, criteria: list[Criterion]) -> 
     """What the cockpit shows while a case is driven: "run 2 of 3 · 312 m of 500 m …"."""
     current = next((r for r in result.legs if r.is_open), None)
     number = result.runs_done + (1 if current else 0)
-    parts = [f"run {max(number, 1)} of {case.planned_runs}"]
+    parts = [
+        _("run %(number)s of %(planned)s")
+        % {"number": max(number, 1), "planned": case.planned_runs}
+    ]
     # The run being driven, else the best run of the case.
     shown = current.figures if current else result.figures
     for criterion in criteria:
         if criterion.kind == Kind.DISTANCE_WITHOUT_INTERVENTION and shown is not None:
             reached = shown.longest_without_intervention
-            parts.append(f"{reached:.0f} m of {criterion.value:.0f} m without intervention")
+            parts.append(
+                _("%(reached)s m of %(target)s m without intervention")
+                % {"reached": f"{reached:.0f}", "target": f"{criterion.value:.0f}"}
+            )
     return " · ".join(parts)
 
 

@@ -29,7 +29,7 @@ from common.errors import RuleViolation, TooManyWaiting
 from events.models import TestEvent
 from reports.documents.comparison import render_comparison
 from reports.documents.event_report import ReportResult, check_reportable, render_report
-from reports.documents.options import ReportError, ReportOptions
+from reports.documents.options import ReportError, ReportOptions, language_problem
 from reports.models import Report
 from reports.selectors.content import report_scope
 
@@ -81,10 +81,16 @@ def request_comparison(
     options = options or {}
     if not isinstance(options, dict):
         raise ValidationError({"options": [_("Options must be an object.")]})
-    unknown = sorted(set(options) - {"local"})
-    errors = [f"Unknown or not requestable option '{key}' for a comparison." for key in unknown]
+    unknown = sorted(set(options) - {"local", "language"})
+    errors = [
+        _("Unknown or not requestable option '%(key)s' for a comparison.") % {"key": key}
+        for key in unknown
+    ]
     if "local" in options and not isinstance(options["local"], bool):
-        errors.append("Option 'local' must be true or false.")
+        errors.append(_("Option 'local' must be true or false."))
+    language = options.get("language") or ""
+    if problem := language_problem(str(language)):
+        errors.append(problem)
     if errors:
         raise ValidationError({"options": errors})
     if len({e.pk for e in test_events}) < 2:
@@ -94,7 +100,11 @@ def request_comparison(
         check_waiting(user)
         report = Report.objects.create(
             test_event=events[0],
-            options={COMPARE: [e.pk for e in events], "local": bool(options.get("local", False))},
+            options={
+                COMPARE: [e.pk for e in events],
+                "local": bool(options.get("local", False)),
+                "language": language,
+            },
             requested_by=user if user is not None and user.is_authenticated else None,
             message=QUEUED_MESSAGE if jobs.worker_running() else NO_WORKER_MESSAGE,
         )
@@ -115,8 +125,14 @@ def check_waiting(user) -> None:
     limit = settings.FTT_MAX_WAITING_REPORTS
     if waiting >= limit:
         raise TooManyWaiting(
-            f"You have {waiting} reports waiting or being made, the most one account may "
-            f"have (FTT_MAX_WAITING_REPORTS={limit}); request more when they are done.",
+            (
+                _(
+                    "You have %(waiting)s reports waiting or being made, the most one "
+                    "account may have (FTT_MAX_WAITING_REPORTS=%(limit)s); request more "
+                    "when they are done."
+                )
+                % {"waiting": waiting, "limit": limit}
+            ),
             code="too_many_waiting",
         )
 
@@ -246,10 +262,11 @@ def _render(report: Report, progress) -> ReportResult:
         return render_report(report.test_event, ReportOptions.from_dict(report.options), progress)
     events = list(TestEvent.objects.filter(pk__in=ids))
     if len(events) < 2:
-        raise ReportError("A test event of this comparison was deleted; request it again.")
+        raise ReportError(_("A test event of this comparison was deleted; request it again."))
     progress(0.1, "comparing test events")
     started = time.perf_counter()
-    pdf = render_comparison(events, "local" if report.options.get("local") else "gps")
+    mode = "local" if report.options.get("local") else "gps"
+    pdf = render_comparison(events, mode, report.options.get("language") or "")
     return ReportResult(
         pdf=pdf,
         pages_hint=0,

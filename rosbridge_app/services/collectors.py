@@ -8,6 +8,7 @@ from datetime import timedelta
 
 from django.db import transaction
 from django.utils import timezone
+from django.utils.translation import gettext
 
 from common.errors import RuleViolation
 from events import feed
@@ -43,7 +44,7 @@ def issue_command(
     the collector's parameter schema, a snapshot ``snapshot_control``.
     """
     if kind not in CollectorCommand.Kind.values:
-        raise RuleViolation({"kind": [f"Unknown command '{kind}'."]})
+        raise RuleViolation({"kind": [(gettext("Unknown command '%(kind)s'.") % {"kind": kind})]})
     arguments = dict(arguments or {})
     if kind in (CollectorCommand.Kind.START_LOGGING, CollectorCommand.Kind.STOP_LOGGING):
         allowed, reason = logging_control(collector, leg)
@@ -58,7 +59,7 @@ def issue_command(
         values = arguments.get("parameters")
         if not isinstance(values, dict) or not values:
             raise RuleViolation(
-                {"parameters": ["Give the parameters to set as a non-empty object."]}
+                {"parameters": [gettext("Give the parameters to set as a non-empty object.")]}
             )
         arguments["parameters"] = check_parameter_values(collector, values)
     elif kind == CollectorCommand.Kind.SNAPSHOT:

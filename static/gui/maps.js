@@ -304,7 +304,7 @@ class GpsMap extends TrackMap {
       if (!this.tilesLoaded) this.noTiles(_("Map tiles are unavailable (the tile server cannot be reached). Tracks are still shown on a plain background."));
     });
     if (this.basemapsKnown && !this.chosenBasemap) this.tileLayer.addTo(this.map);
-    if (this.basemapsKnown && this.basemaps.length) this.layers.addBaseLayer(this.tileLayer, "Tile server");
+    if (this.basemapsKnown && this.basemaps.length) this.layers.addBaseLayer(this.tileLayer, _("Tile server"));
   }
   /* The layer switcher: FTT's own basemaps, which work offline, next to the
    * site's tile server; the test event's default basemap starts selected.

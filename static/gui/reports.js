@@ -97,10 +97,11 @@ const Reports = {
   scopeField() {
     const shift = current("shift");
     const leg = shift && current("leg");
-    const choices = [["event", "This test event"]];
-    if (shift) choices.push(["shift", `This shift (Shift ${shift.number ?? shift.id})`]);
-    if (leg) choices.push(["leg", `This leg (Shift ${shift.number ?? shift.id} · Leg ${leg.number ?? leg.id})`]);
-    const spec = { name: "scope", label: "Report of", type: "select", required: true, choices };
+    const choices = [["event", _("This test event")]];
+    const shiftNumber = shift && (shift.number ?? shift.id);
+    if (shift) choices.push(["shift", _("This shift (Shift %(shift)s)", { shift: shiftNumber })]);
+    if (leg) choices.push(["leg", _("This leg (Shift %(shift)s · Leg %(leg)s)", { shift: shiftNumber, leg: leg.number ?? leg.id })]);
+    const spec = { name: "scope", label: _("Report of"), type: "select", required: true, choices };
     const field = buildField(spec, choices[choices.length - 1][0]);
     const chosen = (form) => ({ event: {}, shift: { shift: shift?.id }, leg: { leg: leg?.id } })[form.elements.scope.value];
     return { field, chosen };

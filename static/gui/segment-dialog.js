@@ -113,9 +113,12 @@ $(".history", segmentDialog).addEventListener("toggle", dialogAction(async (e) =
 
 function historyItem(entry) {
   const li = document.createElement("li");
-  const changes = entry.changes.map((c) => `${c.field}: ${c.before ?? "—"} → ${c.after ?? "—"}`).join("; ");
+  const changes = entry.changes.map((c) => `${c.field_name}: ${c.before ?? "—"} → ${c.after ?? "—"}`).join("; ");
   const why = entry.reason ? ` (${entry.reason})` : "";
-  li.textContent = `${fmtTime(entry.at)} · ${entry.author} via ${entry.channel} · ${entry.kind}${changes ? ": " + changes : ""}${why}`;
+  const who = _("%(when)s · %(author)s via %(channel)s · %(kind)s", {
+    when: fmtTime(entry.at), author: entry.author, channel: entry.channel_text, kind: entry.kind_text,
+  });
+  li.textContent = `${who}${changes ? ": " + changes : ""}${why}`;
   return li;
 }
 

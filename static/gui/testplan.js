@@ -6,8 +6,15 @@ import { $ } from "./dom.js";
 import { api } from "./api.js";
 import { showError } from "./feedback.js";
 import { current, state } from "./state.js";
+import { _ } from "./i18n.js";
 
 const PAUSE_MS = 2000; // the plan reads the whole event's figures: not on every pose
+
+/* A verdict (the server's value) in the page's language. */
+function verdictWord(verdict) {
+  const words = { pass: _("pass"), fail: _("fail"), "not yet": _("not yet"), "needs a judgement": _("needs a judgement") };
+  return words[verdict] ?? verdict;
+}
 
 export const TestPlan = {
   timer: null,
@@ -47,7 +54,7 @@ export const TestPlan = {
         item.dataset.verdict = v.verdict;
         const verdict = document.createElement("span");
         verdict.className = "verdict";
-        verdict.textContent = v.verdict;
+        verdict.textContent = verdictWord(v.verdict);
         item.append(`${v.text} `, verdict);
         return item;
       }),

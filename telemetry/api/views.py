@@ -1,6 +1,7 @@
 """REST endpoints for robot data (poses, maps, images) and the track views built on them."""
 
 import django_filters as filters
+from django.utils.translation import gettext as _
 from django_filters.rest_framework import DjangoFilterBackend
 from drf_spectacular.types import OpenApiTypes
 from drf_spectacular.utils import OpenApiParameter, OpenApiResponse, extend_schema
@@ -176,7 +177,7 @@ class MapImageViewSet(RobotDataViewSet):
         shift = _parent(request.query_params, {"shift": Shift}, required=True)["shift"]
         map_image = map_selectors.current_map(shift)
         if map_image is None:
-            raise NotFound("This shift has no map yet.")
+            raise NotFound(_("This shift has no map yet."))
         return self.respond(map_image)
 
 
@@ -236,7 +237,9 @@ def _parent(params, allowed: dict, required: bool = False) -> dict:
     found = {k: v for k, v in query.validated_data.items() if k in allowed}
     if required and len(found) != 1:
         names = " or ".join(allowed)
-        raise serializers.ValidationError({"non_field_errors": [f"Give exactly one of {names}."]})
+        raise serializers.ValidationError(
+            {"non_field_errors": [(_("Give exactly one of %(names)s.") % {"names": names})]}
+        )
     return found
 
 

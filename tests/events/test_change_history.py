@@ -41,9 +41,15 @@ def test_reason_changed_through_the_api_names_the_account_and_channel(take_over,
     url = reverse("segment-detail", args=[take_over.pk])
     assert client.patch(url, {"ito_reason": "safety"}, format="json").status_code == 200
     _assert_reason_entry(take_over, "api", client.user.username)
-    shown = client.get(reverse("segment-history", args=[take_over.pk])).json()
+    shown_url = reverse("segment-history", args=[take_over.pk])
+    shown = client.get(shown_url).json()
     assert shown[0]["channel"] == "api" and shown[0]["author"] == client.user.username
-    assert {"field": "ito_reason", "before": "unassigned", "after": "safety"} in shown[0]["changes"]
+    change = {"field": "ito_reason", "before": "unassigned", "after": "safety"}
+    assert {**change, "field_name": "ito reason"} in shown[0]["changes"]
+    assert (shown[0]["kind_text"], shown[0]["channel_text"]) == ("changed", "API")
+    german = client.get(shown_url, HTTP_ACCEPT_LANGUAGE="de").json()[0]
+    assert {**change, "field_name": "ITO-Grund"} in german["changes"]
+    assert (german["kind_text"], german["channel_text"]) == ("geändert", "API")
 
 
 def test_reason_changed_in_the_gui_is_recorded_as_gui(take_over, client):

@@ -11,6 +11,7 @@
 from django.conf import settings
 from django.core.exceptions import ValidationError
 from django.core.management.base import BaseCommand, CommandError
+from django.utils.translation import gettext as _
 
 from basemaps.services import fetching, layers
 from common.progress import ProgressBar
@@ -76,8 +77,11 @@ class Command(BaseCommand):
             raise CommandError(str(exc)) from exc
         except fetching.FetchError as exc:
             raise CommandError(
-                f"Download interrupted ({exc}); the tiles so far are kept, run the same "
-                "command again to go on."
+                _(
+                    "Download interrupted (%(exc)s); the tiles so far are kept, run the "
+                    "same command again to go on."
+                )
+                % {"exc": exc}
             ) from exc
         self.stdout.write(
             f"{result.path}: {result.total} tiles, {result.fetched} downloaded, "
@@ -91,7 +95,7 @@ class Command(BaseCommand):
         if event is not None:
             test_event = TestEvent.objects.filter(pk=event).first()
             if test_event is None:
-                raise CommandError(f"No test event {event}.")
+                raise CommandError(_("No test event %(event)s.") % {"event": event})
         try:
             layer = layers.register_file(path, name=name, attribution=attribution, key=key)
         except (ValidationError, OSError) as exc:

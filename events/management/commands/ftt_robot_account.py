@@ -10,6 +10,7 @@ again prints the same token and adds the vehicles named to those bound.
 
 from django.core.exceptions import ValidationError
 from django.core.management.base import BaseCommand, CommandError
+from django.utils.translation import gettext as _
 
 from events.models import Vehicle
 from events.services.robots import ensure_robot_account
@@ -38,7 +39,10 @@ class Command(BaseCommand):
         missing = [key for key in vehicle if key not in found]
         if missing:
             known = ", ".join(Vehicle.objects.values_list("key", flat=True)) or "none yet"
-            raise CommandError(f"No vehicle with key {', '.join(missing)} (known: {known}).")
+            raise CommandError(
+                _("No vehicle with key %(keys)s (known: %(known)s).")
+                % {"keys": ", ".join(missing), "known": known}
+            )
         try:
             login = ensure_robot_account(name, list(found.values()), new_token=new_token)
         except ValidationError as exc:

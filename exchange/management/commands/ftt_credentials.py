@@ -5,6 +5,7 @@ credentials, ``manage.py ftt_credentials restore FILE`` after it
 from pathlib import Path
 
 from django.core.management.base import BaseCommand, CommandError
+from django.utils.translation import gettext as _
 
 from exchange.credentials import restore_credentials, save_credentials
 
@@ -27,7 +28,9 @@ class Command(BaseCommand):
         try:
             done = restore_credentials(file)
         except (OSError, ValueError, KeyError) as exc:
-            raise CommandError(f"Cannot restore sign-ins from {file}: {exc}") from None
+            raise CommandError(
+                _("Cannot restore sign-ins from %(file)s: %(exc)s") % {"file": file, "exc": exc}
+            ) from None
         self.stdout.write(
             f"Sign-ins restored: {done['kept']} account(s) kept, {done['made']} made again."
         )

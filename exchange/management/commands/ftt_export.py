@@ -2,6 +2,7 @@
 
 from django.core.management.base import BaseCommand, CommandError
 from django.utils.dateparse import parse_datetime
+from django.utils.translation import gettext as _
 
 from exchange.export import ExportError, export_events, select_events
 
@@ -32,7 +33,10 @@ class Command(BaseCommand):
         if since:
             since_time = parse_datetime(since.replace("Z", "+00:00"))
             if since_time is None or since_time.tzinfo is None:
-                raise CommandError(f"--since {since!r} is not an ISO time with a UTC offset.")
+                raise CommandError(
+                    _("--since %(since)s is not an ISO time with a UTC offset.")
+                    % {"since": f"{since!r}"}
+                )
         try:
             chosen = select_events(events, since_time)
             result = export_events(output, chosen, since=since_time)

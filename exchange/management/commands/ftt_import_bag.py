@@ -6,6 +6,7 @@ import uuid
 
 from django.core.management.base import BaseCommand, CommandError
 from django.db.models import Q
+from django.utils.translation import gettext as _
 
 from common.progress import ProgressBar
 from events.models import Leg, TestEvent, Vehicle
@@ -20,7 +21,7 @@ def _pairs(values: list[str], prefix: str) -> dict:
     for item in values or []:
         name, sep, raw = item.partition("=")
         if not sep:
-            raise CommandError(f"'{item}' is not NAME=VALUE.")
+            raise CommandError(_("'%(item)s' is not NAME=VALUE.") % {"item": item})
         try:
             value = json.loads(raw)
         except ValueError:
@@ -36,7 +37,10 @@ def _lookup(model, ident: str | None):
         lookup = Q(pk=int(ident)) if ident.isdigit() else Q(uid=uuid.UUID(ident))
         return model.objects.get(lookup)
     except (model.DoesNotExist, ValueError):
-        raise CommandError(f"No {model._meta.verbose_name} with id or uid '{ident}'.") from None
+        raise CommandError(
+            _("No %(kind)s with id or uid '%(ident)s'.")
+            % {"kind": model._meta.verbose_name, "ident": ident}
+        ) from None
 
 
 class Command(BaseCommand):
@@ -88,7 +92,9 @@ class Command(BaseCommand):
         try:
             vehicle_row = Vehicle.objects.get(key=vehicle)
         except Vehicle.DoesNotExist:
-            raise CommandError(f"No vehicle with key '{vehicle}'.") from None
+            raise CommandError(
+                _("No vehicle with key '%(vehicle)s'.") % {"vehicle": vehicle}
+            ) from None
         params = _pairs(topic, "topics.") | _pairs(param, "params.") | _pairs(snapshot, "snapshot.")
         if mode_type:
             params["params.robot_mode_type"] = mode_type

@@ -15,6 +15,7 @@ from pathlib import Path
 
 from django.conf import settings
 from django.core.management.base import BaseCommand, CommandError
+from django.utils.translation import gettext
 
 from common.progress import ProgressBar
 from events.models import Leg, Shift, TestEvent
@@ -81,13 +82,14 @@ class Command(BaseCommand):
             "--level",
             choices=[value for value, _ in LEVELS],
             default=FULL,
-            help="; ".join(text for _, text in LEVELS),
+            help="; ".join(str(text) for _, text in LEVELS),
         )
         parser.add_argument(
             "--language",
             choices=[code for code, _ in settings.LANGUAGES],
             default="",
-            help="Language of the report (default: the test event's language).",
+            help="Language of the report (default: the test event's language; for "
+            "--compare the one the test events share, else FTT_LANGUAGE).",
         )
         parser.add_argument(
             "--no-image-appendix",
@@ -126,30 +128,42 @@ class Command(BaseCommand):
             return self._compare(o)
         event_id = o["test_event"] or _event_of(o["shift"], o["leg"])
         if event_id is None and (o["shift"] or o["leg"]):
-            raise CommandError(f"No {'leg' if o['leg'] else 'shift'} with this id.")
+            raise CommandError(
+                gettext("No leg with this id.") if o["leg"] else gettext("No shift with this id.")
+            )
         if event_id is None:
-            raise CommandError("Give --test-event ID, --shift ID or --leg ID (or --job ID).")
+            raise CommandError(
+                gettext("Give --test-event ID, --shift ID or --leg ID (or --job ID).")
+            )
         event = TestEvent.objects.filter(pk=event_id).first()
         if event is None:
-            raise CommandError(f"Test event {event_id} does not exist.")
+            raise CommandError(gettext("Test event %(id)s does not exist.") % {"id": event_id})
         exported = self._exports(event, o)
         if o["output"] or not exported:
             self._pdf(event, o)
 
     def _verify(self, path: Path):
         if not path.is_file():
-            raise CommandError(f"{path} does not exist.")
+            raise CommandError(gettext("%(path)s does not exist.") % {"path": path})
         stamp = stamp_of_report(path.read_bytes())
         if stamp is None:
-            raise CommandError(f"{path} carries no FTT data digest (made before FTT stamped it?).")
+            raise CommandError(
+                gettext("%(path)s carries no FTT data digest (made before FTT stamped it?).")
+                % {"path": path}
+            )
         verdict = verify(stamp)
         self.stdout.write(("OK: " if verdict.ok else "CHANGED: ") + verdict.message)
         for change in verdict.changes:
             reason = f" ({change['reason']})" if change["reason"] else ""
-            who = f"{change['by'] or 'FTT'} via {change['channel']}"
-            self.stdout.write(f"  {change['record']} changed {change['at']} by {who}{reason}")
+            line = gettext("%(record)s changed %(when)s by %(who)s via %(channel)s") % {
+                "record": change["record"],
+                "when": change["at"],
+                "who": change["by"] or "FTT",
+                "channel": change["channel"],
+            }
+            self.stdout.write(f"  {line}{reason}")
         if not verdict.ok:
-            raise CommandError("The data differs from the report.", returncode=1)
+            raise CommandError(gettext("The data differs from the report."), returncode=1)
 
     @staticmethod
     def _month(o) -> tuple[int, int] | None:
@@ -158,15 +172,15 @@ class Command(BaseCommand):
         try:
             year, month = (int(part) for part in o["month"].split("-"))
         except ValueError:
-            raise CommandError("Give the month as YYYY-MM, e.g. 2026-05.") from None
+            raise CommandError(gettext("Give the month as YYYY-MM, e.g. 2026-05.")) from None
         if not 1 <= month <= 12:
-            raise CommandError("Give the month as YYYY-MM, e.g. 2026-05.")
+            raise CommandError(gettext("Give the month as YYYY-MM, e.g. 2026-05."))
         return year, month
 
     def _dmv_month(self, o):
         month = self._month(o)
         if month is None:
-            raise CommandError("Give --test-event ID or --month YYYY-MM with --dmv.")
+            raise CommandError(gettext("Give --test-event ID or --month YYYY-MM with --dmv."))
         Path(o["dmv"]).write_text(
             disengagements_csv(events_in_month(*month), month), encoding="utf-8"
         )
@@ -177,18 +191,21 @@ class Command(BaseCommand):
         events = list(TestEvent.objects.filter(pk__in=ids))
         missing = sorted(set(ids) - {e.pk for e in events})
         if missing:
-            raise CommandError(f"Test event {missing[0]} does not exist.")
+            raise CommandError(gettext("Test event %(id)s does not exist.") % {"id": missing[0]})
         try:
-            pdf = render_comparison(events, "local" if o["local"] else "gps")
+            pdf = render_comparison(events, "local" if o["local"] else "gps", o["language"])
         except ReportError as exc:
             raise CommandError(str(exc)) from exc
         output = Path(o["output"] or "comparison.pdf")
         output.write_bytes(pdf)
-        self.stdout.write(f"comparison of {len(events)} test events: {output}")
+        self.stdout.write(
+            gettext("comparison of %(count)s test events: %(file)s")
+            % {"count": len(events), "file": output}
+        )
 
     def _job(self, report_id: int):
         if not Report.objects.filter(pk=report_id).exists():
-            raise CommandError(f"Report {report_id} does not exist.")
+            raise CommandError(gettext("Report %(id)s does not exist.") % {"id": report_id})
         report = run_job(report_id)
         if report.status == Report.Status.FAILED:
             raise CommandError(report.error)
@@ -233,7 +250,9 @@ class Command(BaseCommand):
         if problems := options.problems():
             raise CommandError(" ".join(problems))
         if options.logo and not Path(options.logo).is_file():
-            raise CommandError(f"Logo file {options.logo} does not exist.")
+            raise CommandError(
+                gettext("Logo file %(file)s does not exist.") % {"file": options.logo}
+            )
         output = Path(o["output"] or "report.pdf")
         try:
             result = render_report(event, options, ProgressBar(o.get("stderr") or sys.stderr))
@@ -241,9 +260,13 @@ class Command(BaseCommand):
             raise CommandError(str(exc)) from None
         output.write_bytes(result.pdf)
         for warning in result.warnings:
-            self.stderr.write(f"warning: {warning}")
-        note = " (provisional: open segments)" if result.provisional else ""
-        self.stdout.write(f"{output}: written in {result.seconds:.1f} s{note}")
+            self.stderr.write(gettext("warning: %(warning)s") % {"warning": warning})
+        written = gettext("%(file)s: written in %(seconds)s s") % {
+            "file": output,
+            "seconds": f"{result.seconds:.1f}",
+        }
+        note = gettext(" (provisional: open segments)") if result.provisional else ""
+        self.stdout.write(written + note)
 
 
 def _event_of(shift: int | None, leg: int | None) -> int | None:

@@ -15,6 +15,7 @@ import re
 from django.apps import apps
 from django.core.management.base import BaseCommand, CommandError
 from django.db import connection
+from django.utils.translation import gettext as _
 
 # Read: the logbook and configuration the collector looks up.
 READ_APPS = ("events", "telemetry", "rosbridge_app")
@@ -64,9 +65,9 @@ class Command(BaseCommand):
 
     def handle(self, *args, role, apply, **options):
         if connection.vendor != "postgresql":
-            raise CommandError("Robot roles are for PostGIS; SpatiaLite has no roles.")
+            raise CommandError(_("Robot roles are for PostGIS; SpatiaLite has no roles."))
         if not ROLE_NAME.fullmatch(role):
-            raise CommandError("A role name is lower-case letters, digits and _ (at most 63).")
+            raise CommandError(_("A role name is lower-case letters, digits and _ (at most 63)."))
         statements = grant_statements(role)
         with connection.cursor() as cursor:
             if apply:
