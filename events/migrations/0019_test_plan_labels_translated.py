@@ -9,7 +9,7 @@ from django.db import migrations, models
 class Migration(migrations.Migration):
 
     dependencies = [
-        ('events', '0017_change_history_finalising_and_regulator_fields'),
+        ('events', '0018_history_author'),
         migrations.swappable_dependency(settings.AUTH_USER_MODEL),
     ]
 
