@@ -101,6 +101,6 @@ def _typeset(events: list[TestEvent], mode: str) -> bytes:
             )
             % {"radius": fmt.number(data["hotspot_radius"])},
             "hotspot_rows": [_hotspot_row(spot, reasons, names) for spot in data["hotspots"]],
-            "formulas": [[k, v] for k, v in data["formulas"].items()],
+            "formulas": [[_(k), v] for k, v in data["formulas"].items()],
         }
         return typeset("compare.typ", document, root)

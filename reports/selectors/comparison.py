@@ -116,7 +116,7 @@ def compare(events: list[TestEvent], mode: str = GPS) -> dict:
         },
         "hotspot_radius": formulas.HOTSPOT_RADIUS_M,
         "hotspots": hotspots(runs_of, mode),
-        "formulas": formulas.shown(
+        "formulas": formulas.keyed(
             formulas.FORMULAS + formulas.GROWTH_FORMULAS + (formulas.HOTSPOT_FORMULA,)
         ),
     }

@@ -1,8 +1,9 @@
 """The definitions behind every reliability figure, as the report's methods
 appendix, the comparison and the API print them.
 
-The English text is the key (the API's ``formulas`` object); ``shown`` gives
-each pair in the active language.
+``keyed`` serves the API: the English name is a stable key, the definition is
+in the active language. ``shown`` gives both in the active language, for
+documents a person reads.
 """
 
 from django.utils.translation import gettext as _
@@ -114,7 +115,15 @@ HOTSPOT_FORMULA = (
 )
 
 
+def _definition(text: str) -> str:
+    return _(text) % {"radius": f"{HOTSPOT_RADIUS_M:g}"} if "%(" in text else _(text)
+
+
+def keyed(pairs) -> dict[str, str]:
+    """Each definition in the active language under its English name, in order."""
+    return {name: _definition(text) for name, text in pairs}
+
+
 def shown(pairs) -> dict[str, str]:
     """Each name and definition in the active language, in order."""
-    radius = {"radius": f"{HOTSPOT_RADIUS_M:g}"}
-    return {_(name): _(text) % radius if "%(" in text else _(text) for name, text in pairs}
+    return {_(name): _definition(text) for name, text in pairs}

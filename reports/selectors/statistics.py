@@ -41,7 +41,7 @@ from scipy.stats import chi2
 from events.models import ItoReason, Segment, SegmentType, TestEvent
 from events.selectors.labels import label, numbers
 from events.selectors.taxonomy import counted_reasons
-from reports.selectors.formulas import FORMULAS, shown
+from reports.selectors.formulas import FORMULAS, keyed
 from telemetry.selectors.distances import kept_paths, measured_paths
 from telemetry.selectors.tracks import GPS, Track
 
@@ -395,7 +395,7 @@ class EventStatistics:
             "confidence": CONFIDENCE,
             "provisional": self.provisional,
             "counted_reasons": self.counted_reasons,
-            "formulas": shown(FORMULAS),
+            "formulas": keyed(FORMULAS),
             "overall": self.overall.as_dict(),
             "shifts": {str(k): v.as_dict() for k, v in self.by_shift.items()},
             "legs": {str(k): v.as_dict() for k, v in self.by_leg.items()},
