@@ -162,7 +162,7 @@ class CatalogueAdmin(ServiceDeleteMixin, admin.ModelAdmin):
     """Everyone with admin access may look; only administrators change."""
 
     search_fields = ["key", "short_description", "long_description"]
-    # Refuses the keys the logging rules name (unassigned, ito, auto).
+    # Refuses the keys the logging rules name (unassigned, ito, auto, unknown).
     delete_service = staticmethod(configuration.delete_configuration)
 
     def _may_write(self, request):
@@ -213,7 +213,7 @@ class SegmentTypeAdmin(CatalogueAdmin):
     list_display = ["key", "short_description", colour_swatch]
 
     def has_add_permission(self, request):
-        # The state machine knows ITO and AUTO only; a third type could never be logged.
+        # The state machine knows ITO, AUTO and UNKNOWN only; another type could never be logged.
         return False
 
 

@@ -123,6 +123,7 @@ QUICK_REASONS = ["unexpected", "planner", "safety", "manual_transit"]
 SEGMENT_TYPES = [
     ("ito", "ITO", "ITO - inhabited take over (manual mode).", "255,0,0"),
     ("auto", "AUTO", "Autonomous.", "0,255,0"),
+    ("unknown", "Unknown", "Mode not known: logged before the robot said its mode.", "150,150,150"),
 ]
 
 CONFIGURATION = ["personnel", "performer", "vehicle", "posesource"]

@@ -155,7 +155,12 @@ class SegmentFilter(OpenStateFilterSet):
         field_name="parent", lookup_expr="isnull", label="true: masters only; false: children"
     )
     mode = filters.ChoiceFilter(
-        field_name="segment_type_id", choices=[(SegmentType.ITO, "ITO"), (SegmentType.AUTO, "AUTO")]
+        field_name="segment_type_id",
+        choices=[
+            (SegmentType.ITO, "ITO"),
+            (SegmentType.AUTO, "AUTO"),
+            (SegmentType.UNKNOWN, "UNKNOWN"),
+        ],
     )
     vehicle = IdFilter(field_name="leg__shift__vehicle_id")
     reason = filters.CharFilter(

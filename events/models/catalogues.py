@@ -34,6 +34,8 @@ class Weather(Catalogue):
 class SegmentType(Catalogue):
     ITO = "ito"
     AUTO = "auto"
+    # Logged before the robot said its mode (rosbridge_app/collector/unknown_mode.py).
+    UNKNOWN = "unknown"
 
     color = models.CharField(max_length=11, validators=[rgb_validator], verbose_name=_("color"))
 

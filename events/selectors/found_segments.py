@@ -3,7 +3,7 @@ for a map, a GeoJSON file or a spreadsheet."""
 
 from collections import defaultdict
 
-from events.models import Segment, SegmentType
+from events.models import Segment
 from events.selectors.labels import label, legs_numbers
 
 # A search that finds more than this is asked to narrow down rather than answered.
@@ -72,7 +72,7 @@ def _row(row, numbers, reasons) -> dict:
     return {
         "id": row["id"],
         "label": label(leg_number, number) if leg_number is not None else "",
-        "mode": "ITO" if row["segment_type_id"] == SegmentType.ITO else "AUTO",
+        "mode": row["segment_type_id"].upper(),
         "reason": row["ito_reason__key"] or " ".join(reasons.get(row["id"], ())),
         "start": row["start"],
         "end": row["end"],

@@ -69,3 +69,17 @@ def short_label(number: str) -> str:
 def segment_label(segment: Segment) -> str:
     """The label of one segment (one query for its leg's numbering)."""
     return label(segment.leg.number, leg_numbers(segment.leg_id)[segment.pk])
+
+
+def segment_labels(segments: list[Segment]) -> dict[int, str]:
+    """{segment id: "Leg 2 · #7"} for segments ordered by leg, then start and id."""
+    rows: dict[int, list[tuple[int, int | None]]] = defaultdict(list)
+    legs = {}
+    for s in segments:
+        rows[s.leg_id].append((s.id, s.parent_id))
+        legs[s.leg_id] = s.leg.number
+    return {
+        pk: label(legs[leg_id], number)
+        for leg_id, pairs in rows.items()
+        for pk, number in numbers(pairs).items()
+    }

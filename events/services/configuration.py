@@ -12,7 +12,7 @@ from events.services import deletion
 # The state machine refers to these keys by name; without them it cannot log.
 _KEYS_IN_CODE = {
     ItoReason: {ItoReason.UNASSIGNED},
-    SegmentType: {SegmentType.ITO, SegmentType.AUTO},
+    SegmentType: {SegmentType.ITO, SegmentType.AUTO, SegmentType.UNKNOWN},
 }
 
 

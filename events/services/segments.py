@@ -1,6 +1,7 @@
 """The segment state machine, scoped to one leg.
 
-A master segment is one continuous run in one mode (ITO or AUTO).  An ITO
+A master segment is one continuous run in one mode (ITO or AUTO, or UNKNOWN
+for what the collector logged before the robot said its mode).  An ITO
 master always has at least one child; children carry the take-over reason and
 its context.  Every change of mode, from the robot or from an operator, goes
 through :func:`report_mode` or :func:`new_manual_segment`.
@@ -29,7 +30,7 @@ from events.services.common import (
 )
 from events.services.finality import require_amendable
 
-MODES = (SegmentType.ITO, SegmentType.AUTO)
+MODES = (SegmentType.ITO, SegmentType.AUTO, SegmentType.UNKNOWN)
 
 
 # The coordinates every stored position keeps to, in degrees (WGS 84); every

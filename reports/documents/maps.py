@@ -31,7 +31,7 @@ def tile_source(event, options: ReportOptions, mode: str) -> TileSource | LayerT
 
 
 def _type_color(kind: str) -> str:
-    return "44,160,44" if kind == "auto" else "214,39,40"
+    return {"auto": "44,160,44", "unknown": "150,150,150"}.get(kind, "214,39,40")
 
 
 class TrackMaps:

@@ -463,6 +463,11 @@ class Sections:
             "no_fix": no_fix,
             "no_start": no_start,
             "uncertain_starts": len(uncertain),
+            "unknown_mode": _("%(time)s and %(distance)s")
+            % {
+                "time": fmt.duration(stats.overall.unknown_seconds),
+                "distance": fmt.metres(stats.overall.unknown_distance),
+            },
             "fixes_missed": sum(leg.fixes_missed for legs in self.legs.values() for leg in legs),
             "uncertainty_max": fmt.decimal(max(uncertain, default=0), 1),
             "tiles": self.maps.tiles_note(),

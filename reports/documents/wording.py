@@ -80,6 +80,10 @@ def report_text() -> dict[str, str]:
         "gaps_more": _("and %(count)s more."),
         "no_fix": _("Positions without a GPS fix (left out):"),
         "no_start": _("Segments without a start position:"),
+        "unknown_mode": _(
+            "Logged before the robot said its mode (unknown mode; in the totals, not in "
+            "autonomy or intervention figures):"
+        ),
         "presentation": _("Presentation"),
         "times_in": _(
             "All times are in the test event's time zone, %(zone)s. Positions: %(mode)s."

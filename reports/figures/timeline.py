@@ -1,9 +1,10 @@
-"""The mode timeline of a shift: AUTO and ITO runs, reasons, weather, goals."""
+"""The mode timeline of a shift: AUTO, ITO and unknown-mode runs, reasons, weather, goals."""
 
 from collections import defaultdict
 from datetime import timedelta
 
 import matplotlib
+from django.utils.translation import gettext as _
 
 matplotlib.use("Agg")
 
@@ -16,6 +17,7 @@ from reports.figures.style import rgb  # noqa: E402
 
 MARKER_REASONS = ("goal", "end_shift")
 WEATHER_ROW = -1.2  # a band above the AUTO bars
+MODE_COLORS = {"auto": "#2ca02c", "ito": "#d62728", "unknown": "#969696"}
 
 
 def time_axis(first, last, min_span=timedelta(0)):
@@ -34,20 +36,22 @@ def draw_timeline(
         {span.reason for run in shift_runs for span in run.reasons},
         key=lambda key: reasons[key].short_description if key in reasons else key,
     )
-    labels = ["AUTO", "ITO"] + [
+    # The unknown mode has a row only in a shift that has such a run.
+    modes = ["auto", "ito"] + (["unknown"] if any(r.kind == "unknown" for r in shift_runs) else [])
+    mode_labels = {"auto": "AUTO", "ito": "ITO", "unknown": _("Unknown mode")}
+    labels = [mode_labels[m] for m in modes] + [
         reasons[key].short_description if key in reasons else key for key in reason_rows
     ]
     height = 1.2 + 0.28 * len(labels) + (0.3 if weather_changes else 0.0)
     fig, ax = style.fixed_figure(7.0, height, style.label_width(labels) + 0.2, top=0.08)
-    row_of = {key: 2 + i for i, key in enumerate(reason_rows)}
+    row_of = {key: len(modes) + i for i, key in enumerate(reason_rows)}
     ax.xaxis_date(tz)
     # Bars of one row, colour and hatch are one collection, markers of one colour one
     # scatter: a shift has hundreds of runs, too many for an artist each.
     bars: dict[tuple, list] = defaultdict(list)
     markers: dict[tuple, list] = defaultdict(list)
     for run in shift_runs:
-        row = 0 if run.kind == "auto" else 1
-        color = "#2ca02c" if run.kind == "auto" else "#d62728"
+        row, color = modes.index(run.kind), MODE_COLORS[run.kind]
         bars[(row, color, 0.6, "//" if run.is_open else None)].append((run.start, run.end))
         for span in run.reasons:
             catalogue = reasons.get(span.reason)

@@ -16,8 +16,9 @@ from xml.etree import ElementTree as ET
 
 from common.spreadsheet import SafeWriter
 from events.models import Note, Segment, TestEvent
+from events.selectors.labels import segment_labels
 from reports.selectors.content import reasons_by_key
-from reports.selectors.statistics import event_runs, segment_labels
+from reports.selectors.statistics import event_runs
 from telemetry.selectors.tracks import GPS
 
 CSV_COLUMNS = (

@@ -43,6 +43,13 @@ FORMULAS = (
             "one with several counted reasons counts once overall and once per reason."
         ),
     ),
+    (
+        gettext_noop("Unknown mode"),
+        gettext_noop(
+            "D_u, T_u: distance and time of the segments logged before the robot said its "
+            "mode; in the totals, not in autonomy or intervention figures."
+        ),
+    ),
     (gettext_noop("Autonomy by distance"), "D_a / (D_a + D_m)"),
     (gettext_noop("Autonomy by time"), "T_a / (T_a + T_m)"),
     ("MDBI", gettext_noop("MDBI = D_a / I (mean distance between interventions)")),

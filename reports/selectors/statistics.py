@@ -4,7 +4,8 @@ Everything the report, the GUI and the API show as a figure comes from here.
 
 Definitions (also printed in the report's methods appendix, see ``reports.selectors.formulas``):
 
-* A *run* is a master segment: one continuous stretch in one mode (AUTO or ITO).
+* A *run* is a master segment: one continuous stretch in one mode (AUTO, ITO,
+  or UNKNOWN: logged before the robot said its mode; counted in the totals only).
 * Duration of a run = end - start (server clock).  An open run (no end yet)
   lasts until the latest thing known about it: its newest pose or reason.
   Statistics over open runs are *provisional*.
@@ -39,7 +40,7 @@ from django.conf import settings
 from scipy.stats import chi2
 
 from events.models import ItoReason, Segment, SegmentType, TestEvent
-from events.selectors.labels import label, numbers
+from events.selectors.labels import segment_labels
 from events.selectors.taxonomy import counted_reasons
 from reports.selectors.formulas import FORMULAS, keyed
 from telemetry.selectors.distances import kept_paths, measured_paths
@@ -141,6 +142,8 @@ class Figures:
     manual_seconds: float
     auto_distance: float
     manual_distance: float
+    unknown_seconds: float
+    unknown_distance: float
     autonomy_ratio_distance: float | None
     autonomy_ratio_time: float | None
     interventions: int
@@ -157,11 +160,11 @@ class Figures:
 
     @property
     def total_distance(self) -> float:
-        return self.auto_distance + self.manual_distance
+        return self.auto_distance + self.manual_distance + self.unknown_distance
 
     @property
     def total_seconds(self) -> float:
-        return self.auto_seconds + self.manual_seconds
+        return self.auto_seconds + self.manual_seconds + self.unknown_seconds
 
     def as_dict(self) -> dict:
         data = asdict(self)
@@ -174,6 +177,7 @@ def figures(runs: list[Run]) -> Figures:
     """Aggregate runs of any grouping (leg, shift, vehicle, event) into figures."""
     auto = [r for r in runs if r.kind == SegmentType.AUTO]
     ito = [r for r in runs if r.kind == SegmentType.ITO]
+    unknown = [r for r in runs if r.kind == SegmentType.UNKNOWN]
     d_a = sum(r.distance for r in auto)
     d_m = sum(r.distance for r in ito)
     t_a = sum(r.seconds for r in auto)
@@ -193,6 +197,8 @@ def figures(runs: list[Run]) -> Figures:
         manual_seconds=t_m,
         auto_distance=d_a,
         manual_distance=d_m,
+        unknown_seconds=sum(r.seconds for r in unknown),
+        unknown_distance=sum(r.distance for r in unknown),
         autonomy_ratio_distance=_ratio(d_a, d_a + d_m),
         autonomy_ratio_time=_ratio(t_a, t_a + t_m),
         interventions=count,
@@ -350,20 +356,6 @@ def event_runs(
             )
         )
     return runs
-
-
-def segment_labels(segments: list[Segment]) -> dict[int, str]:
-    """{segment id: "Leg 2 · #7"} for segments ordered by leg, then start and id."""
-    rows: dict[int, list[tuple[int, int | None]]] = defaultdict(list)
-    legs = {}
-    for s in segments:
-        rows[s.leg_id].append((s.id, s.parent_id))
-        legs[s.leg_id] = s.leg.number
-    return {
-        pk: label(legs[leg_id], number)
-        for leg_id, pairs in rows.items()
-        for pk, number in numbers(pairs).items()
-    }
 
 
 @dataclass

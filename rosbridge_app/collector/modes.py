@@ -3,6 +3,8 @@
 # The segment type keys of events.models.SegmentType, without importing Django models.
 AUTO = "auto"
 ITO = "ito"
+# A segment logged before the robot said its mode (collector/unknown_mode.py).
+UNKNOWN = "unknown"
 
 BOOL = "bool"
 INDUSTRIAL = "industrial"

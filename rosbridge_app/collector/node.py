@@ -101,7 +101,6 @@ class CollectorNode(Node):
         self._snapshot_subs: dict[str, object] = {}
         self._master: str | None = None
         self.pipeline = Pipeline(self._watch_modes(sink), self.current_parameters())
-        self.pipeline.hold_unknown = True
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._parameters_changed)
         self._make_services()

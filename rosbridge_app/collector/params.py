@@ -138,6 +138,12 @@ SPECS: dict[str, Spec] = {
         "A segment's start position is the last one if it is at most this old (s).",
         minimum=0.0,
     ),
+    "params.unknown_mode_wait": Spec(
+        10.0,
+        "Seconds to wait for the robot's first mode after logging starts; positions meanwhile "
+        "join the first segment, after it they go to a segment of unknown mode (s).",
+        minimum=0.0,
+    ),
     "params.deaf_timeout": Spec(
         5.0,
         "Seconds with nothing received on any input while other nodes publish the "

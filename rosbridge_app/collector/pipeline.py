@@ -9,6 +9,8 @@ Rules implemented here:
 * the first mode after logging starts opens a segment, later ones only when
   the mode changes; the last mode is kept while logging is off, so a
   publisher that only sends on change is not missed;
+* positions before the first mode are held and join the first segment, or a
+  segment of unknown mode when the mode stays unknown (unknown_mode.py);
 * a segment starts at the last known GPS and local positions when they are
   fresh, and the latest fix closes the old segment and opens the new one, so
   per-segment paths add up to the whole path;
@@ -34,17 +36,15 @@ from rosbridge_app.collector.events import Event
 from rosbridge_app.collector.mode_sources import Combiner
 from rosbridge_app.collector.mode_sources import parse as parse_mode_sources
 from rosbridge_app.collector.mode_timing import ModeClock
-from rosbridge_app.collector.modes import ITO, mode_of
+from rosbridge_app.collector.modes import ITO, UNKNOWN, mode_of
 from rosbridge_app.collector.params import SPECS
 from rosbridge_app.collector.reason_rules import ReasonWatcher
 from rosbridge_app.collector.reason_rules import parse as parse_reason_rules
 from rosbridge_app.collector.tf_buffer import TfBuffer, TfLookupError
 from rosbridge_app.collector.thinning import Thinner
+from rosbridge_app.collector.unknown_mode import ModeWait
 
 log = logging.getLogger("ftt.collector")
-
-# Thinned fixes kept while logging before the mode is known (hours at the default thinning).
-UNKNOWN_MODE_FIXES = 50_000
 
 # Returned by a handler for a second copy of a message it has already had, so
 # the node does not count that copy as received (see Node._input).
@@ -72,10 +72,7 @@ class Pipeline:
         self.tf = TfBuffer()
         self.images: deque = deque(maxlen=1)
         self.mode_sources: Combiner | None = None
-        # Live: fixes that arrive while logging before the first mode are kept and
-        # start the first segment (a bag import keeps the original's rule).
-        self.hold_unknown = False
-        self.unknown: deque = deque(maxlen=UNKNOWN_MODE_FIXES)
+        self.waiting = ModeWait()
         self.reasons: ReasonWatcher | None = None
         self.update_params(params or {})
         self.logging = False
@@ -126,7 +123,7 @@ class Pipeline:
             return
         self.logging = True
         self.open_mode = None
-        self.unknown.clear()
+        self.waiting.clear()
         self.gps_thinner.reset()
         self.local_thinner.reset()
         self.stored_map_checksum = None
@@ -140,6 +137,8 @@ class Pipeline:
     def stop_logging(self, at: datetime) -> None:
         if not self.logging:
             return
+        if self.open_mode is None and self.waiting:
+            self._switch(UNKNOWN, self.waiting.first_at())
         self._close_track(at)
         self.logging = False
         self.open_mode = None
@@ -191,13 +190,12 @@ class Pipeline:
     def _switch(self, mode: str, at: datetime, robot_stamp=None, uncertainty=None) -> None:
         if self.open_mode is not None:
             self._close_track(at)
-        held = list(self.unknown) if self.open_mode is None else []
-        self.unknown.clear()
-        if held:
+        fixes, poses = self.waiting.take() if self.open_mode is None else ([], [])
+        if fixes or poses:
             # The track driven before the mode was known belongs to this segment.
-            at = min(at, held[0][0])
-        fix = held[0][1] if held else self._fresh(self.last_fix, at)
-        local = self._fresh(self.last_local, at)
+            at = min([at] + [held[0][0] for held in (fixes, poses) if held])
+        fix = fixes[0][1] if fixes else self._fresh(self.last_fix, at)
+        local = poses[0][1] if poses else self._fresh(self.last_local, at)
         master = uuid.uuid4()
         self.sink(
             Event(
@@ -220,11 +218,13 @@ class Pipeline:
         # The new segment's track starts where the robot is now.
         self.gps_thinner.reset()
         self.local_thinner.reset()
-        for when, kept in held:
+        for when, kept in fixes:
             self._record_fix(when, kept)
-        if fix is not None and not held:
+        if fix is not None and not fixes:
             self._record_fix(self.last_fix[0], fix)
-        if local is not None:
+        for when, kept in poses:
+            self._record_local(when, kept)
+        if local is not None and not poses:
             self._record_local(self.last_local[0], local)
         self._flush_images(master, at)
 
@@ -246,9 +246,16 @@ class Pipeline:
         if self.logging and self.open_mode is not None:
             if self.gps_thinner.offer(fix["lon"], fix["lat"], _measured(at, fix)):
                 self._emit_fix(at, fix)
-        elif self.logging and self.hold_unknown:
+        elif self.logging:
             if self.gps_thinner.offer(fix["lon"], fix["lat"], _measured(at, fix)):
-                self.unknown.append((at, fix))
+                self.waiting.fixes.append((at, fix))
+            self._end_wait(at)
+
+    def _end_wait(self, at: datetime) -> None:
+        """The mode stayed unknown too long: a segment of unknown mode takes the held positions."""
+        if self.logging and self.open_mode is None:
+            if self.waiting.is_over(at, self.params["params.unknown_mode_wait"]):
+                self._switch(UNKNOWN, self.waiting.first_at())
 
     def _record_fix(self, at: datetime, fix: dict) -> None:
         self.gps_thinner.keep(fix["lon"], fix["lat"], _measured(at, fix))
@@ -311,6 +318,10 @@ class Pipeline:
         if self.logging and self.open_mode is not None:
             if self.local_thinner.offer(pose["x"], pose["y"], _measured(at, pose), pose["yaw"]):
                 self.sink(Event(ev.LOCAL, at, dict(pose)))
+        elif self.logging:
+            if self.local_thinner.offer(pose["x"], pose["y"], _measured(at, pose), pose["yaw"]):
+                self.waiting.poses.append((at, pose))
+            self._end_wait(at)
 
     def _record_local(self, at: datetime, pose: dict) -> None:
         self.local_thinner.keep(pose["x"], pose["y"], _measured(at, pose), pose["yaw"])
@@ -370,6 +381,7 @@ class Pipeline:
         if self.mode_sources is not None:
             for mode, when in self.mode_sources.tick(at):
                 self.on_mode_value(mode, when)
+        self._end_wait(at)
         if self.map_pending:
             self._maybe_store_map(at)
 

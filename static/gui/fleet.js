@@ -7,7 +7,7 @@
 import { CONFIG, $ } from "./dom.js";
 import { api } from "./api.js";
 import { showError } from "./feedback.js";
-import { saveUrl, state } from "./state.js";
+import { modeName, saveUrl, state } from "./state.js";
 import { fmtDuration } from "./format.js";
 import { _ } from "./i18n.js";
 import { COLORS, GpsMap } from "./maps.js";
@@ -138,7 +138,7 @@ export const Fleet = {
   },
 
   describe(v) {
-    const mode = v.mode ? v.mode.toUpperCase() : _("no open segment");
+    const mode = v.mode ? modeName(v.mode) : _("no open segment");
     const takeover = v.last_takeover ? _("last take-over %(duration)s ago", { duration: fmtDuration(v.last_takeover, null) }) : _("no take-over yet");
     const where = v.leg.location || _("Test event #%(id)s", { id: v.leg.test_event });
     const leg = `${where} · ${_("Shift %(number)s", { number: v.leg.shift_number })} · ${_("Leg %(number)s", { number: v.leg.number })}`;

@@ -5,7 +5,7 @@ import { _ } from "./i18n.js";
 import { api, list } from "./api.js";
 import { Outbox, newUid } from "./outbox.js";
 import { notice, showError } from "./feedback.js";
-import { byId, putSegment, segmentLabel, state } from "./state.js";
+import { byId, modeName, putSegment, segmentLabel, state } from "./state.js";
 import { fmtNumber, fmtTime } from "./format.js";
 import { confirmDialog } from "./dialogs.js";
 import { showSnapshots } from "./snapshots.js";
@@ -19,7 +19,7 @@ export async function openSegmentDialog(id) {
   dialogSegment = s;
   const errorBox = $(".dialog-error", segmentDialog);
   errorBox.hidden = true;
-  const kind = s.segment_type === "ito" ? (s.parent === null ? _("ITO (take-over)") : _("ITO reason")) : "AUTO";
+  const kind = s.segment_type === "ito" ? (s.parent === null ? _("ITO (take-over)") : _("ITO reason")) : modeName(s.segment_type);
   $(".title", segmentDialog).textContent = `${segmentLabel(s.id)} · ${kind}`;
   // Set when the robot's mode message had no stamp: the switch lies within this interval.
   const uncertain = s.start_uncertainty > 0 ? " " + _("(switched up to %(seconds)s s earlier; the robot's mode message has no time stamp)", { seconds: fmtNumber(s.start_uncertainty, 1) }) : "";

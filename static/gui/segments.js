@@ -6,7 +6,7 @@ import { ApiError, api } from "./api.js";
 import { Outbox, newUid } from "./outbox.js";
 import { take } from "./bootstrap.js";
 import { clearError, notice, showError } from "./feedback.js";
-import { byId, current, fromUrl, putSegment, reasonName, saveUrl, segmentLabel, shortLabel, state, vehicleName } from "./state.js";
+import { byId, current, fromUrl, modeName, putSegment, reasonName, saveUrl, segmentLabel, shortLabel, state, vehicleName } from "./state.js";
 import { fmtClock, fmtDistance, fmtDuration, fmtTime } from "./format.js";
 import { confirmDialog } from "./dialogs.js";
 import { clearMaps, drawLegTracks, showPosition, showTakeOvers, gpsMap, loadBasemaps, loadLegTracks, loadLocalMap, localMap, showLegTracks } from "./mapview.js";
@@ -44,7 +44,7 @@ const Timeline = {
       fill.className = "fill";
       const reason = child && (state.catalogue.reasons || []).find((r) => r.key === child.ito_reason);
       if (reason && reason.color) fill.style.backgroundColor = `rgb(${reason.color})`;
-      fill.textContent = child ? `ITO · ${reasonName(child.ito_reason)}` : m.segment_type.toUpperCase();
+      fill.textContent = child ? `ITO · ${reasonName(child.ito_reason)}` : modeName(m.segment_type);
       b.append(fill);
       // The name holds the visible words, so speech control finds the bar by them.
       b.setAttribute("aria-label", `${segmentLabel(target.id)}: ${fill.textContent}, ${fmtDuration(m.start, m.end)}`);
@@ -163,9 +163,9 @@ export function drawTakeOvers() {
 
 function visibleSegments() {
   const itoOnly = $("#ito-only").checked;
-  // AUTO masters and ITO reasons (children); an ITO master is shown through its children.
+  // AUTO and unknown-mode masters and ITO reasons (children); an ITO master is shown through its children.
   return state.segments
-    .filter((s) => (s.parent === null ? s.segment_type === "auto" && !itoOnly : true))
+    .filter((s) => (s.parent === null ? s.segment_type !== "ito" && !itoOnly : true))
     .sort((a, b) => (a.start < b.start ? 1 : a.start > b.start ? -1 : b.id - a.id));
 }
 
@@ -184,7 +184,7 @@ export function renderSegments() {
     const track = state.tracks[master];
     const cells = [
       { text: shortLabel(s.id), title: `${segmentLabel(s.id)} (database id ${s.id})` },
-      s.segment_type.toUpperCase(),
+      modeName(s.segment_type),
       s.parent === null ? "" : reasonName(s.ito_reason),
       { text: fmtClock(s.start), title: fmtTime(s.start) },
       s.end ? { text: fmtClock(s.end), title: fmtTime(s.end) } : "—",
@@ -252,11 +252,11 @@ export function renderMode() {
   const lost = Live.lost();
   panel.dataset.link = lost === null ? "live" : "lost";
   if (lost !== null) {
-    $("#mode-name").textContent = _("last known: %(mode)s, %(seconds)s s ago", { mode: m ? mode.toUpperCase() : _("no open segment"), seconds: lost });
+    $("#mode-name").textContent = _("last known: %(mode)s, %(seconds)s s ago", { mode: m ? modeName(mode) : _("no open segment"), seconds: lost });
     $("#mode-since").textContent = `${m ? `${segmentLabel(m.id)} · ` : ""}${_("no word from the server, reconnecting")}`;
     return;
   }
-  $("#mode-name").textContent = m ? mode.toUpperCase() : _("No open segment");
+  $("#mode-name").textContent = m ? modeName(mode) : _("No open segment");
   const reasonless = m && m.segment_type === "ito" && !state.segments.some((c) => c.parent === m.id && c.is_open);
   $("#mode-since").textContent = m ? _("for %(duration)s · %(segment)s", { duration: fmtDuration(m.start, null), segment: segmentLabel(m.id) }) + (reasonless ? " · " + _("no open reason") : "") : "";
 }

@@ -74,6 +74,8 @@ export const reasonName = (key) => {
   const r = (state.catalogue.reasons || []).find((x) => x.key === key);
   return r ? r.short_description : key || "";
 };
+/* AUTO and ITO as the field writes them; a segment logged before the robot said its mode in words. */
+export const modeName = (type) => (type === "unknown" ? _("Unknown mode") : (type || "").toUpperCase());
 /* A segment row as the server answered it replaces the listed one, or joins the list. */
 export function putSegment(row) {
   const i = state.segments.findIndex((s) => s.id === row.id);

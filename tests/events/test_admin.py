@@ -106,14 +106,18 @@ def test_keys_the_rules_need_cannot_be_deleted_from_admin(admin_client):
     assert admin_client.post(delete_url, {"post": "yes"}).status_code == 403
     response = admin_client.post(
         reverse("admin:events_segmenttype_changelist"),
-        {"action": "delete_selected", "_selected_action": ["ito", "auto"], "post": "yes"},
+        {
+            "action": "delete_selected",
+            "_selected_action": ["ito", "auto", "unknown"],
+            "post": "yes",
+        },
     )
     assert response.status_code == 403
-    assert set(SegmentType.objects.values_list("key", flat=True)) == {"ito", "auto"}
+    assert set(SegmentType.objects.values_list("key", flat=True)) == {"ito", "auto", "unknown"}
     assert ItoReason.objects.filter(pk="unassigned").exists()
 
 
-def test_no_third_segment_type_can_be_added(admin_client):
+def test_no_other_segment_type_can_be_added(admin_client):
     assert admin_client.get(reverse("admin:events_segmenttype_add")).status_code == 403
 
 

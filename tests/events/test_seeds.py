@@ -10,6 +10,7 @@ def test_catalogues_are_seeded_with_the_original_keys_and_colours(db):
     assert set(SegmentType.objects.values_list("key", "color")) == {
         ("ito", "255,0,0"),
         ("auto", "0,255,0"),
+        ("unknown", "150,150,150"),
     }
     assert ItoReason.objects.count() == 12
     assert ItoReason.objects.get(key="safety").color == "255,0,0"

@@ -247,8 +247,10 @@ TRACKS = [range(0, 21), range(20, 41), range(40, 61)]
 def assert_segments() -> list[Segment]:
     found = masters()
     assert [m.segment_type_id for m in found] == ["auto", "ito", "auto"]
+    # The first segment starts at the first fix, before the first mode message at 0.5 s
+    # (rosbridge_app/collector/unknown_mode.py).
     assert [(m.start, m.end) for m in found] == [
-        (at(0.5), at(20.5)),
+        (at(0.1), at(20.5)),
         (at(20.5), at(40.5)),
         (at(40.5), at(END)),
     ]
@@ -403,9 +405,14 @@ def test_bool_mode_on_a_renamed_topic_is_read_when_the_topic_is_given(
 
 
 def test_bool_on_an_unconfigured_topic_is_no_mode(vehicle, media_root, tmp_path):
-    # Any topic may carry a std_msgs/Bool; only the configured one is the mode.
+    # Any topic may carry a std_msgs/Bool; only the configured one is the mode. The
+    # track is kept all the same, in one segment of unknown mode.
     bag = write_bag(tmp_path / "run", mode_topic="/husky/robot_mode")
     out = run_command(bag, "--vehicle", "husky")
-    assert "0 master segments" in out
-    assert not Segment.objects.exists() and not Pose.objects.exists()
+    assert "1 master segments" in out
+    (unknown,) = masters()
+    assert (unknown.segment_type_id, unknown.start, unknown.end) == ("unknown", at(0.1), at(END))
+    assert [(p.point.x, p.point.y) for p in unknown.poses.order_by("robot_stamp")] == [
+        fix_at(k) for k in range(LAST + 1)
+    ]
     assert MapImage.objects.count() == 1  # the map belongs to the shift, not to a segment

@@ -286,7 +286,8 @@ def test_catalogues_are_readable_by_viewers_in_full(api_client, db):
     reasons = {r["key"]: r for r in client.get("/api/ito-reasons/").json()}
     assert len(reasons) == 12
     assert reasons["goal"]["counts_as_intervention"] is False
-    assert {r["key"] for r in client.get("/api/segment-types/").json()} == {"ito", "auto"}
+    types = {r["key"] for r in client.get("/api/segment-types/").json()}
+    assert types == {"ito", "auto", "unknown"}
 
 
 def test_token_endpoint_gives_a_working_token(client, role_user):

@@ -173,9 +173,10 @@ def test_a_recording_with_the_robots_own_type_gives_the_scripted_segments(
     modes = [
         (e.data["mode"], round((e.at - T0).total_seconds(), 2)) for e in events if e.kind == ev.MODE
     ]
-    # The e-stop pressed at 28 keeps ITO through the switch to OFFBOARD at 30.
+    # The e-stop pressed at 28 keeps ITO through the switch to OFFBOARD at 30; the
+    # first segment starts at the fix before the first mode (collector/unknown_mode.py).
     assert modes == [
-        ("ito", 0.01),
+        ("ito", 0.0),
         ("auto", 10.01),
         ("ito", 12.02),
         ("auto", 16.02),
@@ -192,6 +193,41 @@ def test_a_recording_with_the_robots_own_type_gives_the_scripted_segments(
     assert [(m.segment_type_id, m.start) for m in stored] == [
         (mode, T0 + timedelta(seconds=t)) for mode, t in modes
     ]
+
+
+@pytest.mark.django_db
+def test_a_recording_whose_mode_comes_late_keeps_its_track_in_a_segment_of_unknown_mode(
+    tmp_path, vehicle, media_root
+):
+    from reports.selectors.statistics import event_statistics
+    from tests.support.fkie import gps_path_length
+
+    # The flight controller says its state only on change, the first time 15 s
+    # after the first fix: longer than params.unknown_mode_wait (10 s).
+    script = [(tenth / 10, "/gps_fix", 50.0 + tenth * 1e-5) for tenth in range(250)]
+    script += [(15.0, "/mavros/state", "MANUAL"), (20.0, "/mavros/state", "OFFBOARD")]
+    _write_bag(tmp_path / "late", sorted(script, key=lambda step: step[0]))
+    state_only = MAVROS_WITH_ESTOP.split("  - {topic: /estop")[0]
+    result = import_bag(
+        tmp_path / "late", vehicle=vehicle, params={"params.mode_sources": state_only}
+    )
+    stored = list(result.leg.segments.filter(parent__isnull=True).order_by("start"))
+    assert [(m.segment_type_id, m.start) for m in stored] == [
+        ("unknown", at(0)),
+        ("ito", at(15)),
+        ("auto", at(20)),
+    ]
+    first = stored[0].poses.order_by("robot_stamp").first()
+    assert (first.point.x, first.point.y) == (8.0, 50.0)
+    figures = event_statistics(result.leg.shift.test_event).overall
+    assert figures.unknown_seconds == 15.0
+    # Its track up to the next segment's start, measured as every distance is.
+    assert figures.unknown_distance == pytest.approx(
+        gps_path_length([(8.0, 50.0), (8.0, 50.0015)]), rel=1e-6
+    )
+    assert figures.total_distance == pytest.approx(
+        figures.auto_distance + figures.manual_distance + figures.unknown_distance
+    )
 
 
 def test_reason_rules_suggest_the_first_that_fired_within_the_window():
@@ -226,50 +262,6 @@ def test_a_reason_rule_on_a_field_the_type_lacks_is_refused():
             "params.reason_rules",
             "rules: [{topic: /e, type: std_msgs/msg/Bool, field: value, values: [1], reason: x}]",
         )
-
-
-def _fix(seconds: float, lat: float):
-    ns = int(at(seconds).timestamp() * 1e9)
-    return NS(
-        header=NS(stamp=NS(sec=ns // 10**9, nanosec=ns % 10**9)),
-        status=NS(status=0),
-        latitude=lat,
-        longitude=8.0,
-        altitude=0.0,
-        position_covariance=[0.0] * 9,
-        position_covariance_type=0,
-    )
-
-
-def _drive(pipe, mode_at: float) -> list:
-    """7 s of driving north at 10 Hz with the mode (AUTO) said at ``mode_at``."""
-    events = []
-    pipe.sink = events.append
-    pipe.start_logging(at(0))
-    for tenth in range(70):
-        if tenth / 10 == mode_at:
-            pipe.on_mode_value("auto", at(mode_at))
-        pipe.on_fix(_fix(tenth / 10, 50.0 + tenth * 1e-5), at(tenth / 10))
-    if mode_at >= 7:
-        pipe.on_mode_value("auto", at(mode_at))
-    return events
-
-
-@pytest.mark.parametrize("live", [True, False], ids=["live", "bag_import"])
-def test_fixes_before_the_first_mode_start_the_first_segment_live(live):
-    from rosbridge_app.collector.pipeline import Pipeline
-
-    known = [e for e in _drive(Pipeline(print), 0) if e.kind == ev.GPS]
-    late = Pipeline(print)
-    late.hold_unknown = live
-    events = _drive(late, 7)
-    mode = next(e for e in events if e.kind == ev.MODE)
-    fixes = [e for e in events if e.kind == ev.GPS]
-    if live:  # the same segment and track as if the mode had been known from the start
-        assert mode.at == at(0) and mode.data["gps"] == [8.0, 50.0]
-        assert [f.at for f in fixes] == [f.at for f in known]
-    else:  # a recording keeps the original rule: the track starts at the first mode
-        assert mode.at == at(7) and len(fixes) == 1
 
 
 def test_every_preset_of_the_docs_passes_the_check():
