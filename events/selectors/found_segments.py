@@ -4,7 +4,7 @@ for a map, a GeoJSON file or a spreadsheet."""
 from collections import defaultdict
 
 from events.models import Segment, SegmentType
-from events.selectors.labels import label, legs_numbers
+from events.selectors.labels import label, numbers_of
 
 # A search that finds more than this is asked to narrow down rather than answered.
 MAX_FOUND = 200_000
@@ -48,7 +48,7 @@ def found_rows(segments) -> list[dict]:
     )
     if len(rows) > MAX_FOUND:
         return rows
-    numbers = legs_numbers({row["leg_id"] for row in rows})
+    numbers = numbers_of(segments)
     reasons = _reasons_of_masters([row["id"] for row in rows if row["parent_id"] is None])
     return [_row(row, numbers, reasons) for row in rows]
 

@@ -16,8 +16,9 @@ from xml.etree import ElementTree as ET
 
 from common.spreadsheet import SafeWriter
 from events.models import Note, Segment, TestEvent
+from events.selectors.labels import segment_labels
 from reports.selectors.content import reasons_by_key
-from reports.selectors.statistics import event_runs, segment_labels
+from reports.selectors.statistics import event_runs
 from telemetry.selectors.tracks import GPS
 
 CSV_COLUMNS = (
@@ -83,7 +84,7 @@ def segments_csv(event: TestEvent, mode: str = GPS) -> str:
     writer = SafeWriter(out)
     writer.writerow(CSV_COLUMNS)
     ordered = sorted(segments, key=lambda s: (s.leg.shift.start, s.leg.start, s.start, s.id))
-    labels = segment_labels(ordered)
+    labels = segment_labels(segments)
     for seg in ordered:
         run = runs.get(seg.master_id)
         shift = seg.leg.shift

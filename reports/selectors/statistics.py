@@ -39,7 +39,7 @@ from django.conf import settings
 from scipy.stats import chi2
 
 from events.models import ItoReason, Segment, SegmentType, TestEvent
-from events.selectors.labels import label, numbers
+from events.selectors.labels import segment_labels
 from events.selectors.taxonomy import counted_reasons
 from telemetry.selectors.distances import kept_paths, measured_paths
 from telemetry.selectors.tracks import GPS, Track
@@ -355,7 +355,7 @@ def event_runs(
             children[s.parent_id].append(s)
     kept = kept_paths(masters, mode)
     paths = measured_paths(masters, mode) if tracks else {}
-    labels = segment_labels(segments)
+    labels = segment_labels(Segment.objects.filter(**segment_scope(event, shift=shift, leg=leg)))
 
     runs = []
     for master in masters:
@@ -399,20 +399,6 @@ def event_runs(
             )
         )
     return runs
-
-
-def segment_labels(segments: list[Segment]) -> dict[int, str]:
-    """{segment id: "Leg 2 · #7"} for segments ordered by leg, then start and id."""
-    rows: dict[int, list[tuple[int, int | None]]] = defaultdict(list)
-    legs = {}
-    for s in segments:
-        rows[s.leg_id].append((s.id, s.parent_id))
-        legs[s.leg_id] = s.leg.number
-    return {
-        pk: label(legs[leg_id], number)
-        for leg_id, pairs in rows.items()
-        for pk, number in numbers(pairs).items()
-    }
 
 
 @dataclass
