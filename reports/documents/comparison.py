@@ -10,6 +10,7 @@ from pathlib import Path
 from events.models import ItoReason, TestEvent
 from reports import formatting as fmt
 from reports.documents.options import ReportError
+from reports.documents.routes import routes_section
 from reports.documents.typesetting import typeset
 from reports.figures import style
 from reports.figures.growth import growth_chart, hotspot_chart
@@ -46,7 +47,11 @@ def _hotspot_row(spot: dict, reasons: dict, names: dict) -> list[str]:
     return [str(spot["number"]), str(spot["count"]), reason_text or fmt.DASH, segments]
 
 
-def render_comparison(events: list[TestEvent], mode: str = GPS) -> bytes:
+def render_comparison(
+    events: list[TestEvent], mode: str = GPS, routes: dict | None = None
+) -> bytes:
+    """The PDF; ``routes`` ({"leg": [ids], "case": [ids], "threshold": metres}) adds
+    the routes section."""
     if len(events) < 2:
         raise ReportError("A comparison needs at least two test events.")
     data = compare(events, mode)
@@ -69,5 +74,6 @@ def render_comparison(events: list[TestEvent], mode: str = GPS) -> bytes:
             "one hotspot (single linkage); numbers as on the map.",
             "hotspot_rows": [_hotspot_row(spot, reasons, names) for spot in data["hotspots"]],
             "formulas": [[k, v] for k, v in data["formulas"].items()],
+            "routes": routes_section(routes, root) if routes else None,
         }
         return typeset("compare.typ", document, root)

@@ -32,6 +32,7 @@ from reports.documents.event_report import ReportResult, check_reportable, rende
 from reports.documents.options import ReportError, ReportOptions
 from reports.models import Report
 from reports.selectors.content import report_scope
+from reports.selectors.routes import DEFAULT_THRESHOLD, RouteChoiceError, check_route_choice
 
 log = logging.getLogger(__name__)
 
@@ -71,6 +72,8 @@ def request_report(
 
 
 COMPARE = "compare"  # the options key that makes a row a comparison of these test events
+# A comparison's routes to overlay: {"leg": [ids], "case": [ids], "threshold": metres}.
+ROUTES = "routes"
 
 
 def request_comparison(
@@ -81,10 +84,11 @@ def request_comparison(
     options = options or {}
     if not isinstance(options, dict):
         raise ValidationError({"options": [_("Options must be an object.")]})
-    unknown = sorted(set(options) - {"local"})
+    unknown = sorted(set(options) - {"local", ROUTES})
     errors = [f"Unknown or not requestable option '{key}' for a comparison." for key in unknown]
     if "local" in options and not isinstance(options["local"], bool):
         errors.append("Option 'local' must be true or false.")
+    routes = _route_option(options.get(ROUTES), errors)
     if errors:
         raise ValidationError({"options": errors})
     if len({e.pk for e in test_events}) < 2:
@@ -94,12 +98,42 @@ def request_comparison(
         check_waiting(user)
         report = Report.objects.create(
             test_event=events[0],
-            options={COMPARE: [e.pk for e in events], "local": bool(options.get("local", False))},
+            options={
+                COMPARE: [e.pk for e in events],
+                "local": bool(options.get("local", False)),
+                **({ROUTES: routes} if routes else {}),
+            },
             requested_by=user if user is not None and user.is_authenticated else None,
             message=QUEUED_MESSAGE if jobs.worker_running() else NO_WORKER_MESSAGE,
         )
         make_report.enqueue(report.pk)
     return report
+
+
+def _route_option(value, errors: list) -> dict | None:
+    """The comparison's routes option, checked as the route API checks its query."""
+    if value is None:
+        return None
+    if not isinstance(value, dict) or set(value) - {"leg", "case", "threshold"}:
+        errors.append(_("Option 'routes' is an object with 'leg', 'case' and 'threshold'."))
+        return None
+    legs, cases = value.get("leg", []), value.get("case", [])
+    threshold = value.get("threshold", DEFAULT_THRESHOLD)
+    ids = [*legs, *cases] if isinstance(legs, list) and isinstance(cases, list) else None
+    if ids is None or not all(isinstance(i, int) and not isinstance(i, bool) for i in ids):
+        errors.append(_("Option 'routes' names legs and test cases by their ids (numbers)."))
+        return None
+    if isinstance(threshold, bool) or not isinstance(threshold, int | float):
+        threshold = -1.0
+    if not 0 < threshold < 1e6:
+        errors.append(_("The routes' threshold is in metres, above 0."))
+        return None
+    try:
+        check_route_choice(legs, cases)
+    except RouteChoiceError as error:
+        errors.append(str(error))
+        return None
+    return {"leg": legs, "case": cases, "threshold": float(threshold)}
 
 
 def check_waiting(user) -> None:
@@ -249,7 +283,8 @@ def _render(report: Report, progress) -> ReportResult:
         raise ReportError("A test event of this comparison was deleted; request it again.")
     progress(0.1, "comparing test events")
     started = time.perf_counter()
-    pdf = render_comparison(events, "local" if report.options.get("local") else "gps")
+    mode = "local" if report.options.get("local") else "gps"
+    pdf = render_comparison(events, mode, routes=report.options.get(ROUTES))
     return ReportResult(
         pdf=pdf,
         pages_hint=0,
