@@ -18,6 +18,7 @@ native_libs.preload()
 
 import dj_database_url  # noqa: E402
 import ldap  # noqa: E402
+import xstatic.pkg.leaflet_markercluster as markercluster  # noqa: E402
 from csp.constants import NONE, SELF, UNSAFE_INLINE  # noqa: E402
 from django.core.management.utils import get_random_secret_key  # noqa: E402
 from django_auth_ldap.config import (  # noqa: E402
@@ -257,7 +258,8 @@ STATIC_URL = "static/"
 STATIC_ROOT = DATA_DIR / "staticfiles"
 # WhiteNoise warns on every start when the collectstatic target is missing.
 STATIC_ROOT.mkdir(exist_ok=True)
-STATICFILES_DIRS = [BASE_DIR / "static"]
+# Leaflet.markercluster from its PyPI package, served beside django-leaflet's Leaflet.
+STATICFILES_DIRS = [BASE_DIR / "static", ("leaflet-markercluster", markercluster.BASE_DIR)]
 MEDIA_URL = "media/"
 MEDIA_ROOT = Path(env_str("FTT_MEDIA_ROOT", str(DATA_DIR / "media")))
 STORAGES = {

@@ -46,6 +46,9 @@ urlpatterns = [
     path("gui/api/forms/", gui_api.Forms.as_view(), name="gui-forms"),
     path("gui/api/test-case-areas/", gui_api.TestCaseAreas.as_view(), name="gui-test-case-areas"),
     path(
+        "gui/api/test-case-routes/", gui_api.TestCaseRoutes.as_view(), name="gui-test-case-routes"
+    ),
+    path(
         "gui/api/collectors/<int:pk>/commands/",
         gui_api.CollectorCommands.as_view(),
         name="gui-collector-commands",

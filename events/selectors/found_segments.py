@@ -3,8 +3,8 @@ for a map, a GeoJSON file or a spreadsheet."""
 
 from collections import defaultdict
 
-from events.models import Segment
-from events.selectors.labels import label, legs_numbers
+from events.models import Segment, SegmentType
+from events.selectors.labels import label, numbers_of
 
 # A search that finds more than this is asked to narrow down rather than answered.
 MAX_FOUND = 200_000
@@ -48,7 +48,7 @@ def found_rows(segments) -> list[dict]:
     )
     if len(rows) > MAX_FOUND:
         return rows
-    numbers = legs_numbers({row["leg_id"] for row in rows})
+    numbers = numbers_of(segments)
     reasons = _reasons_of_masters([row["id"] for row in rows if row["parent_id"] is None])
     return [_row(row, numbers, reasons) for row in rows]
 
@@ -72,7 +72,7 @@ def _row(row, numbers, reasons) -> dict:
     return {
         "id": row["id"],
         "label": label(leg_number, number) if leg_number is not None else "",
-        "mode": row["segment_type_id"].upper(),
+        "mode": "ITO" if row["segment_type_id"] == SegmentType.ITO else "AUTO",
         "reason": row["ito_reason__key"] or " ".join(reasons.get(row["id"], ())),
         "start": row["start"],
         "end": row["end"],

@@ -4,57 +4,63 @@ Master segments are numbered per leg in driving order (start, then id), so
 the numbers stay readable however many legs a test event has: "Leg 2 · #7".
 An ITO reason (child) is numbered under its master: "Leg 2 · #7.1".  The
 database id stays a technical detail.
+
+The database numbers them (``_NUMBERED``, window functions that PostgreSQL and
+SQLite share), so a label costs its own row, not a read of its whole leg.
 """
 
-from collections import defaultdict
-
+from django.db import connection
+from django.db.models import QuerySet
 from django.utils.translation import gettext as _
 
-from events.models import Segment
+from events.models import Leg, Segment
+
+_NUMBERED = """
+WITH chosen AS (
+    SELECT id, leg_id, parent_id FROM {segment} WHERE id IN ({chosen})
+),
+masters AS (
+    SELECT id, ROW_NUMBER() OVER (PARTITION BY leg_id ORDER BY start, id) AS n
+    FROM {segment}
+    WHERE parent_id IS NULL AND leg_id IN (SELECT leg_id FROM chosen)
+),
+children AS (
+    SELECT id, ROW_NUMBER() OVER (PARTITION BY parent_id ORDER BY start, id) AS n
+    FROM {segment}
+    WHERE parent_id IN (SELECT parent_id FROM chosen)
+)
+SELECT chosen.id, leg.number, master.n, child.n
+FROM chosen
+JOIN {leg} leg ON leg.id = chosen.leg_id
+LEFT JOIN masters master ON master.id = COALESCE(chosen.parent_id, chosen.id)
+LEFT JOIN children child ON child.id = chosen.id
+"""
+
+
+def numbers_of(segments: QuerySet) -> dict[int, tuple[int, str]]:
+    """{segment id: (its leg's number, its number "7" or "7.1")} for the segments
+    of a queryset, each numbered among every segment of its leg; one query."""
+    chosen, params = segments.order_by().values("id").query.sql_with_params()
+    sql = _NUMBERED.format(segment=Segment._meta.db_table, leg=Leg._meta.db_table, chosen=chosen)
+    with connection.cursor() as cursor:
+        cursor.execute(sql, params)
+        return {pk: (leg, _number(master, child)) for pk, leg, master, child in cursor.fetchall()}
+
+
+def _number(master: int | None, child: int | None) -> str:
+    own = "?" if master is None else str(master)
+    return own if child is None else f"{own}.{child}"
 
 
 def leg_numbers(leg_id: int) -> dict[int, str]:
     """{segment id: "7" or "7.1"} for every segment of one leg."""
-    rows = (
-        Segment.objects.filter(leg_id=leg_id).order_by("start", "id").values_list("id", "parent_id")
-    )
-    return numbers(rows)
+    return {pk: n for pk, (_leg, n) in numbers_of(Segment.objects.filter(leg_id=leg_id)).items()}
 
 
 def legs_numbers(leg_ids) -> dict[int, tuple[int, str]]:
     """{segment id: (its leg's number, its number)} for every segment of the given
     legs, in one query."""
-    rows = (
-        Segment.objects.filter(leg_id__in=leg_ids)
-        .order_by("leg_id", "start", "id")
-        .values_list("leg_id", "leg__number", "id", "parent_id")
-    )
-    by_leg: dict[tuple[int, int], list] = defaultdict(list)
-    for leg_id, leg_number, pk, parent in rows:
-        by_leg[(leg_id, leg_number)].append((pk, parent))
-    return {
-        pk: (leg_number, n)
-        for (_, leg_number), pairs in by_leg.items()
-        for pk, n in numbers(pairs).items()
-    }
-
-
-def numbers(rows) -> dict[int, str]:
-    """Numbers of one leg's segments from (id, parent id) pairs in driving order."""
-    result: dict[int, str] = {}
-    children: dict[int, int] = defaultdict(int)
-    masters = 0
-    pending = []
-    for pk, parent in rows:
-        if parent is None:
-            masters += 1
-            result[pk] = str(masters)
-        else:
-            pending.append((pk, parent))
-    for pk, parent in pending:
-        children[parent] += 1
-        result[pk] = f"{result.get(parent, '?')}.{children[parent]}"
-    return result
+    return numbers_of(Segment.objects.filter(leg_id__in=leg_ids))
 
 
 def label(leg_number: int, number: str) -> str:
@@ -67,19 +73,11 @@ def short_label(number: str) -> str:
 
 
 def segment_label(segment: Segment) -> str:
-    """The label of one segment (one query for its leg's numbering)."""
-    return label(segment.leg.number, leg_numbers(segment.leg_id)[segment.pk])
+    """The label of one segment (one query)."""
+    leg_number, number = numbers_of(Segment.objects.filter(pk=segment.pk))[segment.pk]
+    return label(leg_number, number)
 
 
-def segment_labels(segments: list[Segment]) -> dict[int, str]:
-    """{segment id: "Leg 2 · #7"} for segments ordered by leg, then start and id."""
-    rows: dict[int, list[tuple[int, int | None]]] = defaultdict(list)
-    legs = {}
-    for s in segments:
-        rows[s.leg_id].append((s.id, s.parent_id))
-        legs[s.leg_id] = s.leg.number
-    return {
-        pk: label(legs[leg_id], number)
-        for leg_id, pairs in rows.items()
-        for pk, number in numbers(pairs).items()
-    }
+def segment_labels(segments: QuerySet) -> dict[int, str]:
+    """{segment id: "Leg 2 · #7"} for the segments of a queryset; one query."""
+    return {pk: label(*numbered) for pk, numbered in numbers_of(segments).items()}

@@ -1,4 +1,5 @@
-"""Test cases as the GUI's place search offers them: those with an area."""
+"""Test cases as the comparison page offers them: those with an area for the place
+search, those with a planned route for the route comparison."""
 
 import json
 
@@ -18,3 +19,9 @@ def test_case_areas() -> list[dict]:
         }
         for case in cases.order_by("test_event_id", "key")
     ]
+
+
+def test_case_routes() -> list[dict]:
+    """Each test case with a planned route: id, names and its test event."""
+    cases = TestCase.objects.filter(route__isnull=False).order_by("test_event_id", "key")
+    return list(cases.values("id", "key", "title", "test_event"))

@@ -30,7 +30,7 @@ from events.api.serializers import (
 )
 from events.models import Leg, Note, Segment, SegmentType, Shift, Vehicle
 from events.selectors.labels import label, leg_numbers, short_label
-from events.selectors.test_cases import test_case_areas
+from events.selectors.test_cases import test_case_areas, test_case_routes
 from events.services import segments as rules
 from gui.forms import gui_forms
 from rosbridge_app.models import Collector
@@ -431,6 +431,13 @@ class TestCaseAreas(GuiView):
 
     def get(self, request):
         return Response({"cases": test_case_areas()})
+
+
+class TestCaseRoutes(GuiView):
+    """The test cases with a planned route, for the route comparison to pick one."""
+
+    def get(self, request):
+        return Response({"cases": test_case_routes()})
 
 
 class Fleet(GuiView):

@@ -16,7 +16,7 @@ from rest_framework.views import APIView
 
 from common import roles
 from common.api.permissions import RolePermission
-from events.models import Leg, TestEvent
+from events.models import TestEvent
 from events.services.test_plans import judge
 from reports.api.serializers import (
     JudgementSerializer,
@@ -29,7 +29,12 @@ from reports.selectors import exports
 from reports.selectors.comparison import compare
 from reports.selectors.disengagements import disengagements_csv
 from reports.selectors.reports import reports_of
-from reports.selectors.routes import DEFAULT_THRESHOLD, compare_routes, leg_route
+from reports.selectors.routes import (
+    DEFAULT_THRESHOLD,
+    RouteChoiceError,
+    chosen_routes,
+    compare_routes,
+)
 from reports.selectors.statistics import event_statistics
 from reports.selectors.test_plans import test_plan, test_plan_csv
 from reports.services.generation import (
@@ -118,9 +123,10 @@ class ComparisonView(APIView):
 
 
 class RouteComparisonView(APIView):
-    """Driven routes side by side (?leg=1&leg=2): per pair, each route's deviation
-    from the other (metres: mean, 95th percentile, maximum, stretches beyond
-    ``threshold``) and the discrete Fréchet distance."""
+    """Driven routes side by side (?leg=1&leg=2), or legs and a test case's planned
+    route (?leg=1&case=3): per pair, each route's deviation from the other (metres:
+    mean, 95th percentile, maximum, stretches beyond ``threshold``) and the
+    discrete Fréchet distance."""
 
     permission_classes = [RolePermission]
     read_role = roles.VIEWER
@@ -128,18 +134,12 @@ class RouteComparisonView(APIView):
     @extend_schema(
         parameters=[
             OpenApiParameter("leg", int, many=True),
+            OpenApiParameter("case", int, many=True, description="a test case's planned route"),
             OpenApiParameter("threshold", float, description="metres (default 5)"),
         ],
         responses={200: dict},
     )
     def get(self, request):
-        ids = request.query_params.getlist("leg")
-        if len(ids) < 2 or not all(i.isdigit() for i in ids):
-            raise ValidationError({"leg": [_("Give at least two leg ids (numbers).")]})
-        legs = {leg.pk: leg for leg in Leg.objects.filter(pk__in=[int(i) for i in ids])}
-        missing = [i for i in ids if int(i) not in legs]
-        if missing:
-            raise ValidationError({"leg": [(_("No leg with id %(id)s.") % {"id": missing[0]})]})
         try:
             threshold = float(request.query_params.get("threshold", DEFAULT_THRESHOLD))
         except ValueError:
@@ -147,9 +147,20 @@ class RouteComparisonView(APIView):
         if not 0 < threshold < 1e6:
             raise ValidationError({"threshold": [_("Give the threshold in metres, above 0.")]})
         try:
-            return Response(compare_routes([leg_route(legs[int(i)]) for i in ids], threshold))
+            routes = chosen_routes(_ids(request, "leg"), _ids(request, "case"))
+        except RouteChoiceError as error:
+            raise ValidationError({error.field: [str(error)]}) from None
+        try:
+            return Response(compare_routes(routes, threshold))
         except ValueError as error:
             raise ValidationError({"leg": [str(error)]}) from None
+
+
+def _ids(request, field: str) -> list[int]:
+    ids = request.query_params.getlist(field)
+    if not all(i.isdigit() for i in ids):
+        raise ValidationError({field: [_("Give ids as numbers.")]})
+    return [int(i) for i in ids]
 
 
 def _events(ids: list[int], field: str) -> list[TestEvent]:

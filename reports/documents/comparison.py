@@ -14,6 +14,7 @@ from django.utils.translation import gettext as _
 from events.models import ItoReason, TestEvent
 from reports import formatting as fmt
 from reports.documents.options import ReportError
+from reports.documents.routes import routes_section
 from reports.documents.typesetting import typeset
 from reports.documents.wording import comparison_text
 from reports.figures import style
@@ -67,15 +68,18 @@ def _event_name(event: TestEvent) -> str:
     return f"{name} (#{event.pk})"
 
 
-def render_comparison(events: list[TestEvent], mode: str = GPS, language: str = "") -> bytes:
-    """The comparison PDF in ``language`` (default: comparison_language)."""
+def render_comparison(
+    events: list[TestEvent], mode: str = GPS, language: str = "", routes: dict | None = None
+) -> bytes:
+    """The comparison PDF in ``language`` (default: comparison_language); ``routes``
+    ({"leg": [ids], "case": [ids], "threshold": metres}) adds the routes section."""
     if len(events) < 2:
         raise ReportError(_("A comparison needs at least two test events."))
     with fmt.written_in(language or comparison_language(events)):
-        return _typeset(events, mode)
+        return _typeset(events, mode, routes)
 
 
-def _typeset(events: list[TestEvent], mode: str) -> bytes:
+def _typeset(events: list[TestEvent], mode: str, routes: dict | None) -> bytes:
     data = compare(events, mode)
     style.apply()
     reasons = {r.key: r for r in ItoReason.objects.all()}
@@ -102,5 +106,6 @@ def _typeset(events: list[TestEvent], mode: str) -> bytes:
             % {"radius": fmt.number(data["hotspot_radius"])},
             "hotspot_rows": [_hotspot_row(spot, reasons, names) for spot in data["hotspots"]],
             "formulas": [[_(k), v] for k, v in data["formulas"].items()],
+            "routes": routes_section(routes, root) if routes else None,
         }
         return typeset("compare.typ", document, root)

@@ -157,4 +157,19 @@ def comparison_text() -> dict[str, str]:
         "hotspot_segments": _("Segments (test event: segment)"),
         "methods": _("Methods"),
         "generated": _("generated"),
+        "routes": _("Routes"),
+        "route": _("Route"),
+        "colour": _("Colour"),
+        "driven_or_planned": _("Driven or planned"),
+        "deviation_note": _(
+            "Deviation: the distance of each point of one route from the other route's line; "
+            "in red where it is more than %(threshold)s. Fréchet: the discrete Fréchet distance "
+            "of the pair."
+        ),
+        "deviation": _("Deviation"),
+        "frechet": _("Fréchet"),
+        "mean": _("Mean"),
+        "p95": _("95th percentile"),
+        "maximum": _("Maximum"),
+        "beyond_threshold": _("Beyond threshold"),
     }

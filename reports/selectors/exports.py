@@ -84,7 +84,7 @@ def segments_csv(event: TestEvent, mode: str = GPS) -> str:
     writer = SafeWriter(out)
     writer.writerow(CSV_COLUMNS)
     ordered = sorted(segments, key=lambda s: (s.leg.shift.start, s.leg.start, s.start, s.id))
-    labels = segment_labels(ordered)
+    labels = segment_labels(segments)
     for seg in ordered:
         run = runs.get(seg.master_id)
         shift = seg.leg.shift

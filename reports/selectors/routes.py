@@ -1,31 +1,37 @@
 """Did the robot drive the same route: how far driven routes lie apart.
 
 A leg's route is its GPS track in driving order (every master segment, one
-after the other).  Two routes are compared in one local metric frame
-(reports.projection) as GEOS lines (shapely): the deviation of each point of
-one route from the other line (mean, 95th percentile, maximum, and the
-stretches beyond a threshold) and their discrete Fréchet distance, which also
-tells a route driven backwards or in another order from the same route.
+after the other); a test case's planned route is its line, with a point every
+metre so that its deviation is measured along it, not at its few corners.
+Routes are compared in one local metric frame (reports.projection) as GEOS
+lines (shapely): the deviation of each point of one route from the other line
+(mean, 95th percentile, maximum, and the stretches beyond a threshold) and
+their discrete Fréchet distance, which also tells a route driven backwards or
+in another order from the same route.
 """
 
 from dataclasses import dataclass
 
 import numpy as np
 import shapely
+from django.utils.translation import gettext as _
 
-from events.models import Leg
+from events.models import Leg, TestCase
 from reports.projection import local_frame
 from telemetry.selectors.tracks import GPS, masters, segment_tracks
 
 # Metres from the other route beyond which a stretch is drawn as a deviation.
 DEFAULT_THRESHOLD = 5.0
+# Metres between the points a planned route is measured at.
+PLANNED_SPACING = 1.0
 
 
 @dataclass(frozen=True)
 class Route:
-    name: str
+    name: str  # "leg 12" or "case 3", as the API names it
     lon: np.ndarray
     lat: np.ndarray
+    title: str = ""  # what a reader calls it, for the PDF
 
     def __len__(self) -> int:
         return len(self.lon)
@@ -35,7 +41,58 @@ def leg_route(leg: Leg) -> Route:
     tracks = segment_tracks(masters(leg=leg), GPS)
     lon = np.concatenate([t.x for t in tracks]) if tracks else np.empty(0)
     lat = np.concatenate([t.y for t in tracks]) if tracks else np.empty(0)
-    return Route(f"leg {leg.pk}", lon, lat)
+    shift = leg.shift
+    title = f"Test event {shift.test_event_id}, shift {shift.number}, leg {leg.number}"
+    return Route(f"leg {leg.pk}", lon, lat, title)
+
+
+def planned_route(case: TestCase) -> Route:
+    """A test case's planned route, a point at least every PLANNED_SPACING metres."""
+    lon, lat = np.asarray(case.route.coords, dtype=float).T
+    to_local, from_local = local_frame(float(lon.mean()), float(lat.mean()))
+    line = shapely.linestrings(np.column_stack(to_local.transform(lon, lat)))
+    x, y = shapely.get_coordinates(shapely.segmentize(line, PLANNED_SPACING)).T
+    lon, lat = from_local.transform(x, y)
+    title = f"Test case {case.key}: {case.title} (planned)"
+    return Route(f"case {case.pk}", np.asarray(lon), np.asarray(lat), title)
+
+
+class RouteChoiceError(ValueError):
+    """The routes asked for cannot be compared; ``field`` is the parameter at fault."""
+
+    def __init__(self, field: str, message: str):
+        super().__init__(message)
+        self.field = field
+
+
+def check_route_choice(leg_ids: list[int], case_ids: list[int]) -> None:
+    """Refuse (RouteChoiceError) fewer than two routes, an unknown leg or test case,
+    and a test case without a planned route."""
+    if len(leg_ids) + len(case_ids) < 2:
+        raise RouteChoiceError(
+            "leg", _("Give at least two routes: leg ids, or a leg and a test case (case=).")
+        )
+    legs = set(Leg.objects.filter(pk__in=leg_ids).values_list("pk", flat=True))
+    cases = dict(TestCase.objects.filter(pk__in=case_ids).values_list("pk", "route"))
+    for field, ids, found, message in (
+        ("leg", leg_ids, legs, _("No leg with id %(id)s.")),
+        ("case", case_ids, cases, _("No test case with id %(id)s.")),
+    ):
+        missing = [i for i in ids if i not in found]
+        if missing:
+            raise RouteChoiceError(field, message % {"id": missing[0]})
+    unplanned = [i for i in case_ids if cases[i] is None]
+    if unplanned:
+        message = _("Test case %(id)s has no planned route.") % {"id": unplanned[0]}
+        raise RouteChoiceError("case", message)
+
+
+def chosen_routes(leg_ids: list[int], case_ids: list[int]) -> list[Route]:
+    """The legs' routes, then the test cases' planned routes, in the order given."""
+    check_route_choice(leg_ids, case_ids)
+    legs = Leg.objects.select_related("shift").in_bulk(leg_ids)
+    cases = TestCase.objects.in_bulk(case_ids)
+    return [leg_route(legs[i]) for i in leg_ids] + [planned_route(cases[i]) for i in case_ids]
 
 
 def deviation(route: Route, other, threshold: float, to_local) -> dict:
@@ -58,7 +115,7 @@ def compare_routes(routes: list[Route], threshold: float = DEFAULT_THRESHOLD) ->
     discrete Fréchet distance.  Routes need two points or more."""
     short = [r.name for r in routes if len(r) < 2]
     if short:
-        raise ValueError(f"{short[0]} has fewer than two GPS points.")
+        raise ValueError(_("%(route)s has fewer than two GPS points.") % {"route": short[0]})
     lon0 = float(np.median(np.concatenate([r.lon for r in routes])))
     lat0 = float(np.median(np.concatenate([r.lat for r in routes])))
     to_local, _ = local_frame(lon0, lat0)

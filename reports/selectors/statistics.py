@@ -312,7 +312,7 @@ def event_runs(
             children[s.parent_id].append(s)
     kept = kept_paths(masters, mode)
     paths = measured_paths(masters, mode) if tracks else {}
-    labels = segment_labels(segments)
+    labels = segment_labels(Segment.objects.filter(**segment_scope(event, shift=shift, leg=leg)))
 
     runs = []
     for master in masters:

@@ -32,6 +32,7 @@ from reports.documents.event_report import ReportResult, check_reportable, rende
 from reports.documents.options import ReportError, ReportOptions, language_problem
 from reports.models import Report
 from reports.selectors.content import report_scope
+from reports.selectors.routes import DEFAULT_THRESHOLD, RouteChoiceError, check_route_choice
 
 log = logging.getLogger(__name__)
 
@@ -71,6 +72,8 @@ def request_report(
 
 
 COMPARE = "compare"  # the options key that makes a row a comparison of these test events
+# A comparison's routes to overlay: {"leg": [ids], "case": [ids], "threshold": metres}.
+ROUTES = "routes"
 
 
 def request_comparison(
@@ -81,7 +84,7 @@ def request_comparison(
     options = options or {}
     if not isinstance(options, dict):
         raise ValidationError({"options": [_("Options must be an object.")]})
-    unknown = sorted(set(options) - {"local", "language"})
+    unknown = sorted(set(options) - {"local", "language", ROUTES})
     errors = [
         _("Unknown or not requestable option '%(key)s' for a comparison.") % {"key": key}
         for key in unknown
@@ -91,6 +94,7 @@ def request_comparison(
     language = options.get("language") or ""
     if problem := language_problem(str(language)):
         errors.append(problem)
+    routes = _route_option(options.get(ROUTES), errors)
     if errors:
         raise ValidationError({"options": errors})
     if len({e.pk for e in test_events}) < 2:
@@ -104,12 +108,39 @@ def request_comparison(
                 COMPARE: [e.pk for e in events],
                 "local": bool(options.get("local", False)),
                 "language": language,
+                **({ROUTES: routes} if routes else {}),
             },
             requested_by=user if user is not None and user.is_authenticated else None,
             message=QUEUED_MESSAGE if jobs.worker_running() else NO_WORKER_MESSAGE,
         )
         make_report.enqueue(report.pk)
     return report
+
+
+def _route_option(value, errors: list) -> dict | None:
+    """The comparison's routes option, checked as the route API checks its query."""
+    if value is None:
+        return None
+    if not isinstance(value, dict) or set(value) - {"leg", "case", "threshold"}:
+        errors.append(_("Option 'routes' is an object with 'leg', 'case' and 'threshold'."))
+        return None
+    legs, cases = value.get("leg", []), value.get("case", [])
+    threshold = value.get("threshold", DEFAULT_THRESHOLD)
+    ids = [*legs, *cases] if isinstance(legs, list) and isinstance(cases, list) else None
+    if ids is None or not all(isinstance(i, int) and not isinstance(i, bool) for i in ids):
+        errors.append(_("Option 'routes' names legs and test cases by their ids (numbers)."))
+        return None
+    if isinstance(threshold, bool) or not isinstance(threshold, int | float):
+        threshold = -1.0
+    if not 0 < threshold < 1e6:
+        errors.append(_("The routes' threshold is in metres, above 0."))
+        return None
+    try:
+        check_route_choice(legs, cases)
+    except RouteChoiceError as error:
+        errors.append(str(error))
+        return None
+    return {"leg": legs, "case": cases, "threshold": float(threshold)}
 
 
 def check_waiting(user) -> None:
@@ -266,7 +297,9 @@ def _render(report: Report, progress) -> ReportResult:
     progress(0.1, "comparing test events")
     started = time.perf_counter()
     mode = "local" if report.options.get("local") else "gps"
-    pdf = render_comparison(events, mode, report.options.get("language") or "")
+    pdf = render_comparison(
+        events, mode, report.options.get("language") or "", routes=report.options.get(ROUTES)
+    )
     return ReportResult(
         pdf=pdf,
         pages_hint=0,

@@ -1,8 +1,9 @@
-/* Route comparison on the comparison page: two legs' GPS routes on one map,
+/* Route comparison on the comparison page: two legs' GPS routes (or a leg and a
+ * test case's planned route) on one map,
  * per pair the deviation of each from the other (mean, 95th percentile,
  * maximum, share beyond the threshold), the discrete Fréchet distance, and the
  * stretches beyond the threshold in red.  GET /api/reports/routes/ computes it all. */
-import { $, element } from "./dom.js";
+import { CONFIG, $, element } from "./dom.js";
 import { api, list, plainMessage } from "./api.js";
 import { latLngs, plainMap } from "./comparemap.js";
 import { _ } from "./i18n.js";
@@ -70,14 +71,21 @@ function draw(data, names) {
   $("#routes-figures").replaceChildren(...data.pairs.map((pair) => pairCard(pair, names)));
 }
 
+/* A picker's value: a leg's id, or "case:<id>" for a test case's planned route. */
+function routeOf(select) {
+  const [kind, id] = select.value.startsWith("case:") ? ["case", select.value.slice(5)] : ["leg", select.value];
+  return { param: [kind, id], name: `${kind} ${id}` };
+}
+
 async function compare(e) {
   e.preventDefault();
   const form = $("#routes-form").elements;
   const [a, b] = [form.leg_a, form.leg_b];
-  const q = new URLSearchParams([["leg", a.value], ["leg", b.value], ["threshold", form.threshold.value]]);
-  // The server names routes "leg <id>"; the page shows A and B with the picker's words.
+  const chosen = [a, b].map(routeOf);
+  const q = new URLSearchParams([...chosen.map((r) => r.param), ["threshold", form.threshold.value]]);
+  // The server names routes "leg <id>" and "case <id>"; the page shows A and B with the picker's words.
   const names = Object.fromEntries(
-    [a, b].map((select, i) => [`leg ${select.value}`, { letter: LETTERS[i], colour: COLOURS[i], text: select.selectedOptions[0].textContent }]),
+    chosen.map((route, i) => [route.name, { letter: LETTERS[i], colour: COLOURS[i], text: [a, b][i].selectedOptions[0].textContent }]),
   );
   say(_("Comparing the routes…"));
   try {
@@ -92,16 +100,26 @@ async function compare(e) {
 async function main() {
   $("#routes-form").addEventListener("submit", compare);
   try {
-    const [legs, shifts] = await Promise.all([list("legs/"), list("shifts/")]);
+    const [legs, shifts, planned] = await Promise.all([
+      list("legs/"),
+      list("shifts/"),
+      api("GET", "test-case-routes/", undefined, { root: CONFIG.guiApiRoot }),
+    ]);
     const shiftOf = new Map(shifts.map((s) => [s.id, s]));
     legs.sort((x, y) => (x.start < y.start ? 1 : -1));
     const options = legs.map((leg) => {
       const shift = shiftOf.get(leg.shift);
       const where = shift ? `#${shift.test_event} · Shift ${shift.number} · ` : "";
-      return [leg.id, `${where}Leg ${leg.number} (${(leg.start || "").slice(0, 10)})`];
+      return new Option(`${where}Leg ${leg.number} (${(leg.start || "").slice(0, 10)})`, leg.id);
     });
     const form = $("#routes-form").elements;
-    for (const select of [form.leg_a, form.leg_b]) select.replaceChildren(...options.map(([v, t]) => new Option(t, v)));
+    form.leg_a.replaceChildren(...options);
+    form.leg_b.replaceChildren(...options.map((o) => o.cloneNode(true)));
+    if (planned.cases.length) {
+      const group = element("optgroup", { label: _("Planned routes of test cases") });
+      group.append(...planned.cases.map((c) => new Option(_("#%(event)s %(key)s: %(title)s (planned)", { event: c.test_event, key: c.key, title: c.title }), `case:${c.id}`)));
+      form.leg_b.append(group);
+    }
     if (options.length > 1) form.leg_b.selectedIndex = 1;
   } catch (err) {
     say(plainMessage(err), true);

@@ -1,7 +1,8 @@
 /* "Where did it fail" on the comparison page: an area drawn as a rectangle (two
  * clicks on the map) or a test case's area, the filters, and the take-overs
  * found by the server (GET /api/segments/found/) on the map, in a list and as
- * GeoJSON and CSV downloads.  The server decides what lies inside. */
+ * GeoJSON and CSV downloads.  The server decides what lies inside.  Leaflet.markercluster
+ * (global L.markerClusterGroup, a deferred script like Leaflet) groups them. */
 import { CONFIG, $, element } from "./dom.js";
 import { api, list, plainMessage } from "./api.js";
 import { plainMap } from "./comparemap.js";
@@ -84,10 +85,17 @@ function cockpitLink(f) {
 function showFound(collection) {
   if (search.found) search.found.remove();
   const features = collection.features.filter((f) => f.geometry);
-  search.found = L.geoJSON({ type: "FeatureCollection", features }, {
+  // Thousands of take-overs as clusters with their count (Leaflet.markercluster);
+  // a cluster opens as the map zooms in, down to the single circles.
+  const points = L.geoJSON({ type: "FeatureCollection", features }, {
     pointToLayer: (f, at) => L.circleMarker(at, { radius: 6, color: "#b00020", weight: 1, fillOpacity: 0.7 }),
     onEachFeature: (f, layer) => layer.bindTooltip(f.properties.label || ""),
-  }).addTo(search.map);
+  });
+  search.found = L.markerClusterGroup({ chunkedLoading: true, showCoverageOnHover: false });
+  search.found.addLayer(points);
+  search.map.addLayer(search.found);
+  // Without an area the map would stay where it was: show where the take-overs are.
+  if (!search.area && features.length) search.map.fitBounds(points.getBounds(), { maxZoom: 18, animate: false });
   const items = collection.features.slice(0, SHOWN_IN_LIST).map((f) => {
     const p = f.properties;
     const where = `#${p.test_event}${p.test_event_location ? ` ${p.test_event_location}` : ""}`;

@@ -16,15 +16,17 @@ pytestmark = pytest.mark.e2e
 # The robot starts at 7.1 E, 50.6 N and drives north-east (tests/support/browser.py).
 CASE = """
 import json
-from django.contrib.gis.geos import MultiPolygon, Polygon
+from django.contrib.gis.geos import LineString, MultiPolygon, Polygon
 from events.models import Criterion, TestCase, TestEvent, Vehicle
 event = TestEvent.objects.get(location="Gelände {key}")
 case = TestCase.objects.create(
     test_event=event, key="gravel-loop", title="Gravel loop", planned_runs=2,
     area=MultiPolygon(Polygon.from_bbox((7.099, 50.599, 7.104, 50.603))),
+    route=LineString((7.1, 50.6), (7.102, 50.602), srid=4326),
 )
 Criterion.objects.create(test_case=case, kind="distance_without_intervention", value=500)
-print(json.dumps({{"event": event.pk, "vehicle": Vehicle.objects.get(key="{key}").pk}}))
+vehicle = Vehicle.objects.get(key="{key}").pk
+print(json.dumps({{"event": event.pk, "case": case.pk, "vehicle": vehicle}}))
 """
 
 
@@ -115,7 +117,7 @@ def test_test_case_progress_search_and_route_comparison(browser, server, open_le
     by_number = {leg["number"]: leg["id"] for leg in legs["results"]}
     shift = legs["results"][0]["shift"]
     routes.get_by_label("First leg").select_option(str(by_number[2]))
-    routes.get_by_label("Second leg").select_option(str(by_number[3]))
+    routes.get_by_label("Second route").select_option(str(by_number[3]))
     routes.get_by_label("Threshold (m)").fill("5")
     page.get_by_role("button", name="Compare routes").click()
     card = page.locator("#routes-figures article")
@@ -135,6 +137,20 @@ def test_test_case_progress_search_and_route_comparison(browser, server, open_le
         ]
     )
     shot(page, "routes")
+    # The first leg against the test case's planned route.
+    routes.get_by_label("Second route").select_option(
+        label=f"#{ids['event']} gravel-loop: Gravel loop (planned)"
+    )
+    page.get_by_role("button", name="Compare routes").click()
+    planned = page.request.get(
+        f"{server.url}/api/reports/routes/?leg={by_number[2]}&case={ids['case']}&threshold=5"
+    ).json()
+    frechet = f"{planned['pairs'][0]['frechet']:.1f} m"
+    expect(card).to_contain_text(f"Discrete Fréchet distance{frechet}")
+    expect(page.locator("#routes-legend li").nth(1)).to_have_text(
+        "B: #{} gravel-loop: Gravel loop (planned)".format(ids["event"])
+    )
+    shot(page, "routes-planned")
 
     for screen in ("laptop", "tablet", "phone"):
         page.set_viewport_size(VIEWPORTS[screen]["viewport"])

@@ -1,15 +1,21 @@
-"""Did the robot drive the same route: deviation and Fréchet distance between legs."""
+"""Did the robot drive the same route: deviation and Fréchet distance between legs,
+and a leg and a test case's planned route, in the API and in the comparison PDF."""
 
 import math
 from datetime import timedelta
 
 import pytest
+from django.contrib.gis.geos import LineString
+from pypdf import PdfReader
 from pyproj import Geod
 
 from common import roles
-from events.models import SegmentType
+from events.models import SegmentType, TestCase
 from events.services import logs, segments
+from reports.models import Report
+from reports.services.generation import run_job
 from telemetry.services import recording
+from tests.support.pdf import has_row, pdf_text, save_pages
 
 # A straight run eastwards, 2 m apart, about 100 m long.
 EAST = [(7.1 + i * 2.8e-5, 50.6) for i in range(51)]
@@ -94,18 +100,117 @@ def test_a_detour_is_drawn_where_it_leaves_the_route(compare, shift):
     assert len(side["beyond"][0]) == 10
 
 
+def planned(shift, points, key="loop"):
+    route = LineString(points, srid=4326) if points else None
+    return TestCase.objects.create(test_event=shift.test_event, key=key, title=key, route=route)
+
+
+def test_a_leg_against_its_planned_route_five_metres_north(api_client, shift):
+    leg = drive(shift, EAST)
+    # The plan is the straight line only, its two ends: it is measured every metre.
+    case = planned(shift, [(lon, lat + FIVE_METRES_NORTH) for lon, lat in (EAST[0], EAST[-1])])
+    response = api_client(roles.VIEWER).get(
+        "/api/reports/routes/", {"leg": leg.pk, "case": case.pk, "threshold": 4.5}
+    )
+    assert response.status_code == 200, response.content
+    answer = response.json()
+    assert set(answer["routes"]) == {f"leg {leg.pk}", f"case {case.pk}"}
+    assert 100 <= len(answer["routes"][f"case {case.pk}"]) <= 102
+    pair = answer["pairs"][0]
+    assert pair["routes"] == [f"leg {leg.pk}", f"case {case.pk}"]
+    for side in pair["deviation"].values():
+        for figure in ("mean", "p95", "max"):
+            assert side[figure] == pytest.approx(5.0, abs=0.1)
+        assert side["share_beyond"] == 1.0
+    assert pair["frechet"] == pytest.approx(5.0, abs=0.1)
+
+
 def test_bad_requests_get_field_messages(api_client, shift):
     client = api_client(roles.VIEWER)
     leg = drive(shift, EAST)
     empty = logs.create_leg(shift=shift)
+    unplanned = planned(shift, None)
     cases = [
         ({"leg": [leg.pk]}, "leg", "at least two"),
         ({"leg": [leg.pk, 999999]}, "leg", "No leg with id 999999"),
         ({"leg": [leg.pk, empty.pk]}, "leg", "fewer than two GPS points"),
         ({"leg": [leg.pk, leg.pk], "threshold": "-3"}, "threshold", "above 0"),
         ({"leg": [leg.pk, leg.pk], "threshold": "nan"}, "threshold", "above 0"),
+        ({"leg": [leg.pk], "case": [999999]}, "case", "No test case with id 999999"),
+        ({"leg": [leg.pk], "case": [unplanned.pk]}, "case", "has no planned route"),
+        ({"leg": [leg.pk], "case": ["x"]}, "case", "numbers"),
     ]
     for query, field, words in cases:
         response = client.get("/api/reports/routes/", query)
         assert response.status_code == 400, (query, response.content)
         assert words in " ".join(response.json()["errors"][field])
+
+
+def metres(value: float) -> str:
+    return f"{value:.2f} m"
+
+
+def test_the_comparison_pdf_overlays_a_leg_and_its_planned_route(api_client, shift, tmp_path):
+    leg = drive(shift, EAST)
+    case = planned(shift, [(lon, lat + FIVE_METRES_NORTH) for lon, lat in (EAST[0], EAST[-1])])
+    other = logs.create_test_event(location="Elsewhere")
+    routes = {"leg": [leg.pk], "case": [case.pk], "threshold": 4.5}
+    operator = api_client(roles.OPERATOR)
+    response = operator.post(
+        "/api/reports/",
+        {"compare": [shift.test_event.pk, other.pk], "options": {"routes": routes}},
+        format="json",
+    )
+    assert response.status_code == 202, response.content
+    report = run_job(response.json()["id"])
+    assert report.status == Report.Status.DONE, report.error
+    pdf = b"".join(operator.get(f"/api/reports/{report.pk}/pdf/").streaming_content)
+    save_pages(pdf, "comparison-routes")
+    text = pdf_text(pdf, tmp_path)
+    assert "Routes" in text
+    assert has_row(text, "A", "blue", f"Test event {shift.test_event.pk}, shift")
+    assert has_row(text, "B", "orange", f"Test case {case.key}: {case.title} (planned)")
+    # The overlay map is a picture on the routes' page (the charts are vector drawings).
+    path = tmp_path / "routes.pdf"
+    path.write_bytes(pdf)
+    pictures = [p for page in PdfReader(str(path)).pages for p in page.images]
+    assert len(pictures) == 1 and pictures[0].image.width > 500
+    api = api_client(roles.VIEWER).get(
+        "/api/reports/routes/", {"leg": leg.pk, "case": case.pk, "threshold": 4.5}
+    )
+    pair = api.json()["pairs"][0]
+    for letter, other_letter, name in (("A", "B", f"leg {leg.pk}"), ("B", "A", f"case {case.pk}")):
+        side = pair["deviation"][name]
+        assert has_row(
+            text,
+            f"{letter} from {other_letter}",
+            metres(pair["frechet"]),
+            metres(side["mean"]),
+            metres(side["p95"]),
+            metres(side["max"]),
+            "100.0 %",
+        ), (letter, text)
+        assert abs(side["mean"] - 5.0) < 0.1
+
+
+def test_a_comparison_with_routes_it_cannot_draw_is_refused_before_queueing(api_client, shift):
+    leg = drive(shift, EAST)
+    unplanned = planned(shift, None)
+    other = logs.create_test_event(location="Elsewhere")
+    operator = api_client(roles.OPERATOR)
+    for routes, words in (
+        ({"leg": [leg.pk]}, "at least two routes"),
+        ({"leg": [leg.pk], "case": [unplanned.pk]}, "has no planned route"),
+        ({"leg": [leg.pk, 999999]}, "No leg with id 999999"),
+        ({"leg": [leg.pk, "x"]}, "ids (numbers)"),
+        ({"leg": [leg.pk, leg.pk], "threshold": 0}, "above 0"),
+        ([leg.pk], "an object"),
+    ):
+        response = operator.post(
+            "/api/reports/",
+            {"compare": [shift.test_event.pk, other.pk], "options": {"routes": routes}},
+            format="json",
+        )
+        assert response.status_code == 400, routes
+        assert words in " ".join(response.json()["errors"]["options"]), response.json()
+    assert Report.objects.count() == 0
