@@ -118,7 +118,7 @@ def compare_routes(routes: list[Route], threshold: float = DEFAULT_THRESHOLD) ->
         raise ValueError(_("%(route)s has fewer than two GPS points.") % {"route": short[0]})
     lon0 = float(np.median(np.concatenate([r.lon for r in routes])))
     lat0 = float(np.median(np.concatenate([r.lat for r in routes])))
-    to_local, _ = local_frame(lon0, lat0)
+    to_local = local_frame(lon0, lat0)[0]
     lines = {
         r.name: shapely.linestrings(np.column_stack(to_local.transform(r.lon, r.lat)))
         for r in routes
