@@ -18,6 +18,7 @@ from datetime import UTC, datetime
 
 from django.conf import settings
 from django.utils import timezone
+from django.utils.translation import gettext as _
 
 from events.models import Leg, Note, Segment, Shift, TestEvent
 from events.selectors.history import entries_since
@@ -266,14 +267,37 @@ class Verdict:
     ok: bool
     message: str
     changes: list[dict] = field(default_factory=list)
+    test_event: int | None = None
+
+    def as_dict(self) -> dict:
+        return {
+            "ok": self.ok,
+            "message": self.message,
+            "test_event": self.test_event,
+            "changes": self.changes,
+        }
 
 
 def verify(stamp: dict) -> Verdict:
     event = TestEvent.objects.filter(uid=stamp["event_uid"]).first()
     if event is None:
-        return Verdict(False, f"No test event with uid {stamp['event_uid']} here.")
+        return Verdict(
+            False, _("No test event with uid %(uid)s here.") % {"uid": stamp["event_uid"]}
+        )
+    names = {"event": str(event)}
     if data_digest(event) == stamp["digest"]:
-        return Verdict(True, f"The data of test event '{event}' is unchanged.")
+        return Verdict(
+            True, _("The data of test event '%(event)s' is unchanged.") % names, [], event.pk
+        )
     built = datetime.strptime(stamp["built"], _STAMP_FORMAT).replace(tzinfo=UTC)
     changes = [_described(e) for e in changes_since(event, built)]
-    return Verdict(False, f"The data of test event '{event}' changed since the report.", changes)
+    message = _("The data of test event '%(event)s' changed since the report.") % names
+    return Verdict(False, message, changes, event.pk)
+
+
+def verify_report(content: bytes) -> Verdict | None:
+    """Does the database still hold the data a PDF or JSON report was built from?
+    None when ``content`` carries no FTT stamp.  The command (``ftt_report
+    --verify``), the API and the GUI all ask here."""
+    stamp = stamp_of_report(content)
+    return None if stamp is None else verify(stamp)

@@ -72,11 +72,18 @@ export async function loadLevel(level, keepSelection = true) {
   }
 }
 
+/* "final, amended 2 times": the server counts the amendments (the report lists them). */
+async function showAmendments(row, badge) {
+  const { count } = await api("GET", `reports/amendments/${row.id}/`);
+  if (count && current("event") === row) badge.textContent = _("final, amended %(count)s times", { count });
+}
+
 function updateLevelState(level) {
   const row = current(level);
   const badge = $(`[data-state="${level}"]`);
   badge.textContent = row ? stateOf(row) : "";
   badge.className = "state" + (row ? (row.is_open ? " open" : " closed") : "");
+  if (level === "event" && row && row.finalised) showAmendments(row, badge).catch(showError);
   const parentRow = LEVELS[level].parent ? current(LEVELS[level].parent) : true;
   const can = CONFIG.canOperate;
   const setBtn = (action, enabled, show = true) => {
