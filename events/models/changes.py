@@ -10,7 +10,6 @@ Poses are not tracked: they are only ever added, never changed, and a
 history row per pose would double the cost of the busiest write.
 """
 
-from django.contrib.gis.db.models import GeometryField
 from django.db import models
 from simple_history.models import HistoricalRecords
 
@@ -34,16 +33,15 @@ class ChangeOrigin(models.Model):
 class IndexedByRow(HistoricalRecords):
     """History rows indexed only by the row they belong to (``id``) and by date:
     the only two ways they are looked up (``events.selectors.history``).  The
-    copied columns' own indexes (foreign keys, uid, a GiST index per position)
-    would each be written with every history row and never read."""
+    copied columns' own indexes (foreign keys, uid) would each be written with
+    every history row and never read.  Spatial indexes stay: SpatiaLite cannot
+    drop one by migration."""
 
     def copy_fields(self, model):
         fields = super().copy_fields(model)
         for name, field in fields.items():
             if name != model._meta.pk.attname:
                 field.db_index = False
-            if isinstance(field, GeometryField):
-                field.spatial_index = False
         return fields
 
 
