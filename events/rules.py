@@ -29,6 +29,12 @@ def open_masters_of_leg(leg_id: int) -> QuerySet[Segment]:
     return Segment.objects.filter(leg_id=leg_id, parent__isnull=True, end__isnull=True)
 
 
+def open_segments_of_leg(leg_id: int) -> QuerySet[Segment]:
+    """The leg's open master and its open reasons (closing a master closes its
+    reasons), in one read: what a change of mode closes."""
+    return Segment.objects.filter(leg_id=leg_id, end__isnull=True)
+
+
 def open_take_overs(leg_ids) -> QuerySet[Segment]:
     """Each leg's open take-over first: the newest open reason under the open ITO
     master (quick reasons annotate it, whatever row the operator has selected)."""

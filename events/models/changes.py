@@ -35,9 +35,24 @@ class ChangeOrigin(models.Model):
         abstract = True
 
 
+class IndexedByRow(HistoricalRecords):
+    """History rows indexed only by the row they belong to (``id``) and by date:
+    the only two ways they are looked up (``events.selectors.history``).  The
+    copied columns' own indexes (foreign keys, uid) would each be written with
+    every history row and never read.  Spatial indexes stay: SpatiaLite cannot
+    drop one by migration."""
+
+    def copy_fields(self, model):
+        fields = super().copy_fields(model)
+        for name, field in fields.items():
+            if name != model._meta.pk.attname:
+                field.db_index = False
+        return fields
+
+
 def tracked(**options) -> HistoricalRecords:
     """The history of one model; the user link never blocks deleting an account."""
-    return HistoricalRecords(
+    return IndexedByRow(
         bases=[ChangeOrigin],
         user_related_name="+",
         history_change_reason_field=models.TextField(null=True),

@@ -13,6 +13,8 @@ from datetime import datetime
 
 from django.contrib.gis.geos import Point
 from django.db import transaction
+from django.db.models import Value
+from django.db.models.functions import Greatest
 from django.utils import timezone
 from django.utils.translation import gettext as _
 
@@ -20,6 +22,7 @@ from common.errors import NotFound, RuleViolation
 from common.retries import stored_row
 from events import rules
 from events.feed import announce_and_return
+from events.history import write_history
 from events.models import ItoReason, Leg, Segment, SegmentType
 from events.services.common import (
     apply_fields,
@@ -117,21 +120,47 @@ def _open_master(leg: Leg) -> Segment | None:
     return rules.open_masters_of_leg(leg.pk).select_for_update(no_key=True).first()
 
 
-def _close(segment: Segment, at: datetime) -> None:
+def _open_master_and_reasons(leg: Leg) -> tuple[Segment | None, list[Segment]]:
+    rows = list(rules.open_segments_of_leg(leg.pk).select_for_update(no_key=True))
+    master = next((row for row in rows if row.parent_id is None), None)
+    return master, [row for row in rows if master and row.parent_id == master.pk]
+
+
+def _end(segment: Segment, at: datetime, reasons: list[Segment] | None = None) -> list[Segment]:
+    """End ``segment`` and, for a master, its open ``reasons`` (read here when not
+    given) in one write; returns the rows ended, whose history the caller writes."""
     end = max(at, segment.start)
+    ending = [segment]
     if segment.parent_id is None:
-        # A bulk update bypasses save(), which stamps `modified` everywhere else.
-        # One save per child (a master has a few), so each leaves its history entry.
-        for child in segment.children.filter(end__isnull=True):
-            child.end = max(end, child.start)
-            child.save(update_fields=["end"])
-    segment.end = end
-    segment.save(update_fields=["end"])
+        ending += segment.children.filter(end__isnull=True) if reasons is None else reasons
+    now = timezone.now()
+    for row in ending:
+        row.end = max(end, row.start)
+        row.modified = now
+    # A reason that started after ``end`` ends at its start, as the loop above says.
+    Segment.objects.filter(pk__in=[row.pk for row in ending]).update(
+        end=Greatest("start", Value(end)), modified=now
+    )
+    return ending
+
+
+def _close(segment: Segment, at: datetime, reasons: list[Segment] | None = None) -> None:
+    write_history(Segment, changed=_end(segment, at, reasons))
 
 
 def _start_master(
-    leg, mode, at, robot_stamp, positions, reason_key, uid, start_uncertainty=None, reason_uid=None
-) -> Segment:
+    leg,
+    mode,
+    at,
+    robot_stamp,
+    positions,
+    reason_key,
+    uid,
+    start_uncertainty=None,
+    reason_uid=None,
+    suggested_reason=None,
+) -> list[Segment]:
+    """The new master and, for ITO, its first reason; the caller writes their history."""
     master = Segment(
         leg=leg,
         segment_type_id=mode,
@@ -142,13 +171,21 @@ def _start_master(
     )
     if uid is not None:
         master.uid = uid
-    master.save()
-    if mode == SegmentType.ITO:
-        _add_child(master, _reason(reason_key), at, robot_stamp, start_uncertainty, uid=reason_uid)
-    return master
+    master.save_without_historical_record()
+    if mode != SegmentType.ITO:
+        return [master]
+    child = _new_child(
+        master, _reason(reason_key), at, robot_stamp, start_uncertainty, uid=reason_uid
+    )
+    if suggested_reason:
+        # The robot's reason, waiting for the operator's confirmation; a key
+        # the catalogue does not have is no suggestion.
+        child.suggested_reason = ItoReason.objects.filter(pk=suggested_reason).first()
+    child.save_without_historical_record()
+    return [master, child]
 
 
-def _add_child(
+def _new_child(
     master: Segment,
     reason: ItoReason,
     at: datetime,
@@ -156,8 +193,8 @@ def _add_child(
     start_uncertainty=None,
     uid=None,
 ) -> Segment:
-    # A uid of None would be stored as NULL instead of the model's default.
-    return Segment.objects.create(
+    return Segment(
+        # A uid of None would be stored as NULL instead of the model's default.
         **({} if uid is None else {"uid": uid}),
         start_uncertainty=start_uncertainty,
         leg_id=master.leg_id,
@@ -171,6 +208,12 @@ def _add_child(
         start_local_y=master.start_local_y if at == master.start else None,
         start_local_frame=master.start_local_frame if at == master.start else "",
     )
+
+
+def _add_child(master: Segment, reason: ItoReason, at: datetime, uid=None) -> Segment:
+    child = _new_child(master, reason, at, uid=uid)
+    child.save()
+    return child
 
 
 @transaction.atomic
@@ -203,21 +246,23 @@ def report_mode(
         raise RuleViolation({"mode": [message]})
     if existing := stored_row(Segment, uid, leg_id=leg.pk):
         return ModeReport(existing, changed=False)
-    leg = lock(leg)
+    # The shift comes along for the announcement (events.feed).
+    leg = lock(leg, "shift")
     at = instant(at)
     require_open(leg, str(leg))
-    current = _open_master(leg)
+    current, reasons = _open_master_and_reasons(leg)
     if current is not None and current.segment_type_id == mode:
         return ModeReport(current, changed=False)
+    ended = []
     if current is not None:
         require_not_before(
             current, at, _("The open %(mode)s segment") % {"mode": current.segment_type_id.upper()}
         )
-        _close(current, at)
+        ended = _end(current, at, reasons)
     else:
         require_not_before(leg, at, str(leg))
     positions = _position_fields(gps, local)
-    master = _start_master(
+    started = _start_master(
         leg,
         mode,
         at,
@@ -227,18 +272,11 @@ def report_mode(
         uid,
         start_uncertainty=start_uncertainty,
         reason_uid=reason_uid,
+        suggested_reason=suggested_reason,
     )
-    if suggested_reason and mode == SegmentType.ITO:
-        _suggest(master, suggested_reason)
-    return ModeReport(announce_and_return(master), changed=True)
-
-
-def _suggest(master: Segment, reason_key: str) -> None:
-    """The robot's reason for the take-over, waiting for the operator's confirmation;
-    a key the catalogue does not have is no suggestion."""
-    suggestion = ItoReason.objects.filter(pk=reason_key).first()
-    if suggestion is not None:
-        master.children.update(suggested_reason=suggestion)
+    # The switch's history entries (rows ended and started) in one write.
+    write_history(Segment, changed=ended, created=started)
+    return ModeReport(announce_and_return(started[0]), changed=True)
 
 
 @transaction.atomic
@@ -301,9 +339,9 @@ def close_open_master(leg: Leg, at: datetime | None = None) -> Segment | None:
     """Used when logging stops: end whatever master is open, if any."""
     leg = lock(leg)
     at = instant(at)
-    current = _open_master(leg)
+    current, reasons = _open_master_and_reasons(leg)
     if current is not None:
-        _close(announce_and_return(current), at)
+        _close(announce_and_return(current), at, reasons)
     return current
 
 

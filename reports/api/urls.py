@@ -9,6 +9,13 @@ urlpatterns = [
     path("choices/", views.ReportChoicesView.as_view(), name="report-choices"),
     path("<int:pk>/", views.ReportDetailView.as_view(), name="report-detail"),
     path("<int:pk>/pdf/", views.ReportPdfView.as_view(), name="report-pdf"),
+    path("<int:pk>/verify/", views.ReportVerifyView.as_view(), name="report-verify"),
+    path("verify/", views.VerifyUploadView.as_view(), name="report-verify-upload"),
+    path(
+        "amendments/<int:test_event_id>/",
+        views.AmendmentsView.as_view(),
+        name="report-amendments",
+    ),
     path(
         "statistics/<int:test_event_id>/",
         views.StatisticsView.as_view(),

@@ -11,6 +11,7 @@ from django.utils.translation import gettext as _
 from drf_spectacular.utils import OpenApiParameter, extend_schema
 from rest_framework import status
 from rest_framework.exceptions import ValidationError
+from rest_framework.parsers import MultiPartParser
 from rest_framework.response import Response
 from rest_framework.views import APIView
 
@@ -28,6 +29,7 @@ from reports.models import Report
 from reports.selectors import exports
 from reports.selectors.comparison import compare
 from reports.selectors.disengagements import disengagements_csv
+from reports.selectors.provenance import amendments_of, verify_report
 from reports.selectors.reports import reports_of
 from reports.selectors.routes import (
     DEFAULT_THRESHOLD,
@@ -250,6 +252,78 @@ class ReportPdfView(APIView):
         else:
             name = f"ftt-report-test-event-{report.test_event_id}-{report.pk}.pdf"
         return FileResponse(report.pdf.open("rb"), as_attachment=True, filename=name)
+
+
+def _verdict(content: bytes, field: str) -> Response:
+    verdict = verify_report(content)
+    if verdict is None:
+        message = _(
+            "This file carries no FTT data digest: give a PDF or JSON report FTT made "
+            "(reports made before FTT stamped them cannot be checked)."
+        )
+        raise ValidationError({field: [message]})
+    return Response(verdict.as_dict())
+
+
+class VerifyUploadView(APIView):
+    """Is a report (PDF or JSON, uploaded as ``file``) still true to the data?
+    The answer of ``ftt_report --verify``: ok, and when not, which records changed
+    since the report, when, by whom and through what."""
+
+    permission_classes = [RolePermission]
+    read_role = roles.VIEWER
+    # Checking changes nothing: whoever may read reports may check one.
+    write_role = roles.VIEWER
+    parser_classes = [MultiPartParser]
+
+    @extend_schema(
+        request={
+            "multipart/form-data": {
+                "type": "object",
+                "properties": {"file": {"type": "string", "format": "binary"}},
+            }
+        },
+        responses={200: dict},
+    )
+    def post(self, request):
+        upload = request.FILES.get("file")
+        if upload is None:
+            raise ValidationError({"file": [_("Choose a report file (PDF or JSON) to check.")]})
+        return _verdict(upload.read(), "file")
+
+
+class ReportVerifyView(APIView):
+    """The same check for a report this installation made and keeps."""
+
+    permission_classes = [RolePermission]
+    read_role = roles.VIEWER
+
+    @extend_schema(responses={200: dict})
+    def get(self, request, pk: int):
+        report = get_object_or_404(Report, pk=pk, status=Report.Status.DONE)
+        with report.pdf.open("rb") as pdf:
+            return _verdict(pdf.read(), "report")
+
+
+class AmendmentsView(APIView):
+    """Whether a test event is final and the changes made to it since (the
+    report's list of amendments): {final, finalised, count, amendments}."""
+
+    permission_classes = [RolePermission]
+    read_role = roles.VIEWER
+
+    @extend_schema(responses={200: dict})
+    def get(self, request, test_event_id: int):
+        event = get_object_or_404(TestEvent, pk=test_event_id)
+        amendments = amendments_of(event)
+        return Response(
+            {
+                "final": event.finalised is not None,
+                "finalised": event.finalised,
+                "count": len(amendments),
+                "amendments": amendments,
+            }
+        )
 
 
 class ExportView(APIView):

@@ -9,7 +9,7 @@ from pathlib import Path
 from django.conf import settings
 from django.utils import timezone
 from django.utils.translation import gettext as _
-from django.utils.translation import gettext_noop
+from django.utils.translation import gettext_noop, ngettext
 
 from reports import formatting as fmt
 from reports.documents import tables
@@ -134,6 +134,12 @@ class Sections:
                 + (f" ({a['reason']})" if a["reason"] else "")
                 for a in stamp["amendments"]
             ],
+            "amended": ngettext(
+                "amended %(count)s time after finalisation",
+                "amended %(count)s times after finalisation",
+                len(stamp["amendments"]),
+            )
+            % {"count": len(stamp["amendments"])},
             "options": [[k, str(v)] for k, v in stamp["options"].items()],
         }
 

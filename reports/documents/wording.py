@@ -102,7 +102,6 @@ def report_text() -> dict[str, str]:
         "footer_provisional": _("provisional – open segments"),
         "final_since": _("final since"),
         "final_title": _("FINAL since %(when)s"),
-        "amended": _("amended %(count)s times after finalisation"),
         "test_plan": _("Test plan"),
         "test_plan_intro": _(
             "Each test case’s criteria, judged on the figures above (same rules): pass, fail, "

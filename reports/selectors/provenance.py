@@ -267,6 +267,15 @@ class Verdict:
     ok: bool
     message: str
     changes: list[dict] = field(default_factory=list)
+    test_event: int | None = None
+
+    def as_dict(self) -> dict:
+        return {
+            "ok": self.ok,
+            "message": self.message,
+            "test_event": self.test_event,
+            "changes": self.changes,
+        }
 
 
 def verify(stamp: dict) -> Verdict:
@@ -275,11 +284,20 @@ def verify(stamp: dict) -> Verdict:
         return Verdict(
             False, _("No test event with uid %(uid)s here.") % {"uid": stamp["event_uid"]}
         )
+    names = {"event": str(event)}
     if data_digest(event) == stamp["digest"]:
         return Verdict(
-            True, _("The data of test event '%(event)s' is unchanged.") % {"event": event}
+            True, _("The data of test event '%(event)s' is unchanged.") % names, [], event.pk
         )
     built = datetime.strptime(stamp["built"], _STAMP_FORMAT).replace(tzinfo=UTC)
     changes = [_described(e) for e in changes_since(event, built)]
-    message = _("The data of test event '%(event)s' changed since the report.") % {"event": event}
-    return Verdict(False, message, changes)
+    message = _("The data of test event '%(event)s' changed since the report.") % names
+    return Verdict(False, message, changes, event.pk)
+
+
+def verify_report(content: bytes) -> Verdict | None:
+    """Does the database still hold the data a PDF or JSON report was built from?
+    None when ``content`` carries no FTT stamp.  The command (``ftt_report
+    --verify``), the API and the GUI all ask here."""
+    stamp = stamp_of_report(content)
+    return None if stamp is None else verify(stamp)

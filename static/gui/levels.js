@@ -6,7 +6,7 @@ import { take } from "./bootstrap.js";
 import { clearError, notice, showError } from "./feedback.js";
 import { LEVELS, byId, current, saveUrl, state, vehicleName } from "./state.js";
 import { fmtDay, fmtTime } from "./format.js";
-import { _ } from "./i18n.js";
+import { _, plural } from "./i18n.js";
 import { confirmDialog, formDialog } from "./dialogs.js";
 import { Live } from "./live.js";
 import { Collector } from "./collector.js";
@@ -72,11 +72,18 @@ export async function loadLevel(level, keepSelection = true) {
   }
 }
 
+/* "final, amended 2 times": the server counts the amendments (the report lists them). */
+async function showAmendments(row, badge) {
+  const { count } = await api("GET", `reports/amendments/${row.id}/`);
+  if (count && current("event") === row) badge.textContent = plural(ngettext("final, amended %(count)s time", "final, amended %(count)s times", count), count);
+}
+
 function updateLevelState(level) {
   const row = current(level);
   const badge = $(`[data-state="${level}"]`);
   badge.textContent = row ? stateOf(row) : "";
   badge.className = "state" + (row ? (row.is_open ? " open" : " closed") : "");
+  if (level === "event" && row && row.finalised) showAmendments(row, badge).catch(showError);
   const parentRow = LEVELS[level].parent ? current(LEVELS[level].parent) : true;
   const can = CONFIG.canOperate;
   const setBtn = (action, enabled, show = true) => {

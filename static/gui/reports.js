@@ -31,11 +31,11 @@ const Reports = {
     if (!event) {
       const p = document.createElement("p");
       p.textContent = _("Select a test event first.");
-      body.append(p);
+      body.append(p, this.verifyForm());
     } else {
       // The form's fields are the server's (gui/api/forms/, "report").
       const forms = await api("GET", "forms/", undefined, { root: CONFIG.guiApiRoot });
-      body.append(this.downloads(event), this.form(event, forms.report), Object.assign(document.createElement("div"), { id: "report-list" }));
+      body.append(this.downloads(event), this.form(event, forms.report), Object.assign(document.createElement("div"), { id: "report-list" }), this.verifyForm());
       await this.refresh(event);
     }
     if (!d.open) d.showModal();
@@ -91,6 +91,54 @@ const Reports = {
       }
     });
     return form;
+  },
+  /* Is a report (PDF or JSON) still true to the data? The server checks (the
+   * answer of ftt_report --verify); the page shows its answer. */
+  verifyForm() {
+    const form = document.createElement("form");
+    form.id = "verify-form";
+    const h = document.createElement("h3");
+    h.textContent = _("Verify a report");
+    const label = document.createElement("label");
+    label.append(`${_("Report file (PDF or JSON)")} `);
+    const file = Object.assign(document.createElement("input"), { type: "file", name: "file", accept: ".pdf,.json,application/pdf,application/json" });
+    label.append(file);
+    const go = Object.assign(document.createElement("button"), { type: "submit", textContent: _("Verify") });
+    const answer = Object.assign(document.createElement("div"), { className: "verify-answer" });
+    answer.setAttribute("role", "status");
+    form.append(h, label, " ", go, answer);
+    form.addEventListener("submit", async (e) => {
+      e.preventDefault();
+      const errorBox = $("#reports-dialog .dialog-error");
+      errorBox.hidden = true;
+      answer.replaceChildren();
+      const data = new FormData();
+      if (file.files[0]) data.append("file", file.files[0]);
+      try {
+        answer.replaceChildren(this.verdict(await api("POST", "reports/verify/", data)));
+      } catch (err) {
+        showError(err, errorBox);
+      }
+    });
+    return form;
+  },
+  verdict({ ok, message, changes }) {
+    const box = document.createElement("div");
+    const p = document.createElement("p");
+    p.className = ok ? "verify-ok" : "verify-changed";
+    p.textContent = `${ok ? _("OK") : _("CHANGED")}: ${message}`;
+    box.append(p);
+    if (changes.length) {
+      const ul = document.createElement("ul");
+      for (const c of changes) {
+        const li = document.createElement("li");
+        const who = c.by || _("FTT");
+        li.textContent = _("%(record)s changed %(at)s by %(who)s via %(channel)s", { record: c.record, at: fmtTime(c.at), who, channel: c.channel }) + (c.reason ? ` (${c.reason})` : "");
+        ul.append(li);
+      }
+      box.append(ul);
+    }
+    return box;
   },
   /* The whole test event, or the shift or leg selected when the dialog opened
    * (the narrowest by default); the server checks that they belong together. */

@@ -6,7 +6,9 @@ import pytest
 from django.urls import reverse
 from django.utils import timezone
 
+from events.history import authored
 from events.models import ItoReason, Segment, Vehicle
+from events.selectors.history import history_of
 from events.services import finality, logs, segments
 from exchange.archive import open_archive
 from exchange.export import export_events, select_events
@@ -94,6 +96,27 @@ def test_reason_changed_by_an_import_is_recorded_as_import(take_over, tmp_path, 
 def test_closing_a_master_records_each_child(take_over):
     segments.close_segment(take_over.parent)
     assert take_over.history.filter(end__isnull=False).count() == 1
+
+
+def test_a_change_of_mode_leaves_one_entry_per_row_it_ends_or_starts(leg):
+    robot = staff_user("operator")
+    with authored("api", user=robot, reason="field trial"):
+        ito = segments.report_mode(leg, "ito", suggested_reason="safety").master
+        auto = segments.report_mode(leg, "auto").master
+    child = ito.children.get()
+    for row in (ito, child):
+        created, ended = history_of(row)[::-1]
+        assert (created["kind"], ended["kind"]) == ("created", "changed")
+        assert {(e["author"], e["channel"], e["reason"]) for e in (created, ended)} == {
+            (robot.username, "api", "field trial")
+        }
+        row.refresh_from_db()
+        assert [c for c in ended["changes"] if c["field"] == "end"] == [
+            {"field": "end", "before": None, "after": str(row.end)}
+        ]
+    # The robot's suggestion is in the child's first entry, not a change after it.
+    assert child.history.earliest("history_id").suggested_reason_id == "safety"
+    assert [e["kind"] for e in history_of(auto)] == ["created"]
 
 
 # --- finalising ------------------------------------------------------------------------------

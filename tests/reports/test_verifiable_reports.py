@@ -56,7 +56,7 @@ def test_final_report_says_final_and_lists_amendments(scenario, tmp_path):
     options = ["--level", "summary", "--no-tiles", "--no-image-appendix", "-o", str(pdf)]
     call_command("ftt_report", "--test-event", str(event.pk), *options, stdout=io.StringIO())
     text = flat(pdf_text(pdf.read_bytes(), tmp_path))
-    assert "FINAL since" in text and "amended 1 times" in text
+    assert "FINAL since" in text and "amended 1 time after finalisation" in text
     assert "wrong reason tapped" in text and "frozen" in text
     assert "PROVISIONAL" not in text
 

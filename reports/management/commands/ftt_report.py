@@ -26,7 +26,7 @@ from reports.figures.tiles import MAX_ZOOM
 from reports.models import Report
 from reports.selectors import exports
 from reports.selectors.disengagements import disengagements_csv, events_in_month
-from reports.selectors.provenance import json_report, stamp_of_report, verify
+from reports.selectors.provenance import json_report, verify_report
 from reports.services.generation import run_job
 
 
@@ -145,13 +145,12 @@ class Command(BaseCommand):
     def _verify(self, path: Path):
         if not path.is_file():
             raise CommandError(gettext("%(path)s does not exist.") % {"path": path})
-        stamp = stamp_of_report(path.read_bytes())
-        if stamp is None:
+        verdict = verify_report(path.read_bytes())
+        if verdict is None:
             raise CommandError(
                 gettext("%(path)s carries no FTT data digest (made before FTT stamped it?).")
                 % {"path": path}
             )
-        verdict = verify(stamp)
         self.stdout.write(("OK: " if verdict.ok else "CHANGED: ") + verdict.message)
         for change in verdict.changes:
             reason = f" ({change['reason']})" if change["reason"] else ""

@@ -1,0 +1,112 @@
+"""The report check over the API: the answer of ``ftt_report --verify`` (issue 26)."""
+
+import io
+
+from django.core.files.base import ContentFile
+from django.core.files.uploadedfile import SimpleUploadedFile
+from django.core.management import call_command
+
+from reports.models import Report
+from tests.support.pdf import flat, pdf_text
+
+OPTIONS = ["--level", "summary", "--no-tiles", "--no-image-appendix"]
+
+
+def _take_over(scenario):
+    return scenario.masters["I1"].children.order_by("start", "id").first()
+
+
+def _upload(client, name: str, content: bytes):
+    upload = SimpleUploadedFile(name, content)
+    return client.post("/api/reports/verify/", {"file": upload}, format="multipart")
+
+
+def _pdf(event, tmp_path) -> bytes:
+    pdf = tmp_path / "r.pdf"
+    call_command(
+        "ftt_report", "--test-event", str(event.pk), *OPTIONS, "-o", str(pdf), stdout=io.StringIO()
+    )
+    return pdf.read_bytes()
+
+
+def test_an_uploaded_pdf_is_ok_until_a_reason_changes_then_names_who(
+    scenario, api_client, tmp_path
+):
+    event = scenario.event
+    pdf = _pdf(event, tmp_path)
+    assert "Provenance" in flat(pdf_text(pdf, tmp_path))
+    viewer = api_client("viewer")
+    answer = _upload(viewer, "r.pdf", pdf)
+    assert answer.status_code == 200
+    assert answer.json() == {
+        "ok": True,
+        "message": f"The data of test event '{event}' is unchanged.",
+        "test_event": event.pk,
+        "changes": [],
+    }
+    take_over = _take_over(scenario)
+    operator = api_client("operator")
+    changed = operator.patch(
+        f"/api/segments/{take_over.pk}/", {"ito_reason": "other"}, format="json"
+    )
+    assert changed.status_code == 200
+    answer = _upload(viewer, "r.pdf", pdf).json()
+    assert answer["ok"] is False
+    assert answer["message"] == f"The data of test event '{event}' changed since the report."
+    assert [(c["record"], c["by"], c["channel"]) for c in answer["changes"]] == [
+        (f"segment {take_over.uid}", operator.user.username, "api")
+    ]
+
+
+def test_a_json_report_and_a_stored_report_are_checked_too(scenario, api_client, tmp_path):
+    event = scenario.event
+    figures = tmp_path / "figures.json"
+    call_command("ftt_report", "--test-event", str(event.pk), "--json", str(figures))
+    viewer = api_client("viewer")
+    assert _upload(viewer, "figures.json", figures.read_bytes()).json()["ok"] is True
+    stored = Report.objects.create(
+        test_event=event, status=Report.Status.DONE, pdf=ContentFile(_pdf(event, tmp_path), "r.pdf")
+    )
+    answer = viewer.get(f"/api/reports/{stored.pk}/verify/")
+    assert answer.status_code == 200 and answer.json()["ok"] is True
+
+
+def test_a_file_without_a_stamp_or_no_file_is_refused_with_a_field_message(scenario, api_client):
+    viewer = api_client("viewer")
+    answer = _upload(viewer, "notes.txt", b"just some text")
+    assert answer.status_code == 400
+    assert "no FTT data digest" in answer.json()["errors"]["file"][0]
+    empty = viewer.post("/api/reports/verify/", {}, format="multipart")
+    assert empty.status_code == 400
+    assert empty.json()["errors"]["file"] == ["Choose a report file (PDF or JSON) to check."]
+    assert api_client(anonymous=True).post("/api/reports/verify/", {}).status_code in (401, 403)
+
+
+def test_amendments_count_what_was_changed_after_finalising(scenario, api_client):
+    from events.history import authored
+    from events.services import finality, logs
+    from events.services import segments as segment_services
+    from tests.support.accounts import staff_user
+
+    event = scenario.event
+    viewer = api_client("viewer")
+    url = f"/api/reports/amendments/{event.pk}/"
+    assert viewer.get(url).json() == {
+        "final": False,
+        "finalised": None,
+        "count": 0,
+        "amendments": [],
+    }
+    event = finality.finalise_test_event(logs.close_test_event(event))
+    assert viewer.get(url).json()["count"] == 0
+    admin = staff_user("administrator")
+    for reason, value in (("mis-tapped", "other"), ("checked the video", "safety")):
+        with authored("admin", user=admin, reason=reason):
+            segment_services.annotate_segment(_take_over(scenario), ito_reason=value)
+    answer = viewer.get(url).json()
+    assert answer["final"] is True and answer["count"] == 2
+    assert [(a["by"], a["channel"], a["reason"]) for a in answer["amendments"]] == [
+        (admin.username, "admin", "mis-tapped"),
+        (admin.username, "admin", "checked the video"),
+    ]
+    assert viewer.get("/api/reports/amendments/999999/").status_code == 404
