@@ -16,6 +16,7 @@ from common.sql import bound_cursor
 from events.models import PoseSource, Segment
 from telemetry.models import LocalPose, Pose
 from telemetry.models.poses import FixStatus
+from telemetry.services import figure_rows
 
 
 class NewPoint(NamedTuple):
@@ -50,7 +51,8 @@ _POINT = {
 }
 
 # One pose, one statement: it stores nothing when the segment or a named pose
-# source is gone (the master comes from a per-process cache).
+# source is gone (the master comes from a per-process cache), and returns what
+# the segment's figures hold, which the pose is then added to.
 _ONE_POSE = f"""
 INSERT INTO {Pose._meta.db_table} ({POSE_COLUMNS})
 SELECT %s, m.id, {{point}}, %s, %s, %s, %s, %s, %s
@@ -58,14 +60,16 @@ FROM {Segment._meta.db_table} m
 WHERE m.id = %s
   AND (%s IS NULL OR EXISTS (SELECT 1 FROM {PoseSource._meta.db_table} WHERE id = %s))
 ON CONFLICT (uid) DO NOTHING
-RETURNING id
+RETURNING id, {figure_rows.kept_returning(Pose._meta.db_table + ".segment_id", figure_rows.GPS)}
 """
 
 
-def insert_pose(master_id: int, fix, source_id: int | None, received) -> int | None:
-    """Store one checked fix on the master segment ``master_id``; the new row's id,
-    or None when nothing was stored (a known uid, or the segment or pose source
-    no longer exists)."""
+def insert_pose(
+    master_id: int, fix, source_id: int | None, received
+) -> tuple[int, figure_rows.Kept | None] | None:
+    """Store one checked fix on the master segment ``master_id``; the new row's id
+    and what its segment's figures held, or None when nothing was stored (a
+    known uid, or the segment or pose source no longer exists)."""
 
     def prepared(name, value):
         return Pose._meta.get_field(name).get_db_prep_value(value, connection)
@@ -85,7 +89,7 @@ def insert_pose(master_id: int, fix, source_id: int | None, received) -> int | N
     with connection.cursor() as cursor:
         cursor.execute(_ONE_POSE.format(point=_POINT[connection.vendor]), params)
         row = cursor.fetchone()
-    return None if row is None else row[0]
+    return None if row is None else (row[0], figure_rows.kept_from(row[1:]))
 
 
 def insert_fixes(master, source_id, fixes, received) -> list[NewPoint]:

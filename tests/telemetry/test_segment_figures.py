@@ -208,3 +208,27 @@ def test_migration_measures_the_tracks_of_an_existing_database(leg):
     assert again.keys() == kept.keys() == {(master.pk, GPS), (master.pk, LOCAL)}
     for key, figures in kept.items():
         assert differences(figures, again[key]) == []
+
+
+def test_late_single_pose_in_the_middle_of_a_long_track_reads_only_its_neighbours(leg):
+    master = _open_master(leg)
+    fixes = _fixes(2000, 9)
+    late = fixes.pop(1000)
+    late.fix_status, late.robot_stamp = FixStatus.FIX, T0 + timedelta(seconds=1000)
+    recording.record_poses(master, fixes)
+    with CaptureQueriesContext(connection) as queries:
+        recording.store_pose(master.pk, late)
+    # The track is not read again: one read of the pose table, of the late
+    # point's two neighbours.
+    reads = [
+        q["sql"]
+        for q in queries
+        if q["sql"].startswith("SELECT") and Pose._meta.db_table in q["sql"]
+    ]
+    assert len(reads) == 1 and reads[0].count("LIMIT 1") >= 2
+    _assert_kept_equal_poses(leg)
+    kept = SegmentFigures.objects.get(segment=master, mode=GPS)
+    assert (
+        kept.points
+        == Pose.objects.filter(segment=master).exclude(fix_status=FixStatus.NO_FIX).count()
+    )
