@@ -32,11 +32,10 @@ class NewPoint(NamedTuple):
     usable: bool
 
 
-# What a GPS insert returns of each new row (NewPoint's fields).
-_GPS_RETURNING = (
-    "RETURNING uid, id, robot_stamp, received, ST_X(point), ST_Y(point), "
-    f"fix_status <> {int(FixStatus.NO_FIX)}"
-)
+# What an insert returns of each new row: its uid and id.  The rest of a
+# NewPoint is what was sent, so no stamp or coordinate travels back.
+_RETURNING = "RETURNING uid, id"
+
 
 # The columns of a GPS pose row, in the order every insert below gives them.
 POSE_COLUMNS = (
@@ -145,12 +144,14 @@ def _insert_fixes_postgres(master, fixes, source_id, received) -> list[NewPoint]
         [f.robot_stamp for f in fixes],
     )
     insert = _POSTGRES_INSERT.format(
-        table=Pose._meta.db_table, columns=POSE_COLUMNS, returning=_GPS_RETURNING
+        table=Pose._meta.db_table, columns=POSE_COLUMNS, returning=_RETURNING
     )
-    return _insert_columns(_POSE_STAGING, insert, columns, [master.pk, source_id, received])
+    stored = _insert_columns(_POSE_STAGING, insert, columns, [master.pk, source_id, received])
+    return _new_points(stored, fixes, received, lambda f: (f.longitude, f.latitude,
+                       f.fix_status != FixStatus.NO_FIX))  # fmt: skip
 
 
-def _insert_columns(staging, insert: str, columns, params) -> list[NewPoint]:
+def _insert_columns(staging, insert: str, columns, params) -> list[tuple]:
     """Store the rows given as column lists (the uid's first, in the staging
     table's order) whose uid is new; returns them.  ``params`` come before
     the columns in ``insert`` and are the staging insert's own parameters."""
@@ -158,7 +159,7 @@ def _insert_columns(staging, insert: str, columns, params) -> list[NewPoint]:
         return _copy_new(staging, zip(*columns, strict=True), params)
     with bound_cursor() as cursor:
         cursor.execute(insert, [*params, *columns])
-        return _new_points(cursor.fetchall())
+        return cursor.fetchall()
 
 
 # From this many rows on, a batch goes to PostgreSQL by COPY into a temporary
@@ -200,7 +201,7 @@ WITH moved AS (DELETE FROM ftt_pose_in RETURNING *)
 INSERT INTO {Pose._meta.db_table} ({POSE_COLUMNS})
 SELECT u, %s, ST_SetSRID(ST_MakePoint(x, y), 4326), a, f, h, %s, r, %s FROM moved
 ON CONFLICT (uid) DO NOTHING
-{_GPS_RETURNING}
+{_RETURNING}
 """,
 )
 
@@ -213,14 +214,14 @@ WITH moved AS (DELETE FROM ftt_local_pose_in RETURNING *)
 INSERT INTO {LocalPose._meta.db_table} (uid, segment_id, frame, x, y, yaw, robot_stamp, received)
 SELECT u, %s, frame, x, y, yaw, r, %s FROM moved
 ON CONFLICT (uid) DO NOTHING
-RETURNING uid, id, robot_stamp, received, x, y, true
+{_RETURNING}
 """,
 )
 
 
-def _copy_new(staging: _Staging, rows, params) -> list[NewPoint]:
+def _copy_new(staging: _Staging, rows, params) -> list[tuple]:
     """Copy ``rows`` (tuples in the staging table's column order) and store those
-    whose uid is new; returns them."""
+    whose uid is new; returns their (uid, id)."""
     with bound_cursor() as cursor:
         cursor.execute(staging.create())
         with cursor.copy(f"COPY {staging.name} FROM STDIN (FORMAT BINARY)") as copy:
@@ -228,11 +229,23 @@ def _copy_new(staging: _Staging, rows, params) -> list[NewPoint]:
             for row in rows:
                 copy.write_row(row)
         cursor.execute(staging.insert, params)
-        return _new_points(cursor.fetchall())
+        return cursor.fetchall()
 
 
-def _new_points(rows) -> list[NewPoint]:
-    return [NewPoint(as_uuid(row[0]), *row[1:]) for row in rows]
+def _new_points(stored, sent, received, position) -> list[NewPoint]:
+    """NewPoints of the ``stored`` (uid, id) rows from what was ``sent``;
+    ``position`` gives a sent item's (x, y, usable)."""
+    by_uid = {}
+    for item in sent:
+        # The first of a uid sent twice in one batch is the one stored.
+        by_uid.setdefault(as_uuid(item.uid), item)
+    points = []
+    for uid, pk in stored:
+        item = by_uid[as_uuid(uid)]
+        x, y, usable = position(item)
+        point = NewPoint(item.uid, pk, item.robot_stamp, received, float(x), float(y), usable)
+        points.append(point)
+    return points
 
 
 def as_uuid(value) -> uuid.UUID:
@@ -248,7 +261,7 @@ SELECT u, %b, f, x, y, w, r, %b
 FROM unnest(%b::uuid[], %b::text[], %b::float8[], %b::float8[], %b::float8[],
             %b::timestamptz[]) AS t(u, f, x, y, w, r)
 ON CONFLICT (uid) DO NOTHING
-RETURNING uid, id, robot_stamp, received, x, y, true
+{returning}
 """
 
 
@@ -264,8 +277,9 @@ def _insert_local_postgres(master, poses, received) -> list[NewPoint]:
         _floats(p.yaw for p in poses),
         [p.robot_stamp for p in poses],
     )
-    insert = _POSTGRES_LOCAL_INSERT.format(table=LocalPose._meta.db_table)
-    return _insert_columns(_LOCAL_POSE_STAGING, insert, columns, [master.pk, received])
+    insert = _POSTGRES_LOCAL_INSERT.format(table=LocalPose._meta.db_table, returning=_RETURNING)
+    stored = _insert_columns(_LOCAL_POSE_STAGING, insert, columns, [master.pk, received])
+    return _new_points(stored, poses, received, lambda p: (p.x, p.y, True))
 
 
 def insert_new(model, rows) -> list:

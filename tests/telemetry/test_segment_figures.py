@@ -162,12 +162,23 @@ def test_import_merging_poses_into_a_track_measures_it_again(leg, tmp_path, medi
     _assert_kept_equal_poses(leg)
 
 
+def _in_batches(master, share):
+    for begin in range(0, len(share), 10):
+        recording.record_poses(master, share[begin : begin + 10])
+
+
+def _one_by_one(master, share):
+    for fix in share:
+        recording.store_pose(master.pk, fix)
+
+
 @pytest.mark.postgis_only
 @pytest.mark.django_db(transaction=True)
-def test_two_writers_on_one_segment_at_once(leg):
+@pytest.mark.parametrize("send", [_in_batches, _one_by_one])
+def test_two_writers_on_one_segment_at_once(leg, send):
     master = _open_master(leg)
     fixes = _fixes(200, 7)
-    # Interleaved stamps: each writer's batches fall between the other's.
+    # Interleaved stamps: each writer's points fall between the other's.
     shares = [fixes[0::2], fixes[1::2]]
     barrier = threading.Barrier(2)
     errors = []
@@ -175,8 +186,7 @@ def test_two_writers_on_one_segment_at_once(leg):
     def write(share):
         try:
             barrier.wait()
-            for begin in range(0, len(share), 10):
-                recording.record_poses(master, share[begin : begin + 10])
+            send(master, share)
         except Exception as exc:  # noqa: BLE001 - reported by the test below
             errors.append(exc)
         finally:
