@@ -7,7 +7,7 @@ retried pose or batch is stored once even when two retries race.
 
 import uuid
 from dataclasses import dataclass
-from datetime import datetime
+from datetime import UTC, datetime
 from typing import NamedTuple
 
 from django.db import connection
@@ -241,9 +241,14 @@ def _new_points(stored, sent, received, position) -> list[NewPoint]:
         by_uid.setdefault(as_uuid(item.uid), item)
     points = []
     for uid, pk in stored:
-        item = by_uid[as_uuid(uid)]
+        uid = as_uuid(uid)
+        item = by_uid[uid]
         x, y, usable = position(item)
-        point = NewPoint(item.uid, pk, item.robot_stamp, received, float(x), float(y), usable)
+        stamp = item.robot_stamp
+        if stamp is not None and stamp.tzinfo is None:
+            # Stored as UTC (Django's connections use UTC), so compared as UTC.
+            stamp = stamp.replace(tzinfo=UTC)
+        point = NewPoint(uid, pk, stamp, received, float(x), float(y), usable)
         points.append(point)
     return points
 
