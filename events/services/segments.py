@@ -42,6 +42,10 @@ LONGITUDE_RANGE = (-180, 180)
 LATITUDE_RANGE = (-90, 90)
 
 
+def _label(name: str) -> str:
+    return {"longitude": _("Longitude"), "latitude": _("Latitude")}[name]
+
+
 @dataclass(frozen=True)
 class GpsPosition:
     longitude: float
@@ -51,13 +55,13 @@ class GpsPosition:
         errors = {}
         for name, (low, high) in (("longitude", LONGITUDE_RANGE), ("latitude", LATITUDE_RANGE)):
             value = getattr(self, name)
-            label = {"longitude": _("Longitude"), "latitude": _("Latitude")}[name]
+            # Labels are translated only for a message: this check runs per stored pose.
             if not (isinstance(value, int | float) and math.isfinite(value)):
-                errors[name] = [_("%(name)s must be a finite number.") % {"name": label}]
+                errors[name] = [_("%(name)s must be a finite number.") % {"name": _label(name)}]
             elif not low <= value <= high:
                 errors[name] = [
                     _("%(name)s must be between %(low)s and %(high)s degrees.")
-                    % {"name": label, "low": f"{low:g}", "high": f"{high:g}"}
+                    % {"name": _label(name), "low": f"{low:g}", "high": f"{high:g}"}
                 ]
         if errors:
             raise RuleViolation(errors)

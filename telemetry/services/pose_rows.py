@@ -7,7 +7,7 @@ retried pose or batch is stored once even when two retries race.
 
 import uuid
 from dataclasses import dataclass
-from datetime import datetime
+from datetime import UTC, datetime
 from typing import NamedTuple
 
 from django.db import connection
@@ -16,6 +16,7 @@ from common.sql import bound_cursor
 from events.models import PoseSource, Segment
 from telemetry.models import LocalPose, Pose
 from telemetry.models.poses import FixStatus
+from telemetry.services import figure_rows
 
 
 class NewPoint(NamedTuple):
@@ -31,11 +32,10 @@ class NewPoint(NamedTuple):
     usable: bool
 
 
-# What a GPS insert returns of each new row (NewPoint's fields).
-_GPS_RETURNING = (
-    "RETURNING uid, id, robot_stamp, received, ST_X(point), ST_Y(point), "
-    f"fix_status <> {int(FixStatus.NO_FIX)}"
-)
+# What an insert returns of each new row: its uid and id.  The rest of a
+# NewPoint is what was sent, so no stamp or coordinate travels back.
+_RETURNING = "RETURNING uid, id"
+
 
 # The columns of a GPS pose row, in the order every insert below gives them.
 POSE_COLUMNS = (
@@ -50,7 +50,8 @@ _POINT = {
 }
 
 # One pose, one statement: it stores nothing when the segment or a named pose
-# source is gone (the master comes from a per-process cache).
+# source is gone (the master comes from a per-process cache), and returns what
+# the segment's figures hold, which the pose is then added to.
 _ONE_POSE = f"""
 INSERT INTO {Pose._meta.db_table} ({POSE_COLUMNS})
 SELECT %s, m.id, {{point}}, %s, %s, %s, %s, %s, %s
@@ -58,14 +59,16 @@ FROM {Segment._meta.db_table} m
 WHERE m.id = %s
   AND (%s IS NULL OR EXISTS (SELECT 1 FROM {PoseSource._meta.db_table} WHERE id = %s))
 ON CONFLICT (uid) DO NOTHING
-RETURNING id
+RETURNING id, {figure_rows.kept_returning(Pose._meta.db_table + ".segment_id", figure_rows.GPS)}
 """
 
 
-def insert_pose(master_id: int, fix, source_id: int | None, received) -> int | None:
-    """Store one checked fix on the master segment ``master_id``; the new row's id,
-    or None when nothing was stored (a known uid, or the segment or pose source
-    no longer exists)."""
+def insert_pose(
+    master_id: int, fix, source_id: int | None, received
+) -> tuple[int, figure_rows.Kept | None] | None:
+    """Store one checked fix on the master segment ``master_id``; the new row's id
+    and what its segment's figures held, or None when nothing was stored (a
+    known uid, or the segment or pose source no longer exists)."""
 
     def prepared(name, value):
         return Pose._meta.get_field(name).get_db_prep_value(value, connection)
@@ -85,7 +88,7 @@ def insert_pose(master_id: int, fix, source_id: int | None, received) -> int | N
     with connection.cursor() as cursor:
         cursor.execute(_ONE_POSE.format(point=_POINT[connection.vendor]), params)
         row = cursor.fetchone()
-    return None if row is None else row[0]
+    return None if row is None else (row[0], figure_rows.kept_from(row[1:]))
 
 
 def insert_fixes(master, source_id, fixes, received) -> list[NewPoint]:
@@ -141,12 +144,14 @@ def _insert_fixes_postgres(master, fixes, source_id, received) -> list[NewPoint]
         [f.robot_stamp for f in fixes],
     )
     insert = _POSTGRES_INSERT.format(
-        table=Pose._meta.db_table, columns=POSE_COLUMNS, returning=_GPS_RETURNING
+        table=Pose._meta.db_table, columns=POSE_COLUMNS, returning=_RETURNING
     )
-    return _insert_columns(_POSE_STAGING, insert, columns, [master.pk, source_id, received])
+    stored = _insert_columns(_POSE_STAGING, insert, columns, [master.pk, source_id, received])
+    return _new_points(stored, fixes, received, lambda f: (f.longitude, f.latitude,
+                       f.fix_status != FixStatus.NO_FIX))  # fmt: skip
 
 
-def _insert_columns(staging, insert: str, columns, params) -> list[NewPoint]:
+def _insert_columns(staging, insert: str, columns, params) -> list[tuple]:
     """Store the rows given as column lists (the uid's first, in the staging
     table's order) whose uid is new; returns them.  ``params`` come before
     the columns in ``insert`` and are the staging insert's own parameters."""
@@ -154,7 +159,7 @@ def _insert_columns(staging, insert: str, columns, params) -> list[NewPoint]:
         return _copy_new(staging, zip(*columns, strict=True), params)
     with bound_cursor() as cursor:
         cursor.execute(insert, [*params, *columns])
-        return _new_points(cursor.fetchall())
+        return cursor.fetchall()
 
 
 # From this many rows on, a batch goes to PostgreSQL by COPY into a temporary
@@ -196,7 +201,7 @@ WITH moved AS (DELETE FROM ftt_pose_in RETURNING *)
 INSERT INTO {Pose._meta.db_table} ({POSE_COLUMNS})
 SELECT u, %s, ST_SetSRID(ST_MakePoint(x, y), 4326), a, f, h, %s, r, %s FROM moved
 ON CONFLICT (uid) DO NOTHING
-{_GPS_RETURNING}
+{_RETURNING}
 """,
 )
 
@@ -209,14 +214,14 @@ WITH moved AS (DELETE FROM ftt_local_pose_in RETURNING *)
 INSERT INTO {LocalPose._meta.db_table} (uid, segment_id, frame, x, y, yaw, robot_stamp, received)
 SELECT u, %s, frame, x, y, yaw, r, %s FROM moved
 ON CONFLICT (uid) DO NOTHING
-RETURNING uid, id, robot_stamp, received, x, y, true
+{_RETURNING}
 """,
 )
 
 
-def _copy_new(staging: _Staging, rows, params) -> list[NewPoint]:
+def _copy_new(staging: _Staging, rows, params) -> list[tuple]:
     """Copy ``rows`` (tuples in the staging table's column order) and store those
-    whose uid is new; returns them."""
+    whose uid is new; returns their (uid, id)."""
     with bound_cursor() as cursor:
         cursor.execute(staging.create())
         with cursor.copy(f"COPY {staging.name} FROM STDIN (FORMAT BINARY)") as copy:
@@ -224,11 +229,28 @@ def _copy_new(staging: _Staging, rows, params) -> list[NewPoint]:
             for row in rows:
                 copy.write_row(row)
         cursor.execute(staging.insert, params)
-        return _new_points(cursor.fetchall())
+        return cursor.fetchall()
 
 
-def _new_points(rows) -> list[NewPoint]:
-    return [NewPoint(as_uuid(row[0]), *row[1:]) for row in rows]
+def _new_points(stored, sent, received, position) -> list[NewPoint]:
+    """NewPoints of the ``stored`` (uid, id) rows from what was ``sent``;
+    ``position`` gives a sent item's (x, y, usable)."""
+    by_uid = {}
+    for item in sent:
+        # The first of a uid sent twice in one batch is the one stored.
+        by_uid.setdefault(as_uuid(item.uid), item)
+    points = []
+    for uid, pk in stored:
+        uid = as_uuid(uid)
+        item = by_uid[uid]
+        x, y, usable = position(item)
+        stamp = item.robot_stamp
+        if stamp is not None and stamp.tzinfo is None:
+            # Stored as UTC (Django's connections use UTC), so compared as UTC.
+            stamp = stamp.replace(tzinfo=UTC)
+        point = NewPoint(uid, pk, stamp, received, float(x), float(y), usable)
+        points.append(point)
+    return points
 
 
 def as_uuid(value) -> uuid.UUID:
@@ -244,7 +266,7 @@ SELECT u, %b, f, x, y, w, r, %b
 FROM unnest(%b::uuid[], %b::text[], %b::float8[], %b::float8[], %b::float8[],
             %b::timestamptz[]) AS t(u, f, x, y, w, r)
 ON CONFLICT (uid) DO NOTHING
-RETURNING uid, id, robot_stamp, received, x, y, true
+{returning}
 """
 
 
@@ -260,8 +282,9 @@ def _insert_local_postgres(master, poses, received) -> list[NewPoint]:
         _floats(p.yaw for p in poses),
         [p.robot_stamp for p in poses],
     )
-    insert = _POSTGRES_LOCAL_INSERT.format(table=LocalPose._meta.db_table)
-    return _insert_columns(_LOCAL_POSE_STAGING, insert, columns, [master.pk, received])
+    insert = _POSTGRES_LOCAL_INSERT.format(table=LocalPose._meta.db_table, returning=_RETURNING)
+    stored = _insert_columns(_LOCAL_POSE_STAGING, insert, columns, [master.pk, received])
+    return _new_points(stored, poses, received, lambda p: (p.x, p.y, True))
 
 
 def insert_new(model, rows) -> list:

@@ -133,10 +133,10 @@ def store_poses(
     master = segment.master
     source_id = pose_source_id(master, pose_source.pk if pose_source is not None else None)
     stored = pose_rows.insert_fixes(master, source_id, fixes, timezone.now())
-    keep_figures(master.pk, GPS, stored)
     new = {p.uid for p in stored}
     points = [(f.longitude, f.latitude) for f in fixes if pose_rows.as_uuid(f.uid) in new]
     announce_track(master, points, local=False)
+    keep_figures(master.pk, GPS, stored)
     return new
 
 
@@ -163,15 +163,17 @@ def store_pose(
     received = timezone.now()
     source_id = pose_source_id(master, source_id)
     with transaction.atomic():
-        pk = pose_rows.insert_pose(master.pk, fix, source_id, received)
-        if pk is not None:
+        stored = pose_rows.insert_pose(master.pk, fix, source_id, received)
+        if stored is not None:
+            pk, seen = stored
             point = pose_rows.NewPoint(
                 fix.uid, pk, fix.robot_stamp, received, fix.longitude, fix.latitude,
                 fix.fix_status != FixStatus.NO_FIX,
             )  # fmt: skip
-            keep_figures(master.pk, GPS, [point])
             announce_track(master, [(fix.longitude, fix.latitude)], local=False)
-    if pk is None:
+            # Last: the figures row stays locked from this write to the commit.
+            keep_figures(master.pk, GPS, [point], seen)
+    if stored is None:
         return known_pose(master, fix, source_id), False
     row = fix.row(master, source_id, received)
     row.pk = pk
@@ -194,9 +196,9 @@ def known_pose(master: Segment, fix: GpsFix, source_id: int | None) -> Pose:
 def record_local_poses(segment: Segment, poses: list[MapPose]) -> int:
     master = segment.master
     fresh = pose_rows.insert_local_poses(master, poses, timezone.now()) if poses else []
-    keep_figures(master.pk, LOCAL, fresh)
     # The robot's heading for its marker: the yaw of the newest pose stored.
     stored = {point.uid for point in fresh}
     heading = next((p.yaw for p in reversed(poses) if pose_rows.as_uuid(p.uid) in stored), None)
     announce_track(master, [(p.x, p.y) for p in fresh], local=True, heading=heading)
+    keep_figures(master.pk, LOCAL, fresh)
     return len(fresh)

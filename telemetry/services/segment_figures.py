@@ -2,11 +2,13 @@
 to what its poses give, in the transaction that writes the poses.
 
 A batch whose points all come after the kept last point in driving order (the
-live case) is appended: its steps are measured and added, in time that depends
-on the batch, not on the segment.  Anything else (a late batch from an outage
-spool, an import merged into a track) measures the segment's track again.
-The figures row is locked first, so two writers on one segment take turns,
-and the second sees the first's poses when it measures.
+live case) adds its own length and the step from that point.  A late point or
+batch (concurrent single poses committed out of order, an outage spool
+replayed) replaces the step between its two neighbours in driving order, found
+through the driving-order index, by the steps through its points.  Either way
+the time depends on the new points, not on the track.  An import that merges
+poses into a track measures it again (``measure_figures``).  The SQL of the
+row and the neighbour reads is in telemetry.services.figure_rows.
 """
 
 from collections.abc import Iterable
@@ -22,6 +24,7 @@ from telemetry.models.poses import FixStatus
 from telemetry.selectors import driving_order
 from telemetry.selectors.distances import path_length
 from telemetry.selectors.tracks import GPS, LOCAL, MODES, load_tracks
+from telemetry.services import figure_rows
 from telemetry.services.pose_rows import NewPoint
 
 # Figures are float sums taken in another order than a measurement of the
@@ -60,52 +63,79 @@ def _locked(master_id: int, mode: str) -> SegmentFigures:
     return next(iter(SegmentFigures.objects.raw(query, [master_id, mode])))
 
 
-def keep_figures(master_id: int, mode: str, new: list[NewPoint]) -> None:
+_UNREAD = object()
+
+
+def keep_figures(master_id: int, mode: str, new: list[NewPoint], seen=_UNREAD) -> None:
     """Add the points just stored on ``master_id`` (pose_rows' answer) to its
-    figures: two statements, whatever the size of the batch or the segment.
-    Call inside the transaction that stored them."""
+    figures, in time that depends on the new points, not on the track: an
+    upsert, after a read of the row unless the caller gives what it read
+    (``seen``, figure_rows.Kept or None).  Call inside the transaction that
+    stored them."""
     if not new:
         return
-    figures = _locked(master_id, mode)
     rows = sorted((p for p in new if p.usable), key=lambda p: _key(p.robot_stamp, p.received, p.id))
-    last = (figures.last_robot_stamp, figures.last_received, figures.last_id)
-    if (
-        rows
-        and figures.points
-        and _key(rows[0].robot_stamp, rows[0].received, rows[0].id) <= _key(*last)
-    ):
-        _measure(figures)
-    else:
-        figures.no_fix += len(new) - len(rows)
-        if rows:
-            _append(figures, rows, mode)
-    figures.save()
+    alone = _alone(rows, len(new) - len(rows), mode)
+    if seen is _UNREAD:
+        seen = figure_rows.read_kept(master_id, mode)
+    change = _change(master_id, mode, rows, alone, seen)
+    if not figure_rows.write_change(master_id, mode, seen, change):
+        # Another writer changed the row since it was read; it is locked now.
+        seen = figure_rows.read_kept(master_id, mode)
+        change = _change(master_id, mode, rows, alone, seen)
+        if not figure_rows.write_change(master_id, mode, seen, change):
+            raise RuntimeError(f"the figures of segment {master_id} changed under their lock")
 
 
-def _append(figures: SegmentFigures, rows: list[NewPoint], mode: str) -> None:
+def _alone(rows: list[NewPoint], no_fix: int, mode: str) -> dict:
+    """The figures of the new points by themselves (sorted usable ``rows``)."""
+    alone = dict.fromkeys(figure_rows.FIELDS)
+    alone.update(points=len(rows), no_fix=no_fix, length=0.0)
+    if not rows:
+        return alone
     x = np.array([r.x for r in rows], dtype=float)
     y = np.array([r.y for r in rows], dtype=float)
     stamps = [r.robot_stamp or r.received for r in rows]
-    if figures.points:
-        figures.length += path_length(
-            np.concatenate(([figures.last_x], x)), np.concatenate(([figures.last_y], y)), mode
-        )
-    else:
-        figures.length = path_length(x, y, mode)
-        figures.first_x, figures.first_y = float(x[0]), float(y[0])
-    figures.points += len(rows)
-    figures.last_x, figures.last_y = float(x[-1]), float(y[-1])
-    figures.last_robot_stamp, figures.last_received, figures.last_id = (
-        rows[-1][2],
-        rows[-1][3],
-        rows[-1].id,
+    first, last = rows[0], rows[-1]
+    alone.update(
+        length=path_length(x, y, mode),
+        first_x=first.x, first_y=first.y, last_x=last.x, last_y=last.y,
+        last_robot_stamp=last.robot_stamp, last_received=last.received, last_id=last.id,
+        first_stamp=min(stamps), last_stamp=max(stamps),
+        min_x=float(x.min()), min_y=float(y.min()), max_x=float(x.max()), max_y=float(y.max()),
+    )  # fmt: skip
+    return alone
+
+
+def _change(master_id, mode, rows: list[NewPoint], alone: dict, seen) -> figure_rows.Change:
+    """What ``rows`` change in the figures that hold ``seen``: an appended batch
+    adds its length and the step from the kept last point; a late one replaces
+    the step between its neighbours in driving order with the steps through it."""
+    if not rows:
+        return figure_rows.Change(alone, 0.0, False, False)
+    kept_last = None if seen is None or not seen.points else seen
+    if kept_last is None:
+        return figure_rows.Change(alone, alone["length"], True, True)
+    first = (rows[0].robot_stamp, rows[0].received, rows[0].id)
+    if _key(*first) > _key(kept_last.last_robot_stamp, kept_last.last_received, kept_last.last_id):
+        join = path_length([kept_last.last_x, rows[0].x], [kept_last.last_y, rows[0].y], mode)
+        return figure_rows.Change(alone, alone["length"] + join, False, True)
+    last = (rows[-1].robot_stamp, rows[-1].received, rows[-1].id)
+    before, after = figure_rows.neighbours(master_id, mode, first, last)
+    inside = (
+        figure_rows.points_between(master_id, mode, first, last)
+        if len(rows) > 1
+        else [(rows[0].id, rows[0].x, rows[0].y)]
     )
-    figures.first_stamp = min(filter(None, [figures.first_stamp, *stamps]))
-    figures.last_stamp = max(filter(None, [figures.last_stamp, *stamps]))
-    figures.min_x = float(min(x.min(), figures.min_x if figures.min_x is not None else np.inf))
-    figures.min_y = float(min(y.min(), figures.min_y if figures.min_y is not None else np.inf))
-    figures.max_x = float(max(x.max(), figures.max_x if figures.max_x is not None else -np.inf))
-    figures.max_y = float(max(y.max(), figures.max_y if figures.max_y is not None else -np.inf))
+    merged = [p for p in (before, *inside, after) if p is not None]
+    new_ids = {r.id for r in rows}
+    old = [p for p in merged if p[0] not in new_ids]
+    length = _length(merged, mode) - _length(old, mode)
+    return figure_rows.Change(alone, length, before is None, after is None)
+
+
+def _length(points: list[tuple], mode: str) -> float:
+    return path_length([p[1] for p in points], [p[2] for p in points], mode)
 
 
 @dataclass
@@ -123,9 +153,6 @@ def _measured(master_ids: list[int], mode: str) -> dict[int, _Measured]:
         pk: _Measured(path_length(t.x, t.y, mode), len(t), t.no_fix, t.x, t.y)
         for pk, t in load_tracks(master_ids, mode).items()
     }
-
-
-_UNREAD = object()
 
 
 def _measure(figures: SegmentFigures, measured=_UNREAD) -> None:

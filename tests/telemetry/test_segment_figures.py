@@ -162,12 +162,23 @@ def test_import_merging_poses_into_a_track_measures_it_again(leg, tmp_path, medi
     _assert_kept_equal_poses(leg)
 
 
+def _in_batches(master, share):
+    for begin in range(0, len(share), 10):
+        recording.record_poses(master, share[begin : begin + 10])
+
+
+def _one_by_one(master, share):
+    for fix in share:
+        recording.store_pose(master.pk, fix)
+
+
 @pytest.mark.postgis_only
 @pytest.mark.django_db(transaction=True)
-def test_two_writers_on_one_segment_at_once(leg):
+@pytest.mark.parametrize("send", [_in_batches, _one_by_one])
+def test_two_writers_on_one_segment_at_once(leg, send):
     master = _open_master(leg)
     fixes = _fixes(200, 7)
-    # Interleaved stamps: each writer's batches fall between the other's.
+    # Interleaved stamps: each writer's points fall between the other's.
     shares = [fixes[0::2], fixes[1::2]]
     barrier = threading.Barrier(2)
     errors = []
@@ -175,8 +186,7 @@ def test_two_writers_on_one_segment_at_once(leg):
     def write(share):
         try:
             barrier.wait()
-            for begin in range(0, len(share), 10):
-                recording.record_poses(master, share[begin : begin + 10])
+            send(master, share)
         except Exception as exc:  # noqa: BLE001 - reported by the test below
             errors.append(exc)
         finally:
@@ -208,3 +218,27 @@ def test_migration_measures_the_tracks_of_an_existing_database(leg):
     assert again.keys() == kept.keys() == {(master.pk, GPS), (master.pk, LOCAL)}
     for key, figures in kept.items():
         assert differences(figures, again[key]) == []
+
+
+def test_late_single_pose_in_the_middle_of_a_long_track_reads_only_its_neighbours(leg):
+    master = _open_master(leg)
+    fixes = _fixes(2000, 9)
+    late = fixes.pop(1000)
+    late.fix_status, late.robot_stamp = FixStatus.FIX, T0 + timedelta(seconds=1000)
+    recording.record_poses(master, fixes)
+    with CaptureQueriesContext(connection) as queries:
+        recording.store_pose(master.pk, late)
+    # The track is not read again: one read of the pose table, of the late
+    # point's two neighbours.
+    reads = [
+        q["sql"]
+        for q in queries
+        if q["sql"].startswith("SELECT") and Pose._meta.db_table in q["sql"]
+    ]
+    assert len(reads) == 1 and reads[0].count("LIMIT 1") >= 2
+    _assert_kept_equal_poses(leg)
+    kept = SegmentFigures.objects.get(segment=master, mode=GPS)
+    assert (
+        kept.points
+        == Pose.objects.filter(segment=master).exclude(fix_status=FixStatus.NO_FIX).count()
+    )

@@ -3,6 +3,7 @@ there (administrator for configuration and catalogues, operator for the rest), w
 generated from the OpenAPI schema (valid and invalid). No answer may be a 5xx, and no
 input may reach the database unchecked (the handler's generic "cannot store" 400)."""
 
+import json
 import os
 import zlib
 
@@ -10,6 +11,8 @@ import pytest
 import schemathesis
 from django.core import signals
 from django.db import close_old_connections
+from drf_spectacular.generators import SchemaGenerator
+from drf_spectacular.renderers import OpenApiJsonRenderer
 from hypothesis import HealthCheck, settings
 from schemathesis.checks import not_a_server_error
 from schemathesis.config import SchemathesisConfig
@@ -32,21 +35,23 @@ CONFIG = SchemathesisConfig.from_dict(
 DB_ERROR = "The request contains a value the database cannot store."
 
 
-@pytest.fixture
-def api_schema(db):
+def _openapi() -> dict:
+    """The document /api/schema/ serves, generated without a request, so the schema
+    is loaded when the module is collected."""
+    document = SchemaGenerator().get_schema(request=None, public=True)
+    return json.loads(OpenApiJsonRenderer().render(document))
+
+
+@pytest.fixture(autouse=True)
+def _handler_keeps_the_test_transaction(db):
     # Requests go through the real WSGI handler, which closes the database connection
     # after each request; that would end the test's transaction (Django's own test
     # client disconnects the same handlers).
     signals.request_started.disconnect(close_old_connections)
     signals.request_finished.disconnect(close_old_connections)
-    try:
-        schema = schemathesis.openapi.from_wsgi(
-            "/api/schema/?format=json", application, config=CONFIG
-        )
-        yield schema
-    finally:
-        signals.request_started.connect(close_old_connections)
-        signals.request_finished.connect(close_old_connections)
+    yield
+    signals.request_started.connect(close_old_connections)
+    signals.request_finished.connect(close_old_connections)
 
 
 # The endpoints of this package (see events/api/urls.py, telemetry/api/urls.py). Archives,
@@ -56,15 +61,7 @@ OWN_PATHS = (
     r"|pose-sources|weather|ito-reasons|segment-types|poses|local-poses|maps|images|tracks"
     r"|local-tracks)/"
 )
-schema = schemathesis.pytest.from_fixture("api_schema").include(path_regex=OWN_PATHS)
-
-
-@pytest.fixture(autouse=True)
-def _node_id_for_schemathesis(request):
-    # schemathesis 4.32 reads and rewrites the private Node._nodeid that pytest 9 no
-    # longer has; giving it one keeps its per-operation reporting working.
-    if not hasattr(request.node, "_nodeid"):
-        request.node._nodeid = request.node.nodeid
+schema = schemathesis.openapi.from_dict(_openapi(), config=CONFIG).include(path_regex=OWN_PATHS)
 
 
 @schemathesis.check
@@ -150,6 +147,7 @@ def test_no_input_makes_a_server_error(case, tokens, real_ids):
         case.path_parameters["id"] = real[pick % len(real)] if isinstance(real, list) else real
     role = roles.ADMINISTRATOR if resource in ADMIN_RESOURCES else roles.OPERATOR
     case.call_and_validate(
+        app=application,
         headers={"Authorization": f"Token {tokens[role]}"},
         checks=[not_a_server_error, no_unchecked_database_error],
     )

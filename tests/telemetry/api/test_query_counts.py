@@ -98,9 +98,9 @@ def _one_post(client, body):
 
 # Committed for real, as a server runs it: no test-wide transaction around it.
 @pytest.mark.django_db(transaction=True)
-def test_a_single_pose_is_one_short_transaction_of_two_inserts(api_client, leg):
+def test_a_single_pose_is_one_short_transaction_of_three_inserts(api_client, leg):
     """The same statements on PostgreSQL and SpatiaLite: the pose (its segment and
-    pose source checked in the same statement) and its feed row."""
+    pose source checked in the same statement), its feed row and its segment's figures."""
     child = segments.new_manual_segment(leg)
     master = child.parent
     client = api_client("operator")
@@ -111,11 +111,11 @@ def test_a_single_pose_is_one_short_transaction_of_two_inserts(api_client, leg):
     assert response.status_code == 201, response.content
     assert len(every) == len(in_transaction) + 2, every  # nothing outside it
     assert [q.split()[:3] for q in in_transaction] == [
+        # The pose, returning what its segment's figures hold.
         ["INSERT", "INTO", "telemetry_pose"],
-        # The segment's figures, locked and brought up to date.
-        ["INSERT", "INTO", "telemetry_segmentfigures"],
-        ["UPDATE", '"telemetry_segmentfigures"', "SET"],
         ["INSERT", "INTO", '"rosbridge_app_announcement"'],
+        # The figures brought up to date in one upsert, last (it locks their row).
+        ["INSERT", "INTO", "telemetry_segmentfigures"],
     ], in_transaction
     stored = Pose.objects.get(uid=body["uid"])
     assert (stored.segment_id, stored.point.x, stored.point.y) == (master.pk, 7.1, 50.2)
