@@ -67,8 +67,10 @@ class ModeClock:
         placed (the latched subscription) or an older one."""
         key = stamp or sent
         if key is not None and self.last_key is not None:
-            # A robot clock set back by more than MAX_DELAY starts afresh.
-            if self.last_key - MAX_DELAY < key <= self.last_key:
+            # A robot clock set back by more than MAX_DELAY starts afresh; a
+            # stamp that stood still while the value changed is news.
+            copy = key == self.last_key and mode == self.last_mode
+            if copy or self.last_key - MAX_DELAY < key < self.last_key:
                 return None
         heard, previous_sent, previous_mode = self.heard, self.last_sent, self.last_mode
         self.heard, self.last_key, self.last_sent, self.last_mode = True, key, sent, mode
