@@ -108,13 +108,23 @@ def wanted_inputs(get, pipe) -> list[tuple]:
     return wanted
 
 
+MODE_INPUT = "robot_mode"
+MODE_SOURCE_INPUT = "mode_source_"
+
+
+def is_mode_input(name: str) -> bool:
+    """Whether an input carries the mode: subscribed reliable and latched too,
+    with the send time of each message, and taken ahead of sensor data."""
+    return name == MODE_INPUT or name.startswith(MODE_SOURCE_INPUT)
+
+
 def mode_inputs(get, pipe) -> list[tuple]:
     """The mode topic, or one input per mode source (params.mode_sources)."""
     combiner = pipe.mode_sources
     if combiner is None:
         return [
             (
-                "robot_mode",
+                MODE_INPUT,
                 message_type(get("params.robot_mode_type")),
                 get("topics.robot_mode"),
                 qos(MODE_DEPTH, True),
@@ -130,7 +140,9 @@ def mode_inputs(get, pipe) -> list[tuple]:
             log.error("mode source %s: message type %s is not installed", source.topic, source.type)
             continue
         handler = functools.partial(pipe.on_mode_source, i)
-        wanted.append((f"mode_source_{i}", cls, source.topic, qos(MODE_DEPTH, True), handler))
+        wanted.append(
+            (f"{MODE_SOURCE_INPUT}{i}", cls, source.topic, qos(MODE_DEPTH, True), handler)
+        )
     return wanted
 
 

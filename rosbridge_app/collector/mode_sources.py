@@ -12,6 +12,8 @@ presets)::
         ito: [MANUAL, POSCTL, {min: 10, max: 20}]
         default: unknown       # auto, ito or unknown for any other value
         hysteresis: 0.5        # s a new value must hold before it counts
+        stamp: header.stamp    # the robot's time of the value (the default where
+                               # the type has a header; else the DDS send time)
 
 Combination rules (the one place they are decided):
 
@@ -28,17 +30,20 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import datetime, timedelta
+from typing import NamedTuple
 
 import yaml
 from django.utils.translation import gettext as _
 
+from rosbridge_app.collector.mode_timing import HEADER_STAMP, ModeClock, stamp_of
 from rosbridge_app.collector.modes import AUTO, ITO
 
 RULES = ("any_ito", "first")
 DEFAULTS = (AUTO, ITO, "unknown")
 TYPE_NAME = re.compile(r"^[A-Za-z][\w]*/msg/[A-Za-z][\w]*$")
 _STEP = re.compile(r"([A-Za-z_]\w*)((?:\[\d+\])*)")
-_KEYS = {"topic", "type", "field", "auto", "ito", "default", "hysteresis"}
+_KEYS = {"topic", "type", "field", "auto", "ito", "default", "hysteresis", "stamp"}
+TIME_TYPE = "builtin_interfaces/msg/Time"
 
 
 class InvalidModeSources(ValueError):
@@ -67,6 +72,7 @@ class Source:
     default: str = "unknown"
     hysteresis: float = 0.0
     text: str = ""  # the field path as written, for messages
+    stamp: tuple = HEADER_STAMP  # path of the robot's time of the value
 
     def mode_of(self, value) -> str | None:
         """'auto', 'ito' or None (the source says nothing) for a field value."""
@@ -74,6 +80,15 @@ class Source:
             if any(matches(m, value) for m in matchers):
                 return mode
         return None if self.default == "unknown" else self.default
+
+
+class Switch(NamedTuple):
+    """A change of the combined mode: when, and how it was timed (mode_timing.py)."""
+
+    mode: str
+    at: datetime
+    robot_stamp: datetime | None = None
+    uncertainty: float | None = None
 
 
 @dataclass(frozen=True)
@@ -217,11 +232,14 @@ def parse(text: str, fields_of: Callable[[str], dict] | None = None) -> ModeSour
             default=default,
             hysteresis=float(hysteresis),
             text=path_text,
+            stamp=parse_path(raw["stamp"]) if raw.get("stamp") else HEADER_STAMP,
         )
         if not source.auto and not source.ito and default == "unknown":
             raise InvalidModeSources(_("source %(n)d maps no value to auto or ito") % {"n": n})
         if fields_of is not None:
             check_path(source, fields_of)
+            if raw.get("stamp"):
+                check_path(source, fields_of, source.stamp, str(raw["stamp"]), TIME_TYPE)
         sources.append(source)
     if not sources:
         raise InvalidModeSources(_("sources is empty"))
@@ -231,23 +249,32 @@ def parse(text: str, fields_of: Callable[[str], dict] | None = None) -> ModeSour
     return ModeSources(rule, tuple(sources))
 
 
-def check_path(source: Source, fields_of: Callable[[str], dict]) -> None:
-    """InvalidModeSources naming the type or field that does not exist."""
+def check_path(
+    source: Source,
+    fields_of: Callable[[str], dict],
+    path: tuple | None = None,
+    text: str | None = None,
+    ends_at: str | None = None,
+) -> None:
+    """InvalidModeSources naming the type or field that does not exist.
+    ``path`` (written ``text``) is the value's field unless given; it ends at a
+    single value, or at a message of type ``ends_at``."""
+    path, text = (source.path, source.text) if path is None else (path, text)
     typename = source.type
     kind: tuple = ("msg", typename)
-    for step in source.path:
+    for step in path:
         if isinstance(step, int):
             if kind[0] != "array":
                 raise InvalidModeSources(
                     _("%(type)s: %(path)s indexes a field that is not an array")
-                    % {"type": source.type, "path": source.text}
+                    % {"type": source.type, "path": text}
                 )
             kind = kind[1]
             continue
         if kind[0] != "msg":
             raise InvalidModeSources(
                 _("%(type)s: %(path)s goes into a field that is not a message")
-                % {"type": source.type, "path": source.text}
+                % {"type": source.type, "path": text}
             )
         try:
             fields = fields_of(kind[1])
@@ -265,10 +292,14 @@ def check_path(source: Source, fields_of: Callable[[str], dict]) -> None:
                 % {"type": kind[1], "field": step, "fields": ", ".join(fields) or "none"}
             )
         kind = fields[step]
-    if kind[0] != "base":
+    if ends_at is not None and kind != ("msg", ends_at):
         raise InvalidModeSources(
-            _("%(type)s: %(path)s is not a single value")
-            % {"type": source.type, "path": source.text}
+            _("%(type)s: %(path)s is not a time stamp (%(time)s)")
+            % {"type": source.type, "path": text, "time": ends_at}
+        )
+    if ends_at is None and kind[0] != "base":
+        raise InvalidModeSources(
+            _("%(type)s: %(path)s is not a single value") % {"type": source.type, "path": text}
         )
 
 
@@ -279,29 +310,40 @@ class Combiner:
         self.config = config
         n = len(config.sources)
         self.said: list[str | None] = [None] * n  # confirmed, per source
-        self.pending: list[tuple | None] = [None] * n  # (mode, since) within hysteresis
+        # (mode, since, robot stamp, uncertainty) of a value within its hysteresis
+        self.pending: list[tuple | None] = [None] * n
+        self.clocks = [ModeClock() for _ in range(n)]
         self.mode: str | None = None
 
-    def offer(self, index: int, msg, at: datetime) -> list[tuple[str, datetime]]:
-        """(mode, at) of each change of the combined mode this message causes."""
+    def offer(
+        self, index: int, msg, at: datetime, sent: datetime | None = None
+    ) -> list[Switch] | None:
+        """Each change of the combined mode this message, received at ``at``
+        and sent at ``sent`` (if known), causes; None for a second copy of a
+        message already offered."""
         source = self.config.sources[index]
         try:
-            value = field_value(msg, source.path)
+            mode, missing = source.mode_of(field_value(msg, source.path)), False
         except (IndexError, AttributeError):
-            return []  # buttons[4] of a joystick with three buttons says nothing
-        mode = source.mode_of(value)
+            mode, missing = None, True  # buttons[4] of a joystick with three buttons
+        placed = self.clocks[index].place(mode, stamp_of(msg, source.stamp), sent, at)
+        if placed is None:
+            return None
+        if missing:
+            return []  # says nothing
+        start, stamp, uncertainty = placed
         if not source.hysteresis:
             self.said[index], self.pending[index] = mode, None
-            return self._combine(at)
+            return self._combine(Switch(mode, start, stamp, uncertainty))
         if mode == self.said[index]:
             self.pending[index] = None  # a flicker shorter than the hysteresis
             return []
         pending = self.pending[index]
         if pending is None or pending[0] != mode:
-            self.pending[index] = (mode, at)
+            self.pending[index] = (mode, start, stamp, uncertainty)
         return self.tick(at)
 
-    def tick(self, at: datetime) -> list[tuple[str, datetime]]:
+    def tick(self, at: datetime) -> list[Switch]:
         """Confirm values that held for their source's hysteresis; the switch
         happens when the hysteresis ran out, not when it was noticed."""
         changes = []
@@ -309,15 +351,17 @@ class Combiner:
         for i, pending in enumerate(self.pending):
             if pending is None:
                 continue
-            until = pending[1] + timedelta(seconds=self.config.sources[i].hysteresis)
-            if until <= at:
-                due.append((until, i, pending[0]))
-        for until, i, mode in sorted(due, key=lambda d: d[0]):
-            self.said[i], self.pending[i] = mode, None
-            changes += self._combine(until)
+            mode, since, stamp, uncertainty = pending
+            held = timedelta(seconds=self.config.sources[i].hysteresis)
+            if since + held <= at:
+                robot_stamp = stamp + held if stamp is not None else None
+                due.append((i, Switch(mode, since + held, robot_stamp, uncertainty)))
+        for i, switch in sorted(due, key=lambda d: d[1].at):
+            self.said[i], self.pending[i] = switch.mode, None
+            changes += self._combine(switch)
         return changes
 
-    def _combine(self, at: datetime) -> list[tuple[str, datetime]]:
+    def _combine(self, switch: Switch) -> list[Switch]:
         said = self.said
         if self.config.rule == "first":
             mode = next((m for m in said if m is not None), None)
@@ -328,4 +372,4 @@ class Combiner:
         if mode is None or mode == self.mode:
             return []
         self.mode = mode
-        return [(mode, at)]
+        return [switch._replace(mode=mode)]

@@ -29,6 +29,7 @@ from rosbridge_app.collector.conversions import stamp_ns
 from rosbridge_app.collector.hearing import RENEW, RESUBSCRIBE, STREAMS, Hearing
 from rosbridge_app.collector.inputs import (
     drained_subscription,
+    is_mode_input,
     qos,
     volatile_map_inputs,
     wanted_inputs,
@@ -42,7 +43,6 @@ from rosbridge_app.collector.status import Status
 log = logging.getLogger("ftt.collector")
 
 
-MODE_INPUT = "robot_mode"
 # Stamped streams whose lost messages are estimated (see losses.py).
 LOSS_INPUTS = ("gps_fix", "local_pose")
 LOSS_LOG_PERIOD = 10.0
@@ -362,7 +362,7 @@ class CollectorNode(Node):
         for name, msg_type, topic, qos_profile, handler in wanted:
             if not topic:
                 continue
-            mode = name == MODE_INPUT
+            mode = is_mode_input(name)
             try:
                 self._ftt_subs[name] = drained_subscription(
                     self,
@@ -410,9 +410,8 @@ class CollectorNode(Node):
 
     def _take_modes(self) -> None:
         """Mode messages go ahead of the sensor backlog being drained."""
-        for key in (MODE_INPUT, f"{MODE_INPUT} (latched)"):
-            sub = self._ftt_subs.get(key)
-            if sub is not None:
+        for key, sub in list(self._ftt_subs.items()):
+            if is_mode_input(key.removesuffix(" (latched)")):
                 sub.take_waiting()
 
     def _tick(self) -> None:

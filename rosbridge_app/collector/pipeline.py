@@ -33,9 +33,9 @@ from django.utils.translation import gettext
 from rosbridge_app.collector import conversions as conv
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.events import Event
-from rosbridge_app.collector.mode_sources import Combiner
+from rosbridge_app.collector.mode_sources import Combiner, Switch
 from rosbridge_app.collector.mode_sources import parse as parse_mode_sources
-from rosbridge_app.collector.mode_timing import ModeClock
+from rosbridge_app.collector.mode_timing import ModeClock, stamp_of
 from rosbridge_app.collector.modes import ITO, UNKNOWN, mode_of
 from rosbridge_app.collector.params import SPECS
 from rosbridge_app.collector.reason_rules import ReasonWatcher
@@ -151,21 +151,32 @@ class Pipeline:
         mode = mode_of(msg, self.params["params.robot_mode_type"])
         if mode is None:
             return None
-        header = getattr(msg, "header", None)
-        stamp = conv.stamp_to_datetime(header.stamp) if header is not None else None
-        placed = self.mode_clock.place(mode, stamp, sent, at)
+        placed = self.mode_clock.place(mode, stamp_of(msg), sent, at)
         if placed is None:
             return SECOND_COPY
         start, robot_stamp, uncertainty = placed
         self.on_mode_value(mode, start, robot_stamp=robot_stamp, uncertainty=uncertainty)
         return None
 
-    def on_mode_source(self, index: int, msg, at: datetime) -> None:
-        """A message of mode source ``index`` (params.mode_sources)."""
+    def on_mode_source(self, index: int, msg, at: datetime, sent: datetime | None = None):
+        """A message of mode source ``index`` (params.mode_sources), sent at
+        ``sent`` (DDS source timestamp) if known."""
+        switches = self.mode_sources.offer(index, msg, at, sent)
+        if switches is None:
+            return SECOND_COPY
         # A reason rule on the same topic sees the message before the switch it causes.
         self.on_reason_signal(self.mode_sources.config.sources[index].topic, msg, at)
-        for mode, when in self.mode_sources.offer(index, msg, at):
-            self.on_mode_value(mode, when)
+        self._apply(switches)
+        return None
+
+    def _apply(self, switches: list[Switch]) -> None:
+        for switch in switches:
+            self.on_mode_value(
+                switch.mode,
+                switch.at,
+                robot_stamp=switch.robot_stamp,
+                uncertainty=switch.uncertainty,
+            )
 
     def on_reason_signal(self, topic: str, msg, at: datetime) -> None:
         """A message on a topic of params.reason_rules."""
@@ -379,8 +390,7 @@ class Pipeline:
         """Called about once a second: stores a map held back by send_map_period
         and confirms mode source values that held for their hysteresis."""
         if self.mode_sources is not None:
-            for mode, when in self.mode_sources.tick(at):
-                self.on_mode_value(mode, when)
+            self._apply(self.mode_sources.tick(at))
         self._end_wait(at)
         if self.map_pending:
             self._maybe_store_map(at)

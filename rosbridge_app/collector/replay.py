@@ -1,6 +1,8 @@
 """The order in which the writer stores what the spool holds (the one place of that rule).
 
-Normally first in, first out. When the writer finds more than a quarter of a
+Normally first in, first out, and a segment change ends its slice: the
+operators' screens wait for its commit, not for the camera frames and
+positions spooled after it. When the writer finds more than a quarter of a
 slice pending (after an outage, or at a start with a full spool), live data
 must not wait behind it: what the spool holds then is the backlog (ids up to
 ``end``), and:
@@ -50,6 +52,14 @@ MAX_SLICES = 10
 log = logging.getLogger("ftt.collector")
 
 
+def _up_to_change(rows: list) -> list:
+    """The rows up to and with the first segment change."""
+    for i, (_, event) in enumerate(rows):
+        if event.kind in SEGMENT_CHANGES:
+            return rows[: i + 1]
+    return rows
+
+
 class ReplayOrder:
     """``size``: records per slice; ``backlog``: more pending than this is a backlog."""
 
@@ -83,7 +93,7 @@ class ReplayOrder:
             self.lane = {"end": end, "master": recorder.open_master_uid()}
             self.outbox.set_state(_STATE, json.dumps(self.lane))
         if self.lane is None:
-            taken = self._store(recorder, self.outbox.peek(self.size), None)
+            taken = self._store(recorder, _up_to_change(self.outbox.peek(self.size)), None)
             return taken or self._store_held(recorder, maps=True)
         end = self.lane["end"]
         kinds = sorted(SEGMENT_CHANGES)

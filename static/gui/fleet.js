@@ -28,6 +28,7 @@ export const Fleet = {
   lastRead: 0,
   timer: null,
   frame: null,
+  listStale: false, // the next frame redraws the list too, not only the dots
   basemapsOf: null, // the test events (ids, joined) whose basemaps the switcher offers
 
   visible() {
@@ -80,8 +81,9 @@ export const Fleet = {
     this.lastRead = Date.now();
     const data = await api("GET", "fleet/", undefined, { root: CONFIG.guiApiRoot });
     this.vehicles = data.vehicles;
-    await this.loadBasemaps();
+    // The vehicles are shown before the basemaps are asked for: they do not wait on them.
     this.render();
+    await this.loadBasemaps();
   },
 
   /* A segment or poses event of the change feed, applied to its vehicle in place. */
@@ -99,6 +101,8 @@ export const Fleet = {
         return;
       }
       const [lon, lat] = points[points.length - 1];
+      // The list says "no position yet" until the first one.
+      this.listStale ||= !v.position;
       v.position = [lat, lon];
     } else if (e.kind === "segment") {
       const masters = (e.segments || []).filter((s) => s.parent === null && s.leg === v.leg.id);
@@ -107,16 +111,20 @@ export const Fleet = {
         v.mode = open.segment_type;
         v.mode_since = open.start;
         if (open.segment_type === "ito") v.last_takeover = open.start;
+        this.listStale = true;
       } else if (masters.length) {
         Live.later("fleet"); // its segment closed: logging may have stopped
         return;
       } else return; // an annotation, not a mode
     }
-    // Several robots' events in one frame are drawn once.
+    // Several robots' events in one frame are drawn once; positions alone move
+    // the dots and leave the list as it is.
     if (!this.frame) {
       this.frame = requestAnimationFrame(() => {
         this.frame = null;
-        this.render();
+        const list = this.listStale;
+        this.listStale = false;
+        this.render({ list });
       });
     }
   },
@@ -145,7 +153,7 @@ export const Fleet = {
     return { mode, takeover, leg };
   },
 
-  render() {
+  render({ list = true } = {}) {
     if (!this.map) return;
     const seen = new Set();
     for (const v of this.vehicles) {
@@ -180,7 +188,7 @@ export const Fleet = {
     // A new vehicle on the map is brought into view; otherwise the view stays where it was put.
     const ids = new Set(this.markers.keys());
     if ([...ids].some((id) => !this.fitted.has(id))) this.fitAll();
-    this.renderList();
+    if (list) this.renderList();
   },
 
   fitAll() {

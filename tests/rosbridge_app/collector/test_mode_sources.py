@@ -14,7 +14,11 @@ from rosbridge_app.collector import events as ev
 from rosbridge_app.collector import params as P
 from rosbridge_app.collector import reason_rules
 from rosbridge_app.collector.bag import bag_events
-from rosbridge_app.collector.message_fields import folder_types, installed_fields
+from rosbridge_app.collector.message_fields import (
+    folder_types,
+    installed_fields,
+    recorded_fields,
+)
 from rosbridge_app.collector.mode_sources import Combiner, parse
 
 T0 = datetime(2026, 5, 4, 10, 0, tzinfo=UTC)
@@ -87,7 +91,12 @@ def test_sets_ranges_defaults_and_the_estop_veto():
         (6, 0, 1),
     ]:
         said += combiner.offer(index, NS(data=value), at(t))
-    assert said == [("auto", at(1)), ("ito", at(3)), ("auto", at(5)), ("ito", at(6))]
+    assert [s[:2] for s in said] == [
+        ("auto", at(1)),
+        ("ito", at(3)),
+        ("auto", at(5)),
+        ("ito", at(6)),
+    ]
 
 
 def test_an_index_the_message_does_not_have_says_nothing():
@@ -96,7 +105,7 @@ def test_an_index_the_message_does_not_have_says_nothing():
     )
     combiner = Combiner(config)
     assert combiner.offer(0, NS(buttons=[0, 1]), at(0)) == []
-    assert combiner.offer(0, NS(buttons=[0, 0, 0, 0, 1]), at(1)) == [("ito", at(1))]
+    assert combiner.offer(0, NS(buttons=[0, 0, 0, 0, 1]), at(1))[0][:2] == ("ito", at(1))
 
 
 def test_hysteresis_ignores_flicker_and_switches_when_it_ran_out():
@@ -109,7 +118,58 @@ def test_hysteresis_ignores_flicker_and_switches_when_it_ran_out():
     for t, value in [(0, "AUTO"), (1.5, "AUTO"), (2, "MANUAL"), (2.5, "AUTO"), (3, "MANUAL")]:
         said += combiner.offer(0, NS(data=value), at(t))
     said += combiner.tick(at(4.2))
-    assert said == [("auto", at(1)), ("ito", at(4))]
+    assert [s[:2] for s in said] == [("auto", at(1)), ("ito", at(4))]
+
+
+def stamped(seconds: float) -> NS:
+    return NS(sec=int(seconds), nanosec=int(round(seconds % 1 * 1e9)))
+
+
+def test_a_source_with_a_stamp_switches_at_the_robots_time_however_late_it_arrives():
+    config = parse(
+        """
+        sources:
+          - {topic: /state, type: ftt_robot_msgs/msg/State, field: mode,
+             auto: [OFFBOARD], ito: [MANUAL]}
+          - {topic: /op, type: ftt_robot_msgs/msg/OperationModeState, field: mode,
+             auto: [2], ito: [1], stamp: stamp, hysteresis: 0.5}
+        """
+    )
+    combiner = Combiner(config)
+    t = T0.timestamp()
+    state = NS(header=NS(stamp=stamped(t + 1)), mode="OFFBOARD")
+    assert combiner.offer(0, state, at(3.5), sent=at(1.01)) == [("auto", at(1), at(1), 0.0)]
+    # The latched subscription's copy of the same message is no news.
+    assert combiner.offer(0, state, at(3.6), sent=at(1.01)) is None
+    # A field named by `stamp`, and a hysteresis counted from it.
+    assert combiner.offer(1, NS(stamp=stamped(t + 5), mode=1), at(5.2)) == []
+    assert combiner.offer(1, NS(stamp=stamped(t + 5.6), mode=1), at(6.2)) == [
+        ("ito", at(5.5), at(5.5), 0.0)
+    ]
+
+
+def test_a_source_without_a_stamp_switches_when_sent_within_the_interval_since_its_last():
+    config = parse("sources: [{topic: /m, type: std_msgs/msg/String, field: data,"
+                   " auto: [AUTO], ito: [MANUAL]}]")  # fmt: skip
+    combiner = Combiner(config)
+    combiner.offer(0, NS(data="AUTO"), at(0.2), sent=at(0))
+    combiner.offer(0, NS(data="AUTO"), at(1.2), sent=at(1))
+    assert combiner.offer(0, NS(data="MANUAL"), at(4.0), sent=at(2)) == [("ito", at(2), at(2), 1.0)]
+
+
+def test_a_stamp_path_must_name_a_time():
+    text = (
+        "sources: [{topic: /s, type: ftt_robot_msgs/msg/State, field: mode,"
+        " auto: [A], stamp: header.frame_id}]"
+    )
+    with pytest.raises(ValueError, match="header.frame_id is not a time stamp"):
+        parse(text, fields_of=recorded_fields(robot_store()))
+
+
+def robot_store():
+    store = get_typestore(Stores.ROS2_JAZZY)
+    store.register(folder_types(ROBOT_MSGS))
+    return store
 
 
 def _write_bag(path: Path, script: list) -> None:

@@ -1,13 +1,16 @@
 """Mode from the robot's own topics over DDS: one drill with a MAVROS-like State
 and an Autoware-like OperationModeState (built from the .msg files of
-robot_msgs/, not installed packages), a String and an e-stop that vetoes."""
+robot_msgs/, not installed packages), a String and an e-stop that vetoes; and
+a source's switch placed at its header stamp when the collector hears it late."""
 
 import hashlib
 import json
 import os
+import signal
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import pytest
@@ -130,3 +133,81 @@ def test_modes_from_the_robots_own_topics_and_an_estop(
     assert [(t.suggested_reason_id, t.ito_reason_id) for t in takeovers] == [
         (p[3], "unassigned") for p in switches if p[2] == "ito"
     ]
+
+
+# A robot whose State carries the time of the switch in its header: MANUAL at
+# 5 Hz, then, told so on its input, OFFBOARD stamped when it switched and sent
+# 0.3 s later (its DDS send time is not the switch); it prints that stamp.
+STAMPED_ROBOT = """
+import select, sys, time
+import rclpy
+from ftt_robot_msgs.msg import State
+rclpy.init()
+node = rclpy.create_node("stamped_robot")
+pub = node.create_publisher(State, "/mavros/state", 100)
+deadline = time.monotonic() + 30
+while pub.get_subscription_count() == 0:
+    if time.monotonic() > deadline:
+        sys.exit("no subscriber")
+    time.sleep(0.05)
+print("ready", flush=True)
+mode, stamp = "MANUAL", None
+while True:
+    if select.select([sys.stdin], [], [], 0.2)[0]:
+        if not sys.stdin.readline():
+            break
+        mode, stamp = "OFFBOARD", time.time()
+        print(repr(stamp), flush=True)
+        time.sleep(0.3)
+    msg = State(mode=mode)
+    t = stamp if stamp is not None else time.time()
+    msg.header.stamp.sec, msg.header.stamp.nanosec = int(t), int(round(t % 1 * 1e9))
+    pub.publish(msg)
+    stamp = None
+"""
+
+
+def test_a_mode_source_with_a_header_switches_at_its_stamp_when_the_collector_is_late(
+    ros, procs, start_collector, robot_leg, robot_interfaces
+):
+    sources = (
+        "sources: [{topic: /mavros/state, type: ftt_robot_msgs/msg/State, field: mode,"
+        " auto: [OFFBOARD], ito: [MANUAL]}]"
+    )
+    collector = start_collector(params={"params.mode_sources": sources}, env=robot_interfaces)
+    assert ros.set_logging(True).success
+    robot = subprocess.Popen(
+        [sys.executable, "-c", STAMPED_ROBOT],
+        cwd=ROOT,
+        env={**procs.env, **robot_interfaces},
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert robot.stdout.readline() == "ready\n"
+        wait_for(
+            lambda: Segment.objects.filter(leg=robot_leg, segment_type_id="ito").exists(),
+            what="the ITO master",
+        )
+        # The robot's computer starves the collector: it hears nothing for 2 s.
+        os.kill(collector.popen.pid, signal.SIGSTOP)
+        try:
+            robot.stdin.write("switch\n")
+            robot.stdin.flush()
+            stamp = float(robot.stdout.readline())
+            time.sleep(2)  # the starvation itself, not a wait for something
+        finally:
+            os.kill(collector.popen.pid, signal.SIGCONT)
+        resumed = time.time()
+        master = wait_for(
+            lambda: Segment.objects.filter(leg=robot_leg, segment_type_id="auto").first(),
+            what="the AUTO master",
+        )
+    finally:
+        robot.stdin.close()
+        robot.wait(10)
+    assert resumed - stamp > 2
+    assert master.start.timestamp() == pytest.approx(stamp, abs=0.001)
+    assert master.robot_stamp == master.start
+    assert master.start_uncertainty == 0.0

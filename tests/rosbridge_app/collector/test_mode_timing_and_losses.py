@@ -32,6 +32,9 @@ def test_a_second_copy_of_a_message_is_not_placed_again():
     clock = ModeClock()
     clock.place("auto", s(1), s(1), s(1.1))
     assert clock.place("auto", s(1), s(1), s(1.2)) is None  # the latched subscription's copy
+    assert clock.place("auto", s(0.5), None, s(1.3)) is None  # an older one
+    # A publisher whose stamp stands still: a new value is not taken for a copy.
+    assert clock.place("ito", s(1), None, s(1.4)) == (s(1), s(1), 0.0)
 
 
 def test_a_clock_far_from_the_receive_time_is_not_believed():

@@ -125,3 +125,20 @@ def test_backlog_slices_grow_while_each_is_stored_within_the_time_a_live_switch_
         assert len(taken) < len(positions) // SLICE
     else:
         assert max(taken) == SLICE
+
+
+def test_a_live_switch_is_committed_before_what_was_spooled_after_it(leg, tmp_path):
+    t0 = datetime.now(UTC) + timedelta(minutes=1)
+    before, after = _fixes(t0, 3), _fixes(t0 + timedelta(seconds=1), 3)
+    switch = Event(ev.MODE, t0 + timedelta(seconds=1), {"mode": "ito"})
+    outbox = Outbox(tmp_path / "spool.sqlite3")
+    outbox.append([Event(ev.START, t0), *before, switch, *after])
+    order, recorder = ReplayOrder(outbox, 100), Recorder(lambda: leg)
+
+    assert order.write_next(recorder) == 1  # the start alone
+    assert order.write_next(recorder) == len(before) + 1
+    # The new master is in the database while the positions after it still wait.
+    assert Segment.objects.get(uid=switch.uid).segment_type_id == "ito"
+    assert len(outbox) == len(after)
+    assert order.write_next(recorder) == len(after)
+    assert Pose.objects.filter(segment__uid=switch.uid).count() == 3
