@@ -19,6 +19,7 @@ from datetime import datetime
 from django.contrib.gis.geos import GEOSGeometry
 from django.db.models import FileField, ForeignKey
 from django.db.models.fields.files import FieldFile
+from django.utils.translation import gettext as _
 
 from events.models import Leg, Note, Performer, Personnel, Segment, Shift, TestCase, TestEvent
 from exchange import records as rec
@@ -140,5 +141,7 @@ def value_in(field, value, where: str):
     if field.get_internal_type() == "UUIDField":
         return uuid.UUID(value)
     if isinstance(field, FileField) and not isinstance(value, str):
-        raise rec.RecordError(f"{where}: {value!r} is not a file name.")
+        raise rec.RecordError(
+            _("%(field)s: %(value)s is not a file name.") % {"field": where, "value": f"{value!r}"}
+        )
     return value

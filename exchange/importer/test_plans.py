@@ -8,6 +8,7 @@ that criterion and leg, and otherwise the later one wins.
 """
 
 from django.contrib.gis.geos import LineString, MultiPolygon, Polygon
+from django.utils.translation import gettext as _
 
 from events.models import Criterion, ItoReason, Judgement, Leg, Shift, TestCase, TestEvent
 from events.services import test_plans
@@ -21,7 +22,9 @@ def _line_in(coords, field: str):
     try:
         return LineString([tuple(point) for point in coords], srid=4326)
     except (TypeError, ValueError, IndexError):
-        raise rec.RecordError(f"{field}: {coords!r} is not a line.") from None
+        raise rec.RecordError(
+            _("%(field)s: %(value)s is not a line.") % {"field": field, "value": f"{coords!r}"}
+        ) from None
 
 
 def _area_in(coords, field: str):
@@ -31,7 +34,10 @@ def _area_in(coords, field: str):
         polygons = [Polygon(*[[tuple(p) for p in ring] for ring in rings]) for rings in coords]
         return MultiPolygon(*polygons, srid=4326)
     except (TypeError, ValueError, IndexError):
-        raise rec.RecordError(f"{field}: {coords!r} is not a list of polygons.") from None
+        raise rec.RecordError(
+            _("%(field)s: %(value)s is not a list of polygons.")
+            % {"field": field, "value": f"{coords!r}"}
+        ) from None
 
 
 def import_test_cases(session: ImportSession):
