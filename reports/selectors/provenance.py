@@ -23,7 +23,7 @@ from django.utils import timezone
 from django.utils.translation import gettext as _
 
 from events.models import Leg, Note, Segment, Shift, TestEvent
-from events.selectors.history import KINDS, author_of, entries_since
+from events.selectors.history import KINDS, author_of, entries_since, word_for
 from events.selectors.taxonomy import taxonomy_of, taxonomy_version
 from reports.selectors.statistics import event_statistics
 from telemetry.models import Image, LocalPose, Pose
@@ -310,6 +310,7 @@ def _described(entry) -> dict:
     return {
         "record": f"{entry.instance_type._meta.verbose_name} {entry.uid}",
         "kind": KINDS[entry.history_type],
+        "kind_text": word_for(KINDS[entry.history_type]),
         "at": _text(entry.history_date),
         "by": author_of(entry),
         "channel": entry.history_channel,

@@ -50,16 +50,23 @@ def test_pdf_verifies_until_a_reason_changes(scenario, tmp_path):
 
 
 def test_final_report_says_final_and_lists_amendments(scenario, tmp_path):
-    event = logs.close_test_event(scenario.event)
-    finality.finalise_test_event(event)
-    with authored("admin", user=staff_user("administrator"), reason="wrong reason tapped"):
+    note = notes.add_note(_take_over(scenario), text="wet grass")
+    event = finality.finalise_test_event(logs.close_test_event(scenario.event))
+    administrator = staff_user("administrator")
+    with authored("admin", user=administrator, reason="wrong reason tapped"):
         segments.annotate_segment(_take_over(scenario), ito_reason="other")
+    with authored("gui", user=administrator, reason="note on the wrong take-over"):
+        deletion.delete(note)
+    assert [(a["record"], a["kind"]) for a in amendments_of(event)][1:] == [
+        (f"note {note.uid}", "deleted")
+    ]
     pdf = tmp_path / "final.pdf"
     options = ["--level", "summary", "--no-tiles", "--no-image-appendix", "-o", str(pdf)]
     call_command("ftt_report", "--test-event", str(event.pk), *options, stdout=io.StringIO())
     text = flat(pdf_text(pdf.read_bytes(), tmp_path))
-    assert "FINAL since" in text and "amended 1 time after finalisation" in text
+    assert "FINAL since" in text and "amended 2 times after finalisation" in text
     assert "wrong reason tapped" in text and "frozen" in text
+    assert f"note {note.uid} deleted by" in text and "(note on the wrong take-over)" in text
     assert "PROVISIONAL" not in text
 
 
