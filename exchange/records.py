@@ -126,6 +126,9 @@ def test_event_record(event) -> dict:
         "version": event.version,
         "time_zone": event.time_zone,
         "language": event.language,
+        "finalised": time_out(event.finalised),
+        "finalised_by": event.finalised_by,
+        "taxonomy": event.taxonomy,
     }
 
 

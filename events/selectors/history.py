@@ -19,7 +19,8 @@ WORDS = {
 }
 
 
-def _word(value: str) -> str:
+def word_for(value: str) -> str:
+    """What a reader sees for a kind ("deleted") or channel ("admin"), translated."""
     return _(WORDS[value]) if value in WORDS else value
 
 
@@ -57,10 +58,10 @@ def describe_entry(entry, previous) -> dict:
     return {
         "at": entry.history_date.isoformat(),
         "kind": KINDS[entry.history_type],
-        "kind_text": _word(KINDS[entry.history_type]),
+        "kind_text": word_for(KINDS[entry.history_type]),
         "author": author_of(entry) or _("FTT"),
         "channel": entry.history_channel,
-        "channel_text": _word(entry.history_channel),
+        "channel_text": word_for(entry.history_channel),
         "reason": entry.history_change_reason or "",
         "changes": changes,
     }

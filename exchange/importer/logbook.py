@@ -4,6 +4,7 @@ check that none stays open inside a closed one."""
 import uuid
 
 from django.db.models import Q
+from django.utils.translation import gettext as _
 
 from basemaps.models import BasemapLayer, EventBasemap
 from basemaps.services import layers as basemap_layers
@@ -11,6 +12,7 @@ from events import rules
 from events.models import Leg, Note, Performer, PoseSource, Segment, Shift, TestEvent, Vehicle
 from exchange import records as rec
 from exchange.importer import test_plans
+from exchange.importer.plan import MalformedRecord
 from exchange.importer.session import ImportSession
 
 # Segment attributes of the annotation, as stored (the reason by its key).
@@ -28,6 +30,7 @@ def save_entry(
     clashes=(),
     annotation=None,
     counters=None,
+    settled=None,
 ):
     """Add or update one log entry.
 
@@ -36,7 +39,9 @@ def save_entry(
     follow their own stamp (``annotated``), so that an operator's annotation
     survives the robot closing the same segment later on the other side.
     ``counters`` only ever grow where they are counted (a leg's missed fixes,
-    added without a change stamp): the larger count wins.
+    added without a change stamp): the larger count wins.  ``settled`` holds
+    values that are set once and then kept (a test event's finalisation): the
+    archive's are taken while the first of them is still empty here.
     """
     uid = uuid.UUID(record["uid"])
     # A record without change stamps (an archive of an older FTT): the
@@ -45,9 +50,10 @@ def save_entry(
     annotated = rec.time_in(record.get("annotated"), "annotated")
     annotation = annotation or {}
     counters = counters or {}
+    settled = settled or {}
     row = model.objects.filter(uid=uid).first()
     if row is None:
-        values = values | counters
+        values = values | counters | settled
         for queryset, message in clashes:
             other = queryset.first()
             if other is not None:
@@ -76,6 +82,8 @@ def save_entry(
             values["end"] = row.end  # never re-open; see exchange.importer
         wanted |= values
     wanted |= {name: n for name, n in counters.items() if n > getattr(row, name)}
+    if settled and getattr(row, next(iter(settled))) in (None, ""):
+        wanted |= settled
     stamps = []
     if annotation and ("annotated" not in record or _later(annotated, row.annotated)):
         wanted |= annotation
@@ -126,7 +134,28 @@ def import_test_events(session: ImportSession):
             # Archives written before reports had a language are English.
             "language": r.get("language", "en"),
         }
-        session.events[r["uid"]] = save_entry(session, "test_events", TestEvent, r, values).pk
+        final = _finalisation(session, r)
+        event = save_entry(session, "test_events", TestEvent, r, values, settled=final)
+        if event.finalised is not None and event.end is None:
+            message = _("the test event is final in the archive but open here; close it here")
+            session.refuse(f"{session.where}: {message}.")
+        session.events[r["uid"]] = event.pk
+
+
+def _finalisation(session: ImportSession, record) -> dict:
+    """A final event stays final with its frozen taxonomy; archives of an older
+    FTT, or of an event not final there, bring none."""
+    finalised = rec.time_in(record.get("finalised"), "finalised")
+    if finalised is None:
+        return {}
+    if not isinstance(record.get("taxonomy"), dict):
+        message = _("a final test event without its taxonomy")
+        raise MalformedRecord(f"{session.where}: {message}.")
+    return {
+        "finalised": finalised,
+        "finalised_by": str(record.get("finalised_by") or ""),
+        "taxonomy": record["taxonomy"],
+    }
 
 
 def link_basemaps(session: ImportSession):

@@ -129,8 +129,13 @@ class Sections:
             "keywords": keywords(stamp),
             "final": fmt.timestamp(final, self.tz) if final else None,
             "amendments": [
-                _("%(when)s: %(record)s by %(who)s")
-                % {"when": a["at"], "record": a["record"], "who": a["by"] or a["channel"]}
+                _("%(when)s: %(record)s %(kind)s by %(who)s")
+                % {
+                    "when": a["at"],
+                    "record": a["record"],
+                    "kind": a["kind_text"],
+                    "who": a["by"] or a["channel"],
+                }
                 + (f" ({a['reason']})" if a["reason"] else "")
                 for a in stamp["amendments"]
             ],

@@ -13,15 +13,17 @@ says changed since.
 import hashlib
 import json
 import re
+from collections import defaultdict
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 
 from django.conf import settings
+from django.db.models import FileField
 from django.utils import timezone
 from django.utils.translation import gettext as _
 
 from events.models import Leg, Note, Segment, Shift, TestEvent
-from events.selectors.history import author_of, entries_since
+from events.selectors.history import KINDS, author_of, entries_since, word_for
 from events.selectors.taxonomy import taxonomy_of, taxonomy_version
 from reports.selectors.statistics import event_statistics
 from telemetry.models import Image, LocalPose, Pose
@@ -229,32 +231,86 @@ def json_report(event: TestEvent, mode: str) -> str:
 
 
 def amendments_of(event: TestEvent) -> list[dict]:
-    """Changes to a final event after it was finalised, oldest first."""
+    """Changes to a final event after it was finalised, oldest first.
+
+    An import's own entry that leaves a row as the entry before it recorded it
+    is no amendment: it only brings what the carried history (another
+    installation's entries, imported with their own dates) already lists."""
     if event.finalised is None:
         return []
-    return [_described(e) for e in changes_since(event, event.finalised)]
+    entries = changes_since(event, event.finalised)
+    copies = _import_copies(entries)
+    return [_described(e) for e in entries if (type(e), e.history_id) not in copies]
+
+
+def _import_copies(entries: list) -> set:
+    """(history model, entry id) of the import entries that change nothing."""
+    by_model = defaultdict(list)
+    for entry in entries:
+        if entry.history_channel == "import":
+            by_model[type(entry)].append(entry)
+    copies = set()
+    for history, imported in by_model.items():
+        rows = history.objects.filter(id__in={e.id for e in imported})
+        timeline = defaultdict(list)
+        for entry in rows.order_by("history_date", "history_id"):
+            timeline[entry.id].append(entry)
+        for entry in imported:
+            earlier = [e for e in timeline[entry.id] if _before(e, entry)]
+            if earlier and _content(earlier[-1]) == _content(entry):
+                copies.add((history, entry.history_id))
+    return copies
+
+
+def _before(entry, other) -> bool:
+    return (entry.history_date, entry.history_id) < (other.history_date, other.history_id)
+
+
+def _content(entry) -> dict:
+    """A row's values in an entry, without the change stamp and file names
+    (storage names differ between installations; files are not compared)."""
+    return {
+        f.attname: getattr(entry, f.attname)
+        for f in entry.tracked_fields
+        if f.name != "modified" and not isinstance(f, FileField)
+    }
 
 
 def changes_since(event: TestEvent, since: datetime) -> list:
-    """History entries of the event's rows written after ``since``."""
+    """History entries of the event's rows written after ``since``.
+
+    The scope holds the rows there now and those the history places there
+    (a row's entries keep its parent), so a row deleted since is named with
+    who deleted it."""
+    shifts = _ids(Shift, test_event_id=event.pk)
+    legs = _ids(Leg, shift_id__in=shifts)
+    segments = _ids(Segment, leg_id__in=legs)
     scope = (
-        (TestEvent, {"id": event.pk}),
-        (Shift, {"test_event_id": event.pk}),
-        (Leg, {"shift__test_event": event.pk}),
-        (Segment, {"leg__shift__test_event": event.pk}),
-        (Note, {"segment__leg__shift__test_event": event.pk}),
-        (Image, {"segment__leg__shift__test_event": event.pk}),
+        (TestEvent, {event.pk}),
+        (Shift, shifts),
+        (Leg, legs),
+        (Segment, segments),
+        (Note, _ids(Note, segment_id__in=segments)),
+        (Image, _ids(Image, segment_id__in=segments)),
     )
     entries = []
-    for model, where in scope:
-        ids = list(model.objects.filter(**where).values_list("id", flat=True))
+    for model, ids in scope:
         entries += entries_since(model, since, id__in=ids)
     return sorted(entries, key=lambda e: e.history_date)
+
+
+def _ids(model, **where) -> set[int]:
+    """Ids of the rows of ``model`` that are, or once were, where ``where`` says."""
+    now = model.objects.filter(**where).values_list("id", flat=True)
+    once = model.history.filter(**where).values_list("id", flat=True).distinct()
+    return {*now, *once}
 
 
 def _described(entry) -> dict:
     return {
         "record": f"{entry.instance_type._meta.verbose_name} {entry.uid}",
+        "kind": KINDS[entry.history_type],
+        "kind_text": word_for(KINDS[entry.history_type]),
         "at": _text(entry.history_date),
         "by": author_of(entry),
         "channel": entry.history_channel,

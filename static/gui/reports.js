@@ -133,7 +133,14 @@ const Reports = {
       for (const c of changes) {
         const li = document.createElement("li");
         const who = c.by || _("FTT");
-        li.textContent = _("%(record)s changed %(at)s by %(who)s via %(channel)s", { record: c.record, at: fmtTime(c.at), who, channel: c.channel }) + (c.reason ? ` (${c.reason})` : "");
+        const values = { record: c.record, at: fmtTime(c.at), who, channel: c.channel };
+        const line =
+          c.kind === "deleted"
+            ? _("%(record)s deleted %(at)s by %(who)s via %(channel)s", values)
+            : c.kind === "created"
+              ? _("%(record)s created %(at)s by %(who)s via %(channel)s", values)
+              : _("%(record)s changed %(at)s by %(who)s via %(channel)s", values);
+        li.textContent = line + (c.reason ? ` (${c.reason})` : "");
         ul.append(li);
       }
       box.append(ul);

@@ -112,7 +112,7 @@ def test_a_change_of_mode_leaves_one_entry_per_row_it_ends_or_starts(leg):
         }
         row.refresh_from_db()
         assert [c for c in ended["changes"] if c["field"] == "end"] == [
-            {"field": "end", "before": None, "after": str(row.end)}
+            {"field": "end", "field_name": "end", "before": None, "after": str(row.end)}
         ]
     # The robot's suggestion is in the child's first entry, not a change after it.
     assert child.history.earliest("history_id").suggested_reason_id == "safety"

@@ -22,10 +22,10 @@ from events.models import (
     TestEvent,
     Vehicle,
 )
-from events.services import logs, segments, test_plans
+from events.services import finality, logs, segments, test_plans
 from exchange.archive import open_archive
 from exchange.export import export_events, select_events
-from exchange.importer import import_bundle
+from exchange.importer import ImportRefused, import_bundle
 from telemetry.models import Image
 from tests.support.archives import members_of, replace_record, signed_archive
 
@@ -130,6 +130,7 @@ def _as_older_ftt(path, tmp_path):
     members = members_of(path.read_bytes())
     del members["data/history.jsonl"]
     for table, names in (
+        ("test_events", ("finalised", "finalised_by", "taxonomy")),
         ("legs", ("fixes_missed",)),
         ("segments", ("suggested_reason", "start_uncertainty")),
     ):
@@ -160,6 +161,39 @@ def test_an_archive_without_history_and_new_fields_still_imports(
     )
     assert Leg.objects.get().fixes_missed == 0
     assert {e.history_channel for e in child.history.all()} == {"import"}
+
+
+def test_finalisation_travels_and_an_older_archive_never_undoes_it(
+    take_over, tmp_path, media_root, base_station
+):
+    event = logs.close_test_event(take_over.leg.shift.test_event)
+    closed = export(tmp_path / "closed.zip")
+    event = finality.finalise_test_event(event)
+    final = export(tmp_path / "final.zip")
+    base_station()
+
+    load(closed)
+    assert TestEvent.objects.get(uid=event.uid).finalised is None
+    load(final)
+    load(closed)  # older, not final yet: the event stays final
+    here = TestEvent.objects.get(uid=event.uid)
+    assert (here.finalised, here.taxonomy) == (event.finalised, event.taxonomy)
+
+
+def test_a_final_event_meeting_the_same_event_reopened_here_is_refused(
+    take_over, tmp_path, media_root, base_station
+):
+    event = logs.close_test_event(take_over.leg.shift.test_event)
+    closed = export(tmp_path / "closed.zip")
+    finality.finalise_test_event(event)
+    final = export(tmp_path / "final.zip")
+    base_station()
+    load(closed)
+    logs.reopen_test_event(TestEvent.objects.get(uid=event.uid))
+
+    with pytest.raises(ImportRefused, match="final in the archive but open here"):
+        load(final)
+    assert TestEvent.objects.get(uid=event.uid).finalised is None
 
 
 def test_history_names_rows_by_what_every_installation_knows(take_over, tmp_path, media_root):

@@ -8,12 +8,14 @@ import pytest
 from django.core.management import CommandError, call_command
 
 from events.history import authored
-from events.models import Vehicle
-from events.services import finality, logs, segments
+from events.models import ItoReason, TestEvent, Vehicle
+from events.services import deletion, finality, logs, notes, segments
 from exchange.archive import open_archive
 from exchange.export import export_events, select_events
+from exchange.history_records import TRACKED
 from exchange.importer import import_bundle
 from reports.selectors.disengagements import DMV_COLUMNS
+from reports.selectors.provenance import amendments_of
 from reports.selectors.statistics import event_statistics
 from tests.support.accounts import staff_user
 from tests.support.pdf import flat, pdf_text
@@ -48,16 +50,23 @@ def test_pdf_verifies_until_a_reason_changes(scenario, tmp_path):
 
 
 def test_final_report_says_final_and_lists_amendments(scenario, tmp_path):
-    event = logs.close_test_event(scenario.event)
-    finality.finalise_test_event(event)
-    with authored("admin", user=staff_user("administrator"), reason="wrong reason tapped"):
+    note = notes.add_note(_take_over(scenario), text="wet grass")
+    event = finality.finalise_test_event(logs.close_test_event(scenario.event))
+    administrator = staff_user("administrator")
+    with authored("admin", user=administrator, reason="wrong reason tapped"):
         segments.annotate_segment(_take_over(scenario), ito_reason="other")
+    with authored("gui", user=administrator, reason="note on the wrong take-over"):
+        deletion.delete(note)
+    assert [(a["record"], a["kind"]) for a in amendments_of(event)][1:] == [
+        (f"note {note.uid}", "deleted")
+    ]
     pdf = tmp_path / "final.pdf"
     options = ["--level", "summary", "--no-tiles", "--no-image-appendix", "-o", str(pdf)]
     call_command("ftt_report", "--test-event", str(event.pk), *options, stdout=io.StringIO())
     text = flat(pdf_text(pdf.read_bytes(), tmp_path))
-    assert "FINAL since" in text and "amended 1 time after finalisation" in text
+    assert "FINAL since" in text and "amended 2 times after finalisation" in text
     assert "wrong reason tapped" in text and "frozen" in text
+    assert f"note {note.uid} deleted by" in text and "(note on the wrong take-over)" in text
     assert "PROVISIONAL" not in text
 
 
@@ -73,6 +82,61 @@ def test_json_digest_is_the_same_on_another_installation(scenario, tmp_path, wip
         import_bundle(bundle)
     assert _verify(report)[0]
     assert json.loads(report.read_text())["provenance"]["digest"] == digest
+
+
+@pytest.mark.django_db
+def test_a_final_event_arrives_final_with_its_taxonomy_and_amendment(scenario, tmp_path, wipe):
+    administrator = staff_user("administrator")
+    event = logs.close_test_event(scenario.event)
+    with authored("gui", user=administrator):
+        event = finality.finalise_test_event(event)
+    take_over = _take_over(scenario)
+    with authored("admin", user=administrator, reason="wrong reason tapped"):
+        segments.annotate_segment(take_over, ito_reason="other")
+    report = tmp_path / "figures.json"
+    call_command("ftt_report", "--test-event", str(event.pk), "--json", str(report))
+    stamp = json.loads(report.read_text())["provenance"]
+    figures = event_statistics(event).overall.interventions
+    export_events(tmp_path / "a.zip", select_events())
+    wipe()
+    for model in TRACKED.values():
+        model.history.all().delete()  # a base station that never saw the event
+    # The catalogue here counts differently; the event keeps its frozen taxonomy.
+    counted = event.taxonomy["other"]["counts"]
+    ItoReason.objects.filter(key="other").update(counts_as_intervention=not counted)
+    with open_archive(tmp_path / "a.zip") as bundle:
+        import_bundle(bundle)
+
+    here = TestEvent.objects.get(uid=event.uid)
+    assert (here.finalised, here.finalised_by) == (event.finalised, administrator.username)
+    assert here.taxonomy == event.taxonomy
+    assert event_statistics(here).overall.interventions == figures
+    assert [(a["record"], a["by"], a["reason"]) for a in amendments_of(here)] == [
+        (f"segment {take_over.uid}", administrator.username, "wrong reason tapped")
+    ]
+    assert _verify(report) == (True, f"OK: The data of test event '{here}' is unchanged.\n")
+    again = tmp_path / "again.json"
+    call_command("ftt_report", "--test-event", str(here.pk), "--json", str(again))
+    there = json.loads(again.read_text())["provenance"]
+    assert there["digest"] == stamp["digest"]
+    assert (there["final"], there["taxonomy"]) == (stamp["final"], stamp["taxonomy"])
+    assert len(there["amendments"]) == 1
+
+
+def test_verify_names_a_deleted_segment_and_note_with_who_deleted_them(scenario, tmp_path):
+    event = scenario.event
+    take_over = _take_over(scenario)
+    note = notes.add_note(take_over, text="wet grass")
+    report = tmp_path / "figures.json"
+    call_command("ftt_report", "--test-event", str(event.pk), "--json", str(report))
+    assert _verify(report)[0]
+    with authored("api", user=staff_user("administrator")):
+        deletion.delete(take_over)
+    ok, said = _verify(report)
+    assert not ok
+    assert f"segment {take_over.uid} deleted" in said
+    assert f"note {note.uid} deleted" in said
+    assert said.count("by administrator-staff via api") == 2
 
 
 def test_dmv_csv_has_the_columns_and_the_statistics_figures(scenario, tmp_path):

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from django.conf import settings
 from django.core.management.base import BaseCommand, CommandError
-from django.utils.translation import gettext
+from django.utils.translation import gettext, gettext_lazy
 
 from common.progress import ProgressBar
 from events.models import Leg, Shift, TestEvent
@@ -28,6 +28,13 @@ from reports.selectors import exports
 from reports.selectors.disengagements import disengagements_csv, events_in_month
 from reports.selectors.provenance import json_report, verify_report
 from reports.services.generation import run_job
+
+# One line per change the check names (entries of reports.selectors.provenance).
+_CHANGE_LINES = {
+    "created": gettext_lazy("%(record)s created %(when)s by %(who)s via %(channel)s"),
+    "changed": gettext_lazy("%(record)s changed %(when)s by %(who)s via %(channel)s"),
+    "deleted": gettext_lazy("%(record)s deleted %(when)s by %(who)s via %(channel)s"),
+}
 
 
 class Command(BaseCommand):
@@ -154,7 +161,7 @@ class Command(BaseCommand):
         self.stdout.write(("OK: " if verdict.ok else "CHANGED: ") + verdict.message)
         for change in verdict.changes:
             reason = f" ({change['reason']})" if change["reason"] else ""
-            line = gettext("%(record)s changed %(when)s by %(who)s via %(channel)s") % {
+            line = _CHANGE_LINES[change["kind"]] % {
                 "record": change["record"],
                 "when": change["at"],
                 "who": change["by"] or "FTT",
