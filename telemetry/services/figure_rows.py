@@ -162,19 +162,18 @@ def write_change(
     return False, read_kept(master_id, mode)
 
 
-# The upsert and, for when it does not apply, the row as it holds now: one round
-# trip while the row is locked, not two.  A locking read (FOR UPDATE) waits
-# for a writer holding the row and then returns its newest version, not the
-# statement's snapshot; whichever of the two runs first locks the row, so the
-# other sees that same version.
+# The upsert and, when it does not apply, the row as it holds now: one round
+# trip while the row is locked, not two.  The upsert has locked the row; a
+# locking read (FOR UPDATE) returns its newest version, not the statement's
+# snapshot, which is older when the upsert waited for another writer.
 _UPSERT_OR_READ = f"""
 WITH applied AS ({{upsert}} RETURNING 1),
 held AS (
   SELECT {", ".join(_KEPT_COLUMNS)} FROM {_TABLE}
-  WHERE segment_id = %s AND mode = %s FOR UPDATE
+  WHERE segment_id = %s AND mode = %s AND NOT EXISTS (SELECT 1 FROM applied) FOR UPDATE
 )
-SELECT (SELECT count(*) FROM applied) > 0,
-  {", ".join(f"(SELECT {c} FROM held)" for c in _KEPT_COLUMNS)}
+SELECT EXISTS (SELECT 1 FROM applied), held.*
+FROM (VALUES (1)) AS one (x) LEFT JOIN held ON TRUE
 """
 
 
