@@ -5,7 +5,8 @@ differs between PostgreSQL and SpatiaLite lives here, one function per job.
 Writers do not lock the row before they measure.  They read what it holds
 (``Kept``), measure their change from that, and write it with one upsert that
 applies only while the row still holds what they read (``write_change``);
-otherwise that upsert has locked the row, and they read and measure again.
+otherwise that upsert has locked the row and, on PostgreSQL in the same
+statement, read what it holds now, and they measure again from that.
 """
 
 from dataclasses import dataclass
@@ -126,15 +127,17 @@ ON CONFLICT (segment_id, mode) DO UPDATE SET
   {extreme(least, "min_x")}, {extreme(least, "min_y")},
   {extreme(greatest, "max_x")}, {extreme(greatest, "max_y")}
 WHERE f.points = %s AND f.no_fix = %s
-RETURNING 1
 """
 
 
-def write_change(master_id: int, mode: str, seen: Kept | None, change: Change) -> bool:
+def write_change(
+    master_id: int, mode: str, seen: Kept | None, change: Change
+) -> tuple[bool, Kept | None]:
     """Add ``change`` to the figures row if it still holds ``seen`` (or, for
-    None, does not exist yet); whether it did.  When it did not, the row is
-    locked until the transaction ends (PostgreSQL's upsert locks the row it
-    finds), so a ``read_kept`` now sees what it will hold when written."""
+    None, does not exist yet): (True, None) when it did, else (False, what the
+    row holds now).  When it did not, the row is locked until the transaction
+    ends (an upsert locks the row it finds), so what it holds now is what the
+    next ``write_change`` finds."""
     ops = connection.ops
     alone = {
         name: ops.adapt_datetimefield_value(value) if isinstance(value, datetime) else value
@@ -144,8 +147,34 @@ def write_change(master_id: int, mode: str, seen: Kept | None, change: Change) -
     params += [change.first] * 2 + [change.last] * 5
     params += [None, None] if seen is None else [seen.points, seen.no_fix]
     with connection.cursor() as cursor:
-        cursor.execute(_upsert_sql(), params)
-        return cursor.fetchone() is not None
+        if connection.vendor == "postgresql":
+            cursor.execute(_UPSERT_OR_READ.format(upsert=_upsert_sql()), [*params, master_id, mode])
+            applied, *now = cursor.fetchone()
+            if applied:
+                return True, None
+            if now[0] is not None:
+                return False, kept_from(now)
+        else:
+            cursor.execute(_upsert_sql() + "RETURNING 1", params)
+            if cursor.fetchone() is not None:
+                return True, None
+    # SQLite, or a row another writer created after this statement began.
+    return False, read_kept(master_id, mode)
+
+
+# The upsert and, when it does not apply, the row as it holds now: one round
+# trip while the row is locked, not two.  The upsert has locked the row; a
+# locking read (FOR UPDATE) returns its newest version, not the statement's
+# snapshot, which is older when the upsert waited for another writer.
+_UPSERT_OR_READ = f"""
+WITH applied AS ({{upsert}} RETURNING 1),
+held AS (
+  SELECT {", ".join(_KEPT_COLUMNS)} FROM {_TABLE}
+  WHERE segment_id = %s AND mode = %s AND NOT EXISTS (SELECT 1 FROM applied) FOR UPDATE
+)
+SELECT EXISTS (SELECT 1 FROM applied), held.*
+FROM (VALUES (1)) AS one (x) LEFT JOIN held ON TRUE
+"""
 
 
 # The points of a track, in driving order (telemetry.selectors.driving_order),

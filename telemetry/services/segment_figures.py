@@ -79,11 +79,11 @@ def keep_figures(master_id: int, mode: str, new: list[NewPoint], seen=_UNREAD) -
     if seen is _UNREAD:
         seen = figure_rows.read_kept(master_id, mode)
     change = _change(master_id, mode, rows, alone, seen)
-    if not figure_rows.write_change(master_id, mode, seen, change):
+    applied, seen = figure_rows.write_change(master_id, mode, seen, change)
+    if not applied:
         # Another writer changed the row since it was read; it is locked now.
-        seen = figure_rows.read_kept(master_id, mode)
         change = _change(master_id, mode, rows, alone, seen)
-        if not figure_rows.write_change(master_id, mode, seen, change):
+        if not figure_rows.write_change(master_id, mode, seen, change)[0]:
             raise RuntimeError(f"the figures of segment {master_id} changed under their lock")
 
 
