@@ -6,7 +6,7 @@ from datetime import UTC
 
 import django_filters as filters
 from django import forms
-from django.db.models import Q
+from django.db.models import Exists, OuterRef, Q
 from django.utils.translation import gettext as _
 from django_filters.fields import IsoDateTimeField
 from rest_framework import serializers
@@ -180,10 +180,10 @@ class SegmentFilter(OpenStateFilterSet):
         time_fields = ["start", "end", "robot_stamp", "modified"]
 
     def filter_reason(self, queryset, name, value):
-        with_reason = Segment.objects.filter(ito_reason__key=value)
-        return queryset.filter(
-            Q(pk__in=with_reason.values("pk")) | Q(pk__in=with_reason.values("parent_id"))
-        )
+        # Asked per segment the other filters leave (a child by the parent index),
+        # not by collecting every segment with the reason first.
+        child_with_reason = Segment.objects.filter(parent_id=OuterRef("pk"), ito_reason_id=value)
+        return queryset.filter(Q(ito_reason_id=value) | Exists(child_with_reason))
 
 
 class NoteFilter(TimeRangeFilterSet):

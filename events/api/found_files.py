@@ -13,7 +13,7 @@ from events.selectors.found_segments import COLUMNS, MAX_FOUND
 KINDS = ("geojson", "csv")
 
 
-def found_file(rows: list[dict], kind: str) -> HttpResponse:
+def found_file(rows: list[tuple], kind: str) -> HttpResponse:
     if kind not in KINDS:
         raise ValidationError(
             {"as": [(_("Choose one of: %(kinds)s.") % {"kinds": ", ".join(KINDS)})]}
@@ -29,16 +29,16 @@ def found_file(rows: list[dict], kind: str) -> HttpResponse:
 
 
 def _geojson(rows) -> HttpResponse:
+    properties = [(n, k) for n, k in enumerate(COLUMNS) if k not in ("id", "longitude", "latitude")]
+    x, y = COLUMNS.index("longitude"), COLUMNS.index("latitude")
     features = [
         {
             "type": "Feature",
-            "id": row["id"],
+            "id": row[0],
             "geometry": None
-            if row["longitude"] is None
-            else {"type": "Point", "coordinates": [row["longitude"], row["latitude"]]},
-            "properties": {
-                k: _text(row[k]) for k in COLUMNS if k not in ("id", "longitude", "latitude")
-            },
+            if row[x] is None
+            else {"type": "Point", "coordinates": [row[x], row[y]]},
+            "properties": {k: _text(row[n]) for n, k in properties},
         }
         for row in rows
     ]
@@ -51,7 +51,7 @@ def _csv(rows) -> HttpResponse:
     writer = SafeWriter(out)
     writer.writerow(COLUMNS)
     for row in rows:
-        writer.writerow([_text(row[k]) for k in COLUMNS])
+        writer.writerow([_text(value) for value in row])
     return _download(out.getvalue(), "text/csv; charset=utf-8", "segments.csv")
 
 

@@ -354,7 +354,15 @@ class Segment(ChangeStamped):
         verbose_name = _("segment")
         verbose_name_plural = _("segments")
         ordering = ["-start", "-id"]
-        indexes = [models.Index(fields=["leg", "start"], name="segment_leg_start")]
+        indexes = [
+            models.Index(fields=["leg", "start"], name="segment_leg_start"),
+            # Masters in labels' driving order: their numbering reads it without sorting.
+            models.Index(
+                fields=["leg", "start", "id"],
+                condition=Q(parent__isnull=True),
+                name="segment_master_order",
+            ),
+        ]
         constraints = [
             _ends_after_start("segment"),
             models.UniqueConstraint(

@@ -3,8 +3,10 @@ for a map, a GeoJSON file or a spreadsheet."""
 
 from collections import defaultdict
 
+from django.db.models import F, FloatField, Func
+
 from events.models import Segment, SegmentType
-from events.selectors.labels import label, numbers_of
+from events.selectors.labels import segment_labels
 
 # A search that finds more than this is asked to narrow down rather than answered.
 MAX_FOUND = 200_000
@@ -27,64 +29,64 @@ COLUMNS = (
 )
 
 
-def found_rows(segments) -> list[dict]:
-    """One dict per segment of the filtered queryset, COLUMNS as keys, in time order."""
+def _coordinate(function: str) -> Func:
+    # The database reads the point's ordinate: no geometry object per row in Python.
+    return Func(F("start_position"), function=function, output_field=FloatField())
+
+
+def found_rows(segments) -> list[tuple]:
+    """One tuple per segment of the filtered queryset, in COLUMNS order and time
+    order; MAX_FOUND + 1 bare rows when the search found too many (see too_many)."""
     rows = list(
-        segments.order_by("start", "id").values(
+        segments.order_by("start", "id")
+        .annotate(x=_coordinate("ST_X"), y=_coordinate("ST_Y"))
+        .values_list(
             "id",
-            "parent_id",
-            "leg_id",
             "segment_type_id",
-            "ito_reason__key",
+            "ito_reason_id",
             "start",
             "end",
-            "start_position",
-            "leg__shift_id",
-            "leg__shift__vehicle__key",
+            "x",
+            "y",
             "leg__shift__test_event_id",
             "leg__shift__test_event__location",
             "leg__shift__test_event__version",
+            "leg__shift__vehicle__key",
+            "leg__shift_id",
+            "leg_id",
         )[: MAX_FOUND + 1]
     )
-    if len(rows) > MAX_FOUND:
+    if too_many(rows):
         return rows
-    numbers = numbers_of(segments)
-    reasons = _reasons_of_masters([row["id"] for row in rows if row["parent_id"] is None])
-    return [_row(row, numbers, reasons) for row in rows]
+    labels = segment_labels(segments)
+    reasons = _reasons_of_masters(segments)
+    ito = SegmentType.ITO
+    return [
+        (
+            pk,
+            labels.get(pk, ""),
+            "ITO" if segment_type == ito else "AUTO",
+            reason or " ".join(reasons.get(pk, ())),
+            *rest,
+        )
+        for pk, segment_type, reason, *rest in rows
+    ]
 
 
-def _reasons_of_masters(master_ids) -> dict[int, list[str]]:
+def _reasons_of_masters(segments) -> dict[int, list[str]]:
     """{master id: its reasons' keys in driving order}: a take-over's reasons are its children."""
     found = defaultdict(list)
     children = (
-        Segment.objects.filter(parent_id__in=master_ids, ito_reason__isnull=False)
+        Segment.objects.filter(
+            parent_id__in=segments.filter(parent__isnull=True).order_by().values("id"),
+            ito_reason__isnull=False,
+        )
         .order_by("start", "id")
-        .values_list("parent_id", "ito_reason__key")
+        .values_list("parent_id", "ito_reason_id")
     )
     for parent, key in children:
         found[parent].append(key)
     return found
-
-
-def _row(row, numbers, reasons) -> dict:
-    point = row["start_position"]
-    leg_number, number = numbers.get(row["id"], (None, "?"))
-    return {
-        "id": row["id"],
-        "label": label(leg_number, number) if leg_number is not None else "",
-        "mode": "ITO" if row["segment_type_id"] == SegmentType.ITO else "AUTO",
-        "reason": row["ito_reason__key"] or " ".join(reasons.get(row["id"], ())),
-        "start": row["start"],
-        "end": row["end"],
-        "longitude": point.x if point else None,
-        "latitude": point.y if point else None,
-        "test_event": row["leg__shift__test_event_id"],
-        "test_event_location": row["leg__shift__test_event__location"],
-        "version": row["leg__shift__test_event__version"],
-        "vehicle": row["leg__shift__vehicle__key"],
-        "shift": row["leg__shift_id"],
-        "leg": row["leg_id"],
-    }
 
 
 def too_many(rows) -> bool:

@@ -6,12 +6,15 @@ An ITO reason (child) is numbered under its master: "Leg 2 · #7.1".  The
 database id stays a technical detail.
 
 The database numbers them (``_NUMBERED``, window functions that PostgreSQL and
-SQLite share), so a label costs its own row, not a read of its whole leg.
+SQLite share), so a label costs its own row, not a read of its whole leg.  The
+masters' window reads the partial index ``segment_master_order`` in its own
+order; only the numbers of the chosen segments' masters leave the window.
 """
 
 from django.db import connection
 from django.db.models import QuerySet
 from django.utils.translation import gettext as _
+from django.utils.translation import gettext_noop
 
 from events.models import Leg, Segment
 
@@ -20,9 +23,12 @@ WITH chosen AS (
     SELECT id, leg_id, parent_id FROM {segment} WHERE id IN ({chosen})
 ),
 masters AS (
-    SELECT id, ROW_NUMBER() OVER (PARTITION BY leg_id ORDER BY start, id) AS n
-    FROM {segment}
-    WHERE parent_id IS NULL AND leg_id IN (SELECT leg_id FROM chosen)
+    SELECT id, n FROM (
+        SELECT id, ROW_NUMBER() OVER (PARTITION BY leg_id ORDER BY start, id) AS n
+        FROM {segment}
+        WHERE parent_id IS NULL AND leg_id IN (SELECT leg_id FROM chosen)
+    ) numbered
+    WHERE id IN (SELECT COALESCE(parent_id, id) FROM chosen)
 ),
 children AS (
     SELECT id, ROW_NUMBER() OVER (PARTITION BY parent_id ORDER BY start, id) AS n
@@ -63,8 +69,11 @@ def legs_numbers(leg_ids) -> dict[int, tuple[int, str]]:
     return numbers_of(Segment.objects.filter(leg_id__in=leg_ids))
 
 
+_LABEL = gettext_noop("Leg %(leg)s · %(segment)s")
+
+
 def label(leg_number: int, number: str) -> str:
-    return _("Leg %(leg)s · %(segment)s") % {"leg": leg_number, "segment": short_label(number)}
+    return _(_LABEL) % {"leg": leg_number, "segment": short_label(number)}
 
 
 def short_label(number: str) -> str:
@@ -80,4 +89,8 @@ def segment_label(segment: Segment) -> str:
 
 def segment_labels(segments: QuerySet) -> dict[int, str]:
     """{segment id: "Leg 2 · #7"} for the segments of a queryset; one query."""
-    return {pk: label(*numbered) for pk, numbered in numbers_of(segments).items()}
+    template = _(_LABEL)  # translated once, not per segment
+    return {
+        pk: template % {"leg": leg_number, "segment": short_label(number)}
+        for pk, (leg_number, number) in numbers_of(segments).items()
+    }

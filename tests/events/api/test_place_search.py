@@ -121,6 +121,9 @@ def test_found_take_overs_download_as_geojson_and_csv(api_client, take_overs):
     assert by_id[take_overs["edge"]]["geometry"]["coordinates"] == [8.0, 50.25]
     assert by_id[take_overs["edge"]]["properties"]["reason"] == "planner"
     assert by_id[take_overs["edge"]]["properties"]["mode"] == "ITO"
+    # Numbered among every master of the leg, found or not: an AUTO before each take-over.
+    labels = {n: by_id[pk]["properties"]["label"] for n, pk in take_overs.items() if pk in by_id}
+    assert labels == {"edge": "Leg 1 · #4", "corner": "Leg 1 · #6", "in_hole_ring": "Leg 1 · #10"}
 
     sheet = client.get("/api/segments/found/", {**query, "as": "csv"})
     assert sheet.status_code == 200
@@ -132,3 +135,13 @@ def test_found_take_overs_download_as_geojson_and_csv(api_client, take_overs):
 
     wrong = client.get("/api/segments/found/", {**query, "as": "kml"})
     assert wrong.status_code == 400 and "geojson" in wrong.json()["errors"]["as"][0]
+
+
+def test_a_reason_found_without_its_take_over_is_numbered_under_it(api_client, take_overs):
+    client = api_client(roles.VIEWER)
+    found = client.get("/api/segments/found/", {"master": "false", "reason": "planner"})
+    assert found.status_code == 200
+    (feature,) = json.loads(found.content)["features"]
+    assert feature["properties"]["label"] == "Leg 1 · #4.1"
+    assert feature["properties"]["reason"] == "planner"
+    assert feature["properties"]["mode"] == "ITO"
