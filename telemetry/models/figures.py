@@ -35,6 +35,9 @@ class SegmentFigures(models.Model):
     min_y = models.FloatField(null=True)
     max_x = models.FloatField(null=True)
     max_y = models.FloatField(null=True)
+    # The retention policy thinned the stored poses (reports.services.pose_retention):
+    # these figures were kept from all of them and stay; a recount leaves them.
+    thinned = models.BooleanField(default=False, db_default=False)
 
     class Meta:
         constraints = [
