@@ -5,7 +5,7 @@ older than that many months keeps, of each master's track, the points its map
 in the report draws (``reports.figures.maps.map_tolerance``: half a pixel of the
 shift's map, Douglas-Peucker as every drawing does); the others are deleted.
 The per-segment figures were kept from every pose at write time and stay as
-they are, marked ``thinned`` so a recount leaves them.  GPS fixes without a
+they are; a ThinnedSegment row marks the master, so a recount leaves it.  GPS fixes without a
 position are not drawn and are kept (the figures count them apart).
 """
 
@@ -22,7 +22,7 @@ from django.utils import timezone
 from events.models import Segment
 from reports.documents.sections import OVERVIEW_SIZE
 from reports.figures.maps import Line, map_tolerance
-from telemetry.models import LocalPose, Pose, SegmentFigures
+from telemetry.models import LocalPose, Pose, SegmentFigures, ThinnedSegment
 from telemetry.models.poses import FixStatus
 from telemetry.selectors import driving_order
 from telemetry.selectors.track_drawing import simplified
@@ -38,7 +38,7 @@ def old_shifts(months: int, now: datetime | None = None) -> list[int]:
     """Shifts not thinned yet whose newest pose is older than ``months`` months."""
     cutoff = (now or timezone.now()) - relativedelta(months=months)
     shifts = (
-        SegmentFigures.objects.filter(thinned=False)
+        SegmentFigures.objects.filter(segment__thinning__isnull=True)
         .values("segment__leg__shift")
         .annotate(newest=Max("last_stamp"))
         .filter(newest__lt=cutoff)
@@ -112,7 +112,9 @@ def thin_shift(shift_id: int) -> int:
             for begin in range(0, len(drop), CHUNK):
                 model.objects.filter(segment_id=seg, id__in=drop[begin : begin + CHUNK]).delete()
             deleted += len(drop)
-    SegmentFigures.objects.filter(segment_id__in=masters).update(thinned=True)
+    ThinnedSegment.objects.bulk_create(
+        [ThinnedSegment(segment_id=pk) for pk in masters], ignore_conflicts=True
+    )
     log.info(
         "retention: shift %s thinned, %s poses deleted, %s kept", shift_id, deleted, kept_total
     )

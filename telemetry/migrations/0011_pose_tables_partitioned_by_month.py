@@ -26,7 +26,7 @@ def merge(apps, schema_editor):
 
 class Migration(migrations.Migration):
     dependencies = [
-        ("telemetry", "0010_segment_figures_thinned"),
+        ("telemetry", "0010_thinned_segments"),
     ]
 
     operations = [migrations.RunPython(partition, merge)]

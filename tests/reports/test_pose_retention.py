@@ -16,7 +16,7 @@ from reports.documents.sections import OVERVIEW_SIZE
 from reports.figures.maps import Line, map_tolerance
 from reports.selectors.statistics import event_statistics, figures
 from reports.services.pose_retention import thin_old_poses
-from telemetry.models import LocalPose, Pose, SegmentFigures
+from telemetry.models import LocalPose, Pose, SegmentFigures, ThinnedSegment
 from telemetry.selectors.tracks import GPS, LOCAL, load_tracks
 from telemetry.services import recording
 from telemetry.services.recording import GpsFix, MapPose
@@ -106,8 +106,8 @@ def test_old_shifts_are_thinned_to_the_report_drawing_and_figures_stay(leg, othe
         # The newest shift is untouched.
         assert np.array_equal(thinned[new.pk].x, tracks[mode][new.pk].x)
         assert model.objects.filter(segment=new).count() == 600
-    assert SegmentFigures.objects.filter(segment=old, thinned=True).count() == 2
-    assert not SegmentFigures.objects.filter(segment=new, thinned=True).exists()
+    assert ThinnedSegment.objects.filter(segment=old).exists()
+    assert not ThinnedSegment.objects.filter(segment=new).exists()
     # A second run finds nothing left, and a recount leaves the thinned shift.
     assert thin_old_poses() == 0
     call_command("ftt_recount_figures")

@@ -86,7 +86,7 @@ def test_migration_back_and_forth_keeps_every_pose_and_figure(leg):
     assert all(pose_partitions.is_partitioned(t) == postgres for t in pose_partitions.TABLES)
 
     executor = MigrationExecutor(connection)
-    executor.migrate([("telemetry", "0010_segment_figures_thinned")])
+    executor.migrate([("telemetry", "0010_thinned_segments")])
     assert not any(pose_partitions.is_partitioned(t) for t in pose_partitions.TABLES)
     _assert_same(before, _state(event))
     assert recount_figures([master.pk]) == {}

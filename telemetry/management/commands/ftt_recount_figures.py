@@ -30,8 +30,8 @@ class Command(BaseCommand):
             masters = masters.filter(leg__shift__test_event=event)
         # Thinned by the retention policy: the kept figures are from every pose,
         # which are no longer there to measure.
-        thinned = masters.filter(figures__thinned=True).distinct().count()
-        masters = masters.exclude(figures__thinned=True)
+        thinned = masters.filter(thinning__isnull=False).count()
+        masters = masters.filter(thinning__isnull=True)
         ids = list(masters.order_by("pk").values_list("pk", flat=True))
         differing = 0
         for begin in range(0, len(ids), CHUNK):
