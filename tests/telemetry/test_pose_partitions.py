@@ -2,6 +2,7 @@
 the same poses and figures either way, a re-sent pose stored once, and the
 migration of a database with poses reversible."""
 
+import re
 from datetime import UTC, datetime, timedelta
 
 import pytest
@@ -14,7 +15,9 @@ from events.services import segments
 from events.services.segments import GpsPosition
 from reports.selectors.statistics import event_statistics, figures
 from telemetry.models import LocalPose, Pose, SegmentFigures
-from telemetry.selectors.tracks import GPS
+from telemetry.models.poses import FixStatus
+from telemetry.selectors.packed_tracks import gps_tracks_plan
+from telemetry.selectors.tracks import GPS, LOCAL, load_tracks
 from telemetry.services import pose_partitions, recording
 from telemetry.services.recording import GpsFix, MapPose
 from telemetry.services.segment_figures import differences, recount_figures
@@ -181,3 +184,61 @@ def test_deleting_a_test_event_deletes_its_poses(leg):
     _drive(master)
     TestEvent.objects.get(pk=leg.shift.test_event_id).delete()
     assert not Pose.objects.exists() and not LocalPose.objects.exists()
+
+
+def _as_read(track):
+    return (track.x.tolist(), track.y.tolist(), track.t.tolist(), track.frame, track.no_fix)
+
+
+def _drive_with_blind_fixes(leg, *, every_fix_stamped=False):
+    """A track across a month's end (with a few points without the robot's
+    clock, or none), fixes without a position months before and hours after
+    it and one unstamped, and a second master with such a fix only."""
+    pose_partitions.ensure_partitions(datetime(2026, 1, 1, tzinfo=UTC), T0 + timedelta(days=1))
+    master = _master(leg)
+    if every_fix_stamped:
+        stamps = [T0 + timedelta(seconds=i) for i in range(240)]
+        recording.record_poses(
+            master, [GpsFix(8.0 + i * 1e-5, 50.0, robot_stamp=t) for i, t in enumerate(stamps)]
+        )
+    else:
+        _drive(master)
+    no_fix = [
+        GpsFix(8.0, 50.0, fix_status=FixStatus.NO_FIX, robot_stamp=stamp)
+        for stamp in (datetime(2026, 2, 3, tzinfo=UTC), None, T0 + timedelta(hours=1))
+    ]
+    recording.record_poses(master, no_fix)
+    blind = segments.report_mode(
+        leg, SegmentType.ITO, at=T0 + timedelta(hours=2), gps=GpsPosition(8.1, 50.0)
+    ).master
+    recording.record_poses(blind, [GpsFix(8.1, 50.0, fix_status=FixStatus.NO_FIX)])
+    return master, blind
+
+
+def test_tracks_read_within_the_kept_span_are_those_of_every_pose(leg):
+    """The drawing read, bounded by the kept figures' span, gives the tracks of
+    every pose: poses without the robot's clock, fixes without a position
+    outside the span, and a master with such fixes only included."""
+    master, blind = _drive_with_blind_fixes(leg)
+    ids = [master.pk, blind.pk]
+    for mode in (GPS, LOCAL):
+        bounded = load_tracks(ids, mode)
+        every = load_tracks(ids, mode, within_kept_span=False)
+        assert bounded.keys() == every.keys()
+        for pk, track in every.items():
+            assert _as_read(bounded[pk]) == _as_read(track)
+    gps, local = load_tracks(ids, GPS), load_tracks(ids, LOCAL)
+    assert (len(gps[master.pk]), gps[master.pk].no_fix) == (240, 3)
+    assert (len(gps[blind.pk]), gps[blind.pk].no_fix) == (0, 1)
+    assert local.keys() == {master.pk} and len(local[master.pk]) == 120
+
+
+@pytest.mark.postgis_only
+def test_a_track_read_reads_the_months_its_kept_span_covers(leg):
+    master, blind = _drive_with_blind_fixes(leg, every_fix_stamped=True)
+    assert len(load_tracks([master.pk])[master.pk]) == 240
+    plan = "\n".join(gps_tracks_plan([master.pk, blind.pk], GPS))
+    table = Pose._meta.db_table
+    # Not February, where a fix without a position lies, nor the other months.
+    read = set(re.findall(rf" on ({table}_(?:\d{{6}}|default))\b", plan))
+    assert read == {f"{table}_202605", f"{table}_202606", f"{table}_default"}, plan
