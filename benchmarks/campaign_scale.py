@@ -56,6 +56,10 @@ try:
     from telemetry.models import SegmentFigures
 except ImportError:  # a checkout from before the figures
     SegmentFigures = None
+try:
+    from telemetry.services.pose_partitions import ensure_partitions
+except ImportError:  # a checkout with one pose table
+    ensure_partitions = None
 
 START = datetime(2025, 4, 1, 6, 0, tzinfo=UTC)
 # A pose every 10 ms of a segment's hour, so a segment holds up to 360 000.
@@ -225,13 +229,17 @@ def segment_list(leg_masters: list[Segment]) -> None:
 
 
 def sizes() -> dict:
-    table = Pose._meta.db_table
+    # Summed over the table's partitions where it has them (a plain table is
+    # its own one-row tree).
     with connection.cursor() as cursor:
         cursor.execute(
-            "SELECT pg_table_size(%s), pg_indexes_size(%s), pg_database_size(current_database())",
-            [table, table],
+            "SELECT sum(pg_table_size(relid)), sum(pg_indexes_size(relid)),"
+            " pg_database_size(current_database()) FROM"
+            " (SELECT relid FROM pg_partition_tree(%s::regclass) UNION SELECT %s::regclass) t",
+            [Pose._meta.db_table, Pose._meta.db_table],
         )
-        return dict(zip(("pose table", "pose indexes", "database"), cursor.fetchone(), strict=True))
+        row = [int(v) for v in cursor.fetchone()]
+        return dict(zip(("pose table", "pose indexes", "database"), row, strict=True))
 
 
 def measure(step: int) -> dict:
@@ -273,6 +281,16 @@ def main():
     parser.add_argument("--shifts", type=int, default=1000)
     parser.add_argument("--segments", type=int, default=30000)
     parser.add_argument("--json", help="write the figures here")
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help="go on growing the campaign a --keepdb run (or a failed one) left",
+    )
+    parser.add_argument(
+        "--keepdb",
+        action="store_true",
+        help="use the test database a superuser made (empty, with PostGIS) and keep it",
+    )
     parser.add_argument("--compare", nargs=2, metavar="JSON", help="print two runs side by side")
     args = parser.parse_args()
     if args.compare:
@@ -284,8 +302,12 @@ def main():
         sys.exit("campaign_scale needs PostGIS (FTT_DATABASE_URL)")
     print(f"checkout {ROOT}; load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
     old_name = connection.settings_dict["NAME"]
-    connection.creation.create_test_db(verbosity=0, autoclobber=True, serialize=False)
+    connection.creation.create_test_db(
+        verbosity=0, autoclobber=True, serialize=False, keepdb=args.keepdb or args.resume
+    )
     run(args)
+    if args.keepdb or args.resume:
+        return
     try:
         connection.creation.destroy_test_db(old_name, verbosity=0)
     except DatabaseError as exc:
@@ -295,18 +317,25 @@ def main():
 
 def run(args) -> None:
     started = time.perf_counter()
-    ids = build(args.events, args.shifts, args.segments)
-    masters = list(Segment.objects.filter(pk__in=ids).order_by("pk"))
+    campaign = Segment.objects.filter(parent=None).exclude(leg__shift__test_event__location="live")
+    if not args.resume:
+        build(args.events, args.shifts, args.segments)
+    masters = list(campaign.order_by("pk"))
+    if ensure_partitions is not None:
+        # The months of the campaign, made before its poses arrive (as the
+        # daily job would have, had the campaign been recorded live).
+        ensure_partitions(min(m.start for m in masters), max(m.end for m in masters))
     print(f"campaign of {len(masters)} masters built in {time.perf_counter() - started:.1f} s")
-    have, steps = 0, []
+    have = Pose.objects.filter(segment__in=campaign).count() if args.resume else 0
+    steps = []
     for want in (int(float(s)) for s in args.steps.split(",")):
         seconds = grow(masters, have, want)
         have = want
         print(f"{want:,d} poses loaded ({seconds:.1f} s); measuring", flush=True)
-        steps.append({"poses": want, **measure(want)})
+        steps.append({"poses": want, "load": os.getloadavg()[0], **measure(want)})
         report(steps)
-    if args.json:
-        Path(args.json).write_text(json.dumps(steps, indent=1))
+        if args.json:
+            Path(args.json).write_text(json.dumps(steps, indent=1))
 
 
 if __name__ == "__main__":

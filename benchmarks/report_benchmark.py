@@ -42,12 +42,13 @@ django.setup()
 
 import numpy as np  # noqa: E402
 from django.contrib.gis.geos import Point  # noqa: E402
-from django.db import connection  # noqa: E402
+from django.db import connection, transaction  # noqa: E402
 
 from events.models import Leg, Segment, Shift, TestEvent, Vehicle  # noqa: E402
 from telemetry.models import Pose  # noqa: E402
-from telemetry.selectors.packed_tracks import gps_tracks_sql  # noqa: E402
+from telemetry.selectors.packed_tracks import gps_tracks_plan  # noqa: E402
 from telemetry.selectors.tracks import GPS, load_tracks  # noqa: E402
+from telemetry.services.segment_figures import measure_figures  # noqa: E402
 
 # Seconds: issue 14's target for the statistics of a million poses.
 STATISTICS_TARGET = 1.0
@@ -177,6 +178,9 @@ def build(shifts: int, segments: int, poses: int) -> TestEvent:
             [(masters[i].pk, n, x0, y0, t0) for i, n, x0, y0, t0 in pose_rows],
         )
         pose_rows.clear()
+        # The figures the write path keeps (the report and the track reads use them).
+        with transaction.atomic():
+            measure_figures([m.pk for m in masters], (GPS,))
         Shift.objects.filter(pk=shift.pk).update(end=t)
         Leg.objects.filter(pk=leg.pk).update(end=t)
         t += timedelta(hours=1)
@@ -384,11 +388,7 @@ def explain(master_ids: list[int]) -> None:
     """PostgreSQL's plan of the tracks query, run once with EXPLAIN ANALYZE."""
     if connection.vendor != "postgresql":
         return
-    with connection.cursor() as cursor:
-        cursor.execute("SET jit = off")
-        cursor.execute("EXPLAIN (ANALYZE, BUFFERS) " + gps_tracks_sql(), [master_ids])
-        print("\n".join(row[0][:160] for row in cursor.fetchall()))
-        cursor.execute("RESET jit")
+    print("\n".join(line[:160] for line in gps_tracks_plan(master_ids, GPS, analyze=True)))
 
 
 def _location(shifts: int, segments: int, poses: int) -> str:

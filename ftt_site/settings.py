@@ -166,6 +166,9 @@ FTT_TOKEN_CACHE_SECONDS = env_int("FTT_TOKEN_CACHE_SECONDS", 5)
 # Statistics count the robot's suggested reason of a take-over nobody has
 # annotated yet (params.reason_rules); off: confirmed reasons only.
 FTT_COUNT_ROBOT_REASONS = env_bool("FTT_COUNT_ROBOT_REASONS", False)
+# Stored poses of shifts older than this many months are thinned to what the
+# report draws (reports.services.pose_retention); 0: all poses are kept.
+FTT_POSE_RETENTION_MONTHS = env_int("FTT_POSE_RETENTION_MONTHS", 0)
 AXES_RESET_ON_SUCCESS = True
 AXES_LOCKOUT_CALLABLE = "ftt_site.lockout.locked_out"
 AXES_CLIENT_IP_CALLABLE = "ftt_site.lockout.client_address"

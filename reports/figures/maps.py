@@ -27,9 +27,13 @@ from matplotlib.transforms import Affine2D  # noqa: E402
 from reports.figures.style import rgb  # noqa: E402
 from reports.projection import local_frame  # noqa: E402
 from telemetry.selectors.track_drawing import simplified  # noqa: E402
+from telemetry.selectors.tracks import GPS  # noqa: E402
 
 PAD_FRACTION = 0.1
 PAD_MIN_M = 10.0
+# Where the map's axes sit in its figure, as fractions of the figure's width.
+AXES_LEFT, AXES_RIGHT = 0.13, 0.97
+DPI = 150
 
 
 @dataclass
@@ -61,18 +65,14 @@ class Background:
 @dataclass
 class MapPainter:
     tiles: object | None = None  # reports.figures.tiles.TileSource
-    dpi: int = 150
+    dpi: int = DPI
     tiles_used: set = field(default_factory=set)
 
     def gps_map(self, lines: list[Line], path: str, size=(6.0, 4.5)) -> MapResult | None:
         if not any(len(line.x) for line in lines):
             return None
-        lons = np.concatenate([np.asarray(line.x, dtype=float) for line in lines])
-        lats = np.concatenate([np.asarray(line.y, dtype=float) for line in lines])
-        forward, back = local_frame(
-            float((lons.min() + lons.max()) / 2), float((lats.min() + lats.max()) / 2)
-        )
-        projected = [Line(*forward.transform(ln.x, ln.y), ln.color, ln.width) for ln in lines]
+        forward, back = _frame(lines)
+        projected = _projected(lines, forward)
         bounds = _padded_bounds(projected, size)
         fig, ax = _figure(size)
         tiles = False
@@ -133,7 +133,7 @@ def _figure(size):
     # Fixed margins: a constrained layout would cost half the time of a map,
     # and a report has one map per segment.
     fig, ax = plt.subplots(figsize=size)
-    fig.subplots_adjust(left=0.13, right=0.97, bottom=0.12, top=0.97)
+    fig.subplots_adjust(left=AXES_LEFT, right=AXES_RIGHT, bottom=0.12, top=0.97)
     ax.tick_params(labelsize=7)
     return fig, ax
 
@@ -155,6 +155,35 @@ def _padded_bounds(lines: list[Line], size) -> tuple[float, float, float, float]
         grow = (width / shape - height) / 2
         y0, y1 = y0 - grow, y1 + grow
     return (x0, x1, y0, y1)
+
+
+def drawing_tolerance(bounds, size, dpi: int = DPI) -> float:
+    """Half a pixel of a map of ``size`` inches showing ``bounds``: what its tracks
+    are thinned by, since nothing finer can be seen (also what the retention
+    policy thins stored poses to, reports.services.pose_retention)."""
+    pixels = (AXES_RIGHT - AXES_LEFT) * size[0] * dpi
+    return (bounds[1] - bounds[0]) / pixels / 2
+
+
+def map_tolerance(mode: str, lines: list[Line], size) -> tuple[float, list[Line]]:
+    """The tolerance a map of ``lines`` (GPS: longitude, latitude) thins them by,
+    and the lines in the map's units (metres) that it applies to."""
+    if mode == GPS:
+        lines = _projected(lines)
+    return drawing_tolerance(_padded_bounds(lines, size), size), lines
+
+
+def _frame(lines: list[Line]):
+    """The local frame (forward, back) around the centre of GPS lines."""
+    lons = np.concatenate([np.asarray(line.x, dtype=float) for line in lines])
+    lats = np.concatenate([np.asarray(line.y, dtype=float) for line in lines])
+    return local_frame(float((lons.min() + lons.max()) / 2), float((lats.min() + lats.max()) / 2))
+
+
+def _projected(lines: list[Line], forward=None) -> list[Line]:
+    """GPS lines in metres east and north of their common centre."""
+    forward = forward or _frame(lines)[0]
+    return [Line(*forward.transform(ln.x, ln.y), ln.color, ln.width) for ln in lines]
 
 
 def _draw_lines(ax, lines: list[Line], tolerance: float):
@@ -206,8 +235,7 @@ def _finish(ax, lines, bounds, xlabel, ylabel, dpi):
     """Grid, tracks, limits, labels and scale bar: what every map has."""
     ax.grid(True, color="#888888", linewidth=0.4, alpha=0.6)
     x0, x1, y0, y1 = bounds
-    pixels = ax.get_position().width * ax.figure.get_figwidth() * dpi
-    _draw_lines(ax, lines, (x1 - x0) / pixels / 2)
+    _draw_lines(ax, lines, drawing_tolerance(bounds, ax.figure.get_size_inches(), dpi))
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
     ax.set_aspect("equal", adjustable="box")

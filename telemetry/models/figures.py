@@ -8,6 +8,7 @@ joins them to the segment's neighbours by the one distance rule).
 """
 
 from django.db import models
+from django.utils import timezone
 
 from events.models import Segment
 
@@ -43,3 +44,16 @@ class SegmentFigures(models.Model):
 
     def __str__(self):
         return f"{self.mode} figures of segment {self.segment_id}"
+
+
+class ThinnedSegment(models.Model):
+    """A master whose stored poses the retention policy thinned
+    (reports.services.pose_retention): its figures were kept from all of them
+    and stay; a recount leaves it out.  A table of its own, not a field of the
+    figures: the figures' migration measures tracks with today's model."""
+
+    segment = models.OneToOneField(Segment, on_delete=models.CASCADE, related_name="thinning")
+    thinned = models.DateTimeField(default=timezone.now)
+
+    def __str__(self):
+        return f"segment {self.segment_id} thinned {self.thinned:%Y-%m-%d}"

@@ -101,20 +101,29 @@ def _rows(segment_ids, mode):
     return ordered.values_list(*columns).iterator(chunk_size=20000)
 
 
-def load_tracks(segment_ids: list[int], mode: str = GPS) -> dict[int, Track]:
-    """Tracks of the given master segments; segments without points are absent."""
+def load_tracks(
+    segment_ids: list[int], mode: str = GPS, *, within_kept_span: bool = True
+) -> dict[int, Track]:
+    """Tracks of the given master segments; segments without points are absent.
+
+    On PostgreSQL the read is bounded by the span the segments' kept figures
+    give, so only the month partitions they span are read
+    (``packed_tracks._packed_rows``); ``within_kept_span=False`` reads every
+    pose, for measuring the figures themselves
+    (telemetry.services.segment_figures).  SpatiaLite keeps one table."""
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}")
     if connection.vendor == "postgresql":
         ids = [int(pk) for pk in segment_ids]
+        kept_mode = mode if within_kept_span else None
         if mode == GPS:
             return {
                 seg: Track(seg, x, y, t, no_fix=no_fix)
-                for seg, x, y, t, no_fix in packed_tracks.gps_arrays(ids)
+                for seg, x, y, t, no_fix in packed_tracks.gps_arrays(ids, kept_mode)
             }
         return {
             seg: Track(seg, x, y, t, frame=frame)
-            for seg, x, y, t, frame in packed_tracks.local_arrays(ids)
+            for seg, x, y, t, frame in packed_tracks.local_arrays(ids, kept_mode)
         }
     buckets: dict[int, tuple[list, list, list, list]] = {}
     no_fix: dict[int, int] = {}

@@ -1,7 +1,7 @@
 """Pose rows as each database stores them: the SQL that differs between
 PostgreSQL and SpatiaLite lives here, one function per job, and nowhere else.
 
-Every insert skips a uid already stored (``ON CONFLICT (uid) DO NOTHING``), so a
+Every insert skips a uid already stored (``ON CONFLICT DO NOTHING``), so a
 retried pose or batch is stored once even when two retries race.
 """
 
@@ -58,7 +58,7 @@ SELECT %s, m.id, {{point}}, %s, %s, %s, %s, %s, %s
 FROM {Segment._meta.db_table} m
 WHERE m.id = %s
   AND (%s IS NULL OR EXISTS (SELECT 1 FROM {PoseSource._meta.db_table} WHERE id = %s))
-ON CONFLICT (uid) DO NOTHING
+ON CONFLICT DO NOTHING
 RETURNING id, {figure_rows.kept_returning(Pose._meta.db_table + ".segment_id", figure_rows.GPS)}
 """
 
@@ -122,7 +122,7 @@ INSERT INTO {table} ({columns})
 SELECT u, %b, ST_SetSRID(ST_MakePoint(x, y), 4326), a, f, h, %b, r, %b
 FROM unnest(%b::uuid[], %b::float8[], %b::float8[], %b::float8[], %b::int2[],
             %b::float8[], %b::timestamptz[]) AS t(u, x, y, a, f, h, r)
-ON CONFLICT (uid) DO NOTHING
+ON CONFLICT DO NOTHING
 {returning}
 """
 
@@ -200,7 +200,7 @@ _POSE_STAGING = _Staging(
 WITH moved AS (DELETE FROM ftt_pose_in RETURNING *)
 INSERT INTO {Pose._meta.db_table} ({POSE_COLUMNS})
 SELECT u, %s, ST_SetSRID(ST_MakePoint(x, y), 4326), a, f, h, %s, r, %s FROM moved
-ON CONFLICT (uid) DO NOTHING
+ON CONFLICT DO NOTHING
 {_RETURNING}
 """,
 )
@@ -213,7 +213,7 @@ _LOCAL_POSE_STAGING = _Staging(
 WITH moved AS (DELETE FROM ftt_local_pose_in RETURNING *)
 INSERT INTO {LocalPose._meta.db_table} (uid, segment_id, frame, x, y, yaw, robot_stamp, received)
 SELECT u, %s, frame, x, y, yaw, r, %s FROM moved
-ON CONFLICT (uid) DO NOTHING
+ON CONFLICT DO NOTHING
 {_RETURNING}
 """,
 )
@@ -265,7 +265,7 @@ INSERT INTO {table} (uid, segment_id, frame, x, y, yaw, robot_stamp, received)
 SELECT u, %b, f, x, y, w, r, %b
 FROM unnest(%b::uuid[], %b::text[], %b::float8[], %b::float8[], %b::float8[],
             %b::timestamptz[]) AS t(u, f, x, y, w, r)
-ON CONFLICT (uid) DO NOTHING
+ON CONFLICT DO NOTHING
 {returning}
 """
 

@@ -151,7 +151,7 @@ def _measured(master_ids: list[int], mode: str) -> dict[int, _Measured]:
     """The figures' track part, measured from the poses by the distance rule."""
     return {
         pk: _Measured(path_length(t.x, t.y, mode), len(t), t.no_fix, t.x, t.y)
-        for pk, t in load_tracks(master_ids, mode).items()
+        for pk, t in load_tracks(master_ids, mode, within_kept_span=False).items()
     }
 
 

@@ -33,7 +33,15 @@ from events.models import (
     Vehicle,
     Weather,
 )
-from telemetry.models import Image, LocalPose, MapImage, Pose, Recording, SegmentFigures
+from telemetry.models import (
+    Image,
+    LocalPose,
+    MapImage,
+    Pose,
+    Recording,
+    SegmentFigures,
+    ThinnedSegment,
+)
 
 TABLES = {
     "weather": Weather,
@@ -60,8 +68,17 @@ TABLES = {
 # themselves they stay where they were made.  Segment figures are measured
 # from the poses (tests/telemetry/test_segment_figures.py checks them).  Test
 # plans (cases, criteria, judgements) are not carried by archives yet: a base
-# station defines its own (docs/data-exchange.md says so).
-NOT_RECORDED = {Announcement, RobotAccount, SegmentFigures, TestCase, Criterion, Judgement}
+# station defines its own (docs/data-exchange.md says so).  Which masters the
+# retention policy thinned is this installation's; an archive carries the poses left.
+NOT_RECORDED = {
+    Announcement,
+    RobotAccount,
+    SegmentFigures,
+    ThinnedSegment,
+    TestCase,
+    Criterion,
+    Judgement,
+}
 
 # Login accounts belong to one installation; archives do not carry them.
 LOCAL_COLUMNS = {(Personnel, "user")}

@@ -1,4 +1,5 @@
-"""``manage.py ftt_worker``: runs queued jobs (reports, archive imports).
+"""``manage.py ftt_worker``: runs queued jobs (reports, archive imports), and
+the pose tables' daily upkeep (``manage.py ftt_pose_storage``).
 
 django-tasks-db's worker loop, plus a heartbeat and the recovery of jobs a
 dead worker left "running" (common.jobs). Stop it with SIGTERM or Ctrl-C: it
@@ -7,10 +8,39 @@ next worker retries.
 """
 
 import gc
+import logging
+import threading
 
+from django.core.management import call_command
+from django.db import connection
 from django_tasks_db.management.commands.db_worker import Command as DbWorkerCommand
 
 from common import jobs
+
+log = logging.getLogger(__name__)
+
+# The pose tables' upkeep (partitions, retention) runs at the start and then daily.
+UPKEEP_EVERY_S = 24 * 3600
+
+
+class Upkeep(threading.Thread):
+    """Runs ``manage.py ftt_pose_storage`` beside the job loop, once a day."""
+
+    def __init__(self):
+        super().__init__(name="ftt-pose-upkeep", daemon=True)
+        self.stopped = threading.Event()
+
+    def run(self) -> None:
+        try:
+            while True:
+                try:
+                    call_command("ftt_pose_storage")
+                except Exception:  # another worker's upkeep, a busy database: tomorrow
+                    log.exception("pose storage upkeep")
+                if self.stopped.wait(UPKEEP_EVERY_S):
+                    return
+        finally:
+            connection.close()
 
 
 class Command(DbWorkerCommand):
@@ -28,10 +58,13 @@ class Command(DbWorkerCommand):
             self.stdout.write(f"job {task_id} of a stopped worker: {outcome}")
         heart = jobs.Heart(worker_id)
         heart.start()
+        upkeep = Upkeep()
+        upkeep.start()
         try:
             super().handle(*args, **options)
         finally:
             heart.stop()
+            upkeep.stopped.set()
             jobs.forget(worker_id)
             # The exit frees everything; the interpreter's last collection
             # would walk every loaded object first and delay Ctrl-C by seconds.

@@ -28,6 +28,10 @@ class Command(BaseCommand):
         masters = Segment.objects.filter(parent__isnull=True)
         if event is not None:
             masters = masters.filter(leg__shift__test_event=event)
+        # Thinned by the retention policy: the kept figures are from every pose,
+        # which are no longer there to measure.
+        thinned = masters.filter(thinning__isnull=False).count()
+        masters = masters.filter(thinning__isnull=True)
         ids = list(masters.order_by("pk").values_list("pk", flat=True))
         differing = 0
         for begin in range(0, len(ids), CHUNK):
@@ -47,5 +51,10 @@ class Command(BaseCommand):
                 "fixed": _(" (set right)") if fix and differing else "",
             }
         )
+        if thinned:
+            self.stdout.write(
+                _("%(count)s masters with thinned poses left out (their kept figures stand).")
+                % {"count": thinned}
+            )
         if differing and not fix:
             raise CommandError(_("The kept figures differ from the poses."))

@@ -56,8 +56,9 @@ CASES = {
     "/api/maps/": (_maps, LIST_QUERIES),
     "/api/images/": (_images, LIST_QUERIES),
     # The leg, its masters, their points: more segments add none.
-    # GPS and local points on PostGIS are one query in a transaction that switches
-    # JIT off (savepoint, SET LOCAL, query, release: telemetry/selectors/packed_tracks.py).
+    # GPS and local points on PostGIS are one query in a transaction whose first
+    # statement reads the kept span and switches JIT off (savepoint, span, query,
+    # release: telemetry/selectors/packed_tracks.py).
     "/api/tracks/?leg={leg}": (_poses, 6),
     "/api/local-tracks/?leg={leg}": (_local_poses, 6),
     "/api/tracks/?shift={shift}": (_poses, 6),
