@@ -1,8 +1,10 @@
 """Fixtures shared by every test package: configuration rows and an open log chain."""
 
 import pytest
+from django.conf import settings
 from django.core.cache import cache
 from django.db import connection
+from django.utils import translation
 
 from common import memo
 from events import seeds
@@ -38,6 +40,16 @@ def _seeds_after_flush(request):
 def _fresh_throttles():
     """API throttles count in the cache; each test starts with none used up."""
     cache.clear()
+
+
+@pytest.fixture(autouse=True)
+def _site_language():
+    """A request through the test client leaves its language active in the
+    thread (Django's LocaleMiddleware activates, never resets): each test starts
+    in the site's language."""
+    translation.activate(settings.LANGUAGE_CODE)
+    yield
+    translation.activate(settings.LANGUAGE_CODE)
 
 
 @pytest.fixture(autouse=True)

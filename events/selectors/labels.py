@@ -11,6 +11,7 @@ masters' window reads the partial index ``segment_master_order`` in its own
 order; only the numbers of the chosen segments' masters leave the window.
 """
 
+from django.core.exceptions import EmptyResultSet
 from django.db import connection
 from django.db.models import QuerySet
 from django.utils.translation import gettext as _
@@ -46,7 +47,10 @@ LEFT JOIN children child ON child.id = chosen.id
 def numbers_of(segments: QuerySet) -> dict[int, tuple[int, str]]:
     """{segment id: (its leg's number, its number "7" or "7.1")} for the segments
     of a queryset, each numbered among every segment of its leg; one query."""
-    chosen, params = segments.order_by().values("id").query.sql_with_params()
+    try:
+        chosen, params = segments.order_by().values("id").query.sql_with_params()
+    except EmptyResultSet:  # a filter that can match nothing (pk__in=[])
+        return {}
     sql = _NUMBERED.format(segment=Segment._meta.db_table, leg=Leg._meta.db_table, chosen=chosen)
     with connection.cursor() as cursor:
         cursor.execute(sql, params)
