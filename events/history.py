@@ -12,6 +12,7 @@ import functools
 from contextvars import ContextVar
 from dataclasses import dataclass, replace
 
+from django.db import connection
 from django.utils import timezone
 from simple_history.utils import get_history_model_for_model
 
@@ -70,26 +71,38 @@ _history_model = functools.cache(get_history_model_for_model)
 
 def write_history(model, *, changed=(), created=()) -> None:
     """The history entries of rows written without them (simple-history's
-    ``save_without_historical_record``, a ``bulk_update``), stamped as
+    ``save_without_historical_record``, an ``update``), stamped as
     :func:`stamp_origin` stamps one, all in one INSERT.
 
-    simple-history's ``bulk_history_create`` writes one kind per call; a change
-    of mode both closes and creates rows, and its entries are one write here."""
+    The values are copied from the stored rows, so an entry holds what the
+    database holds even where an update computed it there (``Greatest``).
+    simple-history's ``bulk_history_create`` writes one kind per call and
+    builds an object per entry; a change of mode both closes and creates
+    rows, and it is the collector's busiest write."""
+    kinds = {row.pk: "~" for row in changed} | {row.pk: "+" for row in created}
+    if not kinds:
+        return
     origin = _origin.get()
     history = _history_model(model)
-    stamp = {
-        "history_date": timezone.now(),
-        "history_user": _origin_user(),
-        "history_change_reason": origin.reason or None,
-        "history_channel": origin.channel,
-    }
-    entries = [
-        history(
-            history_type=kind,
-            **stamp,
-            **{field.attname: getattr(row, field.attname) for field in history.tracked_fields},
-        )
-        for kind, rows in (("~", changed), ("+", created))
-        for row in rows
+    user = _origin_user()
+    quote = connection.ops.quote_name
+    copied = ", ".join(quote(field.column) for field in history.tracked_fields)
+    pk = quote(model._meta.pk.column)
+    created_ids = [pk_ for pk_, kind in kinds.items() if kind == "+"]
+    is_created = f"{pk} IN ({', '.join(['%s'] * len(created_ids))})" if created_ids else "1 = 0"
+    sql = (
+        f"INSERT INTO {quote(history._meta.db_table)} ({copied}, history_date, history_type,"
+        " history_user_id, history_change_reason, history_channel, history_author)"
+        f" SELECT {copied}, %s, CASE WHEN {is_created} THEN '+' ELSE '~' END, %s, %s, %s, ''"
+        f" FROM {quote(model._meta.db_table)} WHERE {pk} IN ({', '.join(['%s'] * len(kinds))})"
+    )
+    params = [
+        connection.ops.adapt_datetimefield_value(timezone.now()),
+        *created_ids,
+        user.pk if user is not None else None,
+        origin.reason or None,
+        origin.channel,
+        *kinds,
     ]
-    history.objects.bulk_create(entries)
+    with connection.cursor() as cursor:
+        cursor.execute(sql, params)

@@ -189,7 +189,7 @@ def export_events(path, events: list[TestEvent], *, since: datetime | None = Non
         out.write_records(
             "vehicles",
             (
-                rec.keyed_record(v, "institution", "configuration")
+                rec.keyed_record(v, "institution", "configuration", "vin")
                 for v in Vehicle.objects.filter(pk__in=vehicle_ids).order_by("key")
             ),
         )

@@ -99,6 +99,7 @@ class VehicleSerializer(ServiceSerializer):
             "long_description",
             "institution",
             "configuration",
+            "vin",
         ]
 
 

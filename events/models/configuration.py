@@ -64,6 +64,12 @@ class Vehicle(KeyedConfiguration):
     )
     institution = models.CharField(max_length=200, blank=True, verbose_name=_("institution"))
     configuration = models.TextField(blank=True, verbose_name=_("configuration"))
+    vin = models.CharField(
+        max_length=64,
+        blank=True,
+        verbose_name=_("vehicle identification number"),
+        help_text=_("VIN or serial number for the disengagement report; empty: its key."),
+    )
     history = tracked()
 
     class Meta(KeyedConfiguration.Meta):

@@ -35,7 +35,7 @@ def _reuse_or_add(session: ImportSession, table, existing, make):
 def import_configuration(session: ImportSession):
     """Vehicles, pose sources, performers and personnel."""
     for model, table, cache, extra in (
-        (Vehicle, "vehicles", session.vehicles, ("institution", "configuration")),
+        (Vehicle, "vehicles", session.vehicles, ("institution", "configuration", "vin")),
         (PoseSource, "pose_sources", session.pose_sources, ()),
     ):
         for r in session.records(table):
@@ -44,7 +44,7 @@ def import_configuration(session: ImportSession):
                 session,
                 table,
                 model.objects.filter(key=r["key"]).first(),
-                lambda r=r, model=model, fields=fields: model(**{f: r[f] for f in fields}),
+                lambda r=r, model=model, fields=fields: model(**{f: r.get(f, "") for f in fields}),
             )
     performers = {fold(p.institution): p for p in Performer.objects.order_by("-pk")}
     for r in session.records("performers"):

@@ -80,7 +80,7 @@ def disengagements_csv(events: list[TestEvent], month: tuple[int, int] | None = 
                     settings.FTT_DMV_MANUFACTURER,
                     settings.FTT_DMV_PERMIT,
                     run.start.astimezone(tz).strftime("%m/%d/%Y"),
-                    vehicle.key,
+                    vehicle.vin or vehicle.key,
                     DMV_INITIATORS[first.initiator],
                     first.location_type,
                     facts,

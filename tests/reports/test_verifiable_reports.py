@@ -143,6 +143,9 @@ def test_dmv_csv_has_the_columns_and_the_statistics_figures(scenario, tmp_path):
     event = scenario.event
     take_over = _take_over(scenario)
     segments.annotate_segment(take_over, initiator="autonomous_system", location_type="field")
+    vehicle = take_over.leg.shift.vehicle
+    vehicle.vin = "WVWZZZ1JZXW000001"
+    vehicle.save()
     out = tmp_path / "dmv.csv"
     call_command("ftt_report", "--test-event", str(event.pk), "--dmv", str(out))
     header, *rows = list(csv.reader(out.open(encoding="utf-8")))
@@ -150,10 +153,12 @@ def test_dmv_csv_has_the_columns_and_the_statistics_figures(scenario, tmp_path):
     stats = event_statistics(event)
     assert len(rows) == stats.overall.interventions > 0
     km = {row[3]: float(row[9]) for row in rows}
+    assert vehicle.vin in km
     for vehicle_id, figures in stats.by_vehicle.items():
-        key = Vehicle.objects.get(pk=vehicle_id).key
-        if key in km:
-            assert km[key] == pytest.approx(figures.auto_distance / 1000, abs=0.001)
+        shown = Vehicle.objects.get(pk=vehicle_id)
+        shown = shown.vin or shown.key
+        if shown in km:
+            assert km[shown] == pytest.approx(figures.auto_distance / 1000, abs=0.001)
     assert ["AV System", "field"] in [row[4:6] for row in rows]
     month = f"{event.start:%Y-%m}"
     by_month = tmp_path / "month.csv"
