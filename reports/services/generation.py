@@ -94,7 +94,7 @@ def request_comparison(
     language = options.get("language") or ""
     if problem := language_problem(str(language)):
         errors.append(problem)
-    routes = _route_option(options.get(ROUTES), errors)
+    routes = route_option(options.get(ROUTES), errors)
     if errors:
         raise ValidationError({"options": errors})
     if len({e.pk for e in test_events}) < 2:
@@ -117,8 +117,11 @@ def request_comparison(
     return report
 
 
-def _route_option(value, errors: list) -> dict | None:
-    """The comparison's routes option, checked as the route API checks its query."""
+def route_option(value, errors: list) -> dict | None:
+    """The comparison's routes option ({"leg": [ids], "case": [ids], "threshold":
+    metres}), checked as the route API checks its query: the checked option, or
+    None with the problems appended to ``errors`` (None without errors: no routes).
+    ``manage.py ftt_report --compare --route-leg …`` goes through it too."""
     if value is None:
         return None
     if not isinstance(value, dict) or set(value) - {"leg", "case", "threshold"}:
