@@ -69,6 +69,14 @@ class RouteChoiceError(ValueError):
         self.field = field
 
 
+def check_threshold(metres: float) -> float:
+    """The deviation threshold in metres (above 0, below a thousand kilometres), or
+    RouteChoiceError on ``threshold``; the API's query and a PDF's option both."""
+    if not 0 < metres < 1e6:  # also refuses nan
+        raise RouteChoiceError("threshold", _("Give the threshold in metres, above 0."))
+    return float(metres)
+
+
 def check_route_choice(leg_ids: list[int], case_ids: list[int]) -> None:
     """Refuse (RouteChoiceError) fewer than two routes, an unknown leg or test case,
     and a test case without a planned route."""

@@ -32,7 +32,12 @@ from reports.documents.event_report import ReportResult, check_reportable, rende
 from reports.documents.options import ReportError, ReportOptions, language_problem
 from reports.models import Report
 from reports.selectors.content import report_scope
-from reports.selectors.routes import DEFAULT_THRESHOLD, RouteChoiceError, check_route_choice
+from reports.selectors.routes import (
+    DEFAULT_THRESHOLD,
+    RouteChoiceError,
+    check_route_choice,
+    check_threshold,
+)
 
 log = logging.getLogger(__name__)
 
@@ -135,15 +140,13 @@ def route_option(value, errors: list) -> dict | None:
         return None
     if isinstance(threshold, bool) or not isinstance(threshold, int | float):
         threshold = -1.0
-    if not 0 < threshold < 1e6:
-        errors.append(_("The routes' threshold is in metres, above 0."))
-        return None
     try:
+        threshold = check_threshold(threshold)
         check_route_choice(legs, cases)
     except RouteChoiceError as error:
         errors.append(str(error))
         return None
-    return {"leg": legs, "case": cases, "threshold": float(threshold)}
+    return {"leg": legs, "case": cases, "threshold": threshold}
 
 
 def check_waiting(user) -> None:
