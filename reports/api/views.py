@@ -34,6 +34,7 @@ from reports.selectors.reports import reports_of
 from reports.selectors.routes import (
     DEFAULT_THRESHOLD,
     RouteChoiceError,
+    check_threshold,
     chosen_routes,
     compare_routes,
 )
@@ -146,9 +147,8 @@ class RouteComparisonView(APIView):
             threshold = float(request.query_params.get("threshold", DEFAULT_THRESHOLD))
         except ValueError:
             threshold = -1.0
-        if not 0 < threshold < 1e6:
-            raise ValidationError({"threshold": [_("Give the threshold in metres, above 0.")]})
         try:
+            threshold = check_threshold(threshold)
             routes = chosen_routes(_ids(request, "leg"), _ids(request, "case"))
         except RouteChoiceError as error:
             raise ValidationError({error.field: [str(error)]}) from None

@@ -8,6 +8,7 @@ from django.utils.translation import gettext as _
 from django.utils.translation import gettext_noop
 
 from reports import formatting as fmt
+from reports.documents.options import ReportError
 from reports.figures.maps import Line, MapPainter
 from reports.selectors.routes import chosen_routes, compare_routes
 
@@ -25,8 +26,11 @@ BEYOND = "208,0,0"
 def routes_section(choice: dict, root: Path) -> dict:
     """Map, legend and figure rows for the routes of ``choice`` ({"leg": [ids],
     "case": [ids], "threshold": metres}); the map is drawn into ``root``."""
-    routes = chosen_routes(choice["leg"], choice["case"])
-    data = compare_routes(routes, choice["threshold"])
+    try:
+        routes = chosen_routes(choice["leg"], choice["case"])
+        data = compare_routes(routes, choice["threshold"])
+    except ValueError as exc:  # deleted since asked, or under two GPS points: say which
+        raise ReportError(str(exc)) from None
     letters = {r.name: chr(ord("A") + i) for i, r in enumerate(routes)}
     lines = [
         Line(r.lon.tolist(), r.lat.tolist(), COLOURS[i % len(COLOURS)], width=3.5)

@@ -31,7 +31,7 @@ class Route:
     name: str  # "leg 12" or "case 3", as the API names it
     lon: np.ndarray
     lat: np.ndarray
-    title: str = ""  # what a reader calls it, for the PDF
+    title: str = ""  # what a reader calls it, for the PDF (in the language active when made)
 
     def __len__(self) -> int:
         return len(self.lon)
@@ -42,7 +42,11 @@ def leg_route(leg: Leg) -> Route:
     lon = np.concatenate([t.x for t in tracks]) if tracks else np.empty(0)
     lat = np.concatenate([t.y for t in tracks]) if tracks else np.empty(0)
     shift = leg.shift
-    title = f"Test event {shift.test_event_id}, shift {shift.number}, leg {leg.number}"
+    title = _("Test event %(event)s, shift %(shift)s, leg %(leg)s") % {
+        "event": shift.test_event_id,
+        "shift": shift.number,
+        "leg": leg.number,
+    }
     return Route(f"leg {leg.pk}", lon, lat, title)
 
 
@@ -53,7 +57,7 @@ def planned_route(case: TestCase) -> Route:
     line = shapely.linestrings(np.column_stack(to_local.transform(lon, lat)))
     x, y = shapely.get_coordinates(shapely.segmentize(line, PLANNED_SPACING)).T
     lon, lat = from_local.transform(x, y)
-    title = f"Test case {case.key}: {case.title} (planned)"
+    title = _("Test case %(key)s: %(title)s (planned)") % {"key": case.key, "title": case.title}
     return Route(f"case {case.pk}", np.asarray(lon), np.asarray(lat), title)
 
 
@@ -63,6 +67,14 @@ class RouteChoiceError(ValueError):
     def __init__(self, field: str, message: str):
         super().__init__(message)
         self.field = field
+
+
+def check_threshold(metres: float) -> float:
+    """The deviation threshold in metres (above 0, below a thousand kilometres), or
+    RouteChoiceError on ``threshold``; the API's query and a PDF's option both."""
+    if not 0 < metres < 1e6:  # also refuses nan
+        raise RouteChoiceError("threshold", _("Give the threshold in metres, above 0."))
+    return float(metres)
 
 
 def check_route_choice(leg_ids: list[int], case_ids: list[int]) -> None:

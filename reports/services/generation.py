@@ -32,7 +32,12 @@ from reports.documents.event_report import ReportResult, check_reportable, rende
 from reports.documents.options import ReportError, ReportOptions, language_problem
 from reports.models import Report
 from reports.selectors.content import report_scope
-from reports.selectors.routes import DEFAULT_THRESHOLD, RouteChoiceError, check_route_choice
+from reports.selectors.routes import (
+    DEFAULT_THRESHOLD,
+    RouteChoiceError,
+    check_route_choice,
+    check_threshold,
+)
 
 log = logging.getLogger(__name__)
 
@@ -94,7 +99,7 @@ def request_comparison(
     language = options.get("language") or ""
     if problem := language_problem(str(language)):
         errors.append(problem)
-    routes = _route_option(options.get(ROUTES), errors)
+    routes = route_option(options.get(ROUTES), errors)
     if errors:
         raise ValidationError({"options": errors})
     if len({e.pk for e in test_events}) < 2:
@@ -117,8 +122,11 @@ def request_comparison(
     return report
 
 
-def _route_option(value, errors: list) -> dict | None:
-    """The comparison's routes option, checked as the route API checks its query."""
+def route_option(value, errors: list) -> dict | None:
+    """The comparison's routes option ({"leg": [ids], "case": [ids], "threshold":
+    metres}), checked as the route API checks its query: the checked option, or
+    None with the problems appended to ``errors`` (None without errors: no routes).
+    ``manage.py ftt_report --compare --route-leg …`` goes through it too."""
     if value is None:
         return None
     if not isinstance(value, dict) or set(value) - {"leg", "case", "threshold"}:
@@ -132,15 +140,13 @@ def _route_option(value, errors: list) -> dict | None:
         return None
     if isinstance(threshold, bool) or not isinstance(threshold, int | float):
         threshold = -1.0
-    if not 0 < threshold < 1e6:
-        errors.append(_("The routes' threshold is in metres, above 0."))
-        return None
     try:
+        threshold = check_threshold(threshold)
         check_route_choice(legs, cases)
     except RouteChoiceError as error:
         errors.append(str(error))
         return None
-    return {"leg": legs, "case": cases, "threshold": float(threshold)}
+    return {"leg": legs, "case": cases, "threshold": threshold}
 
 
 def check_waiting(user) -> None:

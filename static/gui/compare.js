@@ -1,12 +1,13 @@
 /* The comparison page (templates/gui/compare.html loads it as a module): pick test
  * events, see MDBI, MTBI and interventions per km and per hour with their bounds side
- * by side, and get the comparison PDF.
+ * by side, and get the comparison PDF (with the routes compared below, if any: routes.js).
  * Every figure and its wording comes from the server (/api/reports/compare/ formats them
  * as the PDF does); this script only shows them and asks for the PDF job. */
 
 import { CONFIG, $, element } from "./dom.js";
 import { api, list, plainMessage } from "./api.js";
 import { LANGUAGE, _, plural } from "./i18n.js";
+import { shownRoutes } from "./routes.js";
 
 const POLL_MS = 1000;
 
@@ -172,9 +173,11 @@ async function followJob() {
 
 async function makePdf() {
   $("#compare-pdf").disabled = true;
-  say(_("Asking for the PDF…"));
+  const routes = shownRoutes();
+  say(routes ? _("Asking for the PDF, with the routes compared below…") : _("Asking for the PDF…"));
+  const options = { local: state.mode === "local", ...(routes ? { routes } : {}) };
   try {
-    const job = await api("POST", "reports/", { compare: chosenInOrder(), options: { local: state.mode === "local" } });
+    const job = await api("POST", "reports/", { compare: chosenInOrder(), options });
     state.job = job.id;
     writeAddress();
     await followJob();

@@ -10,7 +10,12 @@ import { _ } from "./i18n.js";
 
 const COLOURS = ["#1f5fbf", "#e07b00"];
 const BEYOND = "#d00000";
-const routes = { map: null, drawn: null };
+const routes = { map: null, drawn: null, shown: null };
+
+/* The routes of the comparison on screen, as a comparison PDF asks for them
+ * ({leg: [ids], case: [ids], threshold}), or null before one was drawn: the
+ * PDF button (compare.js) sends them, so the PDF shows what the screen shows. */
+export const shownRoutes = () => routes.shown;
 
 function say(text, isError = false) {
   const line = $("#routes-status");
@@ -57,7 +62,7 @@ function draw(data, names) {
     for (const name of pair.routes) {
       for (const stretch of pair.deviation[name].beyond) {
         L.polyline(latLngs(stretch), { color: BEYOND, weight: 3, opacity: 1, className: "beyond" })
-          .bindTooltip(`${names[name].letter}: more than ${data.threshold} m off`)
+          .bindTooltip(_("%(route)s: more than %(metres)s m off", { route: names[name].letter, metres: data.threshold }))
           .addTo(routes.drawn);
       }
     }
@@ -66,7 +71,7 @@ function draw(data, names) {
   const key = (colour, text) => element("li", {}, [element("span", { className: "swatch", style: `background:${colour}` }), text]);
   $("#routes-legend").replaceChildren(
     ...Object.values(names).map((n) => key(n.colour, `${n.letter}: ${n.text}`)),
-    key(BEYOND, `more than ${data.threshold} m from the other route`),
+    key(BEYOND, _("more than %(metres)s m from the other route", { metres: data.threshold })),
   );
   $("#routes-figures").replaceChildren(...data.pairs.map((pair) => pairCard(pair, names)));
 }
@@ -91,6 +96,9 @@ async function compare(e) {
   try {
     const data = await api("GET", `reports/routes/?${q}`);
     draw(data, names);
+    // Ids as the server took them; legs before cases, the order the server names routes in.
+    const ids = (kind) => chosen.filter((r) => r.param[0] === kind).map((r) => Number(r.param[1]));
+    routes.shown = { leg: ids("leg"), case: ids("case"), threshold: data.threshold };
     say(_("Routes compared; threshold %(metres)s m.", { metres: data.threshold }));
   } catch (err) {
     say(plainMessage(err), true);
@@ -109,8 +117,8 @@ async function main() {
     legs.sort((x, y) => (x.start < y.start ? 1 : -1));
     const options = legs.map((leg) => {
       const shift = shiftOf.get(leg.shift);
-      const where = shift ? `#${shift.test_event} · Shift ${shift.number} · ` : "";
-      return new Option(`${where}Leg ${leg.number} (${(leg.start || "").slice(0, 10)})`, leg.id);
+      const where = shift ? `#${shift.test_event} · ${_("Shift %(number)s", { number: shift.number })} · ` : "";
+      return new Option(`${where}${_("Leg %(number)s", { number: leg.number })} (${(leg.start || "").slice(0, 10)})`, leg.id);
     });
     const form = $("#routes-form").elements;
     form.leg_a.replaceChildren(...options);

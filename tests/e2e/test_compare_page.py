@@ -8,6 +8,7 @@ import pytest
 from playwright.sync_api import expect
 
 from tests.support.browser import login
+from tests.support.pdf import flat, has_row, pdf_text, save_pages
 from tests.support.screens import OVERFLOWING, SMALL, VIEWPORTS
 
 TARGETS = (
@@ -19,7 +20,8 @@ TARGETS = (
 @pytest.fixture(scope="module")
 def two_events(server):
     """Two test events of one vehicle with different software versions; in each an
-    AUTO run, a take-over for a counted reason at the same place, and AUTO again."""
+    AUTO run, a take-over for a counted reason at the same place, and AUTO again.
+    The second event's AUTO run lies about 5.6 m north of the first's (5e-5°)."""
     out = server.python(
         """
         import json
@@ -41,7 +43,10 @@ def two_events(server):
             auto = segments.report_mode(leg, "auto", at=at(0), gps=GpsPosition(7.0, 50.0)).master
             recording.record_poses(
                 auto,
-                [recording.GpsFix(7.0 + i * 1e-4, 50.0, robot_stamp=at(i)) for i in range(1, 30)],
+                [
+                    recording.GpsFix(7.0 + i * 1e-4, 50.0 + n * 5e-5, robot_stamp=at(i))
+                    for i in range(1, 30)
+                ],
             )
             ito = segments.report_mode(
                 leg, "ito", at=at(60), gps=GpsPosition(7.003, 50.0), reason="safety"
@@ -98,13 +103,30 @@ def test_comparison_page_fits_and_matches_the_api(browser, server, two_events, s
     page.close()
 
 
-def test_comparison_pdf_is_made_and_survives_a_reload(browser, server, two_events, shot):
-    page = browser.new_page(**VIEWPORTS["laptop"])
+def test_comparison_pdf_is_made_and_survives_a_reload(browser, server, two_events, shot, tmp_path):
+    page = browser.new_page(**VIEWPORTS["tablet"])
     login(page, server, "otto")
     first, second = (e["event"] for e in two_events)
     page.goto(f"{server.url}/compare/?event={first}&event={second}&mode=gps")
     # The address keeps the choice: the comparison is shown straight away.
     expect(page.locator("#by-event article")).to_have_count(2)
+    # The two events' legs compared as routes: the PDF gets what the screen shows.
+    legs = [e["leg"] for e in two_events]
+    routes = page.locator("#routes-form")
+    routes.get_by_label("First leg").select_option(str(legs[0]))
+    routes.get_by_label("Second route").select_option(str(legs[1]))
+    routes.get_by_label("Threshold (m)").fill("3")
+    page.get_by_role("button", name="Compare routes").click()
+    expect(page.locator("#routes-status")).to_have_text("Routes compared; threshold 3 m.")
+    answer = page.request.get(
+        f"{server.url}/api/reports/routes/?leg={legs[0]}&leg={legs[1]}&threshold=3"
+    ).json()
+    pair = answer["pairs"][0]
+    expect(page.locator("#routes-figures article")).to_contain_text(
+        f"Discrete Fréchet distance{pair['frechet']:.1f} m"
+    )
+    # A threshold typed but not compared is not what the screen shows: not in the PDF.
+    routes.get_by_label("Threshold (m)").fill("50")
     page.get_by_role("button", name="Make PDF").click()
     download = page.locator("#compare-status a.download")
     expect(download).to_be_visible(timeout=180_000)
@@ -117,6 +139,18 @@ def test_comparison_pdf_is_made_and_survives_a_reload(browser, server, two_event
     assert response.status == 200
     assert response.body()[:5] == b"%PDF-"
     assert "ftt-comparison-" in response.headers["content-disposition"]
+    save_pages(response.body(), "compare-page-routes")
+    text = pdf_text(response.body(), tmp_path)
+    assert "Routes" in text and "more than 3.00 m" in flat(text), text
+    for letter, colour, event in (("A", "blue", first), ("B", "orange", second)):
+        assert has_row(text, letter, colour, f"Test event {event}, shift 1, leg 1"), text
+    for name, other, leg in (("A", "B", legs[0]), ("B", "A", legs[1])):
+        side = pair["deviation"][f"leg {leg}"]
+        figures = [f"{pair['frechet']:.2f} m"]
+        figures += [f"{side[key]:.2f} m" for key in ("mean", "p95", "max")]
+        assert side["share_beyond"] > 0.5  # the 5.6 m apart are beyond 3 m
+        share = f"{100 * side['share_beyond']:.1f} %"
+        assert has_row(text, f"{name} from {other}", *figures, share), text
     page.close()
 
 

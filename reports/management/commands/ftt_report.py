@@ -6,6 +6,7 @@
     manage.py ftt_report --job 17        # worker for a report requested from the GUI
     manage.py ftt_report --test-event 3 --json figures.json   # figures with their provenance
     manage.py ftt_report --verify report.pdf   # (or figures.json) is the data still the same?
+    manage.py ftt_report --compare 3 4 --route-leg 12 --route-case 2   # with a routes section
 
 Without -o and without any export option the PDF goes to report.pdf.
 """
@@ -27,7 +28,8 @@ from reports.models import Report
 from reports.selectors import exports
 from reports.selectors.disengagements import disengagements_csv, events_in_month
 from reports.selectors.provenance import json_report, verify_report
-from reports.services.generation import run_job
+from reports.selectors.routes import DEFAULT_THRESHOLD
+from reports.services.generation import route_option, run_job
 
 # One line per change the check names (entries of reports.selectors.provenance).
 _CHANGE_LINES = {
@@ -86,6 +88,30 @@ class Command(BaseCommand):
             help="Compare these test events (at least two) in one PDF instead.",
         )
         parser.add_argument(
+            "--route-leg",
+            type=int,
+            action="append",
+            default=[],
+            metavar="LEG",
+            help="With --compare: add a routes section with this leg's GPS route (repeat; "
+            "two routes or more, legs and --route-case together).",
+        )
+        parser.add_argument(
+            "--route-case",
+            type=int,
+            action="append",
+            default=[],
+            metavar="CASE",
+            help="With --compare: add this test case's planned route (repeat).",
+        )
+        parser.add_argument(
+            "--route-threshold",
+            type=float,
+            metavar="METRES",
+            help="With routes: draw stretches farther than this from the other route in red "
+            f"(default {DEFAULT_THRESHOLD:g}).",
+        )
+        parser.add_argument(
             "--level",
             choices=[value for value, _ in LEVELS],
             default=FULL,
@@ -133,6 +159,10 @@ class Command(BaseCommand):
             return self._dmv_month(o)
         if o["compare"]:
             return self._compare(o)
+        if _routes_asked(o):
+            raise CommandError(
+                gettext("--route-leg, --route-case and --route-threshold go with --compare.")
+            )
         event_id = o["test_event"] or _event_of(o["shift"], o["leg"])
         if event_id is None and (o["shift"] or o["leg"]):
             raise CommandError(
@@ -198,8 +228,11 @@ class Command(BaseCommand):
         missing = sorted(set(ids) - {e.pk for e in events})
         if missing:
             raise CommandError(gettext("Test event %(id)s does not exist.") % {"id": missing[0]})
+        routes = _routes(o)
         try:
-            pdf = render_comparison(events, "local" if o["local"] else "gps", o["language"])
+            pdf = render_comparison(
+                events, "local" if o["local"] else "gps", o["language"], routes=routes
+            )
         except ReportError as exc:
             raise CommandError(str(exc)) from exc
         output = Path(o["output"] or "comparison.pdf")
@@ -273,6 +306,24 @@ class Command(BaseCommand):
         }
         note = gettext(" (provisional: open segments)") if result.provisional else ""
         self.stdout.write(written + note)
+
+
+def _routes_asked(o) -> bool:
+    return bool(o["route_leg"] or o["route_case"]) or o["route_threshold"] is not None
+
+
+def _routes(o) -> dict | None:
+    """The comparison's routes option from --route-*, checked as a request's is."""
+    if not _routes_asked(o):
+        return None
+    value = {"leg": o["route_leg"], "case": o["route_case"]}
+    if o["route_threshold"] is not None:
+        value["threshold"] = o["route_threshold"]
+    errors = []
+    routes = route_option(value, errors)
+    if errors:
+        raise CommandError(" ".join(errors))
+    return routes
 
 
 def _event_of(shift: int | None, leg: int | None) -> int | None:
