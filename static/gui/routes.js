@@ -7,6 +7,7 @@ import { CONFIG, $, element } from "./dom.js";
 import { api, list, plainMessage } from "./api.js";
 import { latLngs, plainMap } from "./comparemap.js";
 import { _ } from "./i18n.js";
+import { fmtNumber } from "./format.js";
 
 const COLOURS = ["#1f5fbf", "#e07b00"];
 const BEYOND = "#d00000";
@@ -23,7 +24,7 @@ function say(text, isError = false) {
   line.classList.toggle("error", isError);
 }
 
-const metres = (value) => `${value.toFixed(1)} m`;
+const metres = (value) => `${fmtNumber(value, 1)} m`;
 
 /* Routes are A and B on the map, in the legend and in the figures. */
 const LETTERS = ["A", "B"];

@@ -4,13 +4,13 @@
 import { $ } from "./dom.js";
 import { _ } from "./i18n.js";
 import { list } from "./api.js";
-import { fmtClock } from "./format.js";
+import { fmtClock, fmtNumber } from "./format.js";
 
 const box = $("#segment-dialog .snapshots");
 let shownMaster = null;
 
 function fmtSize(bytes) {
-  if (bytes >= 1024 * 1024) return `${(bytes / 1024 / 1024).toFixed(1)} MB`;
+  if (bytes >= 1024 * 1024) return `${fmtNumber(bytes / 1024 / 1024, 1)} MB`;
   return `${Math.max(1, Math.round(bytes / 1024))} kB`;
 }
 
