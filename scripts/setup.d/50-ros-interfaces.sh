@@ -10,7 +10,9 @@
 # or folders of .msg/.srv files (docs/collector.md: custom message types).
 # FTT_ROS_PREFIX=DIR builds into DIR instead of the virtualenv, with the tools
 # setup installed there (the tests build their fixtures so).
-if [ -z "${FTT_ROOT:-}" ]; then
+# On its own (also from a process that scripts/test.sh started, where FTT_ROOT
+# is in the environment but the helpers are not) it loads the helpers itself.
+if ! declare -F ftt_die >/dev/null; then
     FTT_SCRIPT=ros-interfaces
     # shellcheck source=scripts/lib.sh
     source "$(dirname "${BASH_SOURCE[0]}")/../lib.sh"
