@@ -13,6 +13,9 @@ venv=$(readlink -f "${FTT_VENV:-$root/.venv}")
 py=$venv/bin/python
 prefix=$1
 shift
+export AMENT_PREFIX_PATH=$prefix:$venv
+# Every folder checked before the first one is built: a wrong one is named at once.
+"$py" "$root/scripts/ros_package.py" --check "$@" >/dev/null
 build=$(mktemp -d "${TMPDIR:-/tmp}/ftt-rosidl.XXXXXX")
 trap 'rm -rf "$build"' EXIT
 for dir in "$@"; do
@@ -25,7 +28,7 @@ for dir in "$@"; do
     fi
     echo "building $pkg into $prefix" >&2
     (
-        export AMENT_PREFIX_PATH=$prefix:$venv CMAKE_PREFIX_PATH=$prefix:$venv
+        export CMAKE_PREFIX_PATH=$prefix:$venv
         cmake -S "$src" -B "$build/$pkg" -DCMAKE_INSTALL_PREFIX="$prefix" \
             -DPython3_EXECUTABLE="$py" -DBUILD_TESTING=OFF \
             -DCMAKE_BUILD_TYPE=Release >"$build/$pkg.log" 2>&1 &&
@@ -34,7 +37,8 @@ for dir in "$@"; do
     ) || {
         # The CMake log names the missing package or the faulty definition.
         tail -n 30 "$build/$pkg.log" >&2
-        echo "building $pkg from $dir failed" >&2
+        trap - EXIT
+        echo "building $pkg from $dir failed (build folder kept: $build)" >&2
         exit 1
     }
 done

@@ -26,6 +26,8 @@ case "${1:-}" in
     ;;
 esac
 export FTT_SETUP_MODE
+# Relative paths given to the hooks (FTT_ROS_INTERFACES) are relative to here.
+export FTT_CALLER_DIR=$PWD
 cd "$FTT_ROOT"
 
 python_ok() { # INTERPRETER -> status 0 when it is >= 3.11 and can make venvs

@@ -163,3 +163,43 @@ def test_second_setup_run_only_checks():
     # Nothing is installed or built again; the setup only checks.
     assert "apt-get" not in result.stdout
     assert "already installed" in result.stdout
+
+
+@pytest.mark.parametrize(
+    ("folder", "says"),
+    [
+        ("no_such_msgs", "{tmp}/no_such_msgs does not exist"),
+        ("Team-Msgs", "'Team-Msgs' is no ROS package name"),
+        ("bad_msgs", "{tmp}/bad_msgs/State.msg: 'strin' is an invalid message name"),
+        ("geo_msgs", "State.msg uses geographic_msgs, which is not installed"),
+        ("ros1_msgs", "State.msg uses Header, which is no message of {tmp}/ros1_msgs"),
+    ],
+)
+def test_a_wrong_interface_folder_is_named_before_anything_is_built(tmp_path, folder, says):
+    """Setup's ROS interface step with FTT_ROS_INTERFACES (relative to where it
+    runs) into a temporary prefix: refused at once, saying what is wrong."""
+    venv_python = ROOT / ".venv" / "bin" / "python"
+    check = subprocess.run([venv_python, "-c", "import rclpy, rosidl_adapter"], capture_output=True)
+    if check.returncode != 0:
+        pytest.skip("no rclpy and rosidl tools in .venv (scripts/setup.sh)")
+    for name, text in {
+        "Team-Msgs": "uint8 mode\n",
+        "bad_msgs": "uint8 mode\nstrin g reason\n",
+        "geo_msgs": "geographic_msgs/GeoPoint where\nuint8 mode\n",
+        "ros1_msgs": "Header header\nuint8 mode\n",
+    }.items():
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "State.msg").write_text(text)
+    prefix = tmp_path / "prefix"
+    result = subprocess.run(
+        ["bash", str(ROOT / "scripts/setup.d/50-ros-interfaces.sh")],
+        cwd=tmp_path,
+        env={**os.environ, "FTT_ROS_PREFIX": str(prefix), "FTT_ROS_INTERFACES": f"{folder}:"},
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode != 0
+    assert says.format(tmp=tmp_path) in result.stderr
+    assert "FTT_ROS_INTERFACES: a folder cannot be built" in result.stderr
+    assert not prefix.exists()

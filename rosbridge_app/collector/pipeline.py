@@ -137,12 +137,18 @@ class Pipeline:
     def stop_logging(self, at: datetime) -> None:
         if not self.logging:
             return
-        if self.open_mode is None and self.waiting:
-            self._switch(UNKNOWN, self.waiting.first_at())
+        self.release_held()
         self._close_track(at)
         self.logging = False
         self.open_mode = None
         self.sink(Event(ev.STOP, at))
+
+    def release_held(self) -> None:
+        """Positions still waiting for the first mode go into a segment of unknown
+        mode: when logging stops, and when the collector stops while logging
+        (a restart continues that segment, as any left open)."""
+        if self.logging and self.open_mode is None and self.waiting:
+            self._switch(UNKNOWN, self.waiting.first_at())
 
     # --- mode ---------------------------------------------------------------------------
 

@@ -428,6 +428,9 @@ class CollectorRuntime:
     def _shutdown(self) -> None:
         log.info(gettext("stopping: spooling what is still in memory"))
         self.executor.shutdown(timeout_sec=2)
+        # The ROS thread is done with the pipeline: what waits for the first mode
+        # is queued now, before the spooler drains the queue.
+        self.node.pipeline.release_held()
         # Windows still open are written with what they have, unless the disk is
         # full or the writer is stuck: neither holds the exit.
         within = 0.0 if self.disk.level == FULL else EXIT_SNAPSHOT_SECONDS

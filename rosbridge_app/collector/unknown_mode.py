@@ -9,10 +9,11 @@ the bag importer alike (both through the pipeline):
 * if the mode becomes known within ``params.unknown_mode_wait`` seconds of the
   first held position, the first master starts at that position and takes
   every held position;
-* if the wait passes first, or logging stops before a mode is known, a master
-  of *unknown* mode opens at the first held position, takes the held positions
-  and records later ones as they come; the first known mode closes it like any
-  switch.
+* if the wait passes first, or logging or the collector (SIGINT, SIGTERM)
+  stops before a mode is known, a master of *unknown* mode opens at the first
+  held position, takes the held positions and records later ones as they come;
+  the first known mode closes it like any switch. A hard kill (SIGKILL, power)
+  loses what is held: at most the wait.
 
 The statistics count unknown masters as time and distance without a known
 mode (reports/selectors/statistics.py). Free of ROS.

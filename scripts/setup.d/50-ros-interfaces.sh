@@ -8,7 +8,11 @@
 # without ROS: the collector cannot run there anyway).
 # FTT_ROS_INTERFACES=DIR[:DIR...] adds the robot team's own interface packages
 # or folders of .msg/.srv files (docs/collector.md: custom message types).
-if [ -z "${FTT_ROOT:-}" ]; then
+# FTT_ROS_PREFIX=DIR builds into DIR instead of the virtualenv, with the tools
+# setup installed there (the tests build their fixtures so).
+# On its own (also from a process that scripts/test.sh started, where FTT_ROOT
+# is in the environment but the helpers are not) it loads the helpers itself.
+if ! declare -F ftt_die >/dev/null; then
     FTT_SCRIPT=ros-interfaces
     # shellcheck source=scripts/lib.sh
     source "$(dirname "${BASH_SOURCE[0]}")/../lib.sh"
@@ -16,9 +20,22 @@ if [ -z "${FTT_ROOT:-}" ]; then
 fi
 
 _ftt_ros_interfaces() {
-    local src=$FTT_ROOT/ros_interfaces venv_site stamp extra
+    local src=$FTT_ROOT/ros_interfaces venv_site stamp dir names name
+    local prefix=${FTT_ROS_PREFIX:-$FTT_VENV} site
+    [[ $prefix == /* ]] || prefix=$PWD/$prefix
+    site=$prefix/lib/$("$FTT_PY" -c 'import sys; print(f"python{sys.version_info[0]}.{sys.version_info[1]}")')/site-packages
+    local dirs=("$src/tf2_msgs" "$src/industrial_msgs") extra=() teams=()
+    # The robot team's own interfaces: ROS 2 packages or folders of .msg files;
+    # setup.sh runs in FTT's folder, a relative one is relative to where it started.
+    IFS=: read -r -a extra <<<"${FTT_ROS_INTERFACES:-}"
+    for dir in "${extra[@]}"; do
+        [ -n "$dir" ] || continue
+        [[ $dir == /* ]] || dir=${FTT_CALLER_DIR:-$PWD}/$dir
+        teams+=("$dir")
+    done
     if ! "$FTT_PY" -c 'import rclpy' >/dev/null 2>&1; then
         ftt_log "no rclpy in $FTT_PY: skipping the ROS interface build"
+        [ ${#teams[@]} -eq 0 ] || ftt_log "FTT_ROS_INTERFACES not built: no rclpy to build them for"
         return 0
     fi
     venv_site=$("$FTT_PY" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
@@ -29,20 +46,27 @@ site = sys.argv[1]
 sys.exit(0 if not tf2_msgs.__file__.startswith(site) else 1)
 PY
         ftt_log "tf2_msgs and industrial_msgs come from the system ROS install"
+        [ ${#teams[@]} -eq 0 ] || ftt_log "FTT_ROS_INTERFACES not built: with a system ROS," \
+            "build them with colcon (docs/collector.md: custom message types)"
         return 0
     fi
-    local dirs=("$src/tf2_msgs" "$src/industrial_msgs") dir
-    # The robot team's own interfaces: ROS 2 packages or folders of .msg files.
-    IFS=: read -r -a extra <<<"${FTT_ROS_INTERFACES:-}"
-    for dir in "${extra[@]}"; do
-        [ -n "$dir" ] && dirs+=("$dir")
-    done
+    dirs+=("${teams[@]}")
+    # Names each package, or says what is wrong with a folder, before anything is built.
+    names=$(AMENT_PREFIX_PATH=$prefix:$FTT_VENV "$FTT_PY" "$FTT_ROOT/scripts/ros_package.py" \
+        --check "${dirs[@]}") ||
+        ftt_die "FTT_ROS_INTERFACES: a folder cannot be built (above; docs/collector.md: custom message types)"
     stamp=$({ "$FTT_PY" -VV; cat "$FTT_ROOT/requirements-rosidl.txt";
         find "${dirs[@]}" -type f | LC_ALL=C sort | xargs cat; } | sha256sum | cut -d' ' -f1)
-    if ftt_stamp_ok ros-interfaces "$stamp" &&
-        "$FTT_PY" -c 'import tf2_msgs.msg, industrial_msgs.msg' >/dev/null 2>&1; then
+    if FTT_VENV=$prefix ftt_stamp_ok ros-interfaces "$stamp" &&
+        _ftt_prefix_python -c 'import tf2_msgs.msg, industrial_msgs.msg' >/dev/null 2>&1; then
         ftt_log "ROS interfaces: already built"
         return 0
+    fi
+    if [ "$prefix" != "$FTT_VENV" ]; then
+        "$FTT_PY" -c 'import rosidl_adapter' 2>/dev/null ||
+            ftt_die "FTT_ROS_PREFIX needs the rosidl tools in $FTT_VENV: run scripts/setup.sh first"
+        _ftt_ros_build
+        return
     fi
     command -v cmake >/dev/null 2>&1 && command -v g++ >/dev/null 2>&1 ||
         ftt_apt_ensure cmake g++
@@ -58,11 +82,21 @@ PY
         xargs -0 -r sed -i -E \
             -e "s#/opt/python/cp[0-9]+-cp[0-9]+/include/python[0-9.]+#$py_inc#g" \
             -e "s#/opt/python/cp[0-9]+-cp[0-9]+/lib/python[0-9.]+/site-packages/numpy/_core/include#$np_inc#g"
-    bash "$FTT_ROOT/scripts/build_interfaces.sh" "$FTT_VENV" "${dirs[@]}" ||
+    _ftt_ros_build
+}
+
+_ftt_prefix_python() { # the interpreter seeing what is built into $prefix
+    PYTHONPATH=$site${PYTHONPATH:+:$PYTHONPATH} LD_LIBRARY_PATH=$prefix/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH} \
+        AMENT_PREFIX_PATH=$prefix:$FTT_VENV "$FTT_PY" "$@"
+}
+
+_ftt_ros_build() { # uses _ftt_ros_interfaces' locals: prefix, dirs, names, stamp
+    bash "$FTT_ROOT/scripts/build_interfaces.sh" "$prefix" "${dirs[@]}" ||
         ftt_die "building the ROS interfaces failed (see above)"
-    "$FTT_PY" -c 'import tf2_msgs.msg, industrial_msgs.msg' ||
-        ftt_die "tf2_msgs/industrial_msgs were built but do not import"
-    ftt_stamp_write ros-interfaces "$stamp"
-    ftt_log "ROS interfaces built into $FTT_VENV"
+    for name in $names; do
+        _ftt_prefix_python -c "import $name" || ftt_die "$name was built but does not import"
+    done
+    FTT_VENV=$prefix ftt_stamp_write ros-interfaces "$stamp"
+    ftt_log "ROS interfaces built into $prefix: ${names//$'\n'/ }"
 }
 _ftt_ros_interfaces

@@ -63,20 +63,38 @@ PHASES = [
 ]  # fmt: skip
 
 
+# What builds a team's interfaces at setup: the hook and the scripts it calls.
+BUILD_SCRIPTS = [
+    "scripts/setup.d/50-ros-interfaces.sh",
+    "scripts/build_interfaces.sh",
+    "scripts/ros_package.py",
+]
+
+
 @pytest.fixture(scope="session")
 def robot_interfaces() -> dict:
     """Environment of processes that use ftt_robot_msgs, built once per
-    definition set (about 40 s) the way setup builds a team's folder."""
-    digest = hashlib.sha256(
-        b"".join(p.read_bytes() for p in sorted(ROBOT_MSGS.rglob("*.msg")))
-    ).hexdigest()[:12]
+    definition set and build scripts (2-3 min) by setup's own step, as
+    FTT_ROS_INTERFACES=ftt_robot_msgs (relative to where it runs) into a
+    temporary FTT_ROS_PREFIX instead of the virtualenv."""
+    inputs = sorted(ROBOT_MSGS.rglob("*.msg")) + [ROOT / s for s in BUILD_SCRIPTS]
+    digest = hashlib.sha256(b"".join(p.read_bytes() for p in inputs)).hexdigest()[:12]
     prefix = Path(tempfile.gettempdir()) / f"ftt-test-interfaces-{digest}"
     if not (prefix / ".built").exists():
-        subprocess.run(
-            ["bash", str(ROOT / "scripts/build_interfaces.sh"), str(prefix), str(ROBOT_MSGS)],
-            check=True,
-            timeout=600,
+        hook = subprocess.run(
+            ["bash", str(ROOT / BUILD_SCRIPTS[0])],
+            cwd=ROBOT_MSGS.parent,
+            env={
+                **os.environ,
+                "FTT_ROS_PREFIX": str(prefix),
+                "FTT_ROS_INTERFACES": ROBOT_MSGS.name,
+            },
+            capture_output=True,
+            text=True,
+            timeout=900,
         )
+        assert hook.returncode == 0, hook.stdout + hook.stderr
+        assert "ftt_robot_msgs" in hook.stdout.splitlines()[-1]  # built and imported
         (prefix / ".built").touch()
     version = f"python{sys.version_info.major}.{sys.version_info.minor}"
 

@@ -5,7 +5,7 @@ from datetime import UTC, datetime, timedelta
 
 import pytest
 
-from events.models import Segment
+from events.models import Segment, Vehicle
 from events.selectors.logs import open_leg_for_vehicle
 from events.services import logs
 from rosbridge_app.collector import events as ev
@@ -53,6 +53,27 @@ def test_fkie_bag_gives_five_masters_and_its_path_once(vehicle, media_root, para
     record_events(leg, events)  # an import run twice
     assert Pose.objects.count() == rows
     assert Segment.objects.filter(leg=leg).count() == 8
+
+
+@pytest.mark.skipif(not FKIE_BAG.exists(), reason="fkie_test.bag not available")
+def test_fkie_bag_with_the_preset_gives_each_segment_of_robot_mode_type(media_root):
+    start = datetime(2019, 4, 8, tzinfo=UTC)
+
+    def imported(key: str, params: dict) -> list[tuple]:
+        vehicle = Vehicle.objects.create(key=key, short_description=key)
+        event = logs.create_test_event(at=start)
+        shift = logs.create_shift(test_event=event, vehicle=vehicle, at=start)
+        leg = logs.create_leg(shift=shift, at=start)
+        record_events(leg, bag_events(FKIE_BAG, params))
+        masters = Segment.objects.filter(leg=leg, parent__isnull=True).order_by("start")
+        return [(m.segment_type_id, m.start, m.end, master_path_length(m)) for m in masters]
+
+    preset = imported("preset", {"params.mode_sources": INDUSTRIAL_PRESET})
+    reference = imported("mode-type", {"params.robot_mode_type": "industrial"})
+    assert len(preset) == 5
+    assert [m[:3] for m in preset] == [m[:3] for m in reference]
+    assert [m[3] for m in preset] == pytest.approx([m[3] for m in reference], abs=1e-9)
+    assert all(m[3] > 0 for m in preset)
 
 
 BASE = datetime.now(UTC)
