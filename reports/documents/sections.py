@@ -467,7 +467,7 @@ class Sections:
             "not_counted": not_counted,
             "confidence": f"{round(CONFIDENCE * 100)} %",
             "time_zone": self.event.time_zone,
-            "gap_seconds": f"{GAP_SECONDS:g}",
+            "gap_seconds": fmt.number(GAP_SECONDS),
             "without_poses": without_poses,
             "gaps": gaps[:MAX_GAPS_LISTED],
             "gaps_more": max(0, len(gaps) - MAX_GAPS_LISTED),
