@@ -214,7 +214,7 @@ class Command(BaseCommand):
             raise CommandError(gettext("Report %(id)s does not exist.") % {"id": report_id})
         report = run_job(report_id)
         if report.status == Report.Status.FAILED:
-            raise CommandError(report.error)
+            raise CommandError(report.shown_error)
         self.stdout.write(f"report {report_id}: {report.pdf.name}")
 
     def _exports(self, event, o) -> bool:
