@@ -475,3 +475,44 @@ def test_a_commands_help_is_in_the_sites_language():
     ).stdout
     assert "Den PDF-Feldtestbericht einer Testveranstaltung erstellen" in helped
     assert "Nur diese Schicht berichten (ID)." in helped
+
+
+# Answers for machines stay English: health checks and metrics for monitoring, the
+# lean pose route and the original FTT's robot API for robots (README, Translations).
+FOR_MACHINES = {"ftt_site/health.py", "ftt_site/metrics.py", "ftt_site/pose_route.py"}
+
+
+def _answer_words(tree: ast.AST) -> list[ast.AST]:
+    """An answer's ``detail`` (API, websocket, GUI data) or a plain-text response."""
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Dict):
+            found += [
+                w
+                for key, value in zip(node.keys, node.values, strict=True)
+                if isinstance(key, ast.Constant) and key.value == "detail"
+                for w in _words(value)
+            ]
+        elif isinstance(node, ast.Call) and getattr(node.func, "id", None) == "HttpResponse":
+            found += _words(node.args[0]) if node.args else []
+    return found
+
+
+def test_answers_a_person_reads_are_marked_for_translation():
+    modules = [
+        path
+        for package in PACKAGES
+        for path in sorted((ROOT / package).rglob("*.py"))
+        if "migrations" not in path.parts
+        and "legacy_api" not in path.parts
+        and str(path.relative_to(ROOT)) not in FOR_MACHINES
+    ]
+    assert _found(modules, _answer_words) == []
+    sample = ast.parse(
+        'Response({"detail": f"Queued as job {n}."})\nHttpResponse("Sign in first.")\n'
+        'send({"type": "error", "detail": gettext("Unknown message.")})\n'
+    )
+    assert sorted(ast.unparse(n) for n in _answer_words(sample)) == [
+        "'Sign in first.'",
+        "f'Queued as job {n}.'",
+    ]

@@ -15,6 +15,7 @@ from django.http import FileResponse
 from django.shortcuts import get_object_or_404
 from django.urls import path
 from django.utils import timezone
+from django.utils.translation import gettext
 from drf_spectacular.types import OpenApiTypes
 from drf_spectacular.utils import OpenApiResponse, extend_schema, inline_serializer
 from rest_framework import serializers
@@ -118,7 +119,10 @@ class ArchiveImportView(APIView):
         }
         if job is None:
             return Response(body)
-        body["detail"] = f"Import queued as job {job.pk}. {plan.verdict()}"
+        body["detail"] = gettext("Import queued as job %(job)s. %(verdict)s") % {
+            "job": job.pk,
+            "verdict": plan.verdict(),
+        }
         return Response({**body, **_job(job, request)}, status=202)
 
 
