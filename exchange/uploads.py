@@ -57,7 +57,7 @@ def queue_import(upload, *, user=None) -> tuple[ArchiveImport, Plan]:
                 filename=(getattr(upload, "name", "") or held.name)[:255],
                 path=str(held.resolve()),
                 **kept("message", jobs.waiting()),
-                verdict=preview.verdict()[:200],
+                **kept("verdict", preview.said(), 200),
                 requested_by=user if user is not None and user.is_authenticated else None,
             )
             import_archive.enqueue(job.pk)
@@ -93,7 +93,7 @@ def import_archive(job_id: int) -> str:
     _finish(
         job,
         ArchiveImport.Status.DONE,
-        verdict=plan.verdict()[:200],
+        **kept("verdict", plan.said(), 200),
         changes=plan.changes(),
         counts={table: dict(counts) for table, counts in plan.counts.items()},
         lines=plan.lines(),

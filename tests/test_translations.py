@@ -421,15 +421,16 @@ def test_figures_are_written_in_the_readers_language():
 JOB_WRITERS = ["reports/services/generation.py", "exchange/uploads.py", "common/jobs.py"]
 
 
+KEPT = {"message", "error", "verdict"}
+
+
 def _job_words(tree: ast.AST) -> list[ast.AST]:
     found = []
     for node in ast.walk(tree):
         if isinstance(node, ast.Call):
-            found += [
-                w for k in node.keywords if k.arg in {"message", "error"} for w in _words(k.value)
-            ]
+            found += [w for k in node.keywords if k.arg in KEPT for w in _words(k.value)]
         elif isinstance(node, ast.Assign):
-            if any(getattr(t, "attr", None) in {"message", "error"} for t in node.targets):
+            if any(getattr(t, "attr", None) in KEPT for t in node.targets):
                 found += _words(node.value)
     return found
 

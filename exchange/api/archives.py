@@ -137,7 +137,7 @@ def _job(job: ArchiveImport, request) -> dict:
             "status": job.status,
             "message": job.shown_message,
             "filename": job.filename,
-            "detail": job.verdict,
+            "detail": job.shown_verdict,
             "changes": job.changes,
             "counts": job.counts,
             "error": job.shown_error,

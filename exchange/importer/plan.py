@@ -4,7 +4,9 @@ from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 
 from django.core.exceptions import ValidationError
+from django.utils.translation import gettext_noop
 
+from common.said import Said, said
 from exchange import records as rec
 
 OUTCOMES = ("added", "updated", "unchanged", "reused")
@@ -34,9 +36,14 @@ class Plan:
         return self.total("added") + self.total("updated")
 
     def verdict(self) -> str:
+        """In the active language."""
+        return str(self.said())
+
+    def said(self) -> Said:
         if self.dry_run:
-            return f"Would change {self.changes()} row(s); dry run, nothing written."
-        return f"Changed {self.changes()} row(s)."
+            would = gettext_noop("Would change %(count)s row(s); dry run, nothing written.")
+            return said(would, count=self.changes())
+        return said(gettext_noop("Changed %(count)s row(s)."), count=self.changes())
 
     def lines(self) -> list[str]:
         head = f"{'':14}" + "".join(f"{o:>11}" for o in OUTCOMES)

@@ -85,7 +85,16 @@ def test_an_archive_imports_step_reads_in_german(api_client, media_root, wipe):
         "/api/archives/import/", {"archive": io.BytesIO(data)}, format="multipart", **GERMAN
     )
     job = queued.json()["job"]
+    assert queued.json()["detail"].startswith(f"Import als Job {job['id']} eingereiht. Würde ")
     assert job["message"] == "wartet: kein Job-Worker läuft (manage.py ftt_worker starten)"
+    assert "Probelauf, nichts geschrieben" in job["detail"]
     assert run_queued_jobs() == 1
-    assert admin.get(job["url"], **GERMAN).json()["message"] == "fertig"
-    assert admin.get(job["url"], **ENGLISH).json()["message"] == "done"
+    german, english = (
+        admin.get(job["url"], **GERMAN).json(),
+        admin.get(job["url"], **ENGLISH).json(),
+    )
+    assert german["message"] == "fertig" and english["message"] == "done"
+    changed = german["changes"]
+    assert changed > 0
+    assert german["detail"] == f"{changed} Zeile(n) geändert."
+    assert english["detail"] == f"Changed {changed} row(s)."
