@@ -2,12 +2,15 @@
 the row keeps the words, not one language's sentence."""
 
 import io
+from datetime import UTC
 
 import pytest
+from django.core.files.uploadedfile import SimpleUploadedFile
 from django_tasks.base import TaskResultStatus
 from django_tasks_db.models import DBTaskResult
 
 from common.jobs import recover_interrupted
+from exchange.models import ArchiveImport
 from reports.models import Report
 from reports.services.generation import request_comparison, run_job
 from tests.support.api import download
@@ -98,3 +101,21 @@ def test_an_archive_imports_step_reads_in_german(api_client, media_root, wipe):
     assert changed > 0
     assert german["detail"] == f"{changed} Zeile(n) geändert."
     assert english["detail"] == f"Changed {changed} row(s)."
+
+
+@pytest.mark.django_db
+def test_the_import_page_lists_the_jobs_in_german(client, api_client, role_user, media_root, wipe):
+    data = download(api_client("viewer"), field_day())
+    wipe()
+    client.force_login(role_user("administrator"))
+    archive = SimpleUploadedFile("field-day.zip", data, content_type="application/zip")
+    client.post("/import/", {"archive": archive}, **GERMAN)
+    waiting = client.get("/import/", **GERMAN).content.decode()
+    assert "wartet: kein Job-Worker läuft" in waiting
+    job = ArchiveImport.objects.get()
+    assert f"{job.created.astimezone(UTC):%d.%m.%Y %H:%M}" in waiting
+    run_queued_jobs()
+    done = client.get("/import/", **GERMAN).content.decode()
+    assert f"{ArchiveImport.objects.get().changes} Zeile(n) geändert." in done
+    english = client.get("/import/", **ENGLISH).content.decode()
+    assert f"{job.created.astimezone(UTC):%Y-%m-%d %H:%M}" in english and "Changed " in english
