@@ -5,6 +5,7 @@ from django.utils.translation import gettext_lazy as _
 
 from common.models import Job
 from common.said import shown
+from exchange.counts import count_lines
 
 
 class ArchiveImport(Job):
@@ -24,6 +25,11 @@ class ArchiveImport(Job):
         verbose_name = _("archive import")
         verbose_name_plural = _("archive imports")
         pass
+
+    @property
+    def shown_lines(self) -> list[str]:
+        """The counts table in the reader's language (``lines`` keeps the requester's)."""
+        return count_lines(self.counts) if self.counts else self.lines
 
     @property
     def shown_verdict(self) -> str:

@@ -7,9 +7,7 @@ from django.core.exceptions import ValidationError
 from django.utils.translation import gettext_noop
 
 from common.said import Said, said
-from exchange import records as rec
-
-OUTCOMES = ("added", "updated", "unchanged", "reused")
+from exchange.counts import count_lines
 
 
 class ImportRefused(Exception):
@@ -46,13 +44,7 @@ class Plan:
         return said(gettext_noop("Changed %(count)s row(s)."), count=self.changes())
 
     def lines(self) -> list[str]:
-        head = f"{'':14}" + "".join(f"{o:>11}" for o in OUTCOMES)
-        rows = [head]
-        for table in rec.TABLES:
-            if table in self.counts:
-                c = self.counts[table]
-                rows.append(f"{table:14}" + "".join(f"{c[o]:>11}" for o in OUTCOMES))
-        return rows
+        return count_lines(self.counts)
 
 
 def describe(exc: ValidationError) -> str:

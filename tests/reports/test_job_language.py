@@ -2,6 +2,7 @@
 the row keeps the words, not one language's sentence."""
 
 import io
+import re
 from datetime import UTC
 
 import pytest
@@ -117,5 +118,6 @@ def test_the_import_page_lists_the_jobs_in_german(client, api_client, role_user,
     run_queued_jobs()
     done = client.get("/import/", **GERMAN).content.decode()
     assert f"{ArchiveImport.objects.get().changes} Zeile(n) geändert." in done
+    assert re.search(r"hinzugefügt\s+aktualisiert\s+unverändert\s+übernommen", done)
     english = client.get("/import/", **ENGLISH).content.decode()
     assert f"{job.created.astimezone(UTC):%Y-%m-%d %H:%M}" in english and "Changed " in english
