@@ -15,7 +15,7 @@ import time
 from datetime import UTC, datetime
 from pathlib import Path
 
-from django.utils.translation import gettext
+from django.utils.translation import gettext, gettext_noop
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
@@ -241,14 +241,14 @@ class CollectorNode(Node):
             if event.kind == ev.MODE:
                 self._master = str(event.uid)
                 if event.data["mode"] == ITO:
-                    self.blackbox.trigger(event.at, self._master, "switch to ITO")
+                    self.blackbox.trigger(event.at, self._master, gettext_noop("switch to ITO"))
             elif event.kind == ev.STOP:
                 self._master = None
 
         return put
 
     def snapshot_now(self) -> tuple[bool, str]:
-        uid = self.blackbox.trigger(now(), self._master, "on request")
+        uid = self.blackbox.trigger(now(), self._master, gettext_noop("on request"))
         if uid is None:
             return False, gettext("Snapshots are off (snapshot.enabled).")
         return True, gettext(
