@@ -39,7 +39,7 @@ class Said:
     @classmethod
     def from_json(cls, data: dict) -> "Said":
         values = {
-            k: cls.from_json(v) if isinstance(v, dict) else v
+            k: cls.from_json(v) if isinstance(v, dict) and "text" in v else v
             for k, v in (data.get("values") or {}).items()
         }
         return cls(data["text"], values)
