@@ -3,6 +3,7 @@
 from django.http import Http404, HttpResponse
 from django.shortcuts import get_object_or_404
 from django.utils.cache import patch_cache_control, patch_vary_headers
+from django.utils.translation import gettext
 
 from basemaps.mbtiles import TooCostly
 from basemaps.models import BasemapLayer
@@ -19,15 +20,19 @@ MAX_AGE = 24 * 3600
 def tile(request, key, z, x, y, fmt):
     user = request.user
     if not user.is_authenticated:
-        return HttpResponse("Sign in to see map tiles.", status=401, content_type="text/plain")
+        return HttpResponse(
+            gettext("Sign in to see map tiles."), status=401, content_type="text/plain"
+        )
     if not roles.has_role(user, roles.VIEWER):
-        return HttpResponse("Your account has no role.", status=403, content_type="text/plain")
+        return HttpResponse(
+            gettext("Your account has no role."), status=403, content_type="text/plain"
+        )
     layer = get_object_or_404(BasemapLayer, key=key)
     try:
         data = render_tile(layer, z, x, y, fmt)
     except TooCostly:
         response = HttpResponse(
-            "This map file did not give the tile in time; try again later.",
+            gettext("This map file did not give the tile in time; try again later."),
             status=503,
             content_type="text/plain",
         )

@@ -28,10 +28,12 @@ from datetime import timedelta
 from django.db import connection, transaction
 from django.utils import timezone
 from django.utils.crypto import get_random_string
+from django.utils.translation import gettext_noop
 from django_tasks.base import TaskResultStatus
 from django_tasks_db.models import DBTaskResult
 
 from common.models import JobWorker
+from common.said import said
 
 log = logging.getLogger(__name__)
 
@@ -45,7 +47,7 @@ _interrupted: dict[str, Callable] = {}
 
 
 def when_interrupted(task):
-    """Register ``handler(*args, retried: bool, reason: str, **kwargs)`` for ``task``.
+    """Register ``handler(*args, retried: bool, reason: Said, **kwargs)`` for ``task``.
 
     Called with the task's own arguments when a worker died while running it.
     """
@@ -78,6 +80,13 @@ def beat(worker_id: str) -> None:
 
 def forget(worker_id: str) -> None:
     JobWorker.objects.filter(worker_id=worker_id).delete()
+
+
+def waiting(now=None):
+    """What a queued job's row says until a worker takes it."""
+    if worker_running(now):
+        return said(gettext_noop("waiting for the job worker"))
+    return said(gettext_noop("waiting: no job worker runs (start manage.py ftt_worker)"))
 
 
 def worker_running(now=None) -> bool:
@@ -130,9 +139,14 @@ def _recover(task_id, worker_id: str, now) -> str | None:
             return None  # another worker was quicker
         attempts = len(result.worker_ids)
         retried = attempts < MAX_ATTEMPTS
-        reason = (
-            f"The job worker stopped during attempt {attempts} of {MAX_ATTEMPTS} "
-            f"(restart or crash of {worker_id or 'an unknown worker'})."
+        reason = said(
+            gettext_noop(
+                "The job worker stopped during attempt %(attempt)s of %(attempts)s "
+                "(restart or crash of %(worker)s)."
+            ),
+            attempt=attempts,
+            attempts=MAX_ATTEMPTS,
+            worker=worker_id or said(gettext_noop("an unknown worker")),
         )
         if retried:
             result.status = TaskResultStatus.READY
@@ -142,7 +156,7 @@ def _recover(task_id, worker_id: str, now) -> str | None:
             result.status = TaskResultStatus.FAILED
             result.finished_at = now
             result.exception_class_path = "common.jobs.WorkerLost"
-            result.traceback = reason
+            result.traceback = reason.english()
             result.save(
                 update_fields=["status", "finished_at", "exception_class_path", "traceback"]
             )
@@ -150,7 +164,7 @@ def _recover(task_id, worker_id: str, now) -> str | None:
         if handler is not None:
             args = result.args_kwargs
             handler(*args["args"], retried=retried, reason=reason, **args["kwargs"])
-    log.warning("job %s %s: %s", task_id, "queued again" if retried else "failed", reason)
+    log.warning("job %s %s: %s", task_id, "queued again" if retried else "failed", reason.english())
     return "retried" if retried else "failed"
 
 

@@ -5,6 +5,8 @@ from django.conf import settings
 from django.db import models
 from django.utils.translation import gettext_lazy as _
 
+from common.said import shown
+
 
 class JobWorker(models.Model):
     """A running ``manage.py ftt_worker``; it renews ``beat`` while it lives.
@@ -39,6 +41,9 @@ class Job(models.Model):
         max_length=200, blank=True, help_text=_("The step running now."), verbose_name=_("message")
     )
     error = models.TextField(blank=True, verbose_name=_("error"))
+    # The message and error as text and values (common.said), shown in the reader's language.
+    message_said = models.JSONField(default=dict, blank=True, verbose_name=_("message (words)"))
+    error_said = models.JSONField(default=dict, blank=True, verbose_name=_("error (words)"))
     requested_by = models.ForeignKey(
         settings.AUTH_USER_MODEL,
         null=True,
@@ -54,6 +59,14 @@ class Job(models.Model):
     class Meta:
         abstract = True
         ordering = ["-created", "-id"]
+
+    @property
+    def shown_message(self) -> str:
+        return shown(self.message, self.message_said)
+
+    @property
+    def shown_error(self) -> str:
+        return shown(self.error, self.error_said)
 
     @property
     def is_finished(self) -> bool:

@@ -22,9 +22,10 @@ class ProgressBar:
             self.stream.write("\n")
         self.stream.flush()
 
-    def __call__(self, fraction: float, message: str) -> None:
-        """The report renderer's callback: a fraction and what is being done."""
-        self.show(fraction, after=f"{100 * fraction:3.0f}% {message[:40]:<40}")
+    def __call__(self, fraction: float, step) -> None:
+        """The report renderer's callback: a fraction and what is being done
+        (common.said.Said, said in the command's language)."""
+        self.show(fraction, after=f"{100 * fraction:3.0f}% {str(step)[:40]:<40}")
 
     def count(self, label: str, done: int, total: int) -> None:
         """A bar for ``done`` of ``total`` things, e.g. messages read from a bag."""

@@ -28,6 +28,7 @@ from django.conf import settings
 from django.contrib.auth import get_user_model
 from django.contrib.auth.hashers import make_password
 from django.db import connection
+from django.utils.translation import gettext as _
 
 from exchange.archive import ArchiveWriter
 
@@ -52,8 +53,11 @@ def pg_tool(name: str, server_major: int) -> str:
         if major >= server_major:
             return path
     raise BackupError(
-        f"No {name} for PostgreSQL {server_major} or newer (found: {', '.join(found) or 'none'});"
-        f" install postgresql-client-{server_major}."
+        _(
+            "No %(tool)s for PostgreSQL %(major)s or newer (found: %(found)s); install "
+            "postgresql-client-%(major)s."
+        )
+        % {"tool": name, "major": server_major, "found": ", ".join(found) or _("none")}
     )
 
 
@@ -105,7 +109,7 @@ def _dump_postgres(target: Path, credentials: bool) -> Path:
             error = dump.stderr.read()
         failed = dump.returncode != 0
     if failed:
-        raise BackupError(f"pg_dump failed: {error.strip()[-1000:]}")
+        raise BackupError(_("pg_dump failed: %(error)s") % {"error": error.strip()[-1000:]})
     return out
 
 
@@ -164,7 +168,7 @@ def make_backup(path, *, credentials: bool = False) -> dict:
         elif connection.vendor == "sqlite":
             dump = _copy_sqlite(scratch, credentials)
         else:  # pragma: no cover - settings allow only these two
-            raise BackupError(f"No backup method for {connection.vendor}.")
+            raise BackupError(_("No backup method for %(vendor)s.") % {"vendor": connection.vendor})
         selection = {
             "database": connection.vendor,
             "media_root": str(media),

@@ -24,6 +24,7 @@ from pathlib import Path
 
 from django.db import transaction
 from django.utils.translation import gettext as _
+from django.utils.translation import gettext_noop
 
 from events.models import Leg, Shift, TestEvent, Vehicle
 from events.services import logs
@@ -201,7 +202,7 @@ def snapshot_events(info: BagInfo, settings: dict, events: list, directory: Path
             path = directory / f"snapshot-{switch.at:%Y%m%d-%H%M%S}-{switch.uid.hex[:8]}.mcap"
             data = {
                 "master": str(switch.uid),
-                "reason": "bag import",
+                "reason": gettext_noop("bag import"),
                 "path": str(path),
                 "start": datetime.fromtimestamp((at - before) / 1e9, UTC).isoformat(),
                 "end": datetime.fromtimestamp((at + after) / 1e9, UTC).isoformat(),

@@ -4,6 +4,8 @@ from django.db import models
 from django.utils.translation import gettext_lazy as _
 
 from common.models import Job
+from common.said import shown
+from exchange.counts import count_lines
 
 
 class ArchiveImport(Job):
@@ -14,6 +16,7 @@ class ArchiveImport(Job):
     # emptied once the import ran (the file is deleted then).
     path = models.CharField(max_length=1000, blank=True, verbose_name=_("path"))
     verdict = models.CharField(max_length=200, blank=True, verbose_name=_("verdict"))
+    verdict_said = models.JSONField(default=dict, blank=True, verbose_name=_("verdict (words)"))
     changes = models.IntegerField(null=True, blank=True, verbose_name=_("changes"))
     counts = models.JSONField(default=dict, blank=True, verbose_name=_("counts"))
     lines = models.JSONField(default=list, blank=True, verbose_name=_("lines"))
@@ -22,6 +25,15 @@ class ArchiveImport(Job):
         verbose_name = _("archive import")
         verbose_name_plural = _("archive imports")
         pass
+
+    @property
+    def shown_lines(self) -> list[str]:
+        """The counts table in the reader's language (``lines`` keeps the requester's)."""
+        return count_lines(self.counts) if self.counts else self.lines
+
+    @property
+    def shown_verdict(self) -> str:
+        return shown(self.verdict, self.verdict_said)
 
     def __str__(self):
         return f"Import {self.pk} of {self.filename} ({self.status})"

@@ -16,9 +16,11 @@ from pathlib import Path
 from django.conf import settings
 from django.db import transaction
 from django.utils import timezone
+from django.utils.translation import gettext_noop
 from django_tasks import task
 
 from common import jobs
+from common.said import Said, kept, said
 from exchange.archive import open_archive
 from exchange.importer import Plan, import_bundle
 from exchange.models import ArchiveImport
@@ -45,22 +47,22 @@ def queue_import(upload, *, user=None) -> tuple[ArchiveImport, Plan]:
     """
     folder = Path(settings.DATA_DIR) / "job_files"
     folder.mkdir(mode=0o700, parents=True, exist_ok=True)
-    kept = folder / f"import-{uuid.uuid4().hex}.zip"
+    held = folder / f"import-{uuid.uuid4().hex}.zip"
     try:
-        with open(kept, "wb") as copy:
+        with open(held, "wb") as copy:
             _copy(upload, copy)
-        preview = import_file(kept, dry_run=True)
+        preview = import_file(held, dry_run=True)
         with transaction.atomic():
             job = ArchiveImport.objects.create(
-                filename=(getattr(upload, "name", "") or kept.name)[:255],
-                path=str(kept.resolve()),
-                message=_waiting(),
-                verdict=preview.verdict()[:200],
+                filename=(getattr(upload, "name", "") or held.name)[:255],
+                path=str(held.resolve()),
+                **kept("message", jobs.waiting()),
+                **kept("verdict", preview.said(), 200),
                 requested_by=user if user is not None and user.is_authenticated else None,
             )
             import_archive.enqueue(job.pk)
     except BaseException:
-        kept.unlink(missing_ok=True)
+        held.unlink(missing_ok=True)
         raise
     return job, preview
 
@@ -74,12 +76,6 @@ def _copy(upload, target) -> None:
     target.flush()
 
 
-def _waiting() -> str:
-    if jobs.worker_running():
-        return "waiting for the job worker"
-    return "waiting: no job worker runs (start manage.py ftt_worker)"
-
-
 @task()
 def import_archive(job_id: int) -> str:
     """The queued job: import a kept upload, record the outcome, delete the file."""
@@ -87,17 +83,17 @@ def import_archive(job_id: int) -> str:
     if job.is_finished:
         return job.status
     ArchiveImport.objects.filter(pk=job_id).update(
-        status=ArchiveImport.Status.RUNNING, message="importing"
+        status=ArchiveImport.Status.RUNNING, **kept("message", said(gettext_noop("importing")))
     )
     try:
         plan = import_file(Path(job.path), dry_run=False)
     except Exception as exc:  # refused, malformed or a file gone: the reason is the outcome
-        _finish(job, ArchiveImport.Status.FAILED, error=str(exc) or exc.__class__.__name__)
+        _finish(job, ArchiveImport.Status.FAILED, **kept("error", _reason(exc)))
         return ArchiveImport.Status.FAILED
     _finish(
         job,
         ArchiveImport.Status.DONE,
-        verdict=plan.verdict()[:200],
+        **kept("verdict", plan.said(), 200),
         changes=plan.changes(),
         counts={table: dict(counts) for table, counts in plan.counts.items()},
         lines=plan.lines(),
@@ -106,15 +102,29 @@ def import_archive(job_id: int) -> str:
 
 
 @jobs.when_interrupted(import_archive)
-def _worker_stopped(job_id: int, *, retried: bool, reason: str) -> None:
+def _worker_stopped(job_id: int, *, retried: bool, reason: Said) -> None:
     if retried:
+        again = said(gettext_noop("queued again: %(reason)s"), reason=reason)
         ArchiveImport.objects.filter(pk=job_id).update(
-            status=ArchiveImport.Status.QUEUED, message=f"queued again: {reason}"[:200]
+            status=ArchiveImport.Status.QUEUED, **kept("message", again, 200)
         )
         return
     job = ArchiveImport.objects.filter(pk=job_id).first()
     if job is not None:
-        _finish(job, ArchiveImport.Status.FAILED, error=f"{reason} Nothing was imported.")
+        nothing = said(gettext_noop("%(reason)s Nothing was imported."), reason=reason)
+        _finish(job, ArchiveImport.Status.FAILED, **kept("error", nothing))
+
+
+def _reason(exc: Exception) -> str:
+    """Why an import failed; an archive's refusal is in the language of the worker
+    (FTT_LANGUAGE), said where it was found, with the record it names."""
+    return str(exc) or exc.__class__.__name__
+
+
+FINISHED = {
+    ArchiveImport.Status.DONE: gettext_noop("done"),
+    ArchiveImport.Status.FAILED: gettext_noop("failed"),
+}
 
 
 def _finish(job: ArchiveImport, status: str, **fields) -> None:
@@ -122,7 +132,7 @@ def _finish(job: ArchiveImport, status: str, **fields) -> None:
         Path(job.path).unlink(missing_ok=True)
     ArchiveImport.objects.filter(pk=job.pk).update(
         status=status,
-        message=status,
+        **kept("message", said(FINISHED[status])),
         path="",
         finished=timezone.now(),
         **fields,

@@ -32,22 +32,24 @@ def written_in(language: str) -> Iterator[None]:
         _LANGUAGE.reset(token)
 
 
-def _number(text: str) -> str:
+def localised(text: str) -> str:
+    """Text with figures written with a decimal point, in the report's language
+    (also what the figures' tick labels go through, reports.figures.style)."""
     mark = _DECIMAL.get(_LANGUAGE.get())
     return text.replace(".", mark) if mark else text
 
 
 def decimal(value: float, places: int = 2) -> str:
-    return _number(f"{value:.{places}f}")
+    return localised(f"{value:.{places}f}")
 
 
 def number(value: float) -> str:
     """A plain figure, as short as it reads (25, 2.5)."""
-    return _number(f"{value:g}")
+    return localised(f"{value:g}")
 
 
 def metres(value: float | None) -> str:
-    return DASH if value is None else _number(f"{value:.2f}") + " m"
+    return DASH if value is None else localised(f"{value:.2f}") + " m"
 
 
 def duration(seconds: float | None) -> str:
@@ -61,15 +63,15 @@ def duration(seconds: float | None) -> str:
 
 
 def percent(ratio: float | None) -> str:
-    return DASH if ratio is None else _number(f"{100 * ratio:.1f}") + " %"
+    return DASH if ratio is None else localised(f"{100 * ratio:.1f}") + " %"
 
 
 def rate(value: float | None) -> str:
-    return DASH if value is None else _number(f"{value:.3f}")
+    return DASH if value is None else localised(f"{value:.3f}")
 
 
 def speed(distance: float, seconds: float) -> str:
-    return DASH if seconds <= 0 else _number(f"{distance / seconds:.2f}") + " m/s"
+    return DASH if seconds <= 0 else localised(f"{distance / seconds:.2f}") + " m/s"
 
 
 def timestamp(value: datetime | None, tz: tzinfo) -> str:

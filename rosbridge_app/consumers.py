@@ -22,6 +22,7 @@ from channels.generic.websocket import AsyncJsonWebsocketConsumer
 from django.conf import settings
 from django.contrib import auth
 from django.db import connections
+from django.utils.translation import gettext
 from psycopg import AsyncConnection
 
 from common import roles
@@ -295,7 +296,9 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
         return False
 
     async def _end_session(self) -> None:
-        await self.send_json({"type": "error", "detail": "Your session has ended; sign in again."})
+        await self.send_json(
+            {"type": "error", "detail": gettext("Your session has ended; sign in again.")}
+        )
         await self.close(code=4401)
 
     async def session_ended(self, message):
@@ -336,7 +339,7 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
         except ValueError:
             content = None
         if not isinstance(content, dict):
-            await self.send_json({"type": "error", "detail": "Send one JSON object."})
+            await self.send_json({"type": "error", "detail": gettext("Send one JSON object.")})
             return
         await self.receive_json(content, **kwargs)
 
@@ -344,7 +347,7 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
         if not await self._session_holds():
             return
         if content.get("type") != "subscribe":
-            await self.send_json({"type": "error", "detail": "Unknown message."})
+            await self.send_json({"type": "error", "detail": gettext("Unknown message.")})
             return
         for key in self.watch:
             value = content.get(key)

@@ -2,10 +2,14 @@
 German browser or account gets."""
 
 import ast
+import io
 import logging
+import os
 import re
 import subprocess
+import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 from django.conf import settings
@@ -13,6 +17,8 @@ from django.core.management import call_command
 from django.utils import translation
 
 from common.models import AccountPreference
+from rosbridge_app.collector import conversions, params
+from rosbridge_app.collector.disk_guard import DiskGuard
 from rosbridge_app.collector.hearing import RESUBSCRIBE, Hearing
 from tests.support.typst_words import TypstWords
 
@@ -185,6 +191,9 @@ SHOWN_ERRORS = {
     "ValidationError", "RuleViolation", "NotFound", "ParseError", "CommandError",
     "ReportError", "ArchiveError", "AreaError", "BagImportError", "ExportError",
     "ImportRefused", "RecordError", "NotAGeoTiff", "TooManyWaiting",
+    # Read on a command line, in the collector's log or the GUI's collector panel.
+    "BackupError", "FetchError", "InvalidModeSources", "InvalidParameter", "LegacyError",
+    "MalformedRecord", "SnapshotError", "UnsupportedImage", "SystemExit",
 }  # fmt: skip
 GETTEXT = {"_", "gettext", "gettext_lazy", "ngettext", "ngettext_lazy", "pgettext"}
 
@@ -256,4 +265,255 @@ def test_the_report_templates_take_every_word_from_the_data():
         "Check with:",
         "Legs",
         "outside",
+    ]
+
+
+def _modules(*patterns: str) -> list[Path]:
+    found = sorted({path for pattern in patterns for path in ROOT.glob(pattern)})
+    assert found, patterns
+    return found
+
+
+def _found(paths, check) -> list[str]:
+    return [
+        f"{path.relative_to(ROOT)}:{node.lineno}: {ast.unparse(node)[:80]}"
+        for path in paths
+        for node in check(ast.parse(path.read_text()))
+    ]
+
+
+def _words(node) -> list[ast.AST]:
+    """Literal words in ``node``; both branches of ``a if c else b``."""
+    if isinstance(node, ast.IfExp):
+        return _words(node.body) + _words(node.orelse)
+    return _words_outside_gettext(node)
+
+
+def _command_words(tree: ast.AST) -> list[ast.AST]:
+    """A command's help (its own, its options'), what it writes and how it exits."""
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ClassDef):
+            for item in node.body:
+                if isinstance(item, ast.Assign) and any(
+                    getattr(t, "id", None) == "help" for t in item.targets
+                ):
+                    found += _words(item.value)
+        elif isinstance(node, ast.Call):
+            found += [w for k in node.keywords if k.arg == "help" for w in _words(k.value)]
+            f = node.func
+            if (
+                isinstance(f, ast.Attribute)
+                and f.attr == "write"
+                and getattr(f.value, "attr", None) in {"stdout", "stderr"}
+                and node.args
+            ):
+                found += _words(node.args[0])
+    return found
+
+
+COMMANDS = "*/management/commands/ftt_*.py"
+
+
+def test_the_commands_help_and_output_are_marked_for_translation():
+    """Their argparse help and what they print; argparse's and Django's own words
+    (usage:, --verbosity) are theirs and stay English (docs/architecture.md)."""
+    assert _found(_modules(COMMANDS), _command_words) == []
+    sample = ast.parse(
+        'class Command:\n    help = "Make the report."\n'
+        'p.add_argument("--x", help="The width.")\n'
+        'self.stdout.write(f"wrote {n}")\n'
+        'self.stderr.write(("Fine" if ok else _("bad")))\n'
+        'p.add_argument("--y", help=_("The height."))\n'
+    )
+    assert sorted(ast.unparse(n) for n in _command_words(sample)) == [
+        "'Fine'", "'Make the report.'", "'The width.'", "f'wrote {n}'",
+    ]  # fmt: skip
+
+
+# Loggers whose lines an operator reads (the collector's console, the report's tile
+# source); log.debug and log.exception (with its traceback) are for engineers.
+OPERATOR_LOGS = ["rosbridge_app/collector/*.py", COMMANDS, "reports/figures/tiles.py"]
+READ_LEVELS = {"info", "warning", "error", "critical"}
+
+
+def _log_words(tree: ast.AST) -> list[ast.AST]:
+    found = []
+    for node in ast.walk(tree):
+        if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)):
+            continue
+        owner = node.func.value
+        logger = getattr(owner, "id", None) in {"log", "logger"} or (
+            isinstance(owner, ast.Call) and getattr(owner.func, "attr", "") == "get_logger"
+        )
+        if logger and node.func.attr in READ_LEVELS and node.args:
+            found += _words(node.args[0])
+        # A collector's answer to a command from the GUI or ROS: (ok, words).
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Return) and isinstance(node.value, ast.Tuple):
+            first, *rest = node.value.elts or [None]
+            if isinstance(first, ast.Constant) and isinstance(first.value, bool) and rest:
+                found += _words(rest[0])
+    return found
+
+
+def _parameter_words(tree: ast.AST) -> list[ast.AST]:
+    """A collector parameter's description (the GUI's parameter editor shows it)."""
+    return [
+        found
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "Spec"
+        for found in _words(node.args[1])
+    ]
+
+
+def test_the_log_lines_an_operator_reads_are_marked_for_translation():
+    assert _found(_modules(*OPERATOR_LOGS), _log_words) == []
+    assert _found(_modules("rosbridge_app/collector/params.py"), _parameter_words) == []
+    sample = ast.parse(
+        'log.warning("disk full: %s", x)\nlog.info("%s", text)\n'
+        'node.get_logger().error(f"lost {n}")\nlog.exception("crash")\n'
+        'def f():\n    return False, "No file."\n'
+    )
+    assert [ast.unparse(n) for n in _log_words(sample)] == [
+        "'disk full: %s'", "f'lost {n}'", "'No file.'",
+    ]  # fmt: skip
+
+
+# A figure written with a decimal mark: f"{x:.2f}", f"{x:g}".
+DECIMALS = re.compile(r"^(\.[1-9]\d*)?[gGeE]$|^\.[1-9]\d*[f%]$")
+FIGURE_MAKERS = {"plt.subplots", "plt.figure", "add_axes", "add_subplot"}
+
+
+def _figure_words(tree: ast.AST) -> list[ast.AST]:
+    """Figures formatted without the report's or the command's language
+    (reports.formatting, django.utils.formats.number_format), and figures made
+    without the tick formatter of reports/figures/style.py."""
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.FormattedValue) and isinstance(node.format_spec, ast.JoinedStr):
+            spec = "".join(p.value for p in node.format_spec.values if isinstance(p, ast.Constant))
+            if DECIMALS.match(spec):
+                found.append(node)
+        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute):
+            if {node.func.attr, ast.unparse(node.func)} & FIGURE_MAKERS:
+                found.append(node)
+    return found
+
+
+def test_figures_are_written_in_the_readers_language():
+    """Report figures and charts (the PDF is in the report's language) and what the
+    commands print: every decimal through the language's formatting."""
+    modules = [
+        p
+        for p in _modules("reports/figures/*.py", "reports/documents/*.py", COMMANDS)
+        if p.name != "style.py"
+    ]
+    assert _found(modules, _figure_words) == []
+    sample = ast.parse('f"{x:.2f} m"\nf"{n:.0f} m"\nf"{x:g}"\nplt.subplots(figsize=s)\n')
+    assert sorted(ast.unparse(n) for n in _figure_words(sample)) == [
+        "plt.subplots(figsize=s)", "{x:.2f}", "{x:g}",
+    ]  # fmt: skip
+
+
+# Where a background job writes its row: its step and failure are kept as words
+# (common.said.kept), so that each reader gets them in their language.
+JOB_WRITERS = ["reports/services/generation.py", "exchange/uploads.py", "common/jobs.py"]
+
+
+KEPT = {"message", "error", "verdict"}
+
+
+def _job_words(tree: ast.AST) -> list[ast.AST]:
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Call):
+            found += [w for k in node.keywords if k.arg in KEPT for w in _words(k.value)]
+        elif isinstance(node, ast.Assign):
+            if any(getattr(t, "attr", None) in KEPT for t in node.targets):
+                found += _words(node.value)
+    return found
+
+
+def test_job_rows_keep_words_not_sentences():
+    assert _found(_modules(*JOB_WRITERS), _job_words) == []
+    sample = ast.parse(
+        'Report.objects.update(message="done")\nrow.error = f"failed: {e}"\n'
+        'Report.objects.update(**kept("message", said(gettext_noop("done"))))\n'
+    )
+    assert sorted(ast.unparse(n) for n in _job_words(sample)) == ["'done'", "f'failed: {e}'"]
+
+
+@pytest.mark.django_db
+def test_commands_and_the_collector_answer_in_german(tmp_path, django_user_model):
+    """What an operator reads from a command and from the collector, in German."""
+    django_user_model.objects.create_user("anna", password="pw-Xy7-long")
+    out = io.StringIO()
+    with translation.override("de"):
+        call_command("ftt_credentials", "save", str(tmp_path / "sign-ins"), stdout=out)
+        with pytest.raises(params.InvalidParameter) as refused:
+            params.check("snapshot.write_timeout", 0.5)
+        with pytest.raises(conversions.UnsupportedImage) as image:
+            conversions.compressed_image(SimpleNamespace(data=b"BM..", format="bmp"))
+        disk = DiskGuard(tmp_path / "spool")
+        disk.count("frames", 3)
+        summary = disk.summary()
+    assert out.getvalue().startswith("Anmeldedaten von 1 Konto/Konten in ")
+    assert str(refused.value) == "snapshot.write_timeout muss >= 1 sein"
+    assert str(image.value) == "nicht unterstütztes komprimiertes Format 'bmp'"
+    assert summary == "seit -: 3 Kamerabilder verworfen"
+
+
+def test_a_commands_help_is_in_the_sites_language():
+    """argparse help of FTT's own options in FTT_LANGUAGE (Django's own stay English)."""
+    helped = subprocess.run(
+        [sys.executable, "manage.py", "ftt_report", "--help"],
+        cwd=ROOT,
+        env={**os.environ, "FTT_LANGUAGE": "de", "COLUMNS": "200"},
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    assert "Den PDF-Feldtestbericht einer Testveranstaltung erstellen" in helped
+    assert "Nur diese Schicht berichten (ID)." in helped
+
+
+# Answers for machines stay English: health checks and metrics for monitoring, the
+# lean pose route and the original FTT's robot API for robots (README, Translations).
+FOR_MACHINES = {"ftt_site/health.py", "ftt_site/metrics.py", "ftt_site/pose_route.py"}
+
+
+def _answer_words(tree: ast.AST) -> list[ast.AST]:
+    """An answer's ``detail`` (API, websocket, GUI data) or a plain-text response."""
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Dict):
+            found += [
+                w
+                for key, value in zip(node.keys, node.values, strict=True)
+                if isinstance(key, ast.Constant) and key.value == "detail"
+                for w in _words(value)
+            ]
+        elif isinstance(node, ast.Call) and getattr(node.func, "id", None) == "HttpResponse":
+            found += _words(node.args[0]) if node.args else []
+    return found
+
+
+def test_answers_a_person_reads_are_marked_for_translation():
+    modules = [
+        path
+        for package in PACKAGES
+        for path in sorted((ROOT / package).rglob("*.py"))
+        if "migrations" not in path.parts
+        and "legacy_api" not in path.parts
+        and str(path.relative_to(ROOT)) not in FOR_MACHINES
+    ]
+    assert _found(modules, _answer_words) == []
+    sample = ast.parse(
+        'Response({"detail": f"Queued as job {n}."})\nHttpResponse("Sign in first.")\n'
+        'send({"type": "error", "detail": gettext("Unknown message.")})\n'
+    )
+    assert sorted(ast.unparse(n) for n in _answer_words(sample)) == [
+        "'Sign in first.'",
+        "f'Queued as job {n}.'",
     ]

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import morecantile
 import requests
+from django.utils.translation import gettext
 from PIL import Image
 from pmtiles.convert import mbtiles_to_pmtiles
 
@@ -183,6 +184,8 @@ def _get(session, pace: _Pace, url: str, retries: int) -> bytes | None:
         if response.status_code in (404, 204):
             return None
         if attempt == retries:
-            raise FetchError(f"{url}: HTTP {response.status_code}")
+            raise FetchError(
+                gettext("%(url)s: HTTP %(status)s") % {"url": url, "status": response.status_code}
+            )
         wait = _retry_after(response) if response.status_code in (429, 503) else 2.0**attempt
     return None

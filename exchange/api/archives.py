@@ -15,6 +15,7 @@ from django.http import FileResponse
 from django.shortcuts import get_object_or_404
 from django.urls import path
 from django.utils import timezone
+from django.utils.translation import gettext
 from drf_spectacular.types import OpenApiTypes
 from drf_spectacular.utils import OpenApiResponse, extend_schema, inline_serializer
 from rest_framework import serializers
@@ -118,7 +119,10 @@ class ArchiveImportView(APIView):
         }
         if job is None:
             return Response(body)
-        body["detail"] = f"Import queued as job {job.pk}. {plan.verdict()}"
+        body["detail"] = gettext("Import queued as job %(job)s. %(verdict)s") % {
+            "job": job.pk,
+            "verdict": plan.verdict(),
+        }
         return Response({**body, **_job(job, request)}, status=202)
 
 
@@ -131,12 +135,12 @@ def _job(job: ArchiveImport, request) -> dict:
         "job": {
             "id": job.pk,
             "status": job.status,
-            "message": job.message,
+            "message": job.shown_message,
             "filename": job.filename,
-            "detail": job.verdict,
+            "detail": job.shown_verdict,
             "changes": job.changes,
             "counts": job.counts,
-            "error": job.error,
+            "error": job.shown_error,
             "created": job.created,
             "finished": job.finished,
             "url": request.build_absolute_uri(f"/api/archives/imports/{job.pk}/"),

@@ -77,9 +77,14 @@ def import_bundle(bundle, *, dry_run: bool = False) -> Plan:
         OverflowError,
     ) as exc:
         session.discard_files()
-        what = f"missing field {exc}" if isinstance(exc, KeyError) else str(exc)
+        what = (
+            gettext("missing field %(field)s") % {"field": exc}
+            if isinstance(exc, KeyError)
+            else str(exc)
+        )
         raise MalformedRecord(
-            f"{session.where}: malformed record ({what}). Nothing was imported."
+            gettext("%(where)s: malformed record (%(what)s). Nothing was imported.")
+            % {"where": session.where, "what": what}
         ) from None
     except (IntegrityError, DatabaseError) as exc:
         session.discard_files()

@@ -10,6 +10,8 @@ while it adds or changes rows, stay beside them.
 import uuid
 from collections import defaultdict
 
+from django.utils.translation import gettext
+
 from events.models import Personnel, TestCase
 from events.models.changes import CHANNELS
 from exchange import records as rec
@@ -28,7 +30,10 @@ def import_history(session: ImportSession):
             # An entry of a record kind a newer FTT tracks: not kept here.
             continue
         if r.get("type") not in KINDS or r.get("channel") not in _CHANNELS:
-            raise MalformedRecord(f"{session.where}: unknown kind or channel of a history entry.")
+            raise MalformedRecord(
+                gettext("%(where)s: unknown kind or channel of a history entry.")
+                % {"where": session.where}
+            )
         by_model[r["model"]].append(r)
     for name, records in by_model.items():
         _import_entries(session, name, records)
@@ -49,17 +54,20 @@ def _import_entries(session: ImportSession, name: str, records: list):
         pk = ids.get(uuid.UUID(r["uid"]))
         if pk is None:
             raise MalformedRecord(
-                f"{session.where}: the {name} is neither in the archive nor here."
+                gettext("%(where)s: the %(kind)s is neither in the archive nor here.")
+                % {"where": session.where, "kind": name}
             )
         at = rec.time_in(r["at"], "at")
         if at is None:
-            raise MalformedRecord(f"{session.where}: it has no time.")
+            raise MalformedRecord(gettext("%(where)s: it has no time.") % {"where": session.where})
         if (pk, at, r["type"]) in known:
             session.plan.note("history", "unchanged")
             continue
         values = r["values"]
         if not isinstance(values, dict):
-            raise MalformedRecord(f"{session.where}: its values are not an object.")
+            raise MalformedRecord(
+                gettext("%(where)s: its values are not an object.") % {"where": session.where}
+            )
         entry = history(
             id=pk,
             history_date=at,
@@ -130,5 +138,7 @@ def _hashable(value):
     if isinstance(value, list):
         return tuple(str(v) for v in value)
     if not isinstance(value, str):
-        raise MalformedRecord(f"{value!r} is not a reference to a row.")
+        raise MalformedRecord(
+            gettext("%(value)s is not a reference to a row.") % {"value": repr(value)}
+        )
     return value

@@ -4,10 +4,10 @@ from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 
 from django.core.exceptions import ValidationError
+from django.utils.translation import gettext_noop
 
-from exchange import records as rec
-
-OUTCOMES = ("added", "updated", "unchanged", "reused")
+from common.said import Said, said
+from exchange.counts import count_lines
 
 
 class ImportRefused(Exception):
@@ -34,18 +34,17 @@ class Plan:
         return self.total("added") + self.total("updated")
 
     def verdict(self) -> str:
+        """In the active language."""
+        return str(self.said())
+
+    def said(self) -> Said:
         if self.dry_run:
-            return f"Would change {self.changes()} row(s); dry run, nothing written."
-        return f"Changed {self.changes()} row(s)."
+            would = gettext_noop("Would change %(count)s row(s); dry run, nothing written.")
+            return said(would, count=self.changes())
+        return said(gettext_noop("Changed %(count)s row(s)."), count=self.changes())
 
     def lines(self) -> list[str]:
-        head = f"{'':14}" + "".join(f"{o:>11}" for o in OUTCOMES)
-        rows = [head]
-        for table in rec.TABLES:
-            if table in self.counts:
-                c = self.counts[table]
-                rows.append(f"{table:14}" + "".join(f"{c[o]:>11}" for o in OUTCOMES))
-        return rows
+        return count_lines(self.counts)
 
 
 def describe(exc: ValidationError) -> str:

@@ -3,6 +3,8 @@ files written, with the lookups that find a row named by a record."""
 
 from collections import Counter
 
+from django.utils.translation import gettext
+
 from events.models import Performer, PoseSource, Segment, Vehicle
 from exchange.importer.plan import ImportRefused, MalformedRecord, Plan
 
@@ -40,7 +42,10 @@ class ImportSession:
             self.where = f"{table} record {record.get('uid') or record.get('key') or ''}".strip()
             for name in ("uid", "key"):
                 if name in record and not isinstance(record[name], str):
-                    raise MalformedRecord(f"{self.where}: its {name} must be a string.")
+                    raise MalformedRecord(
+                        gettext("%(where)s: its %(field)s must be a string.")
+                        % {"where": self.where, "field": name}
+                    )
             yield record
 
     def refuse(self, message: str):

@@ -7,6 +7,7 @@ from pathlib import PurePosixPath
 
 from django.core.exceptions import ValidationError
 from django.core.files.base import ContentFile
+from django.utils.translation import gettext
 
 from events.models import PoseSource, Segment, Shift
 from exchange import records as rec
@@ -101,7 +102,9 @@ def _store_file(session: ImportSession, row, record, formats, field="image"):
     # The archive's file name is not trusted: the checked format names the file.
     if formats is None:
         if not content.startswith(MCAP_MAGIC):
-            raise MalformedRecord(f"{session.where}: the snapshot is not an MCAP file.")
+            raise MalformedRecord(
+                gettext("%(where)s: the snapshot is not an MCAP file.") % {"where": session.where}
+            )
         suffix = "mcap"
     else:
         try:

@@ -10,6 +10,7 @@ import uuid
 from pathlib import Path
 
 from django.core.exceptions import ValidationError
+from django.utils.translation import gettext
 
 from events.models import (
     ItoReason,
@@ -58,7 +59,9 @@ class LegacyBundle:
         try:
             self._convert(raw)
         except (KeyError, TypeError, ValueError) as exc:
-            raise LegacyError(f"Unexpected content in the original database: {exc!r}") from None
+            raise LegacyError(
+                gettext("Unexpected content in the original database: %(exc)s") % {"exc": repr(exc)}
+            ) from None
 
     def records(self, table: str):
         return iter(self.tables[table])
@@ -178,7 +181,7 @@ class LegacyBundle:
             start = to_float(r["starttime_secs"])
             if start is None:
                 # Every child's uid and fallback start derive from it.
-                raise LegacyError(f"test_event {r['id']} has no start time.")
+                raise LegacyError(gettext("test_event %(id)s has no start time.") % {"id": r["id"]})
             events[r["id"]] = derived_uid(NAMESPACE, "test_event", int(r["id"]), start)
             event_start[r["id"]] = start
             self.tables["test_events"].append(
@@ -339,7 +342,10 @@ class LegacyBundle:
             try:
                 png = greyscale_png(decode_picture(bytes(r["image_data"])))
             except ValidationError as exc:
-                raise LegacyError(f"map_image {r['id']}: {' '.join(exc.messages)}") from None
+                raise LegacyError(
+                    gettext("map_image %(id)s: %(error)s")
+                    % {"id": r["id"], "error": " ".join(exc.messages)}
+                ) from None
             name = f"legacy/maps/{uid}.png"
             self.files[name] = png
             origin = point_xy(r["origin"]) or (0.0, 0.0)

@@ -7,6 +7,7 @@ import re
 from pathlib import Path
 
 import psycopg2
+from django.utils.translation import gettext
 
 # The original's tables that are read, in the order they are converted.
 TABLES = (
@@ -40,7 +41,9 @@ class PostgresSource:
         try:
             self.connection = psycopg2.connect(conninfo)
         except psycopg2.Error as exc:
-            raise LegacyError(f"Cannot connect to the original database: {exc}") from None
+            raise LegacyError(
+                gettext("Cannot connect to the original database: %(exc)s") % {"exc": exc}
+            ) from None
         self.connection.set_session(readonly=True)
         self.name = self.connection.dsn
 
@@ -50,8 +53,11 @@ class PostgresSource:
                 cursor.execute(f'SELECT * FROM public."{table}" ORDER BY id')  # noqa: S608
             except psycopg2.Error as exc:
                 raise LegacyError(
-                    f"The database has no usable table {table}; is it an original FTT "
-                    f"database? ({str(exc).strip()})"
+                    gettext(
+                        "The database has no usable table %(table)s; is it an original FTT "
+                        "database? (%(exc)s)"
+                    )
+                    % {"table": table, "exc": str(exc).strip()}
                 ) from None
             names = [c.name for c in cursor.description]
             return [
@@ -101,12 +107,17 @@ class DumpSource:
             with open(path, encoding="utf-8") as handle:
                 self._parse(handle)
         except (OSError, UnicodeDecodeError) as exc:
-            raise LegacyError(f"Cannot read {path}: {exc}") from None
+            raise LegacyError(
+                gettext("Cannot read %(path)s: %(exc)s") % {"path": path, "exc": exc}
+            ) from None
         if "test_event" not in self.tables:
             raise LegacyError(
-                f"{path} holds no COPY data for test_event: it is not a plain pg_dump of an "
-                f"original FTT database (a custom-format dump must be restored with "
-                f"pg_restore first and read through a connection string)."
+                gettext(
+                    "%(path)s holds no COPY data for test_event: it is not a plain pg_dump of "
+                    "an original FTT database (a custom-format dump must be restored with "
+                    "pg_restore first and read through a connection string)."
+                )
+                % {"path": path}
             )
 
     def _parse(self, handle):

@@ -9,6 +9,7 @@ from datetime import UTC, datetime
 
 from django.contrib.gis.geos import GEOSException, GEOSGeometry
 from django.utils.text import slugify
+from django.utils.translation import gettext
 
 from exchange.legacy.sources import LegacyError
 
@@ -41,7 +42,9 @@ def point_xy(ewkb) -> tuple[float, float] | None:
     try:
         point = GEOSGeometry(ewkb.hex() if isinstance(ewkb, bytes) else ewkb)
     except (GEOSException, ValueError, TypeError):
-        raise LegacyError(f"Unreadable geometry value {str(ewkb)[:40]!r}.") from None
+        raise LegacyError(
+            gettext("Unreadable geometry value %(value)s.") % {"value": repr(str(ewkb)[:40])}
+        ) from None
     return point.x, point.y
 
 

@@ -17,6 +17,9 @@ class ReportSerializer(serializers.ModelSerializer):
     kind = serializers.SerializerMethodField()
     compare = serializers.SerializerMethodField()
     scope = serializers.SerializerMethodField()
+    # In the reader's language (common.said).
+    message = serializers.CharField(source="shown_message", read_only=True)
+    error = serializers.CharField(source="shown_error", read_only=True)
 
     class Meta:
         model = Report

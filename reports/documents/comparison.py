@@ -10,6 +10,7 @@ from pathlib import Path
 from django.conf import settings
 from django.utils import timezone
 from django.utils.translation import gettext as _
+from django.utils.translation import gettext_noop
 
 from events.models import ItoReason, TestEvent
 from reports import formatting as fmt
@@ -74,7 +75,7 @@ def render_comparison(
     """The comparison PDF in ``language`` (default: comparison_language); ``routes``
     ({"leg": [ids], "case": [ids], "threshold": metres}) adds the routes section."""
     if len(events) < 2:
-        raise ReportError(_("A comparison needs at least two test events."))
+        raise ReportError(gettext_noop("A comparison needs at least two test events."))
     with fmt.written_in(language or comparison_language(events)):
         return _typeset(events, mode, routes)
 

@@ -7,8 +7,9 @@ from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 
-from django.utils.translation import gettext as _
+from django.utils.translation import gettext_noop
 
+from common.said import Said, said
 from events.models import TestEvent
 from reports.documents.options import ReportError, ReportOptions
 from reports.documents.sections import Sections
@@ -17,7 +18,7 @@ from reports.figures import style
 from reports.formatting import written_in
 from reports.selectors.content import has_segments, report_scope, scope_name
 
-Progress = Callable[[float, str], None]
+Progress = Callable[[float, Said], None]
 # Wraps each stage of making a report (statistics, maps, charts, timelines, image
 # encoding, typst), by its name; benchmarks/report_benchmark.py times them.
 StageHook = Callable[[str], AbstractContextManager]
@@ -33,7 +34,7 @@ class ReportResult:
     warnings: list[str]
 
 
-def _silent(_fraction: float, _message: str) -> None:
+def _silent(_fraction: float, _step: Said) -> None:
     pass
 
 
@@ -55,12 +56,16 @@ def check_reportable(event: TestEvent, options: ReportOptions | None = None) -> 
     if not has_segments(event, **scope):
         if options is not None and (options.shift or options.leg):
             raise ReportError(
-                _("%(scope)s of test event %(event)s has no segments yet: nothing to report.")
-                % {"scope": scope_name(**scope), "event": event.pk}
+                gettext_noop(
+                    "%(scope)s of test event %(event)s has no segments yet: nothing to report."
+                ),
+                scope=scope_name(**scope),
+                event=event.pk,
             )
         raise ReportError(
-            _("Test event %(id)s ('%(event)s') has no segments yet: nothing to report.")
-            % {"id": event.pk, "event": event}
+            gettext_noop("Test event %(id)s ('%(event)s') has no segments yet: nothing to report."),
+            id=event.pk,
+            event=str(event),
         )
 
 
@@ -81,10 +86,10 @@ def render_report(
     ):
         sections = Sections(event, options, Path(tmp), progress, time_stage)
         data = sections.document()
-        progress(0.95, "typesetting")
+        progress(0.95, said(gettext_noop("typesetting")))
         with time_stage("typst"):
             pdf = typeset("report.typ", data, Path(tmp))
-    progress(1.0, "done")
+    progress(1.0, said(gettext_noop("done")))
     return ReportResult(
         pdf=pdf,
         pages_hint=len(data["shifts"]),

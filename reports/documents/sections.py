@@ -11,6 +11,7 @@ from django.utils import timezone
 from django.utils.translation import gettext as _
 from django.utils.translation import gettext_noop, ngettext
 
+from common.said import Said, said
 from reports import formatting as fmt
 from reports.documents import tables
 from reports.documents.maps import TrackMaps, tile_source
@@ -77,7 +78,7 @@ class Sections:
 
     def document(self) -> dict:
         event = self.event
-        self.progress(0.02, "statistics")
+        self.progress(0.02, said(gettext_noop("statistics")))
         scope = self.options.scope
         # What the report covers, read once: the whole test event, a shift or a leg.
         self.scope_name = content.scope_name(**scope)
@@ -92,11 +93,11 @@ class Sections:
         total_steps = 2 + len(shifts) + len(stats.runs)
         self.step = 0
 
-        def tick(message):
+        def tick(step: Said):
             self.step += 1
-            self.progress(0.05 + 0.9 * self.step / total_steps, message)
+            self.progress(0.05 + 0.9 * self.step / total_steps, step)
 
-        tick("global statistics")
+        tick(said(gettext_noop("global statistics")))
         global_section = self._global(stats, shifts)
         shift_sections = []
         for shift in shifts:
@@ -324,14 +325,20 @@ class Sections:
         )
         overview, overview_note = self.maps.draw(runs, shift, self._file, OVERVIEW_SIZE)
         timeline = self._timeline(shift, runs)
-        tick(f"shift {shift.number}")
+        tick(said(gettext_noop("shift %(number)s"), number=shift.number))
         legs = {leg.id: leg for leg in self.legs[shift.id]}
         segments = []
         level = self.options.level
         for index, run in enumerate(runs, start=1):
             if level == FULL or (level == STANDARD and run.kind == "ito"):
                 segments.append(self._segment(run, legs[run.leg_id], full=level == FULL))
-            tick(f"shift {shift.number}, segment {index}")
+            tick(
+                said(
+                    gettext_noop("shift %(number)s, segment %(index)s"),
+                    number=shift.number,
+                    index=index,
+                )
+            )
         return {
             "title": f"{self.scope_name if self.options.leg else shift_name(shift.number)}: "
             + f"{fmt.timestamp(min(starts), tz)} – "
@@ -467,7 +474,7 @@ class Sections:
             "not_counted": not_counted,
             "confidence": f"{round(CONFIDENCE * 100)} %",
             "time_zone": self.event.time_zone,
-            "gap_seconds": f"{GAP_SECONDS:g}",
+            "gap_seconds": fmt.number(GAP_SECONDS),
             "without_poses": without_poses,
             "gaps": gaps[:MAX_GAPS_LISTED],
             "gaps_more": max(0, len(gaps) - MAX_GAPS_LISTED),

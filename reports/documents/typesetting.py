@@ -10,7 +10,7 @@ import shutil
 from pathlib import Path
 
 import typst
-from django.utils.translation import gettext as _
+from django.utils.translation import gettext_noop
 
 from reports.documents.options import ReportError
 
@@ -28,4 +28,4 @@ def typeset(template: str, data: dict, root: Path) -> bytes:
             sys_inputs={"data": json.dumps(data, ensure_ascii=False)},
         )
     except typst.TypstError as exc:  # a template bug, never user text
-        raise ReportError(_("Typesetting failed: %(exc)s") % {"exc": exc}) from exc
+        raise ReportError(gettext_noop("Typesetting failed: %(exc)s"), exc=str(exc)) from exc

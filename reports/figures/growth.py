@@ -8,13 +8,14 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from django.utils.translation import gettext as _  # noqa: E402
 
-from reports.figures.style import fixed_figure, rgb  # noqa: E402
+from reports import formatting as fmt  # noqa: E402
+from reports.figures.style import figure, fixed_figure, rgb  # noqa: E402
 
 
 def growth_chart(points, total, fit, path) -> str:
     """Cumulative interventions against cumulative autonomous distance (km),
     with the Crow-AMSAA fit and its band when there is one."""
-    fig, ax = plt.subplots(figsize=(7.0, 3.2), layout="constrained")
+    fig, ax = figure((7.0, 3.2), layout="constrained")
     km = [p["distance"] / 1000 for p in points]
     ax.step(
         km, [p["interventions"] for p in points], where="post", color="black", label=_("observed")
@@ -24,7 +25,10 @@ def growth_chart(points, total, fit, path) -> str:
         t = np.linspace(total / 200, total, 200)
         n, beta = fit["interventions"], fit["beta"]
         ax.plot(
-            t / 1000, n * (t / total) ** beta, color="#1f77b4", label=f"Crow-AMSAA, β = {beta:.2f}"
+            t / 1000,
+            n * (t / total) ** beta,
+            color="#1f77b4",
+            label=f"Crow-AMSAA, β = {fmt.decimal(beta)}",
         )
         ax.fill_between(
             t / 1000,

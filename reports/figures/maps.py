@@ -24,6 +24,8 @@ from matplotlib.collections import LineCollection  # noqa: E402
 from matplotlib.ticker import MaxNLocator  # noqa: E402
 from matplotlib.transforms import Affine2D  # noqa: E402
 
+from reports import formatting as fmt  # noqa: E402
+from reports.figures import style  # noqa: E402
 from reports.figures.style import rgb  # noqa: E402
 from reports.projection import local_frame  # noqa: E402
 from telemetry.selectors.track_drawing import simplified  # noqa: E402
@@ -132,7 +134,7 @@ class MapPainter:
 def _figure(size):
     # Fixed margins: a constrained layout would cost half the time of a map,
     # and a report has one map per segment.
-    fig, ax = plt.subplots(figsize=size)
+    fig, ax = style.figure(size)
     fig.subplots_adjust(left=AXES_LEFT, right=AXES_RIGHT, bottom=0.12, top=0.97)
     ax.tick_params(labelsize=7)
     return fig, ax
@@ -256,6 +258,11 @@ def _nice_length(span: float) -> float:
     return float(10 * magnitude)
 
 
+def scale_label(length: float) -> str:
+    """A scale bar's length in m or km, in the report's language."""
+    return fmt.number(length) + " m" if length < 1000 else fmt.number(length / 1000) + " km"
+
+
 def _scale_bar(ax):
     x0, x1, y0, y1 = ax.get_xlim() + ax.get_ylim()
     length = _nice_length(x1 - x0)
@@ -263,8 +270,14 @@ def _scale_bar(ax):
     by = y0 + 0.06 * (y1 - y0)
     ax.plot([bx, bx + length], [by, by], color="black", linewidth=3, zorder=5)
     ax.plot([bx, bx + length], [by, by], color="white", linewidth=1, zorder=6)
-    label = f"{length:g} m" if length < 1000 else f"{length / 1000:g} km"
-    ax.text(bx + length / 2, by + 0.02 * (y1 - y0), label, ha="center", fontsize=7, zorder=6)
+    ax.text(
+        bx + length / 2,
+        by + 0.02 * (y1 - y0),
+        scale_label(length),
+        ha="center",
+        fontsize=7,
+        zorder=6,
+    )
 
 
 def _north_arrow(ax):

@@ -9,7 +9,7 @@ overview map (with tiles) stays a matplotlib figure.
 
 import numpy as np
 
-from reports.figures.maps import _nice_length
+from reports.figures.maps import _nice_length, scale_label
 from reports.projection import local_frame
 from telemetry.selectors.tracks import GPS
 
@@ -43,10 +43,9 @@ def track_sketch(x, y, mode: str, width_pt: float, height_pt: float) -> dict | N
     px = (x - cx) / per_pt + width_pt / 2
     py = height_pt / 2 - (y - cy) / per_pt
     length = _nice_length(width_pt * per_pt)
-    label = f"{length:g} m" if length < 1000 else f"{length / 1000:g} km"
     return {
         "w": width_pt,
         "h": height_pt,
         "points": np.column_stack((px.round(2), py.round(2))).tolist(),
-        "scale": {"pt": round(length / per_pt, 2), "label": label},
+        "scale": {"pt": round(length / per_pt, 2), "label": scale_label(length)},
     }

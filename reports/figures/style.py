@@ -8,6 +8,9 @@ matplotlib.use("Agg")
 
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib import font_manager  # noqa: E402
+from matplotlib.ticker import ScalarFormatter  # noqa: E402
+
+from reports import formatting as fmt  # noqa: E402
 
 # Latin/Greek/Cyrillic first, then CJK fonts; matplotlib falls back glyph by
 # glyph along this list, so a reason or name in any of them renders.
@@ -37,6 +40,31 @@ def apply() -> None:
     matplotlib.rcParams["svg.fonttype"] = "none"
 
 
+class LocalNumbers(ScalarFormatter):
+    """Tick labels with the decimal mark of the report's language (reports.formatting)."""
+
+    def __call__(self, x, pos=None):
+        return fmt.localised(super().__call__(x, pos))
+
+    def get_offset(self):
+        return fmt.localised(super().get_offset())
+
+
+def local_numbers(ax) -> None:
+    """Number both axes in the report's language.  Dates and named ticks set later
+    (xaxis_date, set_xticks with labels) replace it on their axis."""
+    ax.xaxis.set_major_formatter(LocalNumbers())
+    ax.yaxis.set_major_formatter(LocalNumbers())
+
+
+def figure(size, **options):
+    """A figure with one axes (plt.subplots), numbered in the report's language:
+    every report figure is made here or by fixed_figure."""
+    fig, ax = plt.subplots(figsize=size, **options)
+    local_numbers(ax)
+    return fig, ax
+
+
 def fixed_figure(width: float, height: float, left: float, bottom: float = 0.45, top: float = 0.3):
     """Figure and axes with margins in inches given by the caller.  A constrained
     layout measures every text several times and was most of a chart's or
@@ -46,6 +74,7 @@ def fixed_figure(width: float, height: float, left: float, bottom: float = 0.45,
     ax = fig.add_axes(
         (left / width, bottom / height, 1 - (left + right) / width, 1 - (bottom + top) / height)
     )
+    local_numbers(ax)
     return fig, ax
 
 

@@ -19,6 +19,7 @@ import urllib.request
 from pathlib import Path
 
 import numpy as np
+from django.utils.translation import gettext
 from PIL import Image
 
 from basemaps.models import BasemapLayer
@@ -92,11 +93,11 @@ class TileSource:
             image = Image.open(io.BytesIO(data)).convert("RGB")
         except urllib.error.HTTPError as exc:
             # The server is there but has no such tile: leave this one blank.
-            log.info("tile %s/%s/%s: HTTP %s", zoom, x, y, exc.code)
+            log.info(gettext("tile %s/%s/%s: HTTP %s"), zoom, x, y, exc.code)
             self.failed += 1
             return None
         except (OSError, ValueError) as exc:
-            log.warning("tile server unavailable (%s); drawing maps without tiles", exc)
+            log.warning(gettext("tile server unavailable (%s); drawing maps without tiles"), exc)
             self.available = False
             self.failed += 1
             return None

@@ -22,10 +22,12 @@ from django.core.files.base import ContentFile
 from django.db import transaction
 from django.utils import timezone
 from django.utils.translation import gettext as _
+from django.utils.translation import gettext_noop
 from django_tasks import task
 
 from common import jobs
 from common.errors import RuleViolation, TooManyWaiting
+from common.said import Said, kept, said
 from events.models import TestEvent
 from reports.documents.comparison import render_comparison
 from reports.documents.event_report import ReportResult, check_reportable, render_report
@@ -70,7 +72,7 @@ def request_report(
             test_event=test_event,
             options=opts.as_dict(),
             requested_by=user if user is not None and user.is_authenticated else None,
-            message=QUEUED_MESSAGE if jobs.worker_running() else NO_WORKER_MESSAGE,
+            **kept("message", jobs.waiting()),
         )
         make_report.enqueue(report.pk)
     return report
@@ -116,7 +118,7 @@ def request_comparison(
                 **({ROUTES: routes} if routes else {}),
             },
             requested_by=user if user is not None and user.is_authenticated else None,
-            message=QUEUED_MESSAGE if jobs.worker_running() else NO_WORKER_MESSAGE,
+            **kept("message", jobs.waiting()),
         )
         make_report.enqueue(report.pk)
     return report
@@ -174,10 +176,6 @@ def check_waiting(user) -> None:
         )
 
 
-QUEUED_MESSAGE = "waiting for the job worker"
-NO_WORKER_MESSAGE = "waiting: no job worker runs (start manage.py ftt_worker)"
-
-
 @task()
 def make_report(report_id: int) -> str:
     """The queued job: make the PDF of a report row."""
@@ -185,16 +183,16 @@ def make_report(report_id: int) -> str:
 
 
 @jobs.when_interrupted(make_report)
-def _worker_stopped(report_id: int, *, retried: bool, reason: str) -> None:
+def _worker_stopped(report_id: int, *, retried: bool, reason: Said) -> None:
     if retried:
         Report.objects.filter(pk=report_id).update(
             status=Report.Status.QUEUED,
             progress=0.0,
-            message=f"queued again: {reason}"[:200],
+            **kept("message", said(gettext_noop("queued again: %(reason)s"), reason=reason), 200),
             updated=timezone.now(),
         )
     else:
-        _fail(report_id, f"{reason} Request the report again.")
+        _fail(report_id, said(gettext_noop("%(reason)s Request the report again."), reason=reason))
 
 
 # A requested report reads no file and fetches no URL chosen by the requester:
@@ -258,37 +256,41 @@ def run_job(report_id: int) -> Report:
         if report.is_finished:
             return report
         Report.objects.filter(pk=report_id).update(
-            status=Report.Status.RUNNING, message="starting", updated=timezone.now()
+            status=Report.Status.RUNNING,
+            **kept("message", said(gettext_noop("starting"))),
+            updated=timezone.now(),
         )
         last = [0.0]
 
-        def progress(fraction: float, message: str) -> None:
+        def progress(fraction: float, step: Said) -> None:
             now = time.monotonic()
             if now - last[0] < PROGRESS_INTERVAL_S and fraction < 1.0:
                 return
             last[0] = now
             Report.objects.filter(pk=report_id).update(
-                progress=round(fraction, 3), message=message[:200], updated=timezone.now()
+                progress=round(fraction, 3), **kept("message", step, 200), updated=timezone.now()
             )
 
         try:
             result = _render(report, progress)
         except ReportError as exc:
-            return _fail(report_id, str(exc))
+            return _fail(report_id, exc.said)
         except Exception as exc:  # a worker must record every failure on its row
             log.exception("report %s failed", report_id)
-            return _fail(report_id, f"Unexpected error: {exc.__class__.__name__}: {exc}")
+            unexpected = gettext_noop("Unexpected error: %(kind)s: %(error)s")
+            return _fail(report_id, said(unexpected, kind=exc.__class__.__name__, error=str(exc)))
         except BaseException:  # the worker was told twice to stop: it drops the report
-            _fail(report_id, "The job worker was stopped while it made the report.")
+            stopped = gettext_noop("The job worker was stopped while it made the report.")
+            _fail(report_id, said(stopped))
             raise
         report.refresh_from_db()
         report.pdf.save(f"report-{report.pk}.pdf", ContentFile(result.pdf), save=False)
         report.status = Report.Status.DONE
         report.progress = 1.0
-        report.message = "done"
+        report.message, report.message_said = "done", said(gettext_noop("done")).as_json()
         report.provisional = result.provisional
         report.finished = timezone.now()
-        report.error = "\n".join(result.warnings)
+        report.error, report.error_said = "\n".join(result.warnings), {}
         report.save()
         return report
 
@@ -299,8 +301,10 @@ def _render(report: Report, progress) -> ReportResult:
         return render_report(report.test_event, ReportOptions.from_dict(report.options), progress)
     events = list(TestEvent.objects.filter(pk__in=ids))
     if len(events) < 2:
-        raise ReportError(_("A test event of this comparison was deleted; request it again."))
-    progress(0.1, "comparing test events")
+        raise ReportError(
+            gettext_noop("A test event of this comparison was deleted; request it again.")
+        )
+    progress(0.1, said(gettext_noop("comparing test events")))
     started = time.perf_counter()
     mode = "local" if report.options.get("local") else "gps"
     pdf = render_comparison(
@@ -316,8 +320,11 @@ def _render(report: Report, progress) -> ReportResult:
     )
 
 
-def _fail(report_id: int, message: str) -> Report:
+def _fail(report_id: int, why: Said) -> Report:
     Report.objects.filter(pk=report_id).update(
-        status=Report.Status.FAILED, error=message, message="failed", finished=timezone.now()
+        status=Report.Status.FAILED,
+        **kept("error", why),
+        **kept("message", said(gettext_noop("failed"))),
+        finished=timezone.now(),
     )
     return Report.objects.get(pk=report_id)

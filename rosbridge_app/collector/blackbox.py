@@ -156,7 +156,7 @@ class Blackbox:
         if within is not None:
             _, late = futures.wait(self._futures, timeout=within)
             if late:
-                log.error("snapshot writer not done within %.0f s at exit: killed", within)
+                log.error(gettext("snapshot writer not done within %.0f s at exit: killed"), within)
                 self.writer.give_up()
         self._pool.shutdown(wait=wait)
         if wait:
@@ -182,7 +182,7 @@ class Blackbox:
         messages = [m for m in snap.messages if m[1] in types]
         if self.guard is not None and self.guard.check(snap.size) >= TIGHT:
             self.guard.count("snapshots")
-            log.info("snapshot %s dropped: the robot disk is (nearly) full", snap.uid)
+            log.info(gettext("snapshot %s dropped: the robot disk is (nearly) full"), snap.uid)
             return
         if not self._make_room(snap.size):
             log.warning(

@@ -10,6 +10,7 @@ import math
 from datetime import UTC, datetime
 
 import numpy as np
+from django.utils.translation import gettext as _
 from PIL import Image as PilImage
 
 from rosbridge_app.collector.tf_buffer import Transform, yaw_of
@@ -216,13 +217,13 @@ def image_array(msg) -> tuple[np.ndarray, str]:
     encoding = msg.encoding.lower()
     width, height, step = int(msg.width), int(msg.height), int(msg.step)
     if width <= 0 or height <= 0:
-        raise UnsupportedImage("empty image")
+        raise UnsupportedImage(_("empty image"))
     raw = byte_array(msg.data)
     if encoding in _BAYER or encoding in ("yuv422", "uyvy", "yuyv", "yuv422_yuy2"):
         import cv2
 
         if step < width * (1 if encoding in _BAYER else 2) or raw.size < step * height:
-            raise UnsupportedImage("image data shorter than width × height")
+            raise UnsupportedImage(_("image data shorter than width × height"))
         rows = raw[: step * height].reshape(height, step)
         if encoding in _BAYER:
             code = getattr(cv2, f"COLOR_Bayer{_BAYER[encoding]}2RGB")
@@ -231,12 +232,14 @@ def image_array(msg) -> tuple[np.ndarray, str]:
         pairs = np.ascontiguousarray(rows[:, : width * 2]).reshape(height, width, 2)
         return cv2.cvtColor(pairs, code), "RGB"
     if encoding not in _CHANNELS:
-        raise UnsupportedImage(f"unsupported encoding '{msg.encoding}'")
+        raise UnsupportedImage(
+            _("unsupported encoding '%(encoding)s'") % {"encoding": msg.encoding}
+        )
     kind, channels, order = _CHANNELS[encoding]
     dtype = np.dtype(kind).newbyteorder(">" if msg.is_bigendian else "<")
     row_bytes = width * channels * dtype.itemsize
     if step < row_bytes or raw.size < step * (height - 1) + row_bytes:
-        raise UnsupportedImage("image data shorter than width × height")
+        raise UnsupportedImage(_("image data shorter than width × height"))
     padded = np.lib.stride_tricks.as_strided(
         raw, shape=(height, row_bytes), strides=(step, 1), writeable=False
     )
@@ -263,17 +266,21 @@ def compressed_image(msg) -> tuple[bytes, str]:
     """(bytes, file suffix) of a CompressedImage, checked to be a decodable image."""
     data = byte_array(msg.data).tobytes()
     if not data:
-        raise UnsupportedImage("empty compressed image")
+        raise UnsupportedImage(_("empty compressed image"))
     fmt = msg.format.lower()
     if "png" in fmt or data.startswith(b"\x89PNG"):
         suffix = "png"
     elif "jpeg" in fmt or "jpg" in fmt or data.startswith(b"\xff\xd8"):
         suffix = "jpg"
     else:
-        raise UnsupportedImage(f"unsupported compressed format '{msg.format}'")
+        raise UnsupportedImage(
+            _("unsupported compressed format '%(format)s'") % {"format": msg.format}
+        )
     try:
         with PilImage.open(io.BytesIO(data)) as img:
             img.verify()
     except Exception as exc:
-        raise UnsupportedImage(f"undecodable {suffix}: {exc}") from None
+        raise UnsupportedImage(
+            _("undecodable %(kind)s: %(exc)s") % {"kind": suffix, "exc": exc}
+        ) from None
     return data, suffix

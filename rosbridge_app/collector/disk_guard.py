@@ -28,6 +28,7 @@ import time
 from pathlib import Path
 
 from django.utils.translation import gettext as _
+from django.utils.translation import gettext_noop
 
 log = logging.getLogger("ftt.collector")
 
@@ -54,6 +55,15 @@ def disk_full(exc: BaseException) -> bool:
     if code is not None:
         return code & 0xFF in (sqlite3.SQLITE_FULL, sqlite3.SQLITE_IOERR)
     return isinstance(exc, sqlite3.OperationalError) and "full" in str(exc)
+
+
+# What the guard gives up, as the summary names it.
+GIVEN_UP = {
+    "frames": gettext_noop("camera frames"),
+    "snapshots": gettext_noop("snapshots"),
+    "positions": gettext_noop("positions"),
+    "maps": gettext_noop("maps"),
+}
 
 
 class DiskGuard:
@@ -165,7 +175,12 @@ class DiskGuard:
             if level and self.since is None:
                 self.since = time.time()
         if level > before:
-            log.warning("robot disk %s (%s): %s", _word(level), cause.lstrip("!"), _tiers(level))
+            said = (
+                _("robot disk full (%s): %s")
+                if level == FULL
+                else _("robot disk nearly full (%s): %s")
+            )
+            log.warning(said, cause.lstrip("!"), _tiers(level))
             return
         summary = self.summary()
         if level == OK:
@@ -174,17 +189,33 @@ class DiskGuard:
                 self.given_up = dict.fromkeys(self.given_up, 0)
                 self.failed_writes = 0
             self.make_reserve()
-        log.warning("robot disk %s again: %s", _word(level) if level else "has room", summary)
+        again = (
+            _("robot disk nearly full again: %s") if level else _("robot disk has room again: %s")
+        )
+        log.warning(again, summary)
 
     def summary(self) -> str:
         counts = ", ".join(
-            f"{n} {what} {'thinned out' if what == 'positions' else 'dropped'}"
+            (
+                _("%(count)s %(what)s thinned out")
+                if what == "positions"
+                else _("%(count)s %(what)s dropped")
+            )
+            % {"count": n, "what": _(GIVEN_UP[what])}
             for what, n in self.given_up.items()
             if n
         )
         since = time.strftime("%H:%M:%S", time.localtime(self.since)) if self.since else "-"
-        failed = f"; {self.failed_writes} writes to the spool failed" if self.failed_writes else ""
-        return f"since {since}: {counts or 'nothing dropped'}{failed}"
+        failed = (
+            _("; %(count)s writes to the spool failed") % {"count": self.failed_writes}
+            if self.failed_writes
+            else ""
+        )
+        return _("since %(since)s: %(counts)s%(failed)s") % {
+            "since": since,
+            "counts": counts or _("nothing dropped"),
+            "failed": failed,
+        }
 
     def describe(self) -> str:
         """For the cockpit's robot panel: empty while there is room."""
@@ -224,14 +255,10 @@ class DiskGuard:
             return False
 
 
-def _word(level: int) -> str:
-    return {OK: "ok", TIGHT: "nearly full", FULL: "full"}[level]
-
-
 def _tiers(level: int) -> str:
     if level == TIGHT:
-        return "camera frames and snapshots are dropped, everything else is spooled"
-    return (
+        return _("camera frames and snapshots are dropped, everything else is spooled")
+    return _(
         "nothing more is spooled; mode switches and segment changes, the latest map and "
         "positions thinned to the report's resolution are kept in memory"
     )

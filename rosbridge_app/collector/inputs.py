@@ -8,6 +8,7 @@ positions, maps, camera); the node subscribes to each through
 import functools
 import logging
 
+from django.utils.translation import gettext
 from geometry_msgs.msg import PoseStamped
 from nav_msgs.msg import OccupancyGrid
 from rclpy.qos import (
@@ -137,7 +138,11 @@ def mode_inputs(get, pipe) -> list[tuple]:
             cls = message_class(source.type)
         except (ImportError, AttributeError):
             # The parameter check refuses such types; this is one removed since.
-            log.error("mode source %s: message type %s is not installed", source.topic, source.type)
+            log.error(
+                gettext("mode source %s: message type %s is not installed"),
+                source.topic,
+                source.type,
+            )
             continue
         handler = functools.partial(pipe.on_mode_source, i)
         wanted.append(
@@ -161,7 +166,7 @@ def reason_inputs(pipe) -> list[tuple]:
         try:
             cls = message_class(typename)
         except (ImportError, AttributeError):
-            log.error("reason rule %s: message type %s is not installed", topic, typename)
+            log.error(gettext("reason rule %s: message type %s is not installed"), topic, typename)
             continue
         handler = functools.partial(pipe.on_reason_signal, topic)
         wanted.append((f"reason_{i}", cls, topic, qos(MODE_DEPTH, True), handler))

@@ -15,15 +15,17 @@ import time
 from datetime import UTC, datetime
 from pathlib import Path
 
-from django.utils.translation import gettext
+from django.utils.translation import gettext, gettext_noop
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from std_srvs.srv import SetBool, Trigger
 
+from common.numbers import short
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector import params as P
+from rosbridge_app.collector.answers import logging_answer
 from rosbridge_app.collector.blackbox import Blackbox, message_class, snapshot_topics
 from rosbridge_app.collector.conversions import stamp_ns
 from rosbridge_app.collector.hearing import RENEW, RESUBSCRIBE, STREAMS, Hearing
@@ -157,12 +159,15 @@ class CollectorNode(Node):
 
     def save_parameters(self) -> tuple[bool, str]:
         if self.params_file is None:
-            return False, "No parameters file: start ftt_collect with --params-file."
+            return False, gettext("No parameters file: start ftt_collect with --params-file.")
         try:
             P.write_file(self.params_file, self.current_parameters())
         except Exception as exc:
-            return False, f"Could not write {self.params_file}: {exc}"
-        return True, f"FTT parameters saved to {self.params_file}"
+            return False, gettext("Could not write %(file)s: %(exc)s") % {
+                "file": self.params_file,
+                "exc": exc,
+            }
+        return True, gettext("FTT parameters saved to %(file)s") % {"file": self.params_file}
 
     # --- services -----------------------------------------------------------------------
 
@@ -187,37 +192,37 @@ class CollectorNode(Node):
 
     def set_logging(self, on: bool) -> tuple[bool, str]:
         if on == self.pipeline.logging:
-            state = "started" if on else "stopped"
-            return True, f"Logging was already {state}; {self.status.describe()}."
+            return True, logging_answer(on, "already", status=self.status.describe())
         try:
             self.on_logging(on)  # persists the state first: a restart resumes it
         except Exception as exc:
-            return False, f"Could not {'start' if on else 'stop'} logging: {exc}"
+            return False, logging_answer(on, "failed", exc=exc)
         if on:
             self.pipeline.start_logging(now())
-            return True, f"Logging started; {self.status.describe()}."
+            return True, logging_answer(on, "done", status=self.status.describe())
         self.pipeline.stop_logging(now())
-        msg = "Logging stopped; the open segment is closed"
-        if not self.status.database_ok:
-            msg += " as soon as the database is back (the request is spooled)"
-        return True, msg + "."
+        return True, logging_answer(on, "done" if self.status.database_ok else "spooled")
 
     def _srv_set_logging(self, request, response):
         try:
             response.success, response.message = self.set_logging(bool(request.data))
         except Exception as exc:
             log.exception("set_ftt_logging failed")
-            response.success, response.message = False, f"Internal error: {exc}"
+            response.success = False
+            response.message = gettext("Internal error: %(exc)s") % {"exc": exc}
         return response
 
     def _srv_get_logging(self, request, response):
         response.success = self.pipeline.logging
         try:
-            response.message = ("logging; " if self.pipeline.logging else "not logging; ") + (
-                self.status.describe()
+            said = (
+                gettext("logging; %(status)s")
+                if self.pipeline.logging
+                else gettext("not logging; %(status)s")
             )
+            response.message = said % {"status": self.status.describe()}
         except Exception as exc:
-            response.message = f"status unknown: {exc}"
+            response.message = gettext("status unknown: %(exc)s") % {"exc": exc}
         return response
 
     def _srv_save(self, request, response):
@@ -236,20 +241,24 @@ class CollectorNode(Node):
             if event.kind == ev.MODE:
                 self._master = str(event.uid)
                 if event.data["mode"] == ITO:
-                    self.blackbox.trigger(event.at, self._master, "switch to ITO")
+                    self.blackbox.trigger(event.at, self._master, gettext_noop("switch to ITO"))
             elif event.kind == ev.STOP:
                 self._master = None
 
         return put
 
     def snapshot_now(self) -> tuple[bool, str]:
-        uid = self.blackbox.trigger(now(), self._master, "on request")
+        uid = self.blackbox.trigger(now(), self._master, gettext_noop("on request"))
         if uid is None:
-            return False, "Snapshots are off (snapshot.enabled)."
-        return True, (
-            f"Snapshot {uid} of {self.blackbox.before:g} s before and "
-            f"{self.blackbox.after:g} s after now; stored when the window has passed."
-        )
+            return False, gettext("Snapshots are off (snapshot.enabled).")
+        return True, gettext(
+            "Snapshot %(uid)s of %(before)s s before and %(after)s s after now; stored when "
+            "the window has passed."
+        ) % {
+            "uid": uid,
+            "before": short(self.blackbox.before),
+            "after": short(self.blackbox.after),
+        }
 
     def _subscribe_snapshots(self) -> None:
         graph = {t["name"]: t["types"] for t in self.topics}
@@ -342,7 +351,7 @@ class CollectorNode(Node):
             if new > 0:
                 counter.logged = counter.missed
                 log.warning(
-                    "%s: about %d messages missed in %g s (%d so far)",
+                    gettext("%s: about %d messages missed in %g s (%d so far)"),
                     name,
                     new,
                     LOSS_LOG_PERIOD,
@@ -479,7 +488,7 @@ class CollectorNode(Node):
     def set_parameter_values(self, values: dict) -> tuple[bool, str]:
         unknown = sorted(set(values) - set(P.SPECS))
         if unknown:
-            return False, f"Unknown parameters: {', '.join(unknown)}"
+            return False, gettext("Unknown parameters: %(names)s") % {"names": ", ".join(unknown)}
         results = self.set_parameters(
             [Parameter(name, value=value) for name, value in values.items()]
         )
@@ -488,4 +497,4 @@ class CollectorNode(Node):
         ]
         if failed:
             return False, "; ".join(failed)
-        return True, f"Set {', '.join(sorted(values))}."
+        return True, gettext("Set %(names)s.") % {"names": ", ".join(sorted(values))}

@@ -13,7 +13,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import yaml
+from django.utils.translation import gettext as _
+from django.utils.translation import gettext_noop
 
+from common.numbers import short
 from rosbridge_app.collector import mode_sources, reason_rules
 from rosbridge_app.collector.message_fields import installed_fields
 from rosbridge_app.collector.modes import MODE_TYPES
@@ -56,151 +59,209 @@ class Spec:
 
 
 SPECS: dict[str, Spec] = {
-    "vehicle": Spec("", "Vehicle key; the collector logs into its open shift's open leg."),
-    "set_ftt_logging_service": Spec("/set_ftt_logging", "SetBool: start/stop logging."),
-    "get_ftt_logging_service": Spec("/get_ftt_logging", "Trigger: success = logging."),
-    "save_ftt_params_service": Spec("/save_ftt_params", "Trigger: write parameters to file."),
-    "snapshot_ftt_service": Spec("/ftt_snapshot", "Trigger: write a black-box snapshot now."),
+    "vehicle": Spec(
+        "", gettext_noop("Vehicle key; the collector logs into its open shift's open leg.")
+    ),
+    "set_ftt_logging_service": Spec(
+        "/set_ftt_logging", gettext_noop("SetBool: start/stop logging.")
+    ),
+    "get_ftt_logging_service": Spec(
+        "/get_ftt_logging", gettext_noop("Trigger: success = logging.")
+    ),
+    "save_ftt_params_service": Spec(
+        "/save_ftt_params", gettext_noop("Trigger: write parameters to file.")
+    ),
+    "snapshot_ftt_service": Spec(
+        "/ftt_snapshot", gettext_noop("Trigger: write a black-box snapshot now.")
+    ),
     # Its message type follows params.robot_mode_type (see ROBOT_MODE_TYPES).
-    "topics.robot_mode": Spec("robot_mode", "Operating mode topic.", topic=True),
+    "topics.robot_mode": Spec("robot_mode", gettext_noop("Operating mode topic."), topic=True),
     "topics.gps_fix": Spec(
-        "gps_fix", "sensor_msgs/NavSatFix topic.", topic=True, message_types=(NAV_SAT_FIX,)
+        "gps_fix",
+        gettext_noop("sensor_msgs/NavSatFix topic."),
+        topic=True,
+        message_types=(NAV_SAT_FIX,),
     ),
     "topics.local_pose": Spec(
         "local_pose",
-        "geometry_msgs/PoseStamped (use_tf false).",
+        gettext_noop("geometry_msgs/PoseStamped (use_tf false)."),
         topic=True,
         message_types=("geometry_msgs/msg/PoseStamped",),
     ),
     "topics.map": Spec(
         "map",
-        "nav_msgs/OccupancyGrid topic.",
+        gettext_noop("nav_msgs/OccupancyGrid topic."),
         topic=True,
         message_types=("nav_msgs/msg/OccupancyGrid",),
     ),
     "topics.map_jpeg": Spec(
         "",
-        "sensor_msgs/CompressedImage of the same map; empty: off.",
+        gettext_noop("sensor_msgs/CompressedImage of the same map; empty: off."),
         topic=True,
         message_types=(COMPRESSED_IMAGE,),
     ),
     "topics.image": Spec(
         "image",
-        "sensor_msgs/Image camera topic; empty: off.",
+        gettext_noop("sensor_msgs/Image camera topic; empty: off."),
         topic=True,
         message_types=("sensor_msgs/msg/Image",),
     ),
     "topics.image_compressed": Spec(
         "",
-        "sensor_msgs/CompressedImage camera; empty: off.",
+        gettext_noop("sensor_msgs/CompressedImage camera; empty: off."),
         topic=True,
         message_types=(COMPRESSED_IMAGE,),
     ),
-    "topics.tf": Spec("/tf", "Dynamic transforms.", topic=True, message_types=(TF_MESSAGE,)),
+    "topics.tf": Spec(
+        "/tf", gettext_noop("Dynamic transforms."), topic=True, message_types=(TF_MESSAGE,)
+    ),
     "topics.tf_static": Spec(
-        "/tf_static", "Static transforms.", topic=True, message_types=(TF_MESSAGE,)
+        "/tf_static", gettext_noop("Static transforms."), topic=True, message_types=(TF_MESSAGE,)
     ),
     "params.robot_mode_type": Spec(
         "bool",
-        "bool (std_msgs/Bool, true = autonomous) or industrial (industrial_msgs/RobotMode).",
+        gettext_noop(
+            "bool (std_msgs/Bool, true = autonomous) or industrial (industrial_msgs/RobotMode)."
+        ),
         choices=MODE_TYPES,
     ),
     "params.mode_sources": Spec(
         "",
-        "Mode from any topics (YAML: rule, sources with topic, type, field, auto, ito, "
-        "default, hysteresis; presets in docs/collector.md); empty: topics.robot_mode "
-        "with params.robot_mode_type.",
+        gettext_noop(
+            "Mode from any topics (YAML: rule, sources with topic, type, field, auto, ito, "
+            "default, hysteresis; presets in docs/collector.md); empty: topics.robot_mode "
+            "with params.robot_mode_type."
+        ),
         multiline=True,
     ),
     "params.reason_rules": Spec(
         "",
-        "Reasons the robot knows (YAML: window, rules with topic, type, field and values, "
-        "or silent, and reason); the take-over gets the reason as a suggestion to confirm.",
+        gettext_noop(
+            "Reasons the robot knows (YAML: window, rules with topic, type, field and values, "
+            "or silent, and reason); the take-over gets the reason as a suggestion to confirm."
+        ),
         multiline=True,
     ),
-    "params.use_tf": Spec(True, "Local position from TF map_frame→robot_frame, else local_pose."),
-    "params.map_frame": Spec("map", "Frame of local positions."),
-    "params.robot_frame": Spec("base_link", "The robot's frame."),
+    "params.use_tf": Spec(
+        True, gettext_noop("Local position from TF map_frame→robot_frame, else local_pose.")
+    ),
+    "params.map_frame": Spec("map", gettext_noop("Frame of local positions.")),
+    "params.robot_frame": Spec("base_link", gettext_noop("The robot's frame.")),
     "params.sensor_reliable": Spec(
         False,
-        "Subscribe GPS/pose/camera RELIABLE; the default "
-        "BEST_EFFORT connects to publishers of either kind.",
+        gettext_noop(
+            "Subscribe GPS/pose/camera RELIABLE; the default "
+            "BEST_EFFORT connects to publishers of either kind."
+        ),
     ),
-    "params.pose_min_distance": Spec(0.5, "GPS: metres between recorded fixes.", minimum=0.0),
-    "params.pose_min_period": Spec(0.2, "GPS: seconds between recorded fixes.", minimum=0.0),
-    "params.local_min_distance": Spec(0.2, "Local: metres between recorded poses.", minimum=0.0),
-    "params.local_min_period": Spec(0.1, "Local: seconds between recorded poses.", minimum=0.0),
+    "params.pose_min_distance": Spec(
+        0.5, gettext_noop("GPS: metres between recorded fixes."), minimum=0.0
+    ),
+    "params.pose_min_period": Spec(
+        0.2, gettext_noop("GPS: seconds between recorded fixes."), minimum=0.0
+    ),
+    "params.local_min_distance": Spec(
+        0.2, gettext_noop("Local: metres between recorded poses."), minimum=0.0
+    ),
+    "params.local_min_period": Spec(
+        0.1, gettext_noop("Local: seconds between recorded poses."), minimum=0.0
+    ),
     "params.local_min_yaw": Spec(
-        0.1, "Local: a turn of this many radians is recorded too.", minimum=0.0
+        0.1, gettext_noop("Local: a turn of this many radians is recorded too."), minimum=0.0
     ),
     "params.position_max_age": Spec(
         5.0,
-        "A segment's start position is the last one if it is at most this old (s).",
+        gettext_noop("A segment's start position is the last one if it is at most this old (s)."),
         minimum=0.0,
     ),
     "params.unknown_mode_wait": Spec(
         10.0,
-        "Seconds to wait for the robot's first mode after logging starts; positions meanwhile "
-        "join the first segment, after it they go to a segment of unknown mode (s).",
+        gettext_noop(
+            "Seconds to wait for the robot's first mode after logging starts; positions meanwhile "
+            "join the first segment, after it they go to a segment of unknown mode (s)."
+        ),
         minimum=0.0,
     ),
     "params.deaf_timeout": Spec(
         5.0,
-        "Seconds with nothing received on any input while other nodes publish the "
-        "collector's sensor topics (GPS, TF, local pose, camera), before the collector "
-        "re-creates its subscriptions, and if that does not help, itself; 0: off.",
+        gettext_noop(
+            "Seconds with nothing received on any input while other nodes publish the "
+            "collector's sensor topics (GPS, TF, local pose, camera), before the collector "
+            "re-creates its subscriptions, and if that does not help, itself; 0: off."
+        ),
         minimum=0.0,
         maximum=3600.0,
     ),
-    "params.send_map_period": Spec(2.0, "Minimum seconds between two stored maps.", minimum=0.0),
-    "params.image_buffer_size": Spec(
-        3, "Camera frames kept for the next mode switch.", minimum=0, maximum=20
+    "params.send_map_period": Spec(
+        2.0, gettext_noop("Minimum seconds between two stored maps."), minimum=0.0
     ),
-    "params.image_buffer_step": Spec(1.0, "Minimum seconds between buffered frames.", minimum=0.0),
+    "params.image_buffer_size": Spec(
+        3, gettext_noop("Camera frames kept for the next mode switch."), minimum=0, maximum=20
+    ),
+    "params.image_buffer_step": Spec(
+        1.0, gettext_noop("Minimum seconds between buffered frames."), minimum=0.0
+    ),
     "params.image_max_side": Spec(
-        1920, "Larger frames are scaled down to this (px); 0: never.", minimum=0, maximum=16384
+        1920,
+        gettext_noop("Larger frames are scaled down to this (px); 0: never."),
+        minimum=0,
+        maximum=16384,
     ),
     "snapshot.enabled": Spec(
-        True, "Black box: write an MCAP snapshot of the last seconds at every switch to ITO."
+        True,
+        gettext_noop(
+            "Black box: write an MCAP snapshot of the last seconds at every switch to ITO."
+        ),
     ),
     "snapshot.topics": Spec(
         "",
-        "Comma-separated topics of any type for snapshots; empty: the mode, GPS, TF, "
-        "static TF and compressed camera topics above, plus odom and cmd_vel when published.",
+        gettext_noop(
+            "Comma-separated topics of any type for snapshots; empty: the mode, GPS, TF, "
+            "static TF and compressed camera topics above, plus odom and cmd_vel when published."
+        ),
     ),
     "snapshot.before": Spec(
-        20.0, "Snapshot: seconds before the trigger.", minimum=0.0, maximum=600.0
+        20.0, gettext_noop("Snapshot: seconds before the trigger."), minimum=0.0, maximum=600.0
     ),
     "snapshot.after": Spec(
-        10.0, "Snapshot: seconds after the trigger.", minimum=0.0, maximum=600.0
+        10.0, gettext_noop("Snapshot: seconds after the trigger."), minimum=0.0, maximum=600.0
     ),
     "snapshot.buffer_mb": Spec(
-        200, "Snapshot buffer size (MB); the oldest messages go first.", minimum=1, maximum=8192
+        200,
+        gettext_noop("Snapshot buffer size (MB); the oldest messages go first."),
+        minimum=1,
+        maximum=8192,
     ),
     "snapshot.disk_budget_mb": Spec(
         2000,
-        "Disk for snapshots not yet stored (MB); when full the oldest pending one is dropped.",
+        gettext_noop(
+            "Disk for snapshots not yet stored (MB); when full the oldest pending one is dropped."
+        ),
         minimum=1,
         maximum=1_000_000,
     ),
     "snapshot.write_timeout": Spec(
         60.0,
-        "Seconds a snapshot file may take to write, plus 1 s per MB of its window; a "
-        "writer process not done by then is taken as stuck: killed, logged and replaced.",
+        gettext_noop(
+            "Seconds a snapshot file may take to write, plus 1 s per MB of its window; a "
+            "writer process not done by then is taken as stuck: killed, logged and replaced."
+        ),
         minimum=1.0,
         maximum=3600.0,
     ),
     "spool.disk_budget_mb": Spec(
         4000,
-        "Disk for everything the collector writes: spool, snapshots, pending files (MB); "
-        "near it camera frames and snapshots are dropped, at it records are held in memory, "
-        "positions thinned (docs/collector.md, 'A full disk').",
+        gettext_noop(
+            "Disk for everything the collector writes: spool, snapshots, pending files (MB); "
+            "near it camera frames and snapshots are dropped, at it records are held in memory, "
+            "positions thinned (docs/collector.md, 'A full disk')."
+        ),
         minimum=1,
         maximum=1_000_000,
     ),
     "spool.disk_headroom_mb": Spec(
         100,
-        "Disk left free for the rest of the robot (MB); counts like the budget.",
+        gettext_noop("Disk left free for the rest of the robot (MB); counts like the budget."),
         minimum=0,
         maximum=1_000_000,
     ),
@@ -232,24 +293,31 @@ def _checked(name: str, spec: Spec, value, fields_of=installed_fields) -> object
     default = spec.default
     if isinstance(default, bool):
         if not isinstance(value, bool):
-            raise InvalidParameter(f"{name} must be true or false")
+            raise InvalidParameter(_("%(name)s must be true or false") % {"name": name})
     elif isinstance(default, int):
         if isinstance(value, bool) or not isinstance(value, int):
-            raise InvalidParameter(f"{name} must be an integer")
+            raise InvalidParameter(_("%(name)s must be an integer") % {"name": name})
     elif isinstance(default, float):
         if isinstance(value, bool) or not isinstance(value, int | float):
-            raise InvalidParameter(f"{name} must be a number")
+            raise InvalidParameter(_("%(name)s must be a number") % {"name": name})
         value = float(value)
         if not math.isfinite(value):
-            raise InvalidParameter(f"{name} must be finite")
+            raise InvalidParameter(_("%(name)s must be finite") % {"name": name})
     elif isinstance(default, str) and not isinstance(value, str):
-        raise InvalidParameter(f"{name} must be a string")
+        raise InvalidParameter(_("%(name)s must be a string") % {"name": name})
     if spec.minimum is not None and value < spec.minimum:
-        raise InvalidParameter(f"{name} must be >= {spec.minimum:g}")
+        raise InvalidParameter(
+            _("%(name)s must be >= %(limit)s") % {"name": name, "limit": short(spec.minimum)}
+        )
     if spec.maximum is not None and value > spec.maximum:
-        raise InvalidParameter(f"{name} must be <= {spec.maximum:g}")
+        raise InvalidParameter(
+            _("%(name)s must be <= %(limit)s") % {"name": name, "limit": short(spec.maximum)}
+        )
     if spec.choices is not None and value not in spec.choices:
-        raise InvalidParameter(f"{name} must be one of {', '.join(spec.choices)}")
+        raise InvalidParameter(
+            _("%(name)s must be one of %(choices)s")
+            % {"name": name, "choices": ", ".join(spec.choices)}
+        )
     if name in ("params.mode_sources", "params.reason_rules"):
         parse = mode_sources.parse if name == "params.mode_sources" else reason_rules.parse
         try:
@@ -257,7 +325,7 @@ def _checked(name: str, spec: Spec, value, fields_of=installed_fields) -> object
         except mode_sources.InvalidModeSources as exc:
             raise InvalidParameter(f"{name}: {exc}") from None
     if name.endswith("_service") and not value:
-        raise InvalidParameter(f"{name} cannot be empty")
+        raise InvalidParameter(_("%(name)s cannot be empty") % {"name": name})
     return value
 
 

@@ -250,7 +250,12 @@ class CollectorRuntime:
             self.outbox.set_state("logging", "1" if on else "0")
         except SpoolFull:
             # Logging goes on; only a restart on this full disk would not resume it.
-            log.warning("the robot disk is full: logging %s is not kept for a restart", on)
+            said = (
+                gettext("the robot disk is full: logging on is not kept for a restart")
+                if on
+                else gettext("the robot disk is full: logging off is not kept for a restart")
+            )
+            log.warning("%s", said)
 
     # --- database side ------------------------------------------------------------------
 
@@ -416,12 +421,12 @@ class CollectorRuntime:
             ),
         }
         if kind not in calls:
-            return False, f"Unknown command '{kind}'."
+            return False, gettext("Unknown command '%(kind)s'.") % {"kind": kind}
         fn, *args = calls[kind]
         try:
             return node.submit(fn, *args).result(timeout=5)
         except Exception as exc:
-            return False, f"Failed: {exc}"
+            return False, gettext("Failed: %(exc)s") % {"exc": exc}
 
     # --- exit ---------------------------------------------------------------------------
 

@@ -268,7 +268,10 @@ class WriterProcess:
         conn.send(("finish", None))
         status, result = conn.recv()
         if status == "error":
-            raise SnapshotError(f"the writer process could not write {path.name}:\n{result}")
+            raise SnapshotError(
+                gettext("the writer process could not write %(file)s:\n%(error)s")
+                % {"file": path.name, "error": result}
+            )
         return result
 
     @staticmethod

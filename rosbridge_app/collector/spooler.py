@@ -102,6 +102,6 @@ class Spooler(threading.Thread):
             self.guard.failed(exc)
         except Exception as exc:  # a spool that cannot be written at all: memory still can
             if self.guard.level < FULL:
-                log.error("cannot write the spool %s: %s", self.outbox.path, exc)
+                log.error(gettext("cannot write the spool %s: %s"), self.outbox.path, exc)
             self.guard.failed(exc)
         return False

@@ -68,7 +68,7 @@ def parameter_rows(collector: Collector) -> list[dict]:
                 "name": name,
                 "value": values[name],
                 "type": spec.kind if spec else type(values[name]).__name__,
-                "description": spec.description if spec else "",
+                "description": _(spec.description) if spec else "",
                 "minimum": spec.minimum if spec else None,
                 "maximum": spec.maximum if spec else None,
                 "choices": list(spec.choices) if spec and spec.choices else None,

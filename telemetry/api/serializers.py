@@ -323,6 +323,7 @@ class RecordingSerializer(serializers.ModelSerializer):
 
     duration = serializers.FloatField(read_only=True, help_text="Seconds.")
     name = serializers.CharField(source="__str__", read_only=True)
+    reason = serializers.SerializerMethodField()
 
     class Meta:
         model = Recording
@@ -342,3 +343,8 @@ class RecordingSerializer(serializers.ModelSerializer):
             "received",
         ]
         read_only_fields = fields
+
+    def get_reason(self, recording) -> str:
+        """Why it was cut (a trigger FTT names: switch to ITO, on request, bag import),
+        in the reader's language."""
+        return _(recording.reason) if recording.reason else ""

@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from django.utils.translation import gettext
 from pyproj import Geod
 
 from events.models import Segment, Shift
@@ -112,8 +113,10 @@ def overlay(shift: Shift, map_image: MapImage | None) -> dict:
     if fit is None:
         return {
             "available": False,
-            "detail": "Needs at least two segments that started with both a GPS and a "
-            "local position at different places.",
+            "detail": gettext(
+                "Needs at least two segments that started with both a GPS and a "
+                "local position at different places."
+            ),
         }
     result = {
         "available": True,

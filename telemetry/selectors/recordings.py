@@ -3,6 +3,8 @@
 from collections import defaultdict
 
 from django.db.models import Count
+from django.utils.formats import number_format
+from django.utils.translation import gettext
 
 from telemetry.models import Recording
 
@@ -17,12 +19,14 @@ def recordings_by_master(**filters) -> dict[int, list[Recording]]:
 
 
 def summary(recording: Recording) -> str:
-    """One line a person reads: file, window, topics."""
-    topics = ", ".join(recording.topics) or "no topics"
-    return (
-        f"{recording} ({recording.duration:.0f} s, {recording.message_count} messages, "
-        f"{recording.size / 1e6:.1f} MB; {topics})"
-    )
+    """One line a person reads (the report: in its language): file, window, topics."""
+    return gettext("%(name)s (%(seconds)s s, %(count)s messages, %(size)s MB; %(topics)s)") % {
+        "name": recording,
+        "seconds": f"{recording.duration:.0f}",
+        "count": recording.message_count,
+        "size": number_format(recording.size / 1e6, 1),
+        "topics": ", ".join(recording.topics) or gettext("no topics"),
+    }
 
 
 def snapshots_per_vehicle() -> dict[int, int]:

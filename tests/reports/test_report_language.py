@@ -140,3 +140,24 @@ def test_a_comparison_job_takes_the_language_asked_for(two_events, api_client, t
     assert report.status == Report.Status.DONE, report.error
     text = flat(pdf_text(report.pdf.read(), tmp_path))
     assert "Zuverlässigkeit über Testveranstaltungen" in text
+
+
+def _ticks(text: str, after: str, before: str) -> list[str]:
+    """The numbers a chart's axes show, read from the PDF between two of its words."""
+    chart = text[text.index(after) + len(after) : text.index(before)]
+    return re.findall(r"(?<![\w.,])\d+[.,]?\d*(?![\w.,])", chart)
+
+
+def test_chart_ticks_have_the_decimal_comma_in_german(two_events, tmp_path):
+    for scenario in two_events:
+        scenario.event.language = "de"
+        scenario.event.save(update_fields=["language"])
+    german = _comparison(two_events, tmp_path)
+    # The growth chart's axes: cumulative interventions and kilometres, both in halves.
+    ticks = _ticks(german, "Zuverlässigkeitswachstum: kumulierte Eingriffe", "[km]")
+    assert "0,5" in ticks and "1,5" in ticks, ticks
+    assert not [t for t in ticks if "." in t], ticks
+    assert "Crow-AMSAA, β = 1,20" in german
+    english = _comparison(two_events, tmp_path, "--language", "en")
+    ticks = _ticks(english, "Reliability growth: cumulative interventions", "[km]")
+    assert "0.5" in ticks and not [t for t in ticks if "," in t], ticks

@@ -272,7 +272,7 @@ def test_per_vehicle_reliability_contents_and_note_authors(report, scenario):
 def test_progress_is_reported_in_order_up_to_done(scenario, tile_cache):
     steps = []
     render_report(
-        scenario.event, ReportOptions(no_tiles=True), lambda f, msg: steps.append((f, msg))
+        scenario.event, ReportOptions(no_tiles=True), lambda f, msg: steps.append((f, str(msg)))
     )
     fractions = [f for f, _ in steps]
     assert fractions == sorted(fractions) and len(steps) >= 4

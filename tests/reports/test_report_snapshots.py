@@ -28,3 +28,7 @@ def test_the_segment_page_names_the_snapshot_its_window_and_topics(
     assert "snapshot-take-over.mcap (30 s, 2 messages" in text
     # The window wraps in the narrow table cell: check its two ends.
     assert f"/gps_fix), {start}–" in text and end in text
+    event.language = "de"
+    event.save(update_fields=["language"])
+    german = flat(pdf_text(render_report(event, ReportOptions(no_tiles=True)).pdf, tmp_path))
+    assert "snapshot-take-over.mcap (30 s, 2 Nachrichten, 0,0 MB; /gps_fix)" in german

@@ -21,37 +21,41 @@ from events.models import TestEvent
 def bbox(text: str) -> tuple[float, float, float, float]:
     parts = [float(v) for v in text.split(",")]
     if len(parts) != 4:
-        raise ValueError("give west,south,east,north")
+        raise ValueError(_("Give the box as west,south,east,north in degrees."))
     return tuple(parts)
 
 
 class Command(BaseCommand):
-    help = "Download the tiles of an area into an archive, or register a basemap file."
+    help = _("Download the tiles of an area into an archive, or register a basemap file.")
 
     def add_arguments(self, parser):
         sub = parser.add_subparsers(dest="action", required=True)
-        fetch = sub.add_parser("fetch", help="Download tiles of an area (while online).")
-        fetch.add_argument("--bbox", required=True, help="west,south,east,north in degrees")
-        fetch.add_argument("--zooms", required=True, help="e.g. 14-19")
-        fetch.add_argument("--from", dest="url", required=True, help="URL with {z}/{x}/{y}")
-        fetch.add_argument("out", help="Archive to write: NAME.pmtiles or NAME.mbtiles")
+        fetch = sub.add_parser("fetch", help=_("Download tiles of an area (while online)."))
+        fetch.add_argument("--bbox", required=True, help=_("west,south,east,north in degrees"))
+        fetch.add_argument("--zooms", required=True, help=_("e.g. 14-19"))
+        fetch.add_argument("--from", dest="url", required=True, help=_("URL with {z}/{x}/{y}"))
+        fetch.add_argument("out", help=_("Archive to write: NAME.pmtiles or NAME.mbtiles"))
         fetch.add_argument(
             "--rate",
             type=float,
             default=settings.FTT_BASEMAP_FETCH_RATE,
-            help="Tiles per second (FTT_BASEMAP_FETCH_RATE; mind the server's usage policy).",
+            help=_("Tiles per second (FTT_BASEMAP_FETCH_RATE; mind the server's usage policy)."),
         )
-        fetch.add_argument("--max-tiles", type=int, default=20000)
-        fetch.add_argument("--retries", type=int, default=3)
-        fetch.add_argument("--attribution", default="", help="Whose map it is.")
-        fetch.add_argument("--register", action="store_true", help="Also add it as a layer.")
-        fetch.add_argument("--name", default="")
-        imp = sub.add_parser("import", help="Register a GeoTIFF, MBTiles or PMTiles file.")
-        imp.add_argument("file")
-        imp.add_argument("--name", default="")
-        imp.add_argument("--key", default="", help="Name in tile URLs (default from --name).")
-        imp.add_argument("--attribution", default="")
-        imp.add_argument("--event", type=int, help="Make it the default of this test event.")
+        fetch.add_argument(
+            "--max-tiles", type=int, default=20000, help=_("Refuse an area of more tiles.")
+        )
+        fetch.add_argument(
+            "--retries", type=int, default=3, help=_("Attempts per tile before giving up.")
+        )
+        fetch.add_argument("--attribution", default="", help=_("Whose map it is."))
+        fetch.add_argument("--register", action="store_true", help=_("Also add it as a layer."))
+        fetch.add_argument("--name", default="", help=_("Name of the layer."))
+        imp = sub.add_parser("import", help=_("Register a GeoTIFF, MBTiles or PMTiles file."))
+        imp.add_argument("file", help=_("The GeoTIFF, MBTiles or PMTiles file."))
+        imp.add_argument("--name", default="", help=_("Name of the layer."))
+        imp.add_argument("--key", default="", help=_("Name in tile URLs (default from --name)."))
+        imp.add_argument("--attribution", default="", help=_("Whose map it is."))
+        imp.add_argument("--event", type=int, help=_("Make it the default of this test event."))
 
     def handle(self, *args, action, **options):
         if action == "fetch":
@@ -71,7 +75,7 @@ class Command(BaseCommand):
                 max_tiles=max_tiles,
                 retries=retries,
                 attribution=attribution,
-                progress=lambda done, total: bar.count("tiles", done, total),
+                progress=lambda done, total: bar.count(_("tiles"), done, total),
             )
         except ValueError as exc:
             raise CommandError(str(exc)) from exc
@@ -84,13 +88,22 @@ class Command(BaseCommand):
                 % {"exc": exc}
             ) from exc
         self.stdout.write(
-            f"{result.path}: {result.total} tiles, {result.fetched} downloaded, "
-            f"{result.already_there} from an earlier run, {result.missing} not on the server."
+            _(
+                "%(path)s: %(total)s tiles, %(fetched)s downloaded, %(earlier)s from an "
+                "earlier run, %(missing)s not on the server."
+            )
+            % {
+                "path": result.path,
+                "total": result.total,
+                "fetched": result.fetched,
+                "earlier": result.already_there,
+                "missing": result.missing,
+            }
         )
         if options["register"]:
             self.register(out, name=options["name"], attribution=attribution)
 
-    def register(self, path, *, name="", key="", attribution="", event=None, **_):
+    def register(self, path, *, name="", key="", attribution="", event=None, **_options):
         test_event = None
         if event is not None:
             test_event = TestEvent.objects.filter(pk=event).first()
@@ -104,6 +117,12 @@ class Command(BaseCommand):
         if test_event is not None:
             layers.set_event_default(test_event, layer)
         self.stdout.write(
-            f"Layer {layer.key!r} ({layer.get_kind_display()}), zoom {layer.min_zoom}-"
-            f"{layer.max_zoom}, tiles at /tiles/{layer.key}/{{z}}/{{x}}/{{y}}.png"
+            _("Layer '%(key)s' (%(kind)s), zoom %(min)s-%(max)s, tiles at %(url)s")
+            % {
+                "key": layer.key,
+                "kind": layer.get_kind_display(),
+                "min": layer.min_zoom,
+                "max": layer.max_zoom,
+                "url": f"/tiles/{layer.key}/{{z}}/{{x}}/{{y}}.png",
+            }
         )

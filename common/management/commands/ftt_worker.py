@@ -13,6 +13,7 @@ import threading
 
 from django.core.management import call_command
 from django.db import connection
+from django.utils.translation import gettext as _
 from django_tasks_db.management.commands.db_worker import Command as DbWorkerCommand
 
 from common import jobs
@@ -44,7 +45,7 @@ class Upkeep(threading.Thread):
 
 
 class Command(DbWorkerCommand):
-    help = "Run FTT's background jobs (requested reports, archive imports)."
+    help = _("Run FTT's background jobs (requested reports, archive imports).")
 
     def add_arguments(self, parser):
         super().add_arguments(parser)
@@ -55,7 +56,13 @@ class Command(DbWorkerCommand):
         worker_id = options["worker_id"]
         jobs.beat(worker_id)
         for task_id, outcome in jobs.recover_interrupted():
-            self.stdout.write(f"job {task_id} of a stopped worker: {outcome}")
+            self.stdout.write(
+                _("job %(id)s of a stopped worker: %(outcome)s")
+                % {
+                    "id": task_id,
+                    "outcome": _("queued again") if outcome == "retried" else _("failed"),
+                }
+            )
         heart = jobs.Heart(worker_id)
         heart.start()
         upkeep = Upkeep()

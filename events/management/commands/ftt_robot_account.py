@@ -17,28 +17,28 @@ from events.services.robots import ensure_robot_account
 
 
 class Command(BaseCommand):
-    help = "Create (or extend) a robot account bound to vehicles and print its API token."
+    help = _("Create (or extend) a robot account bound to vehicles and print its API token.")
 
     def add_arguments(self, parser):
-        parser.add_argument("name", help="User name of the robot's account, e.g. husky-robot.")
+        parser.add_argument("name", help=_("User name of the robot's account, e.g. husky-robot."))
         parser.add_argument(
             "--vehicle",
             action="append",
             required=True,
             metavar="KEY",
-            help="Key of a vehicle the robot logs for; repeat for several.",
+            help=_("Key of a vehicle the robot logs for; repeat for several."),
         )
         parser.add_argument(
             "--new-token",
             action="store_true",
-            help="Replace the account's token (the old one stops working).",
+            help=_("Replace the account's token (the old one stops working)."),
         )
 
     def handle(self, *args, name, vehicle, new_token, **options):
         found = {v.key: v for v in Vehicle.objects.filter(key__in=vehicle)}
         missing = [key for key in vehicle if key not in found]
         if missing:
-            known = ", ".join(Vehicle.objects.values_list("key", flat=True)) or "none yet"
+            known = ", ".join(Vehicle.objects.values_list("key", flat=True)) or _("none yet")
             raise CommandError(
                 _("No vehicle with key %(keys)s (known: %(known)s).")
                 % {"keys": ", ".join(missing), "known": known}
@@ -48,6 +48,10 @@ class Command(BaseCommand):
         except ValidationError as exc:
             raise CommandError(" ".join(exc.messages)) from exc
         bound = ", ".join(login.account.vehicles.values_list("key", flat=True))
-        state = "Created" if login.created else "Updated"
-        self.stderr.write(f"{state} robot account {name!r}, bound to: {bound}.")
+        said = (
+            _("Created robot account '%(name)s', bound to: %(bound)s.")
+            if login.created
+            else _("Updated robot account '%(name)s', bound to: %(bound)s.")
+        )
+        self.stderr.write(said % {"name": name, "bound": bound})
         self.stdout.write(login.token)

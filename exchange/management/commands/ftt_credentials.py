@@ -11,19 +11,24 @@ from exchange.credentials import restore_credentials, save_credentials
 
 
 class Command(BaseCommand):
-    help = (
+    help = _(
         "Save every account's password hash, API token, role and flags to a file (0600), or "
         "give them back after a backup without credentials was restored."
     )
 
     def add_arguments(self, parser):
-        parser.add_argument("action", choices=["save", "restore"])
-        parser.add_argument("file", type=Path)
+        parser.add_argument(
+            "action", choices=["save", "restore"], help=_("Save before, restore after.")
+        )
+        parser.add_argument("file", type=Path, help=_("File that keeps the sign-ins."))
 
     def handle(self, *args, action, file, **options):
         if action == "save":
             count = save_credentials(file)
-            self.stdout.write(f"Saved the sign-ins of {count} account(s) to {file}.")
+            self.stdout.write(
+                _("Saved the sign-ins of %(count)s account(s) to %(file)s.")
+                % {"count": count, "file": file}
+            )
             return
         try:
             done = restore_credentials(file)
@@ -32,5 +37,6 @@ class Command(BaseCommand):
                 _("Cannot restore sign-ins from %(file)s: %(exc)s") % {"file": file, "exc": exc}
             ) from None
         self.stdout.write(
-            f"Sign-ins restored: {done['kept']} account(s) kept, {done['made']} made again."
+            _("Sign-ins restored: %(kept)s account(s) kept, %(made)s made again.")
+            % {"kept": done["kept"], "made": done["made"]}
         )

@@ -8,24 +8,26 @@ from exchange.export import ExportError, export_events, select_events
 
 
 class Command(BaseCommand):
-    help = (
+    help = _(
         "Export test events (default: all) with their shifts, legs, segments, notes, "
         "poses, maps and images into one archive file."
     )
 
     def add_arguments(self, parser):
-        parser.add_argument("output", help="Archive file to write (.zip).")
+        parser.add_argument("output", help=_("Archive file to write (.zip)."))
         parser.add_argument(
             "--event",
             action="append",
             dest="events",
             metavar="ID|UID",
-            help="Test event to export, by id or uid; repeat for several. Default: all.",
+            help=_("Test event to export, by id or uid; repeat for several. Default: all."),
         )
         parser.add_argument(
             "--since",
-            help="Only telemetry received at or after this ISO time (e.g. 2026-05-04T12:00Z); "
-            "log entries and notes of the chosen events are always complete.",
+            help=_(
+                "Only telemetry received at or after this ISO time (e.g. 2026-05-04T12:00Z); "
+                "log entries and notes of the chosen events are always complete."
+            ),
         )
 
     def handle(self, *args, output, events, since, **options):
@@ -44,5 +46,6 @@ class Command(BaseCommand):
             raise CommandError(str(exc)) from None
         counts = ", ".join(f"{n} {table}" for table, n in result.counts.items() if n)
         self.stdout.write(
-            f"Wrote {result.path}: {len(chosen)} test event(s); {counts}; {result.files} file(s)."
+            _("Wrote %(path)s: %(events)s test event(s); %(counts)s; %(files)s file(s).")
+            % {"path": result.path, "events": len(chosen), "counts": counts, "files": result.files}
         )

@@ -7,13 +7,14 @@ import uuid
 from django.core.management.base import BaseCommand, CommandError
 from django.db.models import Q
 from django.utils.translation import gettext as _
+from django.utils.translation import gettext_noop
 
 from common.progress import ProgressBar
 from events.models import Leg, TestEvent, Vehicle
 from exchange.bag import BagImportError, import_bag
 from rosbridge_app.collector.modes import MODE_TYPES
 
-PHASES = {"reading": "Reading messages", "storing": "Storing events  "}
+PHASES = {"reading": gettext_noop("Reading messages"), "storing": gettext_noop("Storing events")}
 
 
 def _pairs(values: list[str], prefix: str) -> dict:
@@ -44,7 +45,7 @@ def _lookup(model, ident: str | None):
 
 
 class Command(BaseCommand):
-    help = (
+    help = _(
         "Import a ROS 1 bag or a ROS 2 bag (sqlite3 or mcap) with the live collector's rules: "
         "segments from the mode topic, GPS and local poses, maps and camera images. Without "
         "--leg a new test event, shift and leg spanning the recording are made. Importing "
@@ -52,38 +53,40 @@ class Command(BaseCommand):
     )
 
     def add_arguments(self, parser):
-        parser.add_argument("bag", help="A .bag file, or a ROS 2 bag directory / .db3 / .mcap.")
-        parser.add_argument("--vehicle", required=True, help="Key of the vehicle that recorded.")
-        parser.add_argument("--leg", help="Open leg (id or uid) to log into.")
-        parser.add_argument("--test-event", help="Open test event for the new shift.")
+        parser.add_argument("bag", help=_("A .bag file, or a ROS 2 bag directory / .db3 / .mcap."))
+        parser.add_argument("--vehicle", required=True, help=_("Key of the vehicle that recorded."))
+        parser.add_argument("--leg", help=_("Open leg (id or uid) to log into."))
+        parser.add_argument("--test-event", help=_("Open test event for the new shift."))
         parser.add_argument(
             "--mode-type",
             choices=MODE_TYPES,
-            help="Type of the mode topic (collector default: bool).",
+            help=_("Type of the mode topic (collector default: bool)."),
         )
         parser.add_argument(
             "--topic",
             action="append",
             metavar="NAME=TOPIC",
-            help="Topic name as for the collector, e.g. robot_mode=/mode or gps_fix=/fix.",
+            help=_("Topic name as for the collector, e.g. robot_mode=/mode or gps_fix=/fix."),
         )
         parser.add_argument(
             "--param",
             action="append",
             metavar="NAME=VALUE",
-            help="Collector parameter, e.g. pose_min_distance=1.0 or use_tf=false.",
+            help=_("Collector parameter, e.g. pose_min_distance=1.0 or use_tf=false."),
         )
         parser.add_argument(
             "--snapshots",
             action="store_true",
-            help="Also cut the black box's window around every take-over into an MCAP "
-            "file on its ITO segment, as the live collector does.",
+            help=_(
+                "Also cut the black box's window around every take-over into an MCAP "
+                "file on its ITO segment, as the live collector does."
+            ),
         )
         parser.add_argument(
             "--snapshot",
             action="append",
             metavar="NAME=VALUE",
-            help="Snapshot parameter, e.g. before=30, after=5 or topics=/fix,/odom.",
+            help=_("Snapshot parameter, e.g. before=30, after=5 or topics=/fix,/odom."),
         )
 
     def handle(
@@ -98,7 +101,7 @@ class Command(BaseCommand):
         params = _pairs(topic, "topics.") | _pairs(param, "params.") | _pairs(snapshot, "snapshot.")
         if mode_type:
             params["params.robot_mode_type"] = mode_type
-        self.stderr.write(f"Importing {bag}")
+        self.stderr.write(_("Importing %(bag)s") % {"bag": bag})
         bar = ProgressBar(options.get("stderr") or sys.stderr)
         try:
             result = import_bag(
@@ -107,7 +110,9 @@ class Command(BaseCommand):
                 leg=_lookup(Leg, leg),
                 test_event=_lookup(TestEvent, test_event),
                 params=params,
-                progress=lambda phase, done, total: bar.count(PHASES[phase], done, total),
+                progress=lambda phase, done, total: bar.count(
+                    f"{_(PHASES[phase]):<16}", done, total
+                ),
                 snapshots=options["snapshots"],
             )
         except BagImportError as exc:
@@ -115,8 +120,18 @@ class Command(BaseCommand):
         masters = result.leg.segments.filter(parent__isnull=True).count()
         added = ", ".join(f"{n} {name}" for name, n in result.added.items())
         self.stdout.write(
-            f"{result.events} events from the bag into {result.leg} of {result.leg.shift} "
-            f"({result.leg.shift.test_event}): {masters} master segments in the leg; "
-            f"added {added}; {result.skipped} event(s) stored nothing (already there, or "
-            f"outside an open segment)."
+            _(
+                "%(events)s events from the bag into %(leg)s of %(shift)s (%(event)s): "
+                "%(masters)s master segments in the leg; added %(added)s; %(skipped)s "
+                "event(s) stored nothing (already there, or outside an open segment)."
+            )
+            % {
+                "events": result.events,
+                "leg": result.leg,
+                "shift": result.leg.shift,
+                "event": result.leg.shift.test_event,
+                "masters": masters,
+                "added": added,
+                "skipped": result.skipped,
+            }
         )

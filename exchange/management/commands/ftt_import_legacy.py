@@ -2,13 +2,14 @@
 or ``manage.py ftt_import_legacy ftt_dump.sql``."""
 
 from django.core.management.base import BaseCommand, CommandError
+from django.utils.translation import gettext as _
 
 from exchange.importer import ImportRefused, import_bundle
 from exchange.legacy import LegacyBundle, LegacyError, open_source
 
 
 class Command(BaseCommand):
-    help = (
+    help = _(
         "Import test events, their data and configuration from a database of the original "
         "FTT (PostgreSQL connection string) or from its plain SQL dump. Running it again "
         "adds nothing."
@@ -17,11 +18,13 @@ class Command(BaseCommand):
     def add_arguments(self, parser):
         parser.add_argument(
             "source",
-            help="Path of a plain pg_dump file (e.g. ftt_dump.sql), or a libpq connection "
-            "string / URL of the original database.",
+            help=_(
+                "Path of a plain pg_dump file (e.g. ftt_dump.sql), or a libpq connection "
+                "string / URL of the original database."
+            ),
         )
         parser.add_argument(
-            "--dry-run", action="store_true", help="Only print what would be imported."
+            "--dry-run", action="store_true", help=_("Only print what would be imported.")
         )
 
     def handle(self, *args, source, dry_run, **options):

@@ -16,6 +16,7 @@ from django.contrib.auth import get_user_model
 from django.contrib.auth.models import Group
 from django.core.management.base import BaseCommand
 from django.db import transaction
+from django.utils.translation import gettext as _
 
 from common.roles import ADMINISTRATOR
 
@@ -31,7 +32,7 @@ def _write_private(path: Path, text: str) -> None:
 
 
 class Command(BaseCommand):
-    help = "Create or repair the administrator account named by FTT_ADMIN_USER."
+    help = _("Create or repair the administrator account named by FTT_ADMIN_USER.")
 
     def handle(self, *args, **options):
         username = os.environ.get("FTT_ADMIN_USER", "").strip() or "admin"
@@ -52,7 +53,9 @@ class Command(BaseCommand):
                 user.set_password(password)
             elif password and not user.check_password(password):
                 user.set_password(password)
-                self.stdout.write(f"Password of {username!r} set from FTT_ADMIN_PASSWORD.")
+                self.stdout.write(
+                    _("Password of '%(user)s' set from FTT_ADMIN_PASSWORD.") % {"user": username}
+                )
             if email and user.email != email:
                 user.email = email
             user.is_active = user.is_staff = user.is_superuser = True
@@ -64,14 +67,21 @@ class Command(BaseCommand):
         if generated:
             _write_private(password_file, password + "\n")
             self.stdout.write(
-                f"Created administrator {username!r} with password: {password}\n"
-                f"(also stored in {password_file})"
+                _(
+                    "Created administrator '%(user)s' with password: %(password)s\n"
+                    "(also stored in %(file)s)"
+                )
+                % {"user": username, "password": password, "file": password_file}
             )
             return
         if password:
             # A password given in the environment replaces a generated one.
             password_file.unlink(missing_ok=True)
-        state = "Created" if created else "Checked"
-        self.stdout.write(f"{state} administrator {username!r}.")
+        said = (
+            _("Created administrator '%(user)s'.")
+            if created
+            else _("Checked administrator '%(user)s'.")
+        )
+        self.stdout.write(said % {"user": username})
         if password_file.exists() and user.check_password(password_file.read_text().strip()):
-            self.stdout.write(f"Its password is in {password_file}.")
+            self.stdout.write(_("Its password is in %(file)s.") % {"file": password_file})

@@ -16,6 +16,7 @@ from pathlib import Path
 
 from django.conf import settings
 from django.core.management.base import BaseCommand, CommandError
+from django.utils.formats import number_format
 from django.utils.translation import gettext, gettext_lazy
 
 from common.progress import ProgressBar
@@ -40,7 +41,7 @@ _CHANGE_LINES = {
 
 
 class Command(BaseCommand):
-    help = "Make the PDF field-test report of a test event (and CSV/GeoJSON/GPX exports)."
+    help = gettext("Make the PDF field-test report of a test event (and CSV/GeoJSON/GPX exports).")
 
     def create_parser(self, prog_name, subcommand, **kwargs):
         # --version is the report's version here, not Django's.
@@ -48,44 +49,61 @@ class Command(BaseCommand):
         return super().create_parser(prog_name, subcommand, **kwargs)
 
     def add_arguments(self, parser):
-        parser.add_argument("--test-event", type=int, help="Id of the test event.")
-        parser.add_argument("--shift", type=int, help="Report only this shift (id).")
-        parser.add_argument("--leg", type=int, help="Report only this leg (id).")
-        parser.add_argument("--job", type=int, help="Make the queued report with this id.")
-        parser.add_argument("-o", "--output", help="PDF file to write (default report.pdf).")
-        parser.add_argument("--local", action="store_true", help="Use local (map-frame) poses.")
-        parser.add_argument("--name", default="", help="Report name on the title page.")
-        parser.add_argument("--version", dest="report_version", default="1.0")
-        parser.add_argument("--recipient", default="", help="Prepared for: name.")
+        parser.add_argument("--test-event", type=int, help=gettext("Id of the test event."))
+        parser.add_argument("--shift", type=int, help=gettext("Report only this shift (id)."))
+        parser.add_argument("--leg", type=int, help=gettext("Report only this leg (id)."))
+        parser.add_argument("--job", type=int, help=gettext("Make the queued report with this id."))
         parser.add_argument(
-            "--recipient-address", action="append", default=[], help="Address line (repeat)."
+            "-o", "--output", help=gettext("PDF file to write (default report.pdf).")
         )
-        parser.add_argument("--creator", default="", help="Prepared by: name.")
         parser.add_argument(
-            "--creator-address", action="append", default=[], help="Address line (repeat)."
+            "--local", action="store_true", help=gettext("Use local (map-frame) poses.")
         )
-        parser.add_argument("--logo", help="Logo image (PNG, JPEG or SVG) for the title page.")
-        parser.add_argument("--tile-url", help="Tile URL template with {z}/{x}/{y}.")
-        parser.add_argument("--no-tiles", action="store_true", help="Draw maps without tiles.")
+        parser.add_argument("--name", default="", help=gettext("Report name on the title page."))
+        parser.add_argument(
+            "--version",
+            dest="report_version",
+            default="1.0",
+            help=gettext("Report version on the title page."),
+        )
+        parser.add_argument("--recipient", default="", help=gettext("Prepared for: name."))
+        parser.add_argument(
+            "--recipient-address",
+            action="append",
+            default=[],
+            help=gettext("Address line (repeat)."),
+        )
+        parser.add_argument("--creator", default="", help=gettext("Prepared by: name."))
+        parser.add_argument(
+            "--creator-address", action="append", default=[], help=gettext("Address line (repeat).")
+        )
+        parser.add_argument(
+            "--logo", help=gettext("Logo image (PNG, JPEG or SVG) for the title page.")
+        )
+        parser.add_argument("--tile-url", help=gettext("Tile URL template with {z}/{x}/{y}."))
+        parser.add_argument(
+            "--no-tiles", action="store_true", help=gettext("Draw maps without tiles.")
+        )
         parser.add_argument(
             "--min-timeline",
             type=float,
             default=0.0,
             metavar="HOURS",
-            help="Draw each shift's timeline at least this long (the original's min_dur).",
+            help=gettext("Draw each shift's timeline at least this long (the original's min_dur)."),
         )
         parser.add_argument(
             "--max-zoom",
             type=int,
             default=MAX_ZOOM,
-            help=f"Never use map tiles closer than this zoom level (1-{MAX_ZOOM}).",
+            help=gettext("Never use map tiles closer than this zoom level (1-%(max)s).")
+            % {"max": MAX_ZOOM},
         )
         parser.add_argument(
             "--compare",
             type=int,
             nargs="+",
             metavar="EVENT",
-            help="Compare these test events (at least two) in one PDF instead.",
+            help=gettext("Compare these test events (at least two) in one PDF instead."),
         )
         parser.add_argument(
             "--route-leg",
@@ -121,33 +139,42 @@ class Command(BaseCommand):
             "--language",
             choices=[code for code, _ in settings.LANGUAGES],
             default="",
-            help="Language of the report (default: the test event's language; for "
-            "--compare the one the test events share, else FTT_LANGUAGE).",
+            help=gettext(
+                "Language of the report (default: the test event's language; for "
+                "--compare the one the test events share, else FTT_LANGUAGE)."
+            ),
         )
         parser.add_argument(
             "--no-image-appendix",
             action="store_true",
-            help="Camera frames only as thumbnails, without full-size copies in an appendix.",
+            help=gettext(
+                "Camera frames only as thumbnails, without full-size copies in an appendix."
+            ),
         )
-        parser.add_argument("--csv", help="Write the segments as CSV to this file.")
-        parser.add_argument("--geojson", help="Write the GPS tracks as GeoJSON to this file.")
-        parser.add_argument("--gpx", help="Write the GPS tracks as GPX to this file.")
+        parser.add_argument("--csv", help=gettext("Write the segments as CSV to this file."))
         parser.add_argument(
-            "--json", help="Write the figures with their provenance (digest) as JSON to this file."
+            "--geojson", help=gettext("Write the GPS tracks as GeoJSON to this file.")
+        )
+        parser.add_argument("--gpx", help=gettext("Write the GPS tracks as GPX to this file."))
+        parser.add_argument(
+            "--json",
+            help=gettext("Write the figures with their provenance (digest) as JSON to this file."),
         )
         parser.add_argument(
             "--dmv",
-            help="Write the disengagement report (California DMV columns) as CSV to this file.",
+            help=gettext(
+                "Write the disengagement report (California DMV columns) as CSV to this file."
+            ),
         )
         parser.add_argument(
             "--month",
             metavar="YYYY-MM",
-            help="With --dmv and without --test-event: every test event of that month.",
+            help=gettext("With --dmv and without --test-event: every test event of that month."),
         )
         parser.add_argument(
             "--verify",
             metavar="REPORT",
-            help="Check a PDF or JSON report against the data: exit 1 when it changed.",
+            help=gettext("Check a PDF or JSON report against the data: exit 1 when it changed."),
         )
 
     def handle(self, *args, **o):
@@ -188,9 +215,10 @@ class Command(BaseCommand):
                 gettext("%(path)s carries no FTT data digest (made before FTT stamped it?).")
                 % {"path": path}
             )
-        self.stdout.write(("OK: " if verdict.ok else "CHANGED: ") + verdict.message)
+        said = gettext("OK: %(message)s") if verdict.ok else gettext("CHANGED: %(message)s")
+        self.stdout.write(said % {"message": verdict.message})
         for change in verdict.changes:
-            reason = f" ({change['reason']})" if change["reason"] else ""
+            reason = f" ({change['reason']})" if change["reason"] else ""  # the author's words
             line = _CHANGE_LINES[change["kind"]] % {
                 "record": change["record"],
                 "when": change["at"],
@@ -220,7 +248,7 @@ class Command(BaseCommand):
         Path(o["dmv"]).write_text(
             disengagements_csv(events_in_month(*month), month), encoding="utf-8"
         )
-        self.stdout.write(f"dmv: {o['dmv']}")
+        self.stdout.write(gettext("disengagement report: %(file)s") % {"file": o["dmv"]})
 
     def _compare(self, o):
         ids = o["compare"]
@@ -247,8 +275,10 @@ class Command(BaseCommand):
             raise CommandError(gettext("Report %(id)s does not exist.") % {"id": report_id})
         report = run_job(report_id)
         if report.status == Report.Status.FAILED:
-            raise CommandError(report.error)
-        self.stdout.write(f"report {report_id}: {report.pdf.name}")
+            raise CommandError(report.shown_error)
+        self.stdout.write(
+            gettext("report %(id)s: %(file)s") % {"id": report_id, "file": report.pdf.name}
+        )
 
     def _exports(self, event, o) -> bool:
         writers = (
@@ -262,7 +292,7 @@ class Command(BaseCommand):
         for key, make in writers:
             if o[key]:
                 Path(o[key]).write_text(make(), encoding="utf-8")
-                self.stdout.write(f"{key}: {o[key]}")
+                self.stdout.write(gettext("%(kind)s: %(file)s") % {"kind": key, "file": o[key]})
                 done = True
         return done
 
@@ -302,7 +332,7 @@ class Command(BaseCommand):
             self.stderr.write(gettext("warning: %(warning)s") % {"warning": warning})
         written = gettext("%(file)s: written in %(seconds)s s") % {
             "file": output,
-            "seconds": f"{result.seconds:.1f}",
+            "seconds": number_format(result.seconds, 1),
         }
         note = gettext(" (provisional: open segments)") if result.provisional else ""
         self.stdout.write(written + note)

@@ -10,6 +10,7 @@ import time
 
 import rclpy
 from django.core.management.base import BaseCommand
+from django.utils.translation import gettext as _
 from geometry_msgs.msg import TwistStamped
 from rclpy.executors import ExternalShutdownException
 
@@ -17,15 +18,26 @@ from rosbridge_app.collector.modes import ModeDecider, is_moving, make_message, 
 
 
 class Command(BaseCommand):
-    help = "Publish the robot mode derived from joystick and navigation velocity commands."
+    help = _("Publish the robot mode derived from joystick and navigation velocity commands.")
 
     def add_arguments(self, parser):
-        parser.add_argument("--joy-topic", default="joy_cmd_vel")
-        parser.add_argument("--nav-topic", default="nav_cmd_vel")
-        parser.add_argument("--mode-topic", default="robot_mode")
-        parser.add_argument("--mode-type", choices=("bool", "industrial"), default="bool")
-        parser.add_argument("--joy-timeout", type=float, default=0.5)
-        parser.add_argument("--period", type=float, default=1.0)
+        add = parser.add_argument
+        add("--joy-topic", default="joy_cmd_vel", help=_("Joystick velocity commands."))
+        add("--nav-topic", default="nav_cmd_vel", help=_("Navigation velocity commands."))
+        add("--mode-topic", default="robot_mode", help=_("Topic the mode is published on."))
+        add(
+            "--mode-type",
+            choices=("bool", "industrial"),
+            default="bool",
+            help=_("Message type of the mode."),
+        )
+        add(
+            "--joy-timeout",
+            type=float,
+            default=0.5,
+            help=_("Seconds after the last joystick command until autonomous again."),
+        )
+        add("--period", type=float, default=1.0, help=_("Seconds between publications."))
 
     def handle(self, *args, **o):
 
@@ -46,14 +58,14 @@ class Command(BaseCommand):
                 decider.joystick(is_moving(msg.twist), time.monotonic())
                 publish()
             except Exception as exc:
-                node.get_logger().warning(f"ignored a joystick message: {exc}")
+                node.get_logger().warning(_("ignored a joystick message: %(exc)s") % {"exc": exc})
 
         def on_nav(msg):
             try:
                 decider.navigation(time.monotonic())
                 publish()
             except Exception as exc:
-                node.get_logger().warning(f"ignored a navigation message: {exc}")
+                node.get_logger().warning(_("ignored a navigation message: %(exc)s") % {"exc": exc})
 
         node.create_subscription(TwistStamped, o["joy_topic"], on_joy, 10)
         node.create_subscription(TwistStamped, o["nav_topic"], on_nav, 10)

@@ -5,36 +5,41 @@ from pathlib import Path
 
 import rclpy
 from django.core.management.base import BaseCommand
+from django.utils.formats import number_format
+from django.utils.translation import gettext as _
 from rclpy.executors import ExternalShutdownException
 
+from common.numbers import short
 from rosbridge_app.collector.player import BagPlayer
 
 
 class Command(BaseCommand):
-    help = "Publish a bag's messages at the recorded pace (or faster with --rate)."
+    help = _("Publish a bag's messages at the recorded pace (or faster with --rate).")
 
     def add_arguments(self, parser):
-        parser.add_argument("bag", type=Path, help="ROS 1 .bag, or a ROS 2 bag directory.")
+        parser.add_argument("bag", type=Path, help=_("ROS 1 .bag, or a ROS 2 bag directory."))
         parser.add_argument(
             "--rate",
             type=float,
             default=1.0,
-            help="Speed factor (2 = twice as fast; 0 = as fast as possible).",
+            help=_("Speed factor (2 = twice as fast; 0 = as fast as possible)."),
         )
-        parser.add_argument("--prefix", default="", help="Prepend to every topic name.")
+        parser.add_argument("--prefix", default="", help=_("Prepend to every topic name."))
         parser.add_argument(
             "--wait-for",
             nargs="*",
             default=[],
             metavar="TOPIC",
-            help="Wait until these bag topics have a subscriber.",
+            help=_("Wait until these bag topics have a subscriber."),
         )
-        parser.add_argument("--wait-timeout", type=float, default=30.0)
+        parser.add_argument(
+            "--wait-timeout", type=float, default=30.0, help=_("Seconds to wait for them.")
+        )
         parser.add_argument(
             "--linger",
             type=float,
             default=1.0,
-            help="Seconds to stay up after the last message (delivery).",
+            help=_("Seconds to stay up after the last message (delivery)."),
         )
 
     def handle(self, *args, **o):
@@ -43,12 +48,28 @@ class Command(BaseCommand):
         player = BagPlayer(o["bag"], rate=o["rate"], prefix=o["prefix"])
         try:
             if o["wait_for"] and not player.wait_for_subscribers(o["wait_for"], o["wait_timeout"]):
-                raise SystemExit(f"no subscriber on {o['wait_for']} after {o['wait_timeout']} s")
+                raise SystemExit(
+                    _("No subscriber on %(topics)s after %(seconds)s s.")
+                    % {
+                        "topics": ", ".join(o["wait_for"]),
+                        "seconds": short(o["wait_timeout"]),
+                    }
+                )
             started = time.monotonic()
-            self.stdout.write(f"playing {o['bag']} ({player.duration:.1f} s) at ×{o['rate']}")
+            self.stdout.write(
+                _("playing %(bag)s (%(seconds)s s) at ×%(rate)s")
+                % {
+                    "bag": o["bag"],
+                    "seconds": number_format(player.duration, 1),
+                    "rate": short(o["rate"]),
+                }
+            )
             count = player.play(should_stop=lambda: not rclpy.ok())
             time.sleep(o["linger"])
-            self.stdout.write(f"played {count} messages in {time.monotonic() - started:.1f} s")
+            self.stdout.write(
+                _("played %(count)s messages in %(seconds)s s")
+                % {"count": count, "seconds": number_format(time.monotonic() - started, 1)}
+            )
         except (KeyboardInterrupt, ExternalShutdownException):
             pass
         finally:

@@ -57,11 +57,11 @@ def grant_statements(role: str) -> list[str]:
 
 
 class Command(BaseCommand):
-    help = "Print (or apply) the SQL for a least-privilege PostGIS role for ftt_collect."
+    help = _("Print (or apply) the SQL for a least-privilege PostGIS role for ftt_collect.")
 
     def add_arguments(self, parser):
-        parser.add_argument("role", help="Name of the database role, e.g. ftt_robot.")
-        parser.add_argument("--apply", action="store_true", help="Run the SQL now.")
+        parser.add_argument("role", help=_("Name of the database role, e.g. ftt_robot."))
+        parser.add_argument("--apply", action="store_true", help=_("Run the SQL now."))
 
     def handle(self, *args, role, apply, **options):
         if connection.vendor != "postgresql":

@@ -4,8 +4,11 @@ import time
 
 import rclpy
 from django.core.management.base import BaseCommand
+from django.utils.formats import number_format
+from django.utils.translation import gettext as _
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 
+from common.numbers import short
 from events.models import Vehicle
 from events.selectors.logs import open_leg_for_vehicle
 from events.services import logs
@@ -14,60 +17,71 @@ from rosbridge_app.collector.simulator import SimConfig, SimulatedRobot
 
 
 class Command(BaseCommand):
-    help = "Publish a simulated drive: mode switches, GPS, TF, map and camera."
+    help = _("Publish a simulated drive: mode switches, GPS, TF, map and camera.")
 
     def add_arguments(self, parser):
         d = SimConfig()
         a = parser.add_argument
-        a("--latitude", type=float, default=d.latitude)
-        a("--longitude", type=float, default=d.longitude)
-        a("--radius", type=float, default=d.radius, help="Circle radius (m).")
-        a("--speed", type=float, default=d.speed, help="m/s.")
+        a("--latitude", type=float, default=d.latitude, help=_("Centre of the circle (°)."))
+        a("--longitude", type=float, default=d.longitude, help=_("Centre of the circle (°)."))
+        a("--radius", type=float, default=d.radius, help=_("Circle radius (m)."))
+        a("--speed", type=float, default=d.speed, help=_("Speed (m/s)."))
         a(
             "--switch-every",
             type=float,
             default=d.switch_every,
-            help="Seconds between mode switches (starts manual).",
+            help=_("Seconds between mode switches (starts manual)."),
         )
         a(
             "--first-mode",
             choices=(modes.ITO, modes.AUTO),
             default=d.first_mode,
-            help="Mode to start in; with --switch-every 0 it stays in it.",
+            help=_("Mode to start in; with --switch-every 0 it stays in it."),
         )
-        a("--mode-type", choices=("bool", "industrial"), default=d.mode_type)
-        a("--mode-rate", type=float, default=d.mode_rate)
-        a("--gps-rate", type=float, default=d.gps_rate)
-        a("--tf-rate", type=float, default=d.tf_rate)
-        a("--camera-rate", type=float, default=d.camera_rate)
-        a("--camera-size", default=f"{d.camera_width}x{d.camera_height}")
+        a(
+            "--mode-type",
+            choices=("bool", "industrial"),
+            default=d.mode_type,
+            help=_("Message type of the mode."),
+        )
+        a("--mode-rate", type=float, default=d.mode_rate, help=_("Mode messages per second."))
+        a("--gps-rate", type=float, default=d.gps_rate, help=_("GPS fixes per second."))
+        a("--tf-rate", type=float, default=d.tf_rate, help=_("Transforms per second."))
+        a("--camera-rate", type=float, default=d.camera_rate, help=_("Images per second."))
+        a(
+            "--camera-size",
+            default=f"{d.camera_width}x{d.camera_height}",
+            help=_("Image size, WIDTHxHEIGHT."),
+        )
         a(
             "--camera-format",
             choices=("raw", "jpeg"),
             default=d.camera_format,
-            help="raw: sensor_msgs/Image on image; jpeg: CompressedImage on image_compressed.",
+            help=_("raw: sensor_msgs/Image on image; jpeg: CompressedImage on image_compressed."),
         )
-        a("--map-size", type=int, default=d.map_size, help="Cells per side.")
+        a("--map-size", type=int, default=d.map_size, help=_("Cells per side."))
         a(
             "--map-rate",
             type=float,
             default=d.map_rate,
-            help="Republish a changed map at this rate (0: once, latched).",
+            help=_("Republish a changed map at this rate (0: once, latched)."),
         )
-        a("--prefix", default="", help="Topic prefix (robot namespace).")
-        a("--duration", type=float, default=0.0, help="Seconds; 0 runs until stopped.")
+        a("--prefix", default="", help=_("Topic prefix (robot namespace)."))
+        a("--duration", type=float, default=0.0, help=_("Seconds; 0 runs until stopped."))
         a(
             "--open-leg",
             metavar="VEHICLE",
             default="",
-            help="For demos: make sure this vehicle exists and has an open test event, "
-            "shift and leg (created through the services if missing).",
+            help=_(
+                "For demos: make sure this vehicle exists and has an open test event, "
+                "shift and leg (created through the services if missing)."
+            ),
         )
         a(
             "--wait-for-subscriber",
             type=float,
             default=0.0,
-            help="Wait up to this many seconds for a GPS subscriber before starting.",
+            help=_("Wait up to this many seconds for a GPS subscriber before starting."),
         )
 
     def handle(self, *args, **o):
@@ -99,8 +113,12 @@ class Command(BaseCommand):
         executor = SingleThreadedExecutor()
         executor.add_node(robot)
         self.stdout.write(
-            f"simulated robot near {config.latitude}, {config.longitude}, "
-            f"started at {robot.t0:.6f}; Ctrl-C stops it"
+            _("simulated robot near %(lat)s, %(lon)s, started at %(t0)s; Ctrl-C stops it")
+            % {
+                "lat": short(config.latitude),
+                "lon": short(config.longitude),
+                "t0": number_format(robot.t0, 6),
+            }
         )
         end = time.monotonic() + o["duration"] if o["duration"] > 0 else None
         try:
@@ -109,21 +127,25 @@ class Command(BaseCommand):
         except (KeyboardInterrupt, ExternalShutdownException):
             pass
         finally:
-            self.stdout.write(f"published {robot.counts}")
+            self.stdout.write(_("published %(counts)s") % {"counts": robot.counts})
             executor.shutdown()
             robot.destroy_node()
             rclpy.try_shutdown()
 
 
 def ensure_open_leg(key: str) -> str:
-    vehicle, _ = Vehicle.objects.get_or_create(
-        key=key, defaults={"short_description": "Simulated robot (ftt_simulate)"}
+    vehicle, _created = Vehicle.objects.get_or_create(
+        key=key, defaults={"short_description": _("Simulated robot (ftt_simulate)")}
     )
     leg = open_leg_for_vehicle(vehicle)
     if leg is None:
         shift = vehicle.shifts.filter(end__isnull=True).first()
         if shift is None:
-            event = logs.create_test_event(location="Simulation", version="demo")
+            event = logs.create_test_event(location=_("Simulation"), version="demo")
             shift = logs.create_shift(test_event=event, vehicle=vehicle)
         leg = logs.create_leg(shift=shift)
-    return f"vehicle '{key}' logs into {leg} of {leg.shift}"
+    return _("vehicle '%(key)s' logs into %(leg)s of %(shift)s") % {
+        "key": key,
+        "leg": leg,
+        "shift": leg.shift,
+    }

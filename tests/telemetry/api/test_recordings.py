@@ -58,3 +58,23 @@ def test_only_operators_delete_and_nobody_uploads(api_client, recording):
     assert api_client(roles.OPERATOR).post("/api/recordings/", {}).status_code == 405
     assert api_client(roles.OPERATOR).delete(f"/api/recordings/{recording.pk}/").status_code == 204
     assert not Recording.objects.exists()
+
+
+def test_why_a_snapshot_was_cut_reads_in_the_readers_language(
+    auto_master, api_client, media_root, tmp_path
+):
+    path = tmp_path / "snapshot-2.mcap"
+    start = timezone.now()
+    attach_recording(
+        auto_master,
+        path=path,
+        start=start,
+        end=start + timedelta(seconds=30),
+        topics=write_fixes(path, [50.0]),
+        reason="switch to ITO",  # as the collector keeps it
+    )
+    client = api_client(roles.VIEWER)
+    german = client.get("/api/recordings/", HTTP_ACCEPT_LANGUAGE="de").json()["results"]
+    english = client.get("/api/recordings/", HTTP_ACCEPT_LANGUAGE="en").json()["results"]
+    assert [r["reason"] for r in german] == ["Wechsel zu ITO"]
+    assert [r["reason"] for r in english] == ["switch to ITO"]
