@@ -19,6 +19,7 @@ from django.core.management.base import BaseCommand, CommandError
 from django.utils.formats import number_format
 from django.utils.translation import gettext, gettext_lazy
 
+from common.numbers import short
 from common.progress import ProgressBar
 from events.models import Leg, Shift, TestEvent
 from reports.documents.comparison import render_comparison
@@ -111,8 +112,10 @@ class Command(BaseCommand):
             action="append",
             default=[],
             metavar="LEG",
-            help="With --compare: add a routes section with this leg's GPS route (repeat; "
-            "two routes or more, legs and --route-case together).",
+            help=gettext(
+                "With --compare: add a routes section with this leg's GPS route (repeat; "
+                "two routes or more, legs and --route-case together)."
+            ),
         )
         parser.add_argument(
             "--route-case",
@@ -120,14 +123,17 @@ class Command(BaseCommand):
             action="append",
             default=[],
             metavar="CASE",
-            help="With --compare: add this test case's planned route (repeat).",
+            help=gettext("With --compare: add this test case's planned route (repeat)."),
         )
         parser.add_argument(
             "--route-threshold",
             type=float,
             metavar="METRES",
-            help="With routes: draw stretches farther than this from the other route in red "
-            f"(default {DEFAULT_THRESHOLD:g}).",
+            help=gettext(
+                "With routes: draw stretches farther than this from the other route in red "
+                "(default %(metres)s)."
+            )
+            % {"metres": short(DEFAULT_THRESHOLD)},
         )
         parser.add_argument(
             "--level",
