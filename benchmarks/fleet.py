@@ -100,17 +100,14 @@ FRAMES = """(() => {
       });
     }
   };
-  // How many vehicles the fleet list shows, each time that changes (ms after navigation).
+  // How many vehicles the fleet list shows, each time that changes (ms after
+  // navigation), from the first node parsed: the page's modules draw it early.
   window.__list = [];
-  document.addEventListener("DOMContentLoaded", () => {
-    const list = document.querySelector("#fleet-list");
-    if (!list) return;
-    new MutationObserver(() => {
-      const n = list.querySelectorAll(".fleet-vehicle").length;
-      const last = window.__list[window.__list.length - 1];
-      if (!last || last[0] !== n) window.__list.push([n, performance.now()]);
-    }).observe(list, { childList: true, subtree: true });
-  });
+  new MutationObserver(() => {
+    const n = document.querySelectorAll("#fleet-list .fleet-vehicle").length;
+    const last = window.__list[window.__list.length - 1];
+    if (!last || last[0] !== n) window.__list.push([n, performance.now()]);
+  }).observe(document, { childList: true, subtree: true });
 })();"""
 # Where the open time went, in ms after navigation started.
 OPENING = """(n) => {
@@ -154,6 +151,15 @@ OBSERVE = """() => {
   new MutationObserver(note).observe(list, { childList: true, subtree: true, attributes: true });
   note();
 }"""
+
+
+def open_fleet(page, url: str, n: int) -> tuple[float, dict]:
+    """Seconds until the fleet list shows ``n`` vehicles, and where they went."""
+    opened = time.monotonic()
+    # Timed to the list, not to the page's load event.
+    page.goto(f"{url}/?view=fleet", wait_until="commit")
+    page.wait_for_function("(n) => document.querySelectorAll('.fleet-vehicle').length >= n", arg=n)
+    return time.monotonic() - opened, page.evaluate(OPENING, n)
 
 
 def answer(out: str, tag: str) -> str:
@@ -265,15 +271,13 @@ def run(n: int, args) -> dict:
                 if len([v for v in api.json()["vehicles"] if v["position"]]) == n:
                     break
                 time.sleep(1)
-            opened = time.monotonic()
-            # Timed to the list, not to the page's load event.
-            page.goto(f"{server.url}/?view=fleet", wait_until="commit")
-            page.wait_for_function(
-                "(n) => document.querySelectorAll('.fleet-vehicle').length >= n", arg=n
-            )
-            open_s = time.monotonic() - opened
-            opening = page.evaluate(OPENING, n)
+            open_s, opening = open_fleet(page, server.url, n)
+            # Again, as a director who had it open before would: the cache is warm.
+            _, warm = open_fleet(page, server.url, n)
+            opening["list drawn, opened again"] = warm["list drawn"]
             page.evaluate(OBSERVE)
+            # A switch before this was on screen before the page watched: not timed.
+            watched = time.time()
             queries = server.python(QUERIES)
             queries = answer(queries, "QUERIES").split()
             queries = f"{queries[0]} for {queries[1]} vehicles"
@@ -344,8 +348,8 @@ def run(n: int, args) -> dict:
         errors = (ARTIFACTS / f"fleet-bench-{n}.log").read_text(errors="replace")
         drop_database(url)
     logs = [(work / f"collector{i}.log").read_text(errors="replace") for i in range(n)]
-    timing = stages(args, legs, starts, results, vehicles, shown, frames, errors, logs)
-    return summarise(n, args, legs, starts, published, results, vehicles, shown) | {
+    timing = stages(args, legs, starts, results, vehicles, shown, frames, errors, logs, watched)
+    return summarise(n, args, legs, starts, published, results, vehicles, shown, watched) | {
         "stages": timing,
         "drained_s": drained,
         "left_in_spool": left,
@@ -378,7 +382,7 @@ LIVE = re.compile(r"live (read|sent) segments=\[([\d, ]*)\] at=([\d.]+)(?: notif
 RECEIVED = re.compile(r"mode \S+ start=([\d.]+) received=([\d.]+)")
 
 
-def stages(args, legs, starts, results, vehicles, shown, frames, server_log, collector_logs):
+def stages(args, legs, starts, results, vehicles, shown, frames, server_log, logs, watched):
     """Per stage of a switch's way to the screen, the seconds each switch spent in it."""
     read, sent, notified = {}, {}, {}
     for step, ids, at, heard in LIVE.findall(server_log):
@@ -392,11 +396,13 @@ def stages(args, legs, starts, results, vehicles, shown, frames, server_log, col
             message.setdefault(row, at / 1000)
     spans = {label: [] for label, _, _ in STAGES}
     for i, leg in enumerate(legs):
-        received = {round(float(s), 3): float(r) for s, r in RECEIVED.findall(collector_logs[i])}
+        received = {round(float(s), 3): float(r) for s, r in RECEIVED.findall(logs[i])}
         vehicle = vehicles[f"fleet-{i}"]
         for mode, start, _bound, row, written in results[str(leg)]["masters"][1:]:
             k = round((start - starts[i]) / args.switch_every)
             t = {"switch": starts[i] + k * args.switch_every, "published": start}
+            if t["switch"] < watched:
+                continue
             t["received"] = received.get(round(start, 3))
             t["written"], t["read"], t["sent"] = written, read.get(row), sent.get(row)
             # A NOTIFY heard before the row was written woke nobody for it (a poll did).
@@ -415,7 +421,7 @@ def stages(args, legs, starts, results, vehicles, shown, frames, server_log, col
     return spans
 
 
-def summarise(n, args, legs, starts, published, results, vehicles, shown) -> dict:
+def summarise(n, args, legs, starts, published, results, vehicles, shown, watched) -> dict:
     errors, bounds, screen, stored, expected, stored_after = [], [], [], 0, 0, []
     missing_pub = missing_stored = estimated = 0
     for i, leg in enumerate(legs):
@@ -433,7 +439,7 @@ def summarise(n, args, legs, starts, published, results, vehicles, shown) -> dic
             vehicle = vehicles[f"fleet-{i}"]
             seen = [at / 1000 for v, m, at, _painted in shown if int(v) == vehicle and m == mode]
             later = [at for at in seen if at >= t0 + k * every]
-            if later:
+            if later and t0 + k * every >= watched:
                 screen.append(min(later) - (t0 + k * every))
         missing_pub += published[i]["gps"]
         missing_stored += r["poses"]
