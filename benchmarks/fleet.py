@@ -20,6 +20,7 @@ It makes (and drops) a database per N next to the one --database-url names.
 import argparse
 import json
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -56,16 +57,17 @@ from events.models import Announcement, Segment
 from rosbridge_app.models import Collector
 from telemetry.models import Pose
 def stored(master):
-    # When the new segment was committed: its first row in the change feed.
+    # The new segment's first row in the change feed: its id, and when it was written
+    # (in the transaction that stored the segment, just before its commit).
     row = Announcement.objects.filter(kind="segment", payload__id=master.pk).order_by("id").first()
-    return row.created.timestamp() if row else None
+    return [row.pk, row.created.timestamp()] if row else [None, None]
 out = {{}}
 for leg in {legs!r}:
     masters = Segment.objects.filter(leg_id=leg, parent__isnull=True).order_by("start")
     inputs = (Collector.objects.filter(leg_id=leg).values_list("inputs", flat=True).first()) or {{}}
     out[leg] = {{
         "masters": [
-            [m.segment_type_id, m.start.timestamp(), m.start_uncertainty, stored(m)]
+            [m.segment_type_id, m.start.timestamp(), m.start_uncertainty, *stored(m)]
             for m in masters
         ],
         "poses": Pose.objects.filter(segment__leg_id=leg).count(),
@@ -73,22 +75,96 @@ for leg in {legs!r}:
     }}
 print("RESULTS", json.dumps(out))
 """
-# Notes when each vehicle's entry in the fleet list shows a new mode.
+COUNT = """
+import json
+from django.db.models import Count
+from events.models import Segment
+rows = Segment.objects.filter(leg_id__in={legs!r}, parent__isnull=True).values("leg_id")
+counts = dict(rows.annotate(n=Count("id")).values_list("leg_id", "n"))
+print("COUNT", json.dumps(counts))
+"""
+# Before any page script: when each live message with segment events arrives
+# (epoch ms, performance.now() on the page's time origin).
+FRAMES = """(() => {
+  window.__frames = [];
+  const Native = window.WebSocket;
+  window.WebSocket = class extends Native {
+    constructor(...args) {
+      super(...args);
+      this.addEventListener("message", (e) => {
+        const at = performance.timeOrigin + performance.now();
+        const m = JSON.parse(e.data);
+        if (m.type !== "events") return;
+        const ids = m.events.filter((x) => x.kind === "segment").map((x) => x.id);
+        if (ids.length) window.__frames.push([ids, at]);
+      });
+    }
+  };
+  // How many vehicles the fleet list shows, each time that changes (ms after
+  // navigation), from the first node parsed: the page's modules draw it early.
+  window.__list = [];
+  new MutationObserver(() => {
+    const n = document.querySelectorAll("#fleet-list .fleet-vehicle").length;
+    const last = window.__list[window.__list.length - 1];
+    if (!last || last[0] !== n) window.__list.push([n, performance.now()]);
+  }).observe(document, { childList: true, subtree: true });
+})();"""
+# Where the open time went, in ms after navigation started.
+OPENING = """(n) => {
+  const nav = performance.getEntriesByType("navigation")[0];
+  const api = performance.getEntriesByType("resource")
+    .find((r) => r.name.includes("/gui/api/fleet/"));
+  const drawn = window.__list.find(([count]) => count >= n);
+  return {
+    "page HTML": nav.responseEnd,
+    "page scripts run (DOMContentLoaded)": nav.domContentLoadedEventEnd,
+    "fleet API asked": api ? api.startTime : null,
+    "fleet API answered": api ? api.responseEnd : null,
+    "list drawn": drawn ? drawn[1] : null,
+  };
+}"""
+QUERIES = """
+from django.db import connection
+from django.test.utils import CaptureQueriesContext
+from rosbridge_app.selectors.fleet import fleet
+with CaptureQueriesContext(connection) as queries:
+    vehicles = fleet()
+print("QUERIES", len(queries.captured_queries), len(vehicles))
+"""
+# Notes when each vehicle's entry in the fleet list shows a new mode (epoch ms):
+# the DOM changed, and the next animation frame (the change is painted with it).
 OBSERVE = """() => {
   window.__modes = [];
   const shown = new Map();
   const list = document.querySelector("#fleet-list");
   const note = () => {
+    const at = performance.timeOrigin + performance.now();
     for (const b of list.querySelectorAll(".fleet-vehicle")) {
       if (shown.get(b.dataset.vehicle) !== b.dataset.mode) {
         shown.set(b.dataset.vehicle, b.dataset.mode);
-        window.__modes.push([b.dataset.vehicle, b.dataset.mode, Date.now()]);
+        const entry = [b.dataset.vehicle, b.dataset.mode, at, null];
+        window.__modes.push(entry);
+        requestAnimationFrame(() => (entry[3] = performance.timeOrigin + performance.now()));
       }
     }
   };
   new MutationObserver(note).observe(list, { childList: true, subtree: true, attributes: true });
   note();
 }"""
+
+
+def open_fleet(page, url: str, n: int) -> tuple[float, dict]:
+    """Seconds until the fleet list shows ``n`` vehicles, and where they went."""
+    opened = time.monotonic()
+    # Timed to the list, not to the page's load event.
+    page.goto(f"{url}/?view=fleet", wait_until="commit")
+    page.wait_for_function("(n) => document.querySelectorAll('.fleet-vehicle').length >= n", arg=n)
+    return time.monotonic() - opened, page.evaluate(OPENING, n)
+
+
+def answer(out: str, tag: str) -> str:
+    """What a Django shell run printed after ``tag`` on its line."""
+    return next(x for x in out.splitlines() if x.startswith(tag + " "))[len(tag) + 1 :]
 
 
 def pct(values, q):
@@ -136,13 +212,15 @@ def run(n: int, args) -> dict:
     url = fresh_database(args.database_url, f"fleet{n}")
     server = Server(work, "", url, name=f"fleet-bench-{n}")
     server.workers = 2
+    # The live link's and the collectors' timings of each switch (stages()).
+    server.env["DJANGO_SETTINGS_MODULE"] = "benchmarks.fleet_settings"
     if args.redis_url:
         server.env["FTT_REDIS_URL"] = args.redis_url
     server.start()
     procs: dict[str, list[subprocess.Popen]] = {"collector": [], "robot": []}
     try:
         out = server.python(session_code("director", "viewer") + SETUP.format(n=n))
-        _, key, legs = next(x for x in out.splitlines() if x.startswith("SETUP")).split(" ", 2)
+        key, legs = answer(out, "SETUP").split(" ", 1)
         legs = json.loads(legs)
         defaults = P.read_file(P.DEFAULT_FILE)
         for i in range(n):
@@ -168,7 +246,9 @@ def run(n: int, args) -> dict:
                     [sys.executable, "manage.py", "ftt_simulate", "--switch-every"]
                     + [str(args.switch_every), "--gps-rate", "10", "--tf-rate", "10"]
                     + ["--camera-rate", "1", "--camera-size", "320x240", "--map-size", "40"]
-                    + ["--duration", str(args.seconds), "--wait-for-subscriber", "120"]
+                    # A little longer than --seconds: the switch at --seconds is published
+                    # (the mode goes out once a second).
+                    + ["--duration", str(args.seconds + 1.5), "--wait-for-subscriber", "120"]
                     + ["--latitude", str(50.6160 + i * 0.0005)],
                     cwd=ROOT,
                     env=env,
@@ -182,6 +262,7 @@ def run(n: int, args) -> dict:
             browser = pw.chromium.launch(**({"executable_path": chromium} if chromium else {}))
             context = browser.new_context(viewport={"width": 1366, "height": 768})
             context.add_cookies([{"name": "sessionid", "value": key, "url": server.url}])
+            context.add_init_script(FRAMES)
             page = context.new_page()
             # Once every robot logs, the fleet view is opened and timed.
             deadline = time.monotonic() + 150
@@ -190,13 +271,16 @@ def run(n: int, args) -> dict:
                 if len([v for v in api.json()["vehicles"] if v["position"]]) == n:
                     break
                 time.sleep(1)
-            opened = time.monotonic()
-            page.goto(f"{server.url}/?view=fleet")
-            page.wait_for_function(
-                "(n) => document.querySelectorAll('.fleet-vehicle').length >= n", arg=n
-            )
-            open_s = time.monotonic() - opened
+            open_s, opening = open_fleet(page, server.url, n)
+            # Again, as a director who had it open before would: the cache is warm.
+            _, warm = open_fleet(page, server.url, n)
+            opening["list drawn, opened again"] = warm["list drawn"]
             page.evaluate(OBSERVE)
+            # A switch before this was on screen before the page watched: not timed.
+            watched = time.time()
+            queries = server.python(QUERIES)
+            queries = answer(queries, "QUERIES").split()
+            queries = f"{queries[0]} for {queries[1]} vehicles"
             api_times = []
             pids = {
                 "server": descendants(server.process.pid) + [server.worker.pid],
@@ -222,7 +306,19 @@ def run(n: int, args) -> dict:
                 time.sleep(2)
             for p in procs["robot"]:
                 p.wait(60)
+            # The switches still on their way (spooled, or not yet shown) get there
+            # before anything is counted, within a deadline.
+            expected = int(args.seconds // args.switch_every) + 1  # + the first master
+            deadline = time.monotonic() + args.drain
+            while time.monotonic() < deadline:
+                counts = json.loads(answer(server.python(COUNT.format(legs=legs)), "COUNT"))
+                if all(counts.get(str(leg), 0) >= expected for leg in legs):
+                    break
+                time.sleep(2)
+            drained = args.drain - max(0.0, deadline - time.monotonic())
+            time.sleep(2)  # the last switches' frames reach the page
             shown = page.evaluate("window.__modes")
+            frames = page.evaluate("window.__frames")
             browser.close()
         starts, published = [], []
         for p in procs["robot"]:
@@ -231,9 +327,12 @@ def run(n: int, args) -> dict:
             published.append(json.loads(text.split("published ")[1].strip().replace("'", '"')))
         for p in procs["collector"]:
             p.send_signal(2)
+        for p in procs["collector"]:
             p.wait(60)
+        left = [(work / f"collector{i}.log").read_text(errors="replace") for i in range(n)]
+        left = [line for text in left for line in text.splitlines() if "stay in" in line]
         results = server.python(RESULTS.format(legs=legs))
-        results = json.loads(next(x for x in results.splitlines() if x.startswith("RESULTS"))[8:])
+        results = json.loads(answer(results, "RESULTS"))
         vehicles = json.loads(
             server.python(
                 "import json\nfrom events.models import Vehicle\n"
@@ -248,16 +347,81 @@ def run(n: int, args) -> dict:
         server.stop()
         errors = (ARTIFACTS / f"fleet-bench-{n}.log").read_text(errors="replace")
         drop_database(url)
-    return summarise(n, args, legs, starts, published, results, vehicles, shown) | {
+    logs = [(work / f"collector{i}.log").read_text(errors="replace") for i in range(n)]
+    timing = stages(args, legs, starts, results, vehicles, shown, frames, errors, logs, watched)
+    return summarise(n, args, legs, starts, published, results, vehicles, shown, watched) | {
+        "stages": timing,
+        "drained_s": drained,
+        "left_in_spool": left,
+        "opening": opening,
+        "open_queries": queries,
         "open_s": open_s,
         "api_p95": pct(api_times, 0.95),
         "cpu": cpu,
         "rss": rss_max,
         "errors": errors.count("Traceback") + errors.count(" ERROR "),
+        "load": os.getloadavg()[0],
     }
 
 
-def summarise(n, args, legs, starts, published, results, vehicles, shown) -> dict:
+STAGES = [
+    ("robot: switch -> mode published (1 Hz)", "switch", "published"),
+    ("DDS: published -> collector received", "published", "received"),
+    ("collector: received -> segment row written", "received", "written"),
+    ("written -> NOTIFY heard by the web worker", "written", "notified"),
+    ("written -> read by the live poller", "written", "read"),
+    ("server: read -> frame sent", "read", "sent"),
+    ("sent -> message in the page", "sent", "message"),
+    ("page: message -> list updated", "message", "shown"),
+    ("page: list updated -> next frame", "shown", "painted"),
+    ("server + browser: written -> next frame", "written", "painted"),
+    ("FTT: published -> next frame", "published", "painted"),
+    ("switch -> next frame", "switch", "painted"),
+]
+LIVE = re.compile(r"live (read|sent) segments=\[([\d, ]*)\] at=([\d.]+)(?: notified=([\d.]+))?")
+RECEIVED = re.compile(r"mode \S+ start=([\d.]+) received=([\d.]+)")
+
+
+def stages(args, legs, starts, results, vehicles, shown, frames, server_log, logs, watched):
+    """Per stage of a switch's way to the screen, the seconds each switch spent in it."""
+    read, sent, notified = {}, {}, {}
+    for step, ids, at, heard in LIVE.findall(server_log):
+        for row in map(int, filter(None, ids.split(","))):
+            (read if step == "read" else sent).setdefault(row, float(at))
+            if step == "read" and heard:
+                notified.setdefault(row, float(heard))
+    message = {}
+    for ids, at in frames:
+        for row in ids:
+            message.setdefault(row, at / 1000)
+    spans = {label: [] for label, _, _ in STAGES}
+    for i, leg in enumerate(legs):
+        received = {round(float(s), 3): float(r) for s, r in RECEIVED.findall(logs[i])}
+        vehicle = vehicles[f"fleet-{i}"]
+        for mode, start, _bound, row, written in results[str(leg)]["masters"][1:]:
+            k = round((start - starts[i]) / args.switch_every)
+            t = {"switch": starts[i] + k * args.switch_every, "published": start}
+            if t["switch"] < watched:
+                continue
+            t["received"] = received.get(round(start, 3))
+            t["written"], t["read"], t["sent"] = written, read.get(row), sent.get(row)
+            # A NOTIFY heard before the row was written woke nobody for it (a poll did).
+            heard = notified.get(row)
+            t["notified"] = heard if heard and written and heard >= written else None
+            t["message"] = message.get(row)
+            later = [
+                (at / 1000, painted / 1000 if painted else None)
+                for v, m, at, painted in shown
+                if int(v) == vehicle and m == mode and at / 1000 >= t["switch"]
+            ]
+            t["shown"], t["painted"] = min(later) if later else (None, None)
+            for label, a, b in STAGES:
+                if t[a] is not None and t[b] is not None:
+                    spans[label].append(t[b] - t[a])
+    return spans
+
+
+def summarise(n, args, legs, starts, published, results, vehicles, shown, watched) -> dict:
     errors, bounds, screen, stored, expected, stored_after = [], [], [], 0, 0, []
     missing_pub = missing_stored = estimated = 0
     for i, leg in enumerate(legs):
@@ -266,16 +430,16 @@ def summarise(n, args, legs, starts, published, results, vehicles, shown) -> dic
         masters = r["masters"][1:]  # the first one opened when logging started
         expected += int(args.seconds // every)
         stored += len(masters)
-        for mode, start, uncertainty, modified in masters:
+        for mode, start, uncertainty, _row, modified in masters:
             k = round((start - t0) / every)
             if modified is not None:
                 stored_after.append(modified - (t0 + k * every))
             errors.append(abs(start - (t0 + k * every)))
             bounds.append(uncertainty or 0.0)
             vehicle = vehicles[f"fleet-{i}"]
-            seen = [at / 1000 for v, m, at in shown if int(v) == vehicle and m == mode]
+            seen = [at / 1000 for v, m, at, _painted in shown if int(v) == vehicle and m == mode]
             later = [at for at in seen if at >= t0 + k * every]
-            if later:
+            if later and t0 + k * every >= watched:
                 screen.append(min(later) - (t0 + k * every))
         missing_pub += published[i]["gps"]
         missing_stored += r["poses"]
@@ -305,6 +469,12 @@ def main():
     parser.add_argument("--seconds", type=float, default=150)
     parser.add_argument("--switch-every", type=float, default=10)
     parser.add_argument("--domain", type=int, default=90, help="robot i: ROS domain DOMAIN + i")
+    parser.add_argument(
+        "--drain",
+        type=float,
+        default=120,
+        help="after the robots stop, wait up to this long for every switch to be stored",
+    )
     args = parser.parse_args()
     rows = [run(n, args) for n in args.robots]
     load = os.getloadavg()
@@ -324,12 +494,22 @@ def main():
         ("fleet view open (s)", "open_s"),
         ("fleet API p95 (s)", "api_p95"),
         ("server errors logged", "errors"),
+        ("load average (1 min) at the end", "load"),
+        ("waited after the robots stopped (s)", "drained_s"),
+        ("fleet selector's queries", "open_queries"),
     ]
     print("| | " + " | ".join(f"{r['n']} robots" for r in rows) + " |")
     print("|---|" + "---|" * len(rows))
     for label, key in keys:
         cells = [f"{r[key]:.3f}" if isinstance(r[key], float) else str(r[key]) for r in rows]
         print(f"| {label} | " + " | ".join(cells) + " |")
+    for label, _, _ in STAGES:
+        spans = [r["stages"][label] for r in rows]
+        cells = [f"{pct(x, 0.5) * 1e3:.0f} / {pct(x, 0.95) * 1e3:.0f} ({len(x)})" for x in spans]
+        print(f"| {label}, p50 / p95 ms (switches) | " + " | ".join(cells) + " |")
+    for label in rows[0]["opening"]:
+        cells = [f"{r['opening'][label] or float('nan'):.0f}" for r in rows]
+        print(f"| open: {label}, ms after navigation | " + " | ".join(cells) + " |")
     for kind in rows[0]["cpu"]:
         cells = [f"{r['cpu'][kind] * 100:.0f} % / {r['rss'][kind]:.0f} MB" for r in rows]
         print(f"| CPU / RSS: {kind} | " + " | ".join(cells) + " |")
@@ -341,6 +521,9 @@ def main():
             for r in rows
         )
     )
+    for r in rows:
+        for line in r["left_in_spool"]:
+            print(f"{r['n']} robots, left in a spool at the end: {line}")
 
 
 if __name__ == "__main__":

@@ -86,6 +86,15 @@ def _attach_segments(rows: list[dict]) -> None:
 _bounds = database_sync_to_async(feed.bounds)
 
 
+def _log_timing(step: str, rows: list[dict], **times: float) -> None:
+    """At DEBUG: when segment rows were read or sent (epoch seconds), so that a
+    benchmark can split a mode switch's way to the screen into its stages."""
+    ids = [r["id"] for r in rows if r["kind"] == Announcement.Kind.SEGMENT]
+    if ids:
+        extra = "".join(f" {key}={value:.6f}" for key, value in times.items())
+        logger.debug("live %s segments=%s at=%.6f%s", step, ids, time.time(), extra)
+
+
 class OutboxPoller:
     """Reads the outbox once for all consumers of one event loop."""
 
@@ -101,6 +110,7 @@ class OutboxPoller:
         self.listener: asyncio.Task | None = None
         self.sqlite_listener: wakeup.SqliteListener | None = None
         self.wake_from_thread = None
+        self.notified = 0.0  # when the last NOTIFY arrived (time.time(), for the debug log)
 
     @classmethod
     def for_loop(cls) -> "OutboxPoller":
@@ -165,6 +175,7 @@ class OutboxPoller:
                     # Rows committed while (re)connecting are found by this read.
                     self.wakeup.set()
                     async for _ in conn.notifies():
+                        self.notified = time.time()
                         self.wakeup.set()
             except asyncio.CancelledError:
                 raise
@@ -190,7 +201,10 @@ class OutboxPoller:
         self.sqlite_listener, self.sqlite_loop = listener, loop
 
     async def poll_once(self) -> list[dict]:
+        asked = time.time()
         rows = [r for r in await _rows_after(self.floor) if r["id"] not in self.seen]
+        if logger.isEnabledFor(logging.DEBUG):
+            _log_timing("read", rows, notified=self.notified, asked=asked)
         for row in rows:
             self.seen.add(row["id"])
         self._advance_floor()
@@ -384,6 +398,8 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
         if len(self.sent) > 10000:
             self.sent = set(sorted(self.sent)[-5000:])
         await self.send_json({"type": "events", "events": fresh})
+        if logger.isEnabledFor(logging.DEBUG):
+            _log_timing("sent", fresh)
 
     async def live_wake(self, message):
         self.poller.wake()

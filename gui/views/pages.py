@@ -33,6 +33,7 @@ from events.models import (
 )
 from gui.views.gui_api import leg_segments, read_ahead
 from rosbridge_app.selectors.collectors import is_online, logging_into
+from rosbridge_app.selectors.fleet import fleet
 
 
 def missing_configuration() -> list[str]:
@@ -84,7 +85,8 @@ def _chosen(request, name: str) -> int | None:
 def bootstrap(request, opened: dict | None) -> dict[str, dict]:
     """What the cockpit's script reads first, named by what it is: the catalogues,
     the rows of each picker down to the leg in the address (or the one a bare
-    address opens) and that leg's segments, as /api/ and /gui/api/ answer them.
+    address opens) and that leg's segments, as /api/ and /gui/api/ answer them;
+    on the fleet view, the fleet (one query), drawn as soon as the script runs.
 
     Each piece is ``{"of": the parent's id or None, "data": ...}``; the script
     takes a piece once, when it reads that very thing (static/gui/bootstrap.js),
@@ -106,6 +108,8 @@ def bootstrap(request, opened: dict | None) -> dict[str, dict]:
         "vehicles": piece(rows(s.VehicleSerializer, Vehicle.objects.all())),
         "event": piece(rows(s.TestEventSerializer, TestEvent.objects.all())),
     }
+    if request.GET.get("view") == "fleet" or (opened or {}).get("view") == "fleet":
+        pieces["fleet"] = piece({"vehicles": fleet()})
     event, shift, leg = chosen["event"], chosen["shift"], chosen["leg"]
     if event is not None:
         shifts = Shift.objects.filter(test_event_id=event)

@@ -161,6 +161,9 @@ class Pipeline:
         if placed is None:
             return SECOND_COPY
         start, robot_stamp, uncertainty = placed
+        if mode != self.last_mode and log.isEnabledFor(logging.DEBUG):
+            # benchmarks/fleet.py splits a switch's way to the screen with it.
+            log.debug("mode %s start=%.6f received=%.6f", mode, start.timestamp(), at.timestamp())
         self.on_mode_value(mode, start, robot_stamp=robot_stamp, uncertainty=uncertainty)
         return None
 

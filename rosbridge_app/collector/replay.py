@@ -72,6 +72,7 @@ class ReplayOrder:
         # Set once the backlog's segment changes are all applied: looking for
         # more would scan the whole backlog every turn.
         self._changes_done = False
+        self.stored_change = False  # whether the last slice stored held a segment change
         saved = outbox.get_state(_STATE)
         # {"end": last id of the backlog, "master": uid open before it, or None}
         self.lane = json.loads(saved) if saved else None
@@ -138,9 +139,11 @@ class ReplayOrder:
         return taken + stored
 
     def _store(self, recorder: Recorder, rows: list, master: GivenMaster | None) -> int:
+        self.stored_change = False
         if rows:
             recorder.apply([event for _, event in rows], master=master)
             self.outbox.remove([row_id for row_id, _ in rows])
+            self.stored_change = any(event.kind in SEGMENT_CHANGES for _, event in rows)
         return len(rows)
 
     def _store_held(self, recorder: Recorder, maps: bool) -> int:
@@ -152,6 +155,7 @@ class ReplayOrder:
             # Not under the lock: the spool thread goes on holding meanwhile. Should it
             # move these to the spool too, they are stored again later as nothing (uids).
             recorder.apply(events)
+            self.stored_change = any(event.kind in SEGMENT_CHANGES for event in events)
             with self.held.lock:
                 self.held.remove(events)
         return len(events)

@@ -47,6 +47,9 @@ class Spooler(threading.Thread):
         self.stop = threading.Event()
         # Set after every append: the writer waits on it instead of sleeping.
         self.spooled = threading.Event()
+        # Set after a segment change (mode, start, stop) was spooled: the writer
+        # stores it before its periodic chores.
+        self.urgent = threading.Event()
         self.dropped = 0
 
     def run(self) -> None:
@@ -57,6 +60,7 @@ class Spooler(threading.Thread):
         """Positions wait up to ``timeout`` to share one append; a mode switch,
         start or stop ends the wait, so it reaches the database without it."""
         batch = []
+        urgent = False
         deadline = time.monotonic() + timeout
         while len(batch) < BATCH:
             try:
@@ -74,9 +78,12 @@ class Spooler(threading.Thread):
                         gettext("dropped a %s that cannot be converted: %s"), event.kind, exc
                     )
             if event.kind in _URGENT:
+                urgent = True
                 deadline = 0.0  # take only what is already queued
         if batch or len(self.held):
             self._store(batch)
+            if urgent:
+                self.urgent.set()
             self.spooled.set()
         return len(batch)
 

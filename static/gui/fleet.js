@@ -1,5 +1,6 @@
 /* The fleet view: every vehicle that is logging, on one map, for a test
- * director running several robots.  Opening it reads /gui/api/fleet/ once;
+ * director running several robots.  Opening it takes the fleet the page brought
+ * along (or reads /gui/api/fleet/ once);
  * after that each robot's mode and position arrive over the live link and are
  * applied to its entry (apply); only what the events cannot say (a vehicle
  * that starts or stops logging, a collector's state) is read again.  One tap
@@ -14,6 +15,7 @@ import { COLORS, GpsMap } from "./maps.js";
 import { gpsMap, localMap, showMaps, tileUrl } from "./mapview.js";
 import { Live } from "./live.js";
 import { loadLevel } from "./levels.js";
+import { take } from "./bootstrap.js";
 
 const NO_MODE = "#6b7785";
 // What needs a re-read is read at most this often.
@@ -79,7 +81,8 @@ export const Fleet = {
     clearTimeout(this.timer);
     this.timer = null;
     this.lastRead = Date.now();
-    const data = await api("GET", "fleet/", undefined, { root: CONFIG.guiApiRoot });
+    // Opening the view, the page brought the fleet along: no request to wait for.
+    const data = take("fleet") ?? (await api("GET", "fleet/", undefined, { root: CONFIG.guiApiRoot }));
     this.vehicles = data.vehicles;
     // The vehicles are shown before the basemaps are asked for: they do not wait on them.
     this.render();
@@ -111,7 +114,11 @@ export const Fleet = {
         v.mode = open.segment_type;
         v.mode_since = open.start;
         if (open.segment_type === "ito") v.last_takeover = open.start;
-        this.listStale = true;
+        // A new mode is what the director watches for: drawn now, not at the next
+        // frame (a switch is rare; positions, many a second, wait for the frame).
+        this.listStale = false;
+        this.render();
+        return;
       } else if (masters.length) {
         Live.later("fleet"); // its segment closed: logging may have stopped
         return;

@@ -296,6 +296,19 @@ def test_fleet_lists_logging_vehicles_to_anyone_with_a_role(client, leg, vehicle
     assert (entry["vehicle"]["key"], entry["mode"], entry["leg"]["id"]) == ("husky", "ito", leg.pk)
 
 
+def test_the_fleet_view_carries_the_fleet_as_the_api_answers_it(client, leg, vehicle):
+    """Opening the fleet view waits for no request: its vehicles come with the page."""
+    member(client, "vera", "viewer")
+    collector_for(vehicle, logging=True, leg=leg)
+    segments.report_mode(leg, "ito")
+
+    piece = _bootstrap(client.get("/?view=fleet").content.decode())["fleet"]
+
+    assert piece == {"of": None, "data": client.get("/gui/api/fleet/").json()}
+    assert [v["mode"] for v in piece["data"]["vehicles"]] == ["ito"]
+    assert "fleet" not in _bootstrap(client.get(f"/?leg={leg.pk}").content.decode())
+
+
 def _config(page: str) -> dict:
     config = re.search(r'<script id="gui-config" type="application/json">(.*?)</script>', page)
     return json.loads(config.group(1))

@@ -142,3 +142,25 @@ def test_a_live_switch_is_committed_before_what_was_spooled_after_it(leg, tmp_pa
     assert len(outbox) == len(after)
     assert order.write_next(recorder) == len(after)
     assert Pose.objects.filter(segment__uid=switch.uid).count() == 3
+
+
+def test_a_switch_ends_its_slice_and_the_writer_knows_it_is_stored(leg, tmp_path):
+    """The collector's writer stores a switch ahead of its heartbeat: slices
+    until the one that held the switch (runtime._write_change)."""
+    t0 = datetime.now(UTC) + timedelta(minutes=1)
+    outbox = Outbox(tmp_path / "spool.sqlite3")
+    # Live, not a backlog: fewer records pending than a quarter of a slice.
+    recorder, order = Recorder(lambda: leg), ReplayOrder(outbox, 100)
+    outbox.append([Event(ev.START, t0), Event(ev.MODE, t0, {"mode": "auto"})])
+    while order.write_next(recorder):
+        pass
+    switch_at = t0 + timedelta(seconds=5)
+    outbox.append(
+        [*_fixes(t0, 2), Event(ev.MODE, switch_at, {"mode": "ito"}), *_fixes(switch_at, 2)]
+    )
+    while order.write_next(recorder):
+        if order.stored_change:
+            break
+    assert Segment.objects.get(leg=leg, parent=None, end=None).segment_type_id == "ito"
+    assert len(outbox) == 4  # the positions after the switch wait for the next turn
+    assert order.write_next(recorder) == 4 and not order.stored_change

@@ -23,6 +23,7 @@ def test_a_mode_switch_does_not_wait_for_the_batching_window(tmp_path):
     assert time.monotonic() - started < WINDOW / 2
     assert [e.kind for _, e in spooler.outbox.peek()] == [ev.GPS, ev.MODE]
     assert spooler.spooled.is_set()  # the writer is woken
+    assert spooler.urgent.is_set()  # and stores the switch before its chores
 
 
 def test_positions_share_one_append_within_the_window(tmp_path):
@@ -33,3 +34,4 @@ def test_positions_share_one_append_within_the_window(tmp_path):
         events.put(Event(ev.GPS, now, {"lon": 7.0 + i, "lat": 50.0}))
     assert spooler.spool_once(timeout=0.2) == 3
     assert len(spooler.outbox) == 3
+    assert not spooler.urgent.is_set()
