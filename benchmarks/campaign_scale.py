@@ -218,6 +218,12 @@ def ingest(batches: int = 10, size: int = 1000) -> float:
     return total / seconds
 
 
+def one_leg(event: TestEvent) -> list[Segment]:
+    """The masters of the test event's first leg, the leg whose list and tracks are timed."""
+    leg = Leg.objects.filter(shift__test_event=event).order_by("pk").first()
+    return list(Segment.objects.filter(leg=leg, parent=None).order_by("start", "id"))
+
+
 def segment_list(leg_masters: list[Segment]) -> None:
     try:
         distances.displayed_distances(leg_masters)
@@ -248,8 +254,7 @@ def measure(step: int) -> dict:
 
     events = list(TestEvent.objects.exclude(location="live").order_by("start"))
     one = events[len(events) // 2]
-    leg = Leg.objects.filter(shift__test_event=one).order_by("pk").first()
-    leg_masters = list(Segment.objects.filter(leg=leg, parent=None).order_by("start", "id"))
+    leg_masters = one_leg(one)
     figures = {
         "ingest poses/s": ingest(),
         "statistics of one event s": timed(lambda: event_statistics(one, GPS)),
