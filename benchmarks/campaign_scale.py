@@ -36,6 +36,8 @@ from pathlib import Path
 
 ROOT = Path(os.environ.get("FTT_BENCH_ROOT") or Path(__file__).resolve().parent.parent)
 sys.path.insert(0, str(ROOT))
+# Paths given on the command line are the caller's, not the checkout's.
+CALLED_FROM = Path.cwd()
 os.chdir(ROOT)
 os.environ.setdefault("DJANGO_SETTINGS_MODULE", "ftt_site.settings")
 
@@ -301,7 +303,7 @@ def main():
     if args.compare:
         for path in args.compare:
             print(f"== {path}")
-            report(json.loads(Path(path).read_text()))
+            report(json.loads((CALLED_FROM / path).read_text()))
         return
     if connection.vendor != "postgresql":
         sys.exit("campaign_scale needs PostGIS (FTT_DATABASE_URL)")
@@ -340,7 +342,7 @@ def run(args) -> None:
         steps.append({"poses": want, "load": os.getloadavg()[0], **measure(want)})
         report(steps)
         if args.json:
-            Path(args.json).write_text(json.dumps(steps, indent=1))
+            (CALLED_FROM / args.json).write_text(json.dumps(steps, indent=1))
 
 
 if __name__ == "__main__":
