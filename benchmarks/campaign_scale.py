@@ -36,6 +36,8 @@ from pathlib import Path
 
 ROOT = Path(os.environ.get("FTT_BENCH_ROOT") or Path(__file__).resolve().parent.parent)
 sys.path.insert(0, str(ROOT))
+# Paths given on the command line are the caller's, not the checkout's.
+CALLED_FROM = Path.cwd()
 os.chdir(ROOT)
 os.environ.setdefault("DJANGO_SETTINGS_MODULE", "ftt_site.settings")
 
@@ -218,6 +220,12 @@ def ingest(batches: int = 10, size: int = 1000) -> float:
     return total / seconds
 
 
+def one_leg(event: TestEvent) -> list[Segment]:
+    """The masters of the test event's first leg, the leg whose list and tracks are timed."""
+    leg = Leg.objects.filter(shift__test_event=event).order_by("pk").first()
+    return list(Segment.objects.filter(leg=leg, parent=None).order_by("start", "id"))
+
+
 def segment_list(leg_masters: list[Segment]) -> None:
     try:
         distances.displayed_distances(leg_masters)
@@ -248,8 +256,7 @@ def measure(step: int) -> dict:
 
     events = list(TestEvent.objects.exclude(location="live").order_by("start"))
     one = events[len(events) // 2]
-    leg = Leg.objects.filter(shift__test_event=one).order_by("pk").first()
-    leg_masters = list(Segment.objects.filter(leg=leg, parent=None).order_by("start", "id"))
+    leg_masters = one_leg(one)
     figures = {
         "ingest poses/s": ingest(),
         "statistics of one event s": timed(lambda: event_statistics(one, GPS)),
@@ -296,7 +303,7 @@ def main():
     if args.compare:
         for path in args.compare:
             print(f"== {path}")
-            report(json.loads(Path(path).read_text()))
+            report(json.loads((CALLED_FROM / path).read_text()))
         return
     if connection.vendor != "postgresql":
         sys.exit("campaign_scale needs PostGIS (FTT_DATABASE_URL)")
@@ -335,7 +342,7 @@ def run(args) -> None:
         steps.append({"poses": want, "load": os.getloadavg()[0], **measure(want)})
         report(steps)
         if args.json:
-            Path(args.json).write_text(json.dumps(steps, indent=1))
+            (CALLED_FROM / args.json).write_text(json.dumps(steps, indent=1))
 
 
 if __name__ == "__main__":

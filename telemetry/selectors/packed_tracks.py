@@ -23,18 +23,21 @@ _PG_EPOCH_MICROSECONDS = 946_684_800_000_000
 _PG_FLOAT = np.dtype(">f8")
 
 
-# The poses whose robot stamp lies in a span (its two ends are parameters), or
-# that have none: a bound the planner prunes the month partitions by
-# (telemetry.services.pose_partitions) before the read starts, unstamped poses
-# being in the default partition.
-_IN_SPAN = (
-    "(robot_stamp BETWEEN %(first)s::timestamptz AND %(last)s::timestamptz OR robot_stamp IS NULL)"
-)
+def _in_span(unstamped: bool) -> str:
+    """The poses whose robot stamp lies in a span (its two ends are
+    parameters), and those that have none where ``unstamped``: a bound the
+    planner prunes the month partitions by (telemetry.services.pose_partitions)
+    before the read starts.  Unstamped poses are in the default partition,
+    which only a read that may need them names (besides a span that reaches a
+    month without a partition of its own)."""
+    stamped = "robot_stamp BETWEEN %(first)s::timestamptz AND %(last)s::timestamptz"
+    return f"({stamped} OR robot_stamp IS NULL)" if unstamped else f"({stamped})"
 
 
-def gps_tracks_sql() -> str:
+def gps_tracks_sql(unstamped: bool = True) -> str:
     """The query of the GPS tracks (parameters: ``ids``, the segment ids, and
-    ``first`` and ``last``, the span's ends), so the benchmark can show its plan."""
+    ``first`` and ``last``, the span's ends; ``unstamped``: see ``_in_span``),
+    so the benchmark can show its plan."""
     no_fix = int(FixStatus.NO_FIX)
     return (
         "SELECT segment_id, "
@@ -42,13 +45,14 @@ def gps_tracks_sql() -> str:
         f"string_agg(timestamptz_send(t), ''::bytea) FILTER (WHERE fix_status <> {no_fix}), "
         f"count(*) FILTER (WHERE fix_status = {no_fix}) "
         "FROM (SELECT segment_id, point, fix_status, COALESCE(robot_stamp, received) AS t "
-        f'FROM "{Pose._meta.db_table}" WHERE segment_id = ANY(%(ids)s::bigint[]) AND {_IN_SPAN} '
+        f'FROM "{Pose._meta.db_table}" WHERE segment_id = ANY(%(ids)s::bigint[]) '
+        f"AND {_in_span(unstamped)} "
         f"ORDER BY segment_id, {order_sql()}) AS ordered "
         "GROUP BY segment_id"
     )
 
 
-def local_tracks_sql() -> str:
+def local_tracks_sql(unstamped: bool = True) -> str:
     """The query of the local tracks, read the way the GPS tracks are; the
     frame is that of each track's first point, found through the same index."""
     table = LocalPose._meta.db_table
@@ -56,9 +60,10 @@ def local_tracks_sql() -> str:
         "SELECT segment_id, string_agg(float8send(x), ''::bytea), "
         "string_agg(float8send(y), ''::bytea), string_agg(timestamptz_send(t), ''::bytea), "
         f'(SELECT frame FROM "{table}" AS first WHERE first.segment_id = ordered.segment_id '
-        f"AND {_IN_SPAN} ORDER BY {order_sql()} LIMIT 1) "
+        f"AND {_in_span(unstamped)} ORDER BY {order_sql()} LIMIT 1) "
         "FROM (SELECT segment_id, x, y, COALESCE(robot_stamp, received) AS t "
-        f'FROM "{table}" WHERE segment_id = ANY(%(ids)s::bigint[]) AND {_IN_SPAN} '
+        f'FROM "{table}" WHERE segment_id = ANY(%(ids)s::bigint[]) '
+        f"AND {_in_span(unstamped)} "
         f"ORDER BY segment_id, {order_sql()}) AS ordered "
         "GROUP BY segment_id"
     )
@@ -76,10 +81,12 @@ def _kept_span_sql() -> str:
     The first time of the usable points (robot clock, else arrival) is at or
     before the first robot stamp.  The last point in driving order carries the
     latest robot stamp unless it has none (unstamped points sort last); then
-    the latest time of all is at or after it."""
+    the latest time of all is at or after it, and the segment has usable
+    points without a robot stamp: only then is the default partition read."""
     return (
         "SELECT set_config('jit', 'off', true), min(first_stamp), "
         "max(COALESCE(last_robot_stamp, last_stamp)), "
+        "COALESCE(bool_or(points > 0 AND last_robot_stamp IS NULL), false), "
         "array_agg(segment_id) FILTER (WHERE no_fix > 0), "
         "array_agg(no_fix) FILTER (WHERE no_fix > 0) "
         f'FROM "{SegmentFigures._meta.db_table}" '
@@ -87,9 +94,10 @@ def _kept_span_sql() -> str:
     )
 
 
-def _packed_rows(query: str, segment_ids: list[int], kept_mode: str | None):
-    """The rows of ``query``, in binary (as the bytes are stored), and the kept
-    count of fixes without a position by segment (None: every pose was read).
+def _packed_rows(query, segment_ids: list[int], kept_mode: str | None):
+    """The rows of ``query(unstamped)`` (``_in_span``), in binary (as the bytes
+    are stored), and the kept count of fixes without a position by segment
+    (None: every pose was read).
 
     ``kept_mode`` names the figures (telemetry.models.SegmentFigures) whose
     span bounds the read of stamped poses (``_kept_span_sql``); the figures
@@ -102,22 +110,24 @@ def _packed_rows(query: str, segment_ids: list[int], kept_mode: str | None):
     the statement, as it costs a plain scan more than it saves (``SET LOCAL``:
     until the end of the caller's transaction where there is one)."""
     with transaction.atomic():
-        span, no_fix = _span(segment_ids, kept_mode)
+        span, unstamped, no_fix = _span(segment_ids, kept_mode)
         with bound_cursor(binary_results=True) as cursor:
-            cursor.execute(query, {"ids": segment_ids, **span})
+            cursor.execute(query(unstamped), {"ids": segment_ids, **span})
             return cursor.fetchall(), no_fix
 
 
-def _span(segment_ids: list[int], kept_mode: str | None) -> tuple[dict, dict | None]:
-    """The span the read is bounded by and the kept counts of fixes without a
-    position (``_packed_rows``), with JIT off for the transaction."""
+def _span(segment_ids: list[int], kept_mode: str | None) -> tuple[dict, bool, dict | None]:
+    """The span the read is bounded by, whether it reads unstamped poses, and
+    the kept counts of fixes without a position (``_packed_rows``), with JIT
+    off for the transaction."""
     with connection.cursor() as cursor:
         if kept_mode is None:
             cursor.execute("SET LOCAL jit = off")
-            return _ALL_TIME, None
+            return _ALL_TIME, True, None
         cursor.execute(_kept_span_sql(), {"ids": segment_ids, "mode": kept_mode})
-        _, first, last, segments, counts = cursor.fetchone()
-    return {"first": first, "last": last}, dict(zip(segments or [], counts or [], strict=True))
+        _, first, last, unstamped, segments, counts = cursor.fetchone()
+    no_fix = dict(zip(segments or [], counts or [], strict=True))
+    return {"first": first, "last": last}, unstamped, no_fix
 
 
 def gps_tracks_plan(segment_ids: list[int], kept_mode: str, analyze: bool = False) -> list[str]:
@@ -125,9 +135,9 @@ def gps_tracks_plan(segment_ids: list[int], kept_mode: str, analyze: bool = Fals
     the benchmark and the tests to show which partitions it reads."""
     explain = "EXPLAIN (ANALYZE, BUFFERS) " if analyze else "EXPLAIN "
     with transaction.atomic():
-        span, _ = _span(segment_ids, kept_mode)
+        span, unstamped, _ = _span(segment_ids, kept_mode)
         with bound_cursor() as cursor:
-            cursor.execute(explain + gps_tracks_sql(), {"ids": segment_ids, **span})
+            cursor.execute(explain + gps_tracks_sql(unstamped), {"ids": segment_ids, **span})
             return [row[0] for row in cursor.fetchall()]
 
 
@@ -141,7 +151,7 @@ def gps_arrays(segment_ids: list[int], kept_mode: str | None):
     """(segment id, longitudes, latitudes, seconds since 1970, fixes without a
     position) of each segment that has poses, in driving order (``kept_mode``:
     see ``_packed_rows``)."""
-    rows, kept_no_fix = _packed_rows(gps_tracks_sql(), segment_ids, kept_mode)
+    rows, kept_no_fix = _packed_rows(gps_tracks_sql, segment_ids, kept_mode)
     for seg, points, stamps, no_fix in rows:
         points = np.frombuffer(points or b"", dtype=_WKB_POINT)
         if kept_no_fix is not None:
@@ -154,7 +164,7 @@ def gps_arrays(segment_ids: list[int], kept_mode: str | None):
 def local_arrays(segment_ids: list[int], kept_mode: str | None):
     """(segment id, x, y, seconds since 1970, frame) of each segment that has
     local poses, in driving order (``kept_mode``: see ``_packed_rows``)."""
-    rows, _ = _packed_rows(local_tracks_sql(), segment_ids, kept_mode)
+    rows, _ = _packed_rows(local_tracks_sql, segment_ids, kept_mode)
     for seg, x, y, stamps, frame in rows:
         x = np.frombuffer(x, dtype=_PG_FLOAT).astype(float)
         y = np.frombuffer(y, dtype=_PG_FLOAT).astype(float)

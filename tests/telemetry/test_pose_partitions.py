@@ -192,14 +192,18 @@ def _as_read(track):
 
 def _drive_with_blind_fixes(leg, *, every_fix_stamped=False):
     """A track across a month's end (with a few points without the robot's
-    clock, or none), fixes without a position months before and hours after
-    it and one unstamped, and a second master with such a fix only."""
+    clock, or none) and local poses, fixes without a position months before
+    and hours after it and one unstamped, and a second master with such a fix only."""
     pose_partitions.ensure_partitions(datetime(2026, 1, 1, tzinfo=UTC), T0 + timedelta(days=1))
     master = _master(leg)
     if every_fix_stamped:
         stamps = [T0 + timedelta(seconds=i) for i in range(240)]
         recording.record_poses(
             master, [GpsFix(8.0 + i * 1e-5, 50.0, robot_stamp=t) for i, t in enumerate(stamps)]
+        )
+        recording.record_local_poses(
+            master,
+            [MapPose(x=i, y=0.0, frame="map", robot_stamp=t) for i, t in enumerate(stamps[:120])],
         )
     else:
         _drive(master)
@@ -215,11 +219,12 @@ def _drive_with_blind_fixes(leg, *, every_fix_stamped=False):
     return master, blind
 
 
-def test_tracks_read_within_the_kept_span_are_those_of_every_pose(leg):
+@pytest.mark.parametrize("every_fix_stamped", [False, True])
+def test_tracks_read_within_the_kept_span_are_those_of_every_pose(leg, every_fix_stamped):
     """The drawing read, bounded by the kept figures' span, gives the tracks of
     every pose: poses without the robot's clock, fixes without a position
     outside the span, and a master with such fixes only included."""
-    master, blind = _drive_with_blind_fixes(leg)
+    master, blind = _drive_with_blind_fixes(leg, every_fix_stamped=every_fix_stamped)
     ids = [master.pk, blind.pk]
     for mode in (GPS, LOCAL):
         bounded = load_tracks(ids, mode)
@@ -234,11 +239,18 @@ def test_tracks_read_within_the_kept_span_are_those_of_every_pose(leg):
 
 
 @pytest.mark.postgis_only
-def test_a_track_read_reads_the_months_its_kept_span_covers(leg):
-    master, blind = _drive_with_blind_fixes(leg, every_fix_stamped=True)
+@pytest.mark.parametrize("every_fix_stamped", [False, True])
+def test_a_track_read_reads_the_months_its_kept_span_covers(leg, every_fix_stamped):
+    master, blind = _drive_with_blind_fixes(leg, every_fix_stamped=every_fix_stamped)
     assert len(load_tracks([master.pk])[master.pk]) == 240
     plan = "\n".join(gps_tracks_plan([master.pk, blind.pk], GPS))
     table = Pose._meta.db_table
-    # Not February, where a fix without a position lies, nor the other months.
+    # Not February, where a fix without a position lies, nor the months
+    # before; the default partition (poses without the robot's clock) only
+    # where a usable fix has no stamp, not for the unstamped fix without a
+    # position.  (Unstamped fixes end the span at their arrival, today.)
     read = set(re.findall(rf" on ({table}_(?:\d{{6}}|default))\b", plan))
-    assert read == {f"{table}_202605", f"{table}_202606", f"{table}_default"}, plan
+    months = {f"{table}_202605", f"{table}_202606"}
+    assert months <= read and not {f"{table}_202601", f"{table}_202602"} & read, plan
+    assert (f"{table}_default" in read) is not every_fix_stamped, plan
+    assert read == months or not every_fix_stamped, plan
