@@ -42,10 +42,8 @@ FONT_NOTE = gettext_noop(
     "DejaVu Sans with WenQuanYi Micro Hei or Noto CJK for Chinese, Japanese and Korean, "
     "and Noto Color Emoji for emoji"
 )
-# Points: the size of a segment's map sketch.
-SKETCH_SIZE = (190.0, 135.0)
-# Inches: the size of a shift's overview map.
-OVERVIEW_SIZE = (6.5, 4.8)
+SKETCH_SIZE = (190.0, 135.0)  # points: a segment's map sketch
+OVERVIEW_SIZE = (6.5, 4.8)  # inches: a shift's overview map
 MAX_GAPS_LISTED = 200
 
 
