@@ -14,7 +14,7 @@ from events.services import logs, segments
 from reports.documents.event_report import render_report
 from reports.documents.options import ReportOptions
 from telemetry.services import recording
-from tests.support.pdf import flat, pdf_text
+from tests.support.pdf import flat, pdf_text, save_pages
 
 Kind = Criterion.Kind
 STEP = 2.8e-5  # about 2 m of longitude at 50.6° north
@@ -224,6 +224,7 @@ def test_a_leg_takes_only_a_test_case_of_its_own_test_event(api_client, shift):
 def test_the_report_has_a_test_plan_section(plan, tile_server, tmp_path, settings):
     settings.FTT_TILE_CACHE = tmp_path / "tiles"
     result = render_report(plan["event"], ReportOptions(level="summary", tile_url=tile_server.url))
+    save_pages(result.pdf, "test-plan", dpi=90)
     text = flat(pdf_text(result.pdf, tmp_path, layout=False))
     assert "Test plan" in text
     assert "gravel: Gravel" in text and "night: Night" in text
