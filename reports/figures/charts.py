@@ -13,9 +13,10 @@ import numpy as np  # noqa: E402
 from django.utils.translation import gettext as _  # noqa: E402
 
 from reports import formatting as fmt  # noqa: E402
-from reports.figures.style import fixed_figure, rgb  # noqa: E402
+from reports.figures.style import fit_y_ticks, fixed_figure, rgb  # noqa: E402
 
-# Inches left of the axes: the y label and tick labels up to seven digits.
+# Inches left of the axes for the y label and short tick labels; longer ones
+# widen it (fit_y_ticks).
 CHART_LEFT = 0.75
 
 
@@ -37,6 +38,7 @@ def distance_chart(labels, auto, manual, path, dpi=150) -> str:
     ax.set_ylabel(_("distance [m]"), fontsize=7)
     ax.margins(y=0.25)
     ax.legend(fontsize=7)
+    fit_y_ticks(fig, ax)
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
     return path
@@ -66,6 +68,7 @@ def reasons_chart(labels, counts_by_shift, reasons, path, dpi=150) -> str:
         ax.legend(fontsize=6, ncols=min(len(keys), 4))
     else:
         ax.text(0.5, 0.5, _("no interventions"), transform=ax.transAxes, ha="center")
+    fit_y_ticks(fig, ax)
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
     return path
@@ -108,6 +111,7 @@ def estimate_chart(labels, estimates, path, name, unit, scale=1.0, dpi=150) -> s
     )
     ax.set_ylabel(f"{name} [{unit}]", fontsize=7)
     ax.ticklabel_format(axis="y", style="plain", useOffset=False)
+    fit_y_ticks(fig, ax)
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
     return path

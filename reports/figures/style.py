@@ -81,3 +81,18 @@ def fixed_figure(width: float, height: float, left: float, bottom: float = 0.45,
 def label_width(labels, size_pt: float = 7.0) -> float:
     """Inches a column of labels needs: about 0.6 em per character."""
     return max((len(label) for label in labels), default=0) * size_pt * 0.6 / 72
+
+
+# Inches kept free left of the y axis label.
+Y_LABEL_MARGIN = 0.05
+
+
+def fit_y_ticks(fig, ax) -> None:
+    """Widen the axes' left margin where the y axis (tick labels and label)
+    needs more than it gives: a fixed margin is chosen before the data's
+    numbers are known.  Measures the y axis alone, once."""
+    used = ax.yaxis.get_tightbbox(fig.canvas.get_renderer())
+    short = (Y_LABEL_MARGIN * fig.dpi - used.x0) / (fig.get_figwidth() * fig.dpi)
+    if short > 0:
+        box = ax.get_position()
+        ax.set_position((box.x0 + short, box.y0, box.width - short, box.height))
