@@ -100,22 +100,28 @@ def small_filesystem(path: Path, megabytes: int):
 
 
 class Listener:
-    """What the robot published, heard beside the collector: mode changes and fixes."""
+    """What the robot published, heard beside the collector: mode changes and fixes.
+
+    A change is timed by its publisher's send time (the DDS source timestamp),
+    the time the collector stores: this process's own callbacks may run
+    seconds late on a busy machine."""
 
     def __init__(self, node):
         from sensor_msgs.msg import NavSatFix
         from std_msgs.msg import Bool
 
+        from rosbridge_app.collector.mode_timing import sent_at
         from rosbridge_app.collector.modes import AUTO, ITO
 
         self.changes: list[tuple[float, str]] = []
         self.fixes: list[float] = []
         self.counting = True
 
-        def on_mode(msg):
+        def on_mode(msg, info):
             mode = AUTO if msg.data else ITO
             if self.counting and (not self.changes or self.changes[-1][1] != mode):
-                self.changes.append((time.time(), mode))
+                sent = sent_at(info)
+                self.changes.append((sent.timestamp() if sent else time.time(), mode))
 
         def on_fix(msg):
             if self.counting:
@@ -178,13 +184,24 @@ def run(*, relay, leg, name, log: Path, listener, full_seconds, after_seconds, a
         "the backlog written",
     )
     figures["collector exited"] = not alive()
-    masters = Segment.objects.filter(leg=leg, parent__isnull=True).order_by("start")
-    stored = [(m.start.timestamp(), m.segment_type_id) for m in masters]
-    lost = [
-        (t, mode)
-        for t, mode in listener.changes[1:]
-        if not any(mode == kind and abs(start - t) < 1.5 for start, kind in stored)
-    ]
+
+    def lost():
+        masters = Segment.objects.filter(leg=leg, parent__isnull=True).order_by("start")
+        stored = [(m.start.timestamp(), m.segment_type_id) for m in masters]
+        missing = [
+            (round(t - cut, 1), mode)
+            for t, mode in listener.changes[1:]
+            if not any(mode == kind and abs(start - t) < 1.5 for start, kind in stored)
+        ]
+        return missing, stored
+
+    # A switch heard just before the count stopped may still be on its way to
+    # the database: it is lost only if it is not there within the wait.
+    try:
+        wait(lambda: not lost()[0], 30, "every switch stored")
+    except TimeoutError:
+        pass
+    missing, stored = lost()
     stamps = sorted(
         s.timestamp()
         for s in poses.filter(robot_stamp__lte=_aware(end)).values_list("robot_stamp", flat=True)
@@ -195,7 +212,8 @@ def run(*, relay, leg, name, log: Path, listener, full_seconds, after_seconds, a
     figures.update(
         {
             "switches published": len(listener.changes) - 1,
-            "switches lost": len(lost),
+            "switches lost": len(missing),
+            "lost switches (s after the cut, mode)": missing,
             "switches while the disk was full": sum(
                 1 for t, _ in listener.changes if full < t < up
             ),
