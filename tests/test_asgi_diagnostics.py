@@ -28,3 +28,44 @@ def test_sigusr1_prints_every_thread_stack_and_keeps_running(tmp_path):
     assert result.returncode == 0, result.stderr[-2000:]
     assert "still running" in result.stdout
     assert "most recent call first" in result.stderr
+
+
+def test_a_blocked_event_loop_is_reported_once_with_the_blocking_stack(tmp_path):
+    import asyncio
+    import logging
+    import threading
+    import time
+
+    from ftt_site.loop_watch import watch_loop
+
+    said, again = [], threading.Event()
+
+    class Heard(logging.Handler):
+        def emit(self, record):
+            said.append(record.getMessage())
+            if "runs again" in said[-1]:
+                again.set()
+
+    logger, heard = logging.getLogger("ftt.web"), Heard()
+    logger.addHandler(heard)
+    loop = asyncio.new_event_loop()
+    runner = threading.Thread(target=loop.run_forever, daemon=True)
+    runner.start()
+
+    def block_the_loop():
+        time.sleep(2.5)
+
+    dump = tmp_path / "stacks.txt"
+    try:
+        with dump.open("w") as file:
+            watch_loop(loop, stall_s=0.5, file=file)
+            loop.call_soon_threadsafe(block_the_loop)
+            assert again.wait(15), said
+    finally:
+        logger.removeHandler(heard)
+        loop.call_soon_threadsafe(loop.stop)
+        runner.join(5)
+        loop.close()
+    assert sum("has run nothing" in m for m in said) == 1, said
+    assert sum("runs again after" in m for m in said) == 1, said
+    assert "in block_the_loop" in dump.read_text()
