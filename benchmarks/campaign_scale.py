@@ -6,8 +6,10 @@ segments; the poses are bulk-loaded with COPY, appended to every segment's
 track at each step.  At each step it prints:
 
 - batch ingest poses/s into a live segment (record_poses, 1 000-pose batches);
-- statistics of one test event, and the comparison with growth fit of the
-  whole campaign (all test events);
+- statistics of the whole campaign (every run of every test event) and of
+  one test event, and the comparison with growth fit of the whole campaign;
+- the PDF report of one test event (no map tiles; read back: it must be a PDF
+  with a page per shift at least);
 - the cockpit's segment list (its distances) and one leg's GPS tracks;
 - database size per million poses, pose table and its indexes apart;
 
@@ -250,23 +252,43 @@ def sizes() -> dict:
         return dict(zip(("pose table", "pose indexes", "database"), row, strict=True))
 
 
+def one_pdf(event: TestEvent) -> None:
+    """The event's PDF report, without map tiles, read back."""
+    from pypdf import PdfReader
+
+    from reports.documents.event_report import render_report
+    from reports.documents.options import ReportOptions
+
+    pdf = render_report(event, ReportOptions(no_tiles=True)).pdf
+    pages = len(PdfReader(io.BytesIO(pdf)).pages)
+    shifts = Shift.objects.filter(test_event=event).count()
+    if pages < shifts:
+        raise SystemExit(f"the report of {event} has {pages} pages for {shifts} shifts")
+
+
 def measure(step: int) -> dict:
     from reports.selectors.comparison import compare
-    from reports.selectors.statistics import event_statistics
+    from reports.selectors.statistics import event_runs, event_statistics, figures
 
     events = list(TestEvent.objects.exclude(location="live").order_by("start"))
     one = events[len(events) // 2]
     leg_masters = one_leg(one)
-    figures = {
+
+    def campaign_statistics():
+        return figures([run for e in events for run in event_runs(e, GPS, tracks=False)])
+
+    figures_now = {
         "ingest poses/s": ingest(),
+        "statistics of the campaign s": timed(campaign_statistics, repeat=1),
         "statistics of one event s": timed(lambda: event_statistics(one, GPS)),
         "comparison + growth, all events s": timed(lambda: compare(events, GPS), repeat=1),
+        "PDF of one event s": timed(lambda: one_pdf(one), repeat=1),
         "segment list s": timed(lambda: segment_list(leg_masters)),
         "one leg's tracks s": timed(lambda: load_tracks([m.pk for m in leg_masters], GPS)),
     }
     millions = step / 1e6
-    figures.update({f"{k} MB per M poses": v / 1e6 / millions for k, v in sizes().items()})
-    return figures
+    figures_now.update({f"{k} MB per M poses": v / 1e6 / millions for k, v in sizes().items()})
+    return figures_now
 
 
 def report(steps: list[dict]) -> None:
