@@ -50,7 +50,7 @@ class LocalNumbers(ScalarFormatter):
         return fmt.localised(super().get_offset())
 
 
-def local_numbers(ax) -> None:
+def localise_ticks(ax) -> None:
     """Number both axes in the report's language.  Dates and named ticks set later
     (xaxis_date, set_xticks with labels) replace it on their axis."""
     ax.xaxis.set_major_formatter(LocalNumbers())
@@ -61,7 +61,7 @@ def figure(size, **options):
     """A figure with one axes (plt.subplots), numbered in the report's language:
     every report figure is made here or by fixed_figure."""
     fig, ax = plt.subplots(figsize=size, **options)
-    local_numbers(ax)
+    localise_ticks(ax)
     return fig, ax
 
 
@@ -74,7 +74,7 @@ def fixed_figure(width: float, height: float, left: float, bottom: float = 0.45,
     ax = fig.add_axes(
         (left / width, bottom / height, 1 - (left + right) / width, 1 - (bottom + top) / height)
     )
-    local_numbers(ax)
+    localise_ticks(ax)
     return fig, ax
 
 
