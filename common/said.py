@@ -50,7 +50,7 @@ def said(text: str, **values) -> Said:
 
 
 def kept(column: str, words: "Said | str", limit: int | None = None) -> dict:
-    """The fields of a job row that keep ``words`` in ``column`` (message, error):
+    """The fields of a job row that keep ``words`` in ``column`` (message, error, verdict):
     the English sentence and, for a ``Said``, its text and values."""
     if isinstance(words, str):
         return {column: words[:limit], f"{column}_said": {}}

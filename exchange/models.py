@@ -28,7 +28,8 @@ class ArchiveImport(Job):
 
     @property
     def shown_lines(self) -> list[str]:
-        """The counts table in the reader's language (``lines`` keeps the requester's)."""
+        """The counts table in the reader's language (``lines`` is in the worker's,
+        FTT_LANGUAGE)."""
         return count_lines(self.counts) if self.counts else self.lines
 
     @property

@@ -50,7 +50,7 @@ class LocalNumbers(ScalarFormatter):
         return fmt.localised(super().get_offset())
 
 
-def local_numbers(ax) -> None:
+def localise_ticks(ax) -> None:
     """Number both axes in the report's language.  Dates and named ticks set later
     (xaxis_date, set_xticks with labels) replace it on their axis."""
     ax.xaxis.set_major_formatter(LocalNumbers())
@@ -61,20 +61,21 @@ def figure(size, **options):
     """A figure with one axes (plt.subplots), numbered in the report's language:
     every report figure is made here or by fixed_figure."""
     fig, ax = plt.subplots(figsize=size, **options)
-    local_numbers(ax)
+    localise_ticks(ax)
     return fig, ax
 
 
 def fixed_figure(width: float, height: float, left: float, bottom: float = 0.45, top: float = 0.3):
     """Figure and axes with margins in inches given by the caller.  A constrained
-    layout measures every text several times and was most of a chart's or
-    timeline's drawing time; each of ours knows its widest text in advance."""
+    layout measures every text several times, most of a chart's or timeline's
+    drawing time; the caller knows its widest text in advance, except a chart's
+    y tick labels, which widen the margin once drawn (fit_y_ticks)."""
     fig = plt.figure(figsize=(width, height))
     right = 0.15
     ax = fig.add_axes(
         (left / width, bottom / height, 1 - (left + right) / width, 1 - (bottom + top) / height)
     )
-    local_numbers(ax)
+    localise_ticks(ax)
     return fig, ax
 
 

@@ -313,9 +313,10 @@ class CollectorRuntime:
 
     def _write_change(self) -> None:
         """Store the segment change just spooled (with the positions before it)
-        ahead of the heartbeat and the command poll: under load each of those
-        took 0.1-0.4 s that a switch on the fleet view waited for (issue 33).
-        A few slices at most, so that a backlog never starves the heartbeat."""
+        ahead of the heartbeat and the command poll, whose round trips a switch
+        on the fleet view would otherwise wait for (docs/collector.md, the fleet
+        benchmark). A few slices at most, so that a backlog never starves the
+        heartbeat."""
         self.spooler.urgent.clear()
         for _ in range(URGENT_SLICES):
             if not self._write_batch() or self.order.stored_change:

@@ -8,8 +8,9 @@
 # without ROS: the collector cannot run there anyway).
 # FTT_ROS_INTERFACES=DIR[:DIR...] adds the robot team's own interface packages
 # or folders of .msg/.srv files (docs/collector.md: custom message types).
-# FTT_ROS_PREFIX=DIR builds into DIR instead of the virtualenv, with the tools
-# setup installed there (the tests build their fixtures so).
+# FTT_ROS_PREFIX=DIR builds into DIR instead of the virtualenv, with the rosidl
+# tools an earlier setup installed into the virtualenv (the tests build their
+# fixtures so).
 # On its own (also from a process that scripts/test.sh started, where FTT_ROOT
 # is in the environment but the helpers are not) it loads the helpers itself.
 if ! declare -F ftt_die >/dev/null; then

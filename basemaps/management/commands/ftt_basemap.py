@@ -45,7 +45,10 @@ class Command(BaseCommand):
             "--max-tiles", type=int, default=20000, help=_("Refuse an area of more tiles.")
         )
         fetch.add_argument(
-            "--retries", type=int, default=3, help=_("Attempts per tile before giving up.")
+            "--retries",
+            type=int,
+            default=3,
+            help=_("Retries per tile after the first attempt, before giving up."),
         )
         fetch.add_argument("--attribution", default="", help=_("Whose map it is."))
         fetch.add_argument("--register", action="store_true", help=_("Also add it as a layer."))
