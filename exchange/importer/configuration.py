@@ -6,6 +6,14 @@ from exchange.importer.session import ImportSession, fold
 CATALOGUES = {"weather": Weather, "segment_types": SegmentType, "ito_reasons": ItoReason}
 
 
+# Archives written before vehicles had a VIN lack it; every other field is required.
+_MAY_BE_MISSING = {"vin": ""}
+
+
+def _field(row: dict, name: str):
+    return row.get(name, _MAY_BE_MISSING[name]) if name in _MAY_BE_MISSING else row[name]
+
+
 def import_catalogues(session: ImportSession):
     for table, model in CATALOGUES.items():
         known = set(model.objects.values_list("key", flat=True))
@@ -44,7 +52,7 @@ def import_configuration(session: ImportSession):
                 session,
                 table,
                 model.objects.filter(key=r["key"]).first(),
-                lambda r=r, model=model, fields=fields: model(**{f: r.get(f, "") for f in fields}),
+                lambda r=r, model=model, fields=fields: model(**{f: _field(r, f) for f in fields}),
             )
     performers = {fold(p.institution): p for p in Performer.objects.order_by("-pk")}
     for r in session.records("performers"):

@@ -12,7 +12,7 @@ from django.core.files.uploadedfile import SimpleUploadedFile
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from events.models import TestEvent
+from events.models import TestEvent, Vehicle
 from exchange.archive import ArchiveError, open_archive
 from telemetry.models import Image
 from tests.support.api import download
@@ -130,7 +130,23 @@ MALFORMED = {
     "history-without-time": lambda m: signed_archive(
         replace_record(m, "history", lambda r: {**r, "at": None})
     ),
+    "vehicle-without-name": lambda m: signed_archive(
+        replace_record(m, "vehicles", lambda r: _without(r, "short_description"))
+    ),
 }
+
+
+def _without(record: dict, field: str) -> dict:
+    return {k: v for k, v in record.items() if k != field}
+
+
+def test_an_archive_from_before_the_vin_imports_its_vehicles_without_one(exported, post):
+    response = post(
+        signed_archive(replace_record(exported, "vehicles", lambda r: _without(r, "vin")))
+    )
+    assert response.status_code == 202, response.json()
+    run_queued_jobs()
+    assert list(Vehicle.objects.values_list("vin", flat=True)) == [""]
 
 
 @pytest.mark.parametrize("build", MALFORMED.values(), ids=MALFORMED.keys())
