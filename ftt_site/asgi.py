@@ -16,6 +16,7 @@ from channels.auth import AuthMiddlewareStack  # noqa: E402
 from channels.routing import ProtocolTypeRouter, URLRouter  # noqa: E402
 from channels.security.websocket import AllowedHostsOriginValidator  # noqa: E402
 
+from ftt_site.loop_watch import lifespan  # noqa: E402
 from ftt_site.pose_route import PoseRoute  # noqa: E402
 from ftt_site.request_limits import RequestLimits  # noqa: E402
 from ftt_site.warmup import warm_up  # noqa: E402
@@ -29,5 +30,6 @@ application = ProtocolTypeRouter(
         "websocket": AllowedHostsOriginValidator(
             AuthMiddlewareStack(URLRouter(websocket_urlpatterns))
         ),
+        "lifespan": lifespan,
     }
 )

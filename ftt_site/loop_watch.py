@@ -5,9 +5,11 @@ Code that blocks the loop stops them all; the supervisor notices only after
 its timeout (two minutes) and replaces the worker without saying why.  The
 watch asks the loop to run a no-op every second from a thread of its own; when
 the loop has not run it for ``FTT_LOOP_STALL_S`` seconds the watch logs once,
-with the stack of every thread, the blocking one among them.
+with the stack of every thread, the blocking one among them.  The server
+starts it through the ASGI lifespan protocol (:func:`lifespan`).
 """
 
+import asyncio
 import faulthandler
 import logging
 import os
@@ -50,3 +52,16 @@ def watch_loop(loop, stall_s: float = STALL_S, file=None) -> threading.Thread:
     thread = threading.Thread(target=watch, name="loop-watch", daemon=True)
     thread.start()
     return thread
+
+
+async def lifespan(scope, receive, send) -> None:
+    """The ASGI application of the lifespan protocol: the watch starts with the
+    server's event loop."""
+    while True:
+        message = await receive()
+        if message["type"] == "lifespan.startup":
+            watch_loop(asyncio.get_running_loop())
+            await send({"type": "lifespan.startup.complete"})
+        elif message["type"] == "lifespan.shutdown":
+            await send({"type": "lifespan.shutdown.complete"})
+            return

@@ -14,18 +14,13 @@ Uvicorn's, with two differences.
   ``FTT_HEADER_TIMEOUT`` seconds after the connection opened or the request
   began, or the connection is closed. Slow bodies are ftt_site.request_limits'
   concern: they are visible to the application.
-
-It also starts the watch on its event loop (ftt_site/loop_watch.py).
 """
 
-import asyncio
 import os
 import signal
 
 from uvicorn.protocols.http.httptools_impl import HttpToolsProtocol
 from uvicorn_worker import UvicornWorker
-
-from ftt_site.loop_watch import watch_loop
 
 # Read here rather than from Django's settings: the worker class is loaded by
 # Gunicorn before (and whether or not) Django is.
@@ -77,7 +72,3 @@ class Worker(UvicornWorker):
         super().handle_exit(sig, frame)
         if sig == signal.SIGQUIT:
             signal.raise_signal(signal.SIGTERM)
-
-    async def _serve(self) -> None:
-        watch_loop(asyncio.get_running_loop())
-        await super()._serve()

@@ -69,3 +69,33 @@ def test_a_blocked_event_loop_is_reported_once_with_the_blocking_stack(tmp_path)
     assert sum("has run nothing" in m for m in said) == 1, said
     assert sum("runs again after" in m for m in said) == 1, said
     assert "in block_the_loop" in dump.read_text()
+
+
+def test_the_server_application_starts_the_watch_with_its_event_loop(tmp_path):
+    code = (
+        "import asyncio, threading\n"
+        "from ftt_site.asgi import application\n"
+        "async def main():\n"
+        "    inbox, said = asyncio.Queue(), asyncio.Queue()\n"
+        "    scope = {'type': 'lifespan', 'asgi': {'version': '3.0'}}\n"
+        "    serving = asyncio.create_task(application(scope, inbox.get, said.put))\n"
+        "    await inbox.put({'type': 'lifespan.startup'})\n"
+        "    print((await said.get())['type'])\n"
+        "    print('watching' if any(t.name == 'loop-watch' for t in threading.enumerate())"
+        " else 'not watching')\n"
+        "    await inbox.put({'type': 'lifespan.shutdown'})\n"
+        "    print((await said.get())['type'])\n"
+        "    await serving\n"
+        "asyncio.run(main())\n"
+    )
+    env = {k: v for k, v in os.environ.items() if not k.startswith("FTT_")}
+    env.update(FTT_DATA_DIR=str(tmp_path), DJANGO_SETTINGS_MODULE="ftt_site.settings")
+    result = subprocess.run(
+        [sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, timeout=60
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert result.stdout.split() == [
+        "lifespan.startup.complete",
+        "watching",
+        "lifespan.shutdown.complete",
+    ]
