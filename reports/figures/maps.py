@@ -249,7 +249,7 @@ def _finish(ax, lines, bounds, xlabel, ylabel, dpi):
     _scale_bar(ax)
 
 
-def _nice_length(span: float) -> float:
+def nice_length(span: float) -> float:
     target = span / 5
     magnitude = 10 ** np.floor(np.log10(max(target, 1e-6)))
     for factor in (1, 2, 5, 10):
@@ -265,7 +265,7 @@ def scale_label(length: float) -> str:
 
 def _scale_bar(ax):
     x0, x1, y0, y1 = ax.get_xlim() + ax.get_ylim()
-    length = _nice_length(x1 - x0)
+    length = nice_length(x1 - x0)
     bx = x0 + 0.05 * (x1 - x0)
     by = y0 + 0.06 * (y1 - y0)
     ax.plot([bx, bx + length], [by, by], color="black", linewidth=3, zorder=5)

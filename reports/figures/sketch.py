@@ -9,7 +9,7 @@ overview map (with tiles) stays a matplotlib figure.
 
 import numpy as np
 
-from reports.figures.maps import _nice_length, scale_label
+from reports.figures.maps import nice_length, scale_label
 from reports.projection import local_frame
 from telemetry.selectors.tracks import GPS
 
@@ -42,7 +42,7 @@ def track_sketch(x, y, mode: str, width_pt: float, height_pt: float) -> dict | N
     cx, cy = (x.min() + x.max()) / 2, (y.min() + y.max()) / 2
     px = (x - cx) / per_pt + width_pt / 2
     py = height_pt / 2 - (y - cy) / per_pt
-    length = _nice_length(width_pt * per_pt)
+    length = nice_length(width_pt * per_pt)
     return {
         "w": width_pt,
         "h": height_pt,

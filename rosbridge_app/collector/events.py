@@ -24,6 +24,9 @@ RECORDING = "recording"
 START = "start"
 STOP = "stop"
 KINDS = (MODE, GPS, LOCAL, MAP, IMAGE, RECORDING, START, STOP)
+# Events that open or close a segment: they move the positions after them to
+# another master, and an operator waits to see them (spooled at once).
+SEGMENT_CHANGES = frozenset({MODE, START, STOP})
 
 _STAMP_KEYS = ("robot_stamp",)
 

@@ -43,10 +43,6 @@ log = logging.getLogger("ftt.collector")
 _MAP_PER_SHIFT = uuid.UUID("0c6f3d2e-57a4-4c57-9d53-3a7e4c1f2b90")
 
 
-# What moves positions to another master: everything else may be stored beside them.
-SEGMENT_CHANGES = frozenset({ev.MODE, ev.START, ev.STOP})
-
-
 @dataclass(frozen=True)
 class GivenMaster:
     """Positions, frames and snapshots go to this master (uid; None: nowhere),
@@ -86,7 +82,7 @@ class Recorder:
     def apply(self, events: list[Event], master: GivenMaster | None = None) -> None:
         """Store events in order.  Raises DatabaseUnavailable with nothing stored
         (and this object's state unchanged) when the database cannot be used."""
-        if master is not None and any(e.kind in SEGMENT_CHANGES for e in events):
+        if master is not None and any(e.kind in ev.SEGMENT_CHANGES for e in events):
             raise ValueError("a segment change cannot be stored on a given master")
         saved = copy.copy(self.state), self.leg, self.skipped
         self.given = master
@@ -120,7 +116,7 @@ class Recorder:
     def apply_changes(self, events: list[Event]) -> list[str | None]:
         """Apply segment changes (and nothing else) in order; for each, the uid of
         the master it left open (None: none)."""
-        if any(e.kind not in SEGMENT_CHANGES for e in events):
+        if any(e.kind not in ev.SEGMENT_CHANGES for e in events):
             raise ValueError("only segment changes")
         self._left_open = []
         try:
@@ -165,7 +161,7 @@ class Recorder:
                     raise DatabaseUnavailable(str(exc)) from exc
                 self.skipped += 1
                 log.warning(gettext("dropped a %s event: %s"), event.kind, exc)
-                if event.kind in SEGMENT_CHANGES:
+                if event.kind in ev.SEGMENT_CHANGES:
                     self._note_left_open()
                 if event.kind == ev.MODE:
                     # The robot is in this mode even though its segment could not
@@ -225,12 +221,12 @@ class Recorder:
             elif event.kind == ev.LOCAL:
                 locals_.append(event)
             else:
-                if event.kind in SEGMENT_CHANGES:
+                if event.kind in ev.SEGMENT_CHANGES:
                     self._store_positions(fixes, locals_)
                     self._store_maps()
                     fixes, locals_ = [], []
                 getattr(self, f"_on_{event.kind}")(event)
-                if event.kind in SEGMENT_CHANGES:
+                if event.kind in ev.SEGMENT_CHANGES:
                     self._note_left_open()
         self._store_positions(fixes, locals_)
         self._store_maps()

@@ -44,7 +44,7 @@ from django.utils.translation import gettext
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.held import Held
 from rosbridge_app.collector.outbox import Outbox
-from rosbridge_app.collector.recorder import SEGMENT_CHANGES, GivenMaster, Recorder
+from rosbridge_app.collector.recorder import GivenMaster, Recorder
 
 _STATE = "backlog"
 SLICE_SECONDS = 1.0
@@ -55,7 +55,7 @@ log = logging.getLogger("ftt.collector")
 def _up_to_change(rows: list) -> list:
     """The rows up to and with the first segment change."""
     for i, (_, event) in enumerate(rows):
-        if event.kind in SEGMENT_CHANGES:
+        if event.kind in ev.SEGMENT_CHANGES:
             return rows[: i + 1]
     return rows
 
@@ -97,7 +97,7 @@ class ReplayOrder:
             taken = self._store(recorder, _up_to_change(self.outbox.peek(self.size)), None)
             return taken or self._store_held(recorder, maps=True)
         end = self.lane["end"]
-        kinds = sorted(SEGMENT_CHANGES)
+        kinds = sorted(ev.SEGMENT_CHANGES)
         if not self._changes_done:
             changes = self.outbox.peek(
                 self.size,
@@ -143,7 +143,7 @@ class ReplayOrder:
         if rows:
             recorder.apply([event for _, event in rows], master=master)
             self.outbox.remove([row_id for row_id, _ in rows])
-            self.stored_change = any(event.kind in SEGMENT_CHANGES for _, event in rows)
+            self.stored_change = any(event.kind in ev.SEGMENT_CHANGES for _, event in rows)
         return len(rows)
 
     def _store_held(self, recorder: Recorder, maps: bool) -> int:
@@ -155,7 +155,7 @@ class ReplayOrder:
             # Not under the lock: the spool thread goes on holding meanwhile. Should it
             # move these to the spool too, they are stored again later as nothing (uids).
             recorder.apply(events)
-            self.stored_change = any(event.kind in SEGMENT_CHANGES for event in events)
+            self.stored_change = any(event.kind in ev.SEGMENT_CHANGES for event in events)
             with self.held.lock:
                 self.held.remove(events)
         return len(events)

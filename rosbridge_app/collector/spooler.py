@@ -32,10 +32,6 @@ def default_spool(name: str) -> Path:
     return Path(settings.DATA_DIR) / "collector" / f"{safe}.spool.sqlite3"
 
 
-# What an operator waits to see: spooled at once, not after the batching window.
-_URGENT = frozenset({ev.MODE, ev.START, ev.STOP})
-
-
 class Spooler(threading.Thread):
     def __init__(self, events: queue.Queue, outbox: Outbox, guard: DiskGuard | None = None):
         super().__init__(name="ftt-spool", daemon=True)
@@ -77,7 +73,7 @@ class Spooler(threading.Thread):
                     log.warning(
                         gettext("dropped a %s that cannot be converted: %s"), event.kind, exc
                     )
-            if event.kind in _URGENT:
+            if event.kind in ev.SEGMENT_CHANGES:
                 urgent = True
                 deadline = 0.0  # take only what is already queued
         if batch or len(self.held):
