@@ -11,6 +11,15 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def run_python(code: str, data_dir: Path) -> subprocess.CompletedProcess:
+    """``code`` in a Python process of its own with FTT's settings."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith("FTT_")}
+    env.update(FTT_DATA_DIR=str(data_dir), DJANGO_SETTINGS_MODULE="ftt_site.settings")
+    return subprocess.run(
+        [sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, timeout=60
+    )
+
+
 @pytest.mark.skipif(not hasattr(signal, "SIGUSR1"), reason="POSIX signal")
 def test_sigusr1_prints_every_thread_stack_and_keeps_running(tmp_path):
     code = (
@@ -20,11 +29,7 @@ def test_sigusr1_prints_every_thread_stack_and_keeps_running(tmp_path):
         "time.sleep(0.5)\n"
         "print('still running', flush=True)\n"
     )
-    env = {k: v for k, v in os.environ.items() if not k.startswith("FTT_")}
-    env.update(FTT_DATA_DIR=str(tmp_path), DJANGO_SETTINGS_MODULE="ftt_site.settings")
-    result = subprocess.run(
-        [sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, timeout=60
-    )
+    result = run_python(code, tmp_path)
     assert result.returncode == 0, result.stderr[-2000:]
     assert "still running" in result.stdout
     assert "most recent call first" in result.stderr
@@ -88,11 +93,7 @@ def test_the_server_application_starts_the_watch_with_its_event_loop(tmp_path):
         "    await serving\n"
         "asyncio.run(main())\n"
     )
-    env = {k: v for k, v in os.environ.items() if not k.startswith("FTT_")}
-    env.update(FTT_DATA_DIR=str(tmp_path), DJANGO_SETTINGS_MODULE="ftt_site.settings")
-    result = subprocess.run(
-        [sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, timeout=60
-    )
+    result = run_python(code, tmp_path)
     assert result.returncode == 0, result.stderr[-2000:]
     assert result.stdout.split() == [
         "lifespan.startup.complete",
