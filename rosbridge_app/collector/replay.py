@@ -72,7 +72,7 @@ class ReplayOrder:
         # Set once the backlog's segment changes are all applied: looking for
         # more would scan the whole backlog every turn.
         self._changes_done = False
-        self.stored_change = False  # whether the last slice stored held a segment change
+        self.stored_change = False  # whether the last write_next stored a segment change
         saved = outbox.get_state(_STATE)
         # {"end": last id of the backlog, "master": uid open before it, or None}
         self.lane = json.loads(saved) if saved else None
@@ -86,6 +86,7 @@ class ReplayOrder:
 
     def write_next(self, recorder: Recorder) -> int:
         """Store the next slices; how many records were taken or marked."""
+        self.stored_change = False
         if self.lane is None and len(self.outbox) > self.backlog:
             self._changes_done = False
             self.backlog_slice = self.size
@@ -109,6 +110,7 @@ class ReplayOrder:
                 masters = recorder.apply_changes([event for _, event in changes])
                 ids = [row_id for row_id, _ in changes]
                 self.outbox.mark_applied(list(zip(ids, masters, strict=True)))
+                self.stored_change = True
                 return len(changes)
             self._changes_done = True
         live = self.outbox.peek(self.size, where="id > ? AND kind != ?", params=(end, ev.MAP))
@@ -139,11 +141,10 @@ class ReplayOrder:
         return taken + stored
 
     def _store(self, recorder: Recorder, rows: list, master: GivenMaster | None) -> int:
-        self.stored_change = False
         if rows:
             recorder.apply([event for _, event in rows], master=master)
             self.outbox.remove([row_id for row_id, _ in rows])
-            self.stored_change = any(event.kind in ev.SEGMENT_CHANGES for _, event in rows)
+            self.stored_change |= any(event.kind in ev.SEGMENT_CHANGES for _, event in rows)
         return len(rows)
 
     def _store_held(self, recorder: Recorder, maps: bool) -> int:
@@ -155,7 +156,7 @@ class ReplayOrder:
             # Not under the lock: the spool thread goes on holding meanwhile. Should it
             # move these to the spool too, they are stored again later as nothing (uids).
             recorder.apply(events)
-            self.stored_change = any(event.kind in ev.SEGMENT_CHANGES for event in events)
+            self.stored_change |= any(event.kind in ev.SEGMENT_CHANGES for event in events)
             with self.held.lock:
                 self.held.remove(events)
         return len(events)

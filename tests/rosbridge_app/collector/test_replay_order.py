@@ -164,3 +164,19 @@ def test_a_switch_ends_its_slice_and_the_writer_knows_it_is_stored(leg, tmp_path
     assert Segment.objects.get(leg=leg, parent=None, end=None).segment_type_id == "ito"
     assert len(outbox) == 4  # the positions after the switch wait for the next turn
     assert order.write_next(recorder) == 4 and not order.stored_change
+
+
+def test_a_live_switch_stored_with_a_backlog_slice_is_known_as_stored(leg, tmp_path):
+    """The backlog slice stored after the live one in the same turn does not
+    hide the switch from the writer."""
+    t0 = datetime.now(UTC) + timedelta(minutes=1)
+    outbox = Outbox(tmp_path / "spool.sqlite3")
+    outbox.append([Event(ev.START, t0), Event(ev.MODE, t0, {"mode": "auto"}), *_fixes(t0, 30)])
+    recorder, order = Recorder(lambda: leg), ReplayOrder(outbox, SLICE)
+    order.write_next(recorder)  # the backlog found, its segment changes applied
+    switch = Event(ev.MODE, t0 + timedelta(seconds=10), {"mode": "ito"})
+    outbox.append([switch])
+    order.write_next(recorder)
+    assert Segment.objects.filter(uid=switch.uid).exists()
+    assert order.stored_change
+    assert len(outbox) > 0  # the backlog's positions still wait
