@@ -175,12 +175,12 @@ class DiskGuard:
             if level and self.since is None:
                 self.since = time.time()
         if level > before:
-            said = (
+            line = (
                 _("robot disk full (%s): %s")
                 if level == FULL
                 else _("robot disk nearly full (%s): %s")
             )
-            log.warning(said, cause.lstrip("!"), _tiers(level))
+            log.warning(line, cause.lstrip("!"), _tiers(level))
             return
         summary = self.summary()
         if level == OK:

@@ -215,12 +215,12 @@ class CollectorNode(Node):
     def _srv_get_logging(self, request, response):
         response.success = self.pipeline.logging
         try:
-            said = (
+            line = (
                 gettext("logging; %(status)s")
                 if self.pipeline.logging
                 else gettext("not logging; %(status)s")
             )
-            response.message = said % {"status": self.status.describe()}
+            response.message = line % {"status": self.status.describe()}
         except Exception as exc:
             response.message = gettext("status unknown: %(exc)s") % {"exc": exc}
         return response

@@ -252,12 +252,12 @@ class CollectorRuntime:
             self.outbox.set_state("logging", "1" if on else "0")
         except SpoolFull:
             # Logging goes on; only a restart on this full disk would not resume it.
-            said = (
+            line = (
                 gettext("the robot disk is full: logging on is not kept for a restart")
                 if on
                 else gettext("the robot disk is full: logging off is not kept for a restart")
             )
-            log.warning("%s", said)
+            log.warning("%s", line)
 
     # --- database side ------------------------------------------------------------------
 

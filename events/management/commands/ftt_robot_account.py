@@ -48,10 +48,10 @@ class Command(BaseCommand):
         except ValidationError as exc:
             raise CommandError(" ".join(exc.messages)) from exc
         bound = ", ".join(login.account.vehicles.values_list("key", flat=True))
-        said = (
+        line = (
             _("Created robot account '%(name)s', bound to: %(bound)s.")
             if login.created
             else _("Updated robot account '%(name)s', bound to: %(bound)s.")
         )
-        self.stderr.write(said % {"name": name, "bound": bound})
+        self.stderr.write(line % {"name": name, "bound": bound})
         self.stdout.write(login.token)

@@ -77,11 +77,11 @@ class Command(BaseCommand):
         if password:
             # A password given in the environment replaces a generated one.
             password_file.unlink(missing_ok=True)
-        said = (
+        line = (
             _("Created administrator '%(user)s'.")
             if created
             else _("Checked administrator '%(user)s'.")
         )
-        self.stdout.write(said % {"user": username})
+        self.stdout.write(line % {"user": username})
         if password_file.exists() and user.check_password(password_file.read_text().strip()):
             self.stdout.write(_("Its password is in %(file)s.") % {"file": password_file})

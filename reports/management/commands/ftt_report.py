@@ -221,8 +221,8 @@ class Command(BaseCommand):
                 gettext("%(path)s carries no FTT data digest (made before FTT stamped it?).")
                 % {"path": path}
             )
-        said = gettext("OK: %(message)s") if verdict.ok else gettext("CHANGED: %(message)s")
-        self.stdout.write(said % {"message": verdict.message})
+        line = gettext("OK: %(message)s") if verdict.ok else gettext("CHANGED: %(message)s")
+        self.stdout.write(line % {"message": verdict.message})
         for change in verdict.changes:
             reason = f" ({change['reason']})" if change["reason"] else ""  # the author's words
             line = _CHANGE_LINES[change["kind"]] % {
