@@ -16,7 +16,7 @@ from reports.documents.sections import Sections
 from reports.documents.typesetting import typeset
 from reports.figures import style
 from reports.formatting import written_in
-from reports.selectors.content import has_segments, report_scope, scope_name
+from reports.selectors.content import has_segments, report_scope, scope_words
 
 Progress = Callable[[float, Said], None]
 # Wraps each stage of making a report (statistics, maps, charts, timelines, image
@@ -59,7 +59,7 @@ def check_reportable(event: TestEvent, options: ReportOptions | None = None) -> 
                 gettext_noop(
                     "%(scope)s of test event %(event)s has no segments yet: nothing to report."
                 ),
-                scope=scope_name(**scope),
+                scope=scope_words(**scope),
                 event=event.pk,
             )
         raise ReportError(

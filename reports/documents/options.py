@@ -27,7 +27,7 @@ class ReportError(Exception):
     Raised with the English text (marked with gettext_noop) and its values, kept
     as ``said``, so the job's row shows it in its reader's language; ``str()`` is
     the active language's. A refusal passed on from a check that already said it
-    (a route or scope that cannot be drawn) stays in the language it was said in."""
+    (a route that cannot be drawn) stays in the language it was said in."""
 
     def __init__(self, text: str, **values):
         self.said = Said(text, values)

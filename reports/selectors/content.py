@@ -4,7 +4,9 @@ people, the legs with their weather, notes, camera images and the ITO reasons.""
 from collections import defaultdict
 
 from django.utils.translation import gettext as _
+from django.utils.translation import gettext_noop
 
+from common.said import Said, said
 from events.models import ItoReason, Leg, Note, Segment, Shift, TestEvent
 from events.selectors.taxonomy import taxonomy_of
 from reports.selectors.statistics import segment_scope
@@ -54,20 +56,26 @@ def reasons_by_key(event: TestEvent) -> dict[str, ItoReason]:
     }
 
 
-def scope_name(*, shift: int | None = None, leg: int | None = None) -> str:
-    """What a report covers, as a person reads it: "Shift 2 · Leg 1"."""
+def scope_words(*, shift: int | None = None, leg: int | None = None) -> Said:
+    """What a report covers, as words a job's row keeps: "Shift 2 · Leg 1"."""
     if leg is not None:
         row = Leg.objects.select_related("shift").filter(pk=leg).first()
         if row is None:
-            return _("a deleted leg")
-        return _("Shift %(shift)s · Leg %(leg)s") % {
-            "shift": row.shift.number,
-            "leg": row.number,
-        }
+            return said(gettext_noop("a deleted leg"))
+        return said(
+            gettext_noop("Shift %(shift)s · Leg %(leg)s"), shift=row.shift.number, leg=row.number
+        )
     if shift is not None:
         row = Shift.objects.filter(pk=shift).first()
-        return _("Shift %(shift)s") % {"shift": row.number} if row else _("a deleted shift")
-    return _("Test event")
+        if row is None:
+            return said(gettext_noop("a deleted shift"))
+        return said(gettext_noop("Shift %(shift)s"), shift=row.number)
+    return said(gettext_noop("Test event"))
+
+
+def scope_name(*, shift: int | None = None, leg: int | None = None) -> str:
+    """What a report covers, in the active language."""
+    return str(scope_words(shift=shift, leg=leg))
 
 
 def shifts_of(event: TestEvent, shift: int | None = None) -> list[Shift]:

@@ -11,9 +11,10 @@ from django_tasks.base import TaskResultStatus
 from django_tasks_db.models import DBTaskResult
 
 from common.jobs import recover_interrupted
+from events.models import Segment, Shift
 from exchange.models import ArchiveImport
 from reports.models import Report
-from reports.services.generation import request_comparison, run_job
+from reports.services.generation import request_comparison, request_report, run_job
 from tests.support.api import download
 from tests.support.field_day import field_day
 from tests.support.jobs import run_queued_jobs
@@ -78,6 +79,19 @@ def test_why_a_report_could_not_be_made_reads_in_german(
     assert _row(viewer, report, **ENGLISH)["error"] == (
         "A test event of this comparison was deleted; request it again."
     )
+
+
+def test_a_shift_emptied_before_its_report_is_named_in_the_readers_language(scenario, api_client):
+    shift = Shift.objects.filter(test_event=scenario.event).order_by("number").first()
+    report = request_report(scenario.event, shift=shift.pk)
+    Segment.objects.filter(leg__shift=shift).delete()
+    assert run_job(report.pk).status == Report.Status.FAILED
+    viewer = api_client("viewer")
+    assert _row(viewer, report, **GERMAN)["error"] == (
+        f"Schicht {shift.number} der Testveranstaltung {scenario.event.pk} hat noch keine "
+        "Abschnitte: nichts zu berichten."
+    )
+    assert _row(viewer, report, **ENGLISH)["error"].startswith(f"Shift {shift.number} of test")
 
 
 @pytest.mark.django_db
