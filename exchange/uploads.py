@@ -47,22 +47,22 @@ def queue_import(upload, *, user=None) -> tuple[ArchiveImport, Plan]:
     """
     folder = Path(settings.DATA_DIR) / "job_files"
     folder.mkdir(mode=0o700, parents=True, exist_ok=True)
-    held = folder / f"import-{uuid.uuid4().hex}.zip"
+    upload_copy = folder / f"import-{uuid.uuid4().hex}.zip"
     try:
-        with open(held, "wb") as copy:
+        with open(upload_copy, "wb") as copy:
             _copy(upload, copy)
-        preview = import_file(held, dry_run=True)
+        preview = import_file(upload_copy, dry_run=True)
         with transaction.atomic():
             job = ArchiveImport.objects.create(
-                filename=(getattr(upload, "name", "") or held.name)[:255],
-                path=str(held.resolve()),
+                filename=(getattr(upload, "name", "") or upload_copy.name)[:255],
+                path=str(upload_copy.resolve()),
                 **kept("message", jobs.waiting()),
                 **kept("verdict", preview.said(), 200),
                 requested_by=user if user is not None and user.is_authenticated else None,
             )
             import_archive.enqueue(job.pk)
     except BaseException:
-        held.unlink(missing_ok=True)
+        upload_copy.unlink(missing_ok=True)
         raise
     return job, preview
 
