@@ -17,7 +17,18 @@ def current_taxonomy() -> dict[str, dict]:
 
 
 def taxonomy_of(event: TestEvent) -> dict[str, dict]:
-    return event.taxonomy if event.taxonomy is not None else current_taxonomy()
+    return taxonomies_of([event])[event.pk]
+
+
+def taxonomies_of(events) -> dict[int, dict[str, dict]]:
+    """{event id: its taxonomy}, the live catalogue read at most once."""
+    current = None
+    found = {}
+    for event in events:
+        if event.taxonomy is None and current is None:
+            current = current_taxonomy()
+        found[event.pk] = event.taxonomy if event.taxonomy is not None else current
+    return found
 
 
 def taxonomy_version(event: TestEvent) -> str:
@@ -29,4 +40,12 @@ def taxonomy_version(event: TestEvent) -> str:
 
 def counted_reasons(event: TestEvent) -> set[str]:
     """The rule "counts as intervention", as it applies to this event."""
-    return {key for key, entry in taxonomy_of(event).items() if entry["counts"]}
+    return counted_reasons_of([event])[event.pk]
+
+
+def counted_reasons_of(events) -> dict[int, set[str]]:
+    """{event id: ``counted_reasons``} of many events (the catalogue read once)."""
+    return {
+        pk: {key for key, entry in taxonomy.items() if entry["counts"]}
+        for pk, taxonomy in taxonomies_of(events).items()
+    }

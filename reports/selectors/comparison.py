@@ -14,7 +14,7 @@ from reports import formatting as fmt
 from reports.selectors import formulas
 from reports.selectors.growth import crow_amsaa
 from reports.selectors.hotspots import hotspots
-from reports.selectors.statistics import CONFIDENCE, Estimate, Run, event_runs, figures
+from reports.selectors.statistics import CONFIDENCE, Estimate, Run, campaign_runs, figures
 from telemetry.selectors.tracks import GPS
 
 
@@ -78,13 +78,14 @@ def _group(extra: dict, runs: list[Run]) -> dict:
 def compare(events: list[TestEvent], mode: str = GPS) -> dict:
     """JSON-ready comparison of the given test events, oldest first."""
     events = sorted(events, key=lambda e: (e.start, e.pk))
-    runs_of = {e.pk: event_runs(e, mode, tracks=False) for e in events}
+    runs_of = campaign_runs(events, mode)
     every = [run for e in events for run in runs_of[e.pk]]
     by_version: dict[str, list[Run]] = defaultdict(list)
     by_vehicle: dict[int, list[Run]] = defaultdict(list)
     for e in events:
+        version = by_version[e.version or _("unknown")]
         for run in runs_of[e.pk]:
-            by_version[e.version or _("unknown")].append(run)
+            version.append(run)
             by_vehicle[run.vehicle_id].append(run)
     vehicles = {v.pk: v.short_description for v in Vehicle.objects.filter(pk__in=by_vehicle)}
     at, total = growth_points(every)

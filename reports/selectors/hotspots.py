@@ -8,17 +8,19 @@ positions are already metres in the map frame.
 
 Clustering is single linkage with a distance cut: two take-overs at most
 ``HOTSPOT_RADIUS_M`` apart are in the same hotspot, and so is every take-over
-linked to it through such pairs (scipy's hierarchical clustering).  Hotspots
-are numbered 1, 2, ... by size (most take-overs first), then by their first
-take-over in time, so the numbers on the map, in the PDF's table and in the
-JSON agree.
+linked to it through such pairs (the connected components of the pairs
+within the radius, found with a KD-tree).  Hotspots are numbered 1, 2, ...
+by size (most take-overs first), then by their first take-over in time, so
+the numbers on the map, in the PDF's table and in the JSON agree.
 """
 
-from collections import Counter
+from collections import Counter, defaultdict
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.cluster.hierarchy import fcluster, linkage
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 from reports.projection import local_frame
 from reports.selectors.formulas import HOTSPOT_RADIUS_M
@@ -26,7 +28,7 @@ from reports.selectors.statistics import Run
 from telemetry.selectors.tracks import GPS
 
 
-@dataclass
+@dataclass(slots=True)
 class TakeOver:
     test_event: int
     run: Run
@@ -58,9 +60,7 @@ def cluster_labels(xy: np.ndarray, radius: float = HOTSPOT_RADIUS_M) -> list[int
     """Hotspot number (1 = most take-overs) of each point; see the module docstring."""
     if len(xy) == 0:
         return []
-    if len(xy) == 1:
-        return [1]
-    raw = fcluster(linkage(xy, method="single"), t=radius, criterion="distance")
+    raw = _linked_groups(xy, radius)
     sizes = Counter(raw)
     first = {}
     for index, group in enumerate(raw):
@@ -70,43 +70,61 @@ def cluster_labels(xy: np.ndarray, radius: float = HOTSPOT_RADIUS_M) -> list[int
     return [number[g] for g in raw]
 
 
+def _linked_groups(xy: np.ndarray, radius: float) -> list[int]:
+    """A group id per point: single linkage cut at ``radius`` is the connected
+    components of the pairs at most ``radius`` apart.  A KD-tree finds the pairs
+    (with a margin; each is then measured as scipy's pdist measures it), so the
+    cost grows with the pairs near each other, not with all n² of them."""
+    pairs = cKDTree(xy).query_pairs(radius * (1 + 1e-9), output_type="ndarray")
+    step = xy[pairs[:, 0]] - xy[pairs[:, 1]]
+    pairs = pairs[np.sqrt(np.square(step).sum(axis=1)) <= radius]
+    links = coo_matrix(
+        (np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(len(xy),) * 2
+    )
+    return connected_components(links, directed=False)[1].tolist()
+
+
 def hotspots(runs_of: dict[int, list[Run]], mode: str = GPS) -> list[dict]:
     """JSON-ready hotspots, numbered; each lists its take-overs with the segment's
     id, GUI label, test event, shift and leg (enough for a link to the segment)."""
     points = take_overs(runs_of)
     xy = metres(points, mode)
-    numbers = cluster_labels(xy)
-    found: dict[int, dict] = {}
-    for point, (east, north), number in zip(points, xy, numbers, strict=True):
-        spot = found.setdefault(
-            number, {"number": number, "count": 0, "reasons": Counter(), "members": []}
-        )
-        spot["count"] += 1
-        reasons = sorted(set(point.run.counted_reasons))
-        spot["reasons"].update(reasons)
-        spot["members"].append(
+    members_of: dict[int, list[int]] = defaultdict(list)
+    for index, number in enumerate(cluster_labels(xy)):
+        members_of[number].append(index)
+    # x, y as given and east, north in metres: a spot's position is their means.
+    columns = [np.array([p.x for p in points]), np.array([p.y for p in points]), *xy.T]
+    metres_of = xy.tolist()
+    result = []
+    for number in sorted(members_of):
+        chosen = members_of[number]
+        members = [_member(points[i], *metres_of[i]) for i in chosen]
+        reasons = Counter(reason for m in members for reason in m["reasons"])
+        x, y, east, north = (float(np.mean(column[chosen])) for column in columns)
+        result.append(
             {
-                "test_event": point.test_event,
-                "shift": point.run.shift_id,
-                "leg": point.run.leg_id,
-                "segment": point.run.id,
-                "label": point.run.label,
-                "start": point.run.start.isoformat(),
-                "reasons": reasons,
-                "x": point.x,
-                "y": point.y,
-                "east": float(east),
-                "north": float(north),
+                "number": number,
+                "count": len(chosen),
+                "reasons": dict(sorted(reasons.items(), key=lambda kv: (-kv[1], kv[0]))),
+                "members": members,
+                **{"x": x, "y": y, "east": east, "north": north},
             }
         )
-    result = []
-    for number in sorted(found):
-        spot = found[number]
-        members = spot["members"]
-        spot["x"] = float(np.mean([m["x"] for m in members]))
-        spot["y"] = float(np.mean([m["y"] for m in members]))
-        spot["east"] = float(np.mean([m["east"] for m in members]))
-        spot["north"] = float(np.mean([m["north"] for m in members]))
-        spot["reasons"] = dict(sorted(spot["reasons"].items(), key=lambda kv: (-kv[1], kv[0])))
-        result.append(spot)
     return result
+
+
+def _member(point: TakeOver, east: float, north: float) -> dict:
+    run = point.run
+    return {
+        "test_event": point.test_event,
+        "shift": run.shift_id,
+        "leg": run.leg_id,
+        "segment": run.id,
+        "label": run.label,
+        "start": run.start.isoformat(),
+        "reasons": sorted(set(run.counted_reasons)),
+        "x": point.x,
+        "y": point.y,
+        "east": east,
+        "north": north,
+    }

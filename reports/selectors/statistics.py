@@ -34,14 +34,16 @@ Definitions (also printed in the report's methods appendix, see ``reports.select
 from collections import defaultdict
 from dataclasses import asdict, dataclass, field
 from datetime import datetime
+from typing import NamedTuple
 
 import numpy as np
 from django.conf import settings
 from scipy.stats import chi2
 
+from common.sql import plain_rows
 from events.models import ItoReason, Segment, SegmentType, TestEvent
 from events.selectors.labels import segment_labels
-from events.selectors.taxonomy import counted_reasons
+from events.selectors.taxonomy import counted_reasons, counted_reasons_of
 from reports.selectors.formulas import FORMULAS, keyed
 from telemetry.selectors.distances import kept_paths, measured_paths
 from telemetry.selectors.tracks import GPS, Track
@@ -49,7 +51,7 @@ from telemetry.selectors.tracks import GPS, Track
 CONFIDENCE = 0.90
 
 
-@dataclass
+@dataclass(slots=True)
 class ReasonSpan:
     id: int
     reason: str
@@ -65,7 +67,7 @@ class ReasonSpan:
         return (self.end - self.start).total_seconds()
 
 
-@dataclass
+@dataclass(slots=True)
 class Run:
     """One master segment with what the statistics need to know about it."""
 
@@ -228,7 +230,39 @@ def _longest_without_intervention(runs: list[Run]) -> float:
     return longest
 
 
-def _effective_end(segment: Segment, last_stamp: datetime | None, children: list[Segment]):
+class SegmentRow(NamedTuple):
+    """The columns of a segment a run needs, as one row: no model instance (a
+    campaign's comparison reads 45 000 segments).  Start positions are not
+    among them: ``distances.start_points`` reads them by leg."""
+
+    pk: int
+    parent_id: int | None
+    segment_type_id: str
+    ito_reason_id: str | None
+    suggested_reason_id: str | None
+    start: datetime
+    start_uncertainty: float | None
+    end: datetime | None
+    obstacle: str
+    lighting: str
+    slope: str
+    start_local_x: float | None
+    start_local_y: float | None
+    leg_id: int
+    shift_id: int
+    vehicle_id: int
+    test_event_id: int
+
+
+# The ORM path of each SegmentRow column, in its order.
+_ROW_COLUMNS = (
+    *("id", "parent", "segment_type", "ito_reason", "suggested_reason", "start"),
+    *("start_uncertainty", "end", "obstacle", "lighting", "slope", "start_local_x"),
+    *("start_local_y", "leg", "leg__shift", "leg__shift__vehicle", "leg__shift__test_event"),
+)
+
+
+def _effective_end(segment: SegmentRow, last_stamp: datetime | None, children: list[SegmentRow]):
     if segment.end is not None:
         return segment.end
     known = [segment.start]
@@ -239,27 +273,7 @@ def _effective_end(segment: Segment, last_stamp: datetime | None, children: list
     return max(known)
 
 
-RUN_FIELDS = (
-    "parent",
-    "segment_type",
-    "ito_reason",
-    "suggested_reason",
-    "start",
-    "start_uncertainty",
-    "end",
-    "obstacle",
-    "lighting",
-    "slope",
-    "start_local_x",
-    "start_local_y",
-    "leg",
-    "leg__number",
-    "leg__shift",
-    "leg__shift__vehicle",
-)
-
-
-def counted_reason(child: Segment) -> str:
+def counted_reason(child: SegmentRow) -> str:
     """The reason statistics count: the operator's; the robot's suggestion only
     for a take-over still Unassigned and with settings.FTT_COUNT_ROBOT_REASONS."""
     reason = child.ito_reason_id or ItoReason.UNASSIGNED
@@ -290,39 +304,47 @@ def event_runs(
     leg: int | None = None,
 ) -> list[Run]:
     """All master segments of a test event as runs, ordered by leg and time;
-    ``shift`` or ``leg`` (ids) narrow them to one shift or leg.
+    ``shift`` or ``leg`` (ids) narrow them to one shift or leg (``campaign_runs``
+    of this one event)."""
+    scope = segment_scope(event, shift=shift, leg=leg)
+    return _runs(scope, [event], mode, tracks).get(event.pk, [])
 
-    Distances, pose counts and the end of an open segment come from the
-    figures kept at write time; only ``tracks`` (for drawing and the
-    exports) reads the poses."""
-    segments = list(
-        Segment.objects.filter(**segment_scope(event, shift=shift, leg=leg))
-        .select_related("leg__shift")
-        # Only what a run needs: parsing the other timestamps of 1 000 segments, their
-        # legs and shifts took longer than measuring their million steps.  Start
-        # positions stay deferred: measured_paths reads them as plain floats.
-        .only(*RUN_FIELDS)
-        .order_by("leg__shift__start", "leg__shift_id", "leg__start", "leg_id", "start", "id")
+
+def campaign_runs(events: list[TestEvent], mode: str = GPS) -> dict[int, list[Run]]:
+    """{test event id: ``event_runs`` of it, without tracks} for many test events
+    in their given order, read with one query per table, not one per event."""
+    found = _runs({"leg__shift__test_event__in": events}, events, mode, tracks=False)
+    return {event.pk: found.get(event.pk, []) for event in events}
+
+
+def _runs(scope: dict, events: list[TestEvent], mode: str, tracks: bool) -> dict[int, list[Run]]:
+    """The runs of the segments in ``scope`` by test event.  Distances, pose
+    counts and the end of an open segment come from the figures kept at write
+    time; only ``tracks`` (for drawing and the exports) reads the poses."""
+    ordered = Segment.objects.filter(**scope).order_by(
+        "leg__shift__start", "leg__shift_id", "leg__start", "leg_id", "start", "id"
     )
-    counted = counted_reasons(event)
+    segments = [SegmentRow._make(row) for row in plain_rows(ordered.values_list(*_ROW_COLUMNS))]
+    counted = counted_reasons_of(events)
     masters = [s for s in segments if s.parent_id is None]
-    children: dict[int, list[Segment]] = defaultdict(list)
+    children: dict[int, list[SegmentRow]] = defaultdict(list)
     for s in segments:
         if s.parent_id is not None:
             children[s.parent_id].append(s)
     kept = kept_paths(masters, mode)
     paths = measured_paths(masters, mode) if tracks else {}
-    labels = segment_labels(Segment.objects.filter(**segment_scope(event, shift=shift, leg=leg)))
+    # Only the masters are labelled: each is numbered among its leg's masters all the same.
+    labels = segment_labels(Segment.objects.filter(**scope, parent=None))
 
-    runs = []
+    runs: dict[int, list[Run]] = defaultdict(list)
     for master in masters:
-        path = paths.get(master.id)
-        figures = kept[master.id]
-        kids = children.get(master.id, [])
+        path = paths.get(master.pk)
+        figures = kept[master.pk]
+        kids = children.get(master.pk, [])
         end = _effective_end(master, figures.last_stamp, kids)
         spans = [
             ReasonSpan(
-                id=c.id,
+                id=c.pk,
                 reason=counted_reason(c),
                 start=c.start,
                 end=c.end or max(end, c.start),
@@ -333,26 +355,28 @@ def event_runs(
             )
             for c in kids
         ]
-        runs.append(
+        runs[master.test_event_id].append(
             Run(
-                id=master.id,
+                id=master.pk,
                 kind=master.segment_type_id,
                 leg_id=master.leg_id,
-                shift_id=master.leg.shift_id,
-                vehicle_id=master.leg.shift.vehicle_id,
+                shift_id=master.shift_id,
+                vehicle_id=master.vehicle_id,
                 start=master.start,
                 end=end,
                 is_open=master.end is None,
                 distance=figures.distance or 0.0,
                 pose_count=figures.points,
                 reasons=spans,
-                counted_reasons=[s.reason for s in spans if s.reason in counted],
+                counted_reasons=[
+                    s.reason for s in spans if s.reason in counted[master.test_event_id]
+                ],
                 track=path and path.track,
                 has_start_position=figures.has_start_position,
                 origin=figures.origin,
                 start_uncertainty=master.start_uncertainty,
                 **({"path_x": path.x, "path_y": path.y} if path else {}),
-                label=labels[master.id],
+                label=labels[master.pk],
             )
         )
     return runs

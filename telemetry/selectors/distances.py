@@ -27,6 +27,7 @@ from datetime import datetime
 import numpy as np
 from pyproj import Geod
 
+from common.sql import plain_rows
 from events.models import Segment
 from telemetry.models import SegmentFigures
 from telemetry.selectors.tracks import GPS, LOCAL, Coordinate, Track, load_tracks
@@ -77,10 +78,18 @@ def _path_lengths(x: np.ndarray, y: np.ndarray, sizes: np.ndarray, mode: str) ->
     # The step from a polyline's last point to the next one's first is no step.
     inside[ends[(sizes > 0) & (ends < len(x))] - 1] = False
     steps = _steps(x, y, mode, inside)
-    return [
-        float(np.sum(steps[end - size : end - 1])) if size > 1 else None
-        for size, end in zip(sizes.tolist(), ends.tolist(), strict=True)
-    ]
+    # A polyline of two points (a join: a campaign has 60 000) is its one step,
+    # taken as it is rather than summed on its own.
+    last_steps = steps[np.maximum(ends - 2, 0)].tolist()
+    lengths: list[float | None] = []
+    for i, (size, end) in enumerate(zip(sizes.tolist(), ends.tolist(), strict=True)):
+        if size < 2:
+            lengths.append(None)
+        elif size == 2:
+            lengths.append(last_steps[i])
+        else:
+            lengths.append(float(np.sum(steps[end - size : end - 1])))
+    return lengths
 
 
 def _short_steps(lon: np.ndarray, lat: np.ndarray) -> np.ndarray:
@@ -121,16 +130,20 @@ class MeasuredPath:
 
 def start_points(masters: list[Segment], mode: str) -> dict[int, tuple[float, float]]:
     """{segment id: start position} of those that have one.  Where a caller
-    deferred ``start_position`` (the statistics do, for thousands of segments)
-    the GPS positions are read as plain floats in one query instead of one
-    geometry object per segment."""
+    deferred ``start_position`` or passed rows rather than segments (the
+    statistics do, for thousands of segments) the GPS positions are read as
+    plain floats in one query instead of one geometry object per segment."""
     if mode != GPS:
         return {
             m.pk: (m.start_local_x, m.start_local_y)
             for m in masters
             if m.start_local_x is not None and m.start_local_y is not None
         }
-    deferred = {m.pk for m in masters if "start_position" in m.get_deferred_fields()}
+    deferred = {
+        m.pk
+        for m in masters
+        if not isinstance(m, Segment) or "start_position" in m.get_deferred_fields()
+    }
     found = {
         m.pk: (m.start_position.x, m.start_position.y)
         for m in masters
@@ -225,7 +238,7 @@ def _fill(x: np.ndarray, y: np.ndarray, start, track: Track | None, after) -> No
         y[first : first + len(track)] = track.y
 
 
-@dataclass
+@dataclass(slots=True)
 class KeptPath:
     """A master's path as the figures kept at write time describe it."""
 
@@ -244,34 +257,33 @@ def kept_paths(masters: Iterable[Segment], mode: str = GPS) -> dict[int, KeptPat
     the time does not depend on how many are stored.  Pass whole legs, as for
     ``measured_paths``; distance None where fewer than two points are known."""
     neighbours = _neighbours(masters, mode)
-    kept = {
-        f.segment_id: f
-        for f in SegmentFigures.objects.filter(
-            segment_id__in=[m.pk for m, _, _ in neighbours], mode=mode, points__gt=0
-        )
-    }
+    # By leg, not by id (quoting a campaign's 30 000 ids took longer than the
+    # query); plain rows of the columns used, not model instances.
+    figures = SegmentFigures.objects.filter(
+        segment__leg__in={m.leg_id for m, _, _ in neighbours}, mode=mode, points__gt=0
+    ).values_list(
+        "segment_id", "points", "length", "first_x", "first_y", "last_x", "last_y", "last_stamp"
+    )
+    kept = {row[0]: row[1:] for row in plain_rows(figures)}
     joins: list[tuple[int, tuple, tuple]] = []
     paths: dict[int, KeptPath] = {}
     for master, start, after in neighbours:
-        figures = kept.get(master.pk)
-        if figures is None:
+        found = kept.get(master.pk)
+        if found is None:
             paths[master.pk] = KeptPath(None, 0, start is not None, start or after)
             if start is not None and after is not None:
                 joins.append((master.pk, start, after))
             continue
-        first = (figures.first_x, figures.first_y)
-        known = figures.points + (start is not None) + (after is not None)
+        points, length, first_x, first_y, last_x, last_y, last_stamp = found
+        first = (first_x, first_y)
+        known = points + (start is not None) + (after is not None)
         paths[master.pk] = KeptPath(
-            figures.length if known >= 2 else None,
-            figures.points,
-            start is not None,
-            start or first,
-            figures.last_stamp,
+            length if known >= 2 else None, points, start is not None, start or first, last_stamp
         )
         if start is not None:
             joins.append((master.pk, start, first))
         if after is not None:
-            joins.append((master.pk, (figures.last_x, figures.last_y), after))
+            joins.append((master.pk, (last_x, last_y), after))
     if joins:
         x = np.array([c for _, a, b in joins for c in (a[0], b[0])], dtype=float)
         y = np.array([c for _, a, b in joins for c in (a[1], b[1])], dtype=float)
