@@ -5,6 +5,7 @@ Python object per point.  docs/gui.md ("Big tracks") explains the query's shape.
 """
 
 import numpy as np
+from django.db import transaction
 
 from common.sql import bound_cursor
 from telemetry.models import LocalPose, Pose, SegmentFigures
@@ -76,6 +77,16 @@ _GPS_COLUMNS = "segment_id bigint, points bytea, stamps bytea, no_fix bigint"
 _LOCAL_COLUMNS = "segment_id bigint, x bytea, y bytea, stamps bytea, frame text"
 
 
+# The parameters of a read of every pose (``_read``).
+_EVERY_POSE = {
+    "$1": "%(ids)s::bigint[]",
+    "$2": "'-infinity'::timestamptz",
+    "$3": "'infinity'::timestamptz",
+    "$4": "true",
+    "$5": "NULL::text",
+}
+
+
 def _read(query: str, columns: str, segment_ids: list[int], kept_mode: str | None) -> list:
     """The rows of ``query`` (its columns as ``columns`` declares them), in
     binary (as the bytes are stored), read in one statement by
@@ -87,6 +98,15 @@ def _read(query: str, columns: str, segment_ids: list[int], kept_mode: str | Non
     committed before the look-up is inside.  A ``kept_mode`` of None reads
     every pose, for measuring the figures themselves.  The aggregate keeps
     its sorted subquery's order."""
+    if kept_mode is None:
+        # Every pose: nothing to look up (and the figures' migration 0007
+        # measures tracks before 0014 makes the function).
+        for param, value in _EVERY_POSE.items():
+            query = query.replace(param, value)
+        with transaction.atomic(), bound_cursor(binary_results=True) as cursor:
+            cursor.execute("SET LOCAL jit = off")
+            cursor.execute(query, {"ids": segment_ids})
+            return cursor.fetchall()
     with bound_cursor(binary_results=True) as cursor:
         cursor.execute(
             f"SELECT * FROM ftt_read_within_kept_span(%s::text, %s::bigint[], %s::text) "

@@ -92,8 +92,7 @@ def test_migration_back_and_forth_keeps_every_pose_and_figure(leg):
     executor.migrate([("telemetry", "0012_thinned_segments")])
     assert not any(pose_partitions.is_partitioned(t) for t in pose_partitions.TABLES)
     _assert_same(before, _state(event))
-    # Positions are recounted once forward again: 0012 lacks the function
-    # tracks are read with (0014), and a position lost going back stays lost.
+    assert recount_figures([master.pk]) == {}
 
     executor.loader.build_graph()
     executor.migrate(executor.loader.graph.leaf_nodes())
