@@ -4,7 +4,9 @@ Times ``load_tracks`` for the leg ``campaign_scale`` measures (the first leg
 of the middle test event), best of ``--repeat``, in ``--rounds``, and prints
 the plan of its pose query with planning and execution time apart
 (EXPLAIN (ANALYZE, BUFFERS)) and the round trip of an empty statement, so a
-difference between two checkouts can be placed.  FTT_DATABASE_URL names the
+difference between two checkouts can be placed; ``--parts`` splits the read
+into its round trips (BEGIN with the statement before the pose query, the
+pose query, COMMIT), each best of ``--repeat``.  FTT_DATABASE_URL names the
 campaign database itself (``test_…``), FTT_BENCH_ROOT the checkout, as for
 ``campaign_scale.py``; run the two checkouts alternately, each in a process
 of its own:
@@ -15,7 +17,9 @@ of its own:
 
 import argparse
 import inspect
+import math
 import os
+import time
 
 # One connection of its own, not a pool (set before campaign_scale sets Django up).
 os.environ.setdefault("FTT_DB_POOL_SIZE", "0")
@@ -47,11 +51,42 @@ def plan(ids: list[int]) -> list[str]:
         return [row[0] for row in cursor.fetchall()]
 
 
+def parts(ids: list[int], repeat: int) -> dict[str, float]:
+    """Best seconds of each round trip of one read as ``packed_tracks`` makes
+    it (a checkout reads in one statement, or in two in a transaction); the
+    rest of ``load_tracks`` is Python (arrays, tracks)."""
+    if hasattr(packed_tracks, "_read"):  # one statement, no transaction
+        sql, columns = packed_tracks.gps_tracks_sql(), packed_tracks._GPS_COLUMNS
+        read = timed(lambda: packed_tracks._read(sql, columns, ids, GPS), repeat)
+        return {"the one statement": read}
+    best = dict.fromkeys(("begin + first statement", "pose query", "commit"), math.inf)
+    for _ in range(repeat):
+        started = time.perf_counter()
+        with transaction.atomic():
+            if hasattr(packed_tracks, "_span"):
+                span, unstamped, _ = packed_tracks._span(ids, GPS)
+                query, params = packed_tracks.gps_tracks_sql(unstamped), {"ids": ids, **span}
+            else:  # one pose table: JIT off, then the query
+                with connection.cursor() as cursor:
+                    cursor.execute("SET LOCAL jit = off")
+                query, params = packed_tracks.gps_tracks_sql(), [ids]
+            first = time.perf_counter()
+            with bound_cursor(binary_results=True) as cursor:
+                cursor.execute(query, params)
+                cursor.fetchall()
+            read = time.perf_counter()
+        done = time.perf_counter()
+        for name, seconds in zip(best, (first - started, read - first, done - read), strict=True):
+            best[name] = min(best[name], seconds)
+    return best
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--repeat", type=int, default=20)
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--plan", action="store_true", help="print the whole plan")
+    parser.add_argument("--parts", action="store_true", help="time each round trip of a read")
     args = parser.parse_args()
     ids = leg_masters()
     points = sum(len(t) for t in load_tracks(ids, GPS).values())
@@ -76,6 +111,9 @@ def main():
         print(
             f"round {r + 1}: load_tracks {tracks * 1e3:.3f} ms, empty statement {trip * 1e3:.3f} ms"
         )
+        if args.parts:
+            split = parts(ids, args.repeat)
+            print("  parts: " + ", ".join(f"{k} {v * 1e3:.3f} ms" for k, v in split.items()))
     lines = plan(ids)
     timing = [line for line in lines if line.startswith(("Planning", "Execution"))]
     print("; ".join(timing) if not args.plan else "\n".join(lines))

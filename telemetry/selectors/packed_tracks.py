@@ -4,10 +4,8 @@ A million points cross the wire as 1 000 rows that numpy reads without a
 Python object per point.  docs/gui.md ("Big tracks") explains the query's shape.
 """
 
-from datetime import UTC, datetime
-
 import numpy as np
-from django.db import connection, transaction
+from django.db import transaction
 
 from common.sql import bound_cursor
 from telemetry.models import LocalPose, Pose, SegmentFigures
@@ -23,122 +21,107 @@ _PG_EPOCH_MICROSECONDS = 946_684_800_000_000
 _PG_FLOAT = np.dtype(">f8")
 
 
-def _in_span(unstamped: bool) -> str:
-    """The poses whose robot stamp lies in a span (its two ends are
-    parameters), and those that have none where ``unstamped``: a bound the
-    planner prunes the month partitions by (telemetry.services.pose_partitions)
-    before the read starts.  Unstamped poses are in the default partition,
-    which only a read that may need them names (besides a span that reaches a
-    month without a partition of its own)."""
-    stamped = "robot_stamp BETWEEN %(first)s::timestamptz AND %(last)s::timestamptz"
-    return f"({stamped} OR robot_stamp IS NULL)" if unstamped else f"({stamped})"
+def _in_span() -> str:
+    """The poses whose robot stamp lies in the span ($2 and $3, its ends), and
+    those that have none where $4 is true: a bound the planner prunes the
+    month partitions by (telemetry.services.pose_partitions) before the read
+    starts, as the values are constants when it plans.  Unstamped poses are in
+    the default partition, which only a read that may need them names
+    (besides a span that reaches a month without a partition of its own)."""
+    return "(robot_stamp BETWEEN $2 AND $3 OR ($4 AND robot_stamp IS NULL))"
 
 
-def gps_tracks_sql(unstamped: bool = True) -> str:
-    """The query of the GPS tracks (parameters: ``ids``, the segment ids, and
-    ``first`` and ``last``, the span's ends; ``unstamped``: see ``_in_span``),
-    so the benchmark can show its plan."""
+def gps_tracks_sql() -> str:
+    """The query of the GPS tracks (parameters as ``_read`` gives them: $1 the
+    segment ids, $2 to $4 see ``_in_span``, $5 the kept figures' mode or
+    NULL), so the benchmark can show its plan.  Where the read is bounded,
+    the count of fixes without a position is the figures': such a fix may
+    lie outside the span, its segment may have no pose inside."""
     no_fix = int(FixStatus.NO_FIX)
     return (
-        "SELECT segment_id, "
-        f"string_agg(ST_AsBinary(point, 'NDR'), ''::bytea) FILTER (WHERE fix_status <> {no_fix}), "
-        f"string_agg(timestamptz_send(t), ''::bytea) FILTER (WHERE fix_status <> {no_fix}), "
-        f"count(*) FILTER (WHERE fix_status = {no_fix}) "
+        "SELECT segment_id, points, stamps, "
+        "CASE WHEN $5 IS NULL THEN counted ELSE COALESCE(kept.no_fix, 0)::bigint END "
+        "FROM (SELECT segment_id, "
+        f"string_agg(ST_AsBinary(point, 'NDR'), ''::bytea) FILTER (WHERE fix_status <> {no_fix}) "
+        "AS points, "
+        f"string_agg(timestamptz_send(t), ''::bytea) FILTER (WHERE fix_status <> {no_fix}) "
+        "AS stamps, "
+        f"count(*) FILTER (WHERE fix_status = {no_fix}) AS counted "
         "FROM (SELECT segment_id, point, fix_status, COALESCE(robot_stamp, received) AS t "
-        f'FROM "{Pose._meta.db_table}" WHERE segment_id = ANY(%(ids)s::bigint[]) '
-        f"AND {_in_span(unstamped)} "
+        f'FROM "{Pose._meta.db_table}" WHERE segment_id = ANY($1) AND {_in_span()} '
         f"ORDER BY segment_id, {order_sql()}) AS ordered "
-        "GROUP BY segment_id"
+        "GROUP BY segment_id) AS read "
+        "FULL JOIN (SELECT segment_id, no_fix "
+        f'FROM "{SegmentFigures._meta.db_table}" '
+        "WHERE segment_id = ANY($1) AND mode = $5 AND no_fix > 0) AS kept USING (segment_id)"
     )
 
 
-def local_tracks_sql(unstamped: bool = True) -> str:
+def local_tracks_sql() -> str:
     """The query of the local tracks, read the way the GPS tracks are; the
     frame is that of each track's first point, found through the same index."""
     table = LocalPose._meta.db_table
     return (
         "SELECT segment_id, string_agg(float8send(x), ''::bytea), "
         "string_agg(float8send(y), ''::bytea), string_agg(timestamptz_send(t), ''::bytea), "
-        f'(SELECT frame FROM "{table}" AS first WHERE first.segment_id = ordered.segment_id '
-        f"AND {_in_span(unstamped)} ORDER BY {order_sql()} LIMIT 1) "
+        f'(SELECT frame::text FROM "{table}" AS first WHERE first.segment_id = ordered.segment_id '
+        f"AND {_in_span()} ORDER BY {order_sql()} LIMIT 1) "
         "FROM (SELECT segment_id, x, y, COALESCE(robot_stamp, received) AS t "
-        f'FROM "{table}" WHERE segment_id = ANY(%(ids)s::bigint[]) '
-        f"AND {_in_span(unstamped)} "
+        f'FROM "{table}" WHERE segment_id = ANY($1) AND {_in_span()} '
         f"ORDER BY segment_id, {order_sql()}) AS ordered "
         "GROUP BY segment_id"
     )
 
 
-# A span that holds every stamp: the read of every pose.
-_ALL_TIME = {"first": datetime(1, 1, 1, tzinfo=UTC), "last": datetime(9999, 12, 31, tzinfo=UTC)}
+_GPS_COLUMNS = "segment_id bigint, points bytea, stamps bytea, no_fix bigint"
+_LOCAL_COLUMNS = "segment_id bigint, x bytea, y bytea, stamps bytea, frame text"
 
 
-def _kept_span_sql() -> str:
-    """The span of the segments' stamped usable points as their kept figures
-    hold it, and the segments with GPS fixes without a position and how many;
-    JIT compiling off for the transaction in the same statement.
-
-    The first time of the usable points (robot clock, else arrival) is at or
-    before the first robot stamp.  The last point in driving order carries the
-    latest robot stamp unless it has none (unstamped points sort last); then
-    the latest time of all is at or after it, and the segment has usable
-    points without a robot stamp: only then is the default partition read."""
-    return (
-        "SELECT set_config('jit', 'off', true), min(first_stamp), "
-        "max(COALESCE(last_robot_stamp, last_stamp)), "
-        "COALESCE(bool_or(points > 0 AND last_robot_stamp IS NULL), false), "
-        "array_agg(segment_id) FILTER (WHERE no_fix > 0), "
-        "array_agg(no_fix) FILTER (WHERE no_fix > 0) "
-        f'FROM "{SegmentFigures._meta.db_table}" '
-        "WHERE segment_id = ANY(%(ids)s::bigint[]) AND mode = %(mode)s"
-    )
+# The parameters of a read of every pose (``_read``).
+_EVERY_POSE = {
+    "$1": "%(ids)s::bigint[]",
+    "$2": "'-infinity'::timestamptz",
+    "$3": "'infinity'::timestamptz",
+    "$4": "true",
+    "$5": "NULL::text",
+}
 
 
-def _packed_rows(query, segment_ids: list[int], kept_mode: str | None):
-    """The rows of ``query(unstamped)`` (``_in_span``), in binary (as the bytes
-    are stored), and the kept count of fixes without a position by segment
-    (None: every pose was read).
+def _read(query: str, columns: str, segment_ids: list[int], kept_mode: str | None) -> list:
+    """The rows of ``query`` (its columns as ``columns`` declares them), in
+    binary (as the bytes are stored), read in one statement by
+    ``ftt_read_within_kept_span`` (telemetry migration 0014): it looks up the
+    span of the segments' kept figures of ``kept_mode`` and plans ``query``
+    with it, JIT compiling off (it costs a plain scan more than it saves).
 
-    ``kept_mode`` names the figures (telemetry.models.SegmentFigures) whose
-    span bounds the read of stamped poses (``_kept_span_sql``); the figures
-    are written in the poses' transaction, so every pose
-    committed before this read is inside.  A fix without a position may lie
-    outside, so their count is the figures'.  None reads every pose, for
-    measuring the figures themselves.
-
-    The aggregate keeps its sorted subquery's order; JIT compiling is off for
-    the statement, as it costs a plain scan more than it saves (``SET LOCAL``:
-    until the end of the caller's transaction where there is one)."""
-    with transaction.atomic():
-        span, unstamped, no_fix = _span(segment_ids, kept_mode)
-        with bound_cursor(binary_results=True) as cursor:
-            cursor.execute(query(unstamped), {"ids": segment_ids, **span})
-            return cursor.fetchall(), no_fix
-
-
-def _span(segment_ids: list[int], kept_mode: str | None) -> tuple[dict, bool, dict | None]:
-    """The span the read is bounded by, whether it reads unstamped poses, and
-    the kept counts of fixes without a position (``_packed_rows``), with JIT
-    off for the transaction."""
-    with connection.cursor() as cursor:
-        if kept_mode is None:
+    The figures are written in the poses' transaction, so every pose
+    committed before the look-up is inside.  A ``kept_mode`` of None reads
+    every pose, for measuring the figures themselves.  The aggregate keeps
+    its sorted subquery's order."""
+    if kept_mode is None:
+        # Every pose: nothing to look up (and the figures' migration 0007
+        # measures tracks before 0014 makes the function).
+        for param, value in _EVERY_POSE.items():
+            query = query.replace(param, value)
+        with transaction.atomic(), bound_cursor(binary_results=True) as cursor:
             cursor.execute("SET LOCAL jit = off")
-            return _ALL_TIME, True, None
-        cursor.execute(_kept_span_sql(), {"ids": segment_ids, "mode": kept_mode})
-        _, first, last, unstamped, segments, counts = cursor.fetchone()
-    no_fix = dict(zip(segments or [], counts or [], strict=True))
-    return {"first": first, "last": last}, unstamped, no_fix
+            cursor.execute(query, {"ids": segment_ids})
+            return cursor.fetchall()
+    with bound_cursor(binary_results=True) as cursor:
+        cursor.execute(
+            f"SELECT * FROM ftt_read_within_kept_span(%s::text, %s::bigint[], %s::text) "
+            f"AS read({columns})",
+            [query, segment_ids, kept_mode],
+        )
+        return cursor.fetchall()
 
 
 def gps_tracks_plan(segment_ids: list[int], kept_mode: str, analyze: bool = False) -> list[str]:
     """PostgreSQL's plan of the GPS tracks query as ``gps_arrays`` runs it, for
     the benchmark and the tests to show which partitions it reads."""
     explain = "EXPLAIN (ANALYZE, BUFFERS) " if analyze else "EXPLAIN "
-    with transaction.atomic():
-        span, unstamped, _ = _span(segment_ids, kept_mode)
-        with bound_cursor() as cursor:
-            cursor.execute(explain + gps_tracks_sql(unstamped), {"ids": segment_ids, **span})
-            return [row[0] for row in cursor.fetchall()]
+    rows = _read(explain + gps_tracks_sql(), "line text", segment_ids, kept_mode)
+    return [line for (line,) in rows]
 
 
 def _seconds(stamps: bytes | None) -> np.ndarray:
@@ -150,21 +133,17 @@ def _seconds(stamps: bytes | None) -> np.ndarray:
 def gps_arrays(segment_ids: list[int], kept_mode: str | None):
     """(segment id, longitudes, latitudes, seconds since 1970, fixes without a
     position) of each segment that has poses, in driving order (``kept_mode``:
-    see ``_packed_rows``)."""
-    rows, kept_no_fix = _packed_rows(gps_tracks_sql, segment_ids, kept_mode)
+    see ``_read``)."""
+    rows = _read(gps_tracks_sql(), _GPS_COLUMNS, segment_ids, kept_mode)
     for seg, points, stamps, no_fix in rows:
         points = np.frombuffer(points or b"", dtype=_WKB_POINT)
-        if kept_no_fix is not None:
-            no_fix = kept_no_fix.pop(seg, 0)
         yield seg, points["x"].astype(float), points["y"].astype(float), _seconds(stamps), no_fix
-    for seg, no_fix in (kept_no_fix or {}).items():
-        yield seg, np.empty(0), np.empty(0), np.empty(0), no_fix
 
 
 def local_arrays(segment_ids: list[int], kept_mode: str | None):
     """(segment id, x, y, seconds since 1970, frame) of each segment that has
-    local poses, in driving order (``kept_mode``: see ``_packed_rows``)."""
-    rows, _ = _packed_rows(local_tracks_sql, segment_ids, kept_mode)
+    local poses, in driving order (``kept_mode``: see ``_read``)."""
+    rows = _read(local_tracks_sql(), _LOCAL_COLUMNS, segment_ids, kept_mode)
     for seg, x, y, stamps, frame in rows:
         x = np.frombuffer(x, dtype=_PG_FLOAT).astype(float)
         y = np.frombuffer(y, dtype=_PG_FLOAT).astype(float)
