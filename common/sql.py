@@ -27,8 +27,8 @@ def plain_rows(queryset) -> list[tuple]:
     timestamps), as ``list(queryset)`` gives them.
 
     On PostgreSQL they are loaded in binary: psycopg reads a timestamp in C,
-    where Django parses its text in Python, ten times as long (a campaign's
-    comparison reads 120 000).  Elsewhere Django reads them.
+    where Django parses its text in Python (docs/report.md has the figures).
+    Elsewhere Django reads them.
     """
     if queryset.query.annotation_select:
         raise ValueError("plain_rows reads columns, not annotations")

@@ -231,8 +231,8 @@ def _longest_without_intervention(runs: list[Run]) -> float:
 
 
 class SegmentRow(NamedTuple):
-    """The columns of a segment a run needs, as one row: no model instance (a
-    campaign's comparison reads 45 000 segments).  Start positions are not
+    """The columns of a segment a run needs, as one row: no model instance, as
+    a campaign's comparison reads every segment.  Start positions are not
     among them: ``distances.start_points`` reads them by leg."""
 
     pk: int
