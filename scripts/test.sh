@@ -174,7 +174,8 @@ step "import layers (lint-imports)" "$FTT_VENV/bin/lint-imports"
 step "eslint static/gui" npx --no-install eslint static/gui
 
 if [ -n "${FTT_DATABASE_URL:-}" ]; then
-    step "pytest on PostGIS" "${pytest[@]}" -p no:playwright tests --ignore=tests/e2e
+    # The slowest tests are listed: the whole run must stay well under CI's 90 minutes.
+    step "pytest on PostGIS" "${pytest[@]}" -p no:playwright --durations=30 tests --ignore=tests/e2e
 else
     step "pytest on SpatiaLite (FTT_TEST_SPATIALITE=1)" \
         "${pytest[@]}" -p no:playwright tests --ignore=tests/e2e -m "not postgis_only"

@@ -3,9 +3,10 @@
 Normally first in, first out, and a segment change ends its slice: the
 operators' screens wait for its commit, not for the camera frames and
 positions spooled after it. When the writer finds more than a quarter of a
-slice pending (after an outage, or at a start with a full spool), live data
-must not wait behind it: what the spool holds then is the backlog (ids up to
-``end``), and:
+slice pending (after an outage, or at a start with a full spool), or finds
+records held in memory behind the spool (the disk filled during an outage),
+live data must not wait behind it: what the spool holds then is the backlog
+(ids up to ``end``), and:
 
 1. its segment changes (mode, start, stop) are applied first, in spool order,
    and each is marked in the spool with the master it left open;
@@ -29,7 +30,8 @@ restart in the middle goes on the same way.
 
 A backlog slice grows (up to ``MAX_SLICES`` live slices) while it is stored
 in less than ``SLICE_SECONDS``: a slice costs a few dozen round trips to the
-database whatever its size. That time is also how long a live switch may wait.
+database whatever its size. That time is also how long a live switch may wait:
+a slice of many runs (segment changes) ends once it is spent.
 docs/collector.md ("Nothing is lost") has the figures.
 """
 
@@ -47,7 +49,7 @@ from rosbridge_app.collector.outbox import Outbox
 from rosbridge_app.collector.recorder import GivenMaster, Recorder
 
 _STATE = "backlog"
-SLICE_SECONDS = 1.0
+SLICE_SECONDS = 0.5
 MAX_SLICES = 10
 log = logging.getLogger("ftt.collector")
 
@@ -87,7 +89,7 @@ class ReplayOrder:
     def write_next(self, recorder: Recorder) -> int:
         """Store the next slices; how many records were taken or marked."""
         self.stored_change = False
-        if self.lane is None and len(self.outbox) > self.backlog:
+        if self.lane is None and self._has_backlog():
             self._changes_done = False
             self.backlog_slice = self.size
             end = self.outbox.last_id()
@@ -133,12 +135,20 @@ class ReplayOrder:
         for run, rows in runs:
             master = marks[run - 1][1] if run else self.lane["master"]
             stored += self._store(recorder, list(rows), GivenMaster(master))
+            if time.monotonic() - started > SLICE_SECONDS:
+                break  # each run costs its round trips: live data waits no longer
         if stored == self.backlog_slice:  # a short slice (the last, or maps) tells nothing
             rate = stored / max(time.monotonic() - started, 1e-3)
             self.backlog_slice = int(
                 min(self.size * MAX_SLICES, max(self.size, rate * SLICE_SECONDS))
             )
         return taken + stored
+
+    def _has_backlog(self) -> bool:
+        pending = len(self.outbox)
+        # Held records are younger than the whole spool: behind it, they would
+        # wait for each of its segment changes' round trips.
+        return pending > self.backlog or bool(pending and self.held is not None and len(self.held))
 
     def _store(self, recorder: Recorder, rows: list, master: GivenMaster | None) -> int:
         if rows:

@@ -8,7 +8,9 @@ import pytest
 from events.models import Segment
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector import replay
+from rosbridge_app.collector.disk_guard import DiskGuard
 from rosbridge_app.collector.events import Event
+from rosbridge_app.collector.held import Held
 from rosbridge_app.collector.outbox import Outbox
 from rosbridge_app.collector.recorder import Recorder
 from rosbridge_app.collector.replay import ReplayOrder
@@ -180,3 +182,31 @@ def test_a_live_switch_stored_with_a_backlog_slice_is_known_as_stored(leg, tmp_p
     assert Segment.objects.filter(uid=switch.uid).exists()
     assert order.stored_change
     assert len(outbox) > 0  # the backlog's positions still wait
+
+
+def test_positions_held_in_memory_do_not_wait_for_each_switch_of_a_small_spool(leg, tmp_path):
+    """The disk filled during an outage: the spool holds a few switches, memory
+    the live data after them. The live data is stored at the second turn, not
+    behind one turn per spooled switch."""
+    t0 = datetime.now(UTC) + timedelta(minutes=1)
+    outbox = Outbox(tmp_path / "spool.sqlite3")
+    spooled = [Event(ev.START, t0)]
+    for i, mode in enumerate(["auto", "ito", "auto", "ito"]):
+        at = t0 + timedelta(seconds=i)
+        spooled += [Event(ev.MODE, at, {"mode": mode}), *_fixes(at, 2)]
+    outbox.append(spooled)
+    held = Held(DiskGuard(tmp_path / "spool.sqlite3", budget=None, headroom=0))
+    live = _fixes(t0 + timedelta(seconds=10), 1)
+    for event in live:
+        held.add(event)
+    order, recorder = ReplayOrder(outbox, 100, held=held), Recorder(lambda: leg)
+    assert len(outbox) < order.backlog  # small: by its size alone not a backlog
+
+    order.write_next(recorder)  # the spool's switches
+    order.write_next(recorder)
+    assert Pose.objects.filter(uid=live[0].uid).exists()
+    while order.write_next(recorder):
+        pass
+    masters = Segment.objects.filter(leg=leg, parent__isnull=True).order_by("start")
+    assert [m.segment_type_id for m in masters] == ["auto", "ito", "auto", "ito"]
+    assert Pose.objects.count() == 4 * 2 + 1
