@@ -49,7 +49,7 @@ def said(text: str, **values) -> Said:
     return Said(text, values)
 
 
-def kept(column: str, words: "Said | str", limit: int | None = None) -> dict:
+def said_fields(column: str, words: "Said | str", limit: int | None = None) -> dict:
     """The fields of a job row that keep ``words`` in ``column`` (message, error, verdict):
     the English sentence and, for a ``Said``, its text and values."""
     if isinstance(words, str):

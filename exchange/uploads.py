@@ -20,7 +20,7 @@ from django.utils.translation import gettext_noop
 from django_tasks import task
 
 from common import jobs
-from common.said import Said, kept, said
+from common.said import Said, said, said_fields
 from exchange.archive import open_archive
 from exchange.importer import Plan, import_bundle
 from exchange.models import ArchiveImport
@@ -56,8 +56,8 @@ def queue_import(upload, *, user=None) -> tuple[ArchiveImport, Plan]:
             job = ArchiveImport.objects.create(
                 filename=(getattr(upload, "name", "") or upload_copy.name)[:255],
                 path=str(upload_copy.resolve()),
-                **kept("message", jobs.waiting()),
-                **kept("verdict", preview.said(), 200),
+                **said_fields("message", jobs.waiting()),
+                **said_fields("verdict", preview.said(), 200),
                 requested_by=user if user is not None and user.is_authenticated else None,
             )
             import_archive.enqueue(job.pk)
@@ -83,17 +83,18 @@ def import_archive(job_id: int) -> str:
     if job.is_finished:
         return job.status
     ArchiveImport.objects.filter(pk=job_id).update(
-        status=ArchiveImport.Status.RUNNING, **kept("message", said(gettext_noop("importing")))
+        status=ArchiveImport.Status.RUNNING,
+        **said_fields("message", said(gettext_noop("importing"))),
     )
     try:
         plan = import_file(Path(job.path), dry_run=False)
     except Exception as exc:  # refused, malformed or a file gone: the reason is the outcome
-        _finish(job, ArchiveImport.Status.FAILED, **kept("error", _reason(exc)))
+        _finish(job, ArchiveImport.Status.FAILED, **said_fields("error", _reason(exc)))
         return ArchiveImport.Status.FAILED
     _finish(
         job,
         ArchiveImport.Status.DONE,
-        **kept("verdict", plan.said(), 200),
+        **said_fields("verdict", plan.said(), 200),
         changes=plan.changes(),
         counts={table: dict(counts) for table, counts in plan.counts.items()},
         lines=plan.lines(),
@@ -106,13 +107,13 @@ def _worker_stopped(job_id: int, *, retried: bool, reason: Said) -> None:
     if retried:
         again = said(gettext_noop("queued again: %(reason)s"), reason=reason)
         ArchiveImport.objects.filter(pk=job_id).update(
-            status=ArchiveImport.Status.QUEUED, **kept("message", again, 200)
+            status=ArchiveImport.Status.QUEUED, **said_fields("message", again, 200)
         )
         return
     job = ArchiveImport.objects.filter(pk=job_id).first()
     if job is not None:
         nothing = said(gettext_noop("%(reason)s Nothing was imported."), reason=reason)
-        _finish(job, ArchiveImport.Status.FAILED, **kept("error", nothing))
+        _finish(job, ArchiveImport.Status.FAILED, **said_fields("error", nothing))
 
 
 def _reason(exc: Exception) -> str:
@@ -132,7 +133,7 @@ def _finish(job: ArchiveImport, status: str, **fields) -> None:
         Path(job.path).unlink(missing_ok=True)
     ArchiveImport.objects.filter(pk=job.pk).update(
         status=status,
-        **kept("message", said(FINISHED[status])),
+        **said_fields("message", said(FINISHED[status])),
         path="",
         finished=timezone.now(),
         **fields,

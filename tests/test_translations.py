@@ -417,7 +417,7 @@ def test_figures_are_written_in_the_readers_language():
 
 
 # Where a background job writes its row: its step and failure are kept as words
-# (common.said.kept), so that each reader gets them in their language.
+# (common.said.said_fields), so that each reader gets them in their language.
 JOB_WRITERS = ["reports/services/generation.py", "exchange/uploads.py", "common/jobs.py"]
 
 
@@ -439,7 +439,7 @@ def test_job_rows_keep_words_not_sentences():
     assert _found(_modules(*JOB_WRITERS), _job_words) == []
     sample = ast.parse(
         'Report.objects.update(message="done")\nrow.error = f"failed: {e}"\n'
-        'Report.objects.update(**kept("message", said(gettext_noop("done"))))\n'
+        'Report.objects.update(**said_fields("message", said(gettext_noop("done"))))\n'
     )
     assert sorted(ast.unparse(n) for n in _job_words(sample)) == ["'done'", "f'failed: {e}'"]
 

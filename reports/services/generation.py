@@ -27,7 +27,7 @@ from django_tasks import task
 
 from common import jobs
 from common.errors import RuleViolation, TooManyWaiting
-from common.said import Said, kept, said
+from common.said import Said, said, said_fields
 from events.models import TestEvent
 from reports.documents.comparison import render_comparison
 from reports.documents.event_report import ReportResult, check_reportable, render_report
@@ -72,7 +72,7 @@ def request_report(
             test_event=test_event,
             options=opts.as_dict(),
             requested_by=user if user is not None and user.is_authenticated else None,
-            **kept("message", jobs.waiting()),
+            **said_fields("message", jobs.waiting()),
         )
         make_report.enqueue(report.pk)
     return report
@@ -118,7 +118,7 @@ def request_comparison(
                 **({ROUTES: routes} if routes else {}),
             },
             requested_by=user if user is not None and user.is_authenticated else None,
-            **kept("message", jobs.waiting()),
+            **said_fields("message", jobs.waiting()),
         )
         make_report.enqueue(report.pk)
     return report
@@ -188,7 +188,9 @@ def _worker_stopped(report_id: int, *, retried: bool, reason: Said) -> None:
         Report.objects.filter(pk=report_id).update(
             status=Report.Status.QUEUED,
             progress=0.0,
-            **kept("message", said(gettext_noop("queued again: %(reason)s"), reason=reason), 200),
+            **said_fields(
+                "message", said(gettext_noop("queued again: %(reason)s"), reason=reason), 200
+            ),
             updated=timezone.now(),
         )
     else:
@@ -257,7 +259,7 @@ def run_job(report_id: int) -> Report:
             return report
         Report.objects.filter(pk=report_id).update(
             status=Report.Status.RUNNING,
-            **kept("message", said(gettext_noop("starting"))),
+            **said_fields("message", said(gettext_noop("starting"))),
             updated=timezone.now(),
         )
         last = [0.0]
@@ -268,7 +270,9 @@ def run_job(report_id: int) -> Report:
                 return
             last[0] = now
             Report.objects.filter(pk=report_id).update(
-                progress=round(fraction, 3), **kept("message", step, 200), updated=timezone.now()
+                progress=round(fraction, 3),
+                **said_fields("message", step, 200),
+                updated=timezone.now(),
             )
 
         try:
@@ -323,8 +327,8 @@ def _render(report: Report, progress) -> ReportResult:
 def _fail(report_id: int, why: Said) -> Report:
     Report.objects.filter(pk=report_id).update(
         status=Report.Status.FAILED,
-        **kept("error", why),
-        **kept("message", said(gettext_noop("failed"))),
+        **said_fields("error", why),
+        **said_fields("message", said(gettext_noop("failed"))),
         finished=timezone.now(),
     )
     return Report.objects.get(pk=report_id)
