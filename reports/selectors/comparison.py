@@ -9,6 +9,7 @@ from collections import defaultdict
 
 from django.utils.translation import gettext as _
 
+from common import cyclic_gc
 from events.models import ItoReason, TestEvent, Vehicle
 from reports import formatting as fmt
 from reports.selectors import formulas
@@ -75,6 +76,7 @@ def _group(extra: dict, runs: list[Run]) -> dict:
     return {**extra, "figures": data, "shown": shown(data)}
 
 
+@cyclic_gc.paused()
 def compare(events: list[TestEvent], mode: str = GPS) -> dict:
     """JSON-ready comparison of the given test events, oldest first."""
     events = sorted(events, key=lambda e: (e.start, e.pk))
