@@ -174,6 +174,7 @@ class Sender:
 
     def _run(self) -> None:
         sent = 0.0
+        failing = False
         while True:
             self._poked.wait()
             # At once after a quiet spell; in a stream of commits, at most one
@@ -183,10 +184,17 @@ class Sender:
             try:
                 self._send()
             except Exception as exc:  # noqa: BLE001 - the readers poll meanwhile
-                logger.warning("live wake-up not sent: %s", exc)
+                # Once per outage, not once per try: a robot's log must stay readable.
+                if not failing:
+                    logger.warning("live wake-up not sent: %s; trying again every %g s", exc, RETRY)
+                    failing = True
                 self._close()
                 self._poked.set()
                 time.sleep(RETRY)
+            else:
+                if failing:
+                    logger.warning("live wake-ups are sent again")
+                    failing = False
 
     def _send(self) -> None:
         with self._using:

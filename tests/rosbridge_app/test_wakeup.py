@@ -2,7 +2,9 @@
 across processes (NOTIFY on PostgreSQL, datagrams on SQLite)."""
 
 import contextlib
+import logging
 import socket
+import threading
 
 import psycopg
 import pytest
@@ -114,3 +116,30 @@ def test_sqlite_readers_are_woken_and_dead_ones_forgotten(tmp_path):
     finally:
         alive.close()
     assert not alive.path.exists()
+
+
+def test_wake_ups_that_cannot_be_sent_are_logged_once_per_outage(monkeypatch, caplog):
+    monkeypatch.setattr(wakeup, "RETRY", 0.01)
+    caplog.set_level(logging.INFO, "rosbridge_app.wakeup")
+    sent = [threading.Event(), threading.Event()]
+    tries = []
+
+    class Outage(wakeup.Sender):
+        def _send(self):
+            self._poked.clear()
+            tries.append(1)
+            if len(tries) <= 5:
+                raise psycopg.OperationalError("connection refused")
+            sent[len(tries) - 6].set()
+
+    sender = Outage(delay=0)
+    sender.poke()
+    assert sent[0].wait(10)
+    # The thread logs after a send returns: the next send comes after that line.
+    sender.poke()
+    assert sent[1].wait(10)
+    lines = [r.getMessage() for r in caplog.records if r.name == "rosbridge_app.wakeup"]
+    assert lines == [
+        "live wake-up not sent: connection refused; trying again every 0.01 s",
+        "live wake-ups are sent again",
+    ]
