@@ -1,9 +1,8 @@
 """Python's cyclic garbage collector, paused around work that builds many
 short-lived objects without cycles, which reference counting frees anyway.
 
-A campaign's comparison builds a row per segment (30 000 at a time): the
-collector's passes over them were a quarter of its time, freeing nothing.
-The pause is process-wide, so it is counted: the collector runs again when
+A campaign's comparison builds a row per segment; the collector's passes
+over them free nothing (docs/report.md has the figures). The pause is process-wide, so it is counted: the collector runs again when
 the last of the threads that paused it (web requests run in threads) is done,
 and stays off if it was off before.
 """
