@@ -2,8 +2,9 @@
 short-lived objects without cycles, which reference counting frees anyway.
 
 A campaign's comparison builds a row per segment; the collector's passes
-over them free nothing (docs/report.md has the figures). The pause is process-wide, so it is counted: the collector runs again when
-the last of the threads that paused it (web requests run in threads) is done,
+over them free nothing (docs/report.md has the figures). The pause is
+process-wide, so it is counted: the collector runs again when the last of
+the threads that paused it (web requests run in threads) is done,
 and stays off if it was off before.
 """
 
