@@ -61,6 +61,15 @@ def test_commands_are_taken_once_and_answered(vehicle, leg):
     assert Announcement.objects.filter(kind="command").count() == 1
 
 
+def test_a_poll_that_finds_no_command_is_one_statement(vehicle, django_assert_num_queries):
+    # Four polls a second per robot: the idle case must stay one round trip.
+    collector = heartbeat("robot/husky", vehicle=vehicle, logging=True)
+    done = issue_command(collector, CollectorCommand.Kind.STOP_LOGGING)
+    finish_command(done, True, "Logging stopped.")
+    with django_assert_num_queries(1):
+        assert take_commands(collector) == []
+
+
 def test_commands_nobody_takes_fail_after_a_while(vehicle):
     collector = heartbeat("robot/husky", vehicle=vehicle, logging=True)
     command = issue_command(collector, CollectorCommand.Kind.STOP_LOGGING)
