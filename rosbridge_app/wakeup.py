@@ -22,14 +22,19 @@ layers, never call up to it) and, once the writer's transaction commits
 1 and 2 happen in the writer's thread just after its commit (a function call,
 a non-blocking datagram).  3 and 4 leave it: one thread per process sends them,
 at once after a quiet spell and at most once per FTT_LIVE_NOTIFY_DELAY_MS in a
-stream of commits, NOTIFY on a connection of its own.  A commit never sends
-NOTIFY itself, because PostgreSQL holds a database-wide lock from a notifying
-commit until its WAL flush ends, and commits that notify cannot share a flush
-(many single poses a second would be bounded by it).  A wake-up lost (a process
-that dies in between, a full socket queue) delays the readers by at most one
-poll interval.
+stream of commits, NOTIFY on a connection of its own.  Commits do not send
+NOTIFY themselves, because PostgreSQL holds a database-wide lock from a
+notifying commit until its WAL flush ends, and commits that notify cannot share
+a flush (many single poses a second would be bounded by it).  The exception is
+a segment change (a mode switch, a leg started or stopped): rare, and what a
+fleet view waits for, so its transaction NOTIFYs as well and PostgreSQL
+delivers that at the commit, without waiting for the writer's process (a
+collector on a busy robot) to get a core again for 3.  A wake-up lost (a
+process that dies in between, a full socket queue) delays the readers by at
+most one poll interval.
 """
 
+import asyncio
 import functools
 import logging
 import os
@@ -40,7 +45,6 @@ from collections.abc import Callable
 from pathlib import Path
 
 import psycopg
-from asgiref.sync import async_to_sync
 from channels.layers import get_channel_layer
 from django.conf import settings
 from django.db import connections, transaction
@@ -154,6 +158,10 @@ class Sender:
         # Held while the connection is used, by the thread or by disconnect().
         self._using = threading.Lock()
         self._connection = None
+        # The thread's own event loop for the channel layer, kept across sends:
+        # channels_redis keeps one connection per loop, and a loop per send
+        # (async_to_sync) opened a connection per wake-up.
+        self._loop: asyncio.AbstractEventLoop | None = None
         self._pid = None
 
     def poke(self) -> None:
@@ -164,6 +172,8 @@ class Sender:
         with self._lock:
             if self._pid == os.getpid():
                 return
+            # A forked child must not use its parent's loop (its selector is shared).
+            self._loop = None
             try:
                 thread = threading.Thread(target=self._run, name="ftt-wakeup", daemon=True)
                 thread.start()
@@ -207,7 +217,9 @@ class Sender:
         if settings.REDIS_URL:
             layer = get_channel_layer()
             if layer is not None:
-                async_to_sync(layer.group_send)(GROUP, {"type": "live.wake"})
+                if self._loop is None:
+                    self._loop = asyncio.new_event_loop()
+                self._loop.run_until_complete(layer.group_send(GROUP, {"type": "live.wake"}))
 
     def disconnect(self, wait: float = 1.0) -> None:
         """Send what is due, then close the connection (the next wake-up opens
@@ -247,6 +259,10 @@ def _after_commit(using: str) -> None:
 def _on_feed_row(sender, instance, created, using=None, **kwargs) -> None:
     if created:
         using = using or "default"
+        connection = connections[using]
+        if instance.kind == sender.Kind.SEGMENT and connection.vendor == "postgresql":
+            with connection.cursor() as cursor:
+                cursor.execute(f"NOTIFY {CHANNEL}")
         # robust: a failed wake-up is logged, never raised into the committed write.
         transaction.on_commit(functools.partial(_after_commit, using), using=using, robust=True)
 

@@ -180,42 +180,8 @@ def first_poll(monkeypatch) -> asyncio.Event:
     return polled
 
 
-def _redis_or_skip():
-    import redis
-
-    try:
-        redis.Redis.from_url(REDIS_TEST_URL, socket_connect_timeout=0.5).ping()
-    except Exception:  # noqa: BLE001
-        pytest.skip("no Redis server on 127.0.0.1:6379")
-
-
-REDIS_TEST_URL = "redis://127.0.0.1:6379/7"
-
-
-async def test_with_redis_a_commit_wakes_the_poller_at_once(viewer, leg, settings, monkeypatch):
-    _redis_or_skip()
-    from channels.layers import channel_layers
-
-    settings.REDIS_URL = REDIS_TEST_URL
-    settings.CHANNEL_LAYERS = {
-        "default": {
-            "BACKEND": "channels_redis.pubsub.RedisPubSubChannelLayer",
-            "CONFIG": {"hosts": [REDIS_TEST_URL]},
-        }
-    }
-    channel_layers.backends.clear()
-    # Polling alone would take an hour now: only the wake-up can deliver the event.
-    monkeypatch.setattr(consumers, "POLL_INTERVAL", 3600.0)
-    polled = first_poll(monkeypatch)
-    try:
-        communicator, _ = await connect(viewer, leg=leg.pk)
-        await asyncio.wait_for(polled.wait(), 10)  # the poller now waits for a wake-up
-        await database_sync_to_async(segments.report_mode)(leg, "auto")
-        events = await next_events(communicator, timeout=10)
-        assert [e["kind"] for e in events] == ["segment"]
-        await communicator.disconnect()
-    finally:
-        channel_layers.backends.clear()
+async def test_with_redis_a_commit_wakes_the_poller_at_once(viewer, leg, redis_layer, monkeypatch):
+    await _only_the_wakeup_delivers(viewer, leg, monkeypatch)
 
 
 async def _only_the_wakeup_delivers(viewer, leg, monkeypatch):

@@ -5,6 +5,7 @@ import contextlib
 import logging
 import socket
 import threading
+import time
 
 import psycopg
 import pytest
@@ -143,3 +144,46 @@ def test_wake_ups_that_cannot_be_sent_are_logged_once_per_outage(monkeypatch, ca
         "live wake-up not sent: connection refused; trying again every 0.01 s",
         "live wake-ups are sent again",
     ]
+
+
+@pytest.mark.postgis_only
+def test_a_segment_change_is_heard_at_its_commit_without_the_writers_thread(monkeypatch):
+    # A collector starved of CPU sends its thread's NOTIFY late: a mode switch
+    # must not wait for it.  Other rows still do (their commits share a flush).
+    monkeypatch.setattr(wakeup._sender_thread, "poke", lambda: None)
+    with psycopg.connect(conninfo(), autocommit=True) as listener:
+        listener.execute(f"LISTEN {wakeup.CHANNEL}")
+        with transaction.atomic():
+            feed.record("segment", payload={"segment": 1})
+            feed.record("poses", payload={"count": 1})
+            before_commit = list(listener.notifies(timeout=0.3, stop_after=1))
+        at_commit = list(listener.notifies(timeout=2.0, stop_after=1))
+        feed.record("poses", payload={"count": 2})
+        for_poses_alone = list(listener.notifies(timeout=0.5, stop_after=1))
+        with pytest.raises(RuntimeError), transaction.atomic():
+            feed.record("segment", payload={"segment": 2})
+            raise RuntimeError("undo")
+        for_rolled_back = list(listener.notifies(timeout=0.5, stop_after=1))
+    assert (len(before_commit), len(at_commit)) == (0, 1)
+    assert for_poses_alone == [] and for_rolled_back == []
+
+
+def test_wake_ups_through_redis_share_one_connection(redis_layer):
+    def published() -> int:
+        return redis_layer.info("commandstats").get("cmdstat_publish", {}).get("calls", 0)
+
+    sender = wakeup.Sender(delay=0)
+    try:
+        connected = redis_layer.info("stats")["total_connections_received"]
+        for _ in range(8):
+            before = published()
+            sender.poke()
+            deadline = time.monotonic() + 10
+            while published() == before and time.monotonic() < deadline:
+                time.sleep(0.01)
+            assert published() > before, "no wake-up reached Redis"
+        # The test's own INFO calls reuse its client's connection: only the sender's count.
+        opened = redis_layer.info("stats")["total_connections_received"] - connected
+        assert opened <= 1, f"{opened} connections for 8 wake-ups"
+    finally:
+        sender.disconnect()
