@@ -29,6 +29,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+# The collector's parameter table names its texts through Django's translations.
+os.environ.setdefault("DJANGO_SETTINGS_MODULE", "ftt_site.settings")
 
 from tests.support.browser import (  # noqa: E402
     ARTIFACTS,

@@ -71,6 +71,10 @@ RECONNECT = 0.25
 EXIT_FLUSH_SECONDS = 10.0
 # Slices the writer stores at most, ahead of its chores, to reach a segment change.
 URGENT_SLICES = 4
+# Live positions are stored at most this often, so that a robot publishing at
+# 10-100 Hz pays for a few transactions a second, not one per message; a
+# segment change and a backlog do not wait (docs/collector.md, "Pace").
+PACE = 0.2
 # Pending snapshots may take this long at exit; a stuck writer is killed then.
 EXIT_SNAPSHOT_SECONDS = 10.0
 # A renewed collector that is deaf again renews no sooner than this: it keeps
@@ -299,6 +303,8 @@ class CollectorRuntime:
                     feed.prune()
                     next_prune = t + 60
                 if self._write_batch():
+                    if not self.order.replaying:
+                        self.spooler.urgent.wait(PACE)
                     continue
                 if t >= next_sync:
                     self.recorder.sync()
