@@ -17,6 +17,8 @@ from rosbridge_app.collector.tf_buffer import Transform, yaw_of
 from telemetry.models import MapImage
 
 # sensor_msgs/NavSatStatus
+# Jazzy's default value: a driver that never sets the status sends it.
+STATUS_UNKNOWN = -2
 STATUS_NO_FIX = -1
 KNOWN_FIX_STATUSES = (0, 1, 2)
 COVARIANCE_TYPE_UNKNOWN = 0
@@ -55,9 +57,11 @@ def _finite(*values) -> bool:
 
 def navsat_fix(msg) -> dict | None:
     """The usable part of a NavSatFix, or None when it must not be recorded
-    (no fix, non-finite or impossible coordinates)."""
+    (no fix, non-finite or impossible coordinates).  A status FTT does not know,
+    STATUS_UNKNOWN included, is stored as a plain fix: dropping every fix of a
+    driver that leaves the status unset would lose the robot's whole track."""
     status = int(msg.status.status)
-    if status < 0 or status == STATUS_NO_FIX:
+    if status == STATUS_NO_FIX or (status < 0 and status != STATUS_UNKNOWN):
         return None
     lat, lon = float(msg.latitude), float(msg.longitude)
     if not _finite(lat, lon) or not (-90 <= lat <= 90 and -180 <= lon <= 180):

@@ -67,6 +67,7 @@ class Pipeline:
         self.sink = sink
         self.params = {name: spec.default for name, spec in SPECS.items()}
         self.gps_thinner = Thinner(geographic=True)
+        self.said_unknown_status = False  # logged once per run
         self.mode_clock = ModeClock()
         self.local_thinner = Thinner()
         self.tf = TfBuffer()
@@ -261,6 +262,14 @@ class Pipeline:
         fix = conv.navsat_fix(msg)
         if fix is None:
             return
+        if int(msg.status.status) == conv.STATUS_UNKNOWN and not self.said_unknown_status:
+            self.said_unknown_status = True
+            log.warning(
+                gettext(
+                    "gps_fix: the GPS driver leaves NavSatStatus unset (STATUS_UNKNOWN); "
+                    "its fixes are recorded with the status 'fix'"
+                )
+            )
         self.last_fix = (at, fix)
         self.last_fix_recorded = False
         if self.logging and self.open_mode is not None:

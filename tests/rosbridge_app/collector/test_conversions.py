@@ -36,6 +36,7 @@ def test_fix_keeps_position_altitude_and_accuracy():
     "bad",
     [
         {"status": -1},
+        {"status": -3},
         {"lat": float("nan")},
         {"lon": float("inf")},
         {"lat": 91.0},
@@ -43,6 +44,12 @@ def test_fix_keeps_position_altitude_and_accuracy():
 )
 def test_unusable_fixes_are_dropped(bad):
     assert conv.navsat_fix(fix(**bad)) is None
+
+
+def test_a_fix_whose_driver_leaves_the_status_unset_is_kept():
+    # NavSatFix() in Jazzy says STATUS_UNKNOWN (-2) until the driver sets it.
+    f = conv.navsat_fix(fix(status=-2))
+    assert (f["lon"], f["lat"], f["status"]) == (7.1, 50.6, 0)
 
 
 def test_fix_with_nan_altitude_keeps_the_position():

@@ -91,6 +91,18 @@ def test_parked_robot_adds_no_rows_and_bad_fixes_are_ignored(pipe, sink):
     assert kinds(sink).count(ev.GPS) == 1
 
 
+def test_fixes_of_a_driver_that_leaves_the_status_unset_are_recorded_and_said_once(
+    pipe, sink, caplog
+):
+    pipe.start_logging(at(0))
+    pipe.on_mode(mode(True), at(0))
+    for i in range(3):
+        pipe.on_fix(fix(i, 50.0 + i * 1e-4, 7.0, status=-2), at(i))
+    assert kinds(sink).count(ev.GPS) == 3
+    said = [r for r in caplog.records if "NavSatStatus unset" in r.getMessage()]
+    assert len(said) == 1
+
+
 def test_switch_starts_the_new_segment_where_the_robot_is(pipe, sink):
     pipe.start_logging(at(0))
     pipe.on_mode(mode(False), at(0))
