@@ -159,8 +159,7 @@ class Sender:
         self._using = threading.Lock()
         self._connection = None
         # The thread's own event loop for the channel layer, kept across sends:
-        # channels_redis keeps one connection per loop, and a loop per send
-        # (async_to_sync) opened a connection per wake-up.
+        # channels_redis keeps one connection per loop.
         self._loop: asyncio.AbstractEventLoop | None = None
         self._pid = None
 
