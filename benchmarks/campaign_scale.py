@@ -6,8 +6,9 @@ segments; the poses are bulk-loaded with COPY, appended to every segment's
 track at each step.  At each step it prints:
 
 - batch ingest poses/s into a live segment (record_poses, 1 000-pose batches);
-- statistics of the whole campaign (every run of every test event) and of
-  one test event, and the comparison with growth fit of the whole campaign;
+- statistics of the whole campaign (every run of every test event, read at
+  once as the comparison reads them) and of one test event, and the
+  comparison with growth fit of the whole campaign;
 - the PDF report of one test event (no map tiles; read back: it must be a PDF
   with a page per shift at least);
 - the cockpit's segment list (its distances) and one leg's GPS tracks;
@@ -268,20 +269,21 @@ def one_pdf(event: TestEvent) -> None:
 
 def measure(step: int) -> dict:
     from reports.selectors.comparison import compare
-    from reports.selectors.statistics import event_runs, event_statistics, figures
+    from reports.selectors.statistics import campaign_runs, event_statistics, figures
 
     events = list(TestEvent.objects.exclude(location="live").order_by("start"))
     one = events[len(events) // 2]
     leg_masters = one_leg(one)
 
     def campaign_statistics():
-        return figures([run for e in events for run in event_runs(e, GPS, tracks=False)])
+        runs_of = campaign_runs(events, GPS)
+        return figures([run for e in events for run in runs_of[e.pk]])
 
     figures_now = {
         "ingest poses/s": ingest(),
-        "statistics of the campaign s": timed(campaign_statistics, repeat=1),
+        "statistics of the campaign s": timed(campaign_statistics),
         "statistics of one event s": timed(lambda: event_statistics(one, GPS)),
-        "comparison + growth, all events s": timed(lambda: compare(events, GPS), repeat=1),
+        "comparison + growth, all events s": timed(lambda: compare(events, GPS)),
         "PDF of one event s": timed(lambda: one_pdf(one), repeat=1),
         "segment list s": timed(lambda: segment_list(leg_masters)),
         "one leg's tracks s": timed(lambda: load_tracks([m.pk for m in leg_masters], GPS)),

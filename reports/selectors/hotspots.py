@@ -89,18 +89,22 @@ def hotspots(runs_of: dict[int, list[Run]], mode: str = GPS) -> list[dict]:
     id, GUI label, test event, shift and leg (enough for a link to the segment)."""
     points = take_overs(runs_of)
     xy = metres(points, mode)
+    numbers = np.array(cluster_labels(xy), dtype=np.int64)
     members_of: dict[int, list[int]] = defaultdict(list)
-    for index, number in enumerate(cluster_labels(xy)):
+    for index, number in enumerate(numbers.tolist()):
         members_of[number].append(index)
-    # x, y as given and east, north in metres: a spot's position is their means.
+    # x, y as given and east, north in metres: a spot's position is their means,
+    # summed per spot in one pass over each column.
+    counts = np.bincount(numbers) if len(numbers) else np.zeros(1)
     columns = [np.array([p.x for p in points]), np.array([p.y for p in points]), *xy.T]
+    means = [(np.bincount(numbers, weights=c) / np.maximum(counts, 1)).tolist() for c in columns]
     metres_of = xy.tolist()
     result = []
     for number in sorted(members_of):
         chosen = members_of[number]
         members = [_member(points[i], *metres_of[i]) for i in chosen]
         reasons = Counter(reason for m in members for reason in m["reasons"])
-        x, y, east, north = (float(np.mean(column[chosen])) for column in columns)
+        x, y, east, north = (mean[number] for mean in means)
         result.append(
             {
                 "number": number,

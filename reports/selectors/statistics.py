@@ -40,8 +40,9 @@ import numpy as np
 from django.conf import settings
 from scipy.stats import chi2
 
+from common import cyclic_gc
 from common.sql import plain_rows
-from events.models import ItoReason, Segment, SegmentType, TestEvent
+from events.models import ItoReason, Leg, Segment, SegmentType, TestEvent
 from events.selectors.labels import segment_labels
 from events.selectors.taxonomy import counted_reasons, counted_reasons_of
 from reports.selectors.formulas import FORMULAS, keyed
@@ -49,6 +50,10 @@ from telemetry.selectors.distances import kept_paths, measured_paths
 from telemetry.selectors.tracks import GPS, Track
 
 CONFIDENCE = 0.90
+
+# The path of a run read without its track, shared by all of them (read-only).
+_NO_PATH = np.empty(0)
+_NO_PATH.flags.writeable = False
 
 
 @dataclass(slots=True)
@@ -86,8 +91,8 @@ class Run:
     track: Track | None = None
     has_start_position: bool = False
     # The polyline the distance was measured on, joins included.
-    path_x: np.ndarray = field(default_factory=lambda: np.empty(0))
-    path_y: np.ndarray = field(default_factory=lambda: np.empty(0))
+    path_x: np.ndarray = field(default_factory=lambda: _NO_PATH)
+    path_y: np.ndarray = field(default_factory=lambda: _NO_PATH)
     # The path's first point (where a take-over happened), None when unknown.
     origin: tuple[float, float] | None = None
     # The GUI's name of the segment ("Leg 2 · #7"), see events.selectors.labels.
@@ -310,6 +315,7 @@ def event_runs(
     return _runs(scope, [event], mode, tracks).get(event.pk, [])
 
 
+@cyclic_gc.paused()
 def campaign_runs(events: list[TestEvent], mode: str = GPS) -> dict[int, list[Run]]:
     """{test event id: ``event_runs`` of it, without tracks} for many test events
     in their given order, read with one query per table, not one per event."""
@@ -317,14 +323,27 @@ def campaign_runs(events: list[TestEvent], mode: str = GPS) -> dict[int, list[Ru
     return {event.pk: found.get(event.pk, []) for event in events}
 
 
+def _driving_order(scope: dict) -> list[SegmentRow]:
+    """The segments in ``scope`` by shift (start, id), leg (start, id), then their
+    own start and id.  The database orders each leg's rows; the legs, a few
+    hundred rows, are ordered by a query of their own, which costs less than
+    sorting every segment by six columns of three tables."""
+    rows = plain_rows(
+        Segment.objects.filter(**scope).order_by("leg_id", "start", "id").values_list(*_ROW_COLUMNS)
+    )
+    by_leg: dict[int, list[SegmentRow]] = defaultdict(list)
+    for row in rows:
+        segment = SegmentRow._make(row)
+        by_leg[segment.leg_id].append(segment)
+    legs = Leg.objects.filter(pk__in=by_leg).order_by("shift__start", "shift_id", "start", "id")
+    return [segment for leg in legs.values_list("id", flat=True) for segment in by_leg[leg]]
+
+
 def _runs(scope: dict, events: list[TestEvent], mode: str, tracks: bool) -> dict[int, list[Run]]:
     """The runs of the segments in ``scope`` by test event.  Distances, pose
     counts and the end of an open segment come from the figures kept at write
     time; only ``tracks`` (for drawing and the exports) reads the poses."""
-    ordered = Segment.objects.filter(**scope).order_by(
-        "leg__shift__start", "leg__shift_id", "leg__start", "leg_id", "start", "id"
-    )
-    segments = [SegmentRow._make(row) for row in plain_rows(ordered.values_list(*_ROW_COLUMNS))]
+    segments = _driving_order(scope)
     counted = counted_reasons_of(events)
     masters = [s for s in segments if s.parent_id is None]
     children: dict[int, list[SegmentRow]] = defaultdict(list)
@@ -340,21 +359,10 @@ def _runs(scope: dict, events: list[TestEvent], mode: str, tracks: bool) -> dict
     for master in masters:
         path = paths.get(master.pk)
         figures = kept[master.pk]
-        kids = children.get(master.pk, [])
+        kids = children.get(master.pk, ())
         end = _effective_end(master, figures.last_stamp, kids)
-        spans = [
-            ReasonSpan(
-                id=c.pk,
-                reason=counted_reason(c),
-                start=c.start,
-                end=c.end or max(end, c.start),
-                is_open=c.end is None,
-                obstacle=c.obstacle,
-                lighting=c.lighting,
-                slope=c.slope,
-            )
-            for c in kids
-        ]
+        spans = [_reason_span(c, end) for c in kids]
+        counted_here = counted[master.test_event_id]
         runs[master.test_event_id].append(
             Run(
                 id=master.pk,
@@ -368,18 +376,30 @@ def _runs(scope: dict, events: list[TestEvent], mode: str, tracks: bool) -> dict
                 distance=figures.distance or 0.0,
                 pose_count=figures.points,
                 reasons=spans,
-                counted_reasons=[
-                    s.reason for s in spans if s.reason in counted[master.test_event_id]
-                ],
+                counted_reasons=[s.reason for s in spans if s.reason in counted_here],
                 track=path and path.track,
                 has_start_position=figures.has_start_position,
+                path_x=path.x if path else _NO_PATH,
+                path_y=path.y if path else _NO_PATH,
                 origin=figures.origin,
-                start_uncertainty=master.start_uncertainty,
-                **({"path_x": path.x, "path_y": path.y} if path else {}),
                 label=labels[master.pk],
+                start_uncertainty=master.start_uncertainty,
             )
         )
     return runs
+
+
+def _reason_span(child: SegmentRow, master_end: datetime) -> ReasonSpan:
+    return ReasonSpan(
+        id=child.pk,
+        reason=counted_reason(child),
+        start=child.start,
+        end=child.end or max(master_end, child.start),
+        is_open=child.end is None,
+        obstacle=child.obstacle,
+        lighting=child.lighting,
+        slope=child.slope,
+    )
 
 
 @dataclass

@@ -114,3 +114,25 @@ def test_the_robots_suggested_reason_counts_only_when_confirmed_or_by_setting(sc
     settings.FTT_COUNT_ROBOT_REASONS = True
     by_reason = event_statistics(scenario.event).overall.interventions_by_reason
     assert by_reason.get("safety") == 2 and "unassigned" not in by_reason
+
+
+def test_runs_come_in_driving_order_when_a_later_made_shift_started_first(
+    vehicle, other_vehicle, performer
+):
+    from events.services import logs
+    from reports.selectors.statistics import campaign_runs, event_runs
+    from tests.support.scenario import T0, T1, _switch
+
+    event = logs.create_test_event(location="Order", at=T0)
+    # The later shift is entered first: ids follow entry, not time.
+    late = logs.create_shift(test_event=event, vehicle=other_vehicle, performer=performer, at=T1)
+    late_leg = logs.create_leg(shift=late, at=T1)
+    late_runs = [_switch(late_leg, "auto", T1, 0, 0.003), _switch(late_leg, "ito", T1, 30, 0.004)]
+    early = logs.create_shift(test_event=event, vehicle=vehicle, performer=performer, at=T0)
+    first_leg = logs.create_leg(shift=early, at=T0)
+    early_runs = [_switch(first_leg, "auto", T0, 0, 0.0), _switch(first_leg, "ito", T0, 60, 0.001)]
+    second_leg = logs.create_leg(shift=early, at=T0 + (T1 - T0) / 2)
+    early_runs.append(_switch(second_leg, "auto", T0, 1900, 0.002))
+    expected = [m.pk for m in early_runs + late_runs]
+    assert [run.id for run in event_runs(event, tracks=False)] == expected
+    assert [run.id for run in campaign_runs([event])[event.pk]] == expected
