@@ -95,9 +95,10 @@ def hotspots(runs_of: dict[int, list[Run]], mode: str = GPS) -> list[dict]:
         members_of[number].append(index)
     # x, y as given and east, north in metres: a spot's position is their means,
     # summed per spot in one pass over each column.
-    counts = np.bincount(numbers) if len(numbers) else np.zeros(1)
+    # Spots are numbered from 1: the count at 0 is kept from dividing by zero.
+    counts = np.maximum(np.bincount(numbers), 1)
     columns = [np.array([p.x for p in points]), np.array([p.y for p in points]), *xy.T]
-    means = [(np.bincount(numbers, weights=c) / np.maximum(counts, 1)).tolist() for c in columns]
+    means = [(np.bincount(numbers, weights=c) / counts).tolist() for c in columns]
     metres_of = xy.tolist()
     result = []
     for number in sorted(members_of):

@@ -6,8 +6,14 @@ are checked against an independent source.
 
 import pytest
 
-from reports.selectors.statistics import event_statistics, poisson_estimate
-from tests.support.scenario import CHI2_05, CHI2_95, STEP_M
+from events.services import logs
+from reports.selectors.statistics import (
+    campaign_runs,
+    event_runs,
+    event_statistics,
+    poisson_estimate,
+)
+from tests.support.scenario import CHI2_05, CHI2_95, STEP_M, T0, T1, _switch
 
 D_A = 13 * STEP_M
 D_M = 4 * STEP_M
@@ -119,10 +125,6 @@ def test_the_robots_suggested_reason_counts_only_when_confirmed_or_by_setting(sc
 def test_runs_come_in_driving_order_when_a_later_made_shift_started_first(
     vehicle, other_vehicle, performer
 ):
-    from events.services import logs
-    from reports.selectors.statistics import campaign_runs, event_runs
-    from tests.support.scenario import T0, T1, _switch
-
     event = logs.create_test_event(location="Order", at=T0)
     # The later shift is entered first: ids follow entry, not time.
     late = logs.create_shift(test_event=event, vehicle=other_vehicle, performer=performer, at=T1)
