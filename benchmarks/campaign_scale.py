@@ -62,6 +62,10 @@ try:
 except ImportError:  # a checkout from before the figures
     SegmentFigures = None
 try:
+    from common.uid_sums import combined, uid_sum
+except ImportError:  # a checkout whose figures keep no uid sum
+    uid_sum = None
+try:
     from telemetry.services.pose_partitions import ensure_partitions
 except ImportError:  # a checkout with one pose table
     ensure_partitions = None
@@ -139,27 +143,39 @@ def grow(masters: list[Segment], have: int, want: int) -> float:
         return 0.0
     table = Pose._meta.db_table
     columns = "uid, segment_id, point, robot_stamp, received, fix_status"
+    added = {}
     with connection.cursor() as cursor:
         for begin in range(0, len(masters), 2000):
             out = io.StringIO()
             for index, m in enumerate(masters[begin : begin + 2000], start=begin):
                 lon, lat, stamps = _track(m, index, per_now, per_next)
-                for x, y, t in zip(lon.tolist(), lat.tolist(), stamps.tolist(), strict=True):
+                uids = [uuid.uuid4() for _ in range(len(lon))]
+                if uid_sum is not None:
+                    added[m.pk] = uid_sum(uids)
+                for uid, x, y, t in zip(
+                    uids, lon.tolist(), lat.tolist(), stamps.tolist(), strict=True
+                ):
                     stamp = datetime.fromtimestamp(t, UTC).isoformat()
                     point = f"SRID=4326;POINT({x!r} {y!r})"
-                    out.write(f"{uuid.uuid4()}\t{m.pk}\t{point}\t{stamp}\t{stamp}\t0\n")
+                    out.write(f"{uid}\t{m.pk}\t{point}\t{stamp}\t{stamp}\t0\n")
             out.seek(0)
             with cursor.connection.cursor().copy(f"COPY {table} ({columns}) FROM STDIN") as copy:
                 while chunk := out.read(1 << 20):
                     copy.write(chunk)
         cursor.execute(f"ANALYZE {table}")
     if SegmentFigures is not None:
-        _keep_figures(masters, per_next)
+        _keep_figures(masters, per_next, added)
     return time.perf_counter() - started
 
 
-def _keep_figures(masters: list[Segment], per: int) -> None:
-    """The figures the write path would have kept, from the generated tracks."""
+def _keep_figures(masters: list[Segment], per: int, added: dict[int, int]) -> None:
+    """The figures the write path would have kept, from the generated tracks
+    (``added``: the uid sum of each master's poses just loaded)."""
+    kept_sums = (
+        dict(SegmentFigures.objects.filter(mode=GPS).values_list("segment_id", "uid_sum"))
+        if uid_sum is not None
+        else {}
+    )
     rows = []
     for index, m in enumerate(masters):
         lon, lat, stamps = _track(m, index, 0, per)
@@ -176,6 +192,8 @@ def _keep_figures(masters: list[Segment], per: int) -> None:
                 min_x=lon.min(), min_y=lat.min(), max_x=lon.max(), max_y=lat.max(),
             )
         )  # fmt: skip
+        if uid_sum is not None:
+            rows[-1].uid_sum = combined(kept_sums.get(m.pk, 0), added[m.pk])
     fields = [
         f.name
         for f in SegmentFigures._meta.concrete_fields

@@ -3,8 +3,12 @@
 The digest covers the canonical content of every row in a test event's scope:
 values as people and figures see them, keyed by uid and catalogue keys, never
 database ids or file bytes, so the same data gives the same digest on any
-installation (after export and import too).  Poses are covered by their uids:
-they are only ever added, never changed.  The report carries the digest, its
+installation (after export and import too).  Poses are covered by their uids,
+through the uid sums their segments' figures keep (common.uid_sums), so the
+digest reads no pose: poses are only ever added, never changed, and thinning
+old ones (reports.services.pose_retention) leaves the sums as they were.
+Reports of earlier versions hashed the uids read from the poses; a digest
+of that kind verifies too.  The report carries the digest, its
 build time and the event's uid (PDF keywords, JSON fields); :func:`verify`
 recomputes the digest and, when it differs, lists what the change history
 says changed since.
@@ -22,11 +26,13 @@ from django.db.models import FileField
 from django.utils import timezone
 from django.utils.translation import gettext as _
 
+from common import uid_sums
 from events.models import Leg, Note, Segment, Shift, TestEvent
 from events.selectors.history import KINDS, author_of, entries_since, word_for
 from events.selectors.taxonomy import taxonomy_of, taxonomy_version
 from reports.selectors.statistics import event_statistics
-from telemetry.models import Image, LocalPose, Pose
+from telemetry.models import Image, LocalPose, Pose, SegmentFigures
+from telemetry.selectors.tracks import GPS, LOCAL
 
 DIGEST_PREFIX = "ftt-digest-sha256-"
 BUILT_PREFIX = "ftt-built-"
@@ -58,7 +64,7 @@ def _person(person) -> str | None:
     return None if person is None else f"{person.name}|{person.institution}"
 
 
-def canonical_records(event: TestEvent) -> list[tuple[str, str, dict]]:
+def canonical_records(event: TestEvent, *, legacy: bool = False) -> list[tuple[str, str, dict]]:
     """(table, uid, content) of every row in the event's scope, in a fixed order."""
     records = [
         (
@@ -154,19 +160,38 @@ def canonical_records(event: TestEvent) -> list[tuple[str, str, dict]]:
                 {"segment": str(image.segment.uid), "description": image.description},
             )
         )
-    for table, model in (("poses", Pose), ("local_poses", LocalPose)):
-        uids = sorted(
-            str(u) for u in model.objects.filter(**in_event).values_list("uid", flat=True)
-        )
-        records.append(
-            (table, "all", {"uids": hashlib.sha256("\n".join(uids).encode()).hexdigest()})
-        )
+    records += (legacy_pose_records if legacy else pose_records)(event)
     return sorted(records, key=lambda r: (r[0], r[1]))
 
 
-def data_digest(event: TestEvent) -> str:
+def pose_records(event: TestEvent) -> list[tuple[str, str, dict]]:
+    """The event's poses by the uid sums their segments' figures keep."""
+    records = []
+    for table, mode in (("poses", GPS), ("local_poses", LOCAL)):
+        kept = SegmentFigures.objects.filter(segment__leg__shift__test_event=event, mode=mode)
+        total = uid_sums.combined(*kept.values_list("uid_sum", flat=True))
+        records.append((table, "all", {"uid_sum": total}))
+    return records
+
+
+def legacy_pose_records(event: TestEvent) -> list[tuple[str, str, dict]]:
+    """The event's poses as reports stamped before the figures kept uid sums
+    covered them: a hash of every uid read from the poses, sorted."""
+    records = []
+    for table, model in (("poses", Pose), ("local_poses", LocalPose)):
+        rows = model.objects.filter(segment__leg__shift__test_event=event)
+        uids = sorted(str(u) for u in rows.values_list("uid", flat=True))
+        records.append(
+            (table, "all", {"uids": hashlib.sha256("\n".join(uids).encode()).hexdigest()})
+        )
+    return records
+
+
+def data_digest(event: TestEvent, *, legacy: bool = False) -> str:
+    """SHA-256 of the event's canonical records (``legacy``: with the poses as
+    reports of earlier FTT versions covered them)."""
     digest = hashlib.sha256()
-    for table, uid, content in canonical_records(event):
+    for table, uid, content in canonical_records(event, legacy=legacy):
         line = json.dumps([table, uid, content], sort_keys=True, ensure_ascii=False)
         digest.update(line.encode() + b"\n")
     return digest.hexdigest()
@@ -341,7 +366,8 @@ def verify(stamp: dict) -> Verdict:
             False, _("No test event with uid %(uid)s here.") % {"uid": stamp["event_uid"]}
         )
     names = {"event": str(event)}
-    if data_digest(event) == stamp["digest"]:
+    digest = stamp["digest"]
+    if digest == data_digest(event) or digest == data_digest(event, legacy=True):
         return Verdict(
             True, _("The data of test event '%(event)s' is unchanged.") % names, [], event.pk
         )

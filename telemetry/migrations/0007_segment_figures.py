@@ -4,16 +4,6 @@ import django.db.models.deletion
 from django.db import migrations, models
 
 
-def measure_stored_tracks(apps, schema_editor):
-    """Figures of every master that already has poses, measured from them."""
-    from telemetry.services.segment_figures import recount_figures
-
-    Segment = apps.get_model("events", "Segment")
-    ids = list(Segment.objects.filter(parent__isnull=True).order_by("pk").values_list("pk", flat=True))
-    for begin in range(0, len(ids), 500):
-        recount_figures(ids[begin : begin + 500], fix=True)
-
-
 class Migration(migrations.Migration):
 
     dependencies = [
@@ -49,5 +39,5 @@ class Migration(migrations.Migration):
                 'constraints': [models.UniqueConstraint(fields=('segment', 'mode'), name='segment_figures_unique')],
             },
         ),
-        migrations.RunPython(measure_stored_tracks, migrations.RunPython.noop),
+        # The stored tracks are measured by 0015, with the figures' last shape.
     ]

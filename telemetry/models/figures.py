@@ -10,6 +10,7 @@ joins them to the segment's neighbours by the one distance rule).
 from django.db import models
 from django.utils import timezone
 
+from common.uid_sums import EMPTY
 from events.models import Segment
 
 
@@ -36,6 +37,9 @@ class SegmentFigures(models.Model):
     min_y = models.FloatField(null=True)
     max_x = models.FloatField(null=True)
     max_y = models.FloatField(null=True)
+    # Every pose's uid, usable or not, as one order-free sum (common.uid_sums):
+    # what a report's data digest covers of the poses.
+    uid_sum = models.CharField(max_length=64, default=EMPTY, db_default=EMPTY)
 
     class Meta:
         constraints = [
@@ -49,8 +53,7 @@ class SegmentFigures(models.Model):
 class ThinnedSegment(models.Model):
     """A master whose stored poses the retention policy thinned
     (reports.services.pose_retention): its figures were kept from all of them
-    and stay; a recount leaves it out.  A table of its own, not a field of the
-    figures: the figures' migration measures tracks with today's model."""
+    and stay; a recount leaves it out."""
 
     segment = models.OneToOneField(Segment, on_delete=models.CASCADE, related_name="thinning")
     thinned = models.DateTimeField(default=timezone.now)

@@ -35,10 +35,12 @@ class Kept:
     last_id: int | None
     last_x: float | None
     last_y: float | None
+    uid_sum: str
 
 
 _KEPT_COLUMNS = (
     "points", "no_fix", "last_robot_stamp", "last_received", "last_id", "last_x", "last_y",
+    "uid_sum",
 )  # fmt: skip
 
 
@@ -57,8 +59,8 @@ def kept_from(values) -> Kept | None:
     when the segment has no figures row yet."""
     if values[0] is None:
         return None
-    points, no_fix, robot_stamp, received, last_id, x, y = values
-    return Kept(points, no_fix, _instant(robot_stamp), _instant(received), last_id, x, y)
+    points, no_fix, robot_stamp, received, last_id, x, y, uids = values
+    return Kept(points, no_fix, _instant(robot_stamp), _instant(received), last_id, x, y, uids)
 
 
 def _instant(value) -> datetime | None:
@@ -85,12 +87,14 @@ class Change:
     """What new points change in a segment's figures.  ``alone`` are the
     figures of the new points by themselves (the row of a segment without one);
     ``length`` is what they add to the kept length; ``first``/``last`` say
-    whether they become the track's first or last point."""
+    whether they become the track's first or last point; ``uid_sum`` is the
+    kept uid sum with theirs added."""
 
     alone: dict
     length: float
     first: bool
     last: bool
+    uid_sum: str
 
 
 # The earlier and the later of two values either of which may be missing (SQL's
@@ -100,6 +104,7 @@ _EXTREMES = {"postgresql": ("LEAST", "GREATEST"), "sqlite": ("MIN", "MAX")}
 FIELDS = (
     "points", "no_fix", "length", "first_x", "first_y", "last_x", "last_y", "last_robot_stamp",
     "last_received", "last_id", "first_stamp", "last_stamp", "min_x", "min_y", "max_x", "max_y",
+    "uid_sum",
 )  # fmt: skip
 
 
@@ -122,7 +127,7 @@ INSERT INTO {_TABLE} AS f (segment_id, mode, {", ".join(FIELDS)})
 VALUES (%s, %s, {", ".join(["%s"] * len(FIELDS))})
 ON CONFLICT (segment_id, mode) DO UPDATE SET
   points = f.points + excluded.points, no_fix = f.no_fix + excluded.no_fix,
-  length = f.length + %s, {", ".join(moved)},
+  length = f.length + %s, uid_sum = %s, {", ".join(moved)},
   {extreme(least, "first_stamp")}, {extreme(greatest, "last_stamp")},
   {extreme(least, "min_x")}, {extreme(least, "min_y")},
   {extreme(greatest, "max_x")}, {extreme(greatest, "max_y")}
@@ -143,7 +148,7 @@ def write_change(
         name: ops.adapt_datetimefield_value(value) if isinstance(value, datetime) else value
         for name, value in change.alone.items()
     }
-    params = [master_id, mode, *(alone[name] for name in FIELDS), change.length]
+    params = [master_id, mode, *(alone[name] for name in FIELDS), change.length, change.uid_sum]
     params += [change.first] * 2 + [change.last] * 5
     params += [None, None] if seen is None else [seen.points, seen.no_fix]
     with connection.cursor() as cursor:

@@ -11,6 +11,7 @@ poses into a track measures it again (``measure_figures``).  The SQL of the
 row and the neighbour reads is in telemetry.services.figure_rows.
 """
 
+from collections import defaultdict
 from collections.abc import Iterable
 from dataclasses import dataclass
 from datetime import UTC, datetime
@@ -19,6 +20,7 @@ import numpy as np
 from django.db.models import Max, Min
 from django.db.models.functions import Coalesce
 
+from common import uid_sums
 from telemetry.models import LocalPose, Pose, SegmentFigures
 from telemetry.models.poses import FixStatus
 from telemetry.selectors import driving_order
@@ -75,7 +77,7 @@ def keep_figures(master_id: int, mode: str, new: list[NewPoint], seen=_UNREAD) -
     if not new:
         return
     rows = sorted((p for p in new if p.usable), key=lambda p: _key(p.robot_stamp, p.received, p.id))
-    alone = _alone(rows, len(new) - len(rows), mode)
+    alone = _alone(new, rows, mode)
     if seen is _UNREAD:
         seen = figure_rows.read_kept(master_id, mode)
     change = _change(master_id, mode, rows, alone, seen)
@@ -87,10 +89,16 @@ def keep_figures(master_id: int, mode: str, new: list[NewPoint], seen=_UNREAD) -
             raise RuntimeError(f"the figures of segment {master_id} changed under their lock")
 
 
-def _alone(rows: list[NewPoint], no_fix: int, mode: str) -> dict:
-    """The figures of the new points by themselves (sorted usable ``rows``)."""
+def _alone(new: list[NewPoint], rows: list[NewPoint], mode: str) -> dict:
+    """The figures of the ``new`` points by themselves (``rows``: the usable
+    ones, sorted)."""
     alone = dict.fromkeys(figure_rows.FIELDS)
-    alone.update(points=len(rows), no_fix=no_fix, length=0.0)
+    alone.update(
+        points=len(rows),
+        no_fix=len(new) - len(rows),
+        length=0.0,
+        uid_sum=uid_sums.combined(uid_sums.uid_sum(p.uid for p in new)),
+    )
     if not rows:
         return alone
     x = np.array([r.x for r in rows], dtype=float)
@@ -111,15 +119,16 @@ def _change(master_id, mode, rows: list[NewPoint], alone: dict, seen) -> figure_
     """What ``rows`` change in the figures that hold ``seen``: an appended batch
     adds its length and the step from the kept last point; a late one replaces
     the step between its neighbours in driving order with the steps through it."""
+    uids = uid_sums.combined(uid_sums.EMPTY if seen is None else seen.uid_sum, alone["uid_sum"])
     if not rows:
-        return figure_rows.Change(alone, 0.0, False, False)
+        return figure_rows.Change(alone, 0.0, False, False, uids)
     kept_last = None if seen is None or not seen.points else seen
     if kept_last is None:
-        return figure_rows.Change(alone, alone["length"], True, True)
+        return figure_rows.Change(alone, alone["length"], True, True, uids)
     first = (rows[0].robot_stamp, rows[0].received, rows[0].id)
     if _key(*first) > _key(kept_last.last_robot_stamp, kept_last.last_received, kept_last.last_id):
         join = path_length([kept_last.last_x, rows[0].x], [kept_last.last_y, rows[0].y], mode)
-        return figure_rows.Change(alone, alone["length"] + join, False, True)
+        return figure_rows.Change(alone, alone["length"] + join, False, True, uids)
     last = (rows[-1].robot_stamp, rows[-1].received, rows[-1].id)
     before, after = figure_rows.neighbours(master_id, mode, first, last)
     inside = (
@@ -131,7 +140,7 @@ def _change(master_id, mode, rows: list[NewPoint], alone: dict, seen) -> figure_
     new_ids = {r.id for r in rows}
     old = [p for p in merged if p[0] not in new_ids]
     length = _length(merged, mode) - _length(old, mode)
-    return figure_rows.Change(alone, length, before is None, after is None)
+    return figure_rows.Change(alone, length, before is None, after is None, uids)
 
 
 def _length(points: list[tuple], mode: str) -> float:
@@ -145,14 +154,30 @@ class _Measured:
     no_fix: int
     x: np.ndarray
     y: np.ndarray
+    uid_sum: str = uid_sums.EMPTY
 
 
 def _measured(master_ids: list[int], mode: str) -> dict[int, _Measured]:
-    """The figures' track part, measured from the poses by the distance rule."""
-    return {
+    """The figures' track part and uid sum, measured from the poses by the
+    distance rule."""
+    found = {
         pk: _Measured(path_length(t.x, t.y, mode), len(t), t.no_fix, t.x, t.y)
         for pk, t in load_tracks(master_ids, mode, within_kept_span=False).items()
     }
+    for pk, total in _uid_sums(master_ids, mode).items():
+        if pk not in found:
+            found[pk] = _Measured(0.0, 0, 0, np.empty(0), np.empty(0))
+        found[pk].uid_sum = total
+    return found
+
+
+def _uid_sums(master_ids: list[int], mode: str) -> dict[int, str]:
+    """The uid sum of each master's poses (masters without poses are absent)."""
+    sums = defaultdict(int)
+    rows = _model(mode).objects.filter(segment_id__in=master_ids)
+    for pk, uid in rows.values_list("segment_id", "uid").iterator(chunk_size=20000):
+        sums[pk] += uid_sums.uid_sum([uid])
+    return {pk: uid_sums.combined(total) for pk, total in sums.items()}
 
 
 def _measure(figures: SegmentFigures, measured=_UNREAD) -> None:
@@ -164,6 +189,7 @@ def _measure(figures: SegmentFigures, measured=_UNREAD) -> None:
     empty = measured is None or measured.points == 0
     figures.points = 0 if measured is None else measured.points
     figures.no_fix = 0 if measured is None else measured.no_fix
+    figures.uid_sum = uid_sums.EMPTY if measured is None else measured.uid_sum
     figures.length = 0.0 if empty else measured.length
     usable = _usable(mode).filter(segment_id=master_id)
     last = (
@@ -200,10 +226,22 @@ def measure_figures(master_ids: Iterable[int], modes=MODES) -> None:
             figures.save()
 
 
+def sum_uids_again(master_ids: list[int]) -> None:
+    """Set the uid sum of ``master_ids``' figures from the poses stored, and
+    nothing else (figures kept before they kept a sum, thinned ones too)."""
+    for mode in MODES:
+        sums = _uid_sums(master_ids, mode)
+        rows = list(SegmentFigures.objects.filter(segment_id__in=master_ids, mode=mode))
+        for figures in rows:
+            figures.uid_sum = sums.get(figures.segment_id, uid_sums.EMPTY)
+        SegmentFigures.objects.bulk_update(rows, ["uid_sum"], batch_size=500)
+
+
 # The figures a recount compares, and how.
 _EXACT = (
     "points", "no_fix", "first_x", "first_y", "last_x", "last_y", "last_robot_stamp",
     "last_received", "last_id", "first_stamp", "last_stamp", "min_x", "min_y", "max_x", "max_y",
+    "uid_sum",
 )  # fmt: skip
 
 

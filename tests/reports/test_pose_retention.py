@@ -14,6 +14,7 @@ from events.services import segments
 from events.services.segments import GpsPosition
 from reports.documents.sections import OVERVIEW_SIZE
 from reports.figures.maps import Line, map_tolerance
+from reports.selectors.provenance import data_digest
 from reports.selectors.statistics import event_statistics, figures
 from reports.services.pose_retention import thin_old_poses
 from telemetry.models import LocalPose, Pose, SegmentFigures, ThinnedSegment
@@ -82,7 +83,7 @@ def test_old_shifts_are_thinned_to_the_report_drawing_and_figures_stay(leg, othe
     old = _drive(leg, OLD)
     new = _drive(other_leg, RECENT)
     event = leg.shift.test_event
-    figures, statistics = _figures(), _seen(event)
+    figures, statistics, digest = _figures(), _seen(event), data_digest(event)
     tracks = {mode: load_tracks([old.pk, new.pk], mode) for mode in (GPS, LOCAL)}
     settings.FTT_POSE_RETENTION_MONTHS = 12
 
@@ -94,6 +95,9 @@ def test_old_shifts_are_thinned_to_the_report_drawing_and_figures_stay(leg, othe
     for key, kept in figures.items():
         assert differences(kept, after[key]) == []
     assert _seen(event) == statistics
+    # A report built before the thinning still verifies: its digest covered the
+    # uids as the figures kept them.
+    assert data_digest(event) == digest
     for mode, model in ((GPS, Pose), (LOCAL, LocalPose)):
         thinned = load_tracks([old.pk, new.pk], mode)
         # The old shift keeps few points, first and last among them, and the

@@ -6,6 +6,8 @@ import json
 
 import pytest
 from django.core.management import CommandError, call_command
+from django.db import connection
+from django.test.utils import CaptureQueriesContext
 
 from events.history import authored
 from events.models import ItoReason, TestEvent, Vehicle
@@ -15,8 +17,12 @@ from exchange.export import export_events, select_events
 from exchange.history_records import TRACKED
 from exchange.importer import import_bundle
 from reports.selectors.disengagements import DMV_COLUMNS
-from reports.selectors.provenance import amendments_of
+from reports.selectors.provenance import amendments_of, data_digest, verify
 from reports.selectors.statistics import event_statistics
+from telemetry.models import LocalPose, Pose
+from telemetry.models.poses import FixStatus
+from telemetry.services import recording
+from telemetry.services.recording import GpsFix, MapPose
 from tests.support.accounts import staff_user
 from tests.support.pdf import flat, pdf_text
 
@@ -47,6 +53,41 @@ def test_pdf_verifies_until_a_reason_changes(scenario, tmp_path):
     ok, said = _verify(pdf)
     assert not ok
     assert f"segment {take_over.uid}" in said and "operator-staff via api" in said
+
+
+def _stamp(event, digest):
+    return {"digest": digest, "built": "20260302T020000.000000Z", "event_uid": str(event.uid)}
+
+
+def test_digest_reads_no_pose_and_changes_with_every_new_pose(scenario):
+    event, master = scenario.event, scenario.masters["A2"]
+    with CaptureQueriesContext(connection) as queries:
+        digest = data_digest(event)
+    pose_tables = (Pose._meta.db_table, LocalPose._meta.db_table)
+    assert not [q["sql"] for q in queries if any(t in q["sql"] for t in pose_tables)]
+    assert verify(_stamp(event, digest)).ok
+    # A fix without a position is covered too, and so is a local pose.
+    fix = GpsFix(longitude=0.0055, latitude=0.0, fix_status=FixStatus.NO_FIX)
+    assert recording.record_poses(master, [fix]) == 1
+    after_fix = data_digest(event)
+    assert after_fix != digest and not verify(_stamp(event, digest)).ok
+    recording.record_local_poses(master, [MapPose(x=1.0, y=2.0, frame="map")])
+    assert data_digest(event) not in (digest, after_fix)
+    # The same pose sent again is stored once: the digest stays.
+    before_retry = data_digest(event)
+    assert recording.record_poses(master, [fix]) == 0
+    assert data_digest(event) == before_retry
+
+
+def test_a_report_of_an_earlier_version_still_verifies(scenario):
+    """Its digest hashed the uids read from the poses."""
+    event = scenario.event
+    legacy = data_digest(event, legacy=True)
+    assert legacy != data_digest(event)
+    assert verify(_stamp(event, legacy)).ok
+    recording.record_poses(scenario.masters["A2"], [GpsFix(longitude=0.0065, latitude=0.0)])
+    verdict = verify(_stamp(event, legacy))
+    assert not verdict.ok and "changed since the report" in verdict.message
 
 
 def test_final_report_says_final_and_lists_amendments(scenario, tmp_path):

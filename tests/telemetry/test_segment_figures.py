@@ -11,6 +11,7 @@ from django.db import connection, connections
 from django.db.migrations.executor import MigrationExecutor
 from django.test.utils import CaptureQueriesContext
 
+from common import uid_sums
 from events.models import Segment, SegmentType
 from events.services import segments
 from events.services.segments import GpsPosition
@@ -18,7 +19,7 @@ from exchange.archive import open_archive
 from exchange.export import export_events, select_events
 from exchange.importer import import_bundle
 from reports.selectors.statistics import event_statistics
-from telemetry.models import Pose, SegmentFigures
+from telemetry.models import Pose, SegmentFigures, ThinnedSegment
 from telemetry.models.poses import FixStatus
 from telemetry.selectors.distances import displayed_distances, kept_distances, measured_paths
 from telemetry.selectors.tracks import GPS, LOCAL, masters
@@ -218,6 +219,24 @@ def test_migration_measures_the_tracks_of_an_existing_database(leg):
     assert again.keys() == kept.keys() == {(master.pk, GPS), (master.pk, LOCAL)}
     for key, figures in kept.items():
         assert differences(figures, again[key]) == []
+
+
+@pytest.mark.django_db(transaction=True)
+def test_migration_sums_the_uids_left_of_a_thinned_master_and_keeps_its_figures(leg):
+    master = _open_master(leg)
+    recording.record_poses(master, _fixes(40, 9))
+    ThinnedSegment.objects.create(segment=master)
+    ids = list(Pose.objects.filter(segment=master).order_by("id").values_list("id", flat=True))
+    Pose.objects.filter(pk__in=ids[1:30:2]).delete()
+    kept = SegmentFigures.objects.get(segment=master, mode=GPS)
+    executor = MigrationExecutor(connection)
+    executor.migrate([("telemetry", "0014_tracks_read_in_one_statement")])
+    executor.loader.build_graph()
+    executor.migrate(executor.loader.graph.leaf_nodes())
+    again = SegmentFigures.objects.get(segment=master, mode=GPS)
+    left = Pose.objects.filter(segment=master).values_list("uid", flat=True)
+    assert again.uid_sum == uid_sums.combined(uid_sums.uid_sum(left)) != kept.uid_sum
+    assert differences(kept, again) == [f"uid_sum: {kept.uid_sum!r} != {again.uid_sum!r}"]
 
 
 def test_late_single_pose_in_the_middle_of_a_long_track_reads_only_its_neighbours(leg):
