@@ -1,9 +1,9 @@
 """The figures keep the uid sum of their segment's poses (common.uid_sums), so a
-report's data digest reads no pose.  A master with figures takes the sum of
-its poses (a thinned one: of the poses left); a master with poses and no
-figures yet (a database from before 0007, which leaves the measuring here) is
-measured whole.  Both use today's figures code, which matches the table only
-from here on."""
+report's data digest reads no pose.  Every kept figures row takes the sum of
+its poses (a thinned master: of the poses left), in one pass over the poses;
+a master with poses and no figures yet (a database from before 0007, which
+leaves the measuring here) is measured whole.  Both use today's figures code,
+which matches the table only from here on."""
 
 from django.db import migrations, models
 
@@ -16,14 +16,12 @@ def measure_stored_tracks(apps, schema_editor):
     Segment = apps.get_model("events", "Segment")
     SegmentFigures = apps.get_model("telemetry", "SegmentFigures")
     kept = set(SegmentFigures.objects.values_list("segment_id", flat=True))
+    if kept:
+        sum_uids_again()
     masters = Segment.objects.filter(parent__isnull=True).order_by("pk")
-    ids = list(masters.values_list("pk", flat=True))
+    ids = [pk for pk in masters.values_list("pk", flat=True) if pk not in kept]
     for begin in range(0, len(ids), CHUNK):
-        chunk = ids[begin : begin + CHUNK]
-        if summed := [pk for pk in chunk if pk in kept]:
-            sum_uids_again(summed)
-        if measured := [pk for pk in chunk if pk not in kept]:
-            recount_figures(measured, fix=True)
+        recount_figures(ids[begin : begin + CHUNK], fix=True)
 
 
 class Migration(migrations.Migration):

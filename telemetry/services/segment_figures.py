@@ -171,10 +171,13 @@ def _measured(master_ids: list[int], mode: str) -> dict[int, _Measured]:
     return found
 
 
-def _uid_sums(master_ids: list[int], mode: str) -> dict[int, str]:
-    """The uid sum of each master's poses (masters without poses are absent)."""
+def _uid_sums(master_ids: list[int] | None, mode: str) -> dict[int, str]:
+    """The uid sum of each master's poses (None: of every master); masters
+    without poses are absent."""
     sums = defaultdict(int)
-    rows = _model(mode).objects.filter(segment_id__in=master_ids)
+    rows = _model(mode).objects.all()
+    if master_ids is not None:
+        rows = rows.filter(segment_id__in=master_ids)
     for pk, uid in rows.values_list("segment_id", "uid").iterator(chunk_size=20000):
         sums[pk] += uid_sums.uid_sum([uid])
     return {pk: uid_sums.combined(total) for pk, total in sums.items()}
@@ -226,12 +229,13 @@ def measure_figures(master_ids: Iterable[int], modes=MODES) -> None:
             figures.save()
 
 
-def sum_uids_again(master_ids: list[int]) -> None:
-    """Set the uid sum of ``master_ids``' figures from the poses stored, and
-    nothing else (figures kept before they kept a sum, thinned ones too)."""
+def sum_uids_again() -> None:
+    """Set the uid sum of every kept figures row from the poses stored, and
+    nothing else (figures kept before they kept a sum, thinned ones too), in
+    one pass over each pose table."""
     for mode in MODES:
-        sums = _uid_sums(master_ids, mode)
-        rows = list(SegmentFigures.objects.filter(segment_id__in=master_ids, mode=mode))
+        sums = _uid_sums(None, mode)
+        rows = list(SegmentFigures.objects.filter(mode=mode))
         for figures in rows:
             figures.uid_sum = sums.get(figures.segment_id, uid_sums.EMPTY)
         SegmentFigures.objects.bulk_update(rows, ["uid_sum"], batch_size=500)
