@@ -1,5 +1,5 @@
-"""An order-free digest of a set of uids: the sum of their SHA-256 values
-modulo 2**256, written as 64 hex digits.
+"""An order-free digest of a set of uids: the sum of the SHA-256 values of
+their 16 bytes modulo 2**256, written as 64 hex digits.
 
 A sum can be kept as rows arrive in any order and on any installation, and
 the sums of parts add up to the sum of the whole, so a report's data digest
@@ -17,11 +17,13 @@ EMPTY = "0" * 64
 
 
 def uid_sum(uids: Iterable) -> int:
-    """The sum of ``uids`` (uuid.UUID or their text) as a number."""
+    """The sum of ``uids`` (uuid.UUID or their text) as a number; each uid is
+    hashed as its 16 bytes."""
+    sha256, from_bytes = hashlib.sha256, int.from_bytes
     total = 0
     for uid in uids:
-        text = str(uid if isinstance(uid, uuid.UUID) else uuid.UUID(str(uid)))
-        total += int.from_bytes(hashlib.sha256(text.encode()).digest())
+        raw = uid.bytes if isinstance(uid, uuid.UUID) else uuid.UUID(str(uid)).bytes
+        total += from_bytes(sha256(raw).digest())
     return total % _MODULUS
 
 
