@@ -9,6 +9,7 @@ from pathlib import Path
 
 from django.utils.translation import gettext_noop
 
+from common import cyclic_gc
 from common.said import Said, said
 from events.models import TestEvent
 from reports.documents.options import ReportError, ReportOptions
@@ -69,6 +70,7 @@ def check_reportable(event: TestEvent, options: ReportOptions | None = None) -> 
         )
 
 
+@cyclic_gc.paused()
 def render_report(
     event: TestEvent,
     options: ReportOptions,

@@ -31,11 +31,13 @@ def track_sketch(x, y, mode: str, width_pt: float, height_pt: float) -> dict | N
     y = np.asarray(y, dtype=float)
     if not len(x):
         return None
+    centre = float((x.min() + x.max()) / 2), float((y.min() + y.max()) / 2)
+    # Thinned by index first, so only the points drawn are projected.
+    x, y = _thinned(x, y)
     if mode == GPS:
-        forward, _ = local_frame(float((x.min() + x.max()) / 2), float((y.min() + y.max()) / 2))
+        forward, _ = local_frame(*centre)
         x, y = forward.transform(x, y)
         x, y = np.asarray(x), np.asarray(y)
-    x, y = _thinned(x, y)
     span = max(float(np.ptp(x)) / width_pt, float(np.ptp(y)) / height_pt, MIN_SPAN_M / width_pt)
     # 10 % margin on each side: metres per point.
     per_pt = span / 0.8
