@@ -16,15 +16,15 @@ _MODULUS = 1 << 256
 EMPTY = "0" * 64
 
 
+def uid_value(uid) -> int:
+    """One uid's part of a sum (uuid.UUID or its text): the SHA-256 of its 16 bytes."""
+    raw = uid.bytes if isinstance(uid, uuid.UUID) else uuid.UUID(str(uid)).bytes
+    return int.from_bytes(hashlib.sha256(raw).digest())
+
+
 def uid_sum(uids: Iterable) -> int:
-    """The sum of ``uids`` (uuid.UUID or their text) as a number; each uid is
-    hashed as its 16 bytes."""
-    sha256, from_bytes = hashlib.sha256, int.from_bytes
-    total = 0
-    for uid in uids:
-        raw = uid.bytes if isinstance(uid, uuid.UUID) else uuid.UUID(str(uid)).bytes
-        total += from_bytes(sha256(raw).digest())
-    return total % _MODULUS
+    """The sum of ``uids`` as a number."""
+    return sum(map(uid_value, uids)) % _MODULUS
 
 
 def combined(*sums: str | int) -> str:

@@ -179,7 +179,7 @@ def _uid_sums(master_ids: list[int] | None, mode: str) -> dict[int, str]:
     if master_ids is not None:
         rows = rows.filter(segment_id__in=master_ids)
     for pk, uid in rows.values_list("segment_id", "uid").iterator(chunk_size=20000):
-        sums[pk] += uid_sums.uid_sum([uid])
+        sums[pk] += uid_sums.uid_value(uid)
     return {pk: uid_sums.combined(total) for pk, total in sums.items()}
 
 
