@@ -9,7 +9,9 @@ by the robots vs stored, thinning off) and the collectors' own estimate,
 switch -> fleet view on screen p50/p95, the fleet view's open time and the
 fleet API's time, CPU and RSS per process kind, and server errors logged.
 The robots' share (simulators and collectors, which on a real fleet run on
-the robots) is printed apart from the server's.
+the robots) is printed apart from the server's.  ``--robot-nice N`` runs the
+simulated robots at nice N, to see how much of a switch's time is the robots'
+own processes taking the shared cores from FTT's.
 
     .venv/bin/python benchmarks/fleet.py --database-url postgis://ftt:ftt@127.0.0.1:5432/ftt \\
         [--robots 3 6 10] [--seconds 60] [--redis-url redis://127.0.0.1:6379/2]
@@ -257,6 +259,7 @@ def run(n: int, args) -> dict:
                     stdout=subprocess.PIPE,
                     stderr=subprocess.STDOUT,
                     text=True,
+                    preexec_fn=(lambda: os.nice(args.robot_nice)) if args.robot_nice else None,
                 )
             )
         with sync_playwright() as pw:
@@ -476,6 +479,12 @@ def main():
         type=float,
         default=120,
         help="after the robots stop, wait up to this long for every switch to be stored",
+    )
+    parser.add_argument(
+        "--robot-nice",
+        type=int,
+        default=0,
+        help="run the simulated robots at this nice value (they stand for other computers)",
     )
     args = parser.parse_args()
     rows = [run(n, args) for n in args.robots]
