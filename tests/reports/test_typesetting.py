@@ -13,6 +13,7 @@ from reports.documents import typesetting
 from reports.documents.options import ReportError
 from tests.support.pdf import pdf_text
 
+LINES = '#let d = json(bytes(sys.inputs.data))\n#for line in d.at("lines") [#line \\ ]\n'
 TITLE = 'Prüfung #1: $x$ <b> \\ "Übergabe" 测试'
 
 
@@ -71,12 +72,9 @@ print(json.dumps(sizes))
 
 
 def test_a_process_that_makes_many_pdfs_does_not_keep_typsts_memory(tmp_path, templates):
-    # typst in the asking process kept about 25 MB per such document, for the
-    # last ten documents (measured: docs/report.md).
-    (templates / "lines.typ").write_text(
-        '#let d = json(bytes(sys.inputs.data))\n#for line in d.at("lines") [#line \\ ]\n',
-        encoding="utf-8",
-    )
+    # typst's memo cache, were typst run in this process, would keep each of
+    # these documents' work for the next ten compilations.
+    (templates / "lines.typ").write_text(LINES, encoding="utf-8")
     done = subprocess.run(
         [sys.executable, "-c", MEMORY_PROBE, str(templates), str(root_of(tmp_path, "m"))],
         capture_output=True,
@@ -86,3 +84,53 @@ def test_a_process_that_makes_many_pdfs_does_not_keep_typsts_memory(tmp_path, te
     )
     sizes = json.loads(done.stdout.strip().splitlines()[-1])
     assert sizes[-1] - sizes[0] < 15, sizes
+
+
+INTERRUPT_PROBE = """
+import os, pathlib, signal, sys, threading
+import django
+django.setup()
+from reports.documents import typesetting
+
+signal.signal(signal.SIGINT, lambda *_: None)  # as the job worker: finish the job at hand
+typesetting.TEMPLATE_DIR = pathlib.Path(sys.argv[1])
+lines = [f"line {i}" for i in range(20000)]
+sent = threading.Event()
+
+
+def typst_runs():
+    for task in pathlib.Path("/proc/self/task").iterdir():
+        for pid in (task / "children").read_text().split():
+            try:
+                command = pathlib.Path(f"/proc/{pid}/cmdline").read_bytes()
+            except FileNotFoundError:  # a child that has just ended
+                continue
+            if str(typesetting.CHILD).encode() in command:
+                return True
+    return False
+
+
+def interrupt_once_typst_runs():
+    while not typst_runs():
+        pass
+    os.killpg(0, signal.SIGINT)
+    sent.set()
+
+
+threading.Thread(target=interrupt_once_typst_runs, daemon=True).start()
+pdf = typesetting.typeset("lines.typ", {"lines": lines}, pathlib.Path(sys.argv[2]))
+print(pdf[:5].decode(), sent.is_set())
+"""
+
+
+def test_a_ctrl_c_at_the_workers_terminal_does_not_stop_the_pdf_being_set(tmp_path, templates):
+    (templates / "lines.typ").write_text(LINES, encoding="utf-8")
+    # The probe in a process group of its own: the Ctrl-C reaches only it.
+    done = subprocess.run(
+        [sys.executable, "-c", INTERRUPT_PROBE, str(templates), str(root_of(tmp_path, "i"))],
+        capture_output=True,
+        text=True,
+        cwd=Path(__file__).resolve().parents[2],
+        start_new_session=True,
+    )
+    assert done.stdout.split() == ["%PDF-", "True"], done.stderr[-500:]
