@@ -31,6 +31,20 @@ def root_of(tmp_path: Path, name: str) -> Path:
     return root
 
 
+def run_probe(probe: str, templates: Path, root: Path) -> subprocess.CompletedProcess:
+    """``probe`` in a fresh interpreter, given the templates and a root, with the
+    lines template; in a process group of its own, so a Ctrl-C it sends reaches
+    only itself."""
+    (templates / "lines.typ").write_text(LINES, encoding="utf-8")
+    return subprocess.run(
+        [sys.executable, "-c", probe, str(templates), str(root)],
+        capture_output=True,
+        text=True,
+        cwd=Path(__file__).resolve().parents[2],
+        start_new_session=True,
+    )
+
+
 def test_the_text_arrives_in_the_pdf_as_written(tmp_path, templates):
     (templates / "t.typ").write_text(
         '#let d = json(bytes(sys.inputs.data))\n#d.at("title")\n', encoding="utf-8"
@@ -74,14 +88,8 @@ print(json.dumps(sizes))
 def test_a_process_that_makes_many_pdfs_does_not_keep_typsts_memory(tmp_path, templates):
     # typst's memo cache, were typst run in this process, would keep each of
     # these documents' work for the next ten compilations.
-    (templates / "lines.typ").write_text(LINES, encoding="utf-8")
-    done = subprocess.run(
-        [sys.executable, "-c", MEMORY_PROBE, str(templates), str(root_of(tmp_path, "m"))],
-        capture_output=True,
-        text=True,
-        cwd=Path(__file__).resolve().parents[2],
-        check=True,
-    )
+    done = run_probe(MEMORY_PROBE, templates, root_of(tmp_path, "m"))
+    assert done.returncode == 0, done.stderr[-500:]
     sizes = json.loads(done.stdout.strip().splitlines()[-1])
     assert sizes[-1] - sizes[0] < 15, sizes
 
@@ -124,13 +132,5 @@ print(pdf[:5].decode(), sent.is_set())
 
 
 def test_a_ctrl_c_at_the_workers_terminal_does_not_stop_the_pdf_being_set(tmp_path, templates):
-    (templates / "lines.typ").write_text(LINES, encoding="utf-8")
-    # The probe in a process group of its own: the Ctrl-C reaches only it.
-    done = subprocess.run(
-        [sys.executable, "-c", INTERRUPT_PROBE, str(templates), str(root_of(tmp_path, "i"))],
-        capture_output=True,
-        text=True,
-        cwd=Path(__file__).resolve().parents[2],
-        start_new_session=True,
-    )
+    done = run_probe(INTERRUPT_PROBE, templates, root_of(tmp_path, "i"))
     assert done.stdout.split() == ["%PDF-", "True"], done.stderr[-500:]
