@@ -7,6 +7,7 @@
 # into a package named after the folder (scripts/ros_package.py). A process
 # that uses PREFIX other than the virtualenv needs PYTHONPATH=PREFIX/lib/pythonX.Y/site-packages,
 # LD_LIBRARY_PATH=PREFIX/lib and AMENT_PREFIX_PATH=PREFIX:... at its start.
+# FTT_ROS_INSTALLED=FILE: every file installed is appended to FILE, one a line.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 venv=$(readlink -f "${FTT_VENV:-$root/.venv}")
@@ -33,7 +34,8 @@ for dir in "$@"; do
             -DPython3_EXECUTABLE="$py" -DBUILD_TESTING=OFF \
             -DCMAKE_BUILD_TYPE=Release >"$build/$pkg.log" 2>&1 &&
             cmake --build "$build/$pkg" -j "$(nproc)" >>"$build/$pkg.log" 2>&1 &&
-            cmake --install "$build/$pkg" >>"$build/$pkg.log" 2>&1
+            cmake --install "$build/$pkg" >>"$build/$pkg.log" 2>&1 &&
+            if [ -n "${FTT_ROS_INSTALLED:-}" ]; then { cat "$build/$pkg/install_manifest.txt"; echo; } >>"$FTT_ROS_INSTALLED"; fi
     ) || {
         # The CMake log names the missing package or the faulty definition.
         tail -n 30 "$build/$pkg.log" >&2

@@ -141,6 +141,22 @@ ftt_pg_major() {
     printf '%s' "${best_postgis:-$best}"
 }
 
+# uv installs the locks: pip takes minutes for them on a fresh machine, uv
+# downloads in parallel and links from its cache (~/.cache/uv) afterwards. It
+# reads PyPI; UV_INDEX_URL or UV_DEFAULT_INDEX point it at a mirror.
+ftt_uv_ensure() { # installs the locked uv into the virtualenv unless it is there
+    local want
+    want=$(sed -n 's/^uv==\([^ ]*\).*/\1/p' "$FTT_ROOT/requirements-uv.txt")
+    if [ "$("$FTT_VENV/bin/uv" --version 2>/dev/null | cut -d' ' -f2)" != "$want" ]; then
+        ftt_log "pip install uv $want"
+        "$FTT_PY" -m pip install -q --disable-pip-version-check --require-hashes \
+            -r "$FTT_ROOT/requirements-uv.txt"
+    fi
+}
+ftt_uv_install() { # ARGS... -> uv pip install --require-hashes ARGS into the virtualenv
+    "$FTT_VENV/bin/uv" pip install --quiet --python "$FTT_PY" --require-hashes "$@"
+}
+
 # Stamp files let a step skip work whose inputs have not changed.
 # ftt_stamp_ok NAME VALUE: status 0 when the stamp NAME holds VALUE.
 ftt_stamp_ok() { [ -f "$FTT_VENV/.ftt-stamp-$1" ] && [ "$(cat "$FTT_VENV/.ftt-stamp-$1")" = "$2" ]; }

@@ -5,8 +5,8 @@
 #      PostgreSQL+PostGIS, Redis, Chromium, poppler-utils);
 #   2. the virtualenv .venv (python3 >= 3.11, or FTT_PYTHON) with the
 #      locked requirements (requirements.txt, with --test requirements-dev.txt;
-#      every file's hash checked), skipped while the lock matches the stamp
-#      in .venv;
+#      every file's hash checked), installed by uv (requirements-uv.txt, put
+#      in with pip), skipped while the lock matches the stamp in .venv;
 #   3. the hooks scripts/setup.d/*.sh, sourced in name order.
 # A second run only checks, in about a second.
 #
@@ -104,8 +104,9 @@ fi
 if up_to_date; then
     ftt_log "$file: already installed"
 else
-    ftt_log "pip install --require-hashes -r $file"
-    "$FTT_PY" -m pip install -q --disable-pip-version-check --require-hashes -r "$file"
+    ftt_uv_ensure
+    ftt_log "uv pip install --require-hashes -r $file"
+    ftt_uv_install -r "$file"
     "$FTT_PY" -m pip check
     ftt_stamp_write pip-run "$hash_run"
     if [ "$FTT_SETUP_MODE" = test ]; then

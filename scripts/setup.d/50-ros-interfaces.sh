@@ -63,17 +63,27 @@ PY
         ftt_log "ROS interfaces: already built"
         return 0
     fi
+    if _ftt_ros_restore; then
+        # The tests build interfaces of their own with the tools.
+        [ "${FTT_SETUP_MODE:-run}" != test ] || [ "$prefix" != "$FTT_VENV" ] || _ftt_rosidl_tools
+        return 0
+    fi
     if [ "$prefix" != "$FTT_VENV" ]; then
         "$FTT_PY" -c 'import rosidl_adapter' 2>/dev/null ||
             ftt_die "FTT_ROS_PREFIX needs the rosidl tools in $FTT_VENV: run scripts/setup.sh first"
         _ftt_ros_build
         return
     fi
+    _ftt_rosidl_tools
+    _ftt_ros_build
+}
+
+_ftt_rosidl_tools() { # the rosidl generators and CMake helpers, into the virtualenv
     command -v cmake >/dev/null 2>&1 && command -v g++ >/dev/null 2>&1 ||
         ftt_apt_ensure cmake g++
-    ftt_log "pip install --require-hashes -r requirements-rosidl.txt"
-    "$FTT_PY" -m pip install -q --disable-pip-version-check --require-hashes \
-        -r "$FTT_ROOT/requirements-rosidl.txt"
+    ftt_log "uv pip install --require-hashes -r requirements-rosidl.txt"
+    ftt_uv_ensure
+    ftt_uv_install -r "$FTT_ROOT/requirements-rosidl.txt"
     # The wheels' exported CMake targets name the include directories of the
     # machine that built them; point them at this interpreter and numpy.
     local py_inc np_inc
@@ -83,7 +93,6 @@ PY
         xargs -0 -r sed -i -E \
             -e "s#/opt/python/cp[0-9]+-cp[0-9]+/include/python[0-9.]+#$py_inc#g" \
             -e "s#/opt/python/cp[0-9]+-cp[0-9]+/lib/python[0-9.]+/site-packages/numpy/_core/include#$np_inc#g"
-    _ftt_ros_build
 }
 
 _ftt_prefix_python() { # the interpreter seeing what is built into $prefix
@@ -91,13 +100,60 @@ _ftt_prefix_python() { # the interpreter seeing what is built into $prefix
         AMENT_PREFIX_PATH=$prefix:$FTT_VENV "$FTT_PY" "$@"
 }
 
+# A build is kept in the user's cache under the hash of its inputs, so a new
+# checkout or virtualenv unpacks it in a second instead of building again.
+_ftt_ros_cache() {
+    printf '%s/ftt/ros-interfaces/%s-%s.tar' "${XDG_CACHE_HOME:-$HOME/.cache}" "$stamp" \
+        "$(sha256sum "$FTT_ROOT/requirements.txt" | cut -c1-16)"
+}
+
 _ftt_ros_build() { # uses _ftt_ros_interfaces' locals: prefix, dirs, names, stamp
-    bash "$FTT_ROOT/scripts/build_interfaces.sh" "$prefix" "${dirs[@]}" ||
+    local installed
+    installed=$(mktemp)
+    FTT_ROS_INSTALLED=$installed bash "$FTT_ROOT/scripts/build_interfaces.sh" "$prefix" "${dirs[@]}" ||
         ftt_die "building the ROS interfaces failed (see above)"
     for name in $names; do
         _ftt_prefix_python -c "import $name" || ftt_die "$name was built but does not import"
     done
     FTT_VENV=$prefix ftt_stamp_write ros-interfaces "$stamp"
+    _ftt_ros_keep "$installed" || ftt_log "ROS interfaces: could not keep the build in $(_ftt_ros_cache)"
+    rm -f "$installed"
     ftt_log "ROS interfaces built into $prefix: ${names//$'\n'/ }"
+}
+
+_ftt_ros_keep() { # FILE of installed paths -> the cache's tar (paths relative to prefix, the prefix beside)
+    local cache list
+    cache=$(_ftt_ros_cache)
+    list=$(mktemp)
+    mkdir -p "$(dirname "$cache")" || return 1
+    sed -n "s#^$prefix/##p" "$1" | LC_ALL=C sort -u >"$list"
+    printf '%s' "$prefix" >"$prefix/.ftt-ros-built-prefix"
+    echo ".ftt-ros-built-prefix" >>"$list"
+    tar -cf "$cache.part" -C "$prefix" -T "$list" && mv "$cache.part" "$cache"
+    local status=$?
+    rm -f "$list" "$prefix/.ftt-ros-built-prefix"
+    return $status
+}
+
+_ftt_ros_restore() { # status 0 when the cache held this build and it imports from prefix
+    local cache built file
+    cache=$(_ftt_ros_cache)
+    [ -f "$cache" ] || return 1
+    mkdir -p "$prefix"
+    tar -xf "$cache" -C "$prefix" || return 1
+    built=$(cat "$prefix/.ftt-ros-built-prefix")
+    rm -f "$prefix/.ftt-ros-built-prefix"
+    # CMake exports and setup files name the prefix they were built into.
+    if [ "$built" != "$prefix" ]; then
+        tar -tf "$cache" | while read -r file; do
+            [ -f "$prefix/$file" ] && grep -Iq -- "$built" "$prefix/$file" &&
+                sed -i "s#$built#$prefix#g" "$prefix/$file"
+        done
+    fi
+    for name in $names; do
+        _ftt_prefix_python -c "import $name" >/dev/null 2>&1 || return 1
+    done
+    FTT_VENV=$prefix ftt_stamp_write ros-interfaces "$stamp"
+    ftt_log "ROS interfaces unpacked from $cache into $prefix: ${names//$'\n'/ }"
 }
 _ftt_ros_interfaces
