@@ -154,7 +154,9 @@ ftt_uv_ensure() { # installs the locked uv into the virtualenv unless it is ther
     fi
 }
 ftt_uv_install() { # ARGS... -> uv pip install --require-hashes ARGS into the virtualenv
-    "$FTT_VENV/bin/uv" pip install --quiet --python "$FTT_PY" --require-hashes "$@"
+    # Bytecode now: processes started with PYTHONDONTWRITEBYTECODE would compile
+    # every module they import, every time.
+    "$FTT_VENV/bin/uv" pip install --quiet --compile-bytecode --python "$FTT_PY" --require-hashes "$@"
 }
 
 # Stamp files let a step skip work whose inputs have not changed.

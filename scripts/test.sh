@@ -2,17 +2,24 @@
 # README command 2: install what is missing (scripts/setup.sh --test), bring
 # up PostgreSQL+PostGIS on loopback unless FTT_DATABASE_URL names a database,
 # make sure Redis answers, lint, and run the test suite:
-#   (lint: ruff, the import layers of pyproject.toml, ESLint for static/gui)
-#   a) everything but tests/e2e on PostGIS;
-#   b) the core suite (tests/events, tests/telemetry, tests/ftt_site) on SpatiaLite;
+#   (lint: ruff, the import layers of pyproject.toml, ESLint for static/gui,
+#    and the shell linter over the scripts)
+#   a) everything but tests/e2e on PostGIS, spread over xdist workers;
+#   b) the tests marked `spatialite` (the code under them differs between the
+#      databases, or they drive the embedded database) on SpatiaLite, side by
+#      side with
 #   c) the browser tests in tests/e2e, in a pytest process of their own.
-# Exits non-zero when any step fails.
+# Exits non-zero when any step fails; the last lines give each phase's time
+# and its slowest tests.
 #
 # Usage: bash scripts/test.sh [PYTEST ARGS...]
 #   With arguments only one pytest run happens, with those arguments, after
 #   setup and services (no lint). Without a path among them it covers tests/
 #   minus tests/e2e. FTT_TEST_SPATIALITE=1 makes it run on SpatiaLite.
+#   FTT_TEST_WORKERS sets the xdist workers of the full run (default: one
+#   more than the cores; 0 runs in one process).
 #   Examples: bash scripts/test.sh -k segment -x
+#             bash scripts/test.sh -n 2 tests/events
 #             bash scripts/test.sh tests/e2e/test_live_map.py
 set -euo pipefail
 FTT_SCRIPT="test"
@@ -25,11 +32,12 @@ bash scripts/setup.sh --test
 py=$FTT_VENV/bin/python
 
 export DJANGO_SETTINGS_MODULE=ftt_site.settings
-# ROS 2: stay on this host, on a domain of our own (0-101 keeps the DDS ports
-# below the ephemeral range), with the only RMW the PyPI wheels have.
+# ROS 2: stay on this host, on a domain of our own, with the only RMW the PyPI
+# wheels have. Each xdist worker takes the next domain (tests/support/workers.py);
+# 0-101 keeps the DDS ports below the ephemeral range, so the base stays <= 92.
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
 # FTT_ROS_DOMAIN_ID pins it when several suites share a machine.
-export ROS_DOMAIN_ID=${FTT_ROS_DOMAIN_ID:-$((10 + $$ % 92))}
+export ROS_DOMAIN_ID=${FTT_ROS_DOMAIN_ID:-$((10 + $$ % 83))}
 unset RMW_IMPLEMENTATION ROS_LOCALHOST_ONLY
 
 as_postgres() { # run a command as the postgres user, from a directory it can read
@@ -132,12 +140,47 @@ step() {
     fi
 }
 
+# Phases that run side by side: each writes its output to a log of its own,
+# which is shown when it ends; its time and failure are recorded as step's.
+declare -A together_pid=() together_t0=()
+together_names=()
+logs=$(mktemp -d "${TMPDIR:-/tmp}/ftt-test.XXXXXX")
+start_together() { # NAME COMMAND...
+    local name=$1
+    shift
+    ftt_log "== $name (started beside the next phase)"
+    together_names+=("$name")
+    together_t0[$name]=$(ftt_now_us)
+    "$@" >"$logs/${name//[^A-Za-z0-9]/_}.log" 2>&1 &
+    together_pid[$name]=$!
+}
+finish_together() { # waits for every phase start_together started
+    local name rc took
+    for name in "${together_names[@]}"; do
+        rc=0
+        wait "${together_pid[$name]}" || rc=$?
+        took=$(ftt_seconds $(($(ftt_now_us) - together_t0[$name])))
+        ftt_log "== $name (ended after ${took}s, its output:)"
+        cat "$logs/${name//[^A-Za-z0-9]/_}.log"
+        FTT_PHASES+=("$(printf '%7ss  %s (side by side)' "$took" "$name")")
+        if [ "$rc" -eq 5 ]; then
+            ftt_log "$name: no tests selected"
+        elif [ "$rc" -ne 0 ]; then
+            failed+=("$name (exit $rc)")
+            ftt_log "FAILED: $name (exit $rc)"
+        fi
+    done
+    together_names=()
+}
+
 pytest=("$py" -m pytest)
 
 finish() {
     # Fast DDS leaves shared-memory segments behind when a process is killed.
     "$FTT_VENV/bin/fastdds" shm clean >/dev/null 2>&1 || true
     ftt_phase_summary
+    "$py" scripts/slowest_tests.py --top 10 "$logs"/*.xml || true
+    rm -rf "$logs"
     if [ "${#failed[@]}" -gt 0 ]; then
         ftt_log "FAILED:"
         printf '    %s\n' "${failed[@]}"
@@ -172,32 +215,41 @@ step "ruff check" "$FTT_VENV/bin/ruff" check .
 step "ruff format --check" "$FTT_VENV/bin/ruff" format --check .
 step "import layers (lint-imports)" "$FTT_VENV/bin/lint-imports"
 step "eslint static/gui" npx --no-install eslint static/gui
+scripts=(scripts/*.sh scripts/setup.d/*.sh .ci/run)
+step "shellcheck scripts" shellcheck -x --shell=bash --severity=warning "${scripts[@]}"
+
+workers=${FTT_TEST_WORKERS:-$(($(nproc) + 1))}
+spread=()
+[ "$workers" -eq 0 ] || spread=(-n "$workers" --dist loadfile)
+# Each run its own JUnit file and temporary folder: the runs side by side must
+# not clear each other's, and a short one keeps socket paths below 108 bytes.
+pg_files=("--junitxml=$logs/pg.xml" "--basetemp=$logs/pg")
+sl_files=("--junitxml=$logs/sl.xml" "--basetemp=$logs/sl")
+e2e_files=("--junitxml=$logs/e2e.xml" "--basetemp=$logs/e2e")
 
 if [ -n "${FTT_DATABASE_URL:-}" ]; then
-    # The slowest tests are listed: the whole run must stay well under CI's 90 minutes.
-    step "pytest on PostGIS" "${pytest[@]}" -p no:playwright --durations=30 tests --ignore=tests/e2e
+    step "pytest on PostGIS" "${pytest[@]}" -p no:playwright "${spread[@]}" "${pg_files[@]}" \
+        tests --ignore=tests/e2e
+    # The same code on the embedded database only where it differs from PostGIS.
+    start_together "pytest on SpatiaLite (marked spatialite)" env -u FTT_DATABASE_URL \
+        "${pytest[@]}" -p no:playwright "${spread[@]}" "${sl_files[@]}" \
+        -m "spatialite and not postgis_only" tests --ignore=tests/e2e
 else
-    step "pytest on SpatiaLite (FTT_TEST_SPATIALITE=1)" \
-        "${pytest[@]}" -p no:playwright tests --ignore=tests/e2e -m "not postgis_only"
-fi
-
-core=()
-# The core again on SpatiaLite, with the tests written for the embedded database
-# alone (its backup, its wake-up), which the PostGIS run skips.
-for dir in tests/events tests/telemetry tests/ftt_site tests/exchange/test_backup.py \
-    tests/rosbridge_app/test_wakeup.py; do
-    [ -e "$dir" ] && core+=("$dir")
-done
-if [ "${#core[@]}" -gt 0 ] && [ -n "${FTT_DATABASE_URL:-}" ]; then
-    step --may-be-empty "pytest core on SpatiaLite" env -u FTT_DATABASE_URL \
-        "${pytest[@]}" -p no:playwright -m "not postgis_only" "${core[@]}"
+    step "pytest on SpatiaLite (FTT_TEST_SPATIALITE=1)" "${pytest[@]}" -p no:playwright \
+        "${spread[@]}" "${sl_files[@]}" tests --ignore=tests/e2e -m "not postgis_only"
 fi
 
 if [ -d tests/e2e ]; then
     # Browser tests need their own process: Playwright's sync API keeps an
     # event loop running in the test thread, which pytest-asyncio's tests
     # cannot share.
-    step --may-be-empty "pytest e2e (browser)" "${pytest[@]}" tests/e2e
+    # Past the ROS domains and Redis databases of the run beside it.
+    beside=$((workers > 0 ? workers : 1))
+    redis_db=${FTT_TEST_REDIS_URL##*/}
+    step --may-be-empty "pytest e2e (browser)" env FTT_ROS_DOMAIN_ID=$((ROS_DOMAIN_ID + beside)) \
+        FTT_TEST_REDIS_URL="${FTT_TEST_REDIS_URL%/*}/$((redis_db + beside))" \
+        "${pytest[@]}" "${e2e_files[@]}" tests/e2e
 fi
+finish_together
 
 finish

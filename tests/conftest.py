@@ -4,6 +4,7 @@ import pytest
 from django.conf import settings
 from django.core.cache import cache
 from django.db import connection
+from django.test import override_settings
 from django.utils import translation
 
 from common import memo
@@ -14,6 +15,14 @@ from events.services.robots import ensure_robot_account
 from rosbridge_app import wakeup
 from tests.support.modes import start_auto
 from tests.support.snapshot import snapshot
+from tests.support.workers import assign_worker_resources
+
+QUICK_PBKDF2 = "tests.support.accounts.QuickPBKDF2PasswordHasher"
+
+
+def pytest_configure(config):
+    # Before a test module imports rclpy or reads the Redis URL.
+    assign_worker_resources()
 
 
 def pytest_runtest_setup(item):
@@ -21,18 +30,42 @@ def pytest_runtest_setup(item):
         pytest.skip("needs PostgreSQL (row locks, parallel writers)")
 
 
+@pytest.fixture(scope="session", autouse=True)
+def _seeds_after_every_flush():
+    """A transactional test ends by flushing the database, seeded catalogues and
+    roles included, and under xdist any kind of test may come next on the worker.
+    The flush sends post_migrate; put back then what ``migrate`` gives a real install."""
+    from django.apps import apps
+    from django.db.models.signals import post_migrate
+
+    def reseed(**kwargs):
+        seeds.ensure()
+
+    sender = apps.get_app_config("events")
+    post_migrate.connect(reseed, sender=sender, weak=False, dispatch_uid="ftt-tests-reseed")
+    yield
+    post_migrate.disconnect(sender=sender, dispatch_uid="ftt-tests-reseed")
+
+
 @pytest.fixture(autouse=True)
-def _seeds_after_flush(request):
-    """Transactional tests flush the database, seeded catalogues included;
-    put them back so every test sees what ``migrate`` gives a real install."""
+def _live_link_closed(request):
+    """A transactional test's wake-up connection would keep the test database
+    from being dropped."""
     marker = request.node.get_closest_marker("django_db")
     if marker and marker.kwargs.get("transaction"):
         request.getfixturevalue("transactional_db")
-        seeds.ensure()
         yield
-        # Its connection would keep the test database from being dropped.
         wakeup.disconnect()
     else:
+        yield
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _quick_password_hashes():
+    """Django's PBKDF2 takes half a second per password at its million rounds,
+    and the tests make hundreds of accounts; a thousand rounds make the same kind
+    of hash, which the servers the tests start check as they check any other."""
+    with override_settings(PASSWORD_HASHERS=[QUICK_PBKDF2, *settings.PASSWORD_HASHERS]):
         yield
 
 

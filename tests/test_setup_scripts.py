@@ -2,7 +2,6 @@
 
 import os
 import re
-import shutil
 import subprocess
 from pathlib import Path
 
@@ -24,17 +23,6 @@ def readme_commands() -> list[str]:
 def test_shell_syntax(script):
     result = subprocess.run(["bash", "-n", script], capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
-
-
-@pytest.mark.skipif(shutil.which("shellcheck") is None, reason="shellcheck not installed")
-def test_shellcheck():
-    result = subprocess.run(
-        ["shellcheck", "-x", "--shell=bash", "--severity=warning", *SCRIPTS],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-    )
-    assert result.returncode == 0, result.stdout
 
 
 def test_readme_has_the_two_commands_and_ci_runs_the_second():

@@ -9,6 +9,9 @@ from django.db.models import F
 from common.sql import plain_rows
 from events.models import Segment
 
+# On SpatiaLite too: plain_rows reads binary rows on PostgreSQL, Django's rows elsewhere.
+pytestmark = pytest.mark.spatialite
+
 START = datetime(2025, 4, 1, 6, 0, tzinfo=UTC)
 
 

@@ -18,7 +18,8 @@ from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.recorder import record_events
 from tests.support.accounts import signed_in, staff_user
 
-pytestmark = pytest.mark.django_db
+# On SpatiaLite too: events/history.py writes history rows in raw SQL.
+pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]
 
 
 @pytest.fixture

@@ -10,7 +10,9 @@ from common.errors import RuleViolation
 from events.models import Leg, Segment, Shift
 from events.services import logs, segments
 
+# On SpatiaLite too: row locks on PostgreSQL, the write lock on SpatiaLite.
 pytestmark = [
+    pytest.mark.spatialite,
     pytest.mark.postgis_only,
     pytest.mark.django_db(transaction=True),
 ]

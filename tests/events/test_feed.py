@@ -13,7 +13,8 @@ from events.services import logs, notes, segments
 from telemetry.services import recording
 from tests.support.modes import start_auto
 
-pytestmark = pytest.mark.django_db
+# On SpatiaLite too: feed rows wake readers by trigger on PostgreSQL, by the writer on SpatiaLite.
+pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]
 
 
 def kinds_since(last_id):

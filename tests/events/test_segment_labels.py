@@ -7,7 +7,8 @@ from events.selectors.labels import leg_numbers, segment_label
 from events.services import logs, segments
 from tests.support.modes import start_auto
 
-pytestmark = pytest.mark.django_db
+# On SpatiaLite too: the labels' SQL (COALESCE over the master) runs on both.
+pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]
 
 
 def test_masters_are_numbered_per_leg_in_driving_order_and_reasons_under_them(leg):

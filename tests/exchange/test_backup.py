@@ -18,7 +18,8 @@ from tests.support.snapshot import snapshot
 
 # The backup reads the database from outside this test's connection, so the
 # data must be committed.
-pytestmark = pytest.mark.django_db(transaction=True)
+# On SpatiaLite too: a backup copies the SQLite file or dumps PostgreSQL.
+pytestmark = [pytest.mark.spatialite, pytest.mark.django_db(transaction=True)]
 
 
 def unpack(backup, target):
@@ -76,7 +77,7 @@ def test_postgis_backup_restores_as_the_doc_says(tmp_path, media_root, credentia
     make_backup(tmp_path / "backup.zip", credentials=credentials)
     unpack(tmp_path / "backup.zip", tmp_path / "unpacked")
     db = connection.settings_dict
-    target = "ftt_restore_xchg"
+    target = f"{db['NAME']}_restored"
     env = os.environ | {"PGPASSWORD": db["PASSWORD"]}
     server = ["-h", db["HOST"], "-p", str(db["PORT"] or 5432), "-U", db["USER"]]
     subprocess.run(["dropdb", "--if-exists", "--force", *server, target], env=env, check=True)

@@ -15,19 +15,22 @@ from pathlib import Path
 import pytest
 from django.conf import settings
 from django.core.management import call_command
+from django.db import connection
 from PIL import Image as PilImage
 
 from events.models import ItoReason, Leg, Note, Segment, Shift, TestEvent
 from exchange.importer import import_bundle
 from exchange.legacy import DumpSource, LegacyBundle, LegacyError, PostgresSource
 from telemetry.models import Image, LocalPose, MapImage, Pose
+from tests.support import workers
 from tests.support.field_day import jpeg
 from tests.support.snapshot import snapshot
 
 psycopg2 = pytest.importorskip("psycopg2")
 
 HERE = Path(__file__).parent
-LEGACY_DB = "ftt_legacy_xchg"
+# One per run and worker: the SpatiaLite and PostGIS runs may share the server at once.
+LEGACY_DB = f"ftt_legacy_xchg_{connection.vendor}_{workers.INDEX}"
 
 
 def _server() -> dict:

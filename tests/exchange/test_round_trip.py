@@ -16,7 +16,9 @@ from exchange.importer import import_bundle
 from tests.support.sites import fresh_site
 from tests.support.snapshot import snapshot
 
+# On SpatiaLite too: the export reads poses through the storage code of each database.
 pytestmark = [
+    pytest.mark.spatialite,
     pytest.mark.postgis_only,
     pytest.mark.django_db,
     pytest.mark.skipif(

@@ -3,7 +3,9 @@
 import pytest
 from django.db import connection
 
+# On SpatiaLite too: the SpatiaLite backend itself.
 pytestmark = [
+    pytest.mark.spatialite,
     pytest.mark.django_db,
     pytest.mark.skipif(connection.vendor != "sqlite", reason="SpatiaLite backend"),
 ]

@@ -10,7 +10,11 @@ import requests
 from tests.support.directory import PERSONS, Directory, slapd_available
 from tests.support.web import WebServer
 
-pytestmark = pytest.mark.skipif(not slapd_available(), reason="needs Debian's slapd")
+# On SpatiaLite only: drives a server of its own on the embedded database.
+pytestmark = [
+    pytest.mark.spatialite,
+    pytest.mark.skipif(not slapd_available(), reason="needs Debian's slapd"),
+]
 
 
 @pytest.fixture(scope="module")

@@ -12,7 +12,8 @@ from common import jobs
 from events.models import Vehicle
 from rosbridge_app.services.collectors import heartbeat
 
-pytestmark = pytest.mark.django_db
+# On SpatiaLite too: the health check asks each database its own way.
+pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]
 
 
 def samples(response) -> dict[tuple, float]:

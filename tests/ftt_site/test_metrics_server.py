@@ -8,6 +8,9 @@ from prometheus_client.parser import text_string_to_metric_families
 
 from tests.support.web import WebServer
 
+# On SpatiaLite only: drives a server of its own on the embedded database.
+pytestmark = pytest.mark.spatialite
+
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):

@@ -11,6 +11,9 @@ from tests.support.drill import prepare, run_drill, stored
 from tests.support.ros import wait_for
 from tests.support.web import WebServer
 
+# On SpatiaLite too: the README's server runs on the embedded database.
+pytestmark = pytest.mark.spatialite
+
 MB = 1024 * 1024
 
 

@@ -13,10 +13,14 @@ import requests
 from tests.support.drill import prepare
 from tests.support.web import WebServer
 
-pytestmark = pytest.mark.skipif(
-    bool(os.environ.get("FTT_DATABASE_URL")),
-    reason="drives servers of its own on the embedded database",
-)
+# On SpatiaLite too: the README's server runs on the embedded database.
+pytestmark = [
+    pytest.mark.spatialite,
+    pytest.mark.skipif(
+        bool(os.environ.get("FTT_DATABASE_URL")),
+        reason="drives servers of its own on the embedded database",
+    ),
+]
 
 
 @pytest.fixture(scope="module")

@@ -16,6 +16,9 @@ import websockets
 from tests.support.browser import session_code
 from tests.support.web import WebServer
 
+# On SpatiaLite too: several processes share one SQLite file or one PostgreSQL.
+pytestmark = pytest.mark.spatialite
+
 SESSION = (
     session_code("watcher", "operator")
     + """

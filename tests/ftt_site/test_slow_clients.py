@@ -19,6 +19,9 @@ import json
 from events.models import Vehicle
 from events.services import logs, segments
 from events.services.robots import ensure_robot_account
+
+# On SpatiaLite only: drives a server of its own on the embedded database.
+pytestmark = pytest.mark.spatialite
 vehicle, _ = Vehicle.objects.get_or_create(key="slow", defaults={"short_description": "slow"})
 login = ensure_robot_account("slow-robot", [vehicle], new_token=True)
 leg = logs.create_leg(shift=logs.create_shift(

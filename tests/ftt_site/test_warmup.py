@@ -7,6 +7,11 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
+# On SpatiaLite too: a worker's warm-up opens the embedded database its own way.
+pytestmark = pytest.mark.spatialite
+
 ROOT = Path(__file__).resolve().parents[2]
 
 PROBE = """

@@ -1,5 +1,7 @@
 import pytest
 
+from tests.support import workers
+
 
 @pytest.fixture(autouse=True)
 def _quiet_heartbeat(settings):
@@ -7,7 +9,7 @@ def _quiet_heartbeat(settings):
     settings.FTT_LIVE_HEARTBEAT_MS = 3_600_000
 
 
-REDIS_TEST_URL = "redis://127.0.0.1:6379/7"
+REDIS_TEST_URL = workers.redis_url("redis://127.0.0.1:6379/7")
 
 
 @pytest.fixture

@@ -15,7 +15,8 @@ from common.sql import conninfo
 from events import feed
 from rosbridge_app import wakeup
 
-pytestmark = pytest.mark.django_db(transaction=True)
+# On SpatiaLite too: LISTEN/NOTIFY on PostgreSQL, the writer's signal on SpatiaLite.
+pytestmark = [pytest.mark.spatialite, pytest.mark.django_db(transaction=True)]
 
 
 @pytest.fixture

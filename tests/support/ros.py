@@ -1,6 +1,7 @@
 """Helpers for tests that run real ROS 2 processes (marker ``ros``).
 
-Every run uses its own ROS domain (40-59, from the pid) and loopback-only
+Every run uses its own ROS domain (scripts/test.sh picks it, and each xdist
+worker takes the next one: tests/support/workers.py) and loopback-only
 discovery, so parallel runs on one machine never see each other's topics.
 """
 
@@ -16,8 +17,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-# FTT_ROS_DOMAIN_ID pins the domain when several suites share a machine.
-DOMAIN_ID = int(os.environ.get("FTT_ROS_DOMAIN_ID") or 40 + os.getpid() % 20)
+# Set by the root conftest (tests/support/workers.py) for this worker.
+DOMAIN_ID = int(os.environ["FTT_ROS_DOMAIN_ID"])
 
 # Set for this process before rclpy loads (in-process publishers) and inherited
 # by the processes the tests start.

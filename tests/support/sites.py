@@ -1,12 +1,57 @@
 """Run manage.py for another installation (its own SpatiaLite file and media) in a child process."""
 
+import hashlib
 import json
 import os
+import sqlite3
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
+# Everything a migration can run: the apps' code, not the tests.
+APPS = (
+    "basemaps",
+    "common",
+    "events",
+    "exchange",
+    "ftt_site",
+    "gui",
+    "reports",
+    "rosbridge_app",
+    "telemetry",
+)
+
+
+def _code_digest() -> str:
+    digest = hashlib.sha256(sys.version.encode())
+    for path in sorted(p for app in APPS for p in (ROOT / app).rglob("*.py")):
+        digest.update(str(path.relative_to(ROOT)).encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def copy_migrated_database(data_dir: Path) -> None:
+    """Puts a fully migrated embedded database into ``data_dir`` (which has none),
+    as ``manage.py migrate`` would make it: migrated once per version of the code
+    and copied, because the whole chain of migrations takes seconds per site."""
+    template = Path(tempfile.gettempdir()) / "ftt-test-migrated" / f"{_code_digest()}.sqlite3"
+    if not template.exists():
+        build = Path(tempfile.mkdtemp(prefix="ftt-migrating-"))
+        Site(build).manage("migrate", "--noinput", "-v", "0")
+        template.parent.mkdir(exist_ok=True)
+        part = template.with_suffix(f".{os.getpid()}.part")
+        _copy_sqlite(build / "ftt.sqlite3", part)
+        part.replace(template)  # atomic: another worker may be making the same
+    data_dir.mkdir(parents=True, exist_ok=True)
+    _copy_sqlite(template, data_dir / "ftt.sqlite3")
+
+
+def _copy_sqlite(source: Path, target: Path) -> None:
+    # SQLite's backup copies a consistent state, WAL or not.
+    with sqlite3.connect(source) as src, sqlite3.connect(target) as dst:
+        src.backup(dst)
+    target.chmod(0o600)
 
 
 class Site:
@@ -43,6 +88,5 @@ class Site:
 
 
 def fresh_site(data_dir: Path) -> Site:
-    site = Site(data_dir)
-    site.manage("migrate", "--noinput", "-v", "0")
-    return site
+    copy_migrated_database(data_dir)
+    return Site(data_dir)

@@ -16,6 +16,9 @@ from pathlib import Path
 
 import requests
 
+from tests.support.shell import DjangoShell
+from tests.support.sites import copy_migrated_database
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -60,6 +63,7 @@ class WebServer:
         self.workers = workers
         self.log_path = log
         self.process = None
+        self._shell = None
 
     def manage(self, *args, stdin: str | None = None, timeout: float = 300) -> str:
         result = subprocess.run(
@@ -75,11 +79,19 @@ class WebServer:
         return result.stdout
 
     def python(self, code: str, stdin: str | None = None, timeout: float = 300) -> str:
-        """Run Django code in a separate process (a robot, an admin script)."""
-        return self.manage("shell", "-c", textwrap.dedent(code), stdin=stdin, timeout=timeout)
+        """Run Django code in a separate process (a robot, an admin script): a
+        Django shell kept for this server (tests/support/shell.py)."""
+        if self._shell is None or self._shell.process.poll() is not None:
+            self._shell = DjangoShell(self.root, self.env)
+        return self._shell.run(textwrap.dedent(code), stdin=stdin, timeout=timeout)
 
     def start(self, migrate: bool = True):
-        if migrate:
+        data_dir = self.env.get("FTT_DATA_DIR")
+        # The copy is of this checkout's migrations; another root migrates its own.
+        embedded = data_dir and not self.env.get("FTT_DATABASE_URL") and self.root == ROOT
+        if migrate and embedded and not (Path(data_dir) / "ftt.sqlite3").exists():
+            copy_migrated_database(Path(data_dir))
+        elif migrate:
             self.manage("migrate", "--noinput")
         self.log = open(self.log_path or os.devnull, "w")  # noqa: SIM115 - open while it runs
         self.process = subprocess.Popen(
@@ -124,6 +136,9 @@ class WebServer:
             self.process.send_signal(signal.SIGINT)
 
     def stop(self):
+        if self._shell is not None:
+            self._shell.close()
+            self._shell = None
         if self.process is not None:
             end(self.process, 20)
             self.log.close()

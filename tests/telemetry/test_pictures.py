@@ -12,7 +12,8 @@ from telemetry.pictures import MAP_FORMATS, checked_picture
 from tests.support.images import image_bytes
 from tests.support.modes import start_auto
 
-pytestmark = pytest.mark.django_db
+# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
+pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]
 
 
 def _eps() -> bytes:

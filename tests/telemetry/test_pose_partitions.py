@@ -22,7 +22,8 @@ from telemetry.services import pose_partitions, recording
 from telemetry.services.recording import GpsFix, MapPose
 from telemetry.services.segment_figures import differences, recount_figures
 
-pytestmark = pytest.mark.django_db
+# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
+pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]
 
 # The end of a month, so one segment's poses fall into two partitions.
 T0 = datetime(2026, 5, 31, 23, 58, tzinfo=UTC)

@@ -32,7 +32,8 @@ from telemetry.services.segment_figures import (
     recount_figures,
 )
 
-pytestmark = pytest.mark.django_db
+# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
+pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]
 
 T0 = datetime(2026, 6, 1, 9, 0, tzinfo=UTC)
 

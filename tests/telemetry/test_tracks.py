@@ -28,7 +28,8 @@ from telemetry.services import recording
 from telemetry.services.recording import GpsFix
 from tests.support.modes import start_auto
 
-pytestmark = pytest.mark.django_db
+# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
+pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]
 
 T0 = datetime(2026, 6, 1, 9, 0, tzinfo=UTC)
 

@@ -12,6 +12,9 @@ from events.models import SegmentType, Vehicle
 from events.services import logs, segments
 from events.services.segments import GpsPosition
 
+# On SpatiaLite too: spatial lookups compile to PostGIS or SpatiaLite functions.
+pytestmark = pytest.mark.spatialite
+
 SQUARE = [[7.0, 50.0], [8.0, 50.0], [8.0, 51.0], [7.0, 51.0], [7.0, 50.0]]
 HOLE = [[7.4, 50.4], [7.6, 50.4], [7.6, 50.6], [7.4, 50.6], [7.4, 50.4]]
 # Drawn eastwards over the antimeridian, as a map that wraps lets one draw it.

@@ -17,6 +17,9 @@ from tests.support.api import LIST_QUERIES, assert_constant_queries, post_counti
 from tests.support.images import png
 from tests.support.modes import start_auto
 
+# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
+pytestmark = pytest.mark.spatialite
+
 
 def _poses(n, leg):
     master = start_auto(leg)
