@@ -37,6 +37,7 @@ import time
 from pathlib import Path
 
 from collector_bench import ROOT, Bench, load
+from django.apps import apps
 from django.db import connection
 
 from rosbridge_app.models import Collector
@@ -95,18 +96,6 @@ class Robot(threading.Thread):
             time.sleep(0.1)
 
 
-# FTT's own Python packages, in every checkout.
-PACKAGES = (
-    "ftt_site",
-    "common",
-    "events",
-    "telemetry",
-    "basemaps",
-    "reports",
-    "rosbridge_app",
-    "exchange",
-    "gui",
-)
 # The collector's start-up phases up to and including its subscriptions.
 TO_SUBSCRIPTIONS = (
     "Python, Django and the command loaded",
@@ -146,7 +135,7 @@ def main() -> None:
         print(f"{name}: {root} ({git_head(root)})")
         # As after the collector's first start: each module's bytecode cached
         # (PYTHONDONTWRITEBYTECODE would otherwise compile the project every run).
-        for package in PACKAGES:
+        for package in own_apps():
             compileall.compile_dir(root / package, quiet=1)
     figures = {name: {"subscribed": [], "stored": [], "cpu": []} for name in checkouts}
     try:
@@ -186,6 +175,11 @@ def main() -> None:
                 f"CPU {median(used[name])} ({load()})"
             )
     bench.close()
+
+
+def own_apps() -> list[str]:
+    """FTT's own apps (the installed ones in this checkout), by package name."""
+    return [app.name for app in apps.get_app_configs() if Path(app.path).is_relative_to(ROOT)]
 
 
 def git_head(root: Path) -> str:
