@@ -1,5 +1,4 @@
 from django.apps import AppConfig
-from django.conf import settings
 from django.utils.translation import gettext_lazy as _
 
 from basemaps.confinement import confine_gdal
@@ -10,11 +9,6 @@ class BasemapsConfig(AppConfig):
     verbose_name = _("Basemaps")
 
     def ready(self):
+        # rasterio is loaded by the code that reads rasters; on SpatiaLite before
+        # the first connection (ftt_site.native_libs), as its GDAL requires.
         confine_gdal()
-        # rasterio's wheel brings its own GDAL and PROJ. Loaded after SpatiaLite's
-        # mod_spatialite has bound the system's libraries, it crashes the process
-        # (a segfault importing rio_tiler after the first SpatiaLite connection).
-        # On the embedded database it is therefore loaded now, before any
-        # connection; on PostgreSQL it stays a lazy load.
-        if "spatialite" in settings.DATABASES["default"]["ENGINE"]:
-            import rio_tiler.io  # noqa: F401

@@ -1,8 +1,11 @@
 from django.apps import AppConfig
+from django.conf import settings
 from django.core.signals import request_finished
 from django.db import connection
 from django.db.models.signals import m2m_changed, post_delete, post_save
 from django.utils.translation import gettext_lazy as _
+
+LDAP_BACKEND = "django_auth_ldap.backend.LDAPBackend"
 
 
 class CommonConfig(AppConfig):
@@ -12,7 +15,6 @@ class CommonConfig(AppConfig):
     def ready(self):
         from django.contrib.auth import get_user_model
         from django.contrib.auth.models import Group
-        from django_auth_ldap.backend import populate_user
         from rest_framework.authtoken.models import Token
 
         from common.api.authentication import known_tokens
@@ -32,4 +34,9 @@ class CommonConfig(AppConfig):
             weak=False,
             dispatch_uid="ftt-pool-gauges",
         )
-        populate_user.connect(apply_directory_role, dispatch_uid="ftt-directory-role")
+        # Only the directory backend sends populate_user; without it the LDAP
+        # client library stays unloaded.
+        if LDAP_BACKEND in settings.AUTHENTICATION_BACKENDS:
+            from django_auth_ldap.backend import populate_user
+
+            populate_user.connect(apply_directory_role, dispatch_uid="ftt-directory-role")

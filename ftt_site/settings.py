@@ -11,22 +11,14 @@ from operator import or_
 from pathlib import Path
 from urllib.parse import urlsplit
 
-from ftt_site import native_libs, sqlite_shim
+from ftt_site import sqlite_shim
 
 sqlite_shim.install()
-native_libs.preload()
 
 import dj_database_url  # noqa: E402
-import ldap  # noqa: E402
 import xstatic.pkg.leaflet_markercluster as markercluster  # noqa: E402
 from csp.constants import NONE, SELF, UNSAFE_INLINE  # noqa: E402
 from django.core.management.utils import get_random_secret_key  # noqa: E402
-from django_auth_ldap.config import (  # noqa: E402
-    GroupOfNamesType,
-    LDAPGroupQuery,
-    LDAPSearch,
-    NestedActiveDirectoryGroupType,
-)
 
 from ftt_site.env import (  # noqa: E402
     env_bool,
@@ -95,7 +87,10 @@ INSTALLED_APPS = [
     "django.contrib.gis",
     "rest_framework",
     "rest_framework.authtoken",
-    "rest_framework_gis",
+    # Not "rest_framework_gis": its fields and filters are imported where used, and
+    # its AppConfig only maps GeoDjango fields for ModelSerializer, which every
+    # geometry field of ours declares itself, while loading DRF's serializers
+    # (and with them the HTTP client stack) into every process at start.
     "django_filters",
     "drf_spectacular",
     "drf_spectacular_sidecar",
@@ -458,6 +453,15 @@ FTT_LDAP_ROLE_GROUPS = {
     if env_str(f"FTT_LDAP_{role.upper()}_GROUP")
 }
 if env_str("FTT_LDAP_SERVER_URI"):
+    # The LDAP client library is loaded only where a directory is configured.
+    import ldap
+    from django_auth_ldap.config import (
+        GroupOfNamesType,
+        LDAPGroupQuery,
+        LDAPSearch,
+        NestedActiveDirectoryGroupType,
+    )
+
     if not FTT_LDAP_ROLE_GROUPS:
         raise ValueError(
             "FTT_LDAP_SERVER_URI needs FTT_LDAP_VIEWER_GROUP, FTT_LDAP_OPERATOR_GROUP "

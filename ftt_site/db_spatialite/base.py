@@ -9,9 +9,14 @@ own 5 s, replacing the one Django gave ``sqlite3.connect`` (``OPTIONS["timeout"]
 Under 200 concurrent clients a writer then gave up after 5 s in the queue for
 the write lock ("database is locked", 503) although the settings promise a
 longer wait; the timeout is set again once the extension is in.
+
+The wheels' own PROJ and GDAL are loaded before the first connection loads
+``mod_spatialite`` (``ftt_site.native_libs``).
 """
 
 from django.contrib.gis.db.backends.spatialite import base
+
+from ftt_site import native_libs
 
 # What sqlite3.connect uses when OPTIONS has no "timeout".
 SQLITE_DEFAULT_TIMEOUT = 5.0
@@ -19,6 +24,7 @@ SQLITE_DEFAULT_TIMEOUT = 5.0
 
 class DatabaseWrapper(base.DatabaseWrapper):
     def get_new_connection(self, conn_params):
+        native_libs.preload()
         conn = super().get_new_connection(conn_params)
         timeout = conn_params.get("timeout", SQLITE_DEFAULT_TIMEOUT)
         conn.execute(f"PRAGMA busy_timeout = {round(timeout * 1000)}")
