@@ -12,11 +12,11 @@ class CommonConfig(AppConfig):
     def ready(self):
         from django.contrib.auth import get_user_model
         from django.contrib.auth.models import Group
-        from django_auth_ldap.backend import populate_user
+        from django_auth_ldap.backend import ldap_error, populate_user
         from rest_framework.authtoken.models import Token
 
         from common.api.authentication import known_tokens
-        from common.directory import apply_directory_role
+        from common.directory import DirectoryBackend, apply_directory_role, directory_unreachable
         from common.metrics import observe_pool
 
         # Whatever may revoke or change what a kept token grants.
@@ -33,3 +33,6 @@ class CommonConfig(AppConfig):
             dispatch_uid="ftt-pool-gauges",
         )
         populate_user.connect(apply_directory_role, dispatch_uid="ftt-directory-role")
+        ldap_error.connect(
+            directory_unreachable, sender=DirectoryBackend, dispatch_uid="ftt-directory-down"
+        )

@@ -140,7 +140,9 @@ MIDDLEWARE = [
     "csp.middleware.CSPMiddleware",
     # Who changed a row and through what (events.history).
     "ftt_site.change_origin.ChangeOriginMiddleware",
-    # Last: turns a lockout on any login path into one answer (ftt_site.lockout).
+    # Last: turns a lockout, or a directory that cannot be reached, on any login
+    # path into one answer (ftt_site.lockout).
+    "ftt_site.lockout.DirectoryUnavailableMiddleware",
     "axes.middleware.AxesMiddleware",
     "django_prometheus.middleware.PrometheusAfterMiddleware",
 ]
@@ -450,8 +452,9 @@ PROMETHEUS_EXPORT_MIGRATIONS = False
 
 # Sign-in from a directory (README, Directory sign-in): with FTT_LDAP_SERVER_URI
 # set, django-auth-ldap checks passwords against LDAP or Active Directory after
-# the local accounts; a directory user gets the FTT role of the highest role
-# group they are in (common.directory), and one in none of them is refused.
+# the local accounts, for names that are none; a directory user gets the FTT
+# role of the highest role group they are in (common.directory), and one in
+# none of them is refused.
 FTT_LDAP_ROLE_GROUPS = {
     role: env_str(f"FTT_LDAP_{role.upper()}_GROUP")
     for role in ("viewer", "operator", "administrator")
@@ -463,7 +466,17 @@ if env_str("FTT_LDAP_SERVER_URI"):
             "FTT_LDAP_SERVER_URI needs FTT_LDAP_VIEWER_GROUP, FTT_LDAP_OPERATOR_GROUP "
             "or FTT_LDAP_ADMINISTRATOR_GROUP: directory users without a role cannot sign in"
         )
-    AUTHENTICATION_BACKENDS.insert(1, "django_auth_ldap.backend.LDAPBackend")
+    # After the local accounts, and never for their names (common.directory).
+    AUTHENTICATION_BACKENDS.append("common.directory.DirectoryBackend")
+    # Seconds the directory may take to connect and to answer each request; a
+    # directory that did not is asked again after as long (common.directory).
+    FTT_LDAP_TIMEOUT = env_int("FTT_LDAP_TIMEOUT", 5)
+    # Sign-ins per web process that may wait for the directory at once.
+    FTT_LDAP_MAX_SIGN_INS = env_int("FTT_LDAP_MAX_SIGN_INS", 2)
+    AUTH_LDAP_CONNECTION_OPTIONS = {
+        ldap.OPT_NETWORK_TIMEOUT: FTT_LDAP_TIMEOUT,
+        ldap.OPT_TIMEOUT: FTT_LDAP_TIMEOUT,
+    }
     AUTH_LDAP_SERVER_URI = env_str("FTT_LDAP_SERVER_URI")
     AUTH_LDAP_START_TLS = env_bool("FTT_LDAP_START_TLS", False)
     AUTH_LDAP_BIND_DN = env_str("FTT_LDAP_BIND_DN")
