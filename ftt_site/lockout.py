@@ -17,6 +17,7 @@ from datetime import timedelta
 
 from axes.helpers import get_cool_off
 from axes.models import AccessAttempt
+from axes.utils import reset
 from django.conf import settings
 from django.core.exceptions import PermissionDenied
 from django.db.models import Max, Sum
@@ -27,6 +28,7 @@ from django.utils.translation import gettext as _
 from django.utils.translation import ngettext
 
 from common.directory import DirectoryUnavailable
+from ftt_site.proxies import client_of
 
 
 def account_wait(username: str) -> int:
@@ -108,9 +110,13 @@ class DirectoryUnavailableMiddleware:
 
 
 def client_address(request) -> str | None:
-    """Whose failures count together: behind FTT's proxy every request comes from
-    the proxy, which appends the address it saw to X-Forwarded-For."""
-    forwarded = request.META.get("HTTP_X_FORWARDED_FOR", "")
-    if settings.FTT_BEHIND_PROXY and forwarded:
-        return forwarded.split(",")[-1].strip()
-    return request.META.get("REMOTE_ADDR")
+    """Whose failures count together: the client's address as ftt_site.proxies
+    reads it (behind a configured proxy, the address the proxy saw)."""
+    return client_of(request.META)
+
+
+def forgive_own_failures(sender, request, user, **kwargs) -> None:
+    """``user_logged_in``: the account's own failures from this address are
+    forgiven; other accounts' failures from it still count."""
+    if request is not None:
+        reset(ip=client_address(request), username=user.get_username())

@@ -74,6 +74,12 @@ SECURE_HSTS_SECONDS = env_int("FTT_HSTS_SECONDS", 31536000 if HTTPS else 0)
 SECURE_HSTS_INCLUDE_SUBDOMAINS = HTTPS
 SECURE_HSTS_PRELOAD = HTTPS
 FTT_BEHIND_PROXY = env_bool("FTT_BEHIND_PROXY", False)
+# The proxies whose forwarded headers are believed (ftt_site.proxies); nobody's
+# without FTT_BEHIND_PROXY.
+FTT_PROXY_NETWORKS = [
+    ipaddress.ip_network(net, strict=False)
+    for net in env_list("FTT_PROXY_ADDRESSES", "127.0.0.1/32,::1/128")
+]
 if FTT_BEHIND_PROXY:
     SECURE_PROXY_SSL_HEADER = ("HTTP_X_FORWARDED_PROTO", "https")
 # A load balancer's health probes may come over plain HTTP.
@@ -122,6 +128,8 @@ INSTALLED_APPS = [
 ]
 
 MIDDLEWARE = [
+    # Before anything reads the client's address or scheme (ftt_site.proxies).
+    "ftt_site.proxies.ForwardedHeadersMiddleware",
     # First and last: request counts and latencies for /metrics (ftt_site.metrics).
     "django_prometheus.middleware.PrometheusBeforeMiddleware",
     "django.middleware.security.SecurityMiddleware",
@@ -171,7 +179,9 @@ FTT_COUNT_ROBOT_REASONS = env_bool("FTT_COUNT_ROBOT_REASONS", False)
 # Stored poses of shifts older than this many months are thinned to what the
 # report draws (reports.services.pose_retention); 0: all poses are kept.
 FTT_POSE_RETENTION_MONTHS = env_int("FTT_POSE_RETENTION_MONTHS", 0)
-AXES_RESET_ON_SUCCESS = True
+# A sign-in forgives only its own account's failures from its address
+# (ftt_site.lockout.forgive_own_failures), never another account's.
+AXES_RESET_ON_SUCCESS = False
 AXES_LOCKOUT_CALLABLE = "ftt_site.lockout.locked_out"
 AXES_CLIENT_IP_CALLABLE = "ftt_site.lockout.client_address"
 
@@ -344,8 +354,8 @@ REST_FRAMEWORK = {
         "rest_framework.throttling.AnonRateThrottle",
         "rest_framework.throttling.UserRateThrottle",
     ],
-    # Behind the proxy, the address it saw is the last X-Forwarded-For entry.
-    "NUM_PROXIES": 1 if FTT_BEHIND_PROXY else None,
+    # REMOTE_ADDR, the client's address by ftt_site.proxies' rule.
+    "NUM_PROXIES": 0,
     "DEFAULT_THROTTLE_RATES": {
         "anon": env_str("FTT_API_RATE_ANON", "120/min"),
         "user": env_str("FTT_API_RATE_USER", "3000/min"),
