@@ -381,7 +381,15 @@ LOGGING = {
     "version": 1,
     "disable_existing_loggers": False,
     "formatters": {"plain": {"format": "%(asctime)s %(levelname)s %(name)s: %(message)s"}},
-    "handlers": {"console": {"class": "logging.StreamHandler", "formatter": "plain"}},
+    # No robot token from a /legacy/ path in any line (ftt_site.log_masks).
+    "filters": {"robot_tokens": {"()": "ftt_site.log_masks.MaskRobotTokens"}},
+    "handlers": {
+        "console": {
+            "class": "logging.StreamHandler",
+            "formatter": "plain",
+            "filters": ["robot_tokens"],
+        }
+    },
     "root": {"handlers": ["console"], "level": env_str("FTT_LOG_LEVEL", "INFO")},
     "loggers": {"django.db.backends": {"level": "WARNING"}},
 }
