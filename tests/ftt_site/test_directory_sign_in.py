@@ -104,7 +104,7 @@ def test_a_local_account_still_signs_in_beside_the_directory(server):
     assert answer.status_code == 302
 
 
-def test_guessing_a_directory_password_is_throttled(server):
+def test_guessing_a_directory_password_is_throttled(server, fresh_address):
     for _ in range(2):
         _, answer = sign_in(server, "vera", "wrong-password")
         assert answer.status_code == 200
