@@ -56,20 +56,26 @@ def client_of(meta: dict) -> str | None:
     return str(client)
 
 
+def settle(meta: dict) -> None:
+    """The client's address in ``REMOTE_ADDR``, and forwarded headers only where
+    a configured proxy sent them, in a request's ``META``."""
+    from_proxy = _is_proxy(_address(meta.get("REMOTE_ADDR") or ""))
+    meta["REMOTE_ADDR"] = client_of(meta)
+    # The chain is read; the scheme (SECURE_PROXY_SSL_HEADER) only from a proxy.
+    meta.pop("HTTP_X_FORWARDED_FOR", None)
+    if not from_proxy:
+        for header in FORWARDED_HEADERS:
+            meta.pop(header, None)
+
+
 class ForwardedHeadersMiddleware:
-    """First of all middleware: the client's address in ``REMOTE_ADDR``, and
-    forwarded headers only where a configured proxy sent them."""
+    """First of all middleware: :func:`settle` before anything reads the request.
+    The lean pose route (ftt_site.pose_route), which Django's middleware does
+    not see, settles its requests itself."""
 
     def __init__(self, get_response):
         self.get_response = get_response
 
     def __call__(self, request):
-        meta = request.META
-        from_proxy = _is_proxy(_address(meta.get("REMOTE_ADDR") or ""))
-        meta["REMOTE_ADDR"] = client_of(meta)
-        # The chain is read; the scheme (SECURE_PROXY_SSL_HEADER) only from a proxy.
-        meta.pop("HTTP_X_FORWARDED_FOR", None)
-        if not from_proxy:
-            for header in FORWARDED_HEADERS:
-                meta.pop(header, None)
+        settle(request.META)
         return self.get_response(request)
