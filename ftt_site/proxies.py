@@ -29,9 +29,11 @@ FORWARDED_HEADERS = (
 
 def _address(text: str):
     try:
-        return ipaddress.ip_address(text.strip())
+        address = ipaddress.ip_address(text.strip())
     except ValueError:
         return None
+    # A proxy on an IPv6 socket may be seen as ::ffff:10.1.1.1.
+    return getattr(address, "ipv4_mapped", None) or address
 
 
 def _is_proxy(address) -> bool:

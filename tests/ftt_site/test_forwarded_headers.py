@@ -55,6 +55,9 @@ def test_behind_the_configured_proxies_the_address_they_saw_counts(settings, scr
     # Two proxies in a row: the first address neither of them is, from the right.
     relayed = {"REMOTE_ADDR": "10.1.1.1", "HTTP_X_FORWARDED_FOR": f"6.6.6.6, {SCRAPER}, 10.1.1.2"}
     assert Client(**relayed).get("/metrics").status_code == 200
+    # The same proxy seen on an IPv6 socket.
+    mapped = {"REMOTE_ADDR": "::ffff:10.1.1.1", "HTTP_X_FORWARDED_FOR": SCRAPER}
+    assert Client(**mapped).get("/metrics").status_code == 200
     # A client's own X-Forwarded-For is what the proxy appends to: not believed.
     forged = {"REMOTE_ADDR": "10.1.1.1", "HTTP_X_FORWARDED_FOR": f"{SCRAPER}, 6.6.6.6"}
     assert Client(**forged).get("/metrics").status_code == 403
