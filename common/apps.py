@@ -5,7 +5,7 @@ from django.db import connection
 from django.db.models.signals import m2m_changed, post_delete, post_save
 from django.utils.translation import gettext_lazy as _
 
-LDAP_BACKEND = "django_auth_ldap.backend.LDAPBackend"
+DIRECTORY_BACKEND = "common.directory.DirectoryBackend"
 
 
 class CommonConfig(AppConfig):
@@ -18,7 +18,6 @@ class CommonConfig(AppConfig):
         from rest_framework.authtoken.models import Token
 
         from common.api.authentication import known_tokens
-        from common.directory import apply_directory_role
         from common.metrics import observe_pool
 
         # Whatever may revoke or change what a kept token grants.
@@ -34,9 +33,18 @@ class CommonConfig(AppConfig):
             weak=False,
             dispatch_uid="ftt-pool-gauges",
         )
-        # Only the directory backend sends populate_user; without it the LDAP
-        # client library stays unloaded.
-        if LDAP_BACKEND in settings.AUTHENTICATION_BACKENDS:
-            from django_auth_ldap.backend import populate_user
+        # Only the directory backend sends these; without it the LDAP client
+        # library stays unloaded.
+        if DIRECTORY_BACKEND in settings.AUTHENTICATION_BACKENDS:
+            from django_auth_ldap.backend import ldap_error, populate_user
+
+            from common.directory import (
+                DirectoryBackend,
+                apply_directory_role,
+                directory_unreachable,
+            )
 
             populate_user.connect(apply_directory_role, dispatch_uid="ftt-directory-role")
+            ldap_error.connect(
+                directory_unreachable, sender=DirectoryBackend, dispatch_uid="ftt-directory-down"
+            )

@@ -96,3 +96,26 @@ class AccountPreference(models.Model):
 
     def __str__(self):
         return f"{self.user}: {self.language or '-'}"
+
+
+class DirectoryAccount(models.Model):
+    """Marks an account that a directory sign-in made (common.directory).
+
+    Only these accounts are ever signed in, or changed, by the directory; a
+    local account of the same name keeps the name for itself.
+    """
+
+    user = models.OneToOneField(
+        settings.AUTH_USER_MODEL,
+        on_delete=models.CASCADE,
+        related_name="directory_account",
+        verbose_name=_("account"),
+    )
+    created = models.DateTimeField(auto_now_add=True, verbose_name=_("created"))
+
+    class Meta:
+        verbose_name = _("directory account")
+        verbose_name_plural = _("directory accounts")
+
+    def __str__(self):
+        return str(self.user)

@@ -76,5 +76,12 @@ def on_exit(server):
 def post_worker_init(worker):
     """`kill -USR1` on a worker, or on the master that passes it on, prints every
     thread's stack (as ftt_site/asgi.py promises) and then reopens the log files
-    as Gunicorn does: Gunicorn's own USR1 handler replaced the one asgi.py set."""
+    as Gunicorn does: Gunicorn's own USR1 handler replaced the one asgi.py set.
+
+    The server's error and access logs (Uvicorn's lines go to them too) get the
+    filter that masks robot tokens in /legacy/ paths."""
     faulthandler.register(signal.SIGUSR1, all_threads=True, chain=True)
+    from ftt_site.log_masks import MaskRobotTokens
+
+    for handler in {*worker.log.error_log.handlers, *worker.log.access_log.handlers}:
+        handler.addFilter(MaskRobotTokens())

@@ -7,7 +7,9 @@ addresses, or a stranger could lock anyone out: after that many failures
 across all addresses it is only slowed down, to one attempt per
 ``FTT_LOGIN_ACCOUNT_PACE_SECONDS`` (:class:`AccountPace`). Either way the
 client is told when it may try again, as a page, or as the API's JSON error,
-with Retry-After (``locked_out``, axes' lockout hook).
+with Retry-After (``locked_out``, axes' lockout hook). A directory that cannot
+be reached is said as such (``DirectoryUnavailableMiddleware``) and counts as
+no failure.
 """
 
 import math
@@ -15,6 +17,7 @@ from datetime import timedelta
 
 from axes.helpers import get_cool_off
 from axes.models import AccessAttempt
+from axes.utils import reset
 from django.conf import settings
 from django.core.exceptions import PermissionDenied
 from django.db.models import Max, Sum
@@ -23,6 +26,9 @@ from django.shortcuts import render
 from django.utils import timezone
 from django.utils.translation import gettext as _
 from django.utils.translation import ngettext
+
+from common.directory import DirectoryUnavailable
+from ftt_site.proxies import client_of
 
 
 def account_wait(username: str) -> int:
@@ -63,23 +69,54 @@ def _in_words(seconds: int) -> str:
     return ngettext("%(n)s minute", "%(n)s minutes", minutes) % {"n": minutes}
 
 
+def _paused(request, message: str, status: int, seconds: int):
+    if request.path.startswith("/api/"):
+        response = JsonResponse({"detail": message, "errors": {}}, status=status)
+    else:
+        response = render(
+            request, "registration/locked_out.html", {"message": message}, status=status
+        )
+    response["Retry-After"] = str(seconds)
+    return response
+
+
 def locked_out(request, original_response=None, credentials=None):
     seconds = getattr(request, "ftt_account_wait", None) or int(
         get_cool_off(request).total_seconds()
     )
     message = _("Too many failed sign-ins. Try again in %(wait)s.") % {"wait": _in_words(seconds)}
-    if request.path.startswith("/api/"):
-        response = JsonResponse({"detail": message, "errors": {}}, status=429)
-    else:
-        response = render(request, "registration/locked_out.html", {"message": message}, status=429)
-    response["Retry-After"] = str(seconds)
-    return response
+    return _paused(request, message, 429, seconds)
+
+
+class DirectoryUnavailableMiddleware:
+    """A sign-in the directory could not answer (common.directory), on any login
+    path: said as such, with Retry-After; it was no failed sign-in."""
+
+    def __init__(self, get_response):
+        self.get_response = get_response
+
+    def __call__(self, request):
+        return self.get_response(request)
+
+    def process_exception(self, request, exception):
+        if not isinstance(exception, DirectoryUnavailable):
+            return None
+        seconds = exception.retry_after
+        message = _(
+            "The directory cannot be reached, so directory accounts cannot sign in now; "
+            "local accounts still can. Try again in %(wait)s."
+        ) % {"wait": _in_words(seconds)}
+        return _paused(request, message, 503, seconds)
 
 
 def client_address(request) -> str | None:
-    """Whose failures count together: behind FTT's proxy every request comes from
-    the proxy, which appends the address it saw to X-Forwarded-For."""
-    forwarded = request.META.get("HTTP_X_FORWARDED_FOR", "")
-    if settings.FTT_BEHIND_PROXY and forwarded:
-        return forwarded.split(",")[-1].strip()
-    return request.META.get("REMOTE_ADDR")
+    """Whose failures count together: the client's address as ftt_site.proxies
+    reads it (behind a configured proxy, the address the proxy saw)."""
+    return client_of(request.META)
+
+
+def forgive_own_failures(sender, request, user, **kwargs) -> None:
+    """``user_logged_in``: the account's own failures from this address are
+    forgiven; other accounts' failures from it still count."""
+    if request is not None:
+        reset(ip=client_address(request), username=user.get_username())

@@ -37,6 +37,7 @@ from rest_framework.settings import api_settings
 
 from common.api.authentication import sent_key, token_account
 from common.text import holds_lone_surrogate, may_hold_surrogate
+from ftt_site.proxies import settle
 from telemetry.api import serializers, single_pose
 from telemetry.api.views import PoseViewSet
 
@@ -145,6 +146,7 @@ class PoseRoute:
         if sent is None:
             return None
         request = ASGIRequest(scope, io.BytesIO(body))
+        settle(request.META)
         try:
             request.get_host()
         except DisallowedHost:

@@ -66,6 +66,12 @@ SECURE_HSTS_SECONDS = env_int("FTT_HSTS_SECONDS", 31536000 if HTTPS else 0)
 SECURE_HSTS_INCLUDE_SUBDOMAINS = HTTPS
 SECURE_HSTS_PRELOAD = HTTPS
 FTT_BEHIND_PROXY = env_bool("FTT_BEHIND_PROXY", False)
+# The proxies whose forwarded headers are believed (ftt_site.proxies); nobody's
+# without FTT_BEHIND_PROXY.
+FTT_PROXY_NETWORKS = [
+    ipaddress.ip_network(net, strict=False)
+    for net in env_list("FTT_PROXY_ADDRESSES", "127.0.0.1/32,::1/128")
+]
 if FTT_BEHIND_PROXY:
     SECURE_PROXY_SSL_HEADER = ("HTTP_X_FORWARDED_PROTO", "https")
 # A load balancer's health probes may come over plain HTTP.
@@ -117,6 +123,8 @@ INSTALLED_APPS = [
 ]
 
 MIDDLEWARE = [
+    # Before anything reads the client's address or scheme (ftt_site.proxies).
+    "ftt_site.proxies.ForwardedHeadersMiddleware",
     # First and last: request counts and latencies for /metrics (ftt_site.metrics).
     "django_prometheus.middleware.PrometheusBeforeMiddleware",
     "django.middleware.security.SecurityMiddleware",
@@ -135,7 +143,9 @@ MIDDLEWARE = [
     "csp.middleware.CSPMiddleware",
     # Who changed a row and through what (events.history).
     "ftt_site.change_origin.ChangeOriginMiddleware",
-    # Last: turns a lockout on any login path into one answer (ftt_site.lockout).
+    # Last: turns a lockout, or a directory that cannot be reached, on any login
+    # path into one answer (ftt_site.lockout).
+    "ftt_site.lockout.DirectoryUnavailableMiddleware",
     "axes.middleware.AxesMiddleware",
     "django_prometheus.middleware.PrometheusAfterMiddleware",
 ]
@@ -164,7 +174,9 @@ FTT_COUNT_ROBOT_REASONS = env_bool("FTT_COUNT_ROBOT_REASONS", False)
 # Stored poses of shifts older than this many months are thinned to what the
 # report draws (reports.services.pose_retention); 0: all poses are kept.
 FTT_POSE_RETENTION_MONTHS = env_int("FTT_POSE_RETENTION_MONTHS", 0)
-AXES_RESET_ON_SUCCESS = True
+# A sign-in forgives only its own account's failures from its address
+# (ftt_site.lockout.forgive_own_failures), never another account's.
+AXES_RESET_ON_SUCCESS = False
 AXES_LOCKOUT_CALLABLE = "ftt_site.lockout.locked_out"
 AXES_CLIENT_IP_CALLABLE = "ftt_site.lockout.client_address"
 
@@ -337,8 +349,8 @@ REST_FRAMEWORK = {
         "rest_framework.throttling.AnonRateThrottle",
         "rest_framework.throttling.UserRateThrottle",
     ],
-    # Behind the proxy, the address it saw is the last X-Forwarded-For entry.
-    "NUM_PROXIES": 1 if FTT_BEHIND_PROXY else None,
+    # REMOTE_ADDR, the client's address by ftt_site.proxies' rule.
+    "NUM_PROXIES": 0,
     "DEFAULT_THROTTLE_RATES": {
         "anon": env_str("FTT_API_RATE_ANON", "120/min"),
         "user": env_str("FTT_API_RATE_USER", "3000/min"),
@@ -364,7 +376,15 @@ LOGGING = {
     "version": 1,
     "disable_existing_loggers": False,
     "formatters": {"plain": {"format": "%(asctime)s %(levelname)s %(name)s: %(message)s"}},
-    "handlers": {"console": {"class": "logging.StreamHandler", "formatter": "plain"}},
+    # No robot token from a /legacy/ path in any line (ftt_site.log_masks).
+    "filters": {"robot_tokens": {"()": "ftt_site.log_masks.MaskRobotTokens"}},
+    "handlers": {
+        "console": {
+            "class": "logging.StreamHandler",
+            "formatter": "plain",
+            "filters": ["robot_tokens"],
+        }
+    },
     "root": {"handlers": ["console"], "level": env_str("FTT_LOG_LEVEL", "INFO")},
     "loggers": {"django.db.backends": {"level": "WARNING"}},
 }
@@ -445,8 +465,9 @@ PROMETHEUS_EXPORT_MIGRATIONS = False
 
 # Sign-in from a directory (README, Directory sign-in): with FTT_LDAP_SERVER_URI
 # set, django-auth-ldap checks passwords against LDAP or Active Directory after
-# the local accounts; a directory user gets the FTT role of the highest role
-# group they are in (common.directory), and one in none of them is refused.
+# the local accounts, for names that are none; a directory user gets the FTT
+# role of the highest role group they are in (common.directory), and one in
+# none of them is refused.
 FTT_LDAP_ROLE_GROUPS = {
     role: env_str(f"FTT_LDAP_{role.upper()}_GROUP")
     for role in ("viewer", "operator", "administrator")
@@ -467,7 +488,17 @@ if env_str("FTT_LDAP_SERVER_URI"):
             "FTT_LDAP_SERVER_URI needs FTT_LDAP_VIEWER_GROUP, FTT_LDAP_OPERATOR_GROUP "
             "or FTT_LDAP_ADMINISTRATOR_GROUP: directory users without a role cannot sign in"
         )
-    AUTHENTICATION_BACKENDS.insert(1, "django_auth_ldap.backend.LDAPBackend")
+    # After the local accounts, and never for their names (common.directory).
+    AUTHENTICATION_BACKENDS.append("common.directory.DirectoryBackend")
+    # Seconds the directory may take to connect and to answer each request; a
+    # directory that did not is asked again after as long (common.directory).
+    FTT_LDAP_TIMEOUT = env_int("FTT_LDAP_TIMEOUT", 5)
+    # Sign-ins per web process that may wait for the directory at once.
+    FTT_LDAP_MAX_SIGN_INS = env_int("FTT_LDAP_MAX_SIGN_INS", 2)
+    AUTH_LDAP_CONNECTION_OPTIONS = {
+        ldap.OPT_NETWORK_TIMEOUT: FTT_LDAP_TIMEOUT,
+        ldap.OPT_TIMEOUT: FTT_LDAP_TIMEOUT,
+    }
     AUTH_LDAP_SERVER_URI = env_str("FTT_LDAP_SERVER_URI")
     AUTH_LDAP_START_TLS = env_bool("FTT_LDAP_START_TLS", False)
     AUTH_LDAP_BIND_DN = env_str("FTT_LDAP_BIND_DN")

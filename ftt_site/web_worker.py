@@ -14,6 +14,8 @@ Uvicorn's, with two differences.
   ``FTT_HEADER_TIMEOUT`` seconds after the connection opened or the request
   began, or the connection is closed. Slow bodies are ftt_site.request_limits'
   concern: they are visible to the application.
+
+Forwarded headers are left to the application (``ftt_site.proxies``).
 """
 
 import os
@@ -66,7 +68,9 @@ class HeaderTimeoutProtocol(HttpToolsProtocol):
 
 
 class Worker(UvicornWorker):
-    CONFIG_KWARGS = {"loop": "auto", "http": HeaderTimeoutProtocol}
+    # No proxy headers here: Uvicorn would believe X-Forwarded-For from loopback
+    # whatever FTT_BEHIND_PROXY says; ftt_site.proxies is their one reader.
+    CONFIG_KWARGS = {"loop": "auto", "http": HeaderTimeoutProtocol, "proxy_headers": False}
 
     def handle_exit(self, sig, frame):
         super().handle_exit(sig, frame)

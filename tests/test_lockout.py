@@ -70,6 +70,27 @@ def test_one_address_trying_many_accounts_is_stopped(ada):
     assert LOGINS["token"](Client(), "ada", "right-password-1").status_code == 200
 
 
+def test_one_accounts_sign_in_does_not_forgive_another_accounts_guesses(ada):
+    User.objects.create_user("bea", password="bea-password-1")
+    guesses = []
+    for _ in range(6):
+        # Two wrong passwords for Bea, then Ada signs in, all from one address.
+        for _ in range(2):
+            guesses.append(LOGINS["gui"](Client(REMOTE_ADDR="10.0.0.8"), "bea", "wrong"))
+        LOGINS["gui"](Client(REMOTE_ADDR="10.0.0.8"), "ada", "right-password-1")
+    codes = [answer.status_code for answer in guesses]
+    # The limit is three failures: Ada's sign-ins in between change nothing.
+    assert codes == [200, 200] + [429] * 10
+
+
+def test_a_sign_in_forgives_the_accounts_own_failures_from_its_address(ada):
+    for _ in range(3):
+        typos = [LOGINS["gui"](Client(REMOTE_ADDR="10.0.0.8"), "ada", "typo") for _ in range(2)]
+        assert [answer.status_code for answer in typos] == [200, 200]
+        right = LOGINS["gui"](Client(REMOTE_ADDR="10.0.0.8"), "ada", "right-password-1")
+        assert right.status_code == 302
+
+
 def test_behind_the_proxy_each_browser_counts_on_its_own(ada, settings):
     settings.FTT_BEHIND_PROXY = True
     for _ in range(3):

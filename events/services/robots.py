@@ -10,6 +10,7 @@ from django.utils.translation import gettext
 from rest_framework.authtoken.models import Token
 
 from common import roles
+from common.models import DirectoryAccount
 from events.models import RobotAccount, Vehicle
 
 
@@ -35,7 +36,11 @@ def ensure_robot_account(
         user.set_unusable_password()
         user.save(update_fields=["password"])
     elif not roles.is_robot(user) and (
-        roles.user_role_rank(user) >= 0 or user.is_staff or user.has_usable_password()
+        roles.user_role_rank(user) >= 0
+        or user.is_staff
+        or user.has_usable_password()
+        # A directory person's, even with no role left (docs/accounts.md).
+        or DirectoryAccount.objects.filter(user=user).exists()
     ):
         raise ValidationError(
             {

@@ -8,6 +8,7 @@ from django.core.management import CommandError, call_command
 from rest_framework.test import APIClient
 
 from common import roles
+from common.models import DirectoryAccount
 from events.models import RobotAccount
 
 
@@ -52,3 +53,14 @@ def test_a_persons_account_is_not_turned_into_a_robot(role_user, vehicle):
         _run(person.username, "--vehicle", vehicle.key)
     assert not RobotAccount.objects.exists()
     assert not roles.is_robot(User.objects.get(pk=person.pk))
+
+
+def test_a_directory_persons_account_is_not_turned_into_a_robot(vehicle):
+    # Made by a directory sign-in, its person since removed from every role group.
+    person = User.objects.create_user("dana")
+    person.set_unusable_password()
+    person.save()
+    DirectoryAccount.objects.create(user=person)
+    with pytest.raises(CommandError, match="person's account"):
+        _run("dana", "--vehicle", vehicle.key)
+    assert not RobotAccount.objects.exists()

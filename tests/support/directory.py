@@ -1,6 +1,7 @@
 """A real OpenLDAP server (Debian's slapd) on loopback with a small directory."""
 
 import shutil
+import signal
 import subprocess
 import textwrap
 import time
@@ -29,6 +30,11 @@ PERSONS = {
     "alma": ("Alma", "Admin", "alma-pw-1", [ROLE_GROUPS["administrator"]]),
     "nora": ("Nora", "Nogroup", "nora-pw-1", []),
     "dora": ("Dora", "Disabled", "dora-pw-1", [ROLE_GROUPS["operator"], DISABLED_GROUP]),
+    # Directory people named like FTT's local accounts (the superuser, a local
+    # viewer, a robot): the directory must never sign them in as those.
+    "admin": ("Adam", "Namesake", "adam-pw-1", [ROLE_GROUPS["viewer"]]),
+    "lena": ("Lena", "Namesake", "lena-dir-pw-1", [ROLE_GROUPS["administrator"]]),
+    "robot-a": ("Robert", "Namesake", "robert-pw-1", [ROLE_GROUPS["operator"]]),
 }
 
 
@@ -138,7 +144,15 @@ class Directory:
             )
         connection.unbind_s()
 
+    def pause(self) -> None:
+        """SIGSTOP: the server keeps its socket, so connections open and hang."""
+        self.process.send_signal(signal.SIGSTOP)
+
+    def resume(self) -> None:
+        self.process.send_signal(signal.SIGCONT)
+
     def stop(self) -> None:
         if self.process is not None and self.process.poll() is None:
+            self.resume()
             self.process.terminate()
             self.process.wait(10)
