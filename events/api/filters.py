@@ -1,14 +1,17 @@
 """Query filters shared by the API list endpoints: by parent, time range, open/closed state
 and bounding box."""
 
+import json
 import math
 from datetime import UTC
 
 import django_filters as filters
 from django import forms
 from django.db.models import Exists, OuterRef, Q
+from django.http import QueryDict
 from django.utils.translation import gettext as _
 from django_filters.fields import IsoDateTimeField
+from django_filters.rest_framework import DjangoFilterBackend
 from rest_framework import serializers
 from rest_framework_gis.filters import InBBoxFilter
 
@@ -197,11 +200,46 @@ class NoteFilter(TimeRangeFilterSet):
         time_fields = ["created"]
 
 
+def search_params(request):
+    """A search's parameters: its query, or the body of a search sent by POST (an
+    area of thousands of vertices does not fit in an address).  A JSON body names
+    the same parameters; an area may be given there as a GeoJSON object."""
+    if request.method != "POST":
+        return request.query_params
+    data = request.data
+    if isinstance(data, QueryDict):
+        return data
+    if not isinstance(data, dict):
+        raise serializers.ValidationError(
+            {"non_field_errors": [_("Send the search's parameters as a JSON object.")]}
+        )
+    params = QueryDict(mutable=True)
+    for name, value in data.items():
+        if value is None:
+            continue
+        if isinstance(value, bool):
+            value = "true" if value else "false"
+        elif isinstance(value, dict | list):
+            value = json.dumps(value)
+        params[name] = str(value)
+    return params
+
+
+class SearchFilterBackend(DjangoFilterBackend):
+    """The filter sets, reading a POSTed search's body (:func:`search_params`)."""
+
+    def get_filterset_kwargs(self, request, queryset, view):
+        return {
+            **super().get_filterset_kwargs(request, queryset, view),
+            "data": search_params(request),
+        }
+
+
 class BBoxFilter(InBBoxFilter):
     """``in_bbox=min_lon,min_lat,max_lon,max_lat`` with finite WGS84 degrees."""
 
     def get_filter_bbox(self, request):
-        raw = request.query_params.get(self.bbox_param)
+        raw = search_params(request).get(self.bbox_param)
         if not raw:
             return None
         message = _("Give in_bbox as min_lon,min_lat,max_lon,max_lat in degrees.")
