@@ -281,6 +281,8 @@ class SegmentViewSet(HistoryMixin, ServiceUpdateMixin, ServiceBaseViewSet):
     robot_actions = ("retrieve",)
     # A search sent by POST only reads (common.api.permissions).
     read_actions = ("found",)
+    # The file kind of ``found`` (events.api.filters.SearchFilterBackend).
+    extra_params = ("as",)
 
     def update_with_service(self, instance, data):
         return segments.annotate_segment(instance, **data)
@@ -301,7 +303,7 @@ class SegmentViewSet(HistoryMixin, ServiceUpdateMixin, ServiceBaseViewSet):
         ``vehicle``, ``version``, times), unpaged, as a GeoJSON or CSV file.  POST
         takes the same parameters in its body, for an area too large for the URL."""
         rows = found_rows(self.filter_queryset(self.get_queryset()))
-        return found_file(rows, search_params(request).get("as", "geojson"))
+        return found_file(rows, search_params(request, self).get("as", "geojson"))
 
     @extend_schema(request=s.ChildSerializer, responses={201: s.SegmentSerializer})
     @action(detail=True, methods=["post"])
