@@ -5,6 +5,7 @@ import csv
 import io
 import json
 import math
+from urllib.parse import urlencode
 
 import pytest
 
@@ -171,7 +172,10 @@ def test_a_large_area_is_searched_by_post(api_client, take_overs):
     assert found == {take_overs["inside"], take_overs["in_hole_ring"]}
     # As the page's download links send it: a form, the area as GeoJSON text.
     form = {"master": "true", "mode": "ito", "within": json.dumps(area), "as": "csv"}
-    sheet = client.post("/api/segments/found/", form)
+    form["csrfmiddlewaretoken"] = "the page's token"
+    sheet = client.post(
+        "/api/segments/found/", urlencode(form), content_type="application/x-www-form-urlencoded"
+    )
     assert sheet.status_code == 200
     assert {int(r["id"]) for r in csv.DictReader(io.StringIO(sheet.content.decode()))} == found
 
@@ -185,3 +189,10 @@ def test_a_bad_area_sent_by_post_is_a_field_message(api_client, db):
     assert "not a valid polygon" in " ".join(answer.json()["errors"]["within"])
     listed = api_client(roles.VIEWER).post("/api/segments/found/", [1, 2], format="json")
     assert listed.status_code == 400 and listed.json()["errors"]
+
+
+def test_an_area_nested_too_deeply_is_a_field_message(api_client, db):
+    deep = "[" * 100_000 + "]" * 100_000
+    answer = api_client(roles.VIEWER).get("/api/segments/", {"within": deep})
+    assert answer.status_code == 400
+    assert "nested too deeply" in " ".join(answer.json()["errors"]["within"])
