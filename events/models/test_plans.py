@@ -164,6 +164,8 @@ class Criterion(models.Model):
             low, high, whole = THRESHOLDS[self.kind]
             if value is None:
                 errors["value"] = [_("This kind of criterion needs a value.")]
+            elif not isinstance(value, int | float):
+                pass  # no number: clean_fields says so
             elif not math.isfinite(value) or value < low:
                 errors["value"] = [_("The value must be at least %(low)s.") % {"low": low}]
             elif high is not None and value > high:

@@ -105,6 +105,7 @@ def _archive_of_a_plan(event, tmp_path, **criterion):
     [
         ({"criteria": [{"kind": "distance_without_intervention", "value": None}]}, "value"),
         ({"criteria": [{"kind": "auto_time_share", "value": 250}]}, "between 0 and 100"),
+        ({"criteria": [{"kind": "auto_time_share", "value": "half"}]}, "must be a float"),
         ({"criteria": [{"kind": "forbidden_reasons", "reasons": []}]}, "at least one reason"),
         ({"criteria": [{"kind": "judged", "text": ""}]}, "what a person judges"),
         ({"area": [[[[7, 50], [7.1, 50.1], [7.1, 50], [7, 50.1], [7, 50]]]]}, "valid shape"),
