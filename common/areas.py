@@ -43,6 +43,8 @@ def area_from_text(text: str) -> MultiPolygon:
         value = json.loads(text)
     except ValueError:
         value = None
+    except RecursionError:
+        raise AreaError(gettext("The area is nested too deeply to be a polygon.")) from None
     if isinstance(value, dict) and value.get("type") == "Feature":
         value = value.get("geometry")
     try:

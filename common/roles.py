@@ -1,4 +1,5 @@
-"""The roles, as Django groups (created by migrations events.0002 and 0007).
+"""The roles, as Django groups (made by migrations events.0002 and 0007, and
+given the rights of models added since by events.0024).
 
 The people's roles are ordered, each including the ones below it: an
 administrator may do everything an operator may, an operator everything a
@@ -40,6 +41,11 @@ WRITERS = {
     "events.itoreason": ADMINISTRATOR,
     "events.segmenttype": ADMINISTRATOR,
 }
+
+# The apps whose rows the roles cover in Django admin: viewers may look at them,
+# administrators write them all (test plans, judgements, basemaps, finalising
+# included).  Libraries' own records stay the superuser's (ftt_site.admin_site).
+ROLE_APPS = ("events", "telemetry", "basemaps")
 
 # What a robot account writes besides, into legs of its own vehicles only:
 # segments by reporting its mode, and its telemetry.  The API views name the

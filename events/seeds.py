@@ -174,10 +174,7 @@ def create_roles(apps) -> None:
 
     Group = apps.get_model("auth", "Group")
     Permission = apps.get_model("auth", "Permission")
-    ftt = Permission.objects.filter(content_type__app_label__in=["events", "telemetry"])
-    viewer, _ = Group.objects.get_or_create(name="viewer")
-    viewer.permissions.set(ftt.filter(codename__startswith="view_"))
-    operator, _ = Group.objects.get_or_create(name="operator")
+    ftt = Permission.objects.filter(content_type__app_label__in=roles.ROLE_APPS)
     operated = Permission.objects.none()
     for label in roles.written_by(roles.OPERATOR):
         app_label, model = label.split(".")
@@ -185,17 +182,23 @@ def create_roles(apps) -> None:
             content_type__app_label=app_label,
             codename__in=[f"{action}_{model}" for action in ("add", "change", "delete")],
         )
-    operator.permissions.set(ftt.filter(codename__startswith="view_") | operated)
-    administrator, _ = Group.objects.get_or_create(name="administrator")
-    administrator.permissions.set(ftt | Permission.objects.filter(content_type__app_label="auth"))
-    robot, _ = Group.objects.get_or_create(name=roles.ROBOT)
     robot_may = Permission.objects.none()
     for label in roles.ROBOT_WRITES:
         app_label, model = label.split(".")
         robot_may |= Permission.objects.filter(
             content_type__app_label=app_label, codename=f"add_{model}"
         )
-    robot.permissions.set(robot_may)
+    viewed = ftt.filter(codename__startswith="view_")
+    for name, wanted in (
+        (roles.VIEWER, viewed),
+        (roles.OPERATOR, viewed | operated),
+        (roles.ADMINISTRATOR, ftt | Permission.objects.filter(content_type__app_label="auth")),
+        (roles.ROBOT, robot_may),
+    ):
+        group, _ = Group.objects.get_or_create(name=name)
+        # Added, never taken away: a right an administrator gave a group in
+        # Django admin (finalising, for a test director's group) stays.
+        group.permissions.add(*wanted)
 
 
 def ensure(apps=None) -> None:

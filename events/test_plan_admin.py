@@ -1,13 +1,29 @@
 """Admin pages of test plans: test cases with their criteria (events/admin.py loads it)."""
 
+from django import forms
 from django.contrib import admin
 from leaflet.admin import LeafletGeoAdminMixin
 
 from events.models import Criterion, Judgement, TestCase
 
 
+class CriterionForm(forms.ModelForm):
+    """The model checks value and text (``Criterion.clean``); the reasons are set
+    after the row is saved, so they are checked here on what the form holds."""
+
+    def clean(self):
+        data = super().clean()
+        if data.get("kind") and not data.get("DELETE"):
+            try:
+                Criterion.check_reasons(data["kind"], data.get("reasons"))
+            except forms.ValidationError as exc:
+                self.add_error(None, exc)
+        return data
+
+
 class CriterionInline(admin.StackedInline):
     model = Criterion
+    form = CriterionForm
     extra = 1
     filter_horizontal = ["reasons"]
     fields = ["kind", "value", "reasons", "text"]

@@ -14,10 +14,15 @@ Uvicorn's, with two differences.
   ``FTT_HEADER_TIMEOUT`` seconds after the connection opened or the request
   began, or the connection is closed. Slow bodies are ftt_site.request_limits'
   concern: they are visible to the application.
+* A request the HTTP parser cannot read (a request line or headers over its
+  limit of about 64 KB, e.g. a search area of thousands of vertices in the
+  URL) is answered in the API's JSON error shape instead of Uvicorn's plain
+  text, saying that large values go in a POST body.
 
 Forwarded headers are left to the application (``ftt_site.proxies``).
 """
 
+import json
 import os
 import signal
 
@@ -27,6 +32,12 @@ from uvicorn_worker import UvicornWorker
 # Read here rather than from Django's settings: the worker class is loaded by
 # Gunicorn before (and whether or not) Django is.
 HEADER_TIMEOUT = float(os.environ.get("FTT_HEADER_TIMEOUT") or 10)
+
+
+UNREADABLE = (
+    "The request could not be read: its address or headers are too long or malformed. "
+    "Send large values, such as a search area, in the body of a POST."
+)
 
 
 class HeaderTimeoutProtocol(HttpToolsProtocol):
@@ -65,6 +76,21 @@ class HeaderTimeoutProtocol(HttpToolsProtocol):
     def handle_websocket_upgrade(self) -> None:
         self.disarm_header_timer()
         super().handle_websocket_upgrade()
+
+    def send_400_response(self, msg: str) -> None:
+        # Django is not loaded here (nor its translations): English, as Uvicorn's.
+        body = json.dumps({"detail": UNREADABLE, "errors": {}}).encode()
+        head = [b"HTTP/1.1 400 Bad Request\r\n"]
+        head += [
+            name + b": " + value + b"\r\n" for name, value in self.server_state.default_headers
+        ]
+        head += [
+            b"content-type: application/json\r\n",
+            b"content-length: " + str(len(body)).encode() + b"\r\n",
+            b"connection: close\r\n\r\n",
+        ]
+        self.transport.write(b"".join(head) + body)
+        self.transport.close()
 
 
 class Worker(UvicornWorker):

@@ -18,10 +18,18 @@ PHOTO_FORMATS = {"JPEG": "jpg", "PNG": "png", "WEBP": "webp"}
 MAP_FORMATS = {"PNG": "png"}
 
 
+# What Pillow raises on a file it cannot read or decode.
+UNREADABLE = (OSError, SyntaxError, ValueError, EOFError, PilImage.DecompressionBombError, KeyError)
+
+
+def _unreadable(formats: dict[str, str]) -> ValidationError:
+    message = _("Not a readable %(kinds)s image.") % {"kinds": "/".join(formats)}
+    return ValidationError({"image": [message]})
+
+
 def checked_picture(content: bytes, formats: dict[str, str] = PHOTO_FORMATS) -> str:
     """The extension to store ``content`` under; ValidationError unless it is one of
     ``formats`` within FTT_MAX_IMAGE_PIXELS, whole (a PNG's chunks check, others decode)."""
-    names = "/".join(formats)
     limit = settings.FTT_MAX_IMAGE_PIXELS
     try:
         with warnings.catch_warnings():
@@ -42,16 +50,19 @@ def checked_picture(content: bytes, formats: dict[str, str] = PHOTO_FORMATS) -> 
                 return formats[picture.format]
     except ValidationError:
         raise
-    except (OSError, SyntaxError, ValueError, EOFError, PilImage.DecompressionBombError, KeyError):
-        message = _("Not a readable %(kinds)s image.") % {"kinds": names}
-        raise ValidationError({"image": [message]}) from None
+    except UNREADABLE:
+        raise _unreadable(formats) from None
 
 
 def greyscale_png(content: bytes) -> bytes:
     """A photo-format picture as the greyscale PNG a map is kept as (the original FTT
     sent and stored its maps as greyscale JPEG)."""
     checked_picture(content)
-    with PilImage.open(io.BytesIO(content)) as picture:
-        out = io.BytesIO()
-        picture.convert("L").save(out, format="PNG")
-        return out.getvalue()
+    try:
+        with PilImage.open(io.BytesIO(content)) as picture:
+            out = io.BytesIO()
+            picture.convert("L").save(out, format="PNG")
+            return out.getvalue()
+    except UNREADABLE:
+        # A PNG's chunks may check while its pixel data does not inflate.
+        raise _unreadable(PHOTO_FORMATS) from None

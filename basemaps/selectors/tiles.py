@@ -136,7 +136,9 @@ def _archive_tile(layer, path: Path, z, x, y):
             (z, x, 2**z - 1 - y),
             seconds=settings.FTT_TILE_SECONDS,
         )
-        return rows[0][0] if rows else None
+        tile = rows[0][0] if rows else None
+        # A text or number stored as a tile is no picture.
+        return tile if isinstance(tile, bytes) else None
     return _open(path, _PMTiles).get(z, x, y)
 
 

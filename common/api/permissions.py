@@ -9,8 +9,9 @@ ROBOT_REFUSED = (
 
 
 class RolePermission(BasePermission):
-    """Viewers read.  Writing needs the role :data:`common.roles.WRITERS` names
-    for the view's model; views without a model name it (``write_role``).
+    """Viewers read (also the actions a view names in ``read_actions``, sent by
+    POST).  Writing needs the role :data:`common.roles.WRITERS` names for the
+    view's model; views without a model name it (``write_role``).
 
     A robot account may run only the actions a view names in ``robot_actions``;
     which vehicle's rows it touches is checked by the view (events.api.permissions).
@@ -22,7 +23,9 @@ class RolePermission(BasePermission):
         if roles.is_robot(request.user):
             self.message = ROBOT_REFUSED
             return getattr(view, "action", None) in getattr(view, "robot_actions", ())
-        if request.method in SAFE_METHODS:
+        # A view names in ``read_actions`` what only reads though sent by POST (a search).
+        reads = getattr(view, "action", None) in getattr(view, "read_actions", ())
+        if request.method in SAFE_METHODS or reads:
             return roles.has_role(request.user, getattr(view, "read_role", roles.VIEWER))
         role = getattr(view, "write_role", None)
         if role is None:

@@ -1,14 +1,17 @@
 """Query filters shared by the API list endpoints: by parent, time range, open/closed state
 and bounding box."""
 
+import json
 import math
 from datetime import UTC
 
 import django_filters as filters
 from django import forms
 from django.db.models import Exists, OuterRef, Q
+from django.http import QueryDict
 from django.utils.translation import gettext as _
 from django_filters.fields import IsoDateTimeField
+from django_filters.rest_framework import DjangoFilterBackend
 from rest_framework import serializers
 from rest_framework_gis.filters import InBBoxFilter
 
@@ -189,6 +192,8 @@ class SegmentFilter(OpenStateFilterSet):
 class NoteFilter(TimeRangeFilterSet):
     segment = IdFilter(field_name="segment_id")
     leg = IdFilter(field_name="segment__leg_id")
+    shift = IdFilter(field_name="segment__leg__shift_id")
+    test_event = IdFilter(field_name="segment__leg__shift__test_event_id")
     author = IdFilter(field_name="author_id")
 
     class Meta:
@@ -197,11 +202,78 @@ class NoteFilter(TimeRangeFilterSet):
         time_fields = ["created"]
 
 
+def search_params(request, view):
+    """A search's parameters: its query, or the body of a search sent by POST (an
+    area of thousands of vertices does not fit in an address).  A JSON body names
+    the same parameters; an area may be given there as a GeoJSON object."""
+    searching = getattr(view, "action", None) in getattr(view, "read_actions", ())
+    if request.method != "POST" or not searching:
+        # Another POST's body is what it writes, never a filter.
+        return request.query_params
+    data = request.data
+    if isinstance(data, QueryDict):
+        # A form's token is the CSRF check's, not a parameter of the search.
+        params = data.copy()
+        params.pop("csrfmiddlewaretoken", None)
+        return params
+    if not isinstance(data, dict):
+        raise serializers.ValidationError(
+            {"non_field_errors": [_("Send the search's parameters as a JSON object.")]}
+        )
+    params = QueryDict(mutable=True)
+    for name, value in data.items():
+        if value is None:
+            continue
+        if isinstance(value, bool):
+            value = "true" if value else "false"
+        elif isinstance(value, dict | list):
+            value = json.dumps(value)
+        params[name] = str(value)
+    return params
+
+
+# What every list takes besides its filters: paging and DRF's format.
+LIST_PARAMS = frozenset({"page", "page_size", "format"})
+
+
+class SearchFilterBackend(DjangoFilterBackend):
+    """The filter sets of the API's lists.  A parameter a list does not know is
+    refused (400 naming it): a misspelt or missing filter would otherwise list
+    every row.  A search sent by POST is read from its body (:func:`search_params`)."""
+
+    def get_filterset_kwargs(self, request, queryset, view):
+        return {
+            **super().get_filterset_kwargs(request, queryset, view),
+            "data": search_params(request, view),
+        }
+
+    def filter_queryset(self, request, queryset, view):
+        listing = ("list", *getattr(view, "read_actions", ()))
+        if getattr(view, "action", None) in listing:
+            self._refuse_unknown(search_params(request, view), view, queryset)
+        return super().filter_queryset(request, queryset, view)
+
+    def _refuse_unknown(self, params, view, queryset) -> None:
+        filterset_class = self.get_filterset_class(view, queryset)
+        if filterset_class is None:
+            return
+        known = set(filterset_class.base_filters) | LIST_PARAMS
+        known |= set(getattr(view, "extra_params", ()))
+        if any(issubclass(backend, BBoxFilter) for backend in view.filter_backends):
+            known.add(BBoxFilter.bbox_param)
+        unknown = sorted(set(params) - known)
+        if unknown:
+            message = _("This list has no such filter; it takes: %(known)s.") % {
+                "known": ", ".join(sorted(known))
+            }
+            raise serializers.ValidationError({name: [message] for name in unknown})
+
+
 class BBoxFilter(InBBoxFilter):
     """``in_bbox=min_lon,min_lat,max_lon,max_lat`` with finite WGS84 degrees."""
 
-    def get_filter_bbox(self, request):
-        raw = request.query_params.get(self.bbox_param)
+    def get_filter_bbox(self, request, view=None):
+        raw = search_params(request, view).get(self.bbox_param)
         if not raw:
             return None
         message = _("Give in_bbox as min_lon,min_lat,max_lon,max_lat in degrees.")
@@ -221,7 +293,7 @@ class BBoxFilter(InBBoxFilter):
         # Points on the box's edge count, and a box cut at ±180° is two boxes:
         # the library's "contained" would test the bounding box of both.
         field = getattr(view, "bbox_filter_field", None)
-        area = self.get_filter_bbox(request) if field else None
+        area = self.get_filter_bbox(request, view) if field else None
         if area is None:
             return queryset
         return queryset.filter(**{f"{field}__intersects": area})

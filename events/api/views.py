@@ -2,7 +2,6 @@
 
 from django.http import Http404
 from django.utils.translation import gettext as _
-from django_filters.rest_framework import DjangoFilterBackend
 from drf_spectacular.utils import (
     OpenApiParameter,
     OpenApiResponse,
@@ -19,9 +18,11 @@ from events.api.filters import (
     BBoxFilter,
     LegFilter,
     NoteFilter,
+    SearchFilterBackend,
     SegmentFilter,
     ShiftFilter,
     TestEventFilter,
+    search_params,
 )
 from events.api.found_files import KINDS, found_file
 from events.api.viewsets import ServiceBaseViewSet, ServiceUpdateMixin, ServiceViewSet
@@ -274,10 +275,14 @@ class SegmentViewSet(HistoryMixin, ServiceUpdateMixin, ServiceBaseViewSet):
     queryset = Segment.objects.all()
     serializer_class = s.SegmentSerializer
     filterset_class = SegmentFilter
-    filter_backends = [DjangoFilterBackend, BBoxFilter]
+    filter_backends = [SearchFilterBackend, BBoxFilter]
     bbox_filter_field = "start_position"
     http_method_names = ["get", "patch", "post", "delete", "head", "options"]
     robot_actions = ("retrieve",)
+    # A search sent by POST only reads (common.api.permissions).
+    read_actions = ("found",)
+    # The file kind of ``found`` (events.api.filters.SearchFilterBackend).
+    extra_params = ("as",)
 
     def update_with_service(self, instance, data):
         return segments.annotate_segment(instance, **data)
@@ -292,12 +297,13 @@ class SegmentViewSet(HistoryMixin, ServiceUpdateMixin, ServiceBaseViewSet):
         parameters=[OpenApiParameter("as", str, enum=KINDS, description="file kind (geojson)")],
         responses={200: OpenApiResponse(description="GeoJSON FeatureCollection or CSV")},
     )
-    @action(detail=False, methods=["get"])
+    @action(detail=False, methods=["get", "post"])
     def found(self, request):
         """Every segment the list's filters find (``within``, ``in_bbox``, ``reason``,
-        ``vehicle``, ``version``, times), unpaged, as a GeoJSON or CSV file."""
+        ``vehicle``, ``version``, times), unpaged, as a GeoJSON or CSV file.  POST
+        takes the same parameters in its body, for an area too large for the URL."""
         rows = found_rows(self.filter_queryset(self.get_queryset()))
-        return found_file(rows, request.query_params.get("as", "geojson"))
+        return found_file(rows, search_params(request, self).get("as", "geojson"))
 
     @extend_schema(request=s.ChildSerializer, responses={201: s.SegmentSerializer})
     @action(detail=True, methods=["post"])

@@ -1,8 +1,11 @@
 """A test event's plan: test cases with their pass criteria, and the judgements a
 person records for criteria that figures cannot decide."""
 
+import math
+
 from django.conf import settings
 from django.contrib.gis.db import models
+from django.core.exceptions import ValidationError
 from django.db.models import Q
 from django.utils.translation import gettext as _
 from django.utils.translation import gettext_lazy
@@ -58,6 +61,30 @@ class TestCase(models.Model):
 
     def __str__(self):
         return f"{self.key}: {self.title}"
+
+    def clean(self):
+        errors = {}
+        for name in ("area", "route"):
+            problem = _geometry_problem(getattr(self, name))
+            if problem:
+                errors[name] = [problem]
+        if errors:
+            raise ValidationError(errors)
+
+
+def _geometry_problem(geometry) -> str | None:
+    """Why an area or route cannot be on the globe (or be tested against), or None."""
+    if geometry is None:
+        return None
+    extent = geometry.extent
+    if not all(math.isfinite(v) for v in extent):
+        return _("The coordinates must be finite numbers.")
+    west, south, east, north = extent
+    if west < -180 or east > 180 or south < -90 or north > 90:
+        return _("Longitudes must lie within ±180° and latitudes within ±90°.")
+    if not geometry.valid:
+        return _("This is not a valid shape (%(reason)s).") % {"reason": geometry.valid_reason}
+    return None
 
 
 class Criterion(models.Model):
@@ -119,10 +146,55 @@ class Criterion(models.Model):
     def __str__(self):
         if self.kind == self.Kind.JUDGED:
             return self.text[:80]
-        if self.kind == self.Kind.FORBIDDEN_REASONS:
-            return self.get_kind_display()
+        if self.kind == self.Kind.FORBIDDEN_REASONS or self.value is None:
+            return str(self.get_kind_display())
         # The label names the threshold "value" (in the active language).
         return str(self.get_kind_display()).replace(_("value"), f"{self.value:g}")
+
+    @property
+    def lacks_threshold(self) -> bool:
+        """A measured kind stored without its value (refused since, but an older
+        installation could keep one): nothing can be compared with it."""
+        return self.kind in THRESHOLDS and self.value is None
+
+    def clean(self):
+        errors = {}
+        value = self.value
+        if self.kind in THRESHOLDS:
+            low, high, whole = THRESHOLDS[self.kind]
+            if value is None:
+                errors["value"] = [_("This kind of criterion needs a value.")]
+            elif not isinstance(value, int | float):
+                pass  # no number: clean_fields says so
+            elif not math.isfinite(value) or value < low:
+                errors["value"] = [_("The value must be at least %(low)s.") % {"low": low}]
+            elif high is not None and value > high:
+                errors["value"] = [
+                    _("The value must lie between %(low)s and %(high)s.")
+                    % {"low": low, "high": high}
+                ]
+            elif whole and value != int(value):
+                errors["value"] = [_("The value must be a whole number.")]
+        if self.kind == self.Kind.JUDGED and not self.text.strip():
+            errors["text"] = [_("Say what a person judges.")]
+        if errors:
+            raise ValidationError(errors)
+
+    @classmethod
+    def check_reasons(cls, kind: str, reasons) -> None:
+        """The reasons a criterion names, checked apart from :meth:`clean`: they are
+        set after the row is saved."""
+        if kind == cls.Kind.FORBIDDEN_REASONS and not reasons:
+            raise ValidationError({"reasons": [_("Choose at least one reason.")]})
+
+
+# The measured kinds: least and greatest value, and whether it counts whole runs.
+THRESHOLDS = {
+    Criterion.Kind.DISTANCE_WITHOUT_INTERVENTION: (0, None, False),
+    Criterion.Kind.INTERVENTIONS_PER_KM: (0, None, False),
+    Criterion.Kind.RUNS_COMPLETED: (1, None, True),
+    Criterion.Kind.AUTO_TIME_SHARE: (0, 100, False),
+}
 
 
 class Judgement(models.Model):

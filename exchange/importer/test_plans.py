@@ -62,11 +62,13 @@ def import_test_cases(session: ImportSession):
             criterion = Criterion(
                 test_case=case, kind=c["kind"], value=c.get("value"), text=c.get("text", "")
             )
-            criterion.full_clean()
-            criterion.save()
             reasons = list(ItoReason.objects.filter(pk__in=c.get("reasons", [])))
             if len(reasons) != len(set(c.get("reasons", []))):
                 session.refuse(f"{session.where}: a criterion names an unknown ITO reason.")
+            # The rules of a criterion made in admin (events.models.test_plans).
+            criterion.full_clean()
+            Criterion.check_reasons(criterion.kind, reasons)
+            criterion.save()
             criterion.reasons.set(reasons)
         session.plan.note("test_cases", "added")
         session.changed.append(case)

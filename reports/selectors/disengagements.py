@@ -7,6 +7,7 @@ its vehicle's autonomous distance in the same scope (the statistics' AUTO
 distance), so the file holds the figures a DMV report asks for.
 """
 
+import calendar
 import io
 from collections import defaultdict
 from datetime import date
@@ -41,8 +42,9 @@ DMV_INITIATORS = {
 
 def events_in_month(year: int, month: int) -> list[TestEvent]:
     first = date(year, month, 1)
-    after = date(year + month // 12, month % 12 + 1, 1)
-    return list(TestEvent.objects.filter(start__date__lt=after).exclude(end__date__lt=first))
+    # The month's last day, not the next month's first: December 9999 has none.
+    last = date(year, month, calendar.monthrange(year, month)[1])
+    return list(TestEvent.objects.filter(start__date__lte=last).exclude(end__date__lt=first))
 
 
 def _in_month(moment, tz, month: tuple[int, int] | None) -> bool:

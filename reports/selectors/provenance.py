@@ -244,7 +244,7 @@ def stamp_of_report(content: bytes) -> dict | None:
     try:
         stamp = json.loads(content)["provenance"]
         return {name: stamp[name] for name in ("digest", "built", "event_uid")}
-    except (ValueError, KeyError, TypeError):
+    except (ValueError, KeyError, TypeError, RecursionError):
         return None
 
 

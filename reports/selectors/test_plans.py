@@ -153,8 +153,15 @@ def test_plan(event: TestEvent, mode: str = GPS, runs: list[Run] | None = None) 
     return PlanResult(event, cases, [leg for leg in legs if leg.test_case_id is None])
 
 
+def _without_threshold(criterion: Criterion) -> Verdict:
+    # Nothing to compare with: a person looks at it (and sets the value in admin).
+    return Verdict(criterion, None, JUDGE, _("no threshold set"))
+
+
 def _judge(criterion: Criterion, f: Figures, is_open: bool, judgement: Judgement | None):
     kind, value = criterion.kind, criterion.value
+    if criterion.lacks_threshold:
+        return _without_threshold(criterion)
     if kind == Kind.JUDGED:
         if judgement is None:
             return Verdict(criterion, None, JUDGE)
@@ -187,6 +194,8 @@ def _judge(criterion: Criterion, f: Figures, is_open: bool, judgement: Judgement
 
 
 def _runs_completed(criterion: Criterion, done: int, is_open: bool) -> Verdict:
+    if criterion.lacks_threshold:
+        return _without_threshold(criterion)
     return Verdict(criterion, float(done), _at_least(done, criterion.value, is_open, True))
 
 
@@ -213,7 +222,8 @@ def _progress(case: TestCase, result: CaseResult, criteria: list[Criterion]) -> 
     # The run being driven, else the best run of the case.
     shown = current.figures if current else result.figures
     for criterion in criteria:
-        if criterion.kind == Kind.DISTANCE_WITHOUT_INTERVENTION and shown is not None:
+        distance = criterion.kind == Kind.DISTANCE_WITHOUT_INTERVENTION
+        if distance and shown is not None and not criterion.lacks_threshold:
             reached = shown.longest_without_intervention
             parts.append(
                 _("%(reached)s m of %(target)s m without intervention")

@@ -171,6 +171,9 @@ def load_entries(text: str, key: str, allowed: set) -> tuple[dict, list] | None:
         data = yaml.safe_load(text)
     except yaml.YAMLError as exc:
         raise InvalidModeSources(_("not valid YAML: %(error)s") % {"error": exc}) from None
+    except RecursionError:
+        # PyYAML builds nested lists and mappings by recursion.
+        raise InvalidModeSources(_("not valid YAML: nested too deeply")) from None
     if not isinstance(data, dict) or not isinstance(data.get(key), list):
         raise InvalidModeSources(_("expected '%(key)s:' with a list") % {"key": key})
     entries = []

@@ -24,6 +24,8 @@ def body_of(request) -> dict:
         data = json.loads(request.body or b"{}")
     except (ValueError, UnicodeDecodeError):
         raise LegacyRefusal("KeyValueError", "The body is not JSON.") from None
+    except RecursionError:
+        raise LegacyRefusal("KeyValueError", "The body is JSON nested too deeply.") from None
     if not isinstance(data, dict):
         raise LegacyRefusal("KeyValueError", "The body must be a JSON object.")
     return data

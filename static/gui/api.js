@@ -20,7 +20,7 @@ export function plainMessage(error) {
   return _("Something went wrong: %(error)s", { error: error && error.message ? error.message : String(error) });
 }
 
-function csrfToken() {
+export function csrfToken() {
   const match = document.cookie.match(/(?:^|;\s*)csrftoken=([^;]+)/);
   return match ? decodeURIComponent(match[1]) : "";
 }

@@ -4,13 +4,13 @@
  * GeoJSON and CSV downloads.  The server decides what lies inside.  Leaflet.markercluster
  * (global L.markerClusterGroup, a deferred script like Leaflet) groups them. */
 import { CONFIG, $, element } from "./dom.js";
-import { api, list, plainMessage } from "./api.js";
+import { api, csrfToken, list, plainMessage } from "./api.js";
 import { plainMap } from "./comparemap.js";
 import { _, plural } from "./i18n.js";
 
 const SHOWN_IN_LIST = 200; // the downloads hold every take-over found
 
-const search = { map: null, area: null, outline: null, corner: null, drawing: false, found: null, cases: [] };
+const search = { map: null, area: null, outline: null, corner: null, drawing: false, found: null, cases: [], downloaded: null };
 
 function say(text, isError = false) {
   const line = $("#search-status");
@@ -108,19 +108,32 @@ function showFound(collection) {
   say(plural(ngettext("%(count)s take-over found.", "%(count)s take-overs found.", n), n) + more);
 }
 
+/* Sent by POST: a test case's area of thousands of vertices does not fit in an address. */
 async function runSearch(e) {
   e.preventDefault();
   const q = query();
   say(_("Searching…"));
   try {
-    const found = await api("GET", `segments/found/?${q}&as=geojson`);
+    const found = await api("POST", "segments/found/", { ...Object.fromEntries(q), as: "geojson" });
     showFound(found);
+    search.downloaded = q;
+    // The address of each download, to copy; a click sends the search by POST.
     $("#search-geojson").href = `${CONFIG.apiRoot}segments/found/?${q}&as=geojson`;
     $("#search-csv").href = `${CONFIG.apiRoot}segments/found/?${q}&as=csv`;
     $("#search-downloads").hidden = false;
   } catch (err) {
     say(plainMessage(err), true);
   }
+}
+
+/* The file of the search shown, by a form's POST (the answer is an attachment). */
+function download(e, kind) {
+  e.preventDefault();
+  const fields = [...search.downloaded, ["as", kind], ["csrfmiddlewaretoken", csrfToken()]];
+  const form = element("form", { method: "post", action: `${CONFIG.apiRoot}segments/found/` }, fields.map(([name, value]) => element("input", { type: "hidden", name, value })));
+  document.body.append(form);
+  form.submit();
+  form.remove();
 }
 
 function caseChosen(e) {
@@ -133,6 +146,8 @@ async function main() {
   search.map.on("click", mapClicked);
   $("#search-draw").addEventListener("click", startDrawing);
   $("#search-form").addEventListener("submit", runSearch);
+  $("#search-geojson").addEventListener("click", (e) => download(e, "geojson"));
+  $("#search-csv").addEventListener("click", (e) => download(e, "csv"));
   const form = $("#search-form").elements;
   form.case_area.addEventListener("change", caseChosen);
   try {

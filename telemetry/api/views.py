@@ -2,7 +2,6 @@
 
 import django_filters as filters
 from django.utils.translation import gettext as _
-from django_filters.rest_framework import DjangoFilterBackend
 from drf_spectacular.types import OpenApiTypes
 from drf_spectacular.utils import OpenApiParameter, OpenApiResponse, extend_schema
 from rest_framework import serializers, status, viewsets
@@ -12,7 +11,7 @@ from rest_framework.parsers import FormParser, MultiPartParser
 from rest_framework.response import Response
 
 from common import roles
-from events.api.filters import BBoxFilter, IdFilter, TimeRangeFilterSet
+from events.api.filters import BBoxFilter, IdFilter, SearchFilterBackend, TimeRangeFilterSet
 from events.api.serializers import PrimaryKeyField
 from events.api.viewsets import ServiceBaseViewSet, ServiceCreateMixin
 from events.models import Leg, Shift, TestEvent
@@ -97,7 +96,7 @@ class PoseViewSet(RobotDataViewSet):
     queryset = Pose.objects.all()
     serializer_class = s.PoseSerializer
     filterset_class = PoseFilter
-    filter_backends = [DjangoFilterBackend, BBoxFilter]
+    filter_backends = [SearchFilterBackend, BBoxFilter]
     bbox_filter_field = "point"
     robot_actions = ("create", "batch")
 

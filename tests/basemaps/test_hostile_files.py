@@ -187,3 +187,13 @@ def test_a_huge_geotiff_without_overviews_is_refused(db, media_root, tmp_path):
     with pytest.raises(CommandError, match="add overviews first"):
         call_command("ftt_basemap", "import", str(path))
     assert not BasemapLayer.objects.exists()
+
+
+@pytest.mark.parametrize("fmt", ["png", "webp"])
+def test_a_tile_stored_as_text_is_missing_not_an_error(archive, viewer_client, fmt):
+    layer, (first, *_) = archive
+    z, x, y = first
+    with sqlite3.connect(layer.file.path) as db:
+        where = "zoom_level=? AND tile_column=? AND tile_row=?"
+        db.execute(f"UPDATE tiles SET tile_data = ? WHERE {where}", ("tile", z, x, 2**z - 1 - y))
+    assert viewer_client.get(tile_url(layer, first, fmt)).status_code == 404

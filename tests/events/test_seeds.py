@@ -1,8 +1,11 @@
 """Catalogues and roles exist right after migrate, as the original tool's users know them."""
 
+import json
+
 from django.contrib.auth.models import Group
 
 from events.models import ItoReason, SegmentType, Weather
+from tests.support.sites import fresh_site
 
 
 def test_catalogues_are_seeded_with_the_original_keys_and_colours(db):
@@ -46,3 +49,47 @@ def test_the_robot_group_may_only_add_what_a_robot_records(db):
         "add_image",
         "add_recording",
     }
+
+
+# Run in a freshly migrated installation (tests.support.sites): no seeding after
+# migrate, as on a real install.  Prints the status of each admin page an
+# administrator opens, and whether finalising a closed test event took effect.
+_ADMINISTRATOR_IN_ADMIN = """
+import json
+from django.contrib.auth.models import Group, User
+from django.test import Client
+from django.test.utils import setup_test_environment
+from events.models import TestEvent
+from events.services import logs
+
+setup_test_environment()
+ada = User.objects.create_user("ada", password="pw", is_staff=True)
+ada.groups.add(Group.objects.get(name="administrator"))
+browser = Client()
+browser.force_login(ada)
+pages = [
+    "/admin/events/testcase/",
+    "/admin/events/testcase/add/",
+    "/admin/events/judgement/",
+    "/admin/basemaps/",
+    "/admin/basemaps/basemaplayer/add/",
+    "/admin/basemaps/eventbasemap/",
+    "/admin/events/testevent/",
+]
+seen = {page: browser.get(page).status_code for page in pages}
+event = logs.close_test_event(logs.create_test_event(location="Wachtberg", version="1"))
+browser.post(
+    "/admin/events/testevent/",
+    {"action": "finalise_selected", "_selected_action": [event.pk]},
+)
+seen["finalised"] = TestEvent.objects.get(pk=event.pk).finalised is not None
+print("SEEN" + json.dumps(seen))
+"""
+
+
+def test_on_a_fresh_install_administrators_use_test_plans_basemaps_and_finalising(tmp_path):
+    site = fresh_site(tmp_path / "fresh")
+    out = site.python(_ADMINISTRATOR_IN_ADMIN)
+    seen = json.loads(out.split("SEEN", 1)[1])
+    assert seen.pop("finalised") is True
+    assert seen == dict.fromkeys(seen, 200)

@@ -154,3 +154,17 @@ def test_site_logo_replaces_the_default(scenario, tmp_path, settings):
     first_page_images = PdfReader(str(path)).pages[0].images
     assert len(first_page_images) == 1
     assert first_page_images[0].image.size == (120, 60)
+
+
+@pytest.mark.parametrize("month", ["0000-01", "10000-01", "2026-13", "2026-00", "May"])
+def test_a_month_beyond_the_calendar_is_refused_with_a_message(db, tmp_path, month):
+    with pytest.raises(CommandError, match="between 0001-01 and 9999-12"):
+        call_command("ftt_report", "--dmv", str(tmp_path / "dmv.csv"), "--month", month)
+    assert not (tmp_path / "dmv.csv").exists()
+
+
+@pytest.mark.parametrize("month", ["0001-01", "9999-12"])
+def test_the_first_and_last_month_of_the_calendar_give_an_empty_report(test_event, tmp_path, month):
+    out = tmp_path / "dmv.csv"
+    call_command("ftt_report", "--dmv", str(out), "--month", month, stdout=io.StringIO())
+    assert len(list(csv.reader(io.StringIO(out.read_text())))) == 1

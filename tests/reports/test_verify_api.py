@@ -110,3 +110,9 @@ def test_amendments_count_what_was_changed_after_finalising(scenario, api_client
         (admin.username, "admin", "checked the video"),
     ]
     assert viewer.get("/api/reports/amendments/999999/").status_code == 404
+
+
+def test_a_json_file_nested_too_deeply_is_refused_with_a_field_message(db, api_client):
+    answer = _upload(api_client("viewer"), "deep.json", b"[" * 100_000 + b"]" * 100_000)
+    assert answer.status_code == 400
+    assert "no FTT data digest" in answer.json()["errors"]["file"][0]

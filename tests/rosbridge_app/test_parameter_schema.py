@@ -85,3 +85,11 @@ def test_the_editor_rows_come_from_the_schema(operator, collector):
         rows["params.pose_min_distance"]["description"]
         == SPECS["params.pose_min_distance"].description
     )
+
+
+@pytest.mark.parametrize("name", ["params.mode_sources", "params.reason_rules"])
+def test_yaml_nested_too_deeply_is_refused_under_its_name(operator, collector, name):
+    response = send(operator, collector, {name: "[" * 5000 + "]" * 5000})
+    assert response.status_code in (400, 409), response.content
+    assert "nested too deeply" in " ".join(response.json()["errors"][name])
+    assert not CollectorCommand.objects.exists()

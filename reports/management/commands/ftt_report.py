@@ -12,6 +12,7 @@ Without -o and without any export option the PDF goes to report.pdf.
 """
 
 import sys
+from datetime import date
 from pathlib import Path
 
 from django.conf import settings
@@ -241,10 +242,12 @@ class Command(BaseCommand):
             return None
         try:
             year, month = (int(part) for part in o["month"].split("-"))
+            # The calendar's own range: years 1 to 9999, months 1 to 12.
+            date(year, month, 1)
         except ValueError:
-            raise CommandError(gettext("Give the month as YYYY-MM, e.g. 2026-05.")) from None
-        if not 1 <= month <= 12:
-            raise CommandError(gettext("Give the month as YYYY-MM, e.g. 2026-05."))
+            raise CommandError(
+                gettext("Give the month as YYYY-MM between 0001-01 and 9999-12, e.g. 2026-05.")
+            ) from None
         return year, month
 
     def _dmv_month(self, o):

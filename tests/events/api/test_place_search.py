@@ -4,6 +4,8 @@ holes), reason, vehicle and version, as a list, GeoJSON and CSV, on both databas
 import csv
 import io
 import json
+import math
+from urllib.parse import urlencode
 
 import pytest
 
@@ -148,3 +150,52 @@ def test_a_reason_found_without_its_take_over_is_numbered_under_it(api_client, t
     assert feature["properties"]["label"] == "Leg 1 · #4.1"
     assert feature["properties"]["reason"] == "planner"
     assert feature["properties"]["mode"] == "ITO"
+
+
+def ring_of(vertices: int, lon=7.5, lat=50.5, radius=0.45):
+    ring = [
+        [
+            lon + radius * math.cos(2 * math.pi * i / vertices),
+            lat + radius * math.sin(2 * math.pi * i / vertices),
+        ]
+        for i in range(vertices)
+    ]
+    return [*ring, ring[0]]
+
+
+def test_a_large_area_is_searched_by_post(api_client, take_overs):
+    # About 80 KB of GeoJSON: more than an address may carry.
+    area = {"type": "Polygon", "coordinates": [ring_of(2000)]}
+    assert len(json.dumps(area)) > 65536
+    client = api_client(roles.VIEWER)
+    search = {"master": True, "mode": "ito", "within": area}
+    geo = client.post("/api/segments/found/", search, format="json")
+    assert geo.status_code == 200, geo.content
+    found = {f["id"] for f in json.loads(geo.content)["features"]}
+    assert found == {take_overs["inside"], take_overs["in_hole_ring"]}
+    # As the page's download links send it: a form, the area as GeoJSON text.
+    form = {"master": "true", "mode": "ito", "within": json.dumps(area), "as": "csv"}
+    form["csrfmiddlewaretoken"] = "the page's token"
+    sheet = client.post(
+        "/api/segments/found/", urlencode(form), content_type="application/x-www-form-urlencoded"
+    )
+    assert sheet.status_code == 200
+    assert {int(r["id"]) for r in csv.DictReader(io.StringIO(sheet.content.decode()))} == found
+
+
+def test_a_bad_area_sent_by_post_is_a_field_message(api_client, db):
+    bow_tie = {"type": "Polygon", "coordinates": [[[7, 50], [8, 51], [8, 50], [7, 51], [7, 50]]]}
+    answer = api_client(roles.VIEWER).post(
+        "/api/segments/found/", {"within": bow_tie}, format="json"
+    )
+    assert answer.status_code == 400
+    assert "not a valid polygon" in " ".join(answer.json()["errors"]["within"])
+    listed = api_client(roles.VIEWER).post("/api/segments/found/", [1, 2], format="json")
+    assert listed.status_code == 400 and listed.json()["errors"]
+
+
+def test_an_area_nested_too_deeply_is_a_field_message(api_client, db):
+    deep = "[" * 100_000 + "]" * 100_000
+    answer = api_client(roles.VIEWER).get("/api/segments/", {"within": deep})
+    assert answer.status_code == 400
+    assert "nested too deeply" in " ".join(answer.json()["errors"]["within"])
