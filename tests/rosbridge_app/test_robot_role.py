@@ -25,6 +25,9 @@ def as_robot(db):
     role = f"ftt_robot_test_{os.getpid()}"
     call_command("ftt_robot_role", role, "--apply", stdout=open(os.devnull, "w"))  # noqa: SIM115
     with connection.cursor() as cursor:
+        # A temporary staging table an earlier test made in this session belongs
+        # to the test's own role; a robot's collector has its own session.
+        cursor.execute("DISCARD TEMP")
         cursor.execute(f'SET ROLE "{role}"')
     yield role
     with connection.cursor() as cursor:

@@ -3,9 +3,12 @@ across processes (NOTIFY on PostgreSQL, datagrams on SQLite)."""
 
 import contextlib
 import logging
+import shutil
 import socket
+import tempfile
 import threading
 import time
+from pathlib import Path
 
 import psycopg
 import pytest
@@ -100,8 +103,10 @@ def test_a_rolled_back_transaction_wakes_nobody(woken):
     assert woken == []
 
 
-def test_sqlite_readers_are_woken_and_dead_ones_forgotten(tmp_path):
-    folder = tmp_path / "ftt.sqlite3.wake"
+def test_sqlite_readers_are_woken_and_dead_ones_forgotten():
+    # A socket path has at most 107 bytes, which an xdist worker's tmp_path nearly
+    # fills; a data folder of FTT's is short.
+    folder = Path(tempfile.mkdtemp(prefix="ftt-")) / "ftt.sqlite3.wake"
     alive = wakeup.SqliteListener(folder)
     # A reader killed before it could clean up leaves its socket file behind.
     dead = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
@@ -118,6 +123,7 @@ def test_sqlite_readers_are_woken_and_dead_ones_forgotten(tmp_path):
     finally:
         alive.close()
     assert not alive.path.exists()
+    shutil.rmtree(folder.parent)
 
 
 def test_wake_ups_that_cannot_be_sent_are_logged_once_per_outage(monkeypatch, caplog):
