@@ -320,11 +320,12 @@ def import_notes(session: ImportSession):
         uid = uuid.UUID(r["uid"])
         created = rec.time_in(r["created"], "created")
         edited = rec.time_in(r["edited"], "edited")
-        row = Note.objects.filter(uid=uid).first()
+        segment_id = session.segment(r["segment"]).pk
+        row = session.stored("notes", Note, uid, segment_id=segment_id)
         if row is None:
             row = Note(
                 uid=uid,
-                segment_id=session.segment(r["segment"]).pk,
+                segment_id=segment_id,
                 author_id=session.person_id(r["author"]),
                 text=r["text"],
                 created=created,

@@ -20,7 +20,7 @@ from django.utils import timezone
 from django.utils.translation import gettext as _
 
 from common.errors import RuleViolation
-from common.retries import stored_row
+from common.retries import refuse_foreign, stored_row
 from events import rules
 from events.feed import announce_track
 from events.models import PoseSource, Segment
@@ -134,6 +134,7 @@ def store_poses(
     source_id = pose_source_id(master, pose_source.pk if pose_source is not None else None)
     stored = pose_rows.insert_fixes(master, source_id, fixes, timezone.now())
     new = {p.uid for p in stored}
+    refuse_foreign(Pose, [pose_rows.as_uuid(f.uid) for f in fixes], new, segment_id=master.pk)
     points = [(f.longitude, f.latitude) for f in fixes if pose_rows.as_uuid(f.uid) in new]
     announce_track(master, points, local=False)
     keep_figures(master.pk, GPS, stored)
@@ -193,11 +194,24 @@ def known_pose(master: Segment, fix: GpsFix, source_id: int | None) -> Pose:
 
 
 @transaction.atomic
+def store_local_pose(segment: Segment, pose: MapPose) -> LocalPose:
+    """Store one map-frame pose; the new row, or the row stored first under its
+    uid on the same master (common.retries)."""
+    uid = pose_rows.as_uuid(pose.uid)
+    if record_local_poses(segment, [pose]):
+        return LocalPose.objects.filter(uid=uid, segment_id=segment.master_id).latest("id")
+    return stored_row(LocalPose, uid, segment_id=segment.master_id)
+
+
+@transaction.atomic
 def record_local_poses(segment: Segment, poses: list[MapPose]) -> int:
     master = segment.master
     fresh = pose_rows.insert_local_poses(master, poses, timezone.now()) if poses else []
     # The robot's heading for its marker: the yaw of the newest pose stored.
     stored = {point.uid for point in fresh}
+    refuse_foreign(
+        LocalPose, [pose_rows.as_uuid(p.uid) for p in poses], stored, segment_id=master.pk
+    )
     heading = next((p.yaw for p in reversed(poses) if pose_rows.as_uuid(p.uid) in stored), None)
     announce_track(master, [(p.x, p.y) for p in fresh], local=True, heading=heading)
     keep_figures(master.pk, LOCAL, fresh)
