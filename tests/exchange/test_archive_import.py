@@ -11,6 +11,7 @@ from exchange.archive import ArchiveError, open_archive
 from exchange.export import export_events, select_events
 from exchange.importer import ImportRefused, import_bundle
 from telemetry.models import Image, MapImage, Pose
+from tests.support.archives import members_of, replace_record, signed_archive
 from tests.support.field_day import T0, configuration, field_day
 from tests.support.snapshot import snapshot
 
@@ -360,3 +361,32 @@ def test_commands_export_chosen_events_and_print_the_plan(day, tmp_path, wipe):
     assert list(TestEvent.objects.values_list("uid", flat=True)) == [other.uid]
     with pytest.raises(CommandError, match="does not exist"):
         call_command("ftt_import", str(tmp_path / "x.zip"))
+
+
+@pytest.mark.parametrize(
+    "table, model", [("notes", "Note"), ("poses", "Pose"), ("images", "Image")]
+)
+def test_a_record_whose_uid_is_another_segments_row_here_is_refused(day, tmp_path, table, model):
+    """Issue 42: a uid is one row everywhere; an archive that hangs a known uid
+    under another segment than here names another row, and nothing is imported."""
+    from events.models import Note
+
+    rows = {"Note": Note, "Pose": Pose, "Image": Image}[model].objects
+    first = rows.order_by("id").first()
+    master = Segment.objects.get(pk=first.segment_id).master
+    elsewhere = Segment.objects.filter(parent__isnull=True).exclude(pk=master.pk).first()
+    export_all(tmp_path / "day.zip")
+    members = members_of((tmp_path / "day.zip").read_bytes())
+
+    def moved(record):
+        if record["uid"] == str(first.uid):
+            return {**record, "segment": str(elsewhere.uid)}
+        return record
+
+    (tmp_path / "moved.zip").write_bytes(signed_archive(replace_record(members, table, moved)))
+    before = snapshot()
+
+    with pytest.raises(ImportRefused, match=f"{table} record {first.uid}: .*another row"):
+        load(tmp_path / "moved.zip")
+
+    assert snapshot() == before
