@@ -37,6 +37,8 @@ class ImportSession:
         # For the change feed: rows added or changed, and new track points per master.
         self.changed: list = []
         self.track_points: Counter = Counter()
+        # Test events this archive makes final here (events.services.finality).
+        self.arriving: set = set()
 
     def records(self, table: str):
         for record in self.bundle.records(table):

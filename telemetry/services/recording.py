@@ -25,6 +25,7 @@ from events import rules
 from events.feed import announce_track
 from events.models import PoseSource, Segment
 from events.selectors.segments import pose_target
+from events.services.finality import require_amendable
 from events.services.segments import GpsPosition
 from telemetry.models import LocalPose, Pose
 from telemetry.models.poses import FixStatus
@@ -131,6 +132,7 @@ def store_poses(
     if not fixes:
         return set()
     master = segment.master
+    require_amendable(shifts__legs__segments=master.pk)
     source_id = pose_source_id(master, pose_source.pk if pose_source is not None else None)
     stored = pose_rows.insert_fixes(master, source_id, fixes, timezone.now())
     new = {p.uid for p in stored}
@@ -161,6 +163,7 @@ def store_pose(
     if writer is not None:
         rules.check_robot_target(writer, master)
     fix.check()
+    require_amendable(pk=master.leg.shift.test_event_id)
     received = timezone.now()
     source_id = pose_source_id(master, source_id)
     with transaction.atomic():
@@ -206,6 +209,8 @@ def store_local_pose(segment: Segment, pose: MapPose) -> LocalPose:
 @transaction.atomic
 def record_local_poses(segment: Segment, poses: list[MapPose]) -> int:
     master = segment.master
+    if poses:
+        require_amendable(shifts__legs__segments=master.pk)
     fresh = pose_rows.insert_local_poses(master, poses, timezone.now()) if poses else []
     # The robot's heading for its marker: the yaw of the newest pose stored.
     stored = {point.uid for point in fresh}

@@ -1,5 +1,7 @@
 """Export and import through an archive within one installation."""
 
+import json
+import uuid
 import zipfile
 from datetime import timedelta
 
@@ -388,5 +390,37 @@ def test_a_record_whose_uid_is_another_segments_row_here_is_refused(day, tmp_pat
 
     with pytest.raises(ImportRefused, match=f"{table} record {first.uid}: .*another row"):
         load(tmp_path / "moved.zip")
+
+    assert snapshot() == before
+
+
+def test_an_archive_adds_nothing_to_a_test_event_final_here(day, tmp_path):
+    """Issue 46: an archive brings no poses into a test event finalised here."""
+    from events.services import finality
+
+    finality.finalise_test_event(TestEvent.objects.get())
+    export_all(tmp_path / "day.zip")
+    members = members_of((tmp_path / "day.zip").read_bytes())
+    poses = [json.loads(line) for line in members["data/poses.jsonl"].splitlines()]
+    late = {**poses[-1], "uid": str(uuid.uuid4()), "point": [7.2, 50.7]}
+    members["data/poses.jsonl"] += (json.dumps(late) + "\n").encode()
+    (tmp_path / "late.zip").write_bytes(signed_archive(members))
+    before = snapshot()
+
+    with pytest.raises(ImportRefused, match="final since .*Nothing was imported"):
+        load(tmp_path / "late.zip")
+
+    assert snapshot() == before
+
+
+def test_an_archive_of_a_final_event_new_here_brings_all_of_it(day, tmp_path, wipe):
+    from events.services import finality
+
+    finality.finalise_test_event(TestEvent.objects.get())
+    export_all(tmp_path / "day.zip")
+    before = snapshot()
+    wipe()
+
+    load(tmp_path / "day.zip")
 
     assert snapshot() == before

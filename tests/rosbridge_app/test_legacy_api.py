@@ -12,7 +12,7 @@ import requests
 from PIL import Image as PilImage
 
 from events.models import Segment, Vehicle
-from events.services import logs
+from events.services import finality, logs
 from events.services.robots import ensure_robot_account
 from rosbridge_app.legacy_api.views import UIDS
 from telemetry.models import Image, LocalPose, MapImage, Pose
@@ -228,6 +228,23 @@ def test_a_frame_whose_uid_another_vehicle_took_is_refused(field, live_server):
     assert answer.json()["message"].startswith("[ERROR] (RuleError)")
     assert "uid" in answer.json()["message"]
     assert list(Image.objects.values_list("segment_id", flat=True)) == [theirs.pk]
+
+
+def test_a_final_test_event_takes_no_pose_from_the_original_node(field):
+    """Issue 46: the node names a segment of a test event that is final by now."""
+    robot = field["husky"]
+    call(robot, "POST", "segment", {"leg_id": "Current Leg", "segment_type_id": 2})
+    master = masters(robot["leg"])[-1]
+    event = robot["leg"].shift.test_event
+    logs.close_test_event(event)
+    finality.finalise_test_event(event)
+    fix = {"segment_id": master.pk, "lng": 7.1285, "lat": 50.6161, "orig_secs": 1.7e9}
+
+    answer = call(robot, "POST", "pose", fix)
+
+    assert answer.status_code == 403
+    assert answer.json()["message"].startswith("[ERROR] (AuthError): This test event is final")
+    assert master.poses.count() == 0
 
 
 def test_a_robot_never_writes_into_another_vehicles_leg(field, live_server):
