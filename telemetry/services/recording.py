@@ -25,13 +25,14 @@ from events import rules
 from events.feed import announce_track
 from events.models import PoseSource, Segment
 from events.selectors.segments import pose_target
+from events.services import deletion
 from events.services.finality import require_amendable
 from events.services.segments import GpsPosition
 from telemetry.models import LocalPose, Pose
 from telemetry.models.poses import FixStatus
 from telemetry.selectors.tracks import GPS, LOCAL
 from telemetry.services import pose_rows
-from telemetry.services.segment_figures import keep_figures
+from telemetry.services.segment_figures import keep_figures, measure_figures
 
 # The fix statuses a pose may carry and the one it gets when none is sent; every
 # check of a sent fix reads these.  (FixStatus.values builds a new list on each
@@ -204,6 +205,20 @@ def store_local_pose(segment: Segment, pose: MapPose) -> LocalPose:
     if record_local_poses(segment, [pose]):
         return LocalPose.objects.filter(uid=uid, segment_id=segment.master_id).latest("id")
     return stored_row(LocalPose, uid, segment_id=segment.master_id)
+
+
+def _track_point_deleted(sender, instance, **kwargs) -> None:
+    # Every write that changes poses keeps the figures: a deleted point is a
+    # step less, and its neighbours join (measured again from the poses).
+    measure_figures([instance.segment_id], [GPS if sender is Pose else LOCAL])
+
+
+def connect() -> None:
+    """Deleting a pose or local pose (events.services.deletion) keeps its master's figures."""
+    for model in (Pose, LocalPose):
+        deletion.deleted.connect(
+            _track_point_deleted, sender=model, dispatch_uid=f"ftt-figures-{model.__name__}"
+        )
 
 
 @transaction.atomic
