@@ -164,10 +164,10 @@ def store_pose(
     if writer is not None:
         rules.check_robot_target(writer, master)
     fix.check()
-    require_amendable(pk=master.leg.shift.test_event_id)
     received = timezone.now()
     source_id = pose_source_id(master, source_id)
     with transaction.atomic():
+        require_amendable(pk=master.leg.shift.test_event_id)
         stored = pose_rows.insert_pose(master.pk, fix, source_id, received)
         if stored is not None:
             pk, seen = stored
