@@ -16,7 +16,7 @@ from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.recorder import GivenMaster, Recorder
 from telemetry.models import Image, LocalPose, MapImage, Pose
 from telemetry.services import recording
-from tests.support.images import png
+from tests.support.images import map_form, png
 from tests.support.snapshot import snapshot
 
 pytestmark = pytest.mark.django_db
@@ -40,20 +40,6 @@ def final(leg):
     return {"event": event, "master": master, "leg": leg, "criterion": criterion}
 
 
-def _map(shift):
-    upload = SimpleUploadedFile("map.png", png(), content_type="image/png")
-    return {
-        "shift": shift.pk,
-        "frame": "map",
-        "width": 4,
-        "height": 3,
-        "resolution": 0.05,
-        "origin_x": 0,
-        "origin_y": 0,
-        "image": upload,
-    }
-
-
 ROBOT_WRITES = {
     "pose": ("/api/poses/", "json", lambda f: {"segment": f["master"].pk, **_fix()}),
     "pose batch": (
@@ -71,7 +57,7 @@ ROBOT_WRITES = {
         "json",
         lambda f: {"segment": f["master"].pk, "poses": [{"frame": "map", "x": 1.0, "y": 2.0}]},
     ),
-    "map": ("/api/maps/", "multipart", lambda f: _map(f["leg"].shift)),
+    "map": ("/api/maps/", "multipart", lambda f: map_form(f["leg"].shift)),
     "image": (
         "/api/images/",
         "multipart",
