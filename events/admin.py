@@ -85,19 +85,24 @@ class AmendmentForm(forms.ModelForm):
 
     def clean(self):
         data = super().clean()
-        if self.instance.pk is not None:
-            try:
-                with authored(reason=data.get("change_reason", "")):
-                    finality.require_amendable_row(self.instance)
-            except PermissionDenied as exc:
-                raise ValidationError(str(exc)) from None
-            except ValidationError as exc:
-                raise ValidationError({"change_reason": exc.messages}) from None
+        row = self.instance
+        if row.pk is None:
+            # A row to be added is checked by the parent it names.
+            model = self._meta.model
+            parents = [f.name for f in model._meta.concrete_fields if f.many_to_one]
+            row = model(**{name: data[name] for name in parents if data.get(name) is not None})
+        try:
+            with authored(reason=data.get("change_reason", "")):
+                finality.require_amendable_row(row)
+        except PermissionDenied as exc:
+            raise ValidationError(str(exc)) from None
+        except ValidationError as exc:
+            raise ValidationError({"change_reason": exc.messages}) from None
         return data
 
 
-class HistoryAdmin(SimpleHistoryAdmin):
-    """Every tracked model: its history page, and a reason field when it is changed."""
+class AmendmentAdmin:
+    """A reason field on a row's form, needed for a final test event."""
 
     form = AmendmentForm
 
@@ -109,9 +114,13 @@ class HistoryAdmin(SimpleHistoryAdmin):
 
     def get_fields(self, request, obj=None):
         fields = list(super().get_fields(request, obj))
-        if obj is not None and "change_reason" not in fields:
+        if "change_reason" not in fields:
             fields.append("change_reason")
         return fields
+
+
+class HistoryAdmin(AmendmentAdmin, SimpleHistoryAdmin):
+    """Every tracked model: its history page, and a reason field when it is changed."""
 
 
 # --- configuration ----------------------------------------------------------------------------

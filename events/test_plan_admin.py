@@ -4,6 +4,7 @@ from django import forms
 from django.contrib import admin
 from leaflet.admin import LeafletGeoAdminMixin
 
+from events.admin import AmendmentAdmin
 from events.models import Criterion, Judgement, TestCase
 
 
@@ -39,7 +40,7 @@ class TestCaseAdmin(LeafletGeoAdminMixin, admin.ModelAdmin):
 
 
 @admin.register(Judgement)
-class JudgementAdmin(admin.ModelAdmin):
+class JudgementAdmin(AmendmentAdmin, admin.ModelAdmin):
     list_display = ["criterion", "leg", "passed", "by", "at"]
     readonly_fields = ["by", "at"]
 

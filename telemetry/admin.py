@@ -26,7 +26,7 @@ class RecordedDataAdmin(admin.ModelAdmin):
 
 
 @admin.register(Pose)
-class PoseAdmin(RecordedDataAdmin):
+class PoseAdmin(ServiceDeleteMixin, RecordedDataAdmin):
     list_display = ["id", "segment_link", "longitude", "latitude", "fix_status", "robot_stamp"]
     list_filter = ["fix_status", "pose_source"]
     list_select_related = ["segment__segment_type"]
@@ -41,7 +41,7 @@ class PoseAdmin(RecordedDataAdmin):
 
 
 @admin.register(LocalPose)
-class LocalPoseAdmin(RecordedDataAdmin):
+class LocalPoseAdmin(ServiceDeleteMixin, RecordedDataAdmin):
     list_display = ["id", "segment_link", "frame", "x", "y", "yaw", "robot_stamp"]
     list_filter = ["frame"]
     list_select_related = ["segment__segment_type"]

@@ -5,7 +5,7 @@ from rest_framework.response import Response
 
 from common import roles
 from common.api.permissions import RolePermission
-from common.retries import stored_row
+from common.retries import is_retry
 from events.api.permissions import RobotTargetPermission
 from events.services import deletion
 
@@ -47,26 +47,19 @@ class ServiceCreateMixin:
     """Create through :meth:`create_with_service`; a new row answers 201.
 
     A create that carries a ``uid`` already stored (a retry after a lost answer)
-    answers 200 with the stored row, or 409 when that row has another owner
-    (:meth:`retry_owner`; the rule is common.retries).
+    answers 200 with the stored row; the service decides whether it is a retry
+    or another owner's uid (409), by common.retries.
     """
 
     def create_with_service(self, data: dict):
         raise NotImplementedError
 
-    def retry_owner(self, data: dict) -> dict:
-        """The stored row's fields a retry of ``data`` must match; none by default."""
-        return {}
-
     def create(self, request, *args, **kwargs):
         serializer = self.get_serializer(data=request.data)
         serializer.is_valid(raise_exception=True)
-        data = dict(serializer.validated_data)
-        model = self.get_queryset().model
-        known = stored_row(model, data.get("uid"), **self.retry_owner(data))
-        if known is not None:
-            return self.respond(known)
-        return self.respond(self.create_with_service(data), code=status.HTTP_201_CREATED)
+        row = self.create_with_service(dict(serializer.validated_data))
+        code = status.HTTP_200_OK if is_retry(row) else status.HTTP_201_CREATED
+        return self.respond(row, code=code)
 
 
 class ServiceUpdateMixin:

@@ -1,10 +1,14 @@
 """Finalising a test event, and who may still change one that is final.
 
-A final event is read-only for operators; an administrator may amend it but
-must give a reason, which the change history keeps with every row the
-amendment writes (``events.history``).  Every service that changes a record
-of an event calls :func:`require_amendable` first.
+A final event refuses every change (:func:`require_amendable`); an
+administrator may amend it but must give a reason, which the change history
+keeps with every row the amendment writes (``events.history``).  Every
+service that changes a record of an event calls :func:`require_amendable`
+first, and the archive import for the rows it writes itself.
 """
+
+from contextlib import contextmanager
+from contextvars import ContextVar
 
 from django.core.exceptions import PermissionDenied, ValidationError
 from django.db import transaction
@@ -56,43 +60,77 @@ def finalise_test_event(event: TestEvent, *, by=None) -> TestEvent:
     return announce_and_return(event)
 
 
-# How a row of each kind finds its test event.
-_EVENT_OF = {
-    "testevent": "pk",
-    "shift": "shifts",
-    "leg": "shifts__legs",
-    "segment": "shifts__legs__segments",
-}
+# How a row finds its test event, by the parent it names (so that a row about
+# to be added is checked as well as a stored one).
+_EVENT_OF = (
+    ("test_event_id", "pk"),  # shifts, test cases
+    ("shift_id", "shifts"),  # legs, maps
+    ("leg_id", "shifts__legs"),  # segments
+    ("segment_id", "shifts__legs__segments"),  # notes, poses, images, snapshots
+    ("test_case_id", "test_cases"),  # criteria
+    ("criterion_id", "test_cases__criteria"),  # judgements
+)
 
 
 def require_amendable_row(instance) -> None:
-    """:func:`require_amendable` for a test event, shift, leg, segment, note or image."""
-    name = instance._meta.model_name
-    if name in _EVENT_OF:
-        require_amendable(**{_EVENT_OF[name]: instance.pk})
-    elif hasattr(instance, "segment_id"):
-        require_amendable(shifts__legs__segments=instance.segment_id)
+    """:func:`require_amendable` for a row of a test event, stored or about to be."""
+    if isinstance(instance, TestEvent):
+        if instance.pk is not None:
+            require_amendable(pk=instance.pk)
+        return
+    for attribute, path in _EVENT_OF:
+        if (parent := getattr(instance, attribute, None)) is not None:
+            require_amendable(**{path: parent})
+            return
 
 
-def require_amendable(**event_filter) -> None:
-    """Refuse a change to the final event ``event_filter`` finds unless an
-    administrator gives a reason (``events.history.authored``).
+# Inside an archive import: the test events it makes final, whose contents
+# arrive with their finalisation (exchange.importer).
+_arriving: ContextVar[set] = ContextVar("finalised_by_import", default=frozenset())
 
-    Writes without a person (imports, FTT itself) pass: they carry what was
-    recorded elsewhere, and the history names their channel."""
-    finalised = TestEvent.objects.filter(**event_filter).values_list("finalised", flat=True).first()
+
+@contextmanager
+def finalisations_arriving():
+    """While an archive import runs: the set it adds the test events to that the
+    archive makes final here; their rows are written as the archive gives them."""
+    arriving: set = set()
+    token = _arriving.set(arriving)
+    try:
+        yield arriving
+    finally:
+        _arriving.reset(token)
+
+
+def require_amendable(*conditions, **event_filter) -> None:
+    """What a final test event refuses: anything added to it or changed in it
+    (poses, local poses, maps, images, notes, judgements, segment and log
+    edits, from operators, robots, the collector or an archive), unless an
+    administrator amends it, giving a reason (``events.history.authored``);
+    the change history lists the amendment.
+
+    ``conditions`` and ``event_filter`` find the test events concerned."""
+    final = TestEvent.objects.filter(*conditions, **event_filter, finalised__isnull=False)
+    if arriving := _arriving.get():
+        final = final.exclude(pk__in=arriving)
+    finalised = final.values_list("finalised", flat=True).first()
     if finalised is None:
         return
+    since = {"date": f"{finalised:%Y-%m-%d %H:%M} UTC"}
     user = _acting_user()
     if user is None or not getattr(user, "is_authenticated", False):
-        return
+        # The collector, an archive import, FTT itself: no one who could amend.
+        raise RuleViolation(
+            _("This test event is final since %(date)s; nothing is added to it or changed in it.")
+            % since,
+            code="final",
+        )
     if not roles.has_role(user, roles.ADMINISTRATOR):
         raise PermissionDenied(
             _(
                 "This test event is final since %(date)s; only an administrator may amend it, "
                 "giving a reason."
             )
-            % {"date": f"{finalised:%Y-%m-%d %H:%M} UTC"}
+            % since
         )
     if not current_origin().reason.strip():
         raise ValidationError(

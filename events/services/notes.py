@@ -4,6 +4,7 @@ from django.utils import timezone
 from django.utils.translation import gettext as _
 
 from common import roles
+from common.retries import stored_row
 from events.feed import announce_and_return, announce_row
 from events.models import Note, Personnel, Segment
 from events.services.finality import require_amendable, require_amendable_row
@@ -41,7 +42,7 @@ def add_note(
     segment: Segment, *, text: str, author: Personnel | None = None, uid=None, by=None
 ) -> Note:
     """The author is the person of ``by``; only administrators name someone else."""
-    if uid is not None and (existing := Note.objects.filter(uid=uid).first()):
+    if existing := stored_row(Note, uid, segment_id=segment.pk):
         return existing
     require_amendable(shifts__legs__segments=segment.pk)
     if by is not None:

@@ -5,6 +5,7 @@ from django.db import transaction
 from django.utils.translation import gettext
 
 from events.models import Criterion, Judgement, Leg
+from events.services.finality import require_amendable
 
 
 @transaction.atomic
@@ -26,6 +27,7 @@ def judge(criterion: Criterion, *, passed: bool, leg: Leg | None = None, note: s
         raise ValidationError(
             {"leg": [(gettext("Leg %(leg)s does not drive this test case.") % {"leg": leg.number})]}
         )
+    require_amendable(pk=criterion.test_case.test_event_id)
     judgement, _ = Judgement.objects.update_or_create(
         criterion=criterion, leg=leg, defaults={"passed": passed, "note": note, "by": by}
     )

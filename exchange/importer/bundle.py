@@ -8,6 +8,7 @@ from django.utils.translation import gettext
 from events import feed
 from events.history import authored
 from events.models import Segment
+from events.services.finality import finalisations_arriving
 from exchange import records as rec
 from exchange.archive import ArchiveError
 from exchange.importer import configuration, history, logbook, telemetry, test_plans
@@ -33,6 +34,7 @@ STEPS = (
     telemetry.import_recordings,
     history.import_history,
     logbook.refuse_open_under_closed,
+    logbook.refuse_changes_to_final,
 )
 
 
@@ -52,7 +54,8 @@ def import_bundle(bundle, *, dry_run: bool = False) -> Plan:
     ``read_file(name)``).  Raises :class:`ImportRefused`; then nothing changed."""
     session = ImportSession(bundle, dry_run)
     try:
-        with authored("import"), transaction.atomic():
+        with authored("import"), transaction.atomic(), finalisations_arriving() as arriving:
+            session.arriving = arriving
             for step in STEPS:
                 step(session)
             announce_changes(session)

@@ -3,17 +3,30 @@ check that none stays open inside a closed one."""
 
 import uuid
 
+from django.core.exceptions import PermissionDenied, ValidationError
 from django.db.models import Q
 from django.utils.translation import gettext as _
 
 from basemaps.models import BasemapLayer, EventBasemap
 from basemaps.services import layers as basemap_layers
 from events import rules
-from events.models import Leg, Note, Performer, PoseSource, Segment, Shift, TestEvent, Vehicle
+from events.models import (
+    Leg,
+    Note,
+    Performer,
+    PoseSource,
+    Segment,
+    Shift,
+    TestCase,
+    TestEvent,
+    Vehicle,
+)
+from events.services import finality
 from exchange import records as rec
 from exchange.importer import test_plans
 from exchange.importer.plan import MalformedRecord
 from exchange.importer.session import ImportSession
+from telemetry.models import Image, MapImage, Recording
 
 # Segment attributes of the annotation, as stored (the reason by its key).
 ANNOTATION_COLUMNS = tuple(Segment._meta.get_field(f).attname for f in Segment.ANNOTATION_FIELDS)
@@ -135,7 +148,11 @@ def import_test_events(session: ImportSession):
             "language": r.get("language", "en"),
         }
         final = _finalisation(session, r)
+        was_final = TestEvent.objects.filter(uid=r["uid"], finalised__isnull=False).exists()
         event = save_entry(session, "test_events", TestEvent, r, values, settled=final)
+        if event.finalised is not None and not was_final:
+            # Its rows come with its finalisation: what was final there.
+            session.arriving.add(event.pk)
         if event.finalised is not None and event.end is None:
             message = _("the test event is final in the archive but open here; close it here")
             session.refuse(f"{session.where}: {message}.")
@@ -320,11 +337,12 @@ def import_notes(session: ImportSession):
         uid = uuid.UUID(r["uid"])
         created = rec.time_in(r["created"], "created")
         edited = rec.time_in(r["edited"], "edited")
-        row = Note.objects.filter(uid=uid).first()
+        segment_id = session.segment(r["segment"]).pk
+        row = session.stored("notes", Note, uid, segment_id=segment_id)
         if row is None:
             row = Note(
                 uid=uid,
-                segment_id=session.segment(r["segment"]).pk,
+                segment_id=segment_id,
                 author_id=session.person_id(r["author"]),
                 text=r["text"],
                 created=created,
@@ -342,6 +360,31 @@ def import_notes(session: ImportSession):
             session.changed.append(row)
         else:
             session.plan.note("notes", "unchanged")
+
+
+# How a row the import wrote finds its test event.
+_EVENT_PATHS = (
+    ((TestEvent,), "pk", "pk"),
+    ((Shift, TestCase), "test_event_id", "pk"),
+    ((Leg, MapImage), "shift_id", "shifts"),
+    ((Segment,), "leg_id", "shifts__legs"),
+    ((Note, Image, Recording), "segment_id", "shifts__legs__segments"),
+)
+
+
+def refuse_changes_to_final(session: ImportSession):
+    """An archive adds nothing to a test event final here and changes nothing in
+    it (events.services.finality), unless the archive makes it final itself."""
+    session.where = "after all records"
+    touched = Q(shifts__legs__segments__in={segment for _, segment in session.track_points})
+    for models, attribute, path in _EVENT_PATHS:
+        ids = {getattr(row, attribute) for row in session.changed if isinstance(row, models)}
+        if ids:
+            touched |= Q(**{f"{path}__in": ids})
+    try:
+        finality.require_amendable(touched)
+    except (ValidationError, PermissionDenied) as exc:
+        session.refuse(" ".join(getattr(exc, "messages", None) or [str(exc)]))
 
 
 def refuse_open_under_closed(session: ImportSession):

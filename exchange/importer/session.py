@@ -5,6 +5,7 @@ from collections import Counter
 
 from django.utils.translation import gettext
 
+from common.retries import AnotherOwner, stored_uids
 from events.models import Performer, PoseSource, Segment, Vehicle
 from exchange.importer.plan import ImportRefused, MalformedRecord, Plan
 
@@ -36,6 +37,8 @@ class ImportSession:
         # For the change feed: rows added or changed, and new track points per master.
         self.changed: list = []
         self.track_points: Counter = Counter()
+        # Test events this archive makes final here (events.services.finality).
+        self.arriving: set = set()
 
     def records(self, table: str):
         for record in self.bundle.records(table):
@@ -50,6 +53,21 @@ class ImportSession:
 
     def refuse(self, message: str):
         raise ImportRefused(message)
+
+    def known(self, table: str, model, uids, **owner) -> set:
+        """Those of ``uids`` stored here under the same owner; a uid of another
+        owner's row refuses the archive (common.retries)."""
+        try:
+            return stored_uids(model, uids, **owner)
+        except AnotherOwner as exc:
+            self.refuse(
+                gettext("%(table)s record %(uid)s: %(reason)s")
+                % {"table": table, "uid": exc.uid, "reason": " ".join(exc.messages)}
+            )
+
+    def stored(self, table: str, model, uid, **owner):
+        """The row stored here under ``uid`` and the same owner, or None (:meth:`known`)."""
+        return model.objects.get(uid=uid) if self.known(table, model, [uid], **owner) else None
 
     def config_row(self, cache: dict, model, key, label: str):
         """A configuration row named by a record; looked up here if the archive lacks it."""

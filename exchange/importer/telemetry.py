@@ -2,6 +2,7 @@
 images and black-box snapshots with their files."""
 
 import uuid
+from collections import defaultdict
 from itertools import islice
 from pathlib import PurePosixPath
 
@@ -34,7 +35,13 @@ def _batches(iterable, size):
 def _add_track_points(session: ImportSession, table, model, build):
     for batch in _batches(session.records(table), BATCH):
         uids = [uuid.UUID(r["uid"]) for r in batch]
-        known = set(model.objects.filter(uid__in=uids).values_list("uid", flat=True))
+        by_master = defaultdict(list)
+        for uid, r in zip(uids, batch, strict=True):
+            session.where = f"{table} record {uid}"
+            by_master[session.master(r["segment"]).pk].append(uid)
+        known = set()
+        for master_id, group in by_master.items():
+            known |= session.known(table, model, group, segment_id=master_id)
         fresh = []
         for uid, r in zip(uids, batch, strict=True):
             if uid in known:
@@ -129,7 +136,8 @@ def _add_with_file(session: ImportSession, table, row, record, formats, field="i
 def import_maps(session: ImportSession):
     for r in session.records("maps"):
         uid = uuid.UUID(r["uid"])
-        if MapImage.objects.filter(uid=uid).exists():
+        shift_id = session.entry_id(session.shifts, Shift, r["shift"], "shift")
+        if session.known("maps", MapImage, [uid], shift_id=shift_id):
             session.plan.note("maps", "unchanged")
             continue
         placement = {name: r[name] for name in MapImage.PLACEMENT_FIELDS if name != "frame"}
@@ -139,7 +147,7 @@ def import_maps(session: ImportSession):
             session.refuse(f"maps record {uid}: {describe(exc)}")
         row = MapImage(
             uid=uid,
-            shift_id=session.entry_id(session.shifts, Shift, r["shift"], "shift"),
+            shift_id=shift_id,
             **{name: r[name] for name in (*MapImage.PLACEMENT_FIELDS, "checksum")},
             robot_stamp=rec.time_in(r["robot_stamp"], "robot_stamp"),
             received=rec.time_in(r["received"], "received"),
@@ -150,7 +158,8 @@ def import_maps(session: ImportSession):
 def import_images(session: ImportSession):
     for r in session.records("images"):
         uid = uuid.UUID(r["uid"])
-        row = Image.objects.filter(uid=uid).first()
+        master = session.master(r["segment"])
+        row = session.stored("images", Image, uid, segment_id=master.pk)
         if row is not None:
             if row.description != r["description"]:
                 row.description = r["description"]
@@ -164,7 +173,7 @@ def import_images(session: ImportSession):
         row = Image(
             uid=uid,
             # A full row: the file's storage name contains the segment's uid.
-            segment=Segment.objects.get(pk=session.master(r["segment"]).pk),
+            segment=Segment.objects.get(pk=master.pk),
             description=r["description"],
             robot_stamp=rec.time_in(r["robot_stamp"], "robot_stamp"),
             received=rec.time_in(r["received"], "received"),
@@ -176,12 +185,13 @@ def import_recordings(session: ImportSession):
     # A snapshot never changes once stored: a known uid is left as it is.
     for r in session.records("recordings"):
         uid = uuid.UUID(r["uid"])
-        if Recording.objects.filter(uid=uid).exists():
+        master = session.master(r["segment"])
+        if session.known("recordings", Recording, [uid], segment_id=master.pk):
             session.plan.note("recordings", "unchanged")
             continue
         row = Recording(
             uid=uid,
-            segment=Segment.objects.get(pk=session.master(r["segment"]).pk),
+            segment=Segment.objects.get(pk=master.pk),
             start=rec.time_in(r["start"], "start"),
             end=rec.time_in(r["end"], "end"),
             topics=r["topics"],

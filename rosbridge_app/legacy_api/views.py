@@ -10,6 +10,7 @@ from rest_framework.views import APIView
 
 from common import roles
 from common.api.authentication import token_account
+from common.retries import stored_row
 from events.services import segments
 from events.services.segments import GpsPosition, LocalPosition
 from rosbridge_app.legacy_api import fields, targets
@@ -22,7 +23,9 @@ from telemetry.services import attachments, map_images, recording
 # The original's segment_type ids.
 MODE_OF_TYPE = {1: "ito", 2: "auto"}
 # Row uids made from what the node sends, so a request it repeats after a lost
-# answer stores nothing twice.
+# answer stores nothing twice.  Track points name their master too: a retry is
+# known by its uid within its segment, and the same stamps sent into a new leg
+# are new data.
 UIDS = uuid.UUID("6f1d1c52-1d0b-4c8e-9a51-2a8f3c7e9b10")
 
 
@@ -85,7 +88,7 @@ class SegmentView(LegacyView):
                     longitude=gps.longitude,
                     latitude=gps.latitude,
                     robot_stamp=stamp,
-                    uid=self.uid("switch", stamp, gps.longitude, gps.latitude),
+                    uid=self.uid("switch", report.master.pk, stamp, gps.longitude, gps.latitude),
                 )
                 recording.store_poses(report.master, [fix])
             return info(f"Created {mode.upper()} parent segment entry.")
@@ -123,7 +126,10 @@ class PoseView(LegacyView):
         lng, lat = fields.number(data, "lng"), fields.number(data, "lat")
         stamp = fields.robot_time(data, "orig_secs")
         fix = recording.GpsFix(
-            longitude=lng, latitude=lat, robot_stamp=stamp, uid=self.uid("pose", stamp, lng, lat)
+            longitude=lng,
+            latitude=lat,
+            robot_stamp=stamp,
+            uid=self.uid("pose", segment.master_id, stamp, lng, lat),
         )
         if recording.store_poses(segment, [fix]):
             return info("Created pose entry.")
@@ -143,7 +149,11 @@ class LocalPoseView(LegacyView):
         stamp = fields.robot_time(data, "orig_secs")
         frame = fields.text(data, "frame_id").lstrip("/")
         pose = recording.MapPose(
-            x=x, y=y, frame=frame, robot_stamp=stamp, uid=self.uid("local", stamp, x, y)
+            x=x,
+            y=y,
+            frame=frame,
+            robot_stamp=stamp,
+            uid=self.uid("local", segment.master_id, stamp, x, y),
         )
         if recording.record_local_poses(segment, [pose]):
             return info("Created local_pose entry.")
@@ -205,7 +215,8 @@ class ImageView(LegacyView):
         # The node sends its image buffer again at every switch, even when the
         # camera stalled: the same frame is stored once, on its first take-over.
         uid = self.uid("image", stamp, hashlib.sha256(content).hexdigest())
-        if Image.objects.filter(uid=uid).exists():
+        vehicle = targets.vehicle_of(request.user)
+        if stored_row(Image, uid, segment__leg__shift__vehicle=vehicle):
             return info("This frame is stored already, with the take-over it came first with.")
         attachments.attach_image(
             segment, content=content, description=description, robot_stamp=stamp, uid=uid

@@ -80,13 +80,6 @@ class MapFilter(TimeRangeFilterSet):
 class RobotDataViewSet(ServiceCreateMixin, ServiceBaseViewSet):
     """Robot data is created and deleted, never edited."""
 
-    def stored_row(self, uid):
-        return self.get_queryset().get(uid=uid)
-
-    def retry_owner(self, data):
-        # Rows sent for a segment are stored on its master.
-        return {"segment_id": data["segment"].master_id}
-
     def store_batch(self, request, serializer_class, store):
         stored = store(**self.payload(serializer_class).validated_data)
         return Response({"stored": stored}, status=status.HTTP_201_CREATED)
@@ -129,9 +122,7 @@ class LocalPoseViewSet(RobotDataViewSet):
     robot_actions = ("create", "batch")
 
     def create_with_service(self, data):
-        pose = s.map_pose(data)
-        recording.record_local_poses(data["segment"], [pose])
-        return self.stored_row(pose.uid)
+        return recording.store_local_pose(data["segment"], s.map_pose(data))
 
     @extend_schema(request=s.LocalPoseBatchSerializer, responses={201: s.BatchResultSerializer})
     @action(detail=False, methods=["post"])

@@ -60,6 +60,7 @@ def attach_recording(
         return existing
     if end < start:
         raise RuleViolation({"end": [_("The window ends before it starts.")]})
+    require_amendable(shifts__legs=segment.leg_id)
     path = Path(path)
     recording = Recording(
         segment=segment.master,
@@ -112,5 +113,6 @@ def delete_image(image: Image) -> None:
 
 @transaction.atomic
 def delete_recording(recording: Recording) -> None:
+    require_amendable_row(recording)
     announce_row(recording, deleted=True)
     recording.delete()

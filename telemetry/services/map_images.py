@@ -14,6 +14,7 @@ from common.errors import RuleViolation
 from common.retries import stored_rows
 from events.feed import announce_and_return
 from events.models import Shift
+from events.services.finality import require_amendable
 from telemetry.models import MapImage
 from telemetry.pictures import MAP_FORMATS, checked_picture
 from telemetry.services import pose_rows
@@ -80,6 +81,8 @@ def record_maps(shift: Shift, maps: list[MapPicture]) -> list[tuple[MapImage, bo
     for m in maps:
         m.uid = pose_rows.as_uuid(m.uid) if m.uid is not None else None
     known = stored_rows(MapImage, [m.uid for m in maps], shift_id=shift.pk)
+    if any(m.uid not in known for m in maps):
+        require_amendable(pk=shift.test_event_id)
     for m in maps:
         if m.uid in known:
             continue

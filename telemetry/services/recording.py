@@ -20,17 +20,19 @@ from django.utils import timezone
 from django.utils.translation import gettext as _
 
 from common.errors import RuleViolation
-from common.retries import stored_row
+from common.retries import refuse_foreign, stored_row
 from events import rules
 from events.feed import announce_track
 from events.models import PoseSource, Segment
 from events.selectors.segments import pose_target
+from events.services import deletion
+from events.services.finality import require_amendable
 from events.services.segments import GpsPosition
 from telemetry.models import LocalPose, Pose
 from telemetry.models.poses import FixStatus
 from telemetry.selectors.tracks import GPS, LOCAL
 from telemetry.services import pose_rows
-from telemetry.services.segment_figures import keep_figures
+from telemetry.services.segment_figures import keep_figures, measure_figures
 
 # The fix statuses a pose may carry and the one it gets when none is sent; every
 # check of a sent fix reads these.  (FixStatus.values builds a new list on each
@@ -131,9 +133,11 @@ def store_poses(
     if not fixes:
         return set()
     master = segment.master
+    require_amendable(shifts__legs__segments=master.pk)
     source_id = pose_source_id(master, pose_source.pk if pose_source is not None else None)
     stored = pose_rows.insert_fixes(master, source_id, fixes, timezone.now())
     new = {p.uid for p in stored}
+    refuse_foreign(Pose, [pose_rows.as_uuid(f.uid) for f in fixes], new, segment_id=master.pk)
     points = [(f.longitude, f.latitude) for f in fixes if pose_rows.as_uuid(f.uid) in new]
     announce_track(master, points, local=False)
     keep_figures(master.pk, GPS, stored)
@@ -163,6 +167,7 @@ def store_pose(
     received = timezone.now()
     source_id = pose_source_id(master, source_id)
     with transaction.atomic():
+        require_amendable(pk=master.leg.shift.test_event_id)
         stored = pose_rows.insert_pose(master.pk, fix, source_id, received)
         if stored is not None:
             pk, seen = stored
@@ -193,11 +198,40 @@ def known_pose(master: Segment, fix: GpsFix, source_id: int | None) -> Pose:
 
 
 @transaction.atomic
+def store_local_pose(segment: Segment, pose: MapPose) -> LocalPose:
+    """Store one map-frame pose; the new row, or the row stored first under its
+    uid on the same master (common.retries)."""
+    uid = pose_rows.as_uuid(pose.uid)
+    if record_local_poses(segment, [pose]):
+        return LocalPose.objects.filter(uid=uid, segment_id=segment.master_id).latest("id")
+    return stored_row(LocalPose, uid, segment_id=segment.master_id)
+
+
+def _track_point_deleted(sender, instance, **kwargs) -> None:
+    # Every write that changes poses keeps the figures: a deleted point is a
+    # step less, and its neighbours join (measured again from the poses).
+    measure_figures([instance.segment_id], [GPS if sender is Pose else LOCAL])
+
+
+def connect() -> None:
+    """Deleting a pose or local pose (events.services.deletion) keeps its master's figures."""
+    for model in (Pose, LocalPose):
+        deletion.deleted.connect(
+            _track_point_deleted, sender=model, dispatch_uid=f"ftt-figures-{model.__name__}"
+        )
+
+
+@transaction.atomic
 def record_local_poses(segment: Segment, poses: list[MapPose]) -> int:
     master = segment.master
+    if poses:
+        require_amendable(shifts__legs__segments=master.pk)
     fresh = pose_rows.insert_local_poses(master, poses, timezone.now()) if poses else []
     # The robot's heading for its marker: the yaw of the newest pose stored.
     stored = {point.uid for point in fresh}
+    refuse_foreign(
+        LocalPose, [pose_rows.as_uuid(p.uid) for p in poses], stored, segment_id=master.pk
+    )
     heading = next((p.yaw for p in reversed(poses) if pose_rows.as_uuid(p.uid) in stored), None)
     announce_track(master, [(p.x, p.y) for p in fresh], local=True, heading=heading)
     keep_figures(master.pk, LOCAL, fresh)

@@ -1,5 +1,7 @@
 """Export and import through an archive within one installation."""
 
+import json
+import uuid
 import zipfile
 from datetime import timedelta
 
@@ -11,6 +13,7 @@ from exchange.archive import ArchiveError, open_archive
 from exchange.export import export_events, select_events
 from exchange.importer import ImportRefused, import_bundle
 from telemetry.models import Image, MapImage, Pose
+from tests.support.archives import members_of, replace_record, signed_archive
 from tests.support.field_day import T0, configuration, field_day
 from tests.support.snapshot import snapshot
 
@@ -360,3 +363,88 @@ def test_commands_export_chosen_events_and_print_the_plan(day, tmp_path, wipe):
     assert list(TestEvent.objects.values_list("uid", flat=True)) == [other.uid]
     with pytest.raises(CommandError, match="does not exist"):
         call_command("ftt_import", str(tmp_path / "x.zip"))
+
+
+@pytest.mark.parametrize(
+    "table, model", [("notes", "Note"), ("poses", "Pose"), ("images", "Image")]
+)
+def test_a_record_whose_uid_is_another_segments_row_here_is_refused(day, tmp_path, table, model):
+    """Issue 42: a uid is one row everywhere; an archive that hangs a known uid
+    under another segment than here names another row, and nothing is imported."""
+    from events.models import Note
+
+    rows = {"Note": Note, "Pose": Pose, "Image": Image}[model].objects
+    first = rows.order_by("id").first()
+    master = Segment.objects.get(pk=first.segment_id).master
+    elsewhere = Segment.objects.filter(parent__isnull=True).exclude(pk=master.pk).first()
+    export_all(tmp_path / "day.zip")
+    members = members_of((tmp_path / "day.zip").read_bytes())
+
+    def moved(record):
+        if record["uid"] == str(first.uid):
+            return {**record, "segment": str(elsewhere.uid)}
+        return record
+
+    (tmp_path / "moved.zip").write_bytes(signed_archive(replace_record(members, table, moved)))
+    before = snapshot()
+
+    with pytest.raises(ImportRefused, match=f"{table} record {first.uid}: .*another row"):
+        load(tmp_path / "moved.zip")
+
+    assert snapshot() == before
+
+
+def test_an_archive_adds_nothing_to_a_test_event_final_here(day, tmp_path):
+    """Issue 46: an archive brings no poses into a test event finalised here."""
+    from events.services import finality
+
+    finality.finalise_test_event(TestEvent.objects.get())
+    export_all(tmp_path / "day.zip")
+    members = members_of((tmp_path / "day.zip").read_bytes())
+    poses = [json.loads(line) for line in members["data/poses.jsonl"].splitlines()]
+    late = {**poses[-1], "uid": str(uuid.uuid4()), "point": [7.2, 50.7]}
+    members["data/poses.jsonl"] += (json.dumps(late) + "\n").encode()
+    (tmp_path / "late.zip").write_bytes(signed_archive(members))
+    before = snapshot()
+
+    with pytest.raises(ImportRefused, match="final since .*Nothing was imported"):
+        load(tmp_path / "late.zip")
+
+    assert snapshot() == before
+
+
+def test_an_archive_of_a_final_event_new_here_brings_all_of_it(day, tmp_path, wipe):
+    from events.services import finality
+
+    finality.finalise_test_event(TestEvent.objects.get())
+    export_all(tmp_path / "day.zip")
+    before = snapshot()
+    wipe()
+
+    load(tmp_path / "day.zip")
+
+    assert snapshot() == before
+
+
+def test_an_archive_lists_poses_in_driving_order_unstamped_last(leg, tmp_path, media_root):
+    """Issue 42, defect 3: the same order on PostgreSQL and SpatiaLite."""
+    from events.models import SegmentType
+    from telemetry.services import recording
+
+    master = segments.report_mode(leg, SegmentType.AUTO).master
+    stamps = [None, T0 + timedelta(seconds=2), None, T0 + timedelta(seconds=1)]
+    recording.store_poses(
+        master, [recording.GpsFix(7.0 + i / 1e4, 50.6, robot_stamp=s) for i, s in enumerate(stamps)]
+    )
+    recording.record_local_poses(
+        master,
+        [recording.MapPose(float(i), 0.0, "map", robot_stamp=s) for i, s in enumerate(stamps)],
+    )
+    export_all(tmp_path / "order.zip")
+    members = members_of((tmp_path / "order.zip").read_bytes())
+
+    def sent(table, position):
+        return [position(json.loads(line)) for line in members[f"data/{table}.jsonl"].splitlines()]
+
+    assert sent("poses", lambda r: round((r["point"][0] - 7.0) * 1e4)) == [3, 1, 0, 2]
+    assert sent("local_poses", lambda r: int(r["x"])) == [3, 1, 0, 2]

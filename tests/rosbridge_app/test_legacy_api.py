@@ -1,16 +1,20 @@
 """Robots running the original FTT node log into FTT over HTTP, unchanged."""
 
 import base64
+import hashlib
 import importlib
 import io
+import uuid
+from datetime import UTC, datetime
 
 import pytest
 import requests
 from PIL import Image as PilImage
 
 from events.models import Segment, Vehicle
-from events.services import logs
+from events.services import finality, logs
 from events.services.robots import ensure_robot_account
+from rosbridge_app.legacy_api.views import UIDS
 from telemetry.models import Image, LocalPose, MapImage, Pose
 from tests.support.fkie import FKIE_BAG, full_rate_length, gps_path_length, master_path_length
 from tests.support.legacy_node import LegacyNode, jpeg
@@ -31,7 +35,13 @@ def field(live_server):
         leg = logs.create_leg(shift=logs.create_shift(test_event=event, vehicle=vehicle))
         token = ensure_robot_account(f"{key}-robot", [vehicle]).token
         address = f"{live_server.url.removeprefix('http://')}/legacy/{token}"
-        robots[key] = {"leg": leg, "address": address, "url": f"http://{address}"}
+        robots[key] = {
+            "leg": leg,
+            "address": address,
+            "url": f"http://{address}",
+            "vehicle": vehicle,
+            "token": token,
+        }
     return robots
 
 
@@ -171,6 +181,70 @@ def test_poses_local_poses_maps_and_images_are_stored_once(field):
     assert Image.objects.count() == 1
     with PilImage.open(io.BytesIO(Image.objects.get().image.read())) as picture:
         assert picture.format == "JPEG"
+
+
+def test_the_same_fixes_sent_into_a_new_leg_are_stored_there(field):
+    """Issue 47: a retry is known by its uid within its segment; the same stamps
+    in a new leg of the same vehicle are new data (5 requests)."""
+    robot = field["husky"]
+    fix = {"segment_id": "Current Segment", "lng": 7.1285, "lat": 50.6161, "orig_secs": 1.7e9}
+    call(robot, "POST", "segment", {"leg_id": "Current Leg", "segment_type_id": 2})
+    assert call(robot, "POST", "pose", fix).json() == "[INFO]: Created pose entry."
+    new_leg = logs.create_leg(shift=robot["leg"].shift)
+    call(robot, "POST", "segment", {"leg_id": "Current Leg", "segment_type_id": 2})
+
+    answer = call(robot, "POST", "pose", fix)
+
+    assert answer.json() == "[INFO]: Created pose entry."
+    assert [m.poses.count() for m in masters(robot["leg"])] == [1]
+    assert [m.poses.count() for m in masters(new_leg)] == [1]
+
+
+def test_a_frame_whose_uid_another_vehicle_took_is_refused(field, live_server):
+    """Issue 42: the original's uids are made from what the node sends, so another
+    robot can send one first; the frame is then refused, not answered "stored"."""
+    husky, jackal = field["husky"], field["jackal"]
+    for robot in (husky, jackal):
+        call(robot, "POST", "segment", {"leg_id": "Current Leg", "segment_type_id": 2})
+    frame = {"segment_id": "Current Segment", "image_data": jpeg(99), "orig_secs": 1.7e9 + 1}
+    picture = base64.b64decode(frame["image_data"])
+    stamp = datetime.fromtimestamp(frame["orig_secs"], UTC)
+    taken = uuid.uuid5(
+        UIDS, f"{husky['vehicle'].pk}|image|{stamp}|{hashlib.sha256(picture).hexdigest()}"
+    )
+    theirs = masters(jackal["leg"])[-1]
+    sent = requests.post(
+        f"{live_server.url}/api/images/",
+        data={"segment": theirs.pk, "uid": str(taken)},
+        files={"image": ("frame.jpg", picture, "image/jpeg")},
+        headers={"Authorization": f"Token {jackal['token']}"},
+        timeout=30,
+    )
+    assert sent.status_code == 201, sent.content
+
+    answer = call(husky, "POST", "image", frame)
+
+    assert answer.status_code == 400
+    assert answer.json()["message"].startswith("[ERROR] (RuleError)")
+    assert "uid" in answer.json()["message"]
+    assert list(Image.objects.values_list("segment_id", flat=True)) == [theirs.pk]
+
+
+def test_a_final_test_event_takes_no_pose_from_the_original_node(field):
+    """Issue 46: the node names a segment of a test event that is final by now."""
+    robot = field["husky"]
+    call(robot, "POST", "segment", {"leg_id": "Current Leg", "segment_type_id": 2})
+    master = masters(robot["leg"])[-1]
+    event = robot["leg"].shift.test_event
+    logs.close_test_event(event)
+    finality.finalise_test_event(event)
+    fix = {"segment_id": master.pk, "lng": 7.1285, "lat": 50.6161, "orig_secs": 1.7e9}
+
+    answer = call(robot, "POST", "pose", fix)
+
+    assert answer.status_code == 403
+    assert answer.json()["message"].startswith("[ERROR] (AuthError): This test event is final")
+    assert master.poses.count() == 0
 
 
 def test_a_robot_never_writes_into_another_vehicles_leg(field, live_server):

@@ -32,3 +32,18 @@ def upload(name="map.png", fmt="PNG", **kwargs) -> SimpleUploadedFile:
 
 # The smallest valid PNG (1×1, transparent), for tests that only need "a file".
 PNG = image_bytes((1, 1), (0, 0, 0, 0), "PNG", mode="RGBA")
+
+
+def map_form(shift, **fields) -> dict:
+    """The multipart form of a 4 x 3 map for ``shift`` (``POST /api/maps/``)."""
+    return {
+        "shift": shift.pk,
+        "frame": "map",
+        "width": 4,
+        "height": 3,
+        "resolution": 0.05,
+        "origin_x": 0,
+        "origin_y": 0,
+        "image": upload(),
+        **fields,
+    }

@@ -103,8 +103,9 @@ def _one_post(client, body):
 # Committed for real, as a server runs it: no test-wide transaction around it.
 @pytest.mark.django_db(transaction=True)
 def test_a_single_pose_is_one_short_transaction_of_three_inserts(api_client, leg):
-    """The same statements on PostgreSQL and SpatiaLite: the pose (its segment and
-    pose source checked in the same statement), its feed row and its segment's figures."""
+    """The same statements on PostgreSQL and SpatiaLite: whether its test event is
+    final, the pose (its segment and pose source checked in the same statement),
+    its feed row and its segment's figures."""
     child = segments.new_manual_segment(leg)
     master = child.parent
     client = api_client("operator")
@@ -114,6 +115,8 @@ def test_a_single_pose_is_one_short_transaction_of_three_inserts(api_client, leg
     response, every, in_transaction = post_counting_queries(client, "/api/poses/", body)
     assert response.status_code == 201, response.content
     assert len(every) == len(in_transaction) + 2, every  # nothing outside it
+    final, *in_transaction = in_transaction
+    assert final.startswith('SELECT "events_testevent"."finalised"'), final
     # The table each statement inserts into (PostgreSQL's figures upsert sits in
     # a WITH that also reads the row back when the upsert does not apply).
     assert [q.split("INSERT INTO ", 1)[1].split()[0] for q in in_transaction] == [
@@ -145,7 +148,8 @@ def test_a_single_pose_is_one_short_transaction_of_three_inserts(api_client, leg
     assert again.status_code == 200 and again.json() == response.json()
     assert Pose.objects.filter(uid=body["uid"]).count() == 1
     assert Announcement.objects.count() == feed_rows  # nothing new to announce
-    assert len(in_transaction) == 1 and len(every) == 4, every  # then the row stored first
+    # Whether the event is final, the insert, then the row stored first.
+    assert len(in_transaction) == 2 and len(every) == 5, every
 
 
 def test_a_robots_single_pose_costs_what_an_operators_does(api_client, robot_client, vehicle, leg):
@@ -213,11 +217,12 @@ def test_a_deleted_segment_is_noticed_although_it_was_kept(api_client, leg):
 @pytest.mark.parametrize(
     "size, queries",
     [
-        # The insert of unnested arrays, the segment's figures (lock, update), the feed row.
-        (10, 4),
-        # The staging table, COPY, the insert from it, the figures, the feed row.
-        (COPY_FROM, 6),
-        (5000, 6),
+        # Whether the test event is final, the insert of unnested arrays, the
+        # segment's figures (lock, update), the feed row.
+        (10, 5),
+        # The same with the staging table, COPY and the insert from it.
+        (COPY_FROM, 7),
+        (5000, 7),
     ],
 )
 def test_a_batch_costs_the_same_queries_whatever_its_size(size, queries, api_client, auto_master):

@@ -10,7 +10,7 @@ from django.core.files.uploadedfile import SimpleUploadedFile
 from events.models import SegmentType
 from events.services import segments
 from telemetry.models import Image, LocalPose, MapImage, Pose
-from tests.support.images import png
+from tests.support.images import map_form, png
 
 # On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
 pytestmark = pytest.mark.spatialite
@@ -19,21 +19,6 @@ pytestmark = pytest.mark.spatialite
 def _image(segment, uid):
     upload = SimpleUploadedFile("frame.png", png(), content_type="image/png")
     return {"segment": segment.pk, "uid": uid, "image": upload}
-
-
-def _map(shift, uid):
-    upload = SimpleUploadedFile("map.png", png(), content_type="image/png")
-    return {
-        "shift": shift.pk,
-        "uid": uid,
-        "frame": "map",
-        "width": 4,
-        "height": 3,
-        "resolution": 0.05,
-        "origin_x": 0,
-        "origin_y": 0,
-        "image": upload,
-    }
 
 
 CASES = {
@@ -50,7 +35,7 @@ CASES = {
         lambda m, uid: {"segment": m.pk, "uid": uid, "frame": "map", "x": 12.5, "y": -3.0},
     ),
     "image": ("/api/images/", Image, "multipart", _image),
-    "map": ("/api/maps/", MapImage, "multipart", lambda m, uid: _map(m.leg.shift, uid)),
+    "map": ("/api/maps/", MapImage, "multipart", lambda m, uid: map_form(m.leg.shift, uid=uid)),
 }
 
 
