@@ -144,7 +144,8 @@ step() {
 # which is shown when it ends; its time and failure are recorded as step's.
 declare -A together_pid=() together_t0=()
 together_names=()
-logs=$(mktemp -d "${TMPDIR:-/tmp}/ftt-test.XXXXXX")
+# Short: sockets made below a test's tmp_path have at most 107 bytes of path.
+logs=$(mktemp -d "${TMPDIR:-/tmp}/ftt-XXXX")
 start_together() { # NAME COMMAND...
     local name=$1
     shift
@@ -222,7 +223,7 @@ workers=${FTT_TEST_WORKERS:-$(($(nproc) + 1))}
 spread=()
 [ "$workers" -eq 0 ] || spread=(-n "$workers" --dist loadfile)
 # Each run its own JUnit file and temporary folder: the runs side by side must
-# not clear each other's, and a short one keeps socket paths below 108 bytes.
+# not clear each other's.
 pg_files=("--junitxml=$logs/pg.xml" "--basetemp=$logs/pg")
 sl_files=("--junitxml=$logs/sl.xml" "--basetemp=$logs/sl")
 e2e_files=("--junitxml=$logs/e2e.xml" "--basetemp=$logs/e2e")

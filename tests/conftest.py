@@ -13,6 +13,7 @@ from events.models import Performer, Personnel, PoseSource, TestEvent, Vehicle
 from events.services import logs
 from events.services.robots import ensure_robot_account
 from rosbridge_app import wakeup
+from tests.support.databases import use_migrated_template
 from tests.support.modes import start_auto
 from tests.support.snapshot import snapshot
 from tests.support.workers import assign_worker_resources
@@ -23,6 +24,8 @@ QUICK_PBKDF2 = "tests.support.accounts.QuickPBKDF2PasswordHasher"
 def pytest_configure(config):
     # Before a test module imports rclpy or reads the Redis URL.
     assign_worker_resources()
+    # Before pytest-django creates the test database.
+    use_migrated_template()
 
 
 def pytest_runtest_setup(item):

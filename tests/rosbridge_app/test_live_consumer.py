@@ -16,9 +16,7 @@ from rosbridge_app import consumers, wakeup
 from rosbridge_app.consumers import LiveConsumer
 from telemetry.services import recording
 
-# On SpatiaLite too: the live feed is woken differently per database.
 pytestmark = [
-    pytest.mark.spatialite,
     pytest.mark.django_db(transaction=True),
     pytest.mark.asyncio,
 ]

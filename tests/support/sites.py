@@ -24,7 +24,8 @@ APPS = (
 )
 
 
-def _code_digest() -> str:
+def code_digest() -> str:
+    """Names a migrated database by the code that made it."""
     digest = hashlib.sha256(sys.version.encode())
     for path in sorted(p for app in APPS for p in (ROOT / app).rglob("*.py")):
         digest.update(str(path.relative_to(ROOT)).encode() + b"\0" + path.read_bytes())
@@ -35,7 +36,7 @@ def copy_migrated_database(data_dir: Path) -> None:
     """Puts a fully migrated embedded database into ``data_dir`` (which has none),
     as ``manage.py migrate`` would make it: migrated once per version of the code
     and copied, because the whole chain of migrations takes seconds per site."""
-    template = Path(tempfile.gettempdir()) / "ftt-test-migrated" / f"{_code_digest()}.sqlite3"
+    template = Path(tempfile.gettempdir()) / "ftt-test-migrated" / f"{code_digest()}.sqlite3"
     if not template.exists():
         build = Path(tempfile.mkdtemp(prefix="ftt-migrating-"))
         Site(build).manage("migrate", "--noinput", "-v", "0")

@@ -1,0 +1,58 @@
+"""The PostgreSQL database every xdist worker's test database is copied from.
+
+pytest-django makes each worker's test database and migrates it: the whole
+chain of migrations once per worker. Instead one worker migrates a template,
+named by the digest of the code that migrations can run, and Django creates
+every test database as a copy of it (``TEST["TEMPLATE"]``), whose migrate then
+finds nothing to do.
+"""
+
+import tempfile
+
+import psycopg
+from django.conf import settings
+
+from tests.support.sites import Site, code_digest
+
+_LOCK = 4_112_026  # any number the server's other users do not lock
+
+
+def use_migrated_template() -> None:
+    """Points this process's test database at the migrated template, making the
+    template first when no process has (one at a time, under an advisory lock)."""
+    db = settings.DATABASES["default"]
+    if db["ENGINE"] != "django.contrib.gis.db.backends.postgis":
+        return
+    name = f"ftt_template_{code_digest()}"
+    server = {
+        "host": db["HOST"] or "127.0.0.1",
+        "port": db["PORT"] or 5432,
+        "user": db["USER"],
+        "password": db["PASSWORD"],
+    }
+    with psycopg.connect(**server, dbname="postgres", autocommit=True) as conn:
+        conn.execute("SELECT pg_advisory_lock(%s)", (_LOCK,))
+        try:
+            found = conn.execute("SELECT 1 FROM pg_database WHERE datname = %s", (name,))
+            if found.fetchone() is None:
+                _make_template(conn, server, name)
+        finally:
+            conn.execute("SELECT pg_advisory_unlock(%s)", (_LOCK,))
+    db.setdefault("TEST", {})["TEMPLATE"] = name
+
+
+def _make_template(conn, server: dict, name: str) -> None:
+    # Templates of earlier code are of no use any more.
+    stale = conn.execute("SELECT datname FROM pg_database WHERE datname LIKE 'ftt\\_template\\_%%'")
+    for (old,) in stale.fetchall():
+        conn.execute(f'DROP DATABASE "{old}" WITH (FORCE)')
+    building = f"{name}_building"
+    conn.execute(f'CREATE DATABASE "{building}"')
+    url = (
+        f"postgis://{server['user']}:{server['password']}@{server['host']}:{server['port']}"
+        f"/{building}"
+    )
+    Site(tempfile.mkdtemp(prefix="ftt-template-"), FTT_DATABASE_URL=url).manage(
+        "migrate", "--noinput", "-v", "0"
+    )
+    conn.execute(f'ALTER DATABASE "{building}" RENAME TO "{name}"')
