@@ -20,6 +20,7 @@ from common.models import AccountPreference
 from rosbridge_app.collector import conversions, params
 from rosbridge_app.collector.disk_guard import DiskGuard
 from rosbridge_app.collector.hearing import RESUBSCRIBE, Hearing
+from tests.support.sites import APPS
 from tests.support.typst_words import TypstWords
 
 ROOT = Path(settings.BASE_DIR)
@@ -174,17 +175,7 @@ def test_the_gui_scripts_hand_no_untranslated_words_to_the_page():
 
 
 # The apps of FTT whose modules a user's messages come from.
-PACKAGES = [
-    "basemaps",
-    "common",
-    "events",
-    "exchange",
-    "ftt_site",
-    "gui",
-    "reports",
-    "rosbridge_app",
-    "telemetry",
-]
+PACKAGES = APPS
 # Errors whose message a person reads: as an API or form field message, the
 # command line's error, an archive's or report's refusal.
 SHOWN_ERRORS = {

@@ -10,18 +10,8 @@ import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-# Everything a migration can run: the apps' code, not the tests.
-APPS = (
-    "basemaps",
-    "common",
-    "events",
-    "exchange",
-    "ftt_site",
-    "gui",
-    "reports",
-    "rosbridge_app",
-    "telemetry",
-)
+# FTT's apps, whose code a migration can run (the tests' is not among it).
+APPS = sorted(path.parent.name for path in ROOT.glob("*/apps.py"))
 
 
 def code_digest() -> str:
