@@ -27,7 +27,6 @@ from django.utils import timezone
 from django.utils.translation import gettext as _
 from django.utils.translation import ngettext
 
-from common.directory import DirectoryUnavailable
 from ftt_site.proxies import client_of
 
 
@@ -99,6 +98,10 @@ class DirectoryUnavailableMiddleware:
         return self.get_response(request)
 
     def process_exception(self, request, exception):
+        # Here, not at the top: every process loads this module (ftt_site.apps),
+        # and the LDAP client only matters where a directory signs people in.
+        from common.directory import DirectoryUnavailable
+
         if not isinstance(exception, DirectoryUnavailable):
             return None
         seconds = exception.retry_after

@@ -4,7 +4,8 @@
 # make sure Redis answers, lint, and run the test suite:
 #   (lint: ruff, the import layers of pyproject.toml, ESLint for static/gui,
 #    and the shell linter over the scripts)
-#   a) everything but tests/e2e on PostGIS, spread over xdist workers;
+#   a) everything but tests/e2e on PostGIS, spread over xdist workers (the
+#      tests marked `serial` in one process of their own, beside b and c);
 #   b) the tests marked `spatialite` (the code under them differs between the
 #      databases, or they drive the embedded database) on SpatiaLite, side by
 #      side with
@@ -227,17 +228,23 @@ spread=()
 pg_files=("--junitxml=$logs/pg.xml" "--basetemp=$logs/pg")
 sl_files=("--junitxml=$logs/sl.xml" "--basetemp=$logs/sl")
 e2e_files=("--junitxml=$logs/e2e.xml" "--basetemp=$logs/e2e")
+serial_files=("--junitxml=$logs/serial.xml" "--basetemp=$logs/serial")
 
 if [ -n "${FTT_DATABASE_URL:-}" ]; then
     step "pytest on PostGIS" "${pytest[@]}" -p no:playwright "${spread[@]}" "${pg_files[@]}" \
-        tests --ignore=tests/e2e
+        -m "not serial" tests --ignore=tests/e2e
+    start_together "pytest on PostGIS, tests marked serial (one process)" "${pytest[@]}" \
+        -p no:playwright -p no:xdist "${serial_files[@]}" -m serial tests --ignore=tests/e2e
     # The same code on the embedded database only where it differs from PostGIS.
     start_together "pytest on SpatiaLite (marked spatialite)" env -u FTT_DATABASE_URL \
         "${pytest[@]}" -p no:playwright "${spread[@]}" "${sl_files[@]}" \
         -m "spatialite and not postgis_only" tests --ignore=tests/e2e
 else
     step "pytest on SpatiaLite (FTT_TEST_SPATIALITE=1)" "${pytest[@]}" -p no:playwright \
-        "${spread[@]}" "${sl_files[@]}" tests --ignore=tests/e2e -m "not postgis_only"
+        "${spread[@]}" "${sl_files[@]}" tests --ignore=tests/e2e -m "not postgis_only and not serial"
+    start_together "pytest on SpatiaLite, tests marked serial (one process)" "${pytest[@]}" \
+        -p no:playwright -p no:xdist "${serial_files[@]}" -m "serial and not postgis_only" \
+        tests --ignore=tests/e2e
 fi
 
 if [ -d tests/e2e ]; then

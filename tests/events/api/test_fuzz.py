@@ -61,6 +61,9 @@ OWN_PATHS = (
     r"|pose-sources|weather|ito-reasons|segment-types|poses|local-poses|maps|images|tracks"
     r"|local-tracks)/"
 )
+# Every operation is a case of one test with one node id: xdist would run one.
+pytestmark = pytest.mark.serial
+
 schema = schemathesis.openapi.from_dict(_openapi(), config=CONFIG).include(path_regex=OWN_PATHS)
 
 
