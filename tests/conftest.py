@@ -13,12 +13,13 @@ from events.models import Performer, Personnel, PoseSource, TestEvent, Vehicle
 from events.services import logs
 from events.services.robots import ensure_robot_account
 from rosbridge_app import wakeup
-from tests.support.databases import use_migrated_template
+from tests.support.databases import place_migrated_embedded_database, use_migrated_template
 from tests.support.modes import start_auto
 from tests.support.snapshot import snapshot
 from tests.support.workers import assign_worker_resources
 
 QUICK_PBKDF2 = "tests.support.accounts.QuickPBKDF2PasswordHasher"
+EMBEDDED_COPY = pytest.StashKey[bool]()
 
 
 def pytest_configure(config):
@@ -31,6 +32,18 @@ def pytest_configure(config):
 def pytest_runtest_setup(item):
     if item.get_closest_marker("postgis_only") and connection.vendor != "postgresql":
         pytest.skip("needs PostgreSQL (row locks, parallel writers)")
+
+
+@pytest.fixture(scope="session")
+def django_db_modify_db_settings(django_db_modify_db_settings_parallel_suffix, request):
+    """pytest-django's hook before it creates the test database, after it named it."""
+    request.config.stash[EMBEDDED_COPY] = place_migrated_embedded_database()
+
+
+@pytest.fixture(scope="session")
+def django_db_keepdb(request, django_db_modify_db_settings):
+    """The embedded test database copied into place is used as it is."""
+    return request.config.getvalue("reuse_db") or request.config.stash[EMBEDDED_COPY]
 
 
 @pytest.fixture(scope="session", autouse=True)

@@ -1,18 +1,20 @@
-"""The PostgreSQL database every xdist worker's test database is copied from.
+"""The migrated databases every xdist worker's test database is copied from.
 
 pytest-django makes each worker's test database and migrates it: the whole
 chain of migrations once per worker. Instead one worker migrates a template,
-named by the digest of the code that migrations can run, and Django creates
-every test database as a copy of it (``TEST["TEMPLATE"]``), whose migrate then
-finds nothing to do.
+named by the digest of the code that migrations can run: on PostgreSQL Django
+creates every test database as a copy of it (``TEST["TEMPLATE"]``); on the
+embedded database the file is copied into place and kept (keepdb). Either
+way Django's migrate then finds nothing to do.
 """
 
 import tempfile
+from pathlib import Path
 
 import psycopg
 from django.conf import settings
 
-from tests.support.sites import Site, code_digest
+from tests.support.sites import Site, code_digest, copy_sqlite, migrated_template
 
 _LOCK = 4_112_026  # any number the server's other users do not lock
 
@@ -56,3 +58,13 @@ def _make_template(conn, server: dict, name: str) -> None:
         "migrate", "--noinput", "-v", "0"
     )
     conn.execute(f'ALTER DATABASE "{building}" RENAME TO "{name}"')
+
+
+def place_migrated_embedded_database() -> bool:
+    """Copies the migrated embedded database to where this worker's test database
+    goes (its name has the xdist suffix by now); True when it did."""
+    db = settings.DATABASES["default"]
+    if db["ENGINE"] != "ftt_site.db_spatialite":
+        return False
+    copy_sqlite(migrated_template(), Path(db["TEST"]["NAME"]))
+    return True

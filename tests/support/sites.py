@@ -26,20 +26,28 @@ def copy_migrated_database(data_dir: Path) -> None:
     """Puts a fully migrated embedded database into ``data_dir`` (which has none),
     as ``manage.py migrate`` would make it: migrated once per version of the code
     and copied, because the whole chain of migrations takes seconds per site."""
+    data_dir.mkdir(parents=True, exist_ok=True)
+    copy_sqlite(migrated_template(), data_dir / "ftt.sqlite3")
+
+
+def migrated_template() -> Path:
+    """The embedded database ``manage.py migrate`` makes from this code, made once."""
     template = Path(tempfile.gettempdir()) / "ftt-test-migrated" / f"{code_digest()}.sqlite3"
     if not template.exists():
         build = Path(tempfile.mkdtemp(prefix="ftt-migrating-"))
         Site(build).manage("migrate", "--noinput", "-v", "0")
         template.parent.mkdir(exist_ok=True)
         part = template.with_suffix(f".{os.getpid()}.part")
-        _copy_sqlite(build / "ftt.sqlite3", part)
+        copy_sqlite(build / "ftt.sqlite3", part)
         part.replace(template)  # atomic: another worker may be making the same
-    data_dir.mkdir(parents=True, exist_ok=True)
-    _copy_sqlite(template, data_dir / "ftt.sqlite3")
+    return template
 
 
-def _copy_sqlite(source: Path, target: Path) -> None:
-    # SQLite's backup copies a consistent state, WAL or not.
+def copy_sqlite(source: Path, target: Path) -> None:
+    # SQLite's backup copies a consistent state, WAL or not; a WAL left by an
+    # earlier database of that name would be replayed into the copy.
+    for leftover in ("-wal", "-shm"):
+        target.with_name(target.name + leftover).unlink(missing_ok=True)
     with sqlite3.connect(source) as src, sqlite3.connect(target) as dst:
         src.backup(dst)
     target.chmod(0o600)
