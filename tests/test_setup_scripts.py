@@ -191,3 +191,15 @@ def test_a_wrong_interface_folder_is_named_before_anything_is_built(tmp_path, fo
     assert says.format(tmp=tmp_path) in result.stderr
     assert "FTT_ROS_INTERFACES: a folder cannot be built" in result.stderr
     assert not prefix.exists()
+
+
+def test_every_test_that_skips_on_postgis_runs_in_the_spatialite_pass():
+    """scripts/test.sh runs on SpatiaLite only the tests marked spatialite, so a
+    test that skips on PostGIS and lacks the mark would never run."""
+    unmarked = [
+        str(path.relative_to(ROOT))
+        for path in sorted((ROOT / "tests").rglob("test_*.py"))
+        if 'on the embedded database")' in (text := path.read_text())
+        and "pytest.mark.spatialite" not in text
+    ]
+    assert unmarked == []

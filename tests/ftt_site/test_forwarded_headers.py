@@ -11,6 +11,9 @@ from django.test import Client
 
 from tests.support.web import WebServer
 
+# On SpatiaLite: its server test drives a server of its own on the embedded database.
+pytestmark = pytest.mark.spatialite
+
 SCRAPER = "10.9.9.9"
 
 

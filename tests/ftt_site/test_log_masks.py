@@ -8,6 +8,9 @@ import requests
 
 from tests.support.web import WebServer
 
+# On SpatiaLite: its server test drives a server of its own on the embedded database.
+pytestmark = pytest.mark.spatialite
+
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
