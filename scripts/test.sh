@@ -9,8 +9,7 @@
 #   b) the tests marked `spatialite` (the code under them differs between the
 #      databases, or they drive the embedded database) on SpatiaLite, side by
 #      side with
-#   c) the browser tests in tests/e2e, in pytest processes of their own (two
-#      xdist workers, each with its own server and browser).
+#   c) the browser tests in tests/e2e, in a pytest process of their own.
 # Exits non-zero when any step fails; the last lines give each phase's time
 # and its slowest tests.
 #
@@ -252,15 +251,12 @@ if [ -d tests/e2e ]; then
     # Browser tests need their own process: Playwright's sync API keeps an
     # event loop running in the test thread, which pytest-asyncio's tests
     # cannot share.
-    # Two workers, each with a server and a browser of its own, past the ROS
-    # domains and Redis databases of the run beside it.
-    e2e_spread=()
-    [ "$workers" -eq 0 ] || e2e_spread=(-n 2 --dist loadfile)
+    # Past the ROS domains and Redis databases of the run beside it.
     beside=$((workers > 0 ? workers : 1))
     redis_db=${FTT_TEST_REDIS_URL##*/}
     step --may-be-empty "pytest e2e (browser)" env FTT_ROS_DOMAIN_ID=$((ROS_DOMAIN_ID + beside)) \
         FTT_TEST_REDIS_URL="${FTT_TEST_REDIS_URL%/*}/$((redis_db + beside))" \
-        "${pytest[@]}" "${e2e_spread[@]}" "${e2e_files[@]}" tests/e2e
+        "${pytest[@]}" "${e2e_files[@]}" tests/e2e
 fi
 finish_together
 

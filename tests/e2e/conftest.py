@@ -17,7 +17,6 @@ import pytest
 from PIL import Image
 
 from tests.e2e.link import Link
-from tests.support import workers
 from tests.support.browser import (
     ARTIFACTS,
     Server,
@@ -88,7 +87,7 @@ def postgres_server(tmp_path_factory):
     url = os.environ.get("FTT_DATABASE_URL", "")
     if not url.startswith(("postgis://", "postgres://", "postgresql://")):
         pytest.skip("needs FTT_DATABASE_URL naming a PostgreSQL server (scripts/test.sh sets it)")
-    database = fresh_database(url, f"e2e{workers.INDEX}")
+    database = fresh_database(url, "e2e")
     srv = Server(
         tmp_path_factory.mktemp("ftt-e2e-postgres"),
         _tile_url(),
