@@ -86,9 +86,9 @@ def _live_link_closed(request):
 
 @pytest.fixture(scope="session", autouse=True)
 def _quick_password_hashes():
-    """Django's PBKDF2 takes half a second per password at its million rounds,
-    and the tests make hundreds of accounts; a thousand rounds make the same kind
-    of hash, which the servers the tests start check as they check any other."""
+    """Django's million PBKDF2 rounds are meant to be slow, and the tests make
+    hundreds of accounts; a thousand rounds make the same kind of hash, which the
+    servers the tests start check as they check any other."""
     with override_settings(PASSWORD_HASHERS=[QUICK_PBKDF2, *settings.PASSWORD_HASHERS]):
         yield
 

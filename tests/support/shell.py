@@ -3,7 +3,7 @@
 Each snippet runs as ``manage.py shell -c`` runs it (a fresh namespace, its
 printed output returned, a failure raised with its traceback), in a process
 apart from the test and the server, but without a new interpreter and Django
-set-up (seconds each) for every snippet. Between snippets the process forgets
+set-up for every snippet. Between snippets the process forgets
 what a new one would not have: database connections, per-process caches, the
 active language.
 """
