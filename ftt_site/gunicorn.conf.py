@@ -55,10 +55,9 @@ def on_starting(server):
     if not server.cfg.preload_app:
         return
     # Everything loaded so far lives as long as the process.  Frozen, it is left
-    # out of the collector's full passes: with ~230 000 objects each such pass
-    # took 1.5-2 s on the busy 2-core machine, and a 5 000-pose batch triggered
-    # one every other request (benchmarks/api_throughput.py).  The forked
-    # workers inherit the frozen set, and their pages of it stay shared.
+    # out of the cyclic collector's full passes, which large batches would
+    # otherwise trigger often; the forked workers inherit the frozen set, and
+    # their pages of it stay shared.
     gc.freeze()
 
 

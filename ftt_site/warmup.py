@@ -23,7 +23,7 @@ def warm_up() -> None:
     the life of the process."""
     # Loading the root configuration imports every included one with its views.
     resolve("/")
-    # The first reverse() indexes every pattern (70 ms of the first cockpit page);
+    # The first reverse() indexes every pattern, which the first page would pay;
     # a namespaced name indexes its namespace too.
     reverse("admin:index")
     for name in FIRST_TEMPLATES:

@@ -42,8 +42,7 @@ def checked_picture(content: bytes, formats: dict[str, str] = PHOTO_FORMATS) -> 
                 if picture.format == "PNG":
                     # Every chunk's CRC, the pixel data's included, and the end
                     # marker: a truncated or damaged file is refused without
-                    # inflating it. Decoding a robot's 2000×2000 map took 13 ms,
-                    # most of the cost of replaying a collector's outage spool.
+                    # inflating it, which would dominate an outage spool's replay.
                     picture.verify()
                 else:
                     picture.load()

@@ -122,8 +122,8 @@ def _raster_tile(reader, z, x, y, fmt) -> bytes | None:
         image = reader.tile(x, y, z)
     except TileOutsideBounds:
         return None
-    # zlevel 1: tiles travel over the field LAN; encoding time matters more than
-    # the ~10 % of bytes the default level saves (benchmarks/basemap_tiles.py).
+    # zlevel 1: tiles travel over the field LAN, where encoding time matters
+    # more than the few bytes the default level saves.
     options = {"zlevel": 1} if fmt == "png" else {}
     return image.render(img_format=FORMATS[fmt], **options)
 

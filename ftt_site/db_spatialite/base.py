@@ -5,10 +5,9 @@ runs too late and ``migrate`` fails inside the ISO metadata triggers (Django
 ticket #32935).  Initialising the metadata tables up front avoids that.
 
 Loading ``mod_spatialite`` sets the connection's busy timeout to SpatiaLite's
-own 5 s, replacing the one Django gave ``sqlite3.connect`` (``OPTIONS["timeout"]``).
-Under 200 concurrent clients a writer then gave up after 5 s in the queue for
-the write lock ("database is locked", 503) although the settings promise a
-longer wait; the timeout is set again once the extension is in.
+own 5 s, replacing the one Django gave ``sqlite3.connect`` (``OPTIONS["timeout"]``),
+so a writer queued for the write lock would give up sooner than the settings
+promise; the timeout is set again once the extension is in.
 
 The wheels' own PROJ and GDAL are loaded before the first connection loads
 ``mod_spatialite`` (``ftt_site.native_libs``).

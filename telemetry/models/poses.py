@@ -68,8 +68,7 @@ class Pose(TrackPoint):
         indexes = [
             # The driving order (selectors/driving_order.py) to its last key, so
             # reading a track needs no sort; on PostgreSQL the covered columns let
-            # the statistics of a million poses come from the index alone
-            # (benchmarks/report_benchmark.py).
+            # the statistics come from the index alone.
             models.Index(
                 fields=["segment", "robot_stamp", "received", "id"],
                 include=["point", "fix_status"],

@@ -89,8 +89,8 @@ class _HardLink(File):
 
 def _store_file(recording: Recording, path: Path) -> None:
     """Put the file into media storage without copying it where possible: the
-    collector stores a 12 MB snapshot in the same transaction as the mode and
-    pose rows behind it, and a copy took 20-40 ms of it."""
+    collector stores a snapshot of many megabytes in the same transaction as the
+    mode and pose rows behind it, which a copy would hold open."""
     link = path.with_name(f".{path.name}.{uuid.uuid4().hex[:8]}.link")
     try:
         os.link(path, link)
