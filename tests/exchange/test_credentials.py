@@ -7,7 +7,7 @@ import subprocess
 import sys
 import zipfile
 
-from tests.support.sites import ROOT, Site
+from tests.support.sites import ROOT, Site, fresh_site
 
 ACCOUNTS = """
 from django.contrib.auth.models import Group, User
@@ -43,8 +43,7 @@ def sign_ins(site: Site, token: str) -> dict:
 
 
 def test_saved_sign_ins_come_back_after_a_restore(tmp_path):
-    site = Site(tmp_path / "site")
-    site.manage("migrate", "--noinput")
+    site = fresh_site(tmp_path / "site")
     token = site.python(ACCOUNTS).split("TOKEN", 1)[1].strip()
     assert sign_ins(site, token) == {"alice": True, "robot": True}
 
@@ -67,8 +66,7 @@ def test_saved_sign_ins_come_back_after_a_restore(tmp_path):
 
 
 def test_a_file_that_is_not_saved_sign_ins_is_refused(tmp_path):
-    site = Site(tmp_path / "site")
-    site.manage("migrate", "--noinput")
+    site = fresh_site(tmp_path / "site")
     wrong = tmp_path / "wrong.json"
     wrong.write_text('{"format": "something else"}')
     done = subprocess.run(

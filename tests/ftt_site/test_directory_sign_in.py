@@ -10,6 +10,7 @@ import pytest
 import requests
 
 from tests.support.directory import PERSONS, Directory, slapd_available
+from tests.support.sites import copy_migrated_database
 from tests.support.web import WebServer
 
 # On SpatiaLite only: drives a server of its own on the embedded database.
@@ -38,8 +39,8 @@ def server(tmp_path_factory, directory):
         "FTT_LDAP_TIMEOUT": "2",
         **directory.environment(),
     }
+    copy_migrated_database(data_dir)
     web = WebServer(env, workers=1, log=data_dir / "server.log")
-    web.manage("migrate", "--noinput")
     web.manage("ftt_ensure_admin")
     yield web.start(migrate=False)
     web.stop()

@@ -6,6 +6,7 @@ import os
 import pytest
 import requests
 
+from tests.support.sites import copy_migrated_database
 from tests.support.web import WebServer
 
 # On SpatiaLite: its server test drives a server of its own on the embedded database.
@@ -23,7 +24,7 @@ def server(tmp_path_factory):
         workers=1,
         log=data_dir / "server.log",
     )
-    web.manage("migrate", "--noinput")
+    copy_migrated_database(data_dir)
     web.python('from events.models import Vehicle; Vehicle.objects.create(key="rover")')
     token = web.manage("ftt_robot_account", "robot-a", "--vehicle", "rover").strip()
     yield web.start(migrate=False), token

@@ -11,6 +11,7 @@ import pytest
 import requests
 
 from tests.support.drill import prepare
+from tests.support.sites import copy_migrated_database
 from tests.support.web import WebServer
 
 # On SpatiaLite too: the README's server runs on the embedded database.
@@ -27,7 +28,7 @@ pytestmark = [
 def data_dir(tmp_path_factory):
     """One migrated SpatiaLite file that each test's server starts on."""
     folder = tmp_path_factory.mktemp("server")
-    WebServer({"FTT_DATA_DIR": str(folder)}).manage("migrate", "--noinput")
+    copy_migrated_database(folder)
     return folder
 
 
