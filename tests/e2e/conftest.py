@@ -26,6 +26,7 @@ from tests.support.browser import (
     open_leg_code,
     system_chromium,
 )
+from tests.support.databases import migrated_postgres_template
 
 # Playwright's sync API keeps an event loop in the test thread.
 os.environ.setdefault("DJANGO_ALLOW_ASYNC_UNSAFE", "true")
@@ -87,7 +88,8 @@ def postgres_server(tmp_path_factory):
     url = os.environ.get("FTT_DATABASE_URL", "")
     if not url.startswith(("postgis://", "postgres://", "postgresql://")):
         pytest.skip("needs FTT_DATABASE_URL naming a PostgreSQL server (scripts/test.sh sets it)")
-    database = fresh_database(url, "e2e")
+    # A copy of the migrated template, so the server finds nothing to migrate.
+    database = fresh_database(url, "e2e", migrated_postgres_template())
     srv = Server(
         tmp_path_factory.mktemp("ftt-e2e-postgres"),
         _tile_url(),

@@ -144,13 +144,15 @@ def _maintenance_connection(parts):
     )
 
 
-def fresh_database(url: str, suffix: str) -> str:
-    """An empty database next to the one ``url`` names (PostgreSQL); returns its URL."""
+def fresh_database(url: str, suffix: str, template: str = "") -> str:
+    """A database next to the one ``url`` names (PostgreSQL), empty or a copy of
+    ``template``; returns its URL."""
     parts = urlsplit(url)
     name = f"test_{parts.path.lstrip('/')}_{suffix}"
+    copy_of = f' TEMPLATE "{template}"' if template else ""
     with _maintenance_connection(parts) as conn:
         conn.execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
-        conn.execute(f'CREATE DATABASE "{name}"')
+        conn.execute(f'CREATE DATABASE "{name}"{copy_of}')
     return urlunsplit(parts._replace(path=f"/{name}"))
 
 

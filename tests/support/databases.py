@@ -17,14 +17,23 @@ from django.conf import settings
 from tests.support.sites import Site, code_digest, copy_sqlite, migrated_template
 
 _LOCK = 4_112_026  # any number the server's other users do not lock
+_KEPT_TEMPLATES = 8
 
 
 def use_migrated_template() -> None:
     """Points this process's test database at the migrated template, making the
-    template first when no process has (one at a time, under an advisory lock)."""
+    template first when no process has."""
+    name = migrated_postgres_template()
+    if name:
+        settings.DATABASES["default"].setdefault("TEST", {})["TEMPLATE"] = name
+
+
+def migrated_postgres_template() -> str:
+    """The name of the PostgreSQL database migrated by this code, made when missing
+    (one process at a time, under an advisory lock); "" on the embedded database."""
     db = settings.DATABASES["default"]
     if db["ENGINE"] != "django.contrib.gis.db.backends.postgis":
-        return
+        return ""
     name = f"ftt_template_{code_digest()}"
     server = {
         "host": db["HOST"] or "127.0.0.1",
@@ -40,12 +49,17 @@ def use_migrated_template() -> None:
                 _make_template(conn, server, name)
         finally:
             conn.execute("SELECT pg_advisory_unlock(%s)", (_LOCK,))
-    db.setdefault("TEST", {})["TEMPLATE"] = name
+    return name
 
 
 def _make_template(conn, server: dict, name: str) -> None:
-    # Templates of earlier code are of no use any more.
-    stale = conn.execute("SELECT datname FROM pg_database WHERE datname LIKE 'ftt\\_template\\_%%'")
+    # Templates of earlier code are of no use any more, but another checkout's
+    # suite on the same server may still be copying one: the newest few stay.
+    stale = conn.execute(
+        "SELECT datname FROM pg_database WHERE datname LIKE 'ftt\\_template\\_%%'"
+        " ORDER BY oid DESC OFFSET %s",
+        (_KEPT_TEMPLATES,),
+    )
     for (old,) in stale.fetchall():
         conn.execute(f'DROP DATABASE "{old}" WITH (FORCE)')
     building = f"{name}_building"
