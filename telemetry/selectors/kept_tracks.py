@@ -11,7 +11,8 @@ from django.db.models import Count, Max, Value
 
 from events.models import Segment
 from telemetry.models import LocalPose, Pose
-from telemetry.selectors.tracks import GPS, MODES, Track, load_tracks
+from telemetry.selectors.tracks import Track, load_tracks
+from telemetry.storage.keys import GPS, MODES
 
 # {(mode, segment id): (key, track)}, bounded in points (x, y and t: 24 bytes
 # each, so about 100 MB), least recently read dropped first.

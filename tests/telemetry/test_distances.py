@@ -18,9 +18,10 @@ from events.services.segments import GpsPosition
 from reports.selectors.exports import segments_csv
 from reports.selectors.statistics import event_runs
 from telemetry.selectors.distances import measured_paths, path_length
-from telemetry.selectors.tracks import GPS, masters
+from telemetry.selectors.tracks import masters
 from telemetry.services import recording
 from telemetry.services.recording import GpsFix
+from telemetry.storage.keys import GPS
 from tests.support.modes import start_auto
 
 # On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.

@@ -18,14 +18,10 @@ from telemetry.models import Pose
 from telemetry.models.poses import FixStatus
 from telemetry.selectors.kept_tracks import forget_kept_tracks, kept_tracks
 from telemetry.selectors.track_drawing import drawn, fit_zoom
-from telemetry.selectors.tracks import (
-    GPS,
-    LOCAL,
-    Track,
-    load_tracks,
-)
+from telemetry.selectors.tracks import Track, load_tracks
 from telemetry.services import recording
 from telemetry.services.recording import GpsFix
+from telemetry.storage.keys import GPS, LOCAL
 from tests.support.modes import start_auto
 
 # On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.

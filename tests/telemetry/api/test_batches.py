@@ -9,7 +9,7 @@ import pytest
 from events.models import Announcement, SegmentType
 from events.services import segments
 from telemetry.models import LocalPose, Pose
-from telemetry.services.pose_rows import COPY_FROM
+from telemetry.storage.postgresql import COPY_FROM
 from tests.support.api import assert_error_shape
 
 # On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
