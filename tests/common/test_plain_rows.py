@@ -9,9 +9,6 @@ from django.db.models import F
 from events.models import Segment
 from telemetry.storage import plain_rows
 
-# On SpatiaLite too: plain_rows reads binary rows on PostgreSQL, Django's rows elsewhere.
-pytestmark = pytest.mark.spatialite
-
 START = datetime(2025, 4, 1, 6, 0, tzinfo=UTC)
 
 

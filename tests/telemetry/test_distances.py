@@ -24,8 +24,7 @@ from telemetry.services.recording import GpsFix
 from telemetry.storage.keys import GPS
 from tests.support.modes import start_auto
 
-# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
-pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]
+pytestmark = pytest.mark.django_db
 
 T0 = datetime(2026, 6, 1, 9, 0, tzinfo=UTC)
 GEOD = Geod(ellps="WGS84")

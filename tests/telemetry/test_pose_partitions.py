@@ -24,8 +24,7 @@ from telemetry.services.segment_figures import differences, recount_figures
 from telemetry.storage.keys import GPS, LOCAL
 from telemetry.storage.postgresql import gps_tracks_plan
 
-# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
-pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]
+pytestmark = pytest.mark.django_db
 
 # The end of a month, so one segment's poses fall into two partitions.
 T0 = datetime(2026, 5, 31, 23, 58, tzinfo=UTC)

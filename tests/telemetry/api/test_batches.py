@@ -12,9 +12,6 @@ from telemetry.models import LocalPose, Pose
 from telemetry.storage.postgresql import COPY_FROM
 from tests.support.api import assert_error_shape
 
-# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
-pytestmark = pytest.mark.spatialite
-
 T0 = datetime(2026, 5, 4, 8, tzinfo=UTC)
 # Below and above the size from which PostgreSQL copies; SQLite takes both its one way.
 SIZES = [3, COPY_FROM + 7]

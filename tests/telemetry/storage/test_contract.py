@@ -88,6 +88,30 @@ def test_a_batch_stores_each_new_uid_once(adapter, master, size):
 
 
 @pytest.mark.parametrize("size", [2, postgresql.COPY_FROM], ids=["small", "big"])
+def test_a_batch_keeps_every_value_as_sent_including_the_missing_ones(
+    adapter, master, pose_source, size
+):
+    sent = [
+        GpsFix(7, 50, altitude=-1.5, fix_status=FixStatus.GBAS, horizontal_accuracy=0.02,
+               robot_stamp=_at(1)),
+        GpsFix(7.25, 50.5),
+        *_fixes(size - 2, start=10),
+    ]  # fmt: skip
+    received = _at(99)
+    adapter.insert_fixes(master, pose_source.pk, sent, received)
+    stored = {p.uid: p for p in Pose.objects.filter(segment=master)}
+    for fix in sent:
+        row = stored[fix.uid]
+        assert (row.point.x, row.point.y) == (fix.longitude, fix.latitude)
+        assert (row.altitude, row.fix_status, row.horizontal_accuracy) == (
+            fix.altitude, fix.fix_status, fix.horizontal_accuracy
+        )  # fmt: skip
+        assert (row.robot_stamp, row.received, row.pose_source_id) == (
+            fix.robot_stamp, received, pose_source.pk
+        )  # fmt: skip
+
+
+@pytest.mark.parametrize("size", [2, postgresql.COPY_FROM], ids=["small", "big"])
 def test_a_batch_of_local_poses_stores_each_new_uid_once(adapter, master, size):
     poses = [MapPose(float(i), -1.0, "map", yaw=0.5, robot_stamp=_at(i)) for i in range(size)]
     new = adapter.insert_local_poses(master, [*poses, MapPose(5.0, 5.0, "map", uid=poses[0].uid)],
