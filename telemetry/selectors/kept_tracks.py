@@ -112,9 +112,3 @@ def keeps_any(segments: list[Segment]) -> bool:
     not (no query: what ``kept_tracks`` would then read is what changed)."""
     with _lock:
         return any((mode, s.pk) in _kept for mode in MODES for s in segments)
-
-
-def forget_kept_tracks() -> None:
-    """Empties this process's kept tracks (tests that compare a fresh read)."""
-    with _lock:
-        _kept.clear()
