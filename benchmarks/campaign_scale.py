@@ -55,7 +55,8 @@ from django.db import DatabaseError, connection  # noqa: E402
 from events.models import Leg, Segment, Shift, TestEvent, Vehicle  # noqa: E402
 from telemetry.models import Pose  # noqa: E402
 from telemetry.selectors import distances  # noqa: E402
-from telemetry.selectors.tracks import GPS, LOCAL, load_tracks  # noqa: E402
+from telemetry.selectors.tracks import load_tracks  # noqa: E402
+from telemetry.storage.keys import GPS, LOCAL  # noqa: E402
 
 try:
     from telemetry.models import SegmentFigures

@@ -183,7 +183,7 @@ def robot_mode(leg):
     node = rclpy.create_node("ftt_endurance")
     mode = node.create_publisher(Bool, "robot_mode", 10)
     started = time.monotonic()
-    while not Segment.objects.filter(leg=leg, parent__isnull=True).exists():
+    while not Segment.objects.masters().filter(leg=leg).exists():
         if time.monotonic() - started > 120:
             sys.exit("the collector opened no segment in 2 minutes")
         mode.publish(Bool(data=True))
@@ -216,7 +216,7 @@ def outage(relay, spool, minutes, leg, mode, collector_log, filler=None, name=""
     )
     backlog_end, kinds = spool.composition()
     print(f"spool at the restore: {sum(kinds.values())} records ({_kinds(kinds)})")
-    before = Segment.objects.filter(leg=leg, parent__isnull=True).count()
+    before = Segment.objects.masters().filter(leg=leg).count()
     relay.restore()
     restored = time.monotonic()
     # A switch at the restore, while the backlog waits to be replayed: when is
@@ -232,7 +232,7 @@ def outage(relay, spool, minutes, leg, mode, collector_log, filler=None, name=""
         # What the GUI's collector line says ("N records not yet stored").
         row = Collector.objects.filter(name=name).values_list("pending", flat=True).first()
         shown = max(shown, row or 0)
-        masters = Segment.objects.filter(leg=leg, parent__isnull=True).count()
+        masters = Segment.objects.masters().filter(leg=leg).count()
         left = spool.records(upto=backlog_end)
         if switch_stored is None and masters > before:
             switch_stored = t

@@ -295,7 +295,7 @@ def main() -> None:
         "local poses": LocalPose.objects.filter(segment__leg=leg).count(),
         "maps": MapImage.objects.filter(shift=leg.shift).count(),
         "images": Image.objects.filter(segment__leg=leg).count(),
-        "master segments": Segment.objects.filter(leg=leg, parent__isnull=True).count(),
+        "master segments": Segment.objects.masters().filter(leg=leg).count(),
         "snapshots": Recording.objects.filter(segment__leg=leg).count(),
     }
     snapshots = list(Recording.objects.filter(segment__leg=leg))
@@ -567,7 +567,7 @@ class Switches:
     def _publish(self, mode, auto: bool, sample) -> None:
         from std_msgs.msg import Bool
 
-        segments = Segment.objects.filter(leg=self.leg, parent__isnull=True)
+        segments = Segment.objects.masters().filter(leg=self.leg)
         before = segments.count()
         published = self.last = time.time()
         self.spans.append([published, math.inf])
@@ -953,7 +953,7 @@ def lossless_gps(hz: float, count: int, depth: int) -> None:
         while mode.get_subscription_count() == 0 or gps.get_subscription_count() == 0:
             time.sleep(0.05)
         mode.publish(Bool(data=False))
-        while not Segment.objects.filter(leg=leg, parent__isnull=True).exists():
+        while not Segment.objects.masters().filter(leg=leg).exists():
             time.sleep(0.05)
         fix = NavSatFix()
         fix.header.frame_id = "gps_link"

@@ -67,7 +67,7 @@ def stored(master):
     return [row.pk, row.created.timestamp()] if row else [None, None]
 out = {{}}
 for leg in {legs!r}:
-    masters = Segment.objects.filter(leg_id=leg, parent__isnull=True).order_by("start")
+    masters = Segment.objects.masters().filter(leg_id=leg).order_by("start")
     inputs = (Collector.objects.filter(leg_id=leg).values_list("inputs", flat=True).first()) or {{}}
     out[leg] = {{
         "masters": [
@@ -83,7 +83,7 @@ COUNT = """
 import json
 from django.db.models import Count
 from events.models import Segment
-rows = Segment.objects.filter(leg_id__in={legs!r}, parent__isnull=True).values("leg_id")
+rows = Segment.objects.masters().filter(leg_id__in={legs!r}).values("leg_id")
 counts = dict(rows.annotate(n=Count("id")).values_list("leg_id", "n"))
 print("COUNT", json.dumps(counts))
 """

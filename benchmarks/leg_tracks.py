@@ -27,11 +27,17 @@ os.environ.setdefault("FTT_DB_POOL_SIZE", "0")
 from campaign_scale import ROOT, one_leg, timed  # noqa: E402
 from django.db import connection, transaction  # noqa: E402
 
-from common.sql import bound_cursor  # noqa: E402
 from events.models import TestEvent  # noqa: E402
 from telemetry.models import Pose  # noqa: E402
-from telemetry.selectors import packed_tracks  # noqa: E402
-from telemetry.selectors.tracks import GPS, load_tracks  # noqa: E402
+
+try:  # the storage port's PostgreSQL adapter, or a checkout before it
+    from telemetry.storage import postgresql as packed_tracks
+    from telemetry.storage.postgresql import bound_cursor
+except ImportError:
+    from common.sql import bound_cursor
+    from telemetry.selectors import packed_tracks
+from telemetry.selectors.tracks import load_tracks  # noqa: E402
+from telemetry.storage.keys import GPS  # noqa: E402
 
 POSES = Pose._meta.db_table
 

@@ -143,7 +143,7 @@ def main():
         started = time.perf_counter()
         if not Vehicle.objects.filter(key="bench-search").exists():
             build(args.take_overs)
-        masters = Segment.objects.filter(parent__isnull=True).count()
+        masters = Segment.objects.masters().count()
         print(
             f"load average {' '.join(f'{v:.2f}' for v in os.getloadavg())}; backend "
             f"{connection.vendor}: {masters} take-overs in 100 test events "

@@ -46,8 +46,13 @@ from django.db import connection, transaction  # noqa: E402
 
 from events.models import Leg, Segment, Shift, TestEvent, Vehicle  # noqa: E402
 from telemetry.models import Pose  # noqa: E402
-from telemetry.selectors.packed_tracks import gps_tracks_plan  # noqa: E402
-from telemetry.selectors.tracks import GPS, load_tracks  # noqa: E402
+from telemetry.selectors.tracks import load_tracks  # noqa: E402
+from telemetry.storage.keys import GPS  # noqa: E402
+
+try:  # the storage port's PostgreSQL adapter, or a checkout before it
+    from telemetry.storage.postgresql import gps_tracks_plan
+except ImportError:
+    from telemetry.selectors.packed_tracks import gps_tracks_plan
 from telemetry.services.segment_figures import measure_figures  # noqa: E402
 
 # Seconds: issue 14's target for the statistics of a million poses.

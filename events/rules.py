@@ -26,7 +26,7 @@ def open_legs_of_shift(shift_id: int) -> QuerySet[Leg]:
 
 def open_masters_of_leg(leg_id: int) -> QuerySet[Segment]:
     """A leg has at most one open master segment: the mode the robot is in now."""
-    return Segment.objects.filter(leg_id=leg_id, parent__isnull=True, end__isnull=True)
+    return Segment.objects.masters().filter(leg_id=leg_id, end__isnull=True)
 
 
 def open_segments_of_leg(leg_id: int) -> QuerySet[Segment]:

@@ -6,7 +6,6 @@ idempotent and takes an app registry (the migration's historical one or the
 live ``django.apps.apps``).
 """
 
-from django.apps import apps as global_apps
 from django.contrib.auth.management import create_permissions
 
 from common import roles
@@ -199,14 +198,6 @@ def create_roles(apps) -> None:
         # Added, never taken away: a right an administrator gave a group in
         # Django admin (finalising, for a test director's group) stays.
         group.permissions.add(*wanted)
-
-
-def ensure(apps=None) -> None:
-    if apps is None:
-        apps = global_apps
-    seed_catalogues(apps)
-    mark_quick_reasons(apps)
-    create_roles(apps)
 
 
 def mark_quick_reasons(apps) -> None:

@@ -31,7 +31,7 @@ from exchange import records as rec
 from exchange.archive import ArchiveWriter
 from exchange.history_records import HistoryExport
 from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
-from telemetry.selectors import driving_order
+from telemetry.storage import keys
 
 BATCH = 5000
 
@@ -252,7 +252,7 @@ def export_events(path, events: list[TestEvent], *, since: datetime | None = Non
             (
                 rec.pose_record(p, segment_uid[p.segment_id], source_key.get(p.pose_source_id))
                 for p in Pose.objects.filter(telemetry)
-                .order_by("segment_id", *driving_order.order_by())
+                .order_by("segment_id", *keys.order_by())
                 .iterator(chunk_size=BATCH)
             ),
         )
@@ -261,7 +261,7 @@ def export_events(path, events: list[TestEvent], *, since: datetime | None = Non
             (
                 rec.local_pose_record(p, segment_uid[p.segment_id])
                 for p in LocalPose.objects.filter(telemetry)
-                .order_by("segment_id", *driving_order.order_by())
+                .order_by("segment_id", *keys.order_by())
                 .iterator(chunk_size=BATCH)
             ),
         )

@@ -63,7 +63,9 @@ def _seeds_after_every_flush():
     from django.db.models.signals import post_migrate
 
     def reseed(**kwargs):
-        seeds.ensure()
+        seeds.seed_catalogues(apps)
+        seeds.mark_quick_reasons(apps)
+        seeds.create_roles(apps)
 
     sender = apps.get_app_config("events")
     post_migrate.connect(reseed, sender=sender, weak=False, dispatch_uid="ftt-tests-reseed")

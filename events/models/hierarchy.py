@@ -250,8 +250,21 @@ class Leg(LogEntry):
         return str(_("Leg %(number)s") % {"number": self.number})
 
 
+class SegmentQuerySet(models.QuerySet):
+    def masters(self):
+        """The master segments: those without a parent (an ITO child's data
+        belongs to its master, ``Segment.master``)."""
+        return self.filter(parent__isnull=True)
+
+    def children(self):
+        """The ITO children: the segments under a master."""
+        return self.filter(parent__isnull=False)
+
+
 class Segment(ChangeStamped):
     """A master is one continuous run in one mode; ITO children carry reasons."""
+
+    objects = SegmentQuerySet.as_manager()
 
     # Who initiated a take-over and how severe it was: the fields regulators'
     # disengagement reports ask for (California DMV); defaults need no tap.

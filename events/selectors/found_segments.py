@@ -78,7 +78,7 @@ def _reasons_of_masters(segments) -> dict[int, list[str]]:
     found = defaultdict(list)
     children = (
         Segment.objects.filter(
-            parent_id__in=segments.filter(parent__isnull=True).order_by().values("id"),
+            parent_id__in=segments.masters().order_by().values("id"),
             ito_reason__isnull=False,
         )
         .order_by("start", "id")

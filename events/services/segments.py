@@ -388,7 +388,7 @@ def annotate_open_take_over(leg: Leg, *, seen: int | None = None, **fields) -> S
     be open, and the reason belongs to the one the operator saw."""
     leg = lock(leg)
     if seen is not None:
-        take_over = Segment.objects.filter(leg=leg, pk=seen, parent__isnull=False).first()
+        take_over = Segment.objects.children().filter(leg=leg, pk=seen).first()
         if take_over is None:
             raise NotFound(
                 _(

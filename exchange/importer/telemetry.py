@@ -16,10 +16,10 @@ from exchange.importer.plan import MalformedRecord, describe
 from exchange.importer.session import ImportSession
 from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 from telemetry.pictures import MAP_FORMATS, PHOTO_FORMATS, checked_picture
-from telemetry.selectors.tracks import GPS, LOCAL
 from telemetry.services.map_images import check_map_placement
 from telemetry.services.recording import GpsFix, MapPose
 from telemetry.services.segment_figures import measure_figures
+from telemetry.storage.keys import GPS, LOCAL
 
 BATCH = 2000
 # Every MCAP file starts with these bytes (the format's magic).

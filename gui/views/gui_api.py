@@ -57,7 +57,7 @@ from telemetry.selectors.track_drawing import (
     thinned,
     tolerance,
 )
-from telemetry.selectors.tracks import GPS, LOCAL
+from telemetry.storage.keys import GPS, LOCAL
 
 
 @extend_schema(exclude=True)

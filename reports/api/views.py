@@ -45,7 +45,7 @@ from reports.services.generation import (
     request_comparison,
     request_report,
 )
-from telemetry.selectors.tracks import MODES
+from telemetry.storage.keys import MODES
 
 MODE_PARAM = OpenApiParameter("mode", str, enum=list(MODES), description="gps (default) or local")
 

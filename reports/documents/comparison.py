@@ -21,7 +21,7 @@ from reports.documents.wording import comparison_text
 from reports.figures import style
 from reports.figures.growth import growth_chart, hotspot_chart
 from reports.selectors.comparison import compare
-from telemetry.selectors.tracks import GPS
+from telemetry.storage.keys import GPS
 
 
 def _row(name: str, group: dict) -> list[str]:

@@ -11,7 +11,7 @@ from reports.documents.options import ReportOptions
 from reports.documents.pictures import Pictures
 from reports.figures.maps import Line, MapPainter
 from reports.figures.tiles import LayerTiles, TileSource
-from telemetry.selectors.tracks import GPS, LOCAL
+from telemetry.storage.keys import GPS, LOCAL
 
 
 def tile_source(event, options: ReportOptions, mode: str) -> TileSource | LayerTiles | None:

@@ -35,7 +35,8 @@ from reports.selectors.statistics import (
 )
 from reports.selectors.test_plans import test_plan
 from telemetry.selectors.recordings import recordings_by_master, summary
-from telemetry.selectors.tracks import GAP_SECONDS, GPS, LOCAL
+from telemetry.selectors.tracks import GAP_SECONDS
+from telemetry.storage.keys import GPS, LOCAL
 
 DEFAULT_LOGO = TEMPLATE_DIR / "logo.svg"
 FONT_NOTE = gettext_noop(

@@ -29,7 +29,7 @@ from reports.figures import style  # noqa: E402
 from reports.figures.style import rgb  # noqa: E402
 from reports.projection import local_frame  # noqa: E402
 from telemetry.selectors.track_drawing import simplified  # noqa: E402
-from telemetry.selectors.tracks import GPS  # noqa: E402
+from telemetry.storage.keys import GPS  # noqa: E402
 
 PAD_FRACTION = 0.1
 PAD_MIN_M = 10.0

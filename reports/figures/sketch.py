@@ -11,7 +11,7 @@ import numpy as np
 
 from reports.figures.maps import nice_length, scale_label
 from reports.projection import local_frame
-from telemetry.selectors.tracks import GPS
+from telemetry.storage.keys import GPS
 
 # Enough points for a 4 cm sketch: more cannot be seen and only fill the PDF.
 MAX_POINTS = 400

@@ -16,7 +16,7 @@ from reports.selectors import formulas
 from reports.selectors.growth import crow_amsaa
 from reports.selectors.hotspots import hotspots
 from reports.selectors.statistics import CONFIDENCE, Estimate, Run, campaign_runs, figures
-from telemetry.selectors.tracks import GPS
+from telemetry.storage.keys import GPS
 
 
 def growth_points(runs: list[Run]) -> tuple[list[float], float]:

@@ -18,7 +18,7 @@ from common.spreadsheet import SafeWriter
 from events.models import Segment, TestEvent
 from reports.selectors.content import reasons_by_key
 from reports.selectors.statistics import event_runs
-from telemetry.selectors.tracks import GPS
+from telemetry.storage.keys import GPS
 
 DMV_COLUMNS = (
     "Manufacturer",

@@ -19,7 +19,7 @@ from events.models import Note, Segment, TestEvent
 from events.selectors.labels import segment_labels
 from reports.selectors.content import reasons_by_key
 from reports.selectors.statistics import event_runs
-from telemetry.selectors.tracks import GPS
+from telemetry.storage.keys import GPS
 
 CSV_COLUMNS = (
     "test_event",

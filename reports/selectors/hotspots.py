@@ -25,7 +25,7 @@ from scipy.spatial import cKDTree
 from reports.projection import local_frame
 from reports.selectors.formulas import HOTSPOT_RADIUS_M
 from reports.selectors.statistics import Run
-from telemetry.selectors.tracks import GPS
+from telemetry.storage.keys import GPS
 
 
 @dataclass(slots=True)

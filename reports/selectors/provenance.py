@@ -32,7 +32,7 @@ from events.selectors.history import KINDS, author_of, entries_since, word_for
 from events.selectors.taxonomy import taxonomy_of, taxonomy_version
 from reports.selectors.statistics import event_statistics
 from telemetry.models import Image, LocalPose, Pose, SegmentFigures
-from telemetry.selectors.tracks import GPS, LOCAL
+from telemetry.storage.keys import GPS, LOCAL
 
 DIGEST_PREFIX = "ftt-digest-sha256-"
 BUILT_PREFIX = "ftt-built-"

@@ -18,7 +18,8 @@ from django.utils.translation import gettext as _
 
 from events.models import Leg, TestCase
 from reports.projection import local_frame
-from telemetry.selectors.tracks import GPS, masters, segment_tracks
+from telemetry.selectors.tracks import masters, segment_tracks
+from telemetry.storage.keys import GPS
 
 # Metres from the other route beyond which a stretch is drawn as a deviation.
 DEFAULT_THRESHOLD = 5.0

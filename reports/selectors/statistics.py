@@ -41,13 +41,14 @@ from django.conf import settings
 from scipy.stats import chi2
 
 from common import cyclic_gc
-from common.sql import plain_rows
 from events.models import ItoReason, Leg, Segment, SegmentType, TestEvent
 from events.selectors.labels import segment_labels
 from events.selectors.taxonomy import counted_reasons, counted_reasons_of
 from reports.selectors.formulas import FORMULAS, keyed
 from telemetry.selectors.distances import kept_paths, measured_paths
-from telemetry.selectors.tracks import GPS, Track
+from telemetry.selectors.tracks import Track
+from telemetry.storage import plain_rows
+from telemetry.storage.keys import GPS
 
 CONFIDENCE = 0.90
 

@@ -19,7 +19,7 @@ from django.utils.translation import gettext as _
 from common.spreadsheet import SafeWriter
 from events.models import Criterion, Judgement, Leg, TestCase, TestEvent
 from reports.selectors.statistics import Figures, Run, event_runs, figures
-from telemetry.selectors.tracks import GPS
+from telemetry.storage.keys import GPS
 
 PASS, FAIL, NOT_YET, JUDGE = "pass", "fail", "not yet", "needs a judgement"
 Kind = Criterion.Kind

@@ -23,10 +23,9 @@ from events.models import Segment
 from reports.documents.sections import OVERVIEW_SIZE
 from reports.figures.maps import Line, map_tolerance
 from telemetry.models import LocalPose, Pose, SegmentFigures, ThinnedSegment
-from telemetry.models.poses import FixStatus
-from telemetry.selectors import driving_order
 from telemetry.selectors.track_drawing import simplified
-from telemetry.selectors.tracks import GPS, LOCAL
+from telemetry.storage import keys
+from telemetry.storage.keys import GPS, LOCAL
 
 log = logging.getLogger(__name__)
 
@@ -59,7 +58,7 @@ def thin_old_poses(months: int | None = None, now: datetime | None = None) -> in
 def _points(mode: str, master_ids: list[int]) -> dict[int, tuple[list, np.ndarray, np.ndarray]]:
     """(ids, x, y) of each master's drawn points, in driving order."""
     if mode == GPS:
-        rows = Pose.objects.filter(segment_id__in=master_ids).exclude(fix_status=FixStatus.NO_FIX)
+        rows = Pose.objects.filter(keys.USABLE_FIX, segment_id__in=master_ids)
         rows = rows.values_list("segment_id", "id", "point")
         split = [(seg, pk, p.x, p.y) for seg, pk, p in rows.order_by("segment_id", *_order())]
     else:
@@ -77,7 +76,7 @@ def _points(mode: str, master_ids: list[int]) -> dict[int, tuple[list, np.ndarra
 
 
 def _order():
-    return driving_order.order_by()
+    return keys.order_by()
 
 
 def kept_positions(x: np.ndarray, y: np.ndarray, tolerance: float) -> list[int]:

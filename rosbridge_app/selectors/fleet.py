@@ -21,7 +21,7 @@ def fleet(now=None) -> list[dict]:
     A vehicle with two collectors logging (a restart under a new name) is shown
     once, by the collector heard last."""
     now = now or timezone.now()
-    masters = Segment.objects.filter(parent__isnull=True)
+    masters = Segment.objects.masters()
     open_master = masters.filter(leg=OuterRef("leg"), end__isnull=True)
     # Take-overs of the whole shift: a new leg does not reset the robot's record.
     last_takeover = masters.filter(

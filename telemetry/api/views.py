@@ -21,6 +21,7 @@ from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 from telemetry.selectors import distances, tracks
 from telemetry.selectors import maps as map_selectors
 from telemetry.services import attachments, map_images, recording
+from telemetry.storage import keys
 
 # --- filters ------------------------------------------------------------------------------
 
@@ -258,9 +259,9 @@ class TrackViewSet(viewsets.ViewSet):
         features = []
         # Whole legs: the distance rule needs each master's follower.
         masters = list(tracks.masters(**parent))
-        loaded = tracks.load_tracks([m.pk for m in masters], tracks.GPS)
-        paths = distances.measured_paths(masters, tracks.GPS, loaded)
-        for track in tracks.segment_tracks(masters, tracks.GPS, loaded):
+        loaded = tracks.load_tracks([m.pk for m in masters], keys.GPS)
+        paths = distances.measured_paths(masters, keys.GPS, loaded)
+        for track in tracks.segment_tracks(masters, keys.GPS, loaded):
             coordinates = track.coordinates()
             geometry = (
                 {"type": "LineString", "coordinates": coordinates}
@@ -292,9 +293,9 @@ class LocalTrackViewSet(viewsets.ViewSet):
         result = []
         # Whole legs: the distance rule needs each master's follower.
         masters = list(tracks.masters(**parent))
-        loaded = tracks.load_tracks([m.pk for m in masters], tracks.LOCAL)
-        paths = distances.measured_paths(masters, tracks.LOCAL, loaded)
-        for track in tracks.segment_tracks(masters, tracks.LOCAL, loaded):
+        loaded = tracks.load_tracks([m.pk for m in masters], keys.LOCAL)
+        paths = distances.measured_paths(masters, keys.LOCAL, loaded)
+        for track in tracks.segment_tracks(masters, keys.LOCAL, loaded):
             item = _segment_properties(track.segment)
             item.update(
                 frame=track.frame,

@@ -1,6 +1,6 @@
 """One statement reads tracks within their kept span (PostgreSQL).
 
-The read of tracks (telemetry.selectors.packed_tracks) is bounded by the span
+The read of tracks (telemetry.storage.postgresql) is bounded by the span
 the segments' kept figures give, and the planner prunes the month partitions
 only by values it has when it plans: two statements from the client (the
 look-up, then the read) in a transaction that keeps JIT off for both.  This

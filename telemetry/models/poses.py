@@ -66,7 +66,7 @@ class Pose(TrackPoint):
         verbose_name_plural = _("poses")
         ordering = ["robot_stamp", "received", "id"]
         indexes = [
-            # The driving order (selectors/driving_order.py) to its last key, so
+            # The driving order (telemetry/storage/keys.py) to its last key, so
             # reading a track needs no sort; on PostgreSQL the covered columns let
             # the statistics come from the index alone.
             models.Index(

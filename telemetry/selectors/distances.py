@@ -27,10 +27,11 @@ from datetime import datetime
 import numpy as np
 from pyproj import Geod
 
-from common.sql import plain_rows
 from events.models import Segment
 from telemetry.models import SegmentFigures
-from telemetry.selectors.tracks import GPS, LOCAL, Coordinate, Track, load_tracks
+from telemetry.selectors.tracks import Coordinate, Track, load_tracks
+from telemetry.storage import plain_rows
+from telemetry.storage.keys import GPS, LOCAL
 
 WGS84 = Geod(ellps="WGS84")
 _A = WGS84.a

@@ -11,7 +11,8 @@ from django.db.models import Count, Max, Value
 
 from events.models import Segment
 from telemetry.models import LocalPose, Pose
-from telemetry.selectors.tracks import GPS, MODES, Track, load_tracks
+from telemetry.selectors.tracks import Track, load_tracks
+from telemetry.storage.keys import GPS, MODES
 
 # {(mode, segment id): (key, track)}, bounded in points (x, y and t: 24 bytes
 # each, so about 100 MB), least recently read dropped first.
@@ -111,9 +112,3 @@ def keeps_any(segments: list[Segment]) -> bool:
     not (no query: what ``kept_tracks`` would then read is what changed)."""
     with _lock:
         return any((mode, s.pk) in _kept for mode in MODES for s in segments)
-
-
-def forget_kept_tracks() -> None:
-    """Empties this process's kept tracks (tests that compare a fresh read)."""
-    with _lock:
-        _kept.clear()

@@ -45,12 +45,15 @@ class Similarity:
 
 def tie_points(shift: Shift) -> list[tuple[float, float, float, float]]:
     """(lon, lat, x, y) of every master segment of the shift that has both starts."""
-    rows = Segment.objects.filter(
-        leg__shift=shift,
-        parent__isnull=True,
-        start_position__isnull=False,
-        start_local_x__isnull=False,
-    ).order_by("start", "id")
+    rows = (
+        Segment.objects.masters()
+        .filter(
+            leg__shift=shift,
+            start_position__isnull=False,
+            start_local_x__isnull=False,
+        )
+        .order_by("start", "id")
+    )
     return [
         (s.start_position.x, s.start_position.y, s.start_local_x, s.start_local_y) for s in rows
     ]

@@ -4,7 +4,8 @@ finer inside the area in view, and the zoom at which a leg fits a map."""
 import numpy as np
 import shapely
 
-from telemetry.selectors.tracks import GPS, Track
+from telemetry.selectors.tracks import Track
+from telemetry.storage.keys import GPS
 
 # Zoom levels Leaflet offers on the GPS map; a tolerance below 1e-9 degrees
 # (0.1 mm) keeps every point anyway.

@@ -1,6 +1,6 @@
 """Time-ordered track points of master segments, for distances, maps, the API and exports.
 
-Points are in driving order (``driving_order``).  Fixes flagged "no fix" carry
+Points are in driving order (``telemetry.storage.keys``).  Fixes flagged "no fix" carry
 no usable position and are dropped.  Drawing a track is ``track_drawing``'s
 job, keeping tracks between the map's reads ``kept_tracks``'.
 """
@@ -9,18 +9,13 @@ from dataclasses import dataclass, field
 from datetime import UTC, datetime
 
 import numpy as np
-from django.db import connection
-from django.db.models import F, FloatField, Func, OuterRef, QuerySet, Subquery
+from django.db.models import FloatField, Func, OuterRef, QuerySet, Subquery
 from django.db.models.functions import Coalesce
 
 from events.models import Segment
-from telemetry.models import LocalPose, Pose
-from telemetry.models.poses import FixStatus
-from telemetry.selectors import driving_order, packed_tracks
-
-GPS = "gps"
-LOCAL = "local"
-MODES = (GPS, LOCAL)
+from telemetry import storage
+from telemetry.models import Pose
+from telemetry.storage.keys import GPS, MODES, USABLE_FIX
 
 # Two consecutive points further apart in time than this are reported as a gap.
 GAP_SECONDS = 10.0
@@ -68,89 +63,21 @@ class Track:
         return [(_instant(self.t[i]), _instant(self.t[i + 1])) for i in where]
 
 
-class _Epoch(Func):
-    """Seconds since 1970 as a float, computed in the database: converting
-    200 000 timestamps to datetimes in Python would take most of the time."""
-
-    output_field = FloatField()
-
-    def as_sqlite(self, compiler, connection, **extra):
-        # Django stores UTC text timestamps in SQLite; julianday() reads them.
-        template = "((julianday(%(expressions)s) - 2440587.5) * 86400.0)"
-        return self.as_sql(compiler, connection, template=template, **extra)
-
-    def as_postgresql(self, compiler, connection, **extra):
-        template = "EXTRACT(EPOCH FROM %(expressions)s)::double precision"
-        return self.as_sql(compiler, connection, template=template, **extra)
-
-
-def _rows(segment_ids, mode):
-    model = Pose if mode == GPS else LocalPose
-    qs = model.objects.filter(segment_id__in=segment_ids).annotate(
-        _t=_Epoch(Coalesce("robot_stamp", "received"))
-    )
-    if mode == GPS:
-        qs = qs.annotate(
-            _x=Coordinate("point", function="ST_X"), _y=Coordinate("point", function="ST_Y")
-        )
-        columns = ("segment_id", "_x", "_y", "_t", "fix_status")
-    else:
-        qs = qs.annotate(_x=F("x"), _y=F("y"))
-        columns = ("segment_id", "_x", "_y", "_t", "frame")
-    ordered = qs.order_by("segment_id", *driving_order.order_by())
-    return ordered.values_list(*columns).iterator(chunk_size=20000)
-
-
 def load_tracks(
     segment_ids: list[int], mode: str = GPS, *, within_kept_span: bool = True
 ) -> dict[int, Track]:
     """Tracks of the given master segments; segments without points are absent.
 
-    On PostgreSQL the read is bounded by the span the segments' kept figures
-    give, so only the month partitions they span are read
-    (``packed_tracks._packed_rows``); ``within_kept_span=False`` reads every
-    pose, for measuring the figures themselves
-    (telemetry.services.segment_figures).  SpatiaLite keeps one table."""
+    The read is bounded by the span the segments' kept figures give (on
+    PostgreSQL only the month partitions they span are read);
+    ``within_kept_span=False`` reads every pose, for measuring the figures
+    themselves (telemetry.services.segment_figures)."""
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}")
-    if connection.vendor == "postgresql":
-        ids = [int(pk) for pk in segment_ids]
-        kept_mode = mode if within_kept_span else None
-        if mode == GPS:
-            return {
-                seg: Track(seg, x, y, t, no_fix=no_fix)
-                for seg, x, y, t, no_fix in packed_tracks.gps_arrays(ids, kept_mode)
-            }
-        return {
-            seg: Track(seg, x, y, t, frame=frame)
-            for seg, x, y, t, frame in packed_tracks.local_arrays(ids, kept_mode)
-        }
-    buckets: dict[int, tuple[list, list, list, list]] = {}
-    no_fix: dict[int, int] = {}
-    for seg, x, y, t, extra in _rows(list(segment_ids), mode):
-        if mode == GPS and extra == FixStatus.NO_FIX:
-            no_fix[seg] = no_fix.get(seg, 0) + 1
-            continue
-        bucket = buckets.setdefault(seg, ([], [], [], []))
-        bucket[0].append(x)
-        bucket[1].append(y)
-        bucket[2].append(t)
-        if mode == LOCAL and not bucket[3]:
-            bucket[3].append(extra)
-    tracks = {}
-    for seg, (xs, ys, ts, frame) in buckets.items():
-        t = np.asarray(ts, dtype=float)
-        tracks[seg] = Track(
-            segment_id=seg,
-            x=np.asarray(xs, dtype=float),
-            y=np.asarray(ys, dtype=float),
-            t=t,
-            frame=frame[0] if frame else "",
-            no_fix=no_fix.pop(seg, 0),
-        )
-    for seg, count in no_fix.items():
-        tracks[seg] = Track(seg, np.empty(0), np.empty(0), np.empty(0), no_fix=count)
-    return tracks
+    arrays = storage.track_arrays(segment_ids, mode, mode if within_kept_span else None)
+    if mode == GPS:
+        return {seg: Track(seg, x, y, t, no_fix=no_fix) for seg, x, y, t, no_fix in arrays}
+    return {seg: Track(seg, x, y, t, frame=frame) for seg, x, y, t, frame in arrays}
 
 
 def _instant(seconds: float) -> datetime:
@@ -175,7 +102,7 @@ class SegmentTrack:
 
 def masters(*, leg=None, shift=None, test_event=None) -> QuerySet[Segment]:
     """Master segments of one leg, shift or test event, oldest first."""
-    queryset = Segment.objects.filter(parent__isnull=True)
+    queryset = Segment.objects.masters()
     if leg is not None:
         queryset = queryset.filter(leg=leg)
     if shift is not None:
@@ -213,12 +140,13 @@ def with_last_position(queryset: QuerySet, leg_field: str = "leg") -> QuerySet:
     or by arrival where no fix has a stamp.  Each is the last entry of the
     pose_segment_time index (read backwards), so the cost does not grow with
     the track: ordering by the two times merged would read every fix of it."""
-    usable = Pose.objects.filter(segment=OuterRef("pk")).exclude(fix_status=FixStatus.NO_FIX)
+    usable = Pose.objects.filter(USABLE_FIX, segment=OuterRef("pk"))
     stamped = usable.filter(robot_stamp__isnull=False).order_by("-robot_stamp", "-received", "-id")
     unstamped = usable.filter(robot_stamp__isnull=True).order_by("-received", "-id")
     newest_fix = Coalesce(Subquery(stamped.values("pk")[:1]), Subquery(unstamped.values("pk")[:1]))
     fix_of_leg = (
-        Segment.objects.filter(leg=OuterRef(leg_field), parent__isnull=True)
+        Segment.objects.masters()
+        .filter(leg=OuterRef(leg_field))
         .annotate(_fix=newest_fix)
         .filter(_fix__isnull=False)
         .order_by("-start", "-id")

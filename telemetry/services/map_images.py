@@ -17,7 +17,7 @@ from events.models import Shift
 from events.services.finality import require_amendable
 from telemetry.models import MapImage
 from telemetry.pictures import MAP_FORMATS, checked_picture
-from telemetry.services import pose_rows
+from telemetry.storage.rows import as_uuid
 
 # The most cells a map may have along either side.
 MAX_MAP_CELLS = 100_000
@@ -79,7 +79,7 @@ def record_maps(shift: Shift, maps: list[MapPicture]) -> list[tuple[MapImage, bo
     share the lock, the queries and one insert, and only the newest one stored is
     announced (a browser shows the current map, never the ones in between)."""
     for m in maps:
-        m.uid = pose_rows.as_uuid(m.uid) if m.uid is not None else None
+        m.uid = as_uuid(m.uid) if m.uid is not None else None
     known = stored_rows(MapImage, [m.uid for m in maps], shift_id=shift.pk)
     if any(m.uid not in known for m in maps):
         require_amendable(pk=shift.test_event_id)

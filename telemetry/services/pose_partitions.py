@@ -7,7 +7,8 @@ dropped with them.  Poses without a robot stamp, or in a month without a
 partition yet, go to the table's default partition; ``ensure_partitions``
 (daily, ``manage.py ftt_pose_storage``) makes the coming months' partitions and
 moves such months out of the default partition.  SpatiaLite keeps one table;
-every function here is a no-op there.
+``ensure_partitions`` is a no-op there (``storage.is_partitioned``), and the
+migration steps run on PostgreSQL only.
 
 A uid is unique per partition (``UNIQUE (uid)`` on each), not across them: a
 global unique index is what partitioning avoids (it would grow with every pose
@@ -22,20 +23,13 @@ from datetime import UTC, datetime
 
 from django.db import connection, transaction
 
+from telemetry import storage
 from telemetry.models import LocalPose, Pose
 
 TABLES = (Pose._meta.db_table, LocalPose._meta.db_table)
 KEY = "robot_stamp"
 # Partitions made ahead of the current month, so the daily job can miss a few days.
 MONTHS_AHEAD = 2
-
-
-def is_partitioned(table: str) -> bool:
-    if connection.vendor != "postgresql":
-        return False
-    with connection.cursor() as cursor:
-        cursor.execute("SELECT relkind = 'p' FROM pg_class WHERE oid = %s::regclass", [table])
-        return cursor.fetchone()[0]
 
 
 def _month(value: datetime) -> datetime:
@@ -122,7 +116,7 @@ def ensure_partitions(first: datetime | None = None, last: datetime | None = Non
         wanted.update(months_between(first, last or first))
     made = []
     for table in TABLES:
-        if not is_partitioned(table):
+        if not storage.is_partitioned(table):
             continue
         with transaction.atomic(), connection.cursor() as cursor:
             existing = _existing(cursor, table)

@@ -4,8 +4,8 @@ Every row carries the uid the sender gave it, so a sender that retries after
 a lost answer (the collector's offline queue, an import run twice) writes each
 point once.  Track points always belong to a master segment.  Maps are stored
 by telemetry.services.map_images, images and black-box snapshots by
-telemetry.services.attachments; the SQL of every pose insert is in
-telemetry.services.pose_rows.
+telemetry.services.attachments; the rows are written through the storage
+port (telemetry.storage).
 """
 
 import math
@@ -28,11 +28,12 @@ from events.selectors.segments import pose_target
 from events.services import deletion
 from events.services.finality import require_amendable
 from events.services.segments import GpsPosition
+from telemetry import storage
 from telemetry.models import LocalPose, Pose
 from telemetry.models.poses import FixStatus
-from telemetry.selectors.tracks import GPS, LOCAL
-from telemetry.services import pose_rows
 from telemetry.services.segment_figures import keep_figures, measure_figures
+from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.rows import as_uuid
 
 # The fix statuses a pose may carry and the one it gets when none is sent; every
 # check of a sent fix reads these.  (FixStatus.values builds a new list on each
@@ -135,10 +136,10 @@ def store_poses(
     master = segment.master
     require_amendable(shifts__legs__segments=master.pk)
     source_id = pose_source_id(master, pose_source.pk if pose_source is not None else None)
-    stored = pose_rows.insert_fixes(master, source_id, fixes, timezone.now())
+    stored = storage.insert_fixes(master, source_id, fixes, timezone.now())
     new = {p.uid for p in stored}
-    refuse_foreign(Pose, [pose_rows.as_uuid(f.uid) for f in fixes], new, segment_id=master.pk)
-    points = [(f.longitude, f.latitude) for f in fixes if pose_rows.as_uuid(f.uid) in new]
+    refuse_foreign(Pose, [as_uuid(f.uid) for f in fixes], new, segment_id=master.pk)
+    points = [(f.longitude, f.latitude) for f in fixes if as_uuid(f.uid) in new]
     announce_track(master, points, local=False)
     keep_figures(master.pk, GPS, stored)
     return new
@@ -168,10 +169,10 @@ def store_pose(
     source_id = pose_source_id(master, source_id)
     with transaction.atomic():
         require_amendable(pk=master.leg.shift.test_event_id)
-        stored = pose_rows.insert_pose(master.pk, fix, source_id, received)
+        stored = storage.insert_pose(master.pk, fix, source_id, received)
         if stored is not None:
             pk, seen = stored
-            point = pose_rows.NewPoint(
+            point = storage.NewPoint(
                 fix.uid, pk, fix.robot_stamp, received, fix.longitude, fix.latitude,
                 fix.fix_status != FixStatus.NO_FIX,
             )  # fmt: skip
@@ -201,7 +202,7 @@ def known_pose(master: Segment, fix: GpsFix, source_id: int | None) -> Pose:
 def store_local_pose(segment: Segment, pose: MapPose) -> LocalPose:
     """Store one map-frame pose; the new row, or the row stored first under its
     uid on the same master (common.retries)."""
-    uid = pose_rows.as_uuid(pose.uid)
+    uid = as_uuid(pose.uid)
     if record_local_poses(segment, [pose]):
         return LocalPose.objects.filter(uid=uid, segment_id=segment.master_id).latest("id")
     return stored_row(LocalPose, uid, segment_id=segment.master_id)
@@ -224,15 +225,15 @@ def connect() -> None:
 @transaction.atomic
 def record_local_poses(segment: Segment, poses: list[MapPose]) -> int:
     master = segment.master
+    for pose in poses:
+        pose.check()
     if poses:
         require_amendable(shifts__legs__segments=master.pk)
-    fresh = pose_rows.insert_local_poses(master, poses, timezone.now()) if poses else []
+    fresh = storage.insert_local_poses(master, poses, timezone.now()) if poses else []
     # The robot's heading for its marker: the yaw of the newest pose stored.
     stored = {point.uid for point in fresh}
-    refuse_foreign(
-        LocalPose, [pose_rows.as_uuid(p.uid) for p in poses], stored, segment_id=master.pk
-    )
-    heading = next((p.yaw for p in reversed(poses) if pose_rows.as_uuid(p.uid) in stored), None)
+    refuse_foreign(LocalPose, [as_uuid(p.uid) for p in poses], stored, segment_id=master.pk)
+    heading = next((p.yaw for p in reversed(poses) if as_uuid(p.uid) in stored), None)
     announce_track(master, [(p.x, p.y) for p in fresh], local=True, heading=heading)
     keep_figures(master.pk, LOCAL, fresh)
     return len(fresh)

@@ -8,7 +8,7 @@ replayed) replaces the step between its two neighbours in driving order, found
 through the driving-order index, by the steps through its points.  Either way
 the time depends on the new points, not on the track.  An import that merges
 poses into a track measures it again (``measure_figures``).  The SQL of the
-row and the neighbour reads is in telemetry.services.figure_rows.
+row and the neighbour reads is the storage port's (telemetry.storage).
 """
 
 from collections import defaultdict
@@ -21,13 +21,13 @@ from django.db.models import Max, Min
 from django.db.models.functions import Coalesce
 
 from common import uid_sums
+from telemetry import storage
 from telemetry.models import LocalPose, Pose, SegmentFigures
-from telemetry.models.poses import FixStatus
-from telemetry.selectors import driving_order
 from telemetry.selectors.distances import path_length
-from telemetry.selectors.tracks import GPS, LOCAL, MODES, load_tracks
-from telemetry.services import figure_rows
-from telemetry.services.pose_rows import NewPoint
+from telemetry.selectors.tracks import load_tracks
+from telemetry.storage import keys
+from telemetry.storage.keys import GPS, LOCAL, MODES
+from telemetry.storage.rows import Change, NewPoint
 
 # Figures are float sums taken in another order than a measurement of the
 # whole track: they may differ in the last bits, never by more than this.
@@ -42,13 +42,12 @@ def _model(mode):
 
 
 def _key(robot_stamp, received, pk) -> tuple:
-    """The driving order (telemetry.selectors.driving_order) as a Python sort key."""
+    """The driving order (telemetry.storage.keys) as a Python sort key."""
     return (robot_stamp is None, robot_stamp or _NEVER, received, pk)
 
 
 def _usable(mode):
-    rows = _model(mode).objects.all()
-    return rows.exclude(fix_status=FixStatus.NO_FIX) if mode == GPS else rows
+    return keys.usable(_model(mode).objects.all(), mode)
 
 
 # Creates the row or takes it as it is, and locks it either way (an upsert
@@ -69,30 +68,30 @@ _UNREAD = object()
 
 
 def keep_figures(master_id: int, mode: str, new: list[NewPoint], seen=_UNREAD) -> None:
-    """Add the points just stored on ``master_id`` (pose_rows' answer) to its
+    """Add the points just stored on ``master_id`` (the storage port's answer) to its
     figures, in time that depends on the new points, not on the track: an
     upsert, after a read of the row unless the caller gives what it read
-    (``seen``, figure_rows.Kept or None).  Call inside the transaction that
+    (``seen``, storage.Kept or None).  Call inside the transaction that
     stored them."""
     if not new:
         return
     rows = sorted((p for p in new if p.usable), key=lambda p: _key(p.robot_stamp, p.received, p.id))
     alone = _alone(new, rows, mode)
     if seen is _UNREAD:
-        seen = figure_rows.read_kept(master_id, mode)
+        seen = storage.read_kept(master_id, mode)
     change = _change(master_id, mode, rows, alone, seen)
-    applied, seen = figure_rows.write_change(master_id, mode, seen, change)
+    applied, seen = storage.write_change(master_id, mode, seen, change)
     if not applied:
         # Another writer changed the row since it was read; it is locked now.
         change = _change(master_id, mode, rows, alone, seen)
-        if not figure_rows.write_change(master_id, mode, seen, change)[0]:
+        if not storage.write_change(master_id, mode, seen, change)[0]:
             raise RuntimeError(f"the figures of segment {master_id} changed under their lock")
 
 
 def _alone(new: list[NewPoint], rows: list[NewPoint], mode: str) -> dict:
     """The figures of the ``new`` points by themselves (``rows``: the usable
     ones, sorted)."""
-    alone = dict.fromkeys(figure_rows.FIELDS)
+    alone = dict.fromkeys(keys.FIGURE_FIELDS)
     alone.update(
         points=len(rows),
         no_fix=len(new) - len(rows),
@@ -115,24 +114,24 @@ def _alone(new: list[NewPoint], rows: list[NewPoint], mode: str) -> dict:
     return alone
 
 
-def _change(master_id, mode, rows: list[NewPoint], alone: dict, seen) -> figure_rows.Change:
+def _change(master_id, mode, rows: list[NewPoint], alone: dict, seen) -> storage.Change:
     """What ``rows`` change in the figures that hold ``seen``: an appended batch
     adds its length and the step from the kept last point; a late one replaces
     the step between its neighbours in driving order with the steps through it."""
     uids = uid_sums.combined(uid_sums.EMPTY if seen is None else seen.uid_sum, alone["uid_sum"])
     if not rows:
-        return figure_rows.Change(alone, 0.0, False, False, uids)
+        return Change(alone, 0.0, False, False, uids)
     kept_last = None if seen is None or not seen.points else seen
     if kept_last is None:
-        return figure_rows.Change(alone, alone["length"], True, True, uids)
+        return Change(alone, alone["length"], True, True, uids)
     first = (rows[0].robot_stamp, rows[0].received, rows[0].id)
     if _key(*first) > _key(kept_last.last_robot_stamp, kept_last.last_received, kept_last.last_id):
         join = path_length([kept_last.last_x, rows[0].x], [kept_last.last_y, rows[0].y], mode)
-        return figure_rows.Change(alone, alone["length"] + join, False, True, uids)
+        return Change(alone, alone["length"] + join, False, True, uids)
     last = (rows[-1].robot_stamp, rows[-1].received, rows[-1].id)
-    before, after = figure_rows.neighbours(master_id, mode, first, last)
+    before, after = storage.neighbours(master_id, mode, first, last)
     inside = (
-        figure_rows.points_between(master_id, mode, first, last)
+        storage.points_between(master_id, mode, first, last)
         if len(rows) > 1
         else [(rows[0].id, rows[0].x, rows[0].y)]
     )
@@ -140,7 +139,7 @@ def _change(master_id, mode, rows: list[NewPoint], alone: dict, seen) -> figure_
     new_ids = {r.id for r in rows}
     old = [p for p in merged if p[0] not in new_ids]
     length = _length(merged, mode) - _length(old, mode)
-    return figure_rows.Change(alone, length, before is None, after is None, uids)
+    return Change(alone, length, before is None, after is None, uids)
 
 
 def _length(points: list[tuple], mode: str) -> float:
@@ -198,7 +197,7 @@ def _measure(figures: SegmentFigures, measured=_UNREAD) -> None:
     last = (
         None
         if empty
-        else usable.order_by(*(o.copy().reverse_ordering() for o in driving_order.order_by()))
+        else usable.order_by(*keys.reverse_order_by())
         .values_list("robot_stamp", "received", "id")
         .first()
     )

@@ -6,11 +6,8 @@ import pytest
 from django.db import connection
 from django.db.models import F
 
-from common.sql import plain_rows
 from events.models import Segment
-
-# On SpatiaLite too: plain_rows reads binary rows on PostgreSQL, Django's rows elsewhere.
-pytestmark = pytest.mark.spatialite
+from telemetry.storage import plain_rows
 
 START = datetime(2025, 4, 1, 6, 0, tzinfo=UTC)
 

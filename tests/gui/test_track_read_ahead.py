@@ -6,9 +6,9 @@ import pytest
 from django.db import connection
 from django.test.utils import CaptureQueriesContext
 
-from telemetry.selectors.kept_tracks import forget_kept_tracks
 from telemetry.services import recording
 from tests.support.accounts import signed_in
+from tests.support.kept import forget_kept_tracks
 from tests.support.modes import start_auto
 
 # Committed for real, as a server runs it: the read ahead has a connection of its own.

@@ -9,10 +9,10 @@ from django.db import connection
 from django.test.utils import CaptureQueriesContext
 
 from events.services import segments
-from telemetry.selectors.kept_tracks import forget_kept_tracks
 from telemetry.selectors.track_drawing import zoom_tolerance
 from telemetry.services import recording
 from tests.support.accounts import signed_in
+from tests.support.kept import forget_kept_tracks
 from tests.support.modes import start_auto
 
 pytestmark = pytest.mark.django_db

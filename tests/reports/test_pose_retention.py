@@ -18,10 +18,11 @@ from reports.selectors.provenance import data_digest
 from reports.selectors.statistics import event_statistics, figures
 from reports.services.pose_retention import thin_old_poses
 from telemetry.models import LocalPose, Pose, SegmentFigures, ThinnedSegment
-from telemetry.selectors.tracks import GPS, LOCAL, load_tracks
+from telemetry.selectors.tracks import load_tracks
 from telemetry.services import recording
 from telemetry.services.recording import GpsFix, MapPose
 from telemetry.services.segment_figures import differences
+from telemetry.storage.keys import GPS, LOCAL
 
 pytestmark = pytest.mark.django_db
 

@@ -13,7 +13,7 @@ from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.events import Event
 from rosbridge_app.collector.recorder import Recorder
 from telemetry.models import Pose
-from telemetry.services.pose_rows import COPY_FROM
+from telemetry.storage.postgresql import COPY_FROM
 
 pytestmark = [pytest.mark.postgis_only, pytest.mark.django_db]
 

@@ -3,7 +3,7 @@
 from pathlib import Path
 
 from telemetry.selectors.distances import path_length
-from telemetry.selectors.tracks import GPS
+from telemetry.storage.keys import GPS
 
 FKIE_BAG = Path(__file__).resolve().parents[2].parent / "shared" / "fixtures" / "fkie_test.bag"
 

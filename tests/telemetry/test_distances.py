@@ -18,13 +18,13 @@ from events.services.segments import GpsPosition
 from reports.selectors.exports import segments_csv
 from reports.selectors.statistics import event_runs
 from telemetry.selectors.distances import measured_paths, path_length
-from telemetry.selectors.tracks import GPS, masters
+from telemetry.selectors.tracks import masters
 from telemetry.services import recording
 from telemetry.services.recording import GpsFix
+from telemetry.storage.keys import GPS
 from tests.support.modes import start_auto
 
-# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
-pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]
+pytestmark = pytest.mark.django_db
 
 T0 = datetime(2026, 6, 1, 9, 0, tzinfo=UTC)
 GEOD = Geod(ellps="WGS84")

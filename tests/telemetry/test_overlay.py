@@ -10,9 +10,6 @@ from events.services.segments import GpsPosition, LocalPosition
 from telemetry.models import MapImage
 from telemetry.selectors import overlay
 
-# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
-pytestmark = pytest.mark.spatialite
-
 WGS84 = Geod(ellps="WGS84")
 ORIGIN = (7.2, 50.6)
 

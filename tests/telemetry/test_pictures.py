@@ -12,8 +12,7 @@ from telemetry.pictures import MAP_FORMATS, checked_picture
 from tests.support.images import image_bytes
 from tests.support.modes import start_auto
 
-# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
-pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]
+pytestmark = pytest.mark.django_db
 
 
 def _eps() -> bytes:

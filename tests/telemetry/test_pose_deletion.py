@@ -12,9 +12,9 @@ from django.core.management import call_command
 from events.models import SegmentType
 from events.services import deletion, segments
 from telemetry.models import LocalPose, Pose
-from telemetry.selectors.tracks import GPS, LOCAL
 from telemetry.services import recording
 from telemetry.services.segment_figures import recount_figures
+from telemetry.storage.keys import GPS, LOCAL
 
 pytestmark = pytest.mark.django_db
 

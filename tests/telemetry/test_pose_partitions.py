@@ -14,16 +14,17 @@ from events.models import SegmentType, TestEvent
 from events.services import segments
 from events.services.segments import GpsPosition
 from reports.selectors.statistics import event_statistics, figures
+from telemetry import storage
 from telemetry.models import LocalPose, Pose, SegmentFigures
 from telemetry.models.poses import FixStatus
-from telemetry.selectors.packed_tracks import gps_tracks_plan
-from telemetry.selectors.tracks import GPS, LOCAL, load_tracks
+from telemetry.selectors.tracks import load_tracks
 from telemetry.services import pose_partitions, recording
 from telemetry.services.recording import GpsFix, MapPose
 from telemetry.services.segment_figures import differences, recount_figures
+from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.postgresql import gps_tracks_plan
 
-# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
-pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]
+pytestmark = pytest.mark.django_db
 
 # The end of a month, so one segment's poses fall into two partitions.
 T0 = datetime(2026, 5, 31, 23, 58, tzinfo=UTC)
@@ -93,16 +94,16 @@ def test_migration_back_and_forth_keeps_every_pose_and_figure(leg):
     event = TestEvent.objects.get(pk=leg.shift.test_event_id)
     before = _state(event)
     postgres = connection.vendor == "postgresql"
-    assert all(pose_partitions.is_partitioned(t) == postgres for t in pose_partitions.TABLES)
+    assert all(storage.is_partitioned(t) == postgres for t in pose_partitions.TABLES)
 
     executor = MigrationExecutor(connection)
     executor.migrate([("telemetry", "0012_thinned_segments")])
-    assert not any(pose_partitions.is_partitioned(t) for t in pose_partitions.TABLES)
+    assert not any(storage.is_partitioned(t) for t in pose_partitions.TABLES)
     _assert_same(before, _state(event, uid_sum=False), uid_sum=False)
 
     executor.loader.build_graph()
     executor.migrate(executor.loader.graph.leaf_nodes())
-    assert all(pose_partitions.is_partitioned(t) == postgres for t in pose_partitions.TABLES)
+    assert all(storage.is_partitioned(t) == postgres for t in pose_partitions.TABLES)
     _assert_same(before, _state(event))
     assert recount_figures([master.pk]) == {}
     # New poses go on with new ids after the moved ones.

@@ -15,9 +15,6 @@ from telemetry.models import Image, LocalPose, MapImage, Pose
 from telemetry.services import attachments, map_images, recording
 from tests.support.images import PNG
 
-# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
-pytestmark = pytest.mark.spatialite
-
 
 @pytest.fixture
 def ito(leg):

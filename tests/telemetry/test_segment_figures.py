@@ -22,7 +22,7 @@ from reports.selectors.statistics import event_statistics
 from telemetry.models import Pose, SegmentFigures, ThinnedSegment
 from telemetry.models.poses import FixStatus
 from telemetry.selectors.distances import displayed_distances, kept_distances, measured_paths
-from telemetry.selectors.tracks import GPS, LOCAL, masters
+from telemetry.selectors.tracks import masters
 from telemetry.services import recording
 from telemetry.services.recording import GpsFix, MapPose
 from telemetry.services.segment_figures import (
@@ -31,6 +31,7 @@ from telemetry.services.segment_figures import (
     measure_figures,
     recount_figures,
 )
+from telemetry.storage.keys import GPS, LOCAL
 
 # On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
 pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]

@@ -16,20 +16,16 @@ from events.services import segments
 from events.services.segments import GpsPosition
 from telemetry.models import Pose
 from telemetry.models.poses import FixStatus
-from telemetry.selectors.kept_tracks import forget_kept_tracks, kept_tracks
+from telemetry.selectors.kept_tracks import kept_tracks
 from telemetry.selectors.track_drawing import drawn, fit_zoom
-from telemetry.selectors.tracks import (
-    GPS,
-    LOCAL,
-    Track,
-    load_tracks,
-)
+from telemetry.selectors.tracks import Track, load_tracks
 from telemetry.services import recording
 from telemetry.services.recording import GpsFix
+from telemetry.storage.keys import GPS, LOCAL
+from tests.support.kept import forget_kept_tracks
 from tests.support.modes import start_auto
 
-# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
-pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]
+pytestmark = pytest.mark.django_db
 
 T0 = datetime(2026, 6, 1, 9, 0, tzinfo=UTC)
 

@@ -117,7 +117,7 @@ class Command(BaseCommand):
             )
         except BagImportError as exc:
             raise CommandError(str(exc)) from None
-        masters = result.leg.segments.filter(parent__isnull=True).count()
+        masters = result.leg.segments.masters().count()
         added = ", ".join(f"{n} {name}" for name, n in result.added.items())
         self.stdout.write(
             _(

@@ -25,7 +25,7 @@ class Command(BaseCommand):
         parser.add_argument("--event", type=int, help=_("Only the masters of this test event."))
 
     def handle(self, *args, fix, event, **options):
-        masters = Segment.objects.filter(parent__isnull=True)
+        masters = Segment.objects.masters()
         if event is not None:
             masters = masters.filter(leg__shift__test_event=event)
         # Thinned by the retention policy: the kept figures are from every pose,

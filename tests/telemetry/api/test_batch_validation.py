@@ -13,9 +13,6 @@ from telemetry.api.serializers import (
     sent_pose,
 )
 
-# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
-pytestmark = pytest.mark.spatialite
-
 UID = str(uuid.uuid4())
 GOOD = {"longitude": 7.1, "latitude": 50.2}
 

@@ -9,11 +9,8 @@ import pytest
 from events.models import Announcement, SegmentType
 from events.services import segments
 from telemetry.models import LocalPose, Pose
-from telemetry.services.pose_rows import COPY_FROM
+from telemetry.storage.postgresql import COPY_FROM
 from tests.support.api import assert_error_shape
-
-# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
-pytestmark = pytest.mark.spatialite
 
 T0 = datetime(2026, 5, 4, 8, tzinfo=UTC)
 # Below and above the size from which PostgreSQL copies; SQLite takes both its one way.

@@ -12,9 +12,6 @@ from telemetry.services.recording import GpsFix, MapPose
 from tests.support.api import CrudTests, assert_error_shape
 from tests.support.images import png, upload
 
-# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
-pytestmark = pytest.mark.spatialite
-
 RECORDED = ("create", "delete")
 
 

@@ -11,8 +11,8 @@ from events.models import Announcement, Segment, SegmentType
 from events.services import segments
 from telemetry.models import Pose
 from telemetry.services import attachments, map_images, recording
-from telemetry.services.pose_rows import COPY_FROM
 from telemetry.services.recording import GpsFix, MapPose
+from telemetry.storage.postgresql import COPY_FROM
 from tests.support.api import LIST_QUERIES, assert_constant_queries, post_counting_queries
 from tests.support.images import png
 from tests.support.modes import start_auto
@@ -61,7 +61,7 @@ CASES = {
     # The leg, its masters, their points: more segments add none.
     # GPS and local points on PostGIS are one query in a transaction whose first
     # statement reads the kept span and switches JIT off (savepoint, span, query,
-    # release: telemetry/selectors/packed_tracks.py).
+    # release: telemetry/storage/postgresql.py).
     "/api/tracks/?leg={leg}": (_poses, 6),
     "/api/local-tracks/?leg={leg}": (_local_poses, 6),
     "/api/tracks/?shift={shift}": (_poses, 6),

@@ -10,8 +10,7 @@ from telemetry.models import Recording
 from telemetry.services.attachments import attach_recording
 from tests.support.mcap_files import read_mcap, write_fixes
 
-# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
-pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]
+pytestmark = pytest.mark.django_db
 
 
 @pytest.fixture

@@ -12,9 +12,6 @@ from events.services import segments
 from telemetry.models import Image, LocalPose, MapImage, Pose
 from tests.support.images import map_form, png
 
-# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
-pytestmark = pytest.mark.spatialite
-
 
 def _image(segment, uid):
     upload = SimpleUploadedFile("frame.png", png(), content_type="image/png")

@@ -11,9 +11,6 @@ from tests.support.api import assert_error_shape
 from tests.support.images import upload
 from tests.support.modes import start_auto
 
-# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
-pytestmark = pytest.mark.spatialite
-
 
 @pytest.fixture
 def other_master(other_leg):

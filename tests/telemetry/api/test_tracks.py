@@ -12,9 +12,6 @@ from telemetry.services import recording
 from telemetry.services.recording import GpsFix, MapPose
 from tests.support.api import assert_error_shape
 
-# On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
-pytestmark = pytest.mark.spatialite
-
 # After the fixtures opened the leg "now": the services refuse times before a parent starts.
 T0 = datetime.now(UTC).replace(microsecond=0) + timedelta(hours=1)
 
