@@ -24,6 +24,16 @@ def open_legs_of_shift(shift_id: int) -> QuerySet[Leg]:
     return Leg.objects.filter(shift_id=shift_id, end__isnull=True)
 
 
+def open_legs_under(*, test_event=None, shift=None, leg=None) -> QuerySet[Leg]:
+    """The open legs that ending a test event, a shift or a leg ends with it
+    (name one); ending stops logging into them (``closing``)."""
+    if test_event is not None:
+        return Leg.objects.filter(shift__test_event=test_event, end__isnull=True)
+    if shift is not None:
+        return Leg.objects.filter(shift=shift, end__isnull=True)
+    return Leg.objects.filter(pk=leg.pk, end__isnull=True)
+
+
 def open_masters_of_leg(leg_id: int) -> QuerySet[Segment]:
     """A leg has at most one open master segment: the mode the robot is in now."""
     return Segment.objects.masters().filter(leg_id=leg_id, end__isnull=True)

@@ -11,6 +11,9 @@ from common.models import AccountPreference
 
 # Per session [user id, language or ""], so the preference costs one query per sign-in.
 SESSION_KEY = "ftt_language"
+# A choice made before signing in (the sign-in page's picker); Django's login keeps
+# the session's data, so the account takes it at its first request.
+CHOSEN_KEY = "ftt_language_chosen"
 
 
 def account_language(request) -> str:
@@ -20,12 +23,24 @@ def account_language(request) -> str:
         return ""
     kept = request.session.get(SESSION_KEY)
     if not (isinstance(kept, list) and len(kept) == 2 and kept[0] == user.pk):
-        language = (
-            AccountPreference.objects.filter(user=user).values_list("language", flat=True).first()
-        )
+        chosen = request.session.pop(CHOSEN_KEY, None)
+        if chosen in dict(settings.LANGUAGES):
+            keep_language(user, chosen)
+            language = chosen
+        else:
+            language = (
+                AccountPreference.objects.filter(user=user)
+                .values_list("language", flat=True)
+                .first()
+            )
         kept = [user.pk, language or ""]
         request.session[SESSION_KEY] = kept
     return kept[1]
+
+
+def keep_language(user, language: str) -> None:
+    """Keeps ``language`` ("" for none) as the account's choice."""
+    AccountPreference.objects.update_or_create(user=user, defaults={"language": language})
 
 
 class AccountLanguageMiddleware:
@@ -52,10 +67,10 @@ def choose_language(request):
     if not url_has_allowed_host_and_scheme(target, {request.get_host()}, request.is_secure()):
         target = "/"
     if request.user.is_authenticated:
-        AccountPreference.objects.update_or_create(
-            user=request.user, defaults={"language": language}
-        )
+        keep_language(request.user, language)
         request.session[SESSION_KEY] = [request.user.pk, language]
+    elif language:
+        request.session[CHOSEN_KEY] = language
     response = HttpResponseRedirect(target)
     if language:
         response.set_cookie(settings.LANGUAGE_COOKIE_NAME, language, samesite="Lax")

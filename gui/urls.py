@@ -43,6 +43,7 @@ urlpatterns = [
     path("gui/api/basemaps/", gui_api.Basemaps.as_view(), name="gui-basemaps"),
     path("gui/api/collectors/", gui_api.CollectorStatus.as_view(), name="gui-collectors"),
     path("gui/api/fleet/", gui_api.Fleet.as_view(), name="gui-fleet"),
+    path("gui/api/ending/", gui_api.Ending.as_view(), name="gui-ending"),
     path("gui/api/forms/", gui_api.Forms.as_view(), name="gui-forms"),
     path("gui/api/test-case-areas/", gui_api.TestCaseAreas.as_view(), name="gui-test-case-areas"),
     path(

@@ -508,3 +508,20 @@ def test_answers_a_person_reads_are_marked_for_translation():
         "'Sign in first.'",
         "f'Queued as job {n}.'",
     ]
+
+
+@pytest.mark.django_db
+def test_a_language_chosen_on_the_sign_in_page_is_kept_on_the_account(client, django_user_model):
+    user = django_user_model.objects.create_user("berta", password="pw-Xy7-long")
+    client.get("/login/")
+    client.post("/language/", {"language": "de", "next": "/login/"})
+    signed_in = client.post("/login/", {"username": "berta", "password": "pw-Xy7-long"})
+    assert signed_in.status_code == 302
+    page = client.get("/", HTTP_ACCEPT_LANGUAGE="en-US").content.decode()
+    assert '<html lang="de">' in page
+    assert AccountPreference.objects.get(user=user).language == "de"
+    # Another browser, in English, signs in to the account's German.
+    client.logout()
+    client.cookies.clear()
+    client.force_login(user)
+    assert '<html lang="de">' in client.get("/", HTTP_ACCEPT_LANGUAGE="en-US").content.decode()

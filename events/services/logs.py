@@ -89,7 +89,7 @@ def close_test_event(event: TestEvent, at: datetime | None = None) -> TestEvent:
     at = instant(at)
     require_open(event, _("Test event '%(name)s'") % {"name": event})
     require_not_before(event, at, _("Test event '%(name)s'") % {"name": event})
-    _announce_closing(Leg.objects.filter(shift__test_event=event, end__isnull=True))
+    _announce_closing(rules.open_legs_under(test_event=event))
     # Top-down locks (event, shift, leg), the order the writers below use too.
     for shift in event.shifts.select_for_update().filter(end__isnull=True):
         _close_shift(shift, at)
@@ -179,7 +179,7 @@ def close_shift(shift: Shift, at: datetime | None = None) -> Shift:
     at = instant(at)
     require_open(shift, str(shift))
     require_not_before(shift, at, str(shift))
-    _announce_closing(shift.legs.filter(end__isnull=True))
+    _announce_closing(rules.open_legs_under(shift=shift))
     return announce_and_return(_close_shift(shift, at))
 
 
@@ -225,7 +225,7 @@ def close_leg(leg: Leg, at: datetime | None = None) -> Leg:
     at = instant(at)
     require_open(leg, str(leg))
     require_not_before(leg, at, str(leg))
-    _announce_closing(Leg.objects.filter(pk=leg.pk))
+    _announce_closing(rules.open_legs_under(leg=leg))
     return announce_and_return(_close_leg(leg, at))
 
 

@@ -39,7 +39,9 @@ from rosbridge_app.selectors.control import (
     logging_control,
     parameter_rows,
     snapshot_control,
+    stores_nothing,
 )
+from rosbridge_app.selectors.ending import ACTIONS, ending
 from rosbridge_app.selectors.fleet import fleet
 from rosbridge_app.services.collectors import issue_command
 from telemetry.api.serializers import ImageSerializer, RecordingSerializer
@@ -331,6 +333,24 @@ class QuickReason(SegmentWrite):
         return rules.annotate_open_take_over(leg, seen=seen, ito_reason=body["reason"])
 
 
+class EndingQuery(serializers.Serializer):
+    action = serializers.ChoiceField(choices=sorted(ACTIONS))
+    id = serializers.IntegerField(min_value=1)
+
+
+class Ending(GuiView):
+    """What an action would end, asked before it is done (nothing is written):
+    ``?action=end-event|end-shift|end-leg&id=`` of the row, ``?action=new-leg&id=``
+    of the shift.  ``rosbridge_app.selectors.ending``."""
+
+    def get(self, request):
+        query = EndingQuery(data=request.query_params)
+        query.is_valid(raise_exception=True)
+        action = query.validated_data["action"]
+        row = get_object_or_404(ACTIONS[action][0], pk=query.validated_data["id"])
+        return Response(ending(action, row))
+
+
 class SegmentAttachments(GuiView):
     """What the segment dialog shows beside the annotation, in one request: the
     segment's notes, and the images and snapshots of its master (a reason shares
@@ -412,6 +432,7 @@ class CollectorStatus(GuiView):
                 "reason": reason,
                 "can_snapshot": can_snapshot,
                 "snapshot_reason": snapshot_reason,
+                "stores_nothing": stores_nothing(collector),
             }
         )
 

@@ -177,6 +177,8 @@ def index(request):
             "canOperate": roles.has_role(user, roles.OPERATOR),
             "isAdmin": is_admin,
             "user": user.get_full_name() or user.get_username(),
+            # Whose writes this browser keeps offline (outbox.js): only theirs are sent.
+            "account": user.pk,
             "personnel": personnel.pk if personnel else None,
             "opening": opened,
             "cockpitCookie": LAST_COCKPIT,

@@ -34,6 +34,20 @@ def logging_control(collector: Collector | None, leg: Leg | None) -> tuple[bool,
     return True, ""
 
 
+def stores_nothing(collector: Collector | None) -> str:
+    """Why a collector that logs stores nothing (its leg ended or it has none), or ""."""
+    if collector is None or not collector.logging or not is_online(collector):
+        return ""
+    leg = collector.leg
+    if leg is None:
+        return _("Logging into no leg: nothing is stored. Start a new leg.")
+    if not leg.is_open:
+        return _("Logging into %(leg)s, which has ended: nothing is stored. Start a new leg.") % {
+            "leg": leg
+        }
+    return ""
+
+
 def snapshot_control(collector: Collector | None) -> tuple[bool, str]:
     """(may "Snapshot now" be pressed, why not / what it does)."""
     if collector is None:

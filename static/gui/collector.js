@@ -40,6 +40,7 @@ export const Collector = {
     const button = $("#logging-toggle");
     const inputs = $("#collector-inputs");
     if (!s || !s.collector) {
+      $("#collector-warning").hidden = true;
       $("#collector-status").textContent = _("No collector has reported for %(vehicle)s.", { vehicle: vehicleName(current("shift").vehicle) });
       inputs.replaceChildren();
       button.disabled = true;
@@ -50,6 +51,10 @@ export const Collector = {
       return;
     }
     const c = s.collector;
+    // The server says when the robot logs into an ended or missing leg (control.py).
+    const warning = $("#collector-warning");
+    warning.textContent = s.stores_nothing || "";
+    warning.hidden = !s.stores_nothing;
     const doing = !c.logging ? _("not logging") : c.leg === state.selected.leg ? _("logging into this leg") : c.leg ? _("logging into another leg") : _("logging into no leg");
     const queue = c.pending ? ` · ${_("%(count)s records not yet stored", { count: fmtNumber(c.pending) })}` : "";
     // Set by the collector's watchdog, e.g. "robot publishes, collector hears nothing (…)".

@@ -94,9 +94,13 @@ export function formDialog({ title, subtitle, specs, values, save }) {
   dialog.showModal();
 }
 
-export function confirmDialog(message, { yes = _("Delete"), no = _("Keep it"), warn = true } = {}) {
+/* `items`: lines naming what the action touches, listed under the question. */
+export function confirmDialog(message, { yes = _("Delete"), no = _("Keep it"), warn = true, items = [] } = {}) {
   const dialog = $("#confirm-dialog");
   $(".message", dialog).textContent = message;
+  const list = $(".items", dialog);
+  list.replaceChildren(...items.map((text) => Object.assign(document.createElement("li"), { textContent: text })));
+  list.hidden = !items.length;
   $(".undo-warning", dialog).hidden = !warn;
   $('button[value="yes"]', dialog).textContent = yes;
   $('button[value="no"]', dialog).textContent = no;

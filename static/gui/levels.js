@@ -131,6 +131,30 @@ async function formOf(level) {
   return forms[level];
 }
 
+/* What `action` on row `id` would end, as the server reads it (nothing is
+ * written), as lines for the confirmation; none when it ends nothing that
+ * a robot logs into. */
+async function endingLines(action, id) {
+  const e = await api("GET", `ending/?action=${action}&id=${id}`, undefined, { root: CONFIG.guiApiRoot });
+  const lines = [];
+  const names = (rows) => rows.map((r) => r.name).join(", ");
+  if (e.vehicles.length) {
+    const whose = e.vehicles.map((v) => v.name).join(", ");
+    lines.push(e.logging_stops ? _("Logging stops on: %(vehicles)s. The robots store nothing until a new leg is started and logging is switched on.", { vehicles: whose }) : _("Logging goes on into the new leg: %(vehicles)s.", { vehicles: whose }));
+  }
+  if (e.shifts.length) lines.push(plural(ngettext("%(count)s shift ends: %(names)s", "%(count)s shifts end: %(names)s", e.shifts.length), e.shifts.length, { names: names(e.shifts) }));
+  if (e.legs.length) lines.push(plural(ngettext("%(count)s leg ends: %(names)s", "%(count)s legs end: %(names)s", e.legs.length), e.legs.length, { names: names(e.legs) }));
+  if (e.take_overs.length) lines.push(plural(ngettext("%(count)s open take-over ends: %(names)s", "%(count)s open take-overs end: %(names)s", e.take_overs.length), e.take_overs.length, { names: names(e.take_overs) }));
+  return lines;
+}
+
+/* Asks before `action` when it ends anything; false when the operator keeps it. */
+async function askBeforeEnding(action, id, question, yes) {
+  const lines = await endingLines(action, id);
+  if (!lines.length && action === "new-leg") return true;
+  return confirmDialog(question, { yes, no: _("Cancel"), warn: false, items: lines });
+}
+
 /* Nothing is written until Save; Cancel leaves no empty entry behind. */
 async function createLevel(level) {
   const form = await formOf(level);
@@ -144,6 +168,8 @@ async function createLevel(level) {
     save: async (body) => {
       if (parent) body[LEVELS[level].parentField] = state.selected[parent];
       // The server ends a vehicle's other open shift (its rule); the operator is asked first.
+      // A new leg ends the shift's open leg (the server's rule): asked first, naming it.
+      if (level === "leg" && !(await askBeforeEnding("new-leg", body.shift, _("Start a new leg? This ends the open leg of this shift."), _("End it and create")))) return false;
       const ending = level === "shift" && body.vehicle ? await list(LEVELS.shift.path, { vehicle: body.vehicle, open: "true" }) : [];
       if (ending.length) {
         const which = ending.map((r) => _("Shift %(number)s (started %(start)s)", { number: r.number, start: fmtTime(r.start) })).join(", ");
@@ -204,8 +230,13 @@ async function levelAction(level, action) {
     await loadLevel(level, true);
     return notice(_("Deleted %(name)s.", { name: nameOf(level, row) }));
   }
-  // The server stops logging into what ends (one rule, in its services).
-  if (action === "end") await api("POST", `${LEVELS[level].path}${row.id}/close/`, {});
+  // The server stops logging into what ends (one rule, in its services); it says
+  // beforehand what that will be, and the operator is asked.
+  if (action === "end") {
+    const question = _("End %(name)s?", { name: nameOf(level, row) });
+    if (!(await askBeforeEnding(`end-${level}`, row.id, question, _("End %(name)s", { name: nameOf(level, row) })))) return;
+    await api("POST", `${LEVELS[level].path}${row.id}/close/`, {});
+  }
   if (action === "reopen") await api("POST", `${LEVELS[level].path}${row.id}/reopen/`, {});
   await loadLevel(level);
   return notice(action === "end" ? _("Ended %(name)s.", { name: nameOf(level, row) }) : _("Re-opened."));

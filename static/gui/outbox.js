@@ -4,18 +4,28 @@
  * they were made once the live link is back.  Each carries the uid its row will
  * have (or, for a reason, the take-over the operator saw), so that a write sent
  * again after a lost answer is stored once: the server decides (common/retries.py).
- * A write the server refuses is dropped and the operator is told why. */
+ * A write the server refuses is dropped and the operator is told why.
+ *
+ * Every write answers within ANSWER_MS: one the server has not answered by then
+ * is kept (its request goes on, and is awaited before the kept copy is sent).
+ * Kept writes belong to the account that made them: another sign-in neither
+ * sees nor sends them, and signing out asks before it deletes them. */
 import { CONFIG, $ } from "./dom.js";
 import { ApiError, api, plainMessage } from "./api.js";
 import { notice, showError } from "./feedback.js";
 import { Live } from "./live.js";
 import { _, plural } from "./i18n.js";
+import { confirmDialog } from "./dialogs.js";
 
 const DB_NAME = "ftt-outbox";
 const STORE = "writes";
 // How long a write may wait for its answer before it is kept for later.
 const WAIT_MS = 8000;
 const WAIT_FILE_MS = 60000;
+// How long a tap waits for the server before it is told "kept, will be sent".
+const ANSWER_MS = 1000;
+// Requests still under way for writes already kept, by their seq in the store.
+const underWay = new Map();
 
 /* A uid for a new row.  crypto.randomUUID exists only on https (and localhost);
  * field laptops may reach the server over plain http. */
@@ -82,23 +92,49 @@ export const Outbox = {
     const waiting = await this.count();
     // A dead link is not tried: its request would only wait out WAIT_MS.
     if (!waiting && ["live", "connecting"].includes(Live.link)) {
+      const sending = send(entry);
+      const late = Symbol("late");
+      const timer = new Promise((resolve) => setTimeout(resolve, ANSWER_MS, late));
       try {
-        return { answer: await send(entry) };
+        const answer = await Promise.race([sending, timer]);
+        if (answer !== late) return { answer };
       } catch (err) {
         if (!unreachable(err)) throw err;
+        return this.keep(entry);
       }
+      // No answer yet on a slow or half-open link: kept now, the request goes on.
+      return this.keep(entry, sending);
     }
+    return this.keep(entry);
+  },
+  /* Keeps `entry`; `sending`: its request still under way, which flush awaits. */
+  async keep(entry, sending = null) {
     const { kept, ...rest } = entry;
     if (kept) rest.body = kept;
     rest.made = new Date().toISOString();
-    await onStore("readwrite", (s) => s.add(rest));
+    rest.account = CONFIG.account;
+    const seq = await onStore("readwrite", (s) => s.add(rest));
+    if (sending) {
+      underWay.set(seq, sending.then(() => true, (err) => (unreachable(err) ? false : Promise.reject(err))));
+      sending.finally(() => Live.link === "live" && this.flush()).catch(() => {});
+    }
     await this.show();
     notice(_("Kept in this browser: %(what)s. It is sent when the server can be reached.", { what: entry.what }));
-    if (Live.link === "live") this.flush();
+    if (Live.link === "live" && !sending) this.flush();
     return { kept: true };
   },
-  count() {
-    return onStore("readonly", (s) => s.count());
+  /* This account's kept writes, oldest first. */
+  async pending() {
+    const all = await onStore("readonly", (s) => s.getAll());
+    return all.filter((e) => e.account === CONFIG.account);
+  },
+  /* Forgets every kept write of this browser (signing out). */
+  clear() {
+    underWay.clear();
+    return onStore("readwrite", (s) => s.clear());
+  },
+  async count() {
+    return (await this.pending()).length;
   },
   /* The kept writes, oldest first, one at a time: a take-over before the reason given to it. */
   async flush() {
@@ -107,9 +143,12 @@ export const Outbox = {
     const refused = [];
     let sent = 0;
     try {
-      for (const entry of await onStore("readonly", (s) => s.getAll())) {
+      for (const entry of await this.pending()) {
         try {
-          await send(entry);
+          // The first request may still arrive: the kept copy is sent only if it did not.
+          const arrived = await underWay.get(entry.seq);
+          underWay.delete(entry.seq);
+          if (!arrived) await send(entry);
           sent += 1;
         } catch (err) {
           // Still cut: this and the later ones wait for the next try, in order.
@@ -134,3 +173,27 @@ export const Outbox = {
     badge.dataset.count = n;
   },
 };
+
+/* Signing out leaves nothing of this account in the browser: kept writes (asked
+ * first, they would be lost) and the service worker's copies of the cockpit,
+ * so the next person neither sees this one's data offline nor sends their writes. */
+export async function signOut(form) {
+  const n = await Outbox.count().catch(() => 0);
+  if (n) {
+    const question = plural(ngettext("%(count)s change made here is not sent yet. Signing out deletes it.", "%(count)s changes made here are not sent yet. Signing out deletes them.", n), n);
+    if (!(await confirmDialog(question, { yes: _("Delete and sign out"), no: _("Stay signed in") }))) return;
+  }
+  await Outbox.clear().catch(() => {});
+  if (window.caches) {
+    for (const name of await caches.keys()) if (name.startsWith("ftt-cockpit")) await caches.delete(name);
+  }
+  form.submit();
+}
+
+const signOutForm = $("#sign-out");
+if (signOutForm) {
+  signOutForm.addEventListener("submit", (e) => {
+    e.preventDefault();
+    signOut(signOutForm).catch(showError);
+  });
+}

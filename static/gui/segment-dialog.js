@@ -12,6 +12,27 @@ import { showSnapshots } from "./snapshots.js";
 
 const segmentDialog = $("#segment-dialog");
 export let dialogSegment = null;
+const ANNOTATION = ["ito_reason", "obstacle", "lighting", "slope", "initiator", "severity", "location_type"];
+// The annotation as the dialog showed it: Save sends only what the operator changed.
+let shownValues = {};
+
+/* The segment `s` with the writes kept for it in this browser applied, oldest
+ * first (a quick reason for it, edits of it), so that an edit made offline
+ * after a quick reason starts from that reason; `kept`: whether any applied. */
+function composed(s, pending) {
+  const row = { ...s };
+  let kept = false;
+  for (const e of pending) {
+    if (e.gui && e.path === `legs/${s.leg}/quick-reason/` && e.body.take_over === s.id) {
+      row.ito_reason = e.body.reason;
+      kept = true;
+    } else if (e.method === "PATCH" && !e.gui && e.path === `segments/${s.id}/`) {
+      Object.assign(row, e.body);
+      kept = true;
+    }
+  }
+  return { row, kept };
+}
 
 export async function openSegmentDialog(id) {
   // The list's row is the same record (kept current by the change feed): no extra read.
@@ -25,12 +46,17 @@ export async function openSegmentDialog(id) {
   const uncertain = s.start_uncertainty > 0 ? " " + _("(switched up to %(seconds)s s earlier; the robot's mode message has no time stamp)", { seconds: fmtNumber(s.start_uncertainty, 1) }) : "";
   $(".subtitle", segmentDialog).textContent = _("Start %(start)s · End %(end)s", { start: fmtTime(s.start) + uncertain, end: s.end ? fmtTime(s.end) : _("still open") });
   const form = $("#annotation-form");
+  // What the server has, with what this browser keeps to send for it on top.
+  const { row, kept } = composed(s, await Outbox.pending().catch(() => []));
+  if (dialogSegment !== s) return;
   form.elements.ito_reason.replaceChildren(...state.catalogue.reasons.map((r) => new Option(r.short_description, r.key)));
-  form.elements.ito_reason.value = s.ito_reason || "unassigned";
-  for (const f of ["obstacle", "lighting", "slope", "location_type"]) form.elements[f].value = s[f] || "";
-  form.elements.initiator.value = s.initiator || "safety_driver";
-  form.elements.severity.value = s.severity || "not_applicable";
+  form.elements.ito_reason.value = row.ito_reason || "unassigned";
+  for (const f of ["obstacle", "lighting", "slope", "location_type"]) form.elements[f].value = row[f] || "";
+  form.elements.initiator.value = row.initiator || "safety_driver";
+  form.elements.severity.value = row.severity || "not_applicable";
   form.elements.change_reason.value = "";
+  shownValues = Object.fromEntries(ANNOTATION.map((f) => [f, form.elements[f].value]));
+  $(".kept-changes", segmentDialog).hidden = !kept;
   const history = $(".history", segmentDialog);
   history.open = false;
   $(".history-list", history).replaceChildren();
@@ -77,15 +103,21 @@ segmentDialog.addEventListener("close", () => {
   dialogSegment = null;
 });
 
+/* The button that started an action stays off until it has answered: a second
+ * tap on a slow link does not send the same note twice. */
 function dialogAction(fn) {
   return async (e) => {
     if (e) e.preventDefault();
     const errorBox = $(".dialog-error", segmentDialog);
     errorBox.hidden = true;
+    const button = e && (e.submitter || (e.currentTarget instanceof HTMLButtonElement ? e.currentTarget : null));
+    if (button) button.disabled = true;
     try {
       await fn(e);
     } catch (err) {
       showError(err, errorBox);
+    } finally {
+      if (button) button.disabled = !CONFIG.canOperate;
     }
   };
 }
@@ -93,12 +125,14 @@ function dialogAction(fn) {
 $("#annotation-form").addEventListener("submit", dialogAction(async () => {
   const form = $("#annotation-form");
   const body = {};
-  for (const f of ["ito_reason", "obstacle", "lighting", "slope", "initiator", "severity", "location_type"]) {
-    body[f] = form.elements[f].value;
+  for (const f of ANNOTATION) {
+    if (form.elements[f].value !== shownValues[f]) body[f] = form.elements[f].value;
   }
-  const reason = form.elements.change_reason.value.trim();
   const id = dialogSegment.id;
+  if (!Object.keys(body).length) return notice(_("Nothing changed in %(segment)s.", { segment: segmentLabel(id) }));
+  const reason = form.elements.change_reason.value.trim();
   const { answer } = await Outbox.write({ method: "PATCH", path: `segments/${id}/`, body, reason, what: _("the edit of %(segment)s", { segment: segmentLabel(id) }) });
+  Object.assign(shownValues, body);
   if (!answer) return;
   putSegment(answer);
   notice(_("%(segment)s saved.", { segment: segmentLabel(id) }));
@@ -202,7 +236,7 @@ $("#note-form").addEventListener("submit", dialogAction(async () => {
   const form = $("#note-form");
   const body = { uid: newUid(), segment: dialogSegment.id, text: form.elements.text.value };
   if (CONFIG.personnel) body.author = CONFIG.personnel;
-  const { answer } = await Outbox.write({ method: "POST", path: "notes/", body, what: `a note on ${segmentLabel(dialogSegment.id)}` });
+  const { answer } = await Outbox.write({ method: "POST", path: "notes/", body, what: _("a note on %(segment)s", { segment: segmentLabel(dialogSegment.id) }) });
   form.reset();
   if (answer) await loadNotes();
 }));

@@ -36,8 +36,10 @@ async function fromNetwork(request, stored = () => {}) {
   const timer = setTimeout(() => controller.abort(), WAIT_MS);
   try {
     const response = await fetch(request, { signal: controller.signal });
-    // A redirect to the sign-in page is no cockpit to keep.
-    if (response.ok && !response.redirected) {
+    // A redirect to the sign-in page is no cockpit to keep, and says the kept
+    // copies belong to a session that has ended: they are dropped.
+    if (response.redirected && new URL(response.url).pathname.startsWith("/login")) stored(caches.delete(CACHE));
+    else if (response.ok && !response.redirected) {
       const copy = response.clone();
       stored(caches.open(CACHE).then((cache) => cache.put(request, copy)));
     }

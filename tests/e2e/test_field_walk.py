@@ -9,7 +9,7 @@ import pytest
 from PIL import Image as PILImage
 from playwright.sync_api import expect
 
-from tests.support.browser import Robot, login
+from tests.support.browser import Robot, end_level, login
 from tests.support.screens import VIEWPORTS
 
 pytestmark = pytest.mark.e2e
@@ -218,7 +218,7 @@ def test_field_walk(browser, server, shot):
         # toast shown is watched to see that the end's was one of them.
         page.evaluate(SEEN_TOASTS)
         toggle.click()
-        page.locator('[data-action="end"][data-level="event"]').click()
+        end_level(page, "event")
         expect(page.locator('[data-state="event"]')).to_have_text("closed")
         expect(page.locator("body")).to_have_attribute("data-saw-ended", "yes")
         expect(page.locator("#error")).to_be_hidden()

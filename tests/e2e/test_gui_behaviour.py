@@ -5,7 +5,7 @@ import re
 import pytest
 from playwright.sync_api import expect
 
-from tests.support.browser import Robot, choose_event, login
+from tests.support.browser import Robot, choose_event, end_level, login
 from tests.support.pdf import flat, pdf_text
 
 pytestmark = pytest.mark.e2e
@@ -200,7 +200,7 @@ def test_reports_dialog_offers_exports_and_makes_a_report(page, server, open_leg
     choose(page, open_leg)
     page.locator("#segment-new").click()
     expect(page.locator("#segment-table tbody tr")).to_have_count(1)
-    page.locator('[data-action="end"][data-level="event"]').click()
+    end_level(page, "event")
     expect(page.locator('[data-state="event"]')).to_have_text("closed")
     page.get_by_role("button", name="Reports & exports").click()
     dialog = page.locator("#reports-dialog")
@@ -348,7 +348,7 @@ def test_ending_a_leg_while_logging_stops_logging_first(page, server, open_leg, 
         expect(toggle).to_have_text("Stop logging", timeout=5000)
         robot.do("auto")
         expect(page.locator("#segment-table tbody tr")).to_have_count(1)
-        page.locator('[data-action="end"][data-level="leg"]').click()
+        end_level(page, "leg")
         expect(page.locator('[data-state="leg"]')).to_have_text("closed")
         expect(toggle).to_have_text("Start logging", timeout=5000)
         # Closed levels: logging cannot start again until a new leg is opened.

@@ -6,7 +6,7 @@ import re
 import pytest
 from playwright.sync_api import expect
 
-from tests.support.browser import PASSWORD, choose_event
+from tests.support.browser import PASSWORD, choose_event, login
 
 pytestmark = pytest.mark.e2e
 
@@ -29,5 +29,25 @@ def test_a_german_browser_gets_the_cockpit_in_german(browser, server, open_leg):
         expect(page.locator("#pick-shift option:checked")).to_have_text(
             re.compile(r"^Schicht 1 · ")
         )
+    finally:
+        context.close()
+
+
+def test_the_cockpits_top_bar_has_the_language_picker(browser, server, open_leg):
+    context = browser.new_context(locale="en-GB")
+    try:
+        page = context.new_page()
+        login(page, server, "vera")
+        choose_event(page, open_leg)
+        picker = page.locator(".topbar").get_by_label("Language")
+        expect(picker).to_be_visible()
+        picker.select_option("de")
+        expect(page.locator("html")).to_have_attribute("lang", "de")
+        expect(page.get_by_role("button", name="Abmelden")).to_be_visible()
+        # Kept on the account: the choice outlives the page it was made on.
+        picker = page.locator(".topbar").get_by_label("Sprache")
+        expect(picker).to_have_value("de")
+        picker.select_option("en")
+        expect(page.get_by_role("button", name="Sign out")).to_be_visible()
     finally:
         context.close()

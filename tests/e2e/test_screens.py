@@ -17,7 +17,8 @@ from tests.support.screens import OVERFLOWING, SMALL, VIEWPORTS
 MAIN_ACTIONS = (
     "#mode-panel .quick button, #mode-panel select, #segment-new, #segment-end, #segment-edit, "
     "#logging-toggle, .log-row button, .log-row select, #segment-table tbody tr, label.switch, "
-    ".topbar nav a, .topbar nav button, #fit-track, #timeline .bar, .leaflet-control-zoom a"
+    ".topbar nav a, .topbar nav button, .topbar nav select, #fit-track, #timeline .bar, "
+    ".leaflet-control-zoom a"
 )
 
 

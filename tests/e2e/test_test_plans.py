@@ -45,6 +45,8 @@ def new_leg(page, case: str | None):
     if case:
         select.select_option(label=case)
     dialog.get_by_role("button", name="Save").click()
+    # The shift's open leg ends: the cockpit asks first.
+    page.locator("#confirm-dialog").get_by_role("button", name="End it and create").click()
     expect(dialog).to_be_hidden()
 
 

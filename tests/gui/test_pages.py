@@ -180,6 +180,7 @@ def test_logging_can_start_only_with_online_collector_and_open_levels(client, le
         "reason": "No collector has reported for this vehicle.",
         "can_snapshot": False,
         "snapshot_reason": "No collector has reported for this vehicle.",
+        "stores_nothing": "",
     }
     collector = collector_for(vehicle)
     assert client.get(url).json()["can_toggle"] is True

@@ -117,6 +117,18 @@ def choose_event(page, key):
     expect(page.locator("#segments-section")).to_be_visible()
 
 
+def end_level(page, level):
+    """End the selected test event, shift or leg ("event", "shift", "leg"): the
+    cockpit asks first, naming what ends; the question is answered yes."""
+    from playwright.sync_api import expect
+
+    page.locator(f'[data-action="end"][data-level="{level}"]').click()
+    confirm = page.locator("#confirm-dialog")
+    expect(confirm).to_be_visible()
+    confirm.locator('button[value="yes"]').click()
+    expect(confirm).to_be_hidden()
+
+
 USERS = f"""
 from django.contrib.auth.models import Group, User
 from events.models import Personnel
