@@ -28,6 +28,17 @@ def env_list(name: str, default: str = "") -> list[str]:
     return [item.strip() for item in os.environ.get(name, default).split(",") if item.strip()]
 
 
+def env_pairs(name: str, default: str = "") -> dict[str, str]:
+    """``key=value,key=value`` as a dict (keys and values stripped)."""
+    pairs = {}
+    for item in env_list(name, default):
+        key, sep, value = item.partition("=")
+        if not sep:
+            raise ImproperlyConfigured(f"{name} takes key=value pairs, not {item!r}")
+        pairs[key.strip()] = value.strip()
+    return pairs
+
+
 def env_int(name: str, default: int) -> int:
     raw = os.environ.get(name)
     if raw is None or raw.strip() == "":

@@ -24,6 +24,7 @@ from ftt_site.env import (  # noqa: E402
     env_bool,
     env_int,
     env_list,
+    env_pairs,
     env_str,
     private_dir,
     private_file,
@@ -534,3 +535,16 @@ FTT_LOCATION_TYPES = env_list("FTT_LOCATION_TYPES", "field,road,yard")
 # The disengagement report's manufacturer and permit columns (ftt_report --dmv).
 FTT_DMV_MANUFACTURER = env_str("FTT_DMV_MANUFACTURER", "")
 FTT_DMV_PERMIT = env_str("FTT_DMV_PERMIT", "")
+# FTT's words as the DMV form's (docs/report.md; checked at start by
+# reports.checks): initiators, location types (any other: the default) and
+# the vehicles capable of operating without a driver (their keys).
+FTT_DMV_INITIATORS = env_pairs(
+    "FTT_DMV_INITIATORS",
+    "autonomous_system=AV System,safety_driver=Test Driver,"
+    "remote_operator=Remote Operator,other=Passenger",
+)
+FTT_DMV_LOCATIONS = env_pairs(
+    "FTT_DMV_LOCATIONS", "road=Street,field=Rural Road,yard=Parking Facility"
+)
+FTT_DMV_LOCATION_DEFAULT = env_str("FTT_DMV_LOCATION_DEFAULT", "Street")
+FTT_DMV_DRIVERLESS_VEHICLES = env_list("FTT_DMV_DRIVERLESS_VEHICLES", "")

@@ -25,6 +25,7 @@ urlpatterns = [
     path("judgements/", views.JudgementView.as_view(), name="report-judgements"),
     re_path(
         r"^exports/(?P<test_event_id>\d+)/(?P<filename>segments\.csv|disengagements\.csv"
+        r"|autonomous-mileage\.csv"
         r"|tracks\.geojson|tracks\.gpx|test-plan\.csv|test-plan\.json)$",
         views.ExportView.as_view(),
         name="report-export",

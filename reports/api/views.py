@@ -28,7 +28,7 @@ from reports.documents.options import FULL, LEVELS
 from reports.models import Report
 from reports.selectors import exports
 from reports.selectors.comparison import compare
-from reports.selectors.disengagements import disengagements_csv
+from reports.selectors.disengagements import disengagements_csv, mileage_csv, reporting_year_of
 from reports.selectors.provenance import amendments_of, verify_report
 from reports.selectors.reports import reports_of
 from reports.selectors.routes import (
@@ -56,6 +56,16 @@ def _mode(request) -> str:
         message = _("mode must be one of %(modes)s.") % {"modes": ", ".join(MODES)}
         raise ValidationError({"mode": [message]})
     return mode
+
+
+def _reporting_year(request, event) -> int:
+    """``?year=`` (the DMV's reporting year), else the one the event starts in."""
+    raw = request.query_params.get("year")
+    if raw is None:
+        return reporting_year_of(event.start.astimezone(event.tzinfo))
+    if not raw.isdigit() or not 2 <= int(raw) <= 9999:
+        raise ValidationError({"year": [_("Give the reporting year between 0002 and 9999.")]})
+    return int(raw)
 
 
 class StatisticsView(APIView):
@@ -338,15 +348,26 @@ class ExportView(APIView):
         "test-plan.csv": "text/csv; charset=utf-8",
         "test-plan.json": "application/json",
         "disengagements.csv": "text/csv; charset=utf-8",
+        "autonomous-mileage.csv": "text/csv; charset=utf-8",
     }
 
-    @extend_schema(parameters=[MODE_PARAM], responses={(200, "text/csv"): bytes})
+    @extend_schema(
+        parameters=[
+            MODE_PARAM,
+            OpenApiParameter(
+                "year", int, description="autonomous-mileage.csv: the DMV's reporting year"
+            ),
+        ],
+        responses={(200, "text/csv"): bytes},
+    )
     def get(self, request, test_event_id: int, filename: str):
         event = get_object_or_404(TestEvent, pk=test_event_id)
         if filename == "segments.csv":
             body = exports.segments_csv(event, _mode(request))
         elif filename == "disengagements.csv":
             body = disengagements_csv([event])
+        elif filename == "autonomous-mileage.csv":
+            body = mileage_csv([event], _reporting_year(request, event))
         elif filename == "tracks.geojson":
             body = exports.tracks_geojson_text(event)
         elif filename == "test-plan.csv":

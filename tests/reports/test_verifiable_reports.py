@@ -1,6 +1,5 @@
 """Reports state the digest of their data and can be verified against it (issue 26)."""
 
-import csv
 import io
 import json
 
@@ -10,13 +9,12 @@ from django.db import connection
 from django.test.utils import CaptureQueriesContext
 
 from events.history import authored
-from events.models import ItoReason, TestEvent, Vehicle
+from events.models import ItoReason, TestEvent
 from events.services import deletion, finality, logs, notes, segments
 from exchange.archive import open_archive
 from exchange.export import export_events, select_events
 from exchange.history_records import TRACKED
 from exchange.importer import import_bundle
-from reports.selectors.disengagements import DMV_COLUMNS
 from reports.selectors.provenance import amendments_of, data_digest, verify
 from reports.selectors.statistics import event_statistics
 from telemetry.models import LocalPose, Pose
@@ -178,30 +176,3 @@ def test_verify_names_a_deleted_segment_and_note_with_who_deleted_them(scenario,
     assert f"segment {take_over.uid} deleted" in said
     assert f"note {note.uid} deleted" in said
     assert said.count("by administrator-staff via api") == 2
-
-
-def test_dmv_csv_has_the_columns_and_the_statistics_figures(scenario, tmp_path):
-    event = scenario.event
-    take_over = _take_over(scenario)
-    segments.annotate_segment(take_over, initiator="autonomous_system", location_type="field")
-    vehicle = take_over.leg.shift.vehicle
-    vehicle.vin = "WVWZZZ1JZXW000001"
-    vehicle.save()
-    out = tmp_path / "dmv.csv"
-    call_command("ftt_report", "--test-event", str(event.pk), "--dmv", str(out))
-    header, *rows = list(csv.reader(out.open(encoding="utf-8")))
-    assert tuple(header) == DMV_COLUMNS
-    stats = event_statistics(event)
-    assert len(rows) == stats.overall.interventions > 0
-    km = {row[3]: float(row[9]) for row in rows}
-    assert vehicle.vin in km
-    for vehicle_id, figures in stats.by_vehicle.items():
-        shown = Vehicle.objects.get(pk=vehicle_id)
-        shown = shown.vin or shown.key
-        if shown in km:
-            assert km[shown] == pytest.approx(figures.auto_distance / 1000, abs=0.001)
-    assert ["AV System", "field"] in [row[4:6] for row in rows]
-    month = f"{event.start:%Y-%m}"
-    by_month = tmp_path / "month.csv"
-    call_command("ftt_report", "--dmv", str(by_month), "--month", month)
-    assert by_month.read_text(encoding="utf-8") == out.read_text(encoding="utf-8")

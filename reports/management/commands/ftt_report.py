@@ -29,7 +29,14 @@ from reports.documents.options import FULL, LEVELS, ReportError, ReportOptions
 from reports.figures.tiles import MAX_ZOOM
 from reports.models import Report
 from reports.selectors import exports
-from reports.selectors.disengagements import disengagements_csv, events_in_month
+from reports.selectors.disengagements import (
+    disengagements_csv,
+    events_in_month,
+    events_in_reporting_year,
+    mileage_csv,
+    reporting_months,
+    reporting_year_of,
+)
 from reports.selectors.provenance import json_report, verify_report
 from reports.selectors.routes import DEFAULT_THRESHOLD
 from reports.services.generation import route_option, run_job
@@ -174,9 +181,25 @@ class Command(BaseCommand):
             ),
         )
         parser.add_argument(
+            "--dmv-mileage",
+            help=gettext(
+                "Write the autonomous miles per vehicle and month of a reporting year "
+                "(California DMV columns) as CSV to this file."
+            ),
+        )
+        parser.add_argument(
             "--month",
             metavar="YYYY-MM",
             help=gettext("With --dmv and without --test-event: every test event of that month."),
+        )
+        parser.add_argument(
+            "--year",
+            type=int,
+            metavar="YYYY",
+            help=gettext(
+                "With --dmv or --dmv-mileage: the DMV's reporting year, December of the "
+                "year before to November (default with --test-event: the year of its start)."
+            ),
         )
         parser.add_argument(
             "--verify",
@@ -189,8 +212,8 @@ class Command(BaseCommand):
             return self._verify(Path(o["verify"]))
         if o["job"] is not None:
             return self._job(o["job"])
-        if o["dmv"] and o["test_event"] is None:
-            return self._dmv_month(o)
+        if (o["dmv"] or o["dmv_mileage"]) and o["test_event"] is None:
+            return self._dmv_scope(o)
         if o["compare"]:
             return self._compare(o)
         if _routes_asked(o):
@@ -250,14 +273,36 @@ class Command(BaseCommand):
             ) from None
         return year, month
 
-    def _dmv_month(self, o):
+    @staticmethod
+    def _year(o) -> int | None:
+        year = o["year"]
+        if year is not None and not 2 <= year <= 9999:
+            raise CommandError(gettext("Give the reporting year between 0002 and 9999."))
+        if year is not None and o["month"]:
+            raise CommandError(gettext("Give --month or --year, not both."))
+        return year
+
+    def _months(self, o) -> set[tuple[int, int]] | None:
+        year = self._year(o)
+        if year is not None:
+            return set(reporting_months(year))
         month = self._month(o)
-        if month is None:
+        return None if month is None else {month}
+
+    def _dmv_scope(self, o):
+        """The DMV tables of every test event of a month or reporting year."""
+        year, month = self._year(o), self._month(o)
+        if o["dmv_mileage"] and year is None:
+            raise CommandError(gettext("Give --year YYYY (or --test-event ID) with --dmv-mileage."))
+        if year is None and month is None:
             raise CommandError(gettext("Give --test-event ID or --month YYYY-MM with --dmv."))
-        Path(o["dmv"]).write_text(
-            disengagements_csv(events_in_month(*month), month), encoding="utf-8"
-        )
-        self.stdout.write(gettext("disengagement report: %(file)s") % {"file": o["dmv"]})
+        events = events_in_month(*month) if month else events_in_reporting_year(year)
+        if o["dmv"]:
+            Path(o["dmv"]).write_text(disengagements_csv(events, self._months(o)), encoding="utf-8")
+            self.stdout.write(gettext("disengagement report: %(file)s") % {"file": o["dmv"]})
+        if o["dmv_mileage"]:
+            Path(o["dmv_mileage"]).write_text(mileage_csv(events, year), encoding="utf-8")
+            self.stdout.write(gettext("autonomous mileage: %(file)s") % {"file": o["dmv_mileage"]})
 
     def _compare(self, o):
         ids = o["compare"]
@@ -295,7 +340,14 @@ class Command(BaseCommand):
             ("geojson", lambda: exports.tracks_geojson_text(event)),
             ("gpx", lambda: exports.tracks_gpx(event)),
             ("json", lambda: json_report(event, "local" if o["local"] else "gps")),
-            ("dmv", lambda: disengagements_csv([event], self._month(o))),
+            ("dmv", lambda: disengagements_csv([event], self._months(o))),
+            (
+                "dmv_mileage",
+                lambda: mileage_csv(
+                    [event],
+                    self._year(o) or reporting_year_of(event.start.astimezone(event.tzinfo)),
+                ),
+            ),
         )
         done = False
         for key, make in writers:
