@@ -25,7 +25,7 @@ export async function openSegmentDialog(id) {
   const uncertain = s.start_uncertainty > 0 ? " " + _("(switched up to %(seconds)s s earlier; the robot's mode message has no time stamp)", { seconds: fmtNumber(s.start_uncertainty, 1) }) : "";
   $(".subtitle", segmentDialog).textContent = _("Start %(start)s · End %(end)s", { start: fmtTime(s.start) + uncertain, end: s.end ? fmtTime(s.end) : _("still open") });
   const form = $("#annotation-form");
-  form.elements.ito_reason.replaceChildren(...state.catalogue.reasons.map((r) => new Option(r.short_description, r.key)));
+  form.elements.ito_reason.replaceChildren(...state.catalogue.reasons.map((r) => new Option(r.label, r.key)));
   form.elements.ito_reason.value = s.ito_reason || "unassigned";
   for (const f of ["obstacle", "lighting", "slope", "location_type"]) form.elements[f].value = s[f] || "";
   form.elements.initiator.value = s.initiator || "safety_driver";
