@@ -181,7 +181,7 @@ def main():
                 figures.setdefault("End a segment", []).append(
                     timed(
                         lambda: page.locator("#segment-end").click(),
-                        until(page, f"() => {SELECTED}.cells[7].textContent === 'CLOSED'"),
+                        until(page, f"() => {SELECTED}.cells[7].textContent === 'closed'"),
                     )
                 )
                 dialog = page.locator("#segment-dialog")

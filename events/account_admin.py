@@ -28,11 +28,11 @@ class RobotAccountAdmin(admin.ModelAdmin):
         queryset = super().get_queryset(request).select_related("user")
         return queryset.prefetch_related("vehicles", "user__groups")
 
-    @admin.display(description="vehicles")
+    @admin.display(description=_("vehicles"))
     def bound_vehicles(self, obj):
         return ", ".join(v.key for v in obj.vehicles.all()) or "— (writes nothing)"
 
-    @admin.display(description="in robot group", boolean=True)
+    @admin.display(description=_("in robot group"), boolean=True)
     def in_robot_group(self, obj):
         # Without the group the binding does nothing: the login keeps its people's role.
         return any(group.name == roles.ROBOT for group in obj.user.groups.all())
@@ -44,7 +44,7 @@ class RobotAccountInline(admin.StackedInline):
     model = RobotAccount
     can_delete = True
     filter_horizontal = ["vehicles"]
-    verbose_name = "robot account (vehicles it logs for)"
+    verbose_name = _("robot account (vehicles it logs for)")
     # Folded: most logins are people's; a robot's is made with ftt_robot_account.
     classes = ["collapse"]
 

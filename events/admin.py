@@ -79,6 +79,7 @@ class AmendmentForm(forms.ModelForm):
 
     change_reason = forms.CharField(
         required=False,
+        label=_("Change reason"),
         widget=forms.Textarea(attrs={"rows": 2}),
         help_text=_("Why this is changed; required for a final test event."),
     )
@@ -146,8 +147,10 @@ class RobotBindingInline(admin.TabularInline):
     model = RobotAccount.vehicles.through
     extra = 0
     autocomplete_fields = ["robotaccount"]
-    verbose_name = "robot account"
-    verbose_name_plural = "robot accounts logging for this vehicle (their tokens write here only)"
+    verbose_name = _("robot account")
+    verbose_name_plural = _(
+        "robot accounts logging for this vehicle (their tokens write here only)"
+    )
 
 
 @admin.register(Vehicle)
@@ -203,7 +206,7 @@ def colour_swatch(obj):
     )
 
 
-colour_swatch.short_description = "colour"
+colour_swatch.short_description = _("colour")
 
 
 @admin.register(Weather)
@@ -293,11 +296,11 @@ class TestEventAdmin(ServiceDeleteMixin, HistoryAdmin):
         else:
             obj.pk = logs.create_test_event(**values).pk
 
-    @admin.action(description="End selected test events (and everything open below)")
+    @admin.action(description=_("End selected test events (and everything open below)"))
     def close_selected(self, request, queryset):
         run_service(self, request, queryset, logs.close_test_event, "test events ended")
 
-    @admin.action(description="Re-open selected test events")
+    @admin.action(description=_("Re-open selected test events"))
     def reopen_selected(self, request, queryset):
         run_service(self, request, queryset, logs.reopen_test_event, "test events re-opened")
 
@@ -329,7 +332,7 @@ class ShiftAdmin(ServiceDeleteMixin, HistoryAdmin):
     def get_readonly_fields(self, request, obj=None):
         return self.readonly_fields if obj else ENTRY_STAMPS
 
-    @admin.display(description="test event")
+    @admin.display(description=_("test event"))
     def test_event_link(self, obj):
         return admin_link(obj.test_event)
 
@@ -344,7 +347,7 @@ class ShiftAdmin(ServiceDeleteMixin, HistoryAdmin):
             )
             obj.pk = created.pk
 
-    @admin.action(description="End selected shifts (and everything open below)")
+    @admin.action(description=_("End selected shifts (and everything open below)"))
     def close_selected(self, request, queryset):
         run_service(self, request, queryset, logs.close_shift, "shifts ended")
 
@@ -366,7 +369,7 @@ class LegAdmin(ServiceDeleteMixin, HistoryAdmin):
     def get_readonly_fields(self, request, obj=None):
         return self.readonly_fields if obj else ENTRY_STAMPS
 
-    @admin.display(description="shift")
+    @admin.display(description=_("shift"))
     def shift_link(self, obj):
         return admin_link(obj.shift, f"{obj.shift} of {obj.shift.test_event}")
 
@@ -380,7 +383,7 @@ class LegAdmin(ServiceDeleteMixin, HistoryAdmin):
         else:
             obj.pk = logs.create_leg(shift=form.cleaned_data["shift"], **values).pk
 
-    @admin.action(description="End selected legs (and their open segments)")
+    @admin.action(description=_("End selected legs (and their open segments)"))
     def close_selected(self, request, queryset):
         run_service(self, request, queryset, logs.close_leg, "legs ended")
 
@@ -439,11 +442,11 @@ class SegmentAdmin(ServiceDeleteMixin, LeafletGeoAdminMixin, HistoryAdmin):
             segment.label = labels.segment_label(segment)
         return segment
 
-    @admin.display(description="leg")
+    @admin.display(description=_("leg"))
     def leg_link(self, obj):
         return admin_link(obj.leg, f"{obj.leg} of {obj.leg.shift}")
 
-    @admin.display(description="master")
+    @admin.display(description=_("master"))
     def parent_link(self, obj):
         return admin_link(obj.parent, obj.parent and labels.segment_label(obj.parent))
 
@@ -452,7 +455,7 @@ class SegmentAdmin(ServiceDeleteMixin, LeafletGeoAdminMixin, HistoryAdmin):
         if values:
             segments.annotate_segment(obj, **values)
 
-    @admin.action(description="End selected segments")
+    @admin.action(description=_("End selected segments"))
     def close_selected(self, request, queryset):
         run_service(self, request, queryset, segments.close_segment, "segments ended")
 

@@ -7,110 +7,119 @@ live ``django.apps.apps``).
 """
 
 from django.contrib.auth.management import create_permissions
+from django.utils.translation import gettext, gettext_noop
 
 from common import roles
 
 WEATHER = [
     (
         "sunny",
-        "sunny",
-        "Mainly sunny, less than 30 percent of the sky is covered by clouds.",
+        gettext_noop("sunny"),
+        gettext_noop("Mainly sunny, less than 30 percent of the sky is covered by clouds."),
         "sun",
     ),
     (
         "cloudy",
-        "cloudy",
-        "Mainly cloudy, between 30 and 95 percent of the sky is covered by clouds.",
+        gettext_noop("cloudy"),
+        gettext_noop("Mainly cloudy, between 30 and 95 percent of the sky is covered by clouds."),
         "cloudy",
     ),
     (
         "overcast",
-        "overcast",
-        "More than 95 percent of the sky is covered by clouds.",
+        gettext_noop("overcast"),
+        gettext_noop("More than 95 percent of the sky is covered by clouds."),
         "overcast",
     ),
     (
         "foggy",
-        "foggy",
-        "Reduced visibility due to fog to less than one kilometer.",
+        gettext_noop("foggy"),
+        gettext_noop("Reduced visibility due to fog to less than one kilometer."),
         "fog",
     ),
-    ("rainy", "rainy", "", "rain"),
-    ("snowy", "snowy", "", "snow"),
+    ("rainy", gettext_noop("rainy"), "", "rain"),
+    ("snowy", gettext_noop("snowy"), "", "snow"),
 ]
 
 # key, short, long, colour, counts as an intervention
 ITO_REASONS = [
     (
         "safety",
-        "Safety",
-        "Safety stop, initiated by an inhabitant of the vehicle.",
+        gettext_noop("Safety"),
+        gettext_noop("Safety stop, initiated by an inhabitant of the vehicle."),
         "255,0,0",
         True,
     ),
     (
         "maintenance",
-        "Maintenance",
-        "Maintenance stop, a stop initiated by the performer to fix code.",
+        gettext_noop("Maintenance"),
+        gettext_noop("Maintenance stop, a stop initiated by the performer to fix code."),
         "255,240,0",
         True,
     ),
     (
         "planner",
-        "Planner",
-        "Planner stop, a stop caused by a timeout or error of the planner.",
+        gettext_noop("Planner"),
+        gettext_noop("Planner stop, a stop caused by a timeout or error of the planner."),
         "255,120,0",
         True,
     ),
     (
         "apparatus",
-        "Apparatus",
-        "Apparatus stop, a stop that is initiated by the test admin to fix the test apparatus.",
+        gettext_noop("Apparatus"),
+        gettext_noop(
+            "Apparatus stop, a stop that is initiated by the test admin to fix the test apparatus."
+        ),
         "70,0,255",
         True,
     ),
     (
         "non_stop",
-        "Non-Stop",
-        "Non-Stop, indicates that no stop was performed. Ignore this ITO.",
+        gettext_noop("Non-Stop"),
+        gettext_noop("Non-Stop, indicates that no stop was performed. Ignore this ITO."),
         "10,120,10",
         False,
     ),
     (
         "stereo",
-        "Stereo test",
-        "Stereo test stop, a stop initiated to perform a test of the stereo accuracy.",
+        gettext_noop("Stereo test"),
+        gettext_noop(
+            "Stereo test stop, a stop initiated to perform a test of the stereo accuracy."
+        ),
         "0,170,255",
         True,
     ),
     (
         "goal",
-        "Goal reached",
-        "Goal reached, a stop because the vehicle reached an (intermediate) goal.",
+        gettext_noop("Goal reached"),
+        gettext_noop("Goal reached, a stop because the vehicle reached an (intermediate) goal."),
         "0,0,139",
         False,
     ),
     (
         "end_shift",
-        "End of shift",
-        "End of shift indicates the stop was caused because the time for the shift was up.",
+        gettext_noop("End of shift"),
+        gettext_noop(
+            "End of shift indicates the stop was caused because the time for the shift was up."
+        ),
         "0,0,220",
         False,
     ),
     (
         "manual_transit",
-        "Manual transit",
-        "Manual transit indicates that the vehicle was stopped to drive it manually "
-        "through a dangerous area.",
+        gettext_noop("Manual transit"),
+        gettext_noop(
+            "Manual transit indicates that the vehicle was stopped to drive it manually "
+            "through a dangerous area."
+        ),
         "100,100,100",
         True,
     ),
-    ("other", "Other", "Other reasons.", "180,180,180", True),
-    ("unassigned", "Unassigned", "Unassigned.", "80,80,80", True),
+    ("other", gettext_noop("Other"), gettext_noop("Other reasons."), "180,180,180", True),
+    ("unassigned", gettext_noop("Unassigned"), gettext_noop("Unassigned."), "80,80,80", True),
     (
         "unexpected",
-        "Unexpected",
-        "Unexpected, non safety-critical behavior.",
+        gettext_noop("Unexpected"),
+        gettext_noop("Unexpected, non safety-critical behavior."),
         "200,200,0",
         True,
     ),
@@ -120,10 +129,29 @@ ITO_REASONS = [
 QUICK_REASONS = ["unexpected", "planner", "safety", "manual_transit"]
 
 SEGMENT_TYPES = [
-    ("ito", "ITO", "ITO - inhabited take over (manual mode).", "255,0,0"),
-    ("auto", "AUTO", "Autonomous.", "0,255,0"),
-    ("unknown", "Unknown", "Mode not known: logged before the robot said its mode.", "150,150,150"),
+    ("ito", "ITO", gettext_noop("ITO - inhabited take over (manual mode)."), "255,0,0"),
+    ("auto", "AUTO", gettext_noop("Autonomous."), "0,255,0"),
+    (
+        "unknown",
+        gettext_noop("Unknown"),
+        gettext_noop("Mode not known: logged before the robot said its mode."),
+        "150,150,150",
+    ),
 ]
+
+# The seeded texts of each catalogue entry: (model name, key) -> (short, long).
+SEEDED_TEXTS = {
+    **{("weather", key): (short, long) for key, short, long, _ in WEATHER},
+    **{("itoreason", key): (short, long) for key, short, long, *_ in ITO_REASONS},
+    **{("segmenttype", key): (short, long) for key, short, long, _ in SEGMENT_TYPES},
+}
+
+
+def shown(model_name: str, key: str, text: str) -> str:
+    """A catalogue entry's text as its reader sees it: the seeded words in the
+    reader's language; an entry an administrator added or rewrote, as written."""
+    return gettext(text) if text and text in SEEDED_TEXTS.get((model_name, key), ()) else text
+
 
 CONFIGURATION = ["personnel", "performer", "vehicle", "posesource"]
 CATALOGUES = ["weather", "itoreason", "segmenttype"]

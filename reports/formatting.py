@@ -6,7 +6,8 @@ from contextlib import contextmanager
 from contextvars import ContextVar
 from datetime import date, datetime, tzinfo
 
-from django.utils import translation
+from django.utils import numberformat, translation
+from django.utils.formats import get_format
 
 from reports.selectors.statistics import Estimate
 
@@ -39,17 +40,33 @@ def localised(text: str) -> str:
     return text.replace(".", mark) if mark else text
 
 
+def _grouped(figure: str) -> str:
+    """A figure written with a decimal point ("1227.47", rounded already) with the
+    report language's decimal mark and thousands separator (German 1.227,47;
+    English 1,227.47)."""
+    language = _LANGUAGE.get()
+    return numberformat.format(
+        figure,
+        get_format("DECIMAL_SEPARATOR", language),
+        None,
+        get_format("NUMBER_GROUPING", language),
+        get_format("THOUSAND_SEPARATOR", language),
+        force_grouping=True,
+    )
+
+
 def decimal(value: float, places: int = 2) -> str:
-    return localised(f"{value:.{places}f}")
+    return _grouped(f"{value:.{places}f}")
 
 
 def number(value: float) -> str:
     """A plain figure, as short as it reads (25, 2.5)."""
-    return localised(f"{value:g}")
+    short = f"{value:g}"
+    return localised(short) if "e" in short else _grouped(short)
 
 
 def metres(value: float | None) -> str:
-    return DASH if value is None else localised(f"{value:.2f}") + " m"
+    return DASH if value is None else _grouped(f"{value:.2f}") + " m"
 
 
 def duration(seconds: float | None) -> str:

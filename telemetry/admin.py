@@ -2,6 +2,7 @@
 
 from django.contrib import admin
 from django.utils.html import format_html
+from django.utils.translation import gettext_lazy as _
 from simple_history.admin import SimpleHistoryAdmin
 
 from events.admin import ServiceDeleteMixin, admin_link
@@ -20,7 +21,7 @@ class RecordedDataAdmin(admin.ModelAdmin):
     def get_readonly_fields(self, request, obj=None):
         return [f.name for f in self.model._meta.fields]
 
-    @admin.display(description="segment")
+    @admin.display(description=_("segment"))
     def segment_link(self, obj):
         return admin_link(obj.segment)
 
@@ -31,11 +32,11 @@ class PoseAdmin(ServiceDeleteMixin, RecordedDataAdmin):
     list_filter = ["fix_status", "pose_source"]
     list_select_related = ["segment__segment_type"]
 
-    @admin.display(description="longitude")
+    @admin.display(description=_("longitude"))
     def longitude(self, obj):
         return f"{obj.point.x:.7f}"
 
-    @admin.display(description="latitude")
+    @admin.display(description=_("latitude"))
     def latitude(self, obj):
         return f"{obj.point.y:.7f}"
 

@@ -110,13 +110,19 @@ class PoseSourceSerializer(ServiceSerializer):
 
 
 class WeatherSerializer(ServiceSerializer):
+    # What the cockpit shows: the seeded words in the reader's language.
+    label = serializers.CharField(source="shown_short", read_only=True)
+
     class Meta:
         model = Weather
-        fields = ["key", "short_description", "long_description", "icon"]
+        fields = ["key", "short_description", "long_description", "icon", "label"]
         create_only_fields = ["key"]
 
 
 class ItoReasonSerializer(ServiceSerializer):
+    # What the cockpit shows: the seeded words in the reader's language.
+    label = serializers.CharField(source="shown_short", read_only=True)
+
     class Meta:
         model = ItoReason
         fields = [
@@ -126,14 +132,18 @@ class ItoReasonSerializer(ServiceSerializer):
             "color",
             "counts_as_intervention",
             "quick",
+            "label",
         ]
         create_only_fields = ["key"]
 
 
 class SegmentTypeSerializer(ServiceSerializer):
+    # What the cockpit shows: the seeded words in the reader's language.
+    label = serializers.CharField(source="shown_short", read_only=True)
+
     class Meta:
         model = SegmentType
-        fields = ["key", "short_description", "long_description", "color"]
+        fields = ["key", "short_description", "long_description", "color", "label"]
         read_only_fields = ["key"]
 
 

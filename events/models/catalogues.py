@@ -5,6 +5,7 @@ from django.core.validators import RegexValidator
 from django.db import models
 from django.utils.translation import gettext_lazy as _
 
+from events import seeds
 from events.models.changes import tracked
 
 rgb_validator = RegexValidator(r"^\d{1,3},\d{1,3},\d{1,3}$", "Colour must be 'R,G,B' (0-255 each).")
@@ -20,7 +21,16 @@ class Catalogue(models.Model):
         ordering = ["short_description"]
 
     def __str__(self):
-        return self.short_description
+        return self.shown_short
+
+    @property
+    def shown_short(self) -> str:
+        """The short description in the reader's language if it is the seeded one."""
+        return seeds.shown(self._meta.model_name, self.key, self.short_description)
+
+    @property
+    def shown_long(self) -> str:
+        return seeds.shown(self._meta.model_name, self.key, self.long_description)
 
 
 class Weather(Catalogue):

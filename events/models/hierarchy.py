@@ -94,8 +94,12 @@ class TestEvent(LogEntry):
     )
     # Set once by events.services.logs.finalise_test_event; from then on
     # operators may not change the event and its figures use `taxonomy`.
-    finalised = models.DateTimeField(null=True, blank=True, editable=False)
-    finalised_by = models.CharField(max_length=200, blank=True, editable=False)
+    finalised = models.DateTimeField(
+        null=True, blank=True, editable=False, verbose_name=_("finalised")
+    )
+    finalised_by = models.CharField(
+        max_length=200, blank=True, editable=False, verbose_name=_("finalised by")
+    )
     # The ITO reasons as they were at finalisation: {key: {name, color, counts}}.
     taxonomy = models.JSONField(null=True, blank=True, editable=False)
     history = tracked()
@@ -228,7 +232,8 @@ class Leg(LogEntry):
         null=True,
         blank=True,
         related_name="legs",
-        help_text="The planned trial of the test event that this leg drives.",
+        help_text=_("The planned trial of the test event that this leg drives."),
+        verbose_name=_("test case"),
     )
     history = tracked()
 
@@ -269,16 +274,16 @@ class Segment(ChangeStamped):
     # Who initiated a take-over and how severe it was: the fields regulators'
     # disengagement reports ask for (California DMV); defaults need no tap.
     INITIATORS = (
-        ("autonomous_system", "autonomous system"),
-        ("safety_driver", "safety driver"),
-        ("remote_operator", "remote operator"),
-        ("other", "other"),
+        ("autonomous_system", _("autonomous system")),
+        ("safety_driver", _("safety driver")),
+        ("remote_operator", _("remote operator")),
+        ("other", _("other")),
     )
     SEVERITIES = (
-        ("critical", "critical"),
-        ("problem", "problem"),
-        ("desired", "desired"),
-        ("not_applicable", "not applicable"),
+        ("critical", _("critical")),
+        ("problem", _("problem")),
+        ("desired", _("desired")),
+        ("not_applicable", _("not applicable")),
     )
     ANNOTATION_FIELDS = (
         "ito_reason",
@@ -410,8 +415,8 @@ class Segment(ChangeStamped):
         # the model alone knows only its id.
         if label := getattr(self, "label", None):
             return label
-        kind = "child" if self.parent_id else "master"
-        return f"{self.segment_type_id.upper()} {kind} #{self.pk}"
+        words = _("%(mode)s reason #%(id)s") if self.parent_id else _("%(mode)s master #%(id)s")
+        return str(words % {"mode": self.segment_type_id.upper(), "id": self.pk})
 
     @property
     def is_open(self) -> bool:

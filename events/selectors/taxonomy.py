@@ -5,6 +5,8 @@ final event uses the copy frozen when it was finalised
 (``TestEvent.taxonomy``), so editing the catalogue never changes its figures.
 """
 
+from django.utils.translation import gettext as _
+
 from events.models import ItoReason, TestEvent
 
 
@@ -36,6 +38,13 @@ def taxonomy_version(event: TestEvent) -> str:
     if event.taxonomy is not None and event.finalised is not None:
         return f"frozen {event.finalised:%Y-%m-%d %H:%M:%S} UTC"
     return "current catalogue"
+
+
+def taxonomy_words(event: TestEvent) -> str:
+    """``taxonomy_version`` as its reader writes it (the PDF's provenance)."""
+    if event.taxonomy is not None and event.finalised is not None:
+        return _("frozen %(when)s UTC") % {"when": f"{event.finalised:%Y-%m-%d %H:%M:%S}"}
+    return _("current catalogue")
 
 
 def counted_reasons(event: TestEvent) -> set[str]:

@@ -96,7 +96,7 @@ def _lines(label: str) -> serializers.CharField:
         required=False,
         allow_blank=True,
         style={"base_template": "textarea.html"},
-        help_text="One line each.",
+        help_text=_("One line each."),
     )
 
 

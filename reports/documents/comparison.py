@@ -44,7 +44,7 @@ def _row(name: str, group: dict) -> list[str]:
 def _hotspot_row(spot: dict, reasons: dict, names: dict) -> list[str]:
     """Number, take-overs, reasons with counts, and each take-over's segment."""
     reason_text = ", ".join(
-        f"{reasons[key].short_description if key in reasons else key} ({count})"
+        f"{reasons[key].shown_short if key in reasons else key} ({count})"
         for key, count in spot["reasons"].items()
     )
     segments = "; ".join(

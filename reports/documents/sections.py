@@ -9,9 +9,10 @@ from pathlib import Path
 from django.conf import settings
 from django.utils import timezone
 from django.utils.translation import gettext as _
-from django.utils.translation import gettext_noop, ngettext
+from django.utils.translation import gettext_noop, ngettext, pgettext
 
 from common.said import Said, said
+from events.selectors.taxonomy import taxonomy_words
 from reports import formatting as fmt
 from reports.documents import tables
 from reports.documents.maps import TrackMaps, tile_source
@@ -127,6 +128,7 @@ class Sections:
         return {
             **stamp,
             "keywords": keywords(stamp),
+            "taxonomy": taxonomy_words(self.event),
             "final": fmt.timestamp(final, self.tz) if final else None,
             "amendments": [
                 _("%(when)s: %(record)s %(kind)s by %(who)s")
@@ -184,7 +186,7 @@ class Sections:
                 (_("Location"), e.location or fmt.DASH),
                 (_("Software version"), e.version or fmt.DASH),
                 (_("Start"), fmt.timestamp(e.start, self.tz)),
-                (_("End"), fmt.timestamp(e.end, self.tz) if e.end else _("open")),
+                (pgettext("time", "End"), fmt.timestamp(e.end, self.tz) if e.end else _("open")),
                 (_("Time zone"), e.time_zone),
                 (_("Positions"), _position_mode(self.mode)),
                 (_("Note"), e.note or fmt.DASH),
@@ -221,13 +223,13 @@ class Sections:
         reason_rows = []
         for key in sorted(
             set(o.manual_seconds_by_reason) | set(o.interventions_by_reason),
-            key=lambda k: self.reasons[k].short_description if k in self.reasons else k,
+            key=lambda k: self.reasons[k].shown_short if k in self.reasons else k,
         ):
             reason = self.reasons.get(key)
             reason_rows.append(
                 [
-                    reason.short_description if reason else key,
-                    "yes" if key in stats.counted_reasons else "no",
+                    reason.shown_short if reason else key,
+                    _("yes") if key in stats.counted_reasons else _("no"),
                     str(o.interventions_by_reason.get(key, 0)),
                     fmt.duration(o.manual_seconds_by_reason.get(key, 0.0)),
                 ]
@@ -281,7 +283,7 @@ class Sections:
             weather_changes = [
                 (
                     leg.start,
-                    leg.weather.short_description if leg.weather else _("weather unknown"),
+                    leg.weather.shown_short if leg.weather else _("weather unknown"),
                     leg.weather.icon if leg.weather else "",
                 )
                 for leg in self.legs[shift.id]
@@ -309,7 +311,7 @@ class Sections:
                 (_("Shift"), str(shift.number)),
                 *([(_("Leg"), str(span.number))] if self.options.leg else []),
                 (_("Start"), fmt.timestamp(min(starts), tz)),
-                (_("End"), fmt.timestamp(max(ends), tz) if span.end else _("open")),
+                (pgettext("time", "End"), fmt.timestamp(max(ends), tz) if span.end else _("open")),
                 (_("Test director"), tables.person_text(shift.test_director)),
                 (_("Test administrator"), tables.person_text(shift.test_administrator)),
                 (_("Robot operator"), tables.person_text(shift.robot_operator)),
@@ -361,8 +363,12 @@ class Sections:
             return ", ".join(values) or fmt.DASH
 
         reasons = ", ".join(
-            (self.reasons[s.reason].short_description if s.reason in self.reasons else s.reason)
-            + (" (counted)" if s.reason in run.counted_reasons else "")
+            (_("%(reason)s (counted)") if s.reason in run.counted_reasons else "%(reason)s")
+            % {
+                "reason": self.reasons[s.reason].shown_short
+                if s.reason in self.reasons
+                else s.reason
+            }
             for s in spans
         )
         rows = tables.label_rows(
@@ -371,7 +377,7 @@ class Sections:
                 (_("Type"), run.kind.upper()),
                 (_("Start"), fmt.timestamp(run.start, tz)),
                 (
-                    _("End"),
+                    pgettext("time", "End"),
                     fmt.timestamp(run.end, tz) + ((" " + _("(still open)")) if run.is_open else ""),
                 ),
                 (_("Duration"), fmt.duration(run.seconds)),
@@ -382,7 +388,7 @@ class Sections:
                 (_("Obstacle"), joined("obstacle")),
                 (_("Lighting"), joined("lighting")),
                 (_("Slope"), joined("slope")),
-                (_("Weather"), leg.weather.short_description if leg.weather else _("unknown")),
+                (_("Weather"), leg.weather.shown_short if leg.weather else _("unknown")),
             ]
             + [
                 (_("Snapshot"), f"{summary(r)}, {fmt.clock(r.start, tz)}–{fmt.clock(r.end, tz)}")
@@ -459,13 +465,9 @@ class Sections:
         no_start = [
             f"{shift_name(number[r.shift_id])}, {r.label}" for r in runs if not r.has_start_position
         ]
-        counted = [
-            self.reasons[k].short_description for k in stats.counted_reasons if k in self.reasons
-        ]
+        counted = [self.reasons[k].shown_short for k in stats.counted_reasons if k in self.reasons]
         not_counted = [
-            r.short_description
-            for k, r in sorted(self.reasons.items())
-            if k not in stats.counted_reasons
+            r.shown_short for k, r in sorted(self.reasons.items()) if k not in stats.counted_reasons
         ]
         return {
             "formulas": [list(pair) for pair in shown_formulas(FORMULAS).items()],

@@ -21,10 +21,10 @@ def weather_text(legs) -> str:
     """The weather of a shift's legs in time order, a repeat named once."""
     names = []
     for leg in legs:
-        label = leg.weather.short_description if leg.weather else "unknown"
+        label = leg.weather.shown_short if leg.weather else _("unknown")
         if not names or names[-1] != label:
             names.append(label)
-    return ", ".join(names) or "unknown"
+    return ", ".join(names) or _("unknown")
 
 
 def figure_rows(f: Figures) -> list:

@@ -58,7 +58,7 @@ def reasons_chart(labels, counts_by_shift, reasons, path, dpi=150) -> str:
             values,
             width,
             color=rgb(catalogue.color) if catalogue else "grey",
-            label=catalogue.short_description if catalogue else key,
+            label=catalogue.shown_short if catalogue else key,
         )
     ax.set_xticks(x, labels, fontsize=7)
     ax.set_title(_("Interventions per shift by reason"))

@@ -70,7 +70,7 @@ def hotspot_chart(spots, reasons, path) -> str | None:
             color=rgb(reason.color) if reason else "grey",
             edgecolors="black",
             linewidths=0.4,
-            label=reason.short_description if reason else _("unassigned"),
+            label=reason.shown_short if reason else _("unassigned"),
             zorder=3,
         )
     for spot in spots:

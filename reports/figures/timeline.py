@@ -34,13 +34,13 @@ def draw_timeline(
     name above the bars.  Times are drawn in ``tz``."""
     reason_rows = sorted(
         {span.reason for run in shift_runs for span in run.reasons},
-        key=lambda key: reasons[key].short_description if key in reasons else key,
+        key=lambda key: reasons[key].shown_short if key in reasons else key,
     )
     # The unknown mode has a row only in a shift that has such a run.
     modes = ["auto", "ito"] + (["unknown"] if any(r.kind == "unknown" for r in shift_runs) else [])
     mode_labels = {"auto": "AUTO", "ito": "ITO", "unknown": _("Unknown mode")}
     labels = [mode_labels[m] for m in modes] + [
-        reasons[key].short_description if key in reasons else key for key in reason_rows
+        reasons[key].shown_short if key in reasons else key for key in reason_rows
     ]
     height = 1.2 + 0.28 * len(labels) + (0.3 if weather_changes else 0.0)
     fig, ax = style.fixed_figure(7.0, height, style.label_width(labels) + 0.2, top=0.08)

@@ -34,7 +34,7 @@ export async function loadCatalogues() {
   ]);
   Object.assign(state.catalogue, { reasons, vehicles });
   const any = $("#reason-any");
-  any.replaceChildren(...reasons.map((r) => new Option(r.short_description, r.key)));
+  any.replaceChildren(...reasons.map((r) => new Option(r.label, r.key)));
 }
 
 export async function loadLevel(level, keepSelection = true) {

@@ -157,7 +157,7 @@ async function main() {
       list("test-events/"),
       api("GET", "test-case-areas/", undefined, { root: CONFIG.guiApiRoot }),
     ]);
-    fill(form.reason, reasons.map((r) => [r.key, r.short_description]));
+    fill(form.reason, reasons.map((r) => [r.key, r.label]));
     fill(form.vehicle, vehicles.map((v) => [v.id, v.short_description]));
     fill(form.test_event, events.map((t) => [t.id, `#${t.id} ${t.location || ""}`]));
     search.cases = areas.cases;

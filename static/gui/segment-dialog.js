@@ -49,7 +49,7 @@ export async function openSegmentDialog(id) {
   // What the server has, with what this browser keeps to send for it on top.
   const { row, kept } = composed(s, await Outbox.pending().catch(() => []));
   if (dialogSegment !== s) return;
-  form.elements.ito_reason.replaceChildren(...state.catalogue.reasons.map((r) => new Option(r.short_description, r.key)));
+  form.elements.ito_reason.replaceChildren(...state.catalogue.reasons.map((r) => new Option(r.label, r.key)));
   form.elements.ito_reason.value = row.ito_reason || "unassigned";
   for (const f of ["obstacle", "lighting", "slope", "location_type"]) form.elements[f].value = row[f] || "";
   form.elements.initiator.value = row.initiator || "safety_driver";

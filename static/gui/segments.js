@@ -190,7 +190,7 @@ export function renderSegments() {
       s.end ? { text: fmtClock(s.end), title: fmtTime(s.end) } : "—",
       fmtDuration(s.start, s.end),
       fmtDistance(track ? track.distance_m : null),
-      s.is_open ? "OPEN" : "CLOSED",
+      s.is_open ? _("open") : _("closed"),
     ];
     tr.replaceChildren(...cells.map((c) => {
       const td = document.createElement("td");
@@ -239,7 +239,7 @@ function openMaster() {
 function whom() {
   const [event, shift, leg] = ["event", "shift", "leg"].map(current);
   if (!event || !shift || !leg) return "";
-  return `${vehicleName(shift.vehicle)} · ${event.location || `test event #${event.id}`} · Shift ${shift.number} · Leg ${leg.number}`;
+  return `${vehicleName(shift.vehicle)} · ${event.location || _("test event #%(id)s", { id: event.id })} · ${_("Shift %(shift)s · Leg %(leg)s", { shift: shift.number, leg: leg.number })}`;
 }
 
 export function renderMode() {

@@ -67,12 +67,12 @@ export const state = {
 
 export const byId = (rows, id) => rows.find((r) => r.id === id) || null;
 export const current = (level) => byId(state.rows[level], state.selected[level]);
-export const vehicleName = (id) => (byId(state.catalogue.vehicles || [], id) || {}).short_description || `vehicle ${id}`;
+export const vehicleName = (id) => (byId(state.catalogue.vehicles || [], id) || {}).short_description || _("vehicle %(id)s", { id });
 export const segmentLabel = (id) => state.labels[id] || `segment ${id}`;
 export const shortLabel = (id) => state.shortLabels[id] || "…";
 export const reasonName = (key) => {
   const r = (state.catalogue.reasons || []).find((x) => x.key === key);
-  return r ? r.short_description : key || "";
+  return r ? r.label : key || "";
 };
 /* AUTO and ITO as the field writes them; a segment logged before the robot said its mode in words. */
 export const modeName = (type) => (type === "unknown" ? _("Unknown mode") : (type || "").toUpperCase());

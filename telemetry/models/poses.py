@@ -25,6 +25,9 @@ class TrackPoint(models.Model):
     class Meta:
         abstract = True
 
+    def __str__(self):
+        return str(_("%(kind)s #%(id)s") % {"kind": self._meta.verbose_name, "id": self.pk})
+
 
 # Every index is paid for by each stored pose (a 20 000-pose batch spends most of
 # its time in PostgreSQL).  The segment key needs no index of its own: the

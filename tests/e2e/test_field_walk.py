@@ -223,7 +223,7 @@ def test_field_walk(browser, server, shot):
         expect(page.locator("body")).to_have_attribute("data-saw-ended", "yes")
         expect(page.locator("#error")).to_be_hidden()
         expect(toggle).to_have_text("Start logging", timeout=5000)
-        expect(ito_row.locator("td").nth(7)).to_have_text("CLOSED", timeout=3000)
+        expect(ito_row.locator("td").nth(7)).to_have_text("closed", timeout=3000)
         expect(page.locator('[data-action="reopen"][data-level="event"]')).to_be_visible()
         shot(page, "test-event-ended")
 

@@ -100,15 +100,15 @@ def test_new_take_over_and_end_show_every_changed_row_without_reading_the_list(
     auto = page.locator("#segment-table tbody tr.auto")
     reason = page.locator("#segment-table tbody tr.child")
     expect(auto.locator("td").nth(0)).to_have_text("#1")
-    expect(auto.locator("td").nth(7)).to_have_text("CLOSED")
+    expect(auto.locator("td").nth(7)).to_have_text("closed")
     expect(reason).to_have_class(re.compile(r"\bselected\b"))
     expect(reason.locator("td").nth(0)).to_have_text("#2.1")
     expect(reason.locator("td").nth(1)).to_have_text("ITO")
-    expect(reason.locator("td").nth(7)).to_have_text("OPEN")
+    expect(reason.locator("td").nth(7)).to_have_text("open")
     expect(page.locator("#mode-name")).to_have_text("ITO")
     expect(page.locator("#notice")).to_contain_text("Take-over recorded")
     page.locator("#segment-end").click()
-    expect(reason.locator("td").nth(7)).to_have_text("CLOSED")
+    expect(reason.locator("td").nth(7)).to_have_text("closed")
     # Ending the reason leaves the take-over (ITO) running, and the page says so.
     expect(page.locator("#notice")).to_have_text(
         re.compile(r"Ended the reason Leg \d+ · #2\.1\. The take-over Leg \d+ · #2 goes on")
@@ -355,7 +355,7 @@ def test_ending_a_leg_while_logging_stops_logging_first(page, server, open_leg, 
         expect(toggle).to_be_disabled()
         expect(page.locator("#logging-why")).to_contain_text("open test event, shift and leg")
         cells = page.locator("#segment-table tbody tr td")
-        expect(cells.nth(7)).to_have_text("CLOSED")
+        expect(cells.nth(7)).to_have_text("closed")
         # The list shows the time of day; the full date and zone are in the tooltip.
         expect(cells.nth(3)).to_have_text(re.compile(r"^\d{2}:\d{2}:\d{2}$"))
         expect(cells.nth(3)).to_have_attribute("title", re.compile(r"20\d\d"))
