@@ -32,7 +32,7 @@ from telemetry.models import LocalPose, Pose
 from telemetry.models.poses import FixStatus
 from telemetry.selectors.tracks import GPS, LOCAL
 from telemetry.services import pose_rows
-from telemetry.services.segment_figures import keep_figures, measure_figures
+from telemetry.services.segment_figures import Kept, keep_figures, measure_figures
 
 # The fix statuses a pose may carry and the one it gets when none is sent; every
 # check of a sent fix reads these.  (FixStatus.values builds a new list on each
@@ -138,9 +138,7 @@ def store_poses(
     stored = pose_rows.insert_fixes(master, source_id, fixes, timezone.now())
     new = {p.uid for p in stored}
     refuse_foreign(Pose, [pose_rows.as_uuid(f.uid) for f in fixes], new, segment_id=master.pk)
-    points = [(f.longitude, f.latitude) for f in fixes if pose_rows.as_uuid(f.uid) in new]
-    announce_track(master, points, local=False)
-    keep_figures(master.pk, GPS, stored)
+    announce_stored(master, keep_figures(master.pk, GPS, stored), local=False)
     return new
 
 
@@ -175,9 +173,8 @@ def store_pose(
                 fix.uid, pk, fix.robot_stamp, received, fix.longitude, fix.latitude,
                 fix.fix_status != FixStatus.NO_FIX,
             )  # fmt: skip
-            announce_track(master, [(fix.longitude, fix.latitude)], local=False)
-            # Last: the figures row stays locked from this write to the commit.
-            keep_figures(master.pk, GPS, [point], seen)
+            # The figures row stays locked from here to the commit: only the feed row follows.
+            announce_stored(master, keep_figures(master.pk, GPS, [point], seen), local=False)
     if stored is None:
         return known_pose(master, fix, source_id), False
     row = fix.row(master, source_id, received)
@@ -233,6 +230,14 @@ def record_local_poses(segment: Segment, poses: list[MapPose]) -> int:
         LocalPose, [pose_rows.as_uuid(p.uid) for p in poses], stored, segment_id=master.pk
     )
     heading = next((p.yaw for p in reversed(poses) if pose_rows.as_uuid(p.uid) in stored), None)
-    announce_track(master, [(p.x, p.y) for p in fresh], local=True, heading=heading)
-    keep_figures(master.pk, LOCAL, fresh)
+    announce_stored(master, keep_figures(master.pk, LOCAL, fresh), local=True, heading=heading)
     return len(fresh)
+
+
+def announce_stored(master: Segment, kept: Kept, *, local: bool, heading=None) -> None:
+    """Tell open browsers what the track now holds: the usable points a write
+    added, in driving order, when they follow the track's end; else that the
+    track changed inside (a late batch), which they read again.  Written after
+    the figures, whose lock orders the feed rows of one master as their commits."""
+    points = [(p.x, p.y) for p in kept.points]
+    announce_track(master, points, local=local, heading=heading, inside=not kept.appended)
