@@ -87,16 +87,24 @@ def announce_row(obj, *, deleted: bool = False) -> Announcement:
     return announce(kind, obj, **payload)
 
 
-def announce_track(segment, points, *, local: bool, heading=None) -> Announcement | None:
-    """New track points, given as (x, y) or (longitude, latitude) pairs: inlined so that
-    browsers append them without a fetch.  ``heading`` (radians, map frame) is the
-    last point's, where known: the cockpit turns the robot's marker by it."""
+def announce_track(
+    segment, points, *, local: bool, heading=None, inside: bool = False
+) -> Announcement | None:
+    """New usable track points as stored, in driving order, given as (x, y) or
+    (longitude, latitude) pairs.  When they follow the track's end they are
+    inlined, so that browsers append them without a fetch; ``inside`` (some lie
+    between points stored before, a late batch) or too many for a row, the row
+    says the segment's track changed (``"changed": true``, no points) and
+    browsers draw it again from the server's track.  ``heading`` (radians, map
+    frame) is the last point's, where known: the cockpit turns the robot's marker by it."""
     if not points:
         return None
     payload = {"segment": segment.pk, "mode": segment.segment_type_id, "count": len(points)}
     if heading is not None:
         payload["heading"] = heading
-    if len(points) <= MAX_INLINE_POINTS:
+    if inside or len(points) > MAX_INLINE_POINTS:
+        payload["changed"] = True
+    else:
         payload["points"] = [[x, y] for x, y in points]
     return announce("local_poses" if local else "poses", segment, **payload)
 

@@ -33,6 +33,7 @@ from events.api.serializers import touched_rows
 from events.feed import FLEET_KINDS, LOG_KINDS
 from events.models import Announcement
 from rosbridge_app import wakeup
+from rosbridge_app.selectors.fleet import fleet as fleet_entries
 from rosbridge_app.sessions import session_group
 from rosbridge_app.wakeup import CHANNEL, GROUP
 
@@ -67,10 +68,27 @@ def as_message(row: Announcement) -> dict:
 
 
 @database_sync_to_async
-def _rows_after(after: int, limit: int = BATCH) -> list[dict]:
+def _rows_after(after: int, limit: int = BATCH, *, fleet: bool = False) -> list[dict]:
+    """Feed rows after ``after``; ``fleet``: a fleet view watches, so each of its
+    kinds carries its vehicle's entry."""
     rows = [as_message(e) for e in feed.after(after, limit)]
     _attach_segments([r for r in rows if r["kind"] == Announcement.Kind.SEGMENT])
+    if fleet:
+        _attach_fleet([r for r in rows if r["kind"] in FLEET_KINDS and r["leg"] is not None])
     return rows
+
+
+def _attach_fleet(rows: list[dict]) -> None:
+    """Give each mode and position row the fleet entry of the vehicle logging into
+    its leg, as the fleet view's first read gives it (rosbridge_app.selectors.fleet),
+    read after the rows: the page shows it and computes nothing.  None when no
+    vehicle logs into the leg now, and the page reads the fleet again.  One query
+    however many rows."""
+    if not rows:
+        return
+    entries = {entry["leg"]["id"]: entry for entry in fleet_entries(legs={r["leg"] for r in rows})}
+    for row in rows:
+        row["fleet"] = entries.get(row["leg"])
 
 
 def _attach_segments(rows: list[dict]) -> None:
@@ -202,7 +220,8 @@ class OutboxPoller:
 
     async def poll_once(self) -> list[dict]:
         asked = time.time()
-        rows = [r for r in await _rows_after(self.floor) if r["id"] not in self.seen]
+        watched = any(consumer.fleet for consumer in self.consumers)
+        rows = [r for r in await _rows_after(self.floor, fleet=watched) if r["id"] not in self.seen]
         if logger.isEnabledFor(logging.DEBUG):
             _log_timing("read", rows, notified=self.notified, asked=asked)
         for row in rows:
@@ -375,7 +394,7 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
                 # What was missed has been pruned: the page must load afresh.
                 await self.send_json({"type": "reset", "last_id": last})
             else:
-                missed = await _rows_after(last_id, CATCH_UP_LIMIT)
+                missed = await _rows_after(last_id, CATCH_UP_LIMIT, fleet=self.fleet)
                 if len(missed) == CATCH_UP_LIMIT:
                     await self.send_json({"type": "reset", "last_id": last})
                 else:

@@ -15,12 +15,16 @@ from telemetry.selectors.tracks import with_last_position
 FORGET_AFTER = timedelta(minutes=10)
 
 
-def fleet(now=None) -> list[dict]:
-    """One entry per logging vehicle, JSON-ready, in one query however many there are.
+def fleet(now=None, legs=None) -> list[dict]:
+    """One entry per logging vehicle, JSON-ready, in one query however many there are;
+    ``legs``: only the vehicles logging into these (the live feed's entries).
 
     A vehicle with two collectors logging (a restart under a new name) is shown
     once, by the collector heard last."""
     now = now or timezone.now()
+    logging = logging_into()
+    if legs is not None:
+        logging = logging.filter(leg__in=legs)
     masters = Segment.objects.masters()
     open_master = masters.filter(leg=OuterRef("leg"), end__isnull=True)
     # Take-overs of the whole shift: a new leg does not reset the robot's record.
@@ -28,8 +32,7 @@ def fleet(now=None) -> list[dict]:
         leg__shift=OuterRef("leg__shift"), segment_type=SegmentType.ITO
     ).order_by("-start", "-id")
     rows = with_last_position(
-        logging_into()
-        .filter(vehicle__isnull=False, last_seen__gte=now - FORGET_AFTER)
+        logging.filter(vehicle__isnull=False, last_seen__gte=now - FORGET_AFTER)
         .select_related("leg__shift__test_event")
         .annotate(
             mode=Subquery(open_master.values("segment_type")[:1]),

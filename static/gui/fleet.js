@@ -89,41 +89,27 @@ export const Fleet = {
     await this.loadBasemaps();
   },
 
-  /* A segment or poses event of the change feed, applied to its vehicle in place. */
+  /* A segment or poses event of the change feed: it carries its vehicle's entry
+   * as the server computes it (rosbridge_app.consumers), put in place of the old. */
   apply(e) {
     if (!this.visible()) return;
-    const v = this.vehicles.find((x) => x.leg.id === e.leg);
-    if (!v) {
-      Live.later("fleet"); // a vehicle that is not on the map yet
+    const entry = e.fleet;
+    const at = entry ? this.vehicles.findIndex((x) => x.vehicle.id === entry.vehicle.id) : -1;
+    if (at < 0) {
+      Live.later("fleet"); // a vehicle not on the map yet, or no longer logging into this leg
       return;
     }
-    if (e.kind === "poses") {
-      const points = e.payload.points;
-      if (!points || !points.length) {
-        Live.later("fleet"); // too many to inline: the server has the last one
-        return;
-      }
-      const [lon, lat] = points[points.length - 1];
-      // The list says "no position yet" until the first one.
-      this.listStale ||= !v.position;
-      v.position = [lat, lon];
-    } else if (e.kind === "segment") {
-      const masters = (e.segments || []).filter((s) => s.parent === null && s.leg === v.leg.id);
-      const open = masters.find((s) => s.is_open);
-      if (open) {
-        v.mode = open.segment_type;
-        v.mode_since = open.start;
-        if (open.segment_type === "ito") v.last_takeover = open.start;
-        // A new mode is what the director watches for: drawn now, not at the next
-        // frame (a switch is rare; positions, many a second, wait for the frame).
-        this.listStale = false;
-        this.render();
-        return;
-      } else if (masters.length) {
-        Live.later("fleet"); // its segment closed: logging may have stopped
-        return;
-      } else return; // an annotation, not a mode
+    const before = this.vehicles[at];
+    this.vehicles[at] = entry;
+    // A new mode is what the director watches for: drawn now, not at the next
+    // frame (a switch is rare; positions, many a second, wait for the frame).
+    if (entry.mode !== before.mode || entry.mode_since !== before.mode_since) {
+      this.listStale = false;
+      this.render();
+      return;
     }
+    // The list says "no position yet" until the first one.
+    this.listStale ||= !before.position !== !entry.position || entry.last_takeover !== before.last_takeover || entry.collector.online !== before.collector.online;
     // Several robots' events in one frame are drawn once; positions alone move
     // the dots and leave the list as it is.
     if (!this.frame) {

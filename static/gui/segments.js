@@ -325,13 +325,18 @@ $("#segment-edit").addEventListener("click", () => segmentAction(async () => ope
 // The dialog's saves put their answers into the list (segment-dialog.js): shown once it closes.
 $("#segment-dialog").addEventListener("close", renderSegments);
 
-/* Distances come from the server (geodesic); redrawing is only needed when a
- * batch was too large to be sent inline. */
+/* Distances come from the server (geodesic); the lines are drawn again from the
+ * server's tracks when the feed said a track changed inside (a late batch) or
+ * did not inline its points.  A read asked for while one runs follows it. */
 export async function refreshDistances(redraw) {
   const leg = state.selected.leg;
   if (!leg) return;
-  if (refreshDistances.busy) return;
-  refreshDistances.busy = true;
+  if (refreshDistances.busy) {
+    // Points appended while a redraw is read may be missing from its answer: drawn again after it.
+    refreshDistances.again = { redraw: redraw || refreshDistances.busy === "redraw" || Boolean(refreshDistances.again?.redraw) };
+    return;
+  }
+  refreshDistances.busy = redraw ? "redraw" : "read";
   try {
     const data = await loadLegTracks(leg);
     if (leg !== state.selected.leg) return;
@@ -341,14 +346,19 @@ export async function refreshDistances(redraw) {
   } finally {
     refreshDistances.busy = false;
   }
+  const again = refreshDistances.again;
+  refreshDistances.again = null;
+  if (again) await refreshDistances(again.redraw);
 }
 
-/* A live batch of positions of the leg on screen: drawn at once; the distances
- * follow from the server. */
+/* A live batch of positions of the leg on screen, as the server stored them:
+ * usable points in driving order that follow the line's end, drawn at once;
+ * or word that the segment's track changed, which is drawn again from the
+ * server.  The distances follow from the server. */
 export function appendPoses(e) {
   if (!onSelectedLeg(e)) return;
   const p = e.payload;
-  if (!p.points) {
+  if (p.changed || !p.points) {
     Live.later("tracks");
     return;
   }

@@ -31,7 +31,7 @@ from events.services.segments import GpsPosition
 from telemetry import storage
 from telemetry.models import LocalPose, Pose
 from telemetry.models.poses import FixStatus
-from telemetry.services.segment_figures import keep_figures, measure_figures
+from telemetry.services.segment_figures import Added, keep_figures, measure_figures
 from telemetry.storage.keys import GPS, LOCAL
 from telemetry.storage.rows import as_uuid
 
@@ -139,9 +139,7 @@ def store_poses(
     stored = storage.insert_fixes(master, source_id, fixes, timezone.now())
     new = {p.uid for p in stored}
     refuse_foreign(Pose, [as_uuid(f.uid) for f in fixes], new, segment_id=master.pk)
-    points = [(f.longitude, f.latitude) for f in fixes if as_uuid(f.uid) in new]
-    announce_track(master, points, local=False)
-    keep_figures(master.pk, GPS, stored)
+    announce_stored(master, keep_figures(master.pk, GPS, stored), local=False)
     return new
 
 
@@ -176,9 +174,8 @@ def store_pose(
                 fix.uid, pk, fix.robot_stamp, received, fix.longitude, fix.latitude,
                 fix.fix_status != FixStatus.NO_FIX,
             )  # fmt: skip
-            announce_track(master, [(fix.longitude, fix.latitude)], local=False)
-            # Last: the figures row stays locked from this write to the commit.
-            keep_figures(master.pk, GPS, [point], seen)
+            # The figures row stays locked from here to the commit: only the feed row follows.
+            announce_stored(master, keep_figures(master.pk, GPS, [point], seen), local=False)
     if stored is None:
         return known_pose(master, fix, source_id), False
     row = fix.row(master, source_id, received)
@@ -234,6 +231,14 @@ def record_local_poses(segment: Segment, poses: list[MapPose]) -> int:
     stored = {point.uid for point in fresh}
     refuse_foreign(LocalPose, [as_uuid(p.uid) for p in poses], stored, segment_id=master.pk)
     heading = next((p.yaw for p in reversed(poses) if as_uuid(p.uid) in stored), None)
-    announce_track(master, [(p.x, p.y) for p in fresh], local=True, heading=heading)
-    keep_figures(master.pk, LOCAL, fresh)
+    announce_stored(master, keep_figures(master.pk, LOCAL, fresh), local=True, heading=heading)
     return len(fresh)
+
+
+def announce_stored(master: Segment, added: Added, *, local: bool, heading=None) -> None:
+    """Tell open browsers what the track now holds: the usable points a write
+    added, in driving order, when they follow the track's end; else that the
+    track changed inside (a late batch), which they read again.  Written after
+    the figures, whose lock orders the feed rows of one master as their commits."""
+    points = [(p.x, p.y) for p in added.points]
+    announce_track(master, points, local=local, heading=heading, inside=not added.appended)

@@ -67,25 +67,47 @@ def _locked(master_id: int, mode: str) -> SegmentFigures:
 _UNREAD = object()
 
 
-def keep_figures(master_id: int, mode: str, new: list[NewPoint], seen=_UNREAD) -> None:
+@dataclass
+class Added:
+    """What a write added to a track: its usable points in driving order, and
+    whether they all follow the points stored before them (a live batch) or some
+    fall between them (a late one), which changes the track inside."""
+
+    points: list[NewPoint]
+    appended: bool
+
+
+def keep_figures(master_id: int, mode: str, new: list[NewPoint], seen=_UNREAD) -> Added:
     """Add the points just stored on ``master_id`` (the storage port's answer) to its
     figures, in time that depends on the new points, not on the track: an
     upsert, after a read of the row unless the caller gives what it read
     (``seen``, storage.Kept or None).  Call inside the transaction that
-    stored them."""
+    stored them; from then on the figures row is locked until the commit, so
+    concurrent writers of one master learn in commit order where their points lie."""
     if not new:
-        return
+        return Added([], True)
     rows = sorted((p for p in new if p.usable), key=lambda p: _key(p.robot_stamp, p.received, p.id))
     alone = _alone(new, rows, mode)
     if seen is _UNREAD:
         seen = storage.read_kept(master_id, mode)
     change = _change(master_id, mode, rows, alone, seen)
-    applied, seen = storage.write_change(master_id, mode, seen, change)
+    applied, written = storage.write_change(master_id, mode, seen, change)
     if not applied:
         # Another writer changed the row since it was read; it is locked now.
+        seen = written
         change = _change(master_id, mode, rows, alone, seen)
         if not storage.write_change(master_id, mode, seen, change)[0]:
             raise RuntimeError(f"the figures of segment {master_id} changed under their lock")
+    return Added(rows, _appends(rows, seen))
+
+
+def _appends(rows: list[NewPoint], seen) -> bool:
+    """Whether the sorted usable ``rows`` all come after the last point ``seen``
+    (storage.Kept or None) holds, in driving order."""
+    if not rows or seen is None or not seen.points:
+        return True
+    first = _key(rows[0].robot_stamp, rows[0].received, rows[0].id)
+    return first > _key(seen.last_robot_stamp, seen.last_received, seen.last_id)
 
 
 def _alone(new: list[NewPoint], rows: list[NewPoint], mode: str) -> dict:
@@ -121,13 +143,12 @@ def _change(master_id, mode, rows: list[NewPoint], alone: dict, seen) -> storage
     uids = uid_sums.combined(uid_sums.EMPTY if seen is None else seen.uid_sum, alone["uid_sum"])
     if not rows:
         return Change(alone, 0.0, False, False, uids)
-    kept_last = None if seen is None or not seen.points else seen
-    if kept_last is None:
+    if seen is None or not seen.points:
         return Change(alone, alone["length"], True, True, uids)
-    first = (rows[0].robot_stamp, rows[0].received, rows[0].id)
-    if _key(*first) > _key(kept_last.last_robot_stamp, kept_last.last_received, kept_last.last_id):
-        join = path_length([kept_last.last_x, rows[0].x], [kept_last.last_y, rows[0].y], mode)
+    if _appends(rows, seen):
+        join = path_length([seen.last_x, rows[0].x], [seen.last_y, rows[0].y], mode)
         return Change(alone, alone["length"] + join, False, True, uids)
+    first = (rows[0].robot_stamp, rows[0].received, rows[0].id)
     last = (rows[-1].robot_stamp, rows[-1].received, rows[-1].id)
     before, after = storage.neighbours(master_id, mode, first, last)
     inside = (

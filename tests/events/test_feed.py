@@ -77,3 +77,30 @@ def test_announce_inside_failed_transaction_leaves_nothing(leg):
         feed.announce("segment", leg, segment=1)
         raise RuntimeError
     assert kinds_since(before) == []
+
+
+def test_the_feed_carries_the_usable_points_as_stored_in_driving_order(leg):
+    """What a browser draws live is what a reload draws: no-fix fixes are left
+    out, a batch is announced in driving order, and a late batch that falls
+    between stored points says the track changed instead of being appended."""
+    master = start_auto(leg)
+    t0 = timezone.now()
+
+    def fix(lon, seconds, **kwargs):
+        return recording.GpsFix(lon, 50.0, robot_stamp=t0 + timedelta(seconds=seconds), **kwargs)
+
+    before = last_id()
+    # Sent out of order, with a fix that has no position.
+    recording.record_poses(master, [fix(7.3, 30), fix(7.1, 10), fix(7.2, 20, fix_status=-1)])
+    (batch,) = Announcement.objects.filter(id__gt=before)
+    assert batch.payload["points"] == [[7.1, 50.0], [7.3, 50.0]]
+    before = last_id()
+    recording.store_pose(master.pk, fix(7.4, 40, fix_status=-1))
+    assert kinds_since(before) == []  # nothing to draw
+    recording.record_poses(master, [fix(7.15, 15), fix(7.25, 25)])
+    (late,) = Announcement.objects.filter(id__gt=before)
+    assert late.payload["changed"] is True and "points" not in late.payload
+    before = last_id()
+    recording.store_pose(master.pk, fix(7.5, 50))
+    (appended,) = Announcement.objects.filter(id__gt=before)
+    assert appended.payload["points"] == [[7.5, 50.0]]

@@ -14,6 +14,8 @@ from events.models import Announcement
 from events.services import segments
 from rosbridge_app import consumers, wakeup
 from rosbridge_app.consumers import LiveConsumer
+from rosbridge_app.selectors.fleet import fleet
+from rosbridge_app.services import collectors
 from telemetry.services import recording
 
 pytestmark = [
@@ -279,3 +281,24 @@ async def test_sockets_closed_while_subscribing_leave_and_the_others_get_every_r
     assert [e["kind"] for e in received] == ["poses"] * 20
     assert not [r for r in caplog.records if r.levelname in ("ERROR", "CRITICAL")]
     await fleet.disconnect()
+
+
+async def test_a_fleet_view_gets_each_vehicles_entry_as_the_fleet_read_gives_it(viewer, leg):
+    vehicle = await database_sync_to_async(lambda: leg.shift.vehicle)()
+    await database_sync_to_async(collectors.heartbeat)(
+        "rover-collector", vehicle=vehicle, logging=True, leg=leg
+    )
+    communicator, _ = await connect(viewer, fleet=True)
+    master = (await database_sync_to_async(segments.report_mode)(leg, "ito")).master
+    await database_sync_to_async(recording.record_poses)(master, [recording.GpsFix(7.0, 50.0)])
+    received = []
+    while len(received) < 2:
+        received += await next_events(communicator)
+    (entry,) = await database_sync_to_async(fleet)()
+    assert [e["kind"] for e in received] == ["segment", "poses"]
+    # Each row carries the entry as the fleet read gives it when the row is read.
+    assert received[0]["fleet"]["vehicle"]["id"] == vehicle.pk
+    assert received[0]["fleet"]["mode"] == "ito"
+    assert received[1]["fleet"] == entry
+    assert (entry["mode"], entry["position"]) == ("ito", [50.0, 7.0])
+    await communicator.disconnect()

@@ -122,9 +122,10 @@ def test_a_single_pose_is_one_short_transaction_of_three_inserts(api_client, leg
     assert [q.split("INSERT INTO ", 1)[1].split()[0] for q in in_transaction] == [
         # The pose, returning what its segment's figures hold.
         "telemetry_pose",
-        '"rosbridge_app_announcement"',
-        # The figures brought up to date in one upsert, last (it locks their row).
+        # The figures brought up to date in one upsert (it locks their row).
         "telemetry_segmentfigures",
+        # Last, the feed row: the lock orders one master's rows as their commits.
+        '"rosbridge_app_announcement"',
     ], in_transaction
     stored = Pose.objects.get(uid=body["uid"])
     assert (stored.segment_id, stored.point.x, stored.point.y) == (master.pk, 7.1, 50.2)
