@@ -20,6 +20,7 @@ import xstatic.pkg.leaflet_markercluster as markercluster  # noqa: E402
 from csp.constants import NONE, SELF, UNSAFE_INLINE  # noqa: E402
 from django.core.management.utils import get_random_secret_key  # noqa: E402
 
+from common.roles import ADMINISTRATOR, ORDER  # noqa: E402
 from ftt_site.env import (  # noqa: E402
     env_bool,
     env_int,
@@ -472,7 +473,7 @@ PROMETHEUS_EXPORT_MIGRATIONS = False
 # none of them is refused.
 FTT_LDAP_ROLE_GROUPS = {
     role: env_str(f"FTT_LDAP_{role.upper()}_GROUP")
-    for role in ("viewer", "operator", "administrator")
+    for role in ORDER
     if env_str(f"FTT_LDAP_{role.upper()}_GROUP")
 }
 if env_str("FTT_LDAP_SERVER_URI"):
@@ -522,8 +523,8 @@ if env_str("FTT_LDAP_SERVER_URI"):
     AUTH_LDAP_REQUIRE_GROUP = reduce(or_, map(LDAPGroupQuery, FTT_LDAP_ROLE_GROUPS.values()))
     if env_str("FTT_LDAP_DENY_GROUP"):
         AUTH_LDAP_DENY_GROUP = env_str("FTT_LDAP_DENY_GROUP")
-    if "administrator" in FTT_LDAP_ROLE_GROUPS:
-        AUTH_LDAP_USER_FLAGS_BY_GROUP = {"is_staff": FTT_LDAP_ROLE_GROUPS["administrator"]}
+    if ADMINISTRATOR in FTT_LDAP_ROLE_GROUPS:
+        AUTH_LDAP_USER_FLAGS_BY_GROUP = {"is_staff": FTT_LDAP_ROLE_GROUPS[ADMINISTRATOR]}
     AUTH_LDAP_CACHE_TIMEOUT = 300
 
 # Change history (events.models.changes): a file field is kept as its name, so

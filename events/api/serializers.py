@@ -29,7 +29,13 @@ from events.models import (
 from events.selectors.labels import label, legs_numbers, short_label
 from events.selectors.segments import touched_by
 from events.services import logs
-from events.services.segments import MODES, GpsPosition, LocalPosition
+from events.services.segments import (
+    LATITUDE_RANGE,
+    LONGITUDE_RANGE,
+    MODES,
+    GpsPosition,
+    LocalPosition,
+)
 
 
 class PrimaryKeyField(serializers.PrimaryKeyRelatedField):
@@ -308,9 +314,11 @@ class PositionSerializer(serializers.Serializer):
     """Where the robot was when a segment started; 0.0 is a valid coordinate."""
 
     longitude = serializers.FloatField(
-        required=False, allow_null=True, min_value=-180, max_value=180
+        required=False, allow_null=True, min_value=LONGITUDE_RANGE[0], max_value=LONGITUDE_RANGE[1]
     )
-    latitude = serializers.FloatField(required=False, allow_null=True, min_value=-90, max_value=90)
+    latitude = serializers.FloatField(
+        required=False, allow_null=True, min_value=LATITUDE_RANGE[0], max_value=LATITUDE_RANGE[1]
+    )
     local_x = serializers.FloatField(required=False, allow_null=True)
     local_y = serializers.FloatField(required=False, allow_null=True)
     local_frame = serializers.CharField(

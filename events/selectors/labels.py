@@ -21,15 +21,15 @@ from events.models import Leg, Segment
 
 _NUMBERED = """
 WITH chosen AS (
-    SELECT id, leg_id, parent_id FROM {segment} WHERE id IN ({chosen})
+    SELECT id, leg_id, parent_id, {master_id} AS master_id FROM {segment} WHERE id IN ({chosen})
 ),
 masters AS (
     SELECT id, n FROM (
         SELECT id, ROW_NUMBER() OVER (PARTITION BY leg_id ORDER BY start, id) AS n
         FROM {segment}
-        WHERE parent_id IS NULL AND leg_id IN (SELECT leg_id FROM chosen)
+        WHERE {master} AND leg_id IN (SELECT leg_id FROM chosen)
     ) numbered
-    WHERE id IN (SELECT COALESCE(parent_id, id) FROM chosen)
+    WHERE id IN (SELECT master_id FROM chosen)
 ),
 children AS (
     SELECT id, ROW_NUMBER() OVER (PARTITION BY parent_id ORDER BY start, id) AS n
@@ -39,7 +39,7 @@ children AS (
 SELECT chosen.id, leg.number, master.n, child.n
 FROM chosen
 JOIN {leg} leg ON leg.id = chosen.leg_id
-LEFT JOIN masters master ON master.id = COALESCE(chosen.parent_id, chosen.id)
+LEFT JOIN masters master ON master.id = chosen.master_id
 LEFT JOIN children child ON child.id = chosen.id
 """
 
@@ -51,7 +51,13 @@ def numbers_of(segments: QuerySet) -> dict[int, tuple[int, str]]:
         chosen, params = segments.order_by().values("id").query.sql_with_params()
     except EmptyResultSet:  # a filter that can match nothing (pk__in=[])
         return {}
-    sql = _NUMBERED.format(segment=Segment._meta.db_table, leg=Leg._meta.db_table, chosen=chosen)
+    sql = _NUMBERED.format(
+        segment=Segment._meta.db_table,
+        leg=Leg._meta.db_table,
+        chosen=chosen,
+        master=Segment.MASTER_SQL,
+        master_id=Segment.MASTER_ID_SQL,
+    )
     with connection.cursor() as cursor:
         cursor.execute(sql, params)
         return {pk: (leg, _number(master, child)) for pk, leg, master, child in cursor.fetchall()}

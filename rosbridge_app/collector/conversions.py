@@ -13,6 +13,7 @@ import numpy as np
 from django.utils.translation import gettext as _
 from PIL import Image as PilImage
 
+from events.services.segments import LATITUDE_RANGE, LONGITUDE_RANGE
 from rosbridge_app.collector.tf_buffer import Transform, yaw_of
 from telemetry.models import MapImage
 
@@ -64,7 +65,8 @@ def navsat_fix(msg) -> dict | None:
     if status == STATUS_NO_FIX or (status < 0 and status != STATUS_UNKNOWN):
         return None
     lat, lon = float(msg.latitude), float(msg.longitude)
-    if not _finite(lat, lon) or not (-90 <= lat <= 90 and -180 <= lon <= 180):
+    (south, north), (west, east) = LATITUDE_RANGE, LONGITUDE_RANGE
+    if not _finite(lat, lon) or not (south <= lat <= north and west <= lon <= east):
         return None
     alt = float(msg.altitude)
     accuracy = None

@@ -22,6 +22,7 @@ from events.models import PoseSource, Segment
 from events.services.segments import LATITUDE_RANGE, LONGITUDE_RANGE
 from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 from telemetry.models.poses import FixStatus
+from telemetry.pictures import MAP_FORMATS
 from telemetry.services.map_images import check_map_placement
 from telemetry.services.recording import (
     DEFAULT_FIX_STATUS,
@@ -286,7 +287,7 @@ class MapImageSerializer(ClientUidMixin, ServiceSerializer):
         read_only_fields = ["checksum", "received"]
 
     def validate_image(self, upload):
-        if getattr(getattr(upload, "image", None), "format", None) != "PNG":
+        if getattr(getattr(upload, "image", None), "format", None) not in MAP_FORMATS:
             raise serializers.ValidationError(_("Upload the map as a PNG image."))
         return upload
 

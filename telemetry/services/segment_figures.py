@@ -50,20 +50,6 @@ def _usable(mode):
     return keys.usable(_model(mode).objects.all(), mode)
 
 
-# Creates the row or takes it as it is, and locks it either way (an upsert
-# locks the row it meets), in one statement.
-_LOCK = """
-INSERT INTO {table} (segment_id, mode, points, no_fix, length) VALUES (%s, %s, 0, 0, 0)
-ON CONFLICT (segment_id, mode) DO UPDATE SET mode = excluded.mode
-RETURNING *
-"""
-
-
-def _locked(master_id: int, mode: str) -> SegmentFigures:
-    query = _LOCK.format(table=SegmentFigures._meta.db_table)
-    return next(iter(SegmentFigures.objects.raw(query, [master_id, mode])))
-
-
 _UNREAD = object()
 
 
@@ -244,7 +230,7 @@ def measure_figures(master_ids: Iterable[int], modes=MODES) -> None:
     import merged poses into them).  Call inside the writing transaction."""
     for mode in modes:
         for master_id in sorted(set(master_ids)):
-            figures = _locked(master_id, mode)
+            figures = storage.locked_figures(master_id, mode)
             _measure(figures)
             figures.save()
 

@@ -22,7 +22,7 @@ from telemetry.storage.rows import Change, Kept, NewPoint
 
 __all__ = [
     "Change", "Kept", "NewPoint", "adapter", "insert_fixes", "insert_local_poses",
-    "insert_pose", "is_partitioned", "neighbours", "plain_rows", "points_between",
+    "insert_pose", "is_partitioned", "locked_figures", "neighbours", "plain_rows", "points_between",
     "read_kept", "track_arrays", "write_change",
 ]  # fmt: skip
 
@@ -55,6 +55,12 @@ def insert_local_poses(master, poses, received) -> list[NewPoint]:
 def read_kept(master_id: int, mode: str) -> Kept | None:
     """What the segment's figures row of ``mode`` holds, or None without one."""
     return adapter().read_kept(master_id, mode)
+
+
+def locked_figures(master_id: int, mode: str):
+    """The segment's figures row of ``mode`` (made empty when it has none),
+    locked until the transaction ends."""
+    return adapter().locked_figures(master_id, mode)
 
 
 def write_change(

@@ -63,6 +63,19 @@ def insert_pose(point: str, master_id: int, fix, source_id, received):
     return None if row is None else (row[0], kept_from(row[1:]))
 
 
+# Creates the row or takes it as it is, and locks it either way (an upsert
+# locks the row it meets), in one statement.
+_LOCK = f"""
+INSERT INTO {FIGURES} (segment_id, mode, points, no_fix, length) VALUES (%s, %s, 0, 0, 0)
+ON CONFLICT (segment_id, mode) DO UPDATE SET mode = excluded.mode
+RETURNING *
+"""
+
+
+def locked_figures(master_id: int, mode: str) -> SegmentFigures:
+    return next(iter(SegmentFigures.objects.raw(_LOCK, [master_id, mode])))
+
+
 def read_kept(master_id: int, mode: str) -> Kept | None:
     with connection.cursor() as cursor:
         cursor.execute(

@@ -129,5 +129,6 @@ def is_partitioned(table: str) -> bool:
 
 
 read_kept = shared.read_kept
+locked_figures = shared.locked_figures
 neighbours = shared.neighbours
 points_between = shared.points_between

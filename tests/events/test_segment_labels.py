@@ -7,7 +7,7 @@ from events.selectors.labels import leg_numbers, segment_label
 from events.services import logs, segments
 from tests.support.modes import start_auto
 
-# On SpatiaLite too: the labels' SQL (COALESCE over the master) runs on both.
+# On SpatiaLite too: the labels are numbered by window functions in SQL of its own.
 pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]
 
 

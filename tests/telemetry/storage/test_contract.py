@@ -215,3 +215,11 @@ def test_a_masters_queryset_holds_the_segments_without_a_parent(master):
     assert list(Segment.objects.masters()) == [master]
     assert list(master.leg.segments.children()) == [child]
     assert uuid.UUID(str(master.uid))
+
+
+def test_the_locked_figures_row_is_made_empty_or_taken_as_it_is(adapter, master):
+    made = adapter.locked_figures(master.pk, keys.LOCAL)
+    assert (made.segment_id, made.mode, made.points, made.length) == (master.pk, keys.LOCAL, 0, 0)
+    SegmentFigures.objects.filter(pk=made.pk).update(points=7)
+    assert adapter.locked_figures(master.pk, keys.LOCAL).points == 7
+    assert SegmentFigures.objects.filter(segment=master, mode=keys.LOCAL).count() == 1
