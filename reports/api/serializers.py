@@ -9,6 +9,7 @@ from reports.documents.options import LEVELS, MAX_TIMELINE_HOURS, STANDARD
 from reports.figures.tiles import MAX_ZOOM
 from reports.models import Report
 from reports.selectors.content import scope_name
+from reports.selectors.reports import expected_seconds
 from reports.services.generation import COMPARE
 
 
@@ -17,6 +18,7 @@ class ReportSerializer(serializers.ModelSerializer):
     kind = serializers.SerializerMethodField()
     compare = serializers.SerializerMethodField()
     scope = serializers.SerializerMethodField()
+    expected_seconds = serializers.SerializerMethodField()
     # In the reader's language (common.said).
     message = serializers.CharField(source="shown_message", read_only=True)
     error = serializers.CharField(source="shown_error", read_only=True)
@@ -38,8 +40,15 @@ class ReportSerializer(serializers.ModelSerializer):
             "kind",
             "compare",
             "scope",
+            "expected_seconds",
         )
         read_only_fields = fields
+
+    def get_expected_seconds(self, report) -> float | None:
+        """While it is made: how long reports like it took (median), else None."""
+        if report.status not in (Report.Status.QUEUED, Report.Status.RUNNING):
+            return None
+        return expected_seconds(report, self.context.setdefault("expected_memo", {}))
 
     def get_scope(self, report) -> str:
         """What the report covers: "Test event", "Shift 2" or "Shift 2 · Leg 1"."""

@@ -42,7 +42,9 @@ def ending(action: str, row) -> dict:
     if action == "end-event":
         shifts = [
             {"id": s.pk, "name": f"{s.vehicle.short_description} · {s}"}
-            for s in row.shifts.filter(end__isnull=True).select_related("vehicle")
+            for s in row.shifts.filter(end__isnull=True)
+            .select_related("vehicle")
+            .order_by("number")
         ]
     names = {leg.pk: _leg_name(leg) for leg in legs}
     take_overs = rules.open_take_overs(list(names))

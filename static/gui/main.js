@@ -107,6 +107,7 @@ async function boot() {
     // Writes kept while the link was dead go as soon as it is back.
     if (link === "live") Outbox.flush().catch(showError);
   };
+  Outbox.changed = renderSegments;
   Outbox.show().catch(showError);
   keepCockpit();
   setInterval(() => {

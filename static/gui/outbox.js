@@ -165,8 +165,15 @@ export const Outbox = {
       if (refused.length) showError(new ApiError(_("Not sent, kept while offline: %(writes)s", { writes: refused.join(" · ") })));
     }
   },
+  /* Reasons kept for take-overs, by take-over id: the list shows them until sent. */
+  keptReasons: {},
+  // Called when what is kept changes (main.js redraws the list).
+  changed: () => {},
   async show() {
-    const n = await this.count();
+    const kept = await this.pending();
+    const n = kept.length;
+    this.keptReasons = Object.fromEntries(kept.filter((e) => e.gui && e.path.endsWith("/quick-reason/") && e.body.take_over).map((e) => [e.body.take_over, e.body.reason]));
+    this.changed();
     const badge = $("#outbox");
     badge.hidden = n === 0;
     badge.textContent = plural(ngettext("%(count)s waiting to send", "%(count)s waiting to send", n), n);

@@ -4,7 +4,7 @@ import { _ } from "./i18n.js";
 import { api } from "./api.js";
 import { showError } from "./feedback.js";
 import { current } from "./state.js";
-import { fmtTime } from "./format.js";
+import { fmtNumber, fmtTime } from "./format.js";
 import { buildField } from "./dialogs.js";
 
 $("#open-reports").addEventListener("click", () => Reports.open().catch(showError));
@@ -177,7 +177,9 @@ const Reports = {
         a.textContent = _("Report of %(when)s (PDF)", { when });
         li.append(a, r.provisional ? ` — ${_("provisional: the test event was still open")}` : "");
       } else {
-        li.textContent = `${_("Report of %(when)s: %(status)s", { when, status: JOB_STATUS[r.status] || r.status })}${r.progress !== null && r.progress !== undefined ? ` ${Math.round(r.progress * 100)} %` : ""}${r.error ? ` — ${r.error}` : r.message ? ` — ${r.message}` : ""}`;
+        // How long reports like it took, as the server read it from the finished ones.
+        const expected = r.expected_seconds ? ` · ${_("reports like it took about %(seconds)s s; %(elapsed)s s so far", { seconds: fmtNumber(r.expected_seconds, 0), elapsed: fmtNumber(Math.max(0, (Date.now() - Date.parse(r.created)) / 1000), 0) })}` : "";
+        li.textContent = `${_("Report of %(when)s: %(status)s", { when, status: JOB_STATUS[r.status] || r.status })}${r.progress !== null && r.progress !== undefined ? ` ${Math.round(r.progress * 100)} %` : ""}${expected}${r.error ? ` — ${r.error}` : r.message ? ` — ${r.message}` : ""}`;
       }
       ul.append(li);
     }

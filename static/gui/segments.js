@@ -185,7 +185,8 @@ export function renderSegments() {
     const cells = [
       { text: shortLabel(s.id), title: `${segmentLabel(s.id)} (database id ${s.id})` },
       modeName(s.segment_type),
-      s.parent === null ? "" : reasonName(s.ito_reason),
+      // A reason kept in this browser (outbox.js) is shown until it is sent.
+      s.parent === null ? "" : s.id in Outbox.keptReasons ? `${reasonName(Outbox.keptReasons[s.id])} (${_("not sent yet")})` : reasonName(s.ito_reason),
       { text: fmtClock(s.start), title: fmtTime(s.start) },
       s.end ? { text: fmtClock(s.end), title: fmtTime(s.end) } : "—",
       fmtDuration(s.start, s.end),

@@ -63,6 +63,7 @@ def test_an_edit_made_offline_after_a_quick_reason_keeps_the_reason(
         expect(badge).not_to_have_text("live", timeout=5000)
         page.get_by_role("button", name="Planner", exact=True).click()
         expect(waiting).to_have_text("1 waiting to send")
+        expect(row(page, "#1.1").locator("td").nth(2)).to_have_text("Planner (not sent yet)")
         row(page, "#1.1").click()
         page.locator("#segment-edit").click()
         dialog = page.locator("#segment-dialog")
@@ -164,7 +165,9 @@ def test_ending_the_test_event_asks_first_and_names_both_robots_their_legs_and_t
     expect(items.nth(0)).to_have_text(
         re.compile(rf"^Logging stops on: Rover {open_leg}(-b)?, Rover {open_leg}(-b)?\. ")
     )
-    expect(items.nth(1)).to_contain_text("2 shifts end")
+    expect(items.nth(1)).to_have_text(
+        f"2 shifts end: Rover {open_leg} · Shift 1, Rover {open_leg}-b · Shift 2"
+    )
     expect(items.nth(2)).to_contain_text(f"2 legs end: Rover {open_leg} · Shift 1 · Leg 1")
     expect(items.nth(3)).to_have_text(f"1 open take-over ends: Rover {open_leg} · Leg 1 · #1.1")
     for screen, options in VIEWPORTS.items():
