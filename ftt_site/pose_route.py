@@ -18,7 +18,9 @@ the request is counted against the rate and before anything is stored; from
 then on the route answers itself, errors included (the API's exception
 handler: 4xx with field messages, 503 with Retry-After), so no request is
 counted or stored twice.  It sits inside ftt_site.request_limits, so the body
-limits and the request slots hold.
+limits and the request slots hold.  A request it answers is counted in the
+request and latency metrics by django-prometheus' own middleware, as Django
+would have counted it (``_Counted``).
 """
 
 import io
@@ -30,6 +32,10 @@ from django.conf import settings
 from django.core.exceptions import DisallowedHost
 from django.core.handlers.asgi import ASGIRequest
 from django.db import close_old_connections
+from django.http import HttpResponse
+from django.urls import resolve
+from django_prometheus.middleware import PrometheusAfterMiddleware, PrometheusBeforeMiddleware
+from django_prometheus.utils import Time
 from rest_framework.exceptions import AuthenticationFailed
 from rest_framework.renderers import JSONRenderer
 from rest_framework.request import Request
@@ -65,12 +71,40 @@ class _Learn:
         self.secure = secure
 
 
+class _Counted:
+    """django-prometheus' two middlewares around a request this route answers:
+    its counts by method, view and status, and its latency from the moment the
+    route began with it (the body read)."""
+
+    def __init__(self):
+        def unused(request):
+            raise AssertionError("the route answers the request itself")
+
+        self.before = PrometheusBeforeMiddleware(unused)
+        self.after = PrometheusAfterMiddleware(unused)
+
+    def begin(self, request, started) -> None:
+        request.resolver_match = resolve(PATH)
+        self.before.process_request(request)
+        self.after.process_request(request)
+        # The latency counts from where the route began, as Django's would.
+        request.prometheus_before_middleware_event = started
+        request.prometheus_after_middleware_event = started
+        self.after.process_view(request, None)
+
+    def end(self, request, status: int, content: bytes) -> None:
+        response = HttpResponse(content, status=status, content_type="application/json")
+        self.after.process_response(request, response)
+        self.before.process_response(request, response)
+
+
 class PoseRoute:
     def __init__(self, app):
         self.app = app
         # Per scheme (https or not): Django's answer headers for this address.
         self._headers: dict[bool, list[tuple[bytes, bytes]]] = {}
         self._renderer = JSONRenderer()
+        self._counted = _Counted()
 
     async def __call__(self, scope, receive, send):
         if not (
@@ -111,6 +145,7 @@ class PoseRoute:
         """(status, body, headers) when this route answers, None or a _Learn when
         Django does.  Runs in a worker thread; its database connection goes back
         to the pool (or is closed) at the end, as at the end of a Django request."""
+        started = Time()
         try:
             checked = self._checked(scope, key, body)
             if checked is None or isinstance(checked, _Learn):
@@ -125,12 +160,17 @@ class PoseRoute:
             close_old_connections()
             return None
         # From here on the request is counted and may be stored: it is answered here.
+        request = api_request._request
+        self._counted.begin(request, started)
+        status = 500
+        content = b""
         try:
             status, data, extra = self._stored(api_request, view, sent)
             content = self._renderer.render(data)
             headers = [*self._headers[secure], *extra]
             return status, content, [*headers, (b"content-length", str(len(content)).encode())]
         finally:
+            self._counted.end(request, status, content)
             close_old_connections()
 
     def _checked(self, scope, key, body):

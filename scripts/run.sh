@@ -51,7 +51,9 @@ stop() { # Ctrl-C or SIGTERM: both stop together, each once
 trap stop INT TERM
 trap 'stop; wait' EXIT
 ftt_log "FTT at http://$address/ (Django admin at /admin/); Ctrl-C stops it"
-"$py" -m gunicorn -c ftt_site/gunicorn.conf.py "${reload[@]}" --bind "$address" \
+# The script, not `python -m gunicorn`: its master can start a successor on
+# `kill -USR2` (README, Production: restarts and upgrades).
+"$FTT_VENV/bin/gunicorn" -c ftt_site/gunicorn.conf.py "${reload[@]}" --bind "$address" \
     ftt_site.asgi:application &
 web=$!
 status=0

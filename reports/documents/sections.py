@@ -382,7 +382,13 @@ class Sections:
                 ),
                 (_("Duration"), fmt.duration(run.seconds)),
                 (_("Distance"), fmt.metres(run.distance)),
-                (_("Poses"), str(run.pose_count)),
+                # GPS fixes without a position are not counted: say so.
+                (
+                    _("Poses with a position (fixes without one left out)")
+                    if self.mode == GPS
+                    else _("Poses"),
+                    str(run.pose_count),
+                ),
                 (_("Database id"), str(run.id)),
                 (_("Reason(s)"), reasons or fmt.DASH),
                 (_("Obstacle"), joined("obstacle")),

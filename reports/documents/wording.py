@@ -122,6 +122,8 @@ def report_text() -> dict[str, str]:
         "status_provisional": _("provisional (open segments)"),
         "not_finalised": _("not finalised"),
         "check_with": _("Check with:"),
+        # A command, the same in every language.
+        "verify_command": "manage.py ftt_report --verify REPORT.pdf",
         "report_options": _("Report options:"),
         "amendments": _("Amendments after finalisation:"),
     }

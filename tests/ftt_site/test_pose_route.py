@@ -15,6 +15,7 @@ import pytest
 from django.core.signals import request_started
 from django.db import transaction
 from django.db.models.signals import post_save
+from prometheus_client.parser import text_string_to_metric_families
 from rest_framework.throttling import SimpleRateThrottle
 
 from common.sql import conninfo
@@ -286,3 +287,35 @@ def test_a_pose_the_lean_way_wakes_the_live_readers_at_once(api_client, master):
 
     assert status == 201
     assert [note.channel for note in heard] == [CHANNEL]
+
+
+def _pose_figures(client) -> tuple[float, float, float]:
+    """(POST /api/poses/ answered 201, latency observations, requests counted) of /metrics."""
+    stored = latencies = requests = 0.0
+    for family in text_string_to_metric_families(client.get("/metrics").content.decode()):
+        for sample in family.samples:
+            labels = sample.labels
+            if labels.get("view") != "pose-list" or labels.get("method") != "POST":
+                continue
+            if sample.name == "django_http_responses_total_by_status_view_method_total":
+                stored += sample.value if labels["status"] == "201" else 0
+            elif sample.name == "django_http_requests_latency_seconds_by_view_method_count":
+                latencies += sample.value
+            elif sample.name == "django_http_requests_total_by_view_transport_method_total":
+                requests += sample.value
+    return stored, latencies, requests
+
+
+def test_single_poses_the_lean_way_are_in_the_request_metrics(
+    api_client, master, django_requests, client, settings
+):
+    settings.FTT_METRICS_TOKEN = "scraper"
+    client.defaults["HTTP_AUTHORIZATION"] = "Bearer scraper"
+    before = _pose_figures(client)
+    token = api_client("operator").token
+    seen = len(django_requests)
+    for n in range(3):
+        body = {"segment": master.pk, "longitude": 8 + n / 1000, "latitude": 50}
+        assert post_asgi(body, token)[0] == 201
+    assert len(django_requests) == seen  # the route answered them
+    assert _pose_figures(client) == tuple(figure + 3 for figure in before)

@@ -4,8 +4,10 @@ import base64
 import hashlib
 import importlib
 import io
+import re
 import uuid
 from datetime import UTC, datetime
+from pathlib import Path
 
 import pytest
 import requests
@@ -16,10 +18,12 @@ from events.services import finality, logs
 from events.services.robots import ensure_robot_account
 from rosbridge_app.legacy_api.views import UIDS
 from telemetry.models import Image, LocalPose, MapImage, Pose
+from telemetry.selectors.distances import kept_distances
 from tests.support.fkie import FKIE_BAG, full_rate_length, gps_path_length, master_path_length
 from tests.support.legacy_node import LegacyNode, jpeg
 
 pytestmark = pytest.mark.django_db(transaction=True)
+API_DOC = Path(__file__).resolve().parents[2] / "docs" / "api.md"
 
 
 @pytest.fixture
@@ -102,6 +106,14 @@ def test_the_fkie_recording_through_the_original_node(field):
     original = [42.72, 44.62, 24.16, 71.98, 39.56]
     for master, figure in zip(found, original, strict=True):
         assert figure - 2.5 < master_path_length(master) <= figure + 0.05
+    # What FTT stores is what docs/api.md says, to the centimetre.
+    said = re.search(
+        r"the five take-overs as ([\d., and]+) m", " ".join(API_DOC.read_text().split())
+    )
+    documented = [float(x) for x in re.findall(r"\d+\.\d+", said.group(1))]
+    stored = kept_distances(found)
+    shown = [round(stored[m.pk], 2) for m in found]
+    assert shown == documented, shown
     recorded = sum(master_path_length(m) for m in found)
     assert 0.97 < recorded / full_rate_length() <= 1.0
     # The node's camera buffer: three frames at each of the five switches.

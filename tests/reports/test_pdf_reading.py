@@ -1,0 +1,29 @@
+"""What a reader copies from the PDF report works as copied (pdftotext)."""
+
+import pytest
+
+from reports.documents.event_report import render_report
+from reports.documents.options import ReportOptions
+from reports.selectors.provenance import data_digest
+from tests.support.pdf import flat, pdf_text
+
+
+@pytest.fixture
+def text(scenario, tmp_path):
+    pdf = render_report(scenario.event, ReportOptions(no_tiles=True, level="summary")).pdf
+    return pdf_text(pdf, tmp_path, layout=False)
+
+
+def test_the_printed_verify_command_and_digest_can_be_copied(scenario, text):
+    assert "manage.py ftt_report --verify REPORT.pdf" in text
+    assert "\u2013verify" not in text and "\u2014verify" not in text
+    assert "\u200b" not in text
+    assert data_digest(scenario.event) in text
+
+
+def test_the_pose_count_of_a_segment_says_it_leaves_out_fixes_without_a_position(
+    scenario, tmp_path
+):
+    pdf = render_report(scenario.event, ReportOptions(no_tiles=True, level="full")).pdf
+    text = flat(pdf_text(pdf, tmp_path))
+    assert "Poses with a position (fixes without one left out)" in text
