@@ -54,6 +54,10 @@ def _secret_key() -> str:
 
 
 SECRET_KEY = _secret_key()
+# The key that seals this installation's reports (docs/report.md), and the seal
+# keys of other installations whose reports this one verifies too.
+REPORT_SEAL_KEY = env_str("FTT_REPORT_SEAL_KEY") or SECRET_KEY
+TRUSTED_SEAL_KEYS = env_list("FTT_TRUSTED_SEAL_KEYS")
 ALLOWED_HOSTS = env_list("FTT_ALLOWED_HOSTS", "127.0.0.1,localhost,[::1]")
 CSRF_TRUSTED_ORIGINS = env_list("FTT_CSRF_TRUSTED_ORIGINS")
 
