@@ -11,7 +11,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from django.core.exceptions import ValidationError
-from pmtiles.reader import MmapSource
 from pmtiles.reader import Reader as PMTilesReader
 from pmtiles.tile import TileType
 from rasterio.errors import NotGeoreferencedWarning, RasterioError
@@ -19,6 +18,7 @@ from rio_tiler.errors import RioTilerError
 
 from basemaps.mbtiles import MBTiles, TooCostly
 from basemaps.models.layers import MAX_ZOOM, BasemapLayer
+from basemaps.pmtiles_source import DirectoryTooLarge, bounded_source, check_unpacked_size
 from basemaps.rasters import GeoTiffTiles, NotAGeoTiff, check_local_file, open_geotiff
 
 SQLITE_MAGIC = b"SQLite format 3\x00"
@@ -146,13 +146,19 @@ def _pmtiles(path: Path) -> FileFacts:
     size = path.stat().st_size
     try:
         with path.open("rb") as f:
-            header = PMTilesReader(MmapSource(f)).header()
+            source = bounded_source(f)
+            header = PMTilesReader(source).header()
+            # A copy cut short still has a good header; its directories and tiles are missing.
+            ends = [header[f"{part}_offset"] + header[f"{part}_length"] for part in PMTILES_PARTS]
+            if max(ends) > size:
+                refuse(f"A damaged PMTiles archive: {size} bytes of the {max(ends)} it needs.")
+            check_unpacked_size(source(header["root_offset"], header["root_length"]))
+    except DirectoryTooLarge:
+        refuse("This PMTiles archive's directory unpacks to more than it can hold (a gzip bomb?).")
+    except ValidationError:
+        raise
     except Exception as exc:  # noqa: BLE001 - the library raises bare errors on bad files
         refuse(f"A damaged PMTiles archive ({exc}).")
-    # A copy cut short still has a good header; its directories and tiles are missing.
-    ends = [header[f"{part}_offset"] + header[f"{part}_length"] for part in PMTILES_PARTS]
-    if max(ends) > size:
-        refuse(f"A damaged PMTiles archive: {size} bytes of the {max(ends)} it needs.")
     fmt = RASTER_TILE_TYPES.get(header["tile_type"])
     if fmt is None:
         refuse(f"Only raster archives can be served; this one holds {header['tile_type'].name}.")

@@ -54,10 +54,19 @@ def _origin_user():
     return user if getattr(user, "is_authenticated", False) else None
 
 
+def _origin_channel(origin: Origin) -> str:
+    # The REST API's route, signed in by the pages' session (DRF leaves no
+    # ``auth`` then), is the GUI's; by a token, the API's.
+    request = origin.request
+    if origin.channel == "api" and request is not None and getattr(request, "auth", None) is None:
+        return "gui"
+    return origin.channel
+
+
 def stamp_origin(sender, history_instance, **kwargs) -> None:
     """simple-history's pre_create_historical_record: add channel, user and reason."""
     origin = _origin.get()
-    history_instance.history_channel = origin.channel
+    history_instance.history_channel = _origin_channel(origin)
     user = _origin_user()
     if history_instance.history_user_id is None and user is not None:
         history_instance.history_user = user
@@ -101,7 +110,7 @@ def write_history(model, *, changed=(), created=()) -> None:
         *created_ids,
         user.pk if user is not None else None,
         origin.reason or None,
-        origin.channel,
+        _origin_channel(origin),
         *kinds,
     ]
     with connection.cursor() as cursor:

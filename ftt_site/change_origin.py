@@ -16,12 +16,17 @@ def reason_of(request) -> str:
     return request.headers.get(REASON_HEADER, "").strip()
 
 
+# The channel is the route taken, never a header the client chose: the REST API,
+# the original robots' API and admin by their prefixes, the pages' own calls
+# (/gui/api/, forms) the GUI; a REST API call made with the pages' session is
+# the GUI's too (events.history, once DRF has signed the request in).
+_ROUTES = (("/api/", "api"), ("/legacy/", "legacy"), ("/admin/", "admin"))
+
+
 def channel_of(request) -> str:
-    """admin; api for a client with a token; gui for the pages' own (session) calls."""
-    if request.path.startswith("/admin/"):
-        return "admin"
-    if "Authorization" in request.headers:
-        return "api"
+    for prefix, channel in _ROUTES:
+        if request.path.startswith(prefix):
+            return channel
     return "gui"
 
 

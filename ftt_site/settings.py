@@ -56,6 +56,10 @@ def _secret_key() -> str:
 
 
 SECRET_KEY = _secret_key()
+# The key that seals this installation's reports (docs/report.md), and the seal
+# keys of other installations whose reports this one verifies too.
+REPORT_SEAL_KEY = env_str("FTT_REPORT_SEAL_KEY") or SECRET_KEY
+TRUSTED_SEAL_KEYS = env_list("FTT_TRUSTED_SEAL_KEYS")
 ALLOWED_HOSTS = env_list("FTT_ALLOWED_HOSTS", "127.0.0.1,localhost,[::1]")
 CSRF_TRUSTED_ORIGINS = env_list("FTT_CSRF_TRUSTED_ORIGINS")
 
@@ -311,6 +315,10 @@ FTT_LIVE_POLL_MS = env_int("FTT_LIVE_POLL_MS", 200)
 # How often the server speaks on an open live websocket, so that a page can tell
 # a quiet link from a dead one; the page shows its link stale after three missed.
 FTT_LIVE_HEARTBEAT_MS = env_int("FTT_LIVE_HEARTBEAT_MS", 1000)
+# Live links one account, and one client address, may hold open per web process
+# (rosbridge_app.consumers); more are closed with code 4429.
+FTT_LIVE_LINKS_PER_ACCOUNT = env_int("FTT_LIVE_LINKS_PER_ACCOUNT", 20)
+FTT_LIVE_LINKS_PER_ADDRESS = env_int("FTT_LIVE_LINKS_PER_ADDRESS", 60)
 # Each process sends the cross-process wake-ups (NOTIFY, Redis) from a thread of
 # its own, at most once per this long (rosbridge_app.wakeup).
 FTT_LIVE_NOTIFY_DELAY_MS = env_int("FTT_LIVE_NOTIFY_DELAY_MS", 2)

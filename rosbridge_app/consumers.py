@@ -13,6 +13,7 @@ from the outbox, which stays the source of truth.
 import asyncio
 import logging
 import time
+from collections import Counter
 from importlib import import_module
 from types import SimpleNamespace
 
@@ -275,12 +276,46 @@ def _still_allowed(scope) -> bool:
     return roles.has_role(user, roles.VIEWER)
 
 
+# Live links open per account and per client address in this process: one
+# viewer opening hundreds would make every poll and wake-up slow for everybody.
+_OPEN_LINKS: Counter = Counter()
+
+
+def _holders(scope) -> tuple:
+    account = ("account", getattr(scope.get("user"), "pk", None))
+    client = scope.get("client")
+    return (account, ("address", client[0])) if client else (account,)
+
+
+def _take_link(holders: tuple) -> bool:
+    limits = {
+        "account": settings.FTT_LIVE_LINKS_PER_ACCOUNT,
+        "address": settings.FTT_LIVE_LINKS_PER_ADDRESS,
+    }
+    if any(_OPEN_LINKS[h] >= limits[h[0]] for h in holders):
+        return False
+    _OPEN_LINKS.update(holders)
+    return True
+
+
+def _give_back(holders: tuple) -> None:
+    _OPEN_LINKS.subtract(holders)
+    for holder in holders:
+        if _OPEN_LINKS[holder] <= 0:
+            del _OPEN_LINKS[holder]
+
+
 class LiveConsumer(AsyncJsonWebsocketConsumer):
     """ws/live/: the browser subscribes with the ids it shows and its last seen event id."""
 
     async def connect(self):
         if not await _still_allowed(self.scope):
             await self.close(code=4403)
+            return
+        self.holds = _holders(self.scope)
+        if not _take_link(self.holds):
+            self.holds = ()
+            await self.close(code=4429)  # too many live links of this account or address
             return
         self.watch = {"test_event": None, "shift": None, "leg": None}
         self.fleet = False
@@ -353,6 +388,7 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
         if getattr(self, "gone", False):
             return
         self.gone = True
+        _give_back(getattr(self, "holds", ()))
         for task in (getattr(self, "guard", None), getattr(self, "heart", None)):
             if task is not None and task is not asyncio.current_task():
                 task.cancel()

@@ -15,13 +15,13 @@ import morecantile
 from cachetools import LRUCache
 from django.conf import settings
 from PIL import Image, UnidentifiedImageError
-from pmtiles.reader import MmapSource
 from pmtiles.reader import Reader as PMTilesReader
 from rasterio.errors import RasterioError
 from rio_tiler.errors import RioTilerError, TileOutsideBounds
 
 from basemaps.mbtiles import MBTiles
 from basemaps.models import BasemapLayer
+from basemaps.pmtiles_source import DirectoryTooLarge, bounded_source
 from basemaps.rasters import GeoTiffTiles, NotAGeoTiff
 
 FORMATS = {"png": "PNG", "webp": "WEBP"}
@@ -78,10 +78,13 @@ def _open(path: Path, opener):
 class _PMTiles:
     def __init__(self, path: Path):
         self.handle = path.open("rb")
-        self.reader = PMTilesReader(MmapSource(self.handle))
+        self.reader = PMTilesReader(bounded_source(self.handle))
 
     def get(self, z, x, y):
-        return self.reader.get(z, x, y)
+        try:
+            return self.reader.get(z, x, y)
+        except DirectoryTooLarge:
+            return None  # refused at upload; a file swapped in since shows no tiles
 
     def close(self):
         self.handle.close()

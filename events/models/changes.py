@@ -18,6 +18,7 @@ from simple_history.models import HistoricalRecords
 CHANNELS = (
     ("gui", "GUI"),
     ("api", "API"),
+    ("legacy", "original robots' API"),
     ("admin", "admin"),
     ("collector", "collector"),
     ("import", "import"),

@@ -12,6 +12,7 @@ WORDS = {
     "deleted": gettext_noop("deleted"),
     "gui": "GUI",
     "api": "API",
+    "legacy": gettext_noop("original robots' API"),
     "admin": gettext_noop("admin"),
     "collector": gettext_noop("collector"),
     "import": gettext_noop("import"),

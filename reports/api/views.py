@@ -264,8 +264,8 @@ class ReportPdfView(APIView):
         return FileResponse(report.pdf.open("rb"), as_attachment=True, filename=name)
 
 
-def _verdict(content: bytes, field: str) -> Response:
-    verdict = verify_report(content)
+def _verdict(content: bytes, field: str, *, kept: bool = False) -> Response:
+    verdict = verify_report(content, kept=kept)
     if verdict is None:
         message = _(
             "This file carries no FTT data digest: give a PDF or JSON report FTT made "
@@ -312,7 +312,7 @@ class ReportVerifyView(APIView):
     def get(self, request, pk: int):
         report = get_object_or_404(Report, pk=pk, status=Report.Status.DONE)
         with report.pdf.open("rb") as pdf:
-            return _verdict(pdf.read(), "report")
+            return _verdict(pdf.read(), "report", kept=True)
 
 
 class AmendmentsView(APIView):

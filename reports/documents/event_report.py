@@ -18,6 +18,7 @@ from reports.documents.typesetting import typeset
 from reports.figures import style
 from reports.formatting import written_in
 from reports.selectors.content import has_segments, report_scope, scope_words
+from reports.selectors.provenance import seal_pdf
 
 Progress = Callable[[float, Said], None]
 # Wraps each stage of making a report (statistics, maps, charts, timelines, image
@@ -90,7 +91,7 @@ def render_report(
         data = sections.document()
         progress(0.95, said(gettext_noop("typesetting")))
         with time_stage("typst"):
-            pdf = typeset("report.typ", data, Path(tmp))
+            pdf = seal_pdf(typeset("report.typ", data, Path(tmp)))
     progress(1.0, said(gettext_noop("done")))
     return ReportResult(
         pdf=pdf,

@@ -9,9 +9,12 @@ digest reads no pose: poses are only ever added, never changed, and thinning
 old ones (reports.services.pose_retention) leaves the sums as they were.
 Reports of earlier versions hashed the uids read from the poses; a digest
 of that kind verifies too.  The report carries the digest, its
-build time and the event's uid (PDF keywords, JSON fields); :func:`verify`
-recomputes the digest and, when it differs, lists what the change history
-says changed since.
+build time and the event's uid (PDF keywords, JSON fields), and is sealed
+with this installation's key (an HMAC over the whole file: a PDF's bytes, a
+JSON report's canonical text), so that a stamp copied into another file, a
+second stamp or any edit of the document is refused.  :func:`verify` checks
+the seal, recomputes the digest and, when it differs, lists what the change
+history says changed since.
 """
 
 import hashlib
@@ -24,6 +27,7 @@ from datetime import UTC, datetime
 from django.conf import settings
 from django.db.models import FileField
 from django.utils import timezone
+from django.utils.crypto import constant_time_compare, salted_hmac
 from django.utils.translation import gettext as _
 
 from common import uid_sums
@@ -38,6 +42,10 @@ DIGEST_PREFIX = "ftt-digest-sha256-"
 BUILT_PREFIX = "ftt-built-"
 EVENT_PREFIX = "ftt-event-"
 _STAMP_FORMAT = "%Y%m%dT%H%M%S.%fZ"
+# The seal's line after a PDF's end (a PDF reader ignores what follows %%EOF).
+SEAL_PREFIX = b"%ftt-seal-hmac-sha256-"
+_SEAL_LINE = re.compile(rb"\n" + re.escape(SEAL_PREFIX) + rb"([0-9a-f]{64})\n\Z")
+_SEAL_SALT = "ftt.reports.seal"
 
 
 def ftt_version() -> str:
@@ -221,37 +229,74 @@ def keywords(stamp: dict) -> list[str]:
     ]
 
 
+class TwoStamps(ValueError):
+    """A file carries more than one stamp: none of them speaks for it."""
+
+
 def stamp_of_pdf(pdf: bytes) -> dict | None:
     """The stamp written by :func:`keywords` (typst keeps them as plain text in the
-    document information and its XMP metadata)."""
+    document information and its XMP metadata, the same twice); TwoStamps when
+    the file holds two different ones."""
     found = {}
     for name, prefix, pattern in (
         ("digest", DIGEST_PREFIX, rb"[0-9a-f]{64}"),
         ("built", BUILT_PREFIX, rb"\d{8}T\d{6}\.\d{6}Z"),
         ("event_uid", EVENT_PREFIX, rb"[0-9a-f-]{36}"),
     ):
-        match = re.search(re.escape(prefix.encode()) + b"(" + pattern + b")", pdf)
-        if match is None:
+        values = set(re.findall(re.escape(prefix.encode()) + b"(" + pattern + b")", pdf))
+        if not values:
             return None
-        found[name] = match.group(1).decode()
+        if len(values) > 1:
+            raise TwoStamps(name)
+        found[name] = values.pop().decode()
     return found
 
 
-def stamp_of_report(content: bytes) -> dict | None:
-    """The stamp of a PDF report or of a JSON report (``json_report``)."""
+def _seal_of(content: bytes, key: str | None = None) -> str:
+    key = key or settings.REPORT_SEAL_KEY
+    return salted_hmac(_SEAL_SALT, content, secret=key, algorithm="sha256").hexdigest()
+
+
+def _sealed(seal, content: bytes) -> bool:
+    """Is ``seal`` this installation's, or a trusted installation's, over ``content``?"""
+    keys = [settings.REPORT_SEAL_KEY, *settings.TRUSTED_SEAL_KEYS]
+    return isinstance(seal, str) and any(
+        constant_time_compare(seal, _seal_of(content, key)) for key in keys
+    )
+
+
+def seal_pdf(pdf: bytes) -> bytes:
+    """``pdf`` with this installation's seal over all its bytes on a last line."""
+    return pdf + b"\n" + SEAL_PREFIX + _seal_of(pdf).encode() + b"\n"
+
+
+def _canonical(document: dict) -> bytes:
+    return json.dumps(document, sort_keys=True, ensure_ascii=False).encode()
+
+
+def _unsealed(content: bytes) -> tuple[dict | None, bool]:
+    """The stamp of a PDF or JSON report (``json_report``) and whether this
+    installation's seal covers the whole file."""
     if content.startswith(b"%PDF"):
-        return stamp_of_pdf(content)
+        seal = _SEAL_LINE.search(content)
+        body = content[: seal.start()] if seal else content
+        return stamp_of_pdf(body), seal is not None and _sealed(seal.group(1).decode(), body)
     try:
-        stamp = json.loads(content)["provenance"]
-        return {name: stamp[name] for name in ("digest", "built", "event_uid")}
-    except (ValueError, KeyError, TypeError, RecursionError):
-        return None
+        document = json.loads(content)
+        seal = document.pop("seal", None)
+        stamp = document["provenance"]
+        stamp = {name: stamp[name] for name in ("digest", "built", "event_uid")}
+    except (ValueError, KeyError, TypeError, AttributeError, RecursionError):
+        return None, False
+    return stamp, _sealed(seal, _canonical(document))
 
 
 def json_report(event: TestEvent, mode: str) -> str:
-    """The figures (as the API gives them) with the provenance a PDF states."""
+    """The figures (as the API gives them) with the provenance a PDF states,
+    sealed over their canonical text (``seal``)."""
     figures = event_statistics(event, mode).as_dict()
     figures["provenance"] = provenance(event, {"mode": mode}, timezone.now())
+    figures["seal"] = _seal_of(_canonical(figures))
     return json.dumps(figures, indent=2, ensure_ascii=False)
 
 
@@ -377,9 +422,24 @@ def verify(stamp: dict) -> Verdict:
     return Verdict(False, message, changes, event.pk)
 
 
-def verify_report(content: bytes) -> Verdict | None:
-    """Does the database still hold the data a PDF or JSON report was built from?
-    None when ``content`` carries no FTT stamp.  The command (``ftt_report
-    --verify``), the API and the GUI all ask here."""
-    stamp = stamp_of_report(content)
-    return None if stamp is None else verify(stamp)
+def verify_report(content: bytes, *, kept: bool = False) -> Verdict | None:
+    """Is ``content`` a report this installation made, unchanged, and does the
+    database still hold the data it was built from?  None when it carries no FTT
+    stamp.  ``kept``: a report file this installation stored itself, whose seal
+    is not needed (those stored before reports were sealed have none).  The
+    command (``ftt_report --verify``), the API and the GUI all ask here."""
+    try:
+        stamp, sealed = _unsealed(content)
+    except TwoStamps:
+        return Verdict(False, _("This file carries more than one FTT stamp; none of them counts."))
+    if stamp is None:
+        return None
+    if not (sealed or kept):
+        return Verdict(
+            False,
+            _(
+                "This file is not a report this installation made, or it was changed "
+                "after it was made: its seal does not match."
+            ),
+        )
+    return verify(stamp)

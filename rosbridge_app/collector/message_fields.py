@@ -7,13 +7,17 @@ with it), then from the interface packages installed into FTT's environment
 """
 
 import importlib
+import importlib.util
 import re
 from functools import lru_cache
+from pathlib import Path
 
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.base import Nodetype
 
 _BOUND = re.compile(r"(,\s*\d+)?>$")
+_PACKAGE = re.compile(r"[a-z][a-z0-9_]*")
+_KINDS = ("msg", "srv", "action")
 
 
 @lru_cache(maxsize=1)
@@ -55,12 +59,30 @@ def installed_fields(typename: str) -> dict:
     except KeyError:
         pass
     pkg, kind, name = typename.split("/")
+    if not is_interface_package(pkg) or kind not in _KINDS:
+        raise KeyError(typename)
     try:
         cls = getattr(importlib.import_module(f"{pkg}.{kind}"), name)
         fields = cls.get_fields_and_field_types()
     except (ImportError, AttributeError):
         raise KeyError(typename) from None
     return {field: _rosidl_kind(text) for field, text in fields.items()}
+
+
+def is_interface_package(pkg: str) -> bool:
+    """Is ``pkg`` an installed ROS interface package (rosidl made its type support
+    library beside it)?  Found without importing anything, so a name an operator
+    types never runs a module."""
+    if not _PACKAGE.fullmatch(pkg):
+        return False
+    try:
+        spec = importlib.util.find_spec(pkg)
+    except (ImportError, ValueError):
+        return False
+    folders = (spec.submodule_search_locations or []) if spec else []
+    return any(
+        next(Path(folder).glob(f"{pkg}_s__rosidl_typesupport_c*"), None) for folder in folders
+    )
 
 
 def recorded_fields(typestore):

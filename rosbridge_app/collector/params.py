@@ -22,6 +22,9 @@ from rosbridge_app.collector.message_fields import installed_fields
 from rosbridge_app.collector.modes import MODE_TYPES
 
 NODE_NAME = "ftt_collector"
+# Characters a text parameter may have: some hundred mode sources or reason
+# rules; one change is checked, stored and applied under the write lock.
+MAX_TEXT = 20_000
 NAV_SAT_FIX = "sensor_msgs/msg/NavSatFix"
 COMPRESSED_IMAGE = "sensor_msgs/msg/CompressedImage"
 TF_MESSAGE = "tf2_msgs/msg/TFMessage"
@@ -305,6 +308,10 @@ def _checked(name: str, spec: Spec, value, fields_of=installed_fields) -> object
             raise InvalidParameter(_("%(name)s must be finite") % {"name": name})
     elif isinstance(default, str) and not isinstance(value, str):
         raise InvalidParameter(_("%(name)s must be a string") % {"name": name})
+    if isinstance(value, str) and len(value) > MAX_TEXT:
+        raise InvalidParameter(
+            _("%(name)s is longer than %(limit)s characters") % {"name": name, "limit": MAX_TEXT}
+        )
     if spec.minimum is not None and value < spec.minimum:
         raise InvalidParameter(
             _("%(name)s must be >= %(limit)s") % {"name": name, "limit": short(spec.minimum)}

@@ -5,7 +5,7 @@
  * applied to its entry (apply); only what the events cannot say (a vehicle
  * that starts or stops logging, a collector's state) is read again.  One tap
  * on a vehicle opens its cockpit. */
-import { CONFIG, $ } from "./dom.js";
+import { CONFIG, $, element } from "./dom.js";
 import { api } from "./api.js";
 import { showError } from "./feedback.js";
 import { modeName, saveUrl, state } from "./state.js";
@@ -163,7 +163,7 @@ export const Fleet = {
         marker = L.circleMarker(v.position, style).addTo(this.map.map);
         // "auto": right of a dot in the map's left half, left of it in the right half, so a
         // dot near the edge (on a phone every dot is) keeps its name on the map.
-        marker.bindTooltip(v.vehicle.name, { permanent: true, direction: "auto", offset: [10, 0] });
+        marker.bindTooltip(element("span", { textContent: v.vehicle.name }), { permanent: true, direction: "auto", offset: [10, 0] });
         marker.on("click", () => this.open(marker.vehicle));
         this.markers.set(id, marker);
       } else {

@@ -56,14 +56,14 @@ function draw(data, names) {
   // Wide route lines with the red stretches narrower on top: both stay visible.
   Object.entries(data.routes).forEach(([name, points]) => {
     L.polyline(latLngs(points), { color: names[name].colour, weight: 9, opacity: 0.75 })
-      .bindTooltip(`${names[name].letter}: ${names[name].text}`)
+      .bindTooltip(element("span", { textContent: `${names[name].letter}: ${names[name].text}` }))
       .addTo(routes.drawn);
   });
   for (const pair of data.pairs) {
     for (const name of pair.routes) {
       for (const stretch of pair.deviation[name].beyond) {
         L.polyline(latLngs(stretch), { color: BEYOND, weight: 3, opacity: 1, className: "beyond" })
-          .bindTooltip(_("%(route)s: more than %(metres)s m off", { route: names[name].letter, metres: data.threshold }))
+          .bindTooltip(element("span", { textContent: _("%(route)s: more than %(metres)s m off", { route: names[name].letter, metres: data.threshold }) }))
           .addTo(routes.drawn);
       }
     }

@@ -1,6 +1,9 @@
 """The report check over the API: the answer of ``ftt_report --verify`` (issue 26)."""
 
 import io
+import json
+import re
+import uuid
 
 from django.core.files.base import ContentFile
 from django.core.files.uploadedfile import SimpleUploadedFile
@@ -116,3 +119,33 @@ def test_a_json_file_nested_too_deeply_is_refused_with_a_field_message(db, api_c
     answer = _upload(api_client("viewer"), "deep.json", b"[" * 100_000 + b"]" * 100_000)
     assert answer.status_code == 400
     assert "no FTT data digest" in answer.json()["errors"]["file"][0]
+
+
+def test_a_copied_stamp_a_second_stamp_or_an_edited_report_does_not_verify(
+    scenario, api_client, tmp_path
+):
+    event = scenario.event
+    pdf = _pdf(event, tmp_path)
+    viewer = api_client("viewer")
+    assert _upload(viewer, "r.pdf", pdf).json()["ok"] is True
+    stamp = re.search(rb"ftt-digest-sha256-\S{64}.*?ftt-event-[0-9a-f-]{36}", pdf, re.S)
+    copied = b"%PDF-1.7\nA letter that says all is well.\n" + stamp.group(0)
+    edited = pdf.replace(b"Provenance", b"Provenanze", 1)
+    figures = tmp_path / "figures.json"
+    call_command("ftt_report", "--test-event", str(event.pk), "--json", str(figures))
+    document = json.loads(figures.read_text())
+    assert _upload(viewer, "figures.json", figures.read_bytes()).json()["ok"] is True
+    document["statistics" if "statistics" in document else next(iter(document))] = "better"
+    forged_json = json.dumps(document).encode()
+    for name, content in (
+        ("copied.pdf", copied),
+        ("edited.pdf", edited),
+        ("forged.json", forged_json),
+    ):
+        answer = _upload(viewer, name, content)
+        assert answer.status_code == 200, (name, answer.content)
+        assert answer.json()["ok"] is False, name
+        assert "seal does not match" in answer.json()["message"], name
+    other = pdf.replace(str(event.uid).encode(), str(uuid.uuid4()).encode(), 1)
+    answer = _upload(viewer, "two.pdf", other).json()
+    assert answer["ok"] is False and "more than one FTT stamp" in answer["message"]

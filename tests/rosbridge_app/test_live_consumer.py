@@ -32,6 +32,13 @@ async def _close_the_worker_threads_connection():
     await database_sync_to_async(connections.close_all)()
 
 
+@pytest.fixture(autouse=True)
+def _no_links_left_open():
+    # A test that ends without disconnecting leaves its links counted.
+    yield
+    consumers._OPEN_LINKS.clear()
+
+
 @pytest.fixture
 def viewer(db):
     user = User.objects.create_user("vera", password="pw")
@@ -302,3 +309,16 @@ async def test_a_fleet_view_gets_each_vehicles_entry_as_the_fleet_read_gives_it(
     assert received[1]["fleet"] == entry
     assert (entry["mode"], entry["position"]) == ("ito", [50.0, 7.0])
     await communicator.disconnect()
+
+
+async def test_an_account_holds_a_bounded_number_of_live_links(viewer, settings):
+    settings.FTT_LIVE_LINKS_PER_ACCOUNT = 3
+    links = [(await connect(viewer))[0] for _ in range(3)]
+    refused = WebsocketCommunicator(LiveConsumer.as_asgi(), "/ws/live/")
+    refused.scope["user"] = viewer
+    connected, code = await refused.connect()
+    assert not connected and code == 4429
+    await links.pop().disconnect()
+    again, _ = await connect(viewer)
+    for link in [*links, again]:
+        await link.disconnect()

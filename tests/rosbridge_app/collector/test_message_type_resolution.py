@@ -1,0 +1,38 @@
+"""The parameter check resolves message types from interface packages only: a
+module an operator names as a package is never imported (nothing it would run
+reaches the server's log)."""
+
+import sys
+
+import pytest
+
+from rosbridge_app.collector import params as P
+from rosbridge_app.collector.message_fields import is_interface_package
+
+
+def test_a_module_named_as_a_message_package_is_refused_without_importing_it(capfd):
+    sys.modules.pop("this", None)
+    text = "sources: [{topic: /s, type: this/msg/Zen, field: data, auto: [1]}]"
+    with pytest.raises(P.InvalidParameter, match="unknown message type this/msg/Zen"):
+        P.check("params.mode_sources", text)
+    out, err = capfd.readouterr()
+    assert "Beautiful is better than ugly" not in out + err
+    assert "this" not in sys.modules
+
+
+def test_interface_packages_are_told_from_other_modules():
+    assert is_interface_package("std_msgs") and is_interface_package("industrial_msgs")
+    assert not any(map(is_interface_package, ("this", "os", "django", "Std_msgs", "a.b")))
+
+
+def test_a_parameter_text_of_thousands_of_mode_sources_is_refused_at_once():
+    def sources(count):
+        lines = (
+            f"  - {{topic: /s{i}, type: std_msgs/msg/String, field: data, auto: [A]}}\n"
+            for i in range(count)
+        )
+        return "sources:\n" + "".join(lines)
+
+    with pytest.raises(P.InvalidParameter, match="longer than 20000 characters"):
+        P.check("params.mode_sources", sources(3000))
+    assert P.check("params.mode_sources", sources(50)) == sources(50)
