@@ -22,6 +22,9 @@ Combination rules (the one place they are decided):
   source says AUTO; else unknown;
 * ``first``: the first source, in the listed order, that says something.
 
+Several sources may read fields of one message (a status message's level
+and the e-stop inside it): each message is offered to every source of its topic.
+
 While the combination is unknown the last known mode stays (a silent or
 "says nothing" source never opens a segment by itself).
 """
@@ -95,6 +98,15 @@ class Switch(NamedTuple):
 class ModeSources:
     rule: str
     sources: tuple[Source, ...] = field(default=())
+
+    def by_topic(self) -> dict[str, tuple[int, ...]]:
+        """{topic: the numbers of its sources}: one subscription per topic, each
+        message offered to every source that reads a field of it."""
+        found: dict[str, tuple[int, ...]] = {}
+        for i, source in enumerate(self.sources):
+            topic = source.topic.lstrip("/")
+            found[topic] = found.get(topic, ()) + (i,)
+        return found
 
 
 def matches(matcher, value) -> bool:
@@ -246,9 +258,15 @@ def parse(text: str, fields_of: Callable[[str], dict] | None = None) -> ModeSour
         sources.append(source)
     if not sources:
         raise InvalidModeSources(_("sources is empty"))
-    topics = [s.topic.lstrip("/") for s in sources]
-    if len(set(topics)) != len(topics):
-        raise InvalidModeSources(_("each topic can be one source only"))
+    types: dict[str, str] = {}
+    for source in sources:
+        # Several sources may read fields of one message; one topic has one type.
+        first = types.setdefault(source.topic.lstrip("/"), source.type)
+        if first != source.type:
+            raise InvalidModeSources(
+                _("topic %(topic)s: its sources name two types, %(first)s and %(type)s")
+                % {"topic": source.topic, "first": first, "type": source.type}
+            )
     return ModeSources(rule, tuple(sources))
 
 
