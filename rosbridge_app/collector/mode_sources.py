@@ -252,7 +252,7 @@ def parse(text: str, fields_of: Callable[[str], dict] | None = None) -> ModeSour
         if not source.auto and not source.ito and default == "unknown":
             raise InvalidModeSources(_("source %(n)d maps no value to auto or ito") % {"n": n})
         if fields_of is not None:
-            check_path(source, fields_of)
+            check_values(source, n, check_path(source, fields_of))
             if raw.get("stamp"):
                 check_path(source, fields_of, source.stamp, str(raw["stamp"]), TIME_TYPE)
         sources.append(source)
@@ -322,6 +322,44 @@ def check_path(
         raise InvalidModeSources(
             _("%(type)s: %(path)s is not a single value") % {"type": source.type, "path": text}
         )
+    return kind
+
+
+_TEXT_TYPES = {"string", "wstring"}
+_BOOL_TYPES = {"bool", "boolean"}
+
+
+def check_values(source: Source, index: int, kind: tuple) -> None:
+    """InvalidModeSources for a value of ``auto``/``ito`` that the field's
+    type (``kind``, a base kind) can never hold: a mapping that never matches
+    would lose every switch it was meant to see."""
+    base = kind[1]
+    for name, values in (("auto", source.auto), ("ito", source.ito)):
+        for value in values:
+            if base in _TEXT_TYPES:
+                fits = isinstance(value, str | int | float) and not isinstance(value, bool)
+            elif base in _BOOL_TYPES:
+                fits = isinstance(value, bool)
+            else:
+                fits = isinstance(value, Range) or (
+                    isinstance(value, int | float) and not isinstance(value, bool)
+                )
+            if fits:
+                continue
+            where = {"n": index, "key": name, "path": source.text, "base": base}
+            if isinstance(value, bool) and base in _TEXT_TYPES:
+                # YAML 1.1 reads ON, OFF, yes, no, true and false unquoted as booleans.
+                raise InvalidModeSources(
+                    _(
+                        "source %(n)d: %(key)s has a boolean for %(path)s (%(base)s); YAML "
+                        "reads ON, OFF, yes and no as booleans: put the text in quotes"
+                    )
+                    % where
+                )
+            raise InvalidModeSources(
+                _("source %(n)d: %(key)s value %(value)s can never match %(path)s (%(base)s)")
+                % {**where, "value": "{min, max}" if isinstance(value, Range) else repr(value)}
+            )
 
 
 class Combiner:

@@ -99,3 +99,36 @@ def test_an_estop_field_of_the_status_message_vetoes_auto(
     assert masters(robot_leg) == ["ito", "auto", "ito", "auto"]
     takeovers = Segment.objects.filter(leg=robot_leg, parent__isnull=False).order_by("start")
     assert [t.suggested_reason_id for t in takeovers] == [None, "safety"]
+
+
+def test_a_value_mapping_the_field_can_never_hold_is_refused_and_the_switches_still_stored(
+    ros, procs, start_collector, robot_leg, robot_interfaces, tmp_path
+):
+    from rclpy.parameter import Parameter
+
+    good = (
+        f"sources: [{{topic: {STATUS}, type: {STATUS_TYPE}, field: level,"
+        f" auto: [{AUTO}], ito: [{MANUAL}]}}]"
+    )
+    start_collector(params={"params.mode_sources": good}, env=robot_interfaces)
+    params = ros.parameters()
+    assert params.wait_for_services(10)
+    wrong = {
+        # strings for the uint8 level
+        f"sources: [{{topic: {STATUS}, type: {STATUS_TYPE}, field: level,"
+        " auto: [AUTO], ito: [MANUAL]}]": "value 'AUTO' can never match level (uint8)",
+        # ON/OFF unquoted: YAML's booleans, never a string's value
+        "sources: [{topic: /mode_text, type: std_msgs/msg/String, field: data,"
+        " auto: [ON], ito: [OFF]}]": "put the text in quotes",
+    }
+    for text, said in wrong.items():
+        refused = ros.await_future(
+            params.set_parameters([Parameter("params.mode_sources", value=text)])
+        )
+        assert not refused.results[0].successful
+        assert said in refused.results[0].reason
+    assert ros.set_logging(True).success
+    phases = [[1.5, {STATUS: status(MANUAL)}], [1.5, {STATUS: status(AUTO)}]]
+    run_robot(procs, robot_interfaces, tmp_path, phases)
+    wait_for(lambda: len(masters(robot_leg)) >= 2, 20, what="the two switches")
+    assert masters(robot_leg) == ["ito", "auto"]
