@@ -89,7 +89,10 @@ class CollectorNode(Node):
         self._ftt_services: dict[str, object] = {}
         self._calls: queue.Queue = queue.Queue()
         self._lock = threading.Lock()
-        overrides = overrides or {}
+        overrides = {
+            **(P.written_documents(self.params_file) if self.params_file else {}),
+            **(overrides or {}),
+        }
         for name, spec in P.SPECS.items():
             descriptor = ParameterDescriptor(description=spec.description, dynamic_typing=True)
             value = self.declare_parameter(

@@ -132,3 +132,35 @@ def test_a_value_mapping_the_field_can_never_hold_is_refused_and_the_switches_st
     run_robot(procs, robot_interfaces, tmp_path, phases)
     wait_for(lambda: len(masters(robot_leg)) >= 2, 20, what="the two switches")
     assert masters(robot_leg) == ["ito", "auto"]
+
+
+def test_mode_sources_written_nested_in_the_parameters_file_are_read_and_saved_editable(
+    ros, procs, start_collector, robot_leg, robot_interfaces, tmp_path
+):
+    import yaml
+
+    from tests.support.ros import copy_default_params
+
+    path = copy_default_params(tmp_path, vehicle="ros-bot").rename(tmp_path / "collector.yaml")
+    data = yaml.safe_load(path.read_text())
+    # The presets' shape, as docs/collector.md shows them, written into the file.
+    data["ftt_collector"]["ros__parameters"]["params"]["mode_sources"] = {
+        "rule": "any_ito",
+        "sources": [
+            {"topic": STATUS, "type": STATUS_TYPE, "field": "level", "auto": [AUTO]},
+            {"topic": STATUS, "type": STATUS_TYPE, "field": "safety.estop_pressed", "ito": [True]},
+        ],
+    }
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    start_collector(env=robot_interfaces)
+    assert ros.set_logging(True).success
+    phases = [[1.5, {STATUS: status(AUTO)}], [1.5, {STATUS: status(AUTO, estop=True)}]]
+    run_robot(procs, robot_interfaces, tmp_path, phases)
+    wait_for(lambda: len(masters(robot_leg)) >= 2, 20, what="the two switches")
+    assert masters(robot_leg) == ["auto", "ito"]
+    saved = ros.trigger("/save_ftt_params")
+    assert saved.success, saved.message
+    text = path.read_text()
+    # A literal block of the document's own lines, not one escaped string.
+    assert "mode_sources: |" in text
+    assert "field: safety.estop_pressed" in text
