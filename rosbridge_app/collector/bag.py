@@ -93,9 +93,10 @@ def route(pipeline: Pipeline, topic: str, msgtype: str):
     p = pipeline.params
     if pipeline.mode_sources is not None:
         # The same mode sources as live; the classic mode topic is not read then.
-        for i, source in enumerate(pipeline.mode_sources.config.sources):
-            if _same_topic(topic, source.topic) and msgtype == source.type:
-                return lambda m, at, i=i: pipeline.on_mode_source(i, m, at)
+        config = pipeline.mode_sources.config
+        for source_topic, indices in config.by_topic().items():
+            if _same_topic(topic, source_topic) and msgtype == config.sources[indices[0]].type:
+                return lambda m, at, indices=indices: pipeline.on_mode_source(indices, m, at)
         if msgtype == ROBOT_MODE or _same_topic(topic, p["topics.robot_mode"]):
             return None
     if pipeline.reasons is not None:

@@ -25,6 +25,7 @@ from pathlib import Path
 from django.utils.translation import gettext
 
 from rosbridge_app.collector import events as ev
+from rosbridge_app.collector import mode_sources, reason_rules
 from rosbridge_app.collector.disk_guard import TIGHT
 from rosbridge_app.collector.events import Event
 from rosbridge_app.collector.ring_buffer import RingBuffer
@@ -232,6 +233,11 @@ def snapshot_topics(params: dict, graph: dict[str, list[str]], resolve) -> dict[
     if not names:
         names = [params[f"topics.{key}"] for key in DEFAULT_TOPIC_PARAMETERS]
         names += OPTIONAL_TOPICS
+        # The robot's own mode and reason topics tell what happened at a take-over.
+        sources = mode_sources.parse(params.get("params.mode_sources", ""))
+        names += [s.topic for s in sources.sources] if sources else []
+        rules = reason_rules.parse(params.get("params.reason_rules", ""))
+        names += [r.topic for r in rules.rules] if rules else []
     wanted = {}
     for name in names:
         if not name:

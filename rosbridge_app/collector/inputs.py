@@ -133,7 +133,8 @@ def mode_inputs(get, pipe) -> list[tuple]:
             )
         ]
     wanted = []
-    for i, source in enumerate(combiner.config.sources):
+    for indices in combiner.config.by_topic().values():
+        source = combiner.config.sources[indices[0]]
         try:
             cls = message_class(source.type)
         except (ImportError, AttributeError):
@@ -144,9 +145,15 @@ def mode_inputs(get, pipe) -> list[tuple]:
                 source.type,
             )
             continue
-        handler = functools.partial(pipe.on_mode_source, i)
+        handler = functools.partial(pipe.on_mode_source, indices)
         wanted.append(
-            (f"{MODE_SOURCE_INPUT}{i}", cls, source.topic, qos(MODE_DEPTH, True), handler)
+            (
+                f"{MODE_SOURCE_INPUT}{indices[0]}",
+                cls,
+                source.topic,
+                qos(MODE_DEPTH, True),
+                handler,
+            )
         )
     return wanted
 

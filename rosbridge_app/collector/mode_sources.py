@@ -22,6 +22,9 @@ Combination rules (the one place they are decided):
   source says AUTO; else unknown;
 * ``first``: the first source, in the listed order, that says something.
 
+Several sources may read fields of one message (a status message's level
+and the e-stop inside it): each message is offered to every source of its topic.
+
 While the combination is unknown the last known mode stays (a silent or
 "says nothing" source never opens a segment by itself).
 """
@@ -95,6 +98,15 @@ class Switch(NamedTuple):
 class ModeSources:
     rule: str
     sources: tuple[Source, ...] = field(default=())
+
+    def by_topic(self) -> dict[str, tuple[int, ...]]:
+        """{topic: the numbers of its sources}: one subscription per topic, each
+        message offered to every source that reads a field of it."""
+        found: dict[str, tuple[int, ...]] = {}
+        for i, source in enumerate(self.sources):
+            topic = source.topic.lstrip("/")
+            found[topic] = found.get(topic, ()) + (i,)
+        return found
 
 
 def matches(matcher, value) -> bool:
@@ -240,15 +252,21 @@ def parse(text: str, fields_of: Callable[[str], dict] | None = None) -> ModeSour
         if not source.auto and not source.ito and default == "unknown":
             raise InvalidModeSources(_("source %(n)d maps no value to auto or ito") % {"n": n})
         if fields_of is not None:
-            check_path(source, fields_of)
+            check_values(source, n, check_path(source, fields_of))
             if raw.get("stamp"):
                 check_path(source, fields_of, source.stamp, str(raw["stamp"]), TIME_TYPE)
         sources.append(source)
     if not sources:
         raise InvalidModeSources(_("sources is empty"))
-    topics = [s.topic.lstrip("/") for s in sources]
-    if len(set(topics)) != len(topics):
-        raise InvalidModeSources(_("each topic can be one source only"))
+    types: dict[str, str] = {}
+    for source in sources:
+        # Several sources may read fields of one message; one topic has one type.
+        first = types.setdefault(source.topic.lstrip("/"), source.type)
+        if first != source.type:
+            raise InvalidModeSources(
+                _("topic %(topic)s: its sources name two types, %(first)s and %(type)s")
+                % {"topic": source.topic, "first": first, "type": source.type}
+            )
     return ModeSources(rule, tuple(sources))
 
 
@@ -304,6 +322,44 @@ def check_path(
         raise InvalidModeSources(
             _("%(type)s: %(path)s is not a single value") % {"type": source.type, "path": text}
         )
+    return kind
+
+
+_TEXT_TYPES = {"string", "wstring"}
+_BOOL_TYPES = {"bool", "boolean"}
+
+
+def check_values(source: Source, index: int, kind: tuple) -> None:
+    """InvalidModeSources for a value of ``auto``/``ito`` that the field's
+    type (``kind``, a base kind) can never hold: a mapping that never matches
+    would lose every switch it was meant to see."""
+    base = kind[1]
+    for name, values in (("auto", source.auto), ("ito", source.ito)):
+        for value in values:
+            if base in _TEXT_TYPES:
+                fits = isinstance(value, str | int | float) and not isinstance(value, bool)
+            elif base in _BOOL_TYPES:
+                fits = isinstance(value, bool)
+            else:
+                fits = isinstance(value, Range) or (
+                    isinstance(value, int | float) and not isinstance(value, bool)
+                )
+            if fits:
+                continue
+            where = {"n": index, "key": name, "path": source.text, "base": base}
+            if isinstance(value, bool) and base in _TEXT_TYPES:
+                # YAML 1.1 reads ON, OFF, yes, no, true and false unquoted as booleans.
+                raise InvalidModeSources(
+                    _(
+                        "source %(n)d: %(key)s has a boolean for %(path)s (%(base)s); YAML "
+                        "reads ON, OFF, yes and no as booleans: put the text in quotes"
+                    )
+                    % where
+                )
+            raise InvalidModeSources(
+                _("source %(n)d: %(key)s value %(value)s can never match %(path)s (%(base)s)")
+                % {**where, "value": "{min, max}" if isinstance(value, Range) else repr(value)}
+            )
 
 
 class Combiner:

@@ -7,6 +7,7 @@ that escapes a callback would end ``spin()`` and with it the collector.
 """
 
 import concurrent.futures
+import copy
 import functools
 import logging
 import queue
@@ -20,6 +21,7 @@ from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.qos import QoSPolicyKind, ReliabilityPolicy
 from std_srvs.srv import SetBool, Trigger
 
 from common.numbers import short
@@ -87,7 +89,10 @@ class CollectorNode(Node):
         self._ftt_services: dict[str, object] = {}
         self._calls: queue.Queue = queue.Queue()
         self._lock = threading.Lock()
-        overrides = overrides or {}
+        overrides = {
+            **(P.written_documents(self.params_file) if self.params_file else {}),
+            **(overrides or {}),
+        }
         for name, spec in P.SPECS.items():
             descriptor = ParameterDescriptor(description=spec.description, dynamic_typing=True)
             value = self.declare_parameter(
@@ -372,15 +377,21 @@ class CollectorNode(Node):
             if not topic:
                 continue
             mode = is_mode_input(name)
+            subscribe = functools.partial(
+                drained_subscription,
+                self,
+                msg_type,
+                topic,
+                self._input(name, handler),
+                with_info=mode,
+                ahead=None if mode else self._take_modes,
+            )
             try:
-                self._ftt_subs[name] = drained_subscription(
-                    self,
-                    msg_type,
-                    topic,
-                    self._input(name, handler),
+                self._ftt_subs[name] = subscribe(
                     qos_profile,
-                    with_info=mode,
-                    ahead=None if mode else self._take_modes,
+                    event_callbacks=SubscriptionEventCallbacks(
+                        incompatible_qos=functools.partial(self._incompatible, name, subscribe)
+                    ),
                 )
                 if mode:
                     # A publisher that latches its mode gives it to a late collector.
@@ -417,10 +428,32 @@ class CollectorNode(Node):
                 )
         self.inputs = inputs
 
+    def _incompatible(self, name: str, subscribe, event) -> None:
+        """A publisher on input ``name`` offers a QoS its subscription cannot
+        match.  A best-effort publisher (many drivers are) is then heard by a
+        second, best-effort subscription (``subscribe(qos)`` makes it); anything
+        else is said in the GUI, the input names the policy."""
+        info = self.inputs.get(name)
+        twin = f"{name} (best effort)"
+        policy = QoSPolicyKind(event.last_policy_kind)
+        if policy == QoSPolicyKind.RELIABILITY:
+            if twin not in self._ftt_subs:
+                profile = copy.copy(self._ftt_subs[name].qos_profile)
+                profile.reliability = ReliabilityPolicy.BEST_EFFORT
+                self._ftt_subs[twin] = subscribe(profile)
+            text = gettext("a publisher offers best effort: heard best effort")
+        else:
+            text = gettext(
+                "a publisher's QoS is incompatible (%(policy)s): nothing is heard from it"
+            ) % {"policy": policy.name}
+        if info is not None and info.get("qos") != text:
+            info["qos"] = text
+            log.warning("%s (%s): %s", name, info["topic"], text)
+
     def _take_modes(self) -> None:
         """Mode messages go ahead of the sensor backlog being drained."""
         for key, sub in list(self._ftt_subs.items()):
-            if is_mode_input(key.removesuffix(" (latched)")):
+            if is_mode_input(key.split(" (")[0]):
                 sub.take_waiting()
 
     def _tick(self) -> None:

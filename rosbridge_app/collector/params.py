@@ -325,7 +325,7 @@ def _checked(name: str, spec: Spec, value, fields_of=installed_fields) -> object
             _("%(name)s must be one of %(choices)s")
             % {"name": name, "choices": ", ".join(spec.choices)}
         )
-    if name in ("params.mode_sources", "params.reason_rules"):
+    if name in DOCUMENTS:
         parse = mode_sources.parse if name == "params.mode_sources" else reason_rules.parse
         try:
             parse(value, fields_of)
@@ -347,11 +347,18 @@ def _nested(flat: dict) -> dict:
     return tree
 
 
+# Parameters holding a YAML document; a parameters file may write them as
+# nested YAML (the presets' shape) or as text.
+DOCUMENTS = ("params.mode_sources", "params.reason_rules")
+
+
 def _flatten(tree: dict, prefix: str = "") -> dict:
     flat = {}
     for key, value in tree.items():
         name = f"{prefix}{key}"
-        if isinstance(value, dict):
+        if name in DOCUMENTS and isinstance(value, dict | list):
+            flat[name] = yaml.safe_dump(value, sort_keys=False)
+        elif isinstance(value, dict):
             flat.update(_flatten(value, name + "."))
         else:
             flat[name] = value
@@ -366,6 +373,26 @@ def read_file(path: Path, node_name: str = NODE_NAME) -> dict:
         if isinstance(section, dict) and isinstance(section.get("ros__parameters"), dict):
             return _flatten(section["ros__parameters"])
     return {}
+
+
+def written_documents(path: Path) -> dict:
+    """{name: text} of the YAML-document parameters a parameters file sets:
+    rcl reads a nested mapping there as other parameters' names, so the
+    collector takes these values from the file itself."""
+    return {name: v for name, v in read_file(path).items() if name in DOCUMENTS}
+
+
+class _Dumper(yaml.SafeDumper):
+    """Text of several lines as a literal block, so a saved YAML document stays
+    hand-editable (rcl reads it as the same string)."""
+
+
+def _text(dumper, value: str):
+    style = "|" if "\n" in value else None
+    return dumper.represent_scalar("tag:yaml.org,2002:str", value, style=style)
+
+
+_Dumper.add_representer(str, _text)
 
 
 def write_file(path: Path, values: dict, node_name: str = NODE_NAME) -> None:
@@ -389,7 +416,7 @@ def write_file(path: Path, values: dict, node_name: str = NODE_NAME) -> None:
     text = (
         "# ftt_collect parameters (ROS 2 parameters file). Written by /save_ftt_params;\n"
         "# see docs/collector.md for what each one does.\n"
-        + yaml.safe_dump(data, sort_keys=False, default_flow_style=False)
+        + yaml.dump(data, Dumper=_Dumper, sort_keys=False, default_flow_style=False)
     )
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
     try:

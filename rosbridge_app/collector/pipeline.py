@@ -168,15 +168,17 @@ class Pipeline:
         self.on_mode_value(mode, start, robot_stamp=robot_stamp, uncertainty=uncertainty)
         return None
 
-    def on_mode_source(self, index: int, msg, at: datetime, sent: datetime | None = None):
-        """A message of mode source ``index`` (params.mode_sources), sent at
-        ``sent`` (DDS source timestamp) if known."""
-        switches = self.mode_sources.offer(index, msg, at, sent)
-        if switches is None:
+    def on_mode_source(
+        self, indices: tuple[int, ...], msg, at: datetime, sent: datetime | None = None
+    ):
+        """A message of the topic of mode sources ``indices`` (params.mode_sources,
+        each reading its field), sent at ``sent`` (DDS source timestamp) if known."""
+        offers = [self.mode_sources.offer(i, msg, at, sent) for i in indices]
+        if all(switches is None for switches in offers):
             return SECOND_COPY
         # A reason rule on the same topic sees the message before the switch it causes.
-        self.on_reason_signal(self.mode_sources.config.sources[index].topic, msg, at)
-        self._apply(switches)
+        self.on_reason_signal(self.mode_sources.config.sources[indices[0]].topic, msg, at)
+        self._apply([switch for switches in offers if switches for switch in switches])
         return None
 
     def _apply(self, switches: list[Switch]) -> None:

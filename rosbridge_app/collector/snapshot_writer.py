@@ -55,8 +55,8 @@ def _serve(conn) -> None:
         try:
             op, arg = conn.recv()
             window = reduction.recv_handle(conn) if op == "add" else None
-        except EOFError:
-            return
+        except (EOFError, ConnectionResetError):
+            return  # a collector that stops may reset the pipe rather than close it
         try:
             if op == "begin":
                 if mcap is not None:  # the collector gave up on it

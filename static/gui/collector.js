@@ -68,7 +68,9 @@ export const Collector = {
       const age = info && typeof info.age === "number" ? _("%(age)s s ago", { age: fmtNumber(info.age, 1) }) : _("no data yet");
       // Estimated by the collector from gaps in the robot's stamps (losses.py).
       const missed = info && info.missed ? " · " + _("about %(count)s missed", { count: info.missed }) : "";
-      li.textContent = `${name}: ${age}${missed}`;
+      // Said by the collector when a publisher's QoS does not match its subscription.
+      const qos = info && info.qos ? ` · ${info.qos}` : "";
+      li.textContent = `${name}: ${age}${missed}${qos}`;
       return li;
     }));
     button.textContent = c.logging ? _("Stop logging") : _("Start logging");

@@ -1,7 +1,12 @@
 """Fixtures for the collector tests that start real processes (marker ``ros``)."""
 
+import hashlib
 import importlib
 import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
 
 import pytest
 
@@ -9,6 +14,7 @@ from events.models import Vehicle
 from events.services import logs
 from rosbridge_app.models import Collector
 from tests.support.ros import (
+    ROOT,
     Processes,
     RosClient,
     copy_default_params,
@@ -17,6 +23,7 @@ from tests.support.ros import (
 )
 
 VEHICLE = "ros-bot"
+ROBOT_MSGS = Path(__file__).parent / "robot_msgs" / "ftt_robot_msgs"
 
 
 @pytest.fixture
@@ -101,3 +108,48 @@ def start_collector(procs, tmp_path, robot_leg):
         return p
 
     return start
+
+
+# What builds a team's interfaces at setup: the hook and the scripts it calls.
+BUILD_SCRIPTS = [
+    "scripts/setup.d/50-ros-interfaces.sh",
+    "scripts/build_interfaces.sh",
+    "scripts/ros_package.py",
+]
+
+
+@pytest.fixture(scope="session")
+def robot_interfaces() -> dict:
+    """Environment of processes that use ftt_robot_msgs, built once per
+    definition set and build scripts (2-3 min) by setup's own step, as
+    FTT_ROS_INTERFACES=ftt_robot_msgs (relative to where it runs) into a
+    temporary FTT_ROS_PREFIX instead of the virtualenv."""
+    inputs = sorted(ROBOT_MSGS.rglob("*.msg")) + [ROOT / s for s in BUILD_SCRIPTS]
+    digest = hashlib.sha256(b"".join(p.read_bytes() for p in inputs)).hexdigest()[:12]
+    prefix = Path(tempfile.gettempdir()) / f"ftt-test-interfaces-{digest}"
+    if not (prefix / ".built").exists():
+        hook = subprocess.run(
+            ["bash", str(ROOT / BUILD_SCRIPTS[0])],
+            cwd=ROBOT_MSGS.parent,
+            env={
+                **os.environ,
+                "FTT_ROS_PREFIX": str(prefix),
+                "FTT_ROS_INTERFACES": ROBOT_MSGS.name,
+            },
+            capture_output=True,
+            text=True,
+            timeout=900,
+        )
+        assert hook.returncode == 0, hook.stdout + hook.stderr
+        assert "ftt_robot_msgs" in hook.stdout.splitlines()[-1]  # built and imported
+        (prefix / ".built").touch()
+    version = f"python{sys.version_info.major}.{sys.version_info.minor}"
+
+    def joined(name, value):
+        return os.pathsep.join(p for p in (value, os.environ.get(name)) if p)
+
+    return {
+        "PYTHONPATH": joined("PYTHONPATH", str(prefix / "lib" / version / "site-packages")),
+        "LD_LIBRARY_PATH": joined("LD_LIBRARY_PATH", str(prefix / "lib")),
+        "AMENT_PREFIX_PATH": joined("AMENT_PREFIX_PATH", f"{prefix}{os.pathsep}{sys.prefix}"),
+    }

@@ -79,6 +79,23 @@ def test_default_topics_follow_the_collector_topics_and_need_a_publisher():
     assert chosen == {"/other": "std_msgs/msg/String", "/tf": "tf2_msgs/msg/TFMessage"}
 
 
+def test_default_topics_take_the_mode_sources_and_reason_topics():
+    graph = {"/mavros/state": ["mavros_msgs/msg/State"], "/estop": ["std_msgs/msg/Bool"]}
+    values = params()
+    values["params.mode_sources"] = (
+        "sources: [{topic: /mavros/state, type: mavros_msgs/msg/State, field: mode,"
+        " auto: [OFFBOARD]}]"
+    )
+    values["params.reason_rules"] = (
+        "rules: [{topic: /estop, type: std_msgs/msg/Bool, field: data, values: [true],"
+        " reason: safety}]"
+    )
+    assert snapshot_topics(values, graph, lambda name: name) == {
+        "/mavros/state": "mavros_msgs/msg/State",
+        "/estop": "std_msgs/msg/Bool",
+    }
+
+
 def test_the_oldest_pending_snapshot_makes_room_and_a_too_big_one_is_dropped(tmp_path, caplog):
     from sensor_msgs.msg import CompressedImage
 

@@ -3,15 +3,12 @@ and an Autoware-like OperationModeState (built from the .msg files of
 robot_msgs/, not installed packages), a String and an e-stop that vetoes; and
 a source's switch placed at its header stamp when the collector hears it late."""
 
-import hashlib
 import json
 import os
 import signal
 import subprocess
 import sys
-import tempfile
 import time
-from pathlib import Path
 
 import pytest
 
@@ -19,7 +16,6 @@ from events.models import Segment
 from tests.support.ros import ROOT, requires_ros, wait_for
 
 pytestmark = [pytest.mark.ros, requires_ros]
-ROBOT_MSGS = Path(__file__).parent / "robot_msgs" / "ftt_robot_msgs"
 SOURCES = """
 rule: any_ito
 sources:
@@ -61,51 +57,6 @@ PHASES = [
     (1.5, {OPERATION: {"mode": 2}}, "ito", None),
     (1.5, {TEXT: {"data": "AUTO"}}, "auto", None),
 ]  # fmt: skip
-
-
-# What builds a team's interfaces at setup: the hook and the scripts it calls.
-BUILD_SCRIPTS = [
-    "scripts/setup.d/50-ros-interfaces.sh",
-    "scripts/build_interfaces.sh",
-    "scripts/ros_package.py",
-]
-
-
-@pytest.fixture(scope="session")
-def robot_interfaces() -> dict:
-    """Environment of processes that use ftt_robot_msgs, built once per
-    definition set and build scripts (2-3 min) by setup's own step, as
-    FTT_ROS_INTERFACES=ftt_robot_msgs (relative to where it runs) into a
-    temporary FTT_ROS_PREFIX instead of the virtualenv."""
-    inputs = sorted(ROBOT_MSGS.rglob("*.msg")) + [ROOT / s for s in BUILD_SCRIPTS]
-    digest = hashlib.sha256(b"".join(p.read_bytes() for p in inputs)).hexdigest()[:12]
-    prefix = Path(tempfile.gettempdir()) / f"ftt-test-interfaces-{digest}"
-    if not (prefix / ".built").exists():
-        hook = subprocess.run(
-            ["bash", str(ROOT / BUILD_SCRIPTS[0])],
-            cwd=ROBOT_MSGS.parent,
-            env={
-                **os.environ,
-                "FTT_ROS_PREFIX": str(prefix),
-                "FTT_ROS_INTERFACES": ROBOT_MSGS.name,
-            },
-            capture_output=True,
-            text=True,
-            timeout=900,
-        )
-        assert hook.returncode == 0, hook.stdout + hook.stderr
-        assert "ftt_robot_msgs" in hook.stdout.splitlines()[-1]  # built and imported
-        (prefix / ".built").touch()
-    version = f"python{sys.version_info.major}.{sys.version_info.minor}"
-
-    def joined(name, value):
-        return os.pathsep.join(p for p in (value, os.environ.get(name)) if p)
-
-    return {
-        "PYTHONPATH": joined("PYTHONPATH", str(prefix / "lib" / version / "site-packages")),
-        "LD_LIBRARY_PATH": joined("LD_LIBRARY_PATH", str(prefix / "lib")),
-        "AMENT_PREFIX_PATH": joined("AMENT_PREFIX_PATH", f"{prefix}{os.pathsep}{sys.prefix}"),
-    }
 
 
 def test_modes_from_the_robots_own_topics_and_an_estop(
