@@ -183,7 +183,7 @@ export function renderSegments() {
     const master = s.parent === null ? s.id : s.parent;
     const track = state.tracks[master];
     const cells = [
-      { text: shortLabel(s.id), title: `${segmentLabel(s.id)} (database id ${s.id})` },
+      { text: shortLabel(s.id), title: _("%(label)s (database id %(id)s)", { label: segmentLabel(s.id), id: s.id }) },
       modeName(s.segment_type),
       s.parent === null ? "" : reasonName(s.ito_reason),
       { text: fmtClock(s.start), title: fmtTime(s.start) },
