@@ -20,6 +20,8 @@ _LANGUAGE: ContextVar[str] = ContextVar("ftt_report_language", default="en")
 _DECIMAL = {"de": ","}
 _TIMESTAMP = {"de": "%d.%m.%Y %H:%M:%S"}
 _DAY = {"de": "%d.%m.%Y"}
+# The languages whose figures group thousands (German 1.227,47; English 1227.47).
+_GROUPED = {"de"}
 
 
 @contextmanager
@@ -42,8 +44,8 @@ def localised(text: str) -> str:
 
 def _grouped(figure: str) -> str:
     """A figure written with a decimal point ("1227.47", rounded already) with the
-    report language's decimal mark and thousands separator (German 1.227,47;
-    English 1,227.47)."""
+    report language's decimal mark and, where it groups them, thousands
+    separator."""
     language = _LANGUAGE.get()
     return numberformat.format(
         figure,
@@ -51,7 +53,7 @@ def _grouped(figure: str) -> str:
         None,
         get_format("NUMBER_GROUPING", language),
         get_format("THOUSAND_SEPARATOR", language),
-        force_grouping=True,
+        force_grouping=language in _GROUPED,
     )
 
 

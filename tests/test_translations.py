@@ -205,18 +205,72 @@ def _words_outside_gettext(node: ast.AST) -> list[ast.AST]:
     return [node] if re.search(r"[A-Za-z]{3,}", text) else []
 
 
+def _assigned(scope: ast.AST) -> dict[str, list[ast.AST]]:
+    """What each name of ``scope`` is given: ``x = ...``, ``x[k] = ...``,
+    ``x.append(...)``, ``x.update(...)``, ``x.setdefault(k, ...)``, so that a
+    message built in a variable is read where it is made."""
+    given: dict[str, list[ast.AST]] = {}
+    for node in ast.walk(scope):
+        if isinstance(node, ast.Assign | ast.AnnAssign | ast.AugAssign) and node.value:
+            for target in getattr(node, "targets", None) or [node.target]:
+                while isinstance(target, ast.Subscript | ast.Attribute):
+                    target = target.value
+                if isinstance(target, ast.Name):
+                    given.setdefault(target.id, []).append(node.value)
+        elif (
+            isinstance(node, ast.Call)
+            and isinstance(node.func, ast.Attribute)
+            and isinstance(node.func.value, ast.Name)
+            and node.func.attr in {"append", "extend", "update", "setdefault", "insert"}
+        ):
+            given.setdefault(node.func.value.id, []).extend(node.args[-1:])
+    return given
+
+
+def _sentence(node: ast.AST) -> bool:
+    """Words for a reader, not a code ("csv", "bbox_zoom") or a value ("… UTC")."""
+    parts = node.values if isinstance(node, ast.JoinedStr) else [node]
+    text = "".join(p.value for p in parts if isinstance(p, ast.Constant))
+    return " " in text.strip() and re.search(r"[a-z]{3,}", text) is not None
+
+
+def _message_words(node: ast.AST, given: dict, seen: frozenset = frozenset()) -> list[ast.AST]:
+    """Literal words in a message, and sentences in what the names it uses were given."""
+    found = _words(node) if not seen else [w for w in _words(node) if _sentence(w)]
+    for name in {n.id for n in ast.walk(node) if isinstance(n, ast.Name)} - seen:
+        for value in given.get(name, []):
+            found += _message_words(value, given, seen | {name})
+    return found
+
+
 def _untranslated_errors(source: str, name: str) -> list[str]:
     found = []
-    for node in ast.walk(ast.parse(source)):
-        if not (isinstance(node, ast.Call) and node.args):
-            continue
-        called = getattr(node.func, "id", None) or getattr(node.func, "attr", None)
-        if called in SHOWN_ERRORS:
-            found += [
-                f"{name}:{text.lineno}: {ast.unparse(text)[:80]}"
-                for text in _words_outside_gettext(node.args[0])
-            ]
-    return found
+    tree = ast.parse(source)
+    module = _assigned(ast.Module(body=[n for n in tree.body if isinstance(n, ast.Assign)]))
+    scopes = [n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef | ast.AsyncFunctionDef)]
+    for scope in [tree, *scopes]:
+        given = {**module, **_assigned(scope)} if scope is not tree else module
+        calls = ast.walk(scope) if scope is not tree else _outside_functions(tree)
+        for node in calls:
+            if not (isinstance(node, ast.Call) and node.args):
+                continue
+            called = getattr(node.func, "id", None) or getattr(node.func, "attr", None)
+            if called in SHOWN_ERRORS:
+                found += [
+                    f"{name}:{text.lineno}: {ast.unparse(text)[:80]}"
+                    for text in _message_words(node.args[0], given)
+                ]
+    return sorted(set(found), key=lambda line: int(line.split(":")[1]))
+
+
+def _outside_functions(tree: ast.AST):
+    """The nodes of a module that no function holds."""
+    todo = list(tree.body)
+    while todo:
+        node = todo.pop()
+        if not isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+            yield node
+            todo.extend(ast.iter_child_nodes(node))
 
 
 def test_the_errors_a_person_reads_are_marked_for_translation():
@@ -233,14 +287,22 @@ def test_the_errors_a_person_reads_are_marked_for_translation():
         for line in _untranslated_errors(path.read_text(), str(path.relative_to(ROOT)))
     ]
     assert found == []
-    # The check sees an error's words outside gettext, in a field message too.
+    # The check sees an error's words outside gettext, in a field message too,
+    # and in a message built in a variable first.
     sample = (
         'raise CommandError(f"No leg {n}.")\n'
         'raise ValidationError({"leg": [_("No leg %(n)s.") % {"n": n}, "Give a leg."]})\n'
+        "def check(value):\n"
+        "    errors = {}\n"
+        '    errors["x"] = ["Must be a finite number."]\n'
+        '    message = _("Fine.") if value else "Not fine."\n'
+        "    raise ValidationError(errors or message)\n"
     )
     assert _untranslated_errors(sample, "sample.py") == [
         "sample.py:1: f'No leg {n}.'",
         "sample.py:2: 'Give a leg.'",
+        "sample.py:5: 'Must be a finite number.'",
+        "sample.py:6: 'Not fine.'",
     ]
 
 

@@ -8,6 +8,7 @@ from datetime import timedelta
 
 from django.db.models import IntegerField
 from django.utils import timezone
+from django.utils.translation import gettext
 from rest_framework import serializers
 from rest_framework_gis.fields import GeometryField
 
@@ -331,7 +332,9 @@ class PositionSerializer(serializers.Serializer):
         for a, b in (("longitude", "latitude"), ("local_x", "local_y")):
             if (attrs.get(a) is None) != (attrs.get(b) is None):
                 missing = b if attrs.get(b) is None else a
-                errors[missing] = [f"Give {a} and {b} together or neither."]
+                errors[missing] = [
+                    gettext("Give %(a)s and %(b)s together or neither.") % {"a": a, "b": b}
+                ]
         if errors:
             raise serializers.ValidationError(errors)
         return attrs

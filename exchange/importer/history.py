@@ -50,7 +50,10 @@ def _import_entries(session: ImportSession, name: str, records: list):
     references = _References(session, fields, records)
     added = []
     for r in records:
-        session.where = f"history record of {name} {r['uid']}"
+        session.where = gettext("history record of %(table)s %(uid)s") % {
+            "table": name,
+            "uid": r["uid"],
+        }
         pk = ids.get(uuid.UUID(r["uid"]))
         if pk is None:
             raise MalformedRecord(

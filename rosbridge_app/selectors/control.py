@@ -103,7 +103,7 @@ def check_parameter_values(collector: Collector, changes: dict) -> dict:
     errors, checked = {}, {}
     for name, value in changes.items():
         if name not in current or name not in SPECS:
-            errors[name] = ["The collector has no such parameter."]
+            errors[name] = [_("The collector has no such parameter.")]
             continue
         try:
             checked[name] = check(name, value)

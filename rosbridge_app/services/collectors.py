@@ -52,7 +52,11 @@ def issue_command(
         if not allowed:
             raise RuleViolation(reason)
         if starting == collector.logging:
-            raise RuleViolation("Logging is already on." if starting else "Logging is already off.")
+            raise RuleViolation(
+                gettext("Logging is already on.")
+                if starting
+                else gettext("Logging is already off.")
+            )
         if leg is not None:
             arguments.setdefault("leg", leg.pk)
     elif kind == CollectorCommand.Kind.SET_PARAMETERS:

@@ -183,7 +183,7 @@ export function renderSegments() {
     const master = s.parent === null ? s.id : s.parent;
     const track = state.tracks[master];
     const cells = [
-      { text: shortLabel(s.id), title: `${segmentLabel(s.id)} (database id ${s.id})` },
+      { text: shortLabel(s.id), title: _("%(label)s (database id %(id)s)", { label: segmentLabel(s.id), id: s.id }) },
       modeName(s.segment_type),
       // A reason kept in this browser (outbox.js) is shown until it is sent.
       s.parent === null ? "" : s.id in Outbox.keptReasons ? `${reasonName(Outbox.keptReasons[s.id])} (${_("not sent yet")})` : reasonName(s.ito_reason),

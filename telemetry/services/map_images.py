@@ -9,6 +9,7 @@ from datetime import datetime
 
 from django.core.files.base import ContentFile
 from django.db import transaction
+from django.utils.translation import gettext
 
 from common.errors import RuleViolation
 from common.retries import stored_rows
@@ -29,7 +30,10 @@ def check_map_placement(*, width, height, resolution, origin_x, origin_y, origin
     errors = {}
     for name, value in (("width", width), ("height", height)):
         if not isinstance(value, int) or not 0 < value <= MAX_MAP_CELLS:
-            errors[name] = [f"Must be a whole number of cells from 1 to {MAX_MAP_CELLS}."]
+            errors[name] = [
+                gettext("Must be a whole number of cells from 1 to %(most)s.")
+                % {"most": MAX_MAP_CELLS}
+            ]
     for name, value in (
         ("resolution", resolution),
         ("origin_x", origin_x),
@@ -37,9 +41,9 @@ def check_map_placement(*, width, height, resolution, origin_x, origin_y, origin
         ("origin_yaw", origin_yaw),
     ):
         if not isinstance(value, int | float) or not math.isfinite(value):
-            errors[name] = ["Must be a finite number."]
+            errors[name] = [gettext("Must be a finite number.")]
     if "resolution" not in errors and resolution <= 0:
-        errors["resolution"] = ["Resolution must be positive (metres per cell)."]
+        errors["resolution"] = [gettext("Resolution must be positive (metres per cell).")]
     if errors:
         raise RuleViolation(errors)
 

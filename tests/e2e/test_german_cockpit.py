@@ -1,0 +1,56 @@
+"""The cockpit as a German browser shows it, the words its scripts write
+included (segment rows, the pickers, the who-line): none of FTT's own English
+words (tests/support/english.py)."""
+
+import json
+
+import pytest
+from playwright.sync_api import expect
+
+from tests.support.browser import PASSWORD
+from tests.support.english import english_in
+
+pytestmark = pytest.mark.e2e
+
+TAKE_OVER = """
+import json
+from events.models import Vehicle
+from events.services import logs, segments
+v = Vehicle.objects.create(key="kran", short_description="Kran")
+e = logs.create_test_event(location="Kiesgrube", time_zone="Europe/Berlin")
+leg = logs.create_leg(shift=logs.create_shift(test_event=e, vehicle=v), weather_id="sunny")
+segments.report_mode(leg, "auto")
+segments.report_mode(leg, "ito", reason="planner")
+print(json.dumps({"event": e.pk, "shift": leg.shift_id, "leg": leg.pk}))
+"""
+
+
+def test_the_german_cockpit_shows_no_english(browser, server):
+    chosen = json.loads(server.python(TAKE_OVER).strip().splitlines()[-1])
+    context = browser.new_context(locale="de-DE")
+    try:
+        page = context.new_page()
+        page.goto(f"{server.url}/login/")
+        page.get_by_label("Benutzername").fill("vera")
+        page.get_by_label("Passwort").fill(PASSWORD)
+        page.get_by_role("button", name="Anmelden").click()
+        page.wait_for_url(f"{server.url}/")
+        page.goto(f"{server.url}/?{'&'.join(f'{k}={v}' for k, v in chosen.items())}")
+        rows = page.locator("#segment-table tbody tr")
+        expect(rows).to_have_count(2)  # AUTO, then the take-over
+        expect(page.locator("html")).to_have_attribute("lang", "de")
+        shown = page.evaluate(
+            # Leaflet's own controls (zoom, its attribution) speak Leaflet's words.
+            """() => {
+                const own = document.querySelectorAll(".leaflet-control-container");
+                for (const control of own) control.remove();
+                return [document.body.innerText, ...[...document.querySelectorAll(
+                    "[title], [aria-label], [placeholder], option")].map((e) =>
+                    [e.title, e.getAttribute("aria-label"), e.placeholder, e.textContent].join(" "))
+                ].join(" ");
+            }"""
+        )
+        assert "geschlossen" in shown and "offen" in shown
+        assert english_in(shown, {"Kran", "Kiesgrube"}) == []
+    finally:
+        context.close()
