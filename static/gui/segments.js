@@ -12,6 +12,7 @@ import { confirmDialog } from "./dialogs.js";
 import { clearMaps, drawLegTracks, showPosition, showTakeOvers, gpsMap, loadBasemaps, loadLegTracks, loadLocalMap, localMap, showLegTracks } from "./mapview.js";
 import { Live, onSelectedLeg } from "./live.js";
 import { Collector } from "./collector.js";
+import { keepLeg, keptLeg } from "./lastknown.js";
 import { openSegmentDialog } from "./segment-dialog.js";
 
 /* The leg's AUTO/ITO bars over a time axis; ITO bars take their reason's colour and
@@ -105,13 +106,46 @@ export async function selectionChanged() {
 
 export async function loadSegments() {
   const leg = state.selected.leg;
-  // Rows and their labels in one read: the server works on one request at a time per page.
-  const data = take("segments", leg) ?? (await api("GET", `legs/${leg}/segments/`, undefined, { root: CONFIG.guiApiRoot }));
+  const brought = take("segments", leg);
+  // Until the server has spoken, what this browser kept at the cut is shown at
+  // once; an answer read later than it (by the change feed's id) replaces it.
+  const kept = Live.link === "live" ? null : keptLeg(leg);
+  if (kept && !brought) showRows(kept);
+  let answer = brought;
+  try {
+    // Rows and their labels in one read: the server works on one request at a time per page.
+    answer ??= await api("GET", `legs/${leg}/segments/`, undefined, { root: CONFIG.guiApiRoot });
+  } catch (err) {
+    if (!(err instanceof TypeError) || Live.link === "live") throw err;
+    answer = null;
+  }
   if (leg !== state.selected.leg) return;
+  const data = kept && (!answer || kept.last_event > answer.last_event) ? kept : answer;
+  if (!data) return showNoHistory(leg);
+  // A kept state is caught up from its own place in the feed, which may lie before the page's.
+  if (data === kept) state.lastEventId = Math.min(state.lastEventId ?? kept.last_event, kept.last_event);
+  showRows(data);
+}
+
+function showRows(data) {
+  const empty = $("#segments-empty");
+  if (empty.dataset.empty !== undefined) empty.textContent = empty.dataset.empty;
   state.segments = [];
   state.labels = {};
   state.shortLabels = {};
   applyRows(data);
+}
+
+/* A dead link and nothing kept of this leg in this browser: said so, and read once the link is back. */
+function showNoHistory(leg) {
+  const empty = $("#segments-empty");
+  empty.dataset.empty ??= empty.textContent;
+  empty.textContent = _("This device has kept nothing of this leg; its take-overs appear once the server is reached.");
+  state.segments = [];
+  renderSegments();
+  Live.whenLive(() => {
+    if (leg === state.selected.leg) Live.later("segments");
+  });
 }
 
 /* A segment event, and the answer of a segment write, carry the rows the change
@@ -132,6 +166,21 @@ function applyRows(answer) {
   state.openTakeOver = answer.open_take_over ?? null;
   renderSegments();
   drawTakeOvers();
+  keepShownLeg();
+}
+
+/* What the page shows of the leg, kept for a reload on a dead link (lastknown.js). */
+function keepShownLeg() {
+  const leg = state.selected.leg;
+  if (!leg) return;
+  keepLeg({
+    leg,
+    segments: state.segments,
+    labels: state.labels,
+    short_labels: state.shortLabels,
+    open_take_over: state.openTakeOver,
+    last_event: state.lastEventId ?? 0,
+  });
 }
 
 /* A write through /gui/api/ answers with the row it wrote and every row it touched.
