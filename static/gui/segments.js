@@ -225,35 +225,55 @@ export function renderSegments() {
   const tbody = $("#segment-table tbody");
   const rows = visibleSegments();
   $("#segments-empty").hidden = rows.length > 0 || !state.selected.leg;
-  tbody.replaceChildren(...rows.map((s) => {
-    const tr = document.createElement("tr");
-    tr.dataset.id = s.id;
-    tr.className = `${s.segment_type} ${s.parent === null ? "master" : "child"}${s.id === state.segment ? " selected" : ""}`;
-    const master = s.parent === null ? s.id : s.parent;
-    const track = state.tracks[master];
-    const cells = [
-      { text: shortLabel(s.id), title: `${segmentLabel(s.id)} (database id ${s.id})` },
-      modeName(s.segment_type),
-      s.parent === null ? "" : reasonName(s.ito_reason),
-      { text: fmtClock(s.start), title: fmtTime(s.start) },
-      s.end ? { text: fmtClock(s.end), title: fmtTime(s.end) } : "—",
-      fmtDuration(s.start, s.end),
-      fmtDistance(track ? track.distance_m : null),
-      s.is_open ? "OPEN" : "CLOSED",
-    ];
-    tr.replaceChildren(...cells.map((c) => {
-      const td = document.createElement("td");
-      td.textContent = typeof c === "object" ? c.text : c;
-      if (typeof c === "object") td.title = c.title;
-      return td;
-    }));
-    tr.addEventListener("click", () => selectSegment(s.id === state.segment ? null : s.id));
-    tr.addEventListener("dblclick", () => {
-      selectSegment(s.id);
-      openSegmentDialog(s.id);
-    });
+  // Only the rows whose words changed are built again, and the list is laid out
+  // again only when its order changed: a message costs the rows it touched.
+  const built = new Map();
+  const trs = rows.map((s) => {
+    const cells = segmentCells(s);
+    const key = JSON.stringify([cells, s.segment_type, s.parent, s.id === state.segment]);
+    const known = shownRows.get(s.id);
+    const tr = known && known.key === key ? known.tr : segmentRow(s, cells);
+    built.set(s.id, { key, tr });
     return tr;
+  });
+  shownRows = built;
+  const same = trs.length === tbody.children.length && trs.every((tr, i) => tbody.children[i] === tr);
+  if (!same) tbody.replaceChildren(...trs);
+}
+
+let shownRows = new Map(); // segment id -> {key, tr}: the rows in the table and what they say
+
+function segmentCells(s) {
+  const master = s.parent === null ? s.id : s.parent;
+  const track = state.tracks[master];
+  return [
+    { text: shortLabel(s.id), title: `${segmentLabel(s.id)} (database id ${s.id})` },
+    modeName(s.segment_type),
+    s.parent === null ? "" : reasonName(s.ito_reason),
+    { text: fmtClock(s.start), title: fmtTime(s.start) },
+    s.end ? { text: fmtClock(s.end), title: fmtTime(s.end) } : "—",
+    fmtDuration(s.start, s.end),
+    fmtDistance(track ? track.distance_m : null),
+    s.is_open ? "OPEN" : "CLOSED",
+  ];
+}
+
+function segmentRow(s, cells) {
+  const tr = document.createElement("tr");
+  tr.dataset.id = s.id;
+  tr.className = `${s.segment_type} ${s.parent === null ? "master" : "child"}${s.id === state.segment ? " selected" : ""}`;
+  tr.replaceChildren(...cells.map((c) => {
+    const td = document.createElement("td");
+    td.textContent = typeof c === "object" ? c.text : c;
+    if (typeof c === "object") td.title = c.title;
+    return td;
   }));
+  tr.addEventListener("click", () => selectSegment(s.id === state.segment ? null : s.id));
+  tr.addEventListener("dblclick", () => {
+    selectSegment(s.id);
+    openSegmentDialog(s.id);
+  });
+  return tr;
 }
 
 function selectSegment(id) {
@@ -300,13 +320,13 @@ export function renderMode() {
   // A dead link must not look live: what the page knows is shown as what it was.
   const lost = Live.lost();
   panel.dataset.link = lost === null ? "live" : "lost";
+  const reasonless = m && m.segment_type === "ito" && !state.segments.some((c) => c.parent === m.id && c.is_open);
   if (lost !== null) {
     $("#mode-name").textContent = _("last known: %(mode)s, %(seconds)s s ago", { mode: m ? modeName(mode) : _("no open segment"), seconds: lost });
-    $("#mode-since").textContent = `${m ? `${segmentLabel(m.id)} · ` : ""}${_("no word from the server, reconnecting")}`;
+    $("#mode-since").textContent = `${m ? `${segmentLabel(m.id)} · ` : ""}${reasonless ? _("no open reason") + " · " : ""}${_("no word from the server, reconnecting")}`;
     return;
   }
   $("#mode-name").textContent = m ? modeName(mode) : _("No open segment");
-  const reasonless = m && m.segment_type === "ito" && !state.segments.some((c) => c.parent === m.id && c.is_open);
   $("#mode-since").textContent = m ? _("for %(duration)s · %(segment)s", { duration: fmtDuration(m.start, null), segment: segmentLabel(m.id) }) + (reasonless ? " · " + _("no open reason") : "") : "";
 }
 
