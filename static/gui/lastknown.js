@@ -25,19 +25,25 @@ function read() {
  * last_event}) soon, in the shape of the segment read's answer: many messages a second are written once. */
 export function keepLeg(snapshot) {
   pending = snapshot;
-  if (timer) return;
-  timer = setTimeout(() => {
-    timer = null;
-    const leg = pending;
-    pending = null;
-    try {
-      const others = read().filter((k) => k.leg !== leg.leg);
-      localStorage.setItem(KEY, JSON.stringify([leg, ...others].slice(0, LEGS)));
-    } catch {
-      // A full store keeps the copy before; the page goes on.
-    }
-  }, EVERY_MS);
+  if (!timer) timer = setTimeout(write, EVERY_MS);
 }
+
+function write() {
+  clearTimeout(timer);
+  timer = null;
+  const leg = pending;
+  pending = null;
+  if (!leg) return;
+  try {
+    const others = read().filter((k) => k.leg !== leg.leg);
+    localStorage.setItem(KEY, JSON.stringify([leg, ...others].slice(0, LEGS)));
+  } catch {
+    // A full store keeps the copy before; the page goes on.
+  }
+}
+
+// Leaving the page (a reload, another address) writes what is still waiting.
+addEventListener("pagehide", write);
 
 /* What this browser kept of `leg`, or null. */
 export function keptLeg(leg) {
