@@ -179,7 +179,8 @@ function keepShownLeg() {
     labels: state.labels,
     short_labels: state.shortLabels,
     open_take_over: state.openTakeOver,
-    last_event: state.lastEventId ?? 0,
+    // Never older than the state it replaces: catching up from a kept state lowers lastEventId.
+    last_event: Math.max(state.lastEventId ?? 0, keptLeg(leg)?.last_event ?? 0),
   });
 }
 
