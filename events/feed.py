@@ -120,11 +120,15 @@ def after(last_id: int, limit: int = 500) -> list[Announcement]:
     return list(Announcement.objects.filter(pk__gt=last_id).order_by("id")[:limit])
 
 
+def newest() -> int:
+    """The newest id in the feed; 0 when empty."""
+    return Announcement.objects.order_by("-id").values_list("id", flat=True).first() or 0
+
+
 def bounds() -> tuple[int, int]:
     """(first, last) id still in the feed; (0, 0) when empty."""
     first = Announcement.objects.order_by("id").values_list("id", flat=True).first()
-    last = Announcement.objects.order_by("-id").values_list("id", flat=True).first()
-    return first or 0, last or 0
+    return first or 0, newest()
 
 
 def announce_and_return(obj):

@@ -21,6 +21,7 @@ from rest_framework.views import APIView
 
 from basemaps.selectors.layers import layer_list
 from common import roles
+from events import feed
 from events.api import serializers as s
 from events.api.serializers import (
     NoteSerializer,
@@ -246,9 +247,13 @@ class LegSegments(GuiView):
 
 
 def leg_segments(leg: Leg) -> dict:
+    """``last_event``: the change feed's newest id before the rows were read, so the
+    page tells this answer from a state it kept later (static/gui/lastknown.js)."""
+    last_event = feed.newest()
     rows = SegmentSerializer(Segment.objects.filter(leg=leg), many=True).data
     return {
         "leg": leg.pk,
+        "last_event": last_event,
         "segments": rows,
         **leg_labels(leg),
         "open_take_over": open_take_over_ids([leg.pk])[leg.pk],

@@ -23,10 +23,11 @@ export const Live = {
     const socket = new WebSocket(`${scheme}//${location.host}${CONFIG.wsPath}`);
     this.socket = socket;
     this.opened = Date.now();
+    // Open is not yet live: the link is live once the server answers the
+    // subscription, after the events missed meanwhile (receive).
     socket.onopen = () => {
       this.retry = 500;
-      this.heard = Date.now();
-      this.setLink("live");
+      this.opened = Date.now();
       this.subscribe();
     };
     socket.onmessage = (e) => {
@@ -38,7 +39,6 @@ export const Live = {
         this.kept = this.heard;
         localStorage.setItem("ftt.heard", String(this.heard));
       }
-      if (this.link !== "live") this.setLink("live");
       this.receive(JSON.parse(e.data));
     };
     socket.onclose = (e) => {
@@ -58,7 +58,7 @@ export const Live = {
   watch() {
     const socket = this.socket;
     if (!socket) return;
-    const silent = (Date.now() - this.heard) / 1000;
+    const silent = (Date.now() - Math.max(this.heard, this.opened)) / 1000;
     if (socket.readyState === WebSocket.OPEN && silent > this.staleAfter) {
       this.setLink("stale");
       this.socket = null;
@@ -70,15 +70,21 @@ export const Live = {
       this.connect();
     }
   },
-  /* Seconds since the server last spoke while the link is stale or down; null otherwise. */
+  /* Seconds since the server last spoke until the link is proven live; null once it is. */
   lost() {
-    return ["stale", "down"].includes(this.link) ? Math.round((Date.now() - this.heard) / 1000) : null;
+    return this.link === "live" ? null : Math.max(0, Math.round((Date.now() - this.heard) / 1000));
   },
   setLink(link) {
     this.link = link;
     const words = { live: [_("live"), "ok"], stale: [_("stale"), "stale"], down: [_("reconnecting…"), "bad"] };
     this.setStatus(...words[link]);
     this.onLink(link);
+    if (link === "live") for (const run of this.waiting.splice(0)) run();
+  },
+  /* run() once, the next time the link is live (what a dead link kept the page from reading). */
+  waiting: [],
+  whenLive(run) {
+    this.waiting.push(run);
   },
   onLink() {}, // main.js redraws the mode banner
 
@@ -106,6 +112,8 @@ export const Live = {
     }
     if (message.type === "subscribed") {
       if (state.lastEventId === null || message.last_id > state.lastEventId) state.lastEventId = message.last_id;
+      // The server has answered, the missed events came before: what the page shows is live now.
+      if (this.link !== "live") this.setLink("live");
       return;
     }
     if (message.type === "reset") {

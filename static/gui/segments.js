@@ -12,6 +12,7 @@ import { confirmDialog } from "./dialogs.js";
 import { clearMaps, drawLegTracks, showPosition, showTakeOvers, gpsMap, loadBasemaps, loadLegTracks, loadLocalMap, localMap, showLegTracks } from "./mapview.js";
 import { Live, onSelectedLeg } from "./live.js";
 import { Collector } from "./collector.js";
+import { keepLeg, keptLeg } from "./lastknown.js";
 import { openSegmentDialog } from "./segment-dialog.js";
 
 /* The leg's AUTO/ITO bars over a time axis; ITO bars take their reason's colour and
@@ -105,13 +106,46 @@ export async function selectionChanged() {
 
 export async function loadSegments() {
   const leg = state.selected.leg;
-  // Rows and their labels in one read: the server works on one request at a time per page.
-  const data = take("segments", leg) ?? (await api("GET", `legs/${leg}/segments/`, undefined, { root: CONFIG.guiApiRoot }));
+  const brought = take("segments", leg);
+  // Until the server has spoken, what this browser kept at the cut is shown at
+  // once; an answer read later than it (by the change feed's id) replaces it.
+  const kept = Live.link === "live" ? null : keptLeg(leg);
+  if (kept && !brought) showRows(kept);
+  let answer = brought;
+  try {
+    // Rows and their labels in one read: the server works on one request at a time per page.
+    answer ??= await api("GET", `legs/${leg}/segments/`, undefined, { root: CONFIG.guiApiRoot });
+  } catch (err) {
+    if (!(err instanceof TypeError) || Live.link === "live") throw err;
+    answer = null;
+  }
   if (leg !== state.selected.leg) return;
+  const data = kept && (!answer || kept.last_event > answer.last_event) ? kept : answer;
+  if (!data) return showNoHistory(leg);
+  // A kept state is caught up from its own place in the feed, which may lie before the page's.
+  if (data === kept) state.lastEventId = Math.min(state.lastEventId ?? kept.last_event, kept.last_event);
+  showRows(data);
+}
+
+function showRows(data) {
+  const empty = $("#segments-empty");
+  if (empty.dataset.empty !== undefined) empty.textContent = empty.dataset.empty;
   state.segments = [];
   state.labels = {};
   state.shortLabels = {};
   applyRows(data);
+}
+
+/* A dead link and nothing kept of this leg in this browser: said so, and read once the link is back. */
+function showNoHistory(leg) {
+  const empty = $("#segments-empty");
+  empty.dataset.empty ??= empty.textContent;
+  empty.textContent = _("This device has kept nothing of this leg; its take-overs appear once the server is reached.");
+  state.segments = [];
+  renderSegments();
+  Live.whenLive(() => {
+    if (leg === state.selected.leg) Live.later("segments");
+  });
 }
 
 /* A segment event, and the answer of a segment write, carry the rows the change
@@ -132,6 +166,22 @@ function applyRows(answer) {
   state.openTakeOver = answer.open_take_over ?? null;
   renderSegments();
   drawTakeOvers();
+  keepShownLeg();
+}
+
+/* What the page shows of the leg, kept for a reload on a dead link (lastknown.js). */
+function keepShownLeg() {
+  const leg = state.selected.leg;
+  if (!leg) return;
+  keepLeg({
+    leg,
+    segments: state.segments,
+    labels: state.labels,
+    short_labels: state.shortLabels,
+    open_take_over: state.openTakeOver,
+    // Never older than the state it replaces: catching up from a kept state lowers lastEventId.
+    last_event: Math.max(state.lastEventId ?? 0, keptLeg(leg)?.last_event ?? 0),
+  });
 }
 
 /* A write through /gui/api/ answers with the row it wrote and every row it touched.
@@ -176,36 +226,56 @@ export function renderSegments() {
   const tbody = $("#segment-table tbody");
   const rows = visibleSegments();
   $("#segments-empty").hidden = rows.length > 0 || !state.selected.leg;
-  tbody.replaceChildren(...rows.map((s) => {
-    const tr = document.createElement("tr");
-    tr.dataset.id = s.id;
-    tr.className = `${s.segment_type} ${s.parent === null ? "master" : "child"}${s.id === state.segment ? " selected" : ""}`;
-    const master = s.parent === null ? s.id : s.parent;
-    const track = state.tracks[master];
-    const cells = [
-      { text: shortLabel(s.id), title: _("%(label)s (database id %(id)s)", { label: segmentLabel(s.id), id: s.id }) },
-      modeName(s.segment_type),
-      // A reason kept in this browser (outbox.js) is shown until it is sent.
-      s.parent === null ? "" : s.id in Outbox.keptReasons ? `${reasonName(Outbox.keptReasons[s.id])} (${_("not sent yet")})` : reasonName(s.ito_reason),
-      { text: fmtClock(s.start), title: fmtTime(s.start) },
-      s.end ? { text: fmtClock(s.end), title: fmtTime(s.end) } : "—",
-      fmtDuration(s.start, s.end),
-      fmtDistance(track ? track.distance_m : null),
-      s.is_open ? _("open") : _("closed"),
-    ];
-    tr.replaceChildren(...cells.map((c) => {
-      const td = document.createElement("td");
-      td.textContent = typeof c === "object" ? c.text : c;
-      if (typeof c === "object") td.title = c.title;
-      return td;
-    }));
-    tr.addEventListener("click", () => selectSegment(s.id === state.segment ? null : s.id));
-    tr.addEventListener("dblclick", () => {
-      selectSegment(s.id);
-      openSegmentDialog(s.id);
-    });
+  // Only the rows whose words changed are built again, and the list is laid out
+  // again only when its order changed: a message costs the rows it touched.
+  const built = new Map();
+  const trs = rows.map((s) => {
+    const cells = segmentCells(s);
+    const key = JSON.stringify([cells, s.segment_type, s.parent, s.id === state.segment]);
+    const known = shownRows.get(s.id);
+    const tr = known && known.key === key ? known.tr : segmentRow(s, cells);
+    built.set(s.id, { key, tr });
     return tr;
+  });
+  shownRows = built;
+  const same = trs.length === tbody.children.length && trs.every((tr, i) => tbody.children[i] === tr);
+  if (!same) tbody.replaceChildren(...trs);
+}
+
+let shownRows = new Map(); // segment id -> {key, tr}: the rows in the table and what they say
+
+function segmentCells(s) {
+  const master = s.parent === null ? s.id : s.parent;
+  const track = state.tracks[master];
+  return [
+    { text: shortLabel(s.id), title: _("%(label)s (database id %(id)s)", { label: segmentLabel(s.id), id: s.id }) },
+    modeName(s.segment_type),
+    // A reason kept in this browser (outbox.js) is shown until it is sent.
+    s.parent === null ? "" : s.id in Outbox.keptReasons ? `${reasonName(Outbox.keptReasons[s.id])} (${_("not sent yet")})` : reasonName(s.ito_reason),
+    { text: fmtClock(s.start), title: fmtTime(s.start) },
+    s.end ? { text: fmtClock(s.end), title: fmtTime(s.end) } : "—",
+    fmtDuration(s.start, s.end),
+    fmtDistance(track ? track.distance_m : null),
+    s.is_open ? _("open") : _("closed"),
+  ];
+}
+
+function segmentRow(s, cells) {
+  const tr = document.createElement("tr");
+  tr.dataset.id = s.id;
+  tr.className = `${s.segment_type} ${s.parent === null ? "master" : "child"}${s.id === state.segment ? " selected" : ""}`;
+  tr.replaceChildren(...cells.map((c) => {
+    const td = document.createElement("td");
+    td.textContent = typeof c === "object" ? c.text : c;
+    if (typeof c === "object") td.title = c.title;
+    return td;
   }));
+  tr.addEventListener("click", () => selectSegment(s.id === state.segment ? null : s.id));
+  tr.addEventListener("dblclick", () => {
+    selectSegment(s.id);
+    openSegmentDialog(s.id);
+  });
+  return tr;
 }
 
 function selectSegment(id) {
@@ -252,13 +322,13 @@ export function renderMode() {
   // A dead link must not look live: what the page knows is shown as what it was.
   const lost = Live.lost();
   panel.dataset.link = lost === null ? "live" : "lost";
+  const reasonless = m && m.segment_type === "ito" && !state.segments.some((c) => c.parent === m.id && c.is_open);
   if (lost !== null) {
     $("#mode-name").textContent = _("last known: %(mode)s, %(seconds)s s ago", { mode: m ? modeName(mode) : _("no open segment"), seconds: lost });
-    $("#mode-since").textContent = `${m ? `${segmentLabel(m.id)} · ` : ""}${_("no word from the server, reconnecting")}`;
+    $("#mode-since").textContent = `${m ? `${segmentLabel(m.id)} · ` : ""}${reasonless ? _("no open reason") + " · " : ""}${_("no word from the server, reconnecting")}`;
     return;
   }
   $("#mode-name").textContent = m ? modeName(mode) : _("No open segment");
-  const reasonless = m && m.segment_type === "ito" && !state.segments.some((c) => c.parent === m.id && c.is_open);
   $("#mode-since").textContent = m ? _("for %(duration)s · %(segment)s", { duration: fmtDuration(m.start, null), segment: segmentLabel(m.id) }) + (reasonless ? " · " + _("no open reason") : "") : "";
 }
 
