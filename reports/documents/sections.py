@@ -384,10 +384,11 @@ class Sections:
                 (_("Distance"), fmt.metres(run.distance)),
                 # GPS fixes without a position are not counted: say so.
                 (
-                    _("Poses with a position (fixes without one left out)")
+                    _("Poses"),
+                    _("%(count)s with a position (fixes without one left out)")
+                    % {"count": run.pose_count}
                     if self.mode == GPS
-                    else _("Poses"),
-                    str(run.pose_count),
+                    else str(run.pose_count),
                 ),
                 (_("Database id"), str(run.id)),
                 (_("Reason(s)"), reasons or fmt.DASH),
