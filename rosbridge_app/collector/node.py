@@ -431,12 +431,15 @@ class CollectorNode(Node):
     def _incompatible(self, name: str, subscribe, event) -> None:
         """A publisher on input ``name`` offers a QoS its subscription cannot
         match.  A best-effort publisher (many drivers are) is then heard by a
-        second, best-effort subscription (``subscribe(qos)`` makes it); anything
-        else is said in the GUI, the input names the policy."""
+        second, best-effort subscription (``subscribe(qos)`` makes it), except on
+        a sensor input the operator asked to hear reliably
+        (``params.sensor_reliable``); anything else is said in the GUI, the
+        input names the policy."""
         info = self.inputs.get(name)
         twin = f"{name} (best effort)"
         policy = QoSPolicyKind(event.last_policy_kind)
-        if policy == QoSPolicyKind.RELIABILITY:
+        insisted = not is_mode_input(name) and self.get_parameter("params.sensor_reliable").value
+        if policy == QoSPolicyKind.RELIABILITY and not insisted:
             if twin not in self._ftt_subs:
                 profile = copy.copy(self._ftt_subs[name].qos_profile)
                 profile.reliability = ReliabilityPolicy.BEST_EFFORT
