@@ -14,6 +14,9 @@ from tests.e2e.test_cockpit_trust import row
 from tests.support.browser import Robot, choose_event, login
 from tests.support.screens import VIEWPORTS
 
+# The badge may first say stale when a heartbeat comes late on a busy machine.
+LIVE = 15_000
+
 pytestmark = pytest.mark.e2e
 
 # Every Leaflet map the page makes, kept where a test can read its lines (an init
@@ -70,7 +73,7 @@ def test_the_live_line_is_the_stored_line_with_a_no_fix_pose_and_a_late_batch(
     page.set_viewport_size(VIEWPORTS["tablet"]["viewport"])
     login(page, server, "otto")
     choose_event(page, open_leg)
-    expect(page.locator("#live-status")).to_have_text("live")
+    expect(page.locator("#live-status")).to_have_text("live", timeout=LIVE)
     master = int(row(page, "#1").get_attribute("data-id"))
     t0 = datetime.now(UTC)
 
@@ -105,7 +108,7 @@ def test_the_live_line_is_the_stored_line_with_a_no_fix_pose_and_a_late_batch(
     live = drawn(page)
     shot(page, "tablet-live-line")
     page.reload()
-    expect(page.locator("#live-status")).to_have_text("live")
+    expect(page.locator("#live-status")).to_have_text("live", timeout=LIVE)
     expect(gps).to_have_attribute("data-track-points", "7")
     assert drawn(page) == live
     # Driving order: west to east, the late points between their neighbours.
@@ -145,7 +148,7 @@ def test_a_reload_after_a_stall_and_a_cut_shows_the_state_at_the_cut(
         page.evaluate(CONTROLLED)
         choose_event(page, open_leg)
         badge, mode = page.locator("#live-status"), page.locator("#mode-name")
-        expect(badge).to_have_text("live")
+        expect(badge).to_have_text("live", timeout=LIVE)
         expect(mode).to_have_text("AUTO")
         # Live, after the page was loaded: a take-over (#2), its end and a second one (#4).
         robot.do("ito")
@@ -195,7 +198,7 @@ def test_a_cockpit_reloaded_from_the_kept_fleet_page_shows_the_legs_history(
         page.evaluate(CONTROLLED)
         choose_event(page, open_leg)
         cockpit = page.url
-        expect(page.locator("#live-status")).to_have_text("live")
+        expect(page.locator("#live-status")).to_have_text("live", timeout=LIVE)
         expect(row(page, "#1.1")).to_be_visible()
         # Live, after the page was loaded: the take-over ends, a second one starts.
         robot.do("auto")
@@ -204,7 +207,7 @@ def test_a_cockpit_reloaded_from_the_kept_fleet_page_shows_the_legs_history(
         # The last page loaded, and so kept, is the fleet's.
         page.goto(f"{link.url}/?view=fleet")
         expect(page.locator("#fleet-view")).to_be_visible()
-        expect(page.locator("#live-status")).to_have_text("live")
+        expect(page.locator("#live-status")).to_have_text("live", timeout=LIVE)
         link.cut()
         page.goto(cockpit, wait_until="commit")
         mode = page.locator("#mode-name")
