@@ -20,6 +20,7 @@ _LANGUAGE: ContextVar[str] = ContextVar("ftt_report_language", default="en")
 _DECIMAL = {"de": ","}
 _TIMESTAMP = {"de": "%d.%m.%Y %H:%M:%S"}
 _DAY = {"de": "%d.%m.%Y"}
+_DAY_OF_MONTH = {"de": "%d.%m."}
 # The languages whose figures group thousands (German 1.227,47; English 1227.47).
 _GROUPED = {"de"}
 
@@ -100,6 +101,11 @@ def timestamp(value: datetime | None, tz: tzinfo) -> str:
 
 def day(value: date) -> str:
     return value.strftime(_DAY.get(_LANGUAGE.get(), "%Y-%m-%d"))
+
+
+def day_of_month_pattern() -> str:
+    """The strftime pattern of a day without its year, for a time axis."""
+    return _DAY_OF_MONTH.get(_LANGUAGE.get(), "%m-%d")
 
 
 def clock(value: datetime | None, tz: tzinfo) -> str:

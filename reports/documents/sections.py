@@ -3,7 +3,7 @@ template: title, event, global figures, a page per shift with its segments, the
 image appendix and the methods.  All times are in the test event's time zone."""
 
 import shutil
-from datetime import date, timedelta
+from datetime import date, datetime, timedelta
 from pathlib import Path
 
 from django.conf import settings
@@ -123,17 +123,21 @@ class Sections:
         }
 
     def _provenance(self) -> dict:
-        stamp = provenance(self.event, self.options.as_dict(), timezone.now())
+        built = timezone.now()
+        stamp = provenance(self.event, self.options.as_dict(), built)
         final = self.event.finalised
         return {
             **stamp,
             "keywords": keywords(stamp),
+            # The stamp's UTC form is for --verify (keywords); the reader sees the
+            # report's one zone.
+            "built": fmt.timestamp(built, self.tz),
             "taxonomy": taxonomy_words(self.event),
             "final": fmt.timestamp(final, self.tz) if final else None,
             "amendments": [
                 _("%(when)s: %(record)s %(kind)s by %(who)s")
                 % {
-                    "when": a["at"],
+                    "when": fmt.timestamp(datetime.fromisoformat(a["at"]), self.tz),
                     "record": a["record"],
                     "kind": a["kind_text"],
                     "who": a["by"] or a["channel"],

@@ -101,6 +101,7 @@ def report_text() -> dict[str, str]:
         "at_most": _(", at most %(seconds)s s"),
         "footer_provisional": _("provisional – open segments"),
         "final_since": _("final since"),
+        "footer_zone": _("times in %(zone)s"),
         "final_title": _("FINAL since %(when)s"),
         "test_plan": _("Test plan"),
         "test_plan_intro": _(

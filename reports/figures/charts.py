@@ -13,19 +13,35 @@ import numpy as np  # noqa: E402
 from django.utils.translation import gettext as _  # noqa: E402
 
 from reports import formatting as fmt  # noqa: E402
-from reports.figures.style import fit_y_ticks, fixed_figure, rgb  # noqa: E402
+from reports.figures.style import fit_y_ticks, fixed_figure, label_width, rgb  # noqa: E402
 
 # Inches left of the axes for the y label and short tick labels; longer ones
 # widen it (fit_y_ticks).
 CHART_LEFT = 0.75
+# Legend rows beside the axes before a second column starts.
+LEGEND_ROWS = 14
+
+
+def legend_width(labels, size: float, columns: int = 1) -> float:
+    """Inches right of the axes for a legend of ``labels``: handle, gap and text
+    per column."""
+    return columns * (label_width(labels, size) + 0.45) + 0.1
+
+
+def place_legend(ax, size: float, columns: int = 1) -> None:
+    """The legend beside the axes, where it covers no bar and no bar's figure."""
+    ax.legend(
+        fontsize=size, ncols=columns, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0
+    )
 
 
 def distance_chart(labels, auto, manual, path, dpi=150) -> str:
     """Stacked autonomous and manual distance per shift, with the autonomy share."""
-    fig, ax = fixed_figure(7.0, 3.0, CHART_LEFT)
+    names = ["AUTO", _("ITO (manual)")]
+    fig, ax = fixed_figure(7.0, 3.0, CHART_LEFT, right=legend_width(names, 7))
     x = np.arange(len(labels))
-    ax.bar(x, auto, color="#2ca02c", label="AUTO")
-    ax.bar(x, manual, bottom=auto, color="#d62728", label=_("ITO (manual)"))
+    ax.bar(x, auto, color="#2ca02c", label=names[0])
+    ax.bar(x, manual, bottom=auto, color="#d62728", label=names[1])
     for i, (a, m) in enumerate(zip(auto, manual, strict=True)):
         share = (
             _("%(share)s auto") % {"share": fmt.percent(a / (a + m))}
@@ -37,7 +53,7 @@ def distance_chart(labels, auto, manual, path, dpi=150) -> str:
     ax.set_title(_("Distance per shift: autonomous and manual"))
     ax.set_ylabel(_("distance [m]"), fontsize=7)
     ax.margins(y=0.25)
-    ax.legend(fontsize=7)
+    place_legend(ax, 7)
     fit_y_ticks(fig, ax)
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
@@ -47,10 +63,13 @@ def distance_chart(labels, auto, manual, path, dpi=150) -> str:
 def reasons_chart(labels, counts_by_shift, reasons, path, dpi=150) -> str:
     """Interventions per reason per shift; ``counts_by_shift``: [{key: n}]."""
     keys = sorted({k for counts in counts_by_shift for k in counts})
-    fig, ax = fixed_figure(7.0, 3.0, CHART_LEFT)
+    names = [reasons[key].shown_short if key in reasons else key for key in keys]
+    columns = -(-len(keys) // LEGEND_ROWS)
+    right = legend_width(names, 6, columns) if keys else 0.15
+    fig, ax = fixed_figure(7.0, 3.0, CHART_LEFT, right=right)
     x = np.arange(len(labels))
     width = 0.8 / max(len(keys), 1)
-    for i, key in enumerate(keys):
+    for i, (key, name) in enumerate(zip(keys, names, strict=True)):
         catalogue = reasons.get(key)
         values = [counts.get(key, 0) for counts in counts_by_shift]
         ax.bar(
@@ -58,14 +77,14 @@ def reasons_chart(labels, counts_by_shift, reasons, path, dpi=150) -> str:
             values,
             width,
             color=rgb(catalogue.color) if catalogue else "grey",
-            label=catalogue.shown_short if catalogue else key,
+            label=name,
         )
     ax.set_xticks(x, labels, fontsize=7)
     ax.set_title(_("Interventions per shift by reason"))
     ax.set_ylabel(_("interventions [count]"), fontsize=7)
     ax.yaxis.get_major_locator().set_params(integer=True)
     if keys:
-        ax.legend(fontsize=6, ncols=min(len(keys), 4))
+        place_legend(ax, 6, columns)
     else:
         ax.text(0.5, 0.5, _("no interventions"), transform=ax.transAxes, ha="center")
     fit_y_ticks(fig, ax)

@@ -65,13 +65,19 @@ def figure(size, **options):
     return fig, ax
 
 
-def fixed_figure(width: float, height: float, left: float, bottom: float = 0.45, top: float = 0.3):
+def fixed_figure(
+    width: float,
+    height: float,
+    left: float,
+    bottom: float = 0.45,
+    top: float = 0.3,
+    right: float = 0.15,
+):
     """Figure and axes with margins in inches given by the caller.  A constrained
     layout measures every text several times, most of a chart's or timeline's
     drawing time; the caller knows its widest text in advance, except a chart's
     y tick labels, which widen the margin once drawn (fit_y_ticks)."""
     fig = plt.figure(figsize=(width, height))
-    right = 0.15
     ax = fig.add_axes(
         (left / width, bottom / height, 1 - (left + right) / width, 1 - (bottom + top) / height)
     )

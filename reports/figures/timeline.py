@@ -12,6 +12,7 @@ import matplotlib.dates as mdates  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 from django.utils.translation import gettext  # noqa: E402
 
+from reports import formatting as fmt  # noqa: E402
 from reports.figures import style, weather  # noqa: E402
 from reports.figures.style import rgb  # noqa: E402
 
@@ -24,6 +25,26 @@ def time_axis(first, last, min_span=timedelta(0)):
     """The drawn time range: the runs with a small margin, at least ``min_span`` long."""
     span = max(last - first, timedelta(seconds=60), min_span)
     return first - span * 0.02, first + span * 1.02
+
+
+def set_time_ticks(ax, tz, span: timedelta) -> None:
+    """Ticks at round times, each labelled as finely as their step needs, with the
+    day when the axis spans more than one: no label is written twice."""
+    locator = mdates.AutoDateLocator(tz=tz, minticks=3, maxticks=9)
+    day = fmt.day_of_month_pattern()
+    clock = f"{day} %H:%M" if span > timedelta(days=1) else "%H:%M"
+    formatter = mdates.AutoDateFormatter(locator, tz=tz)
+    # Keyed by the locator's tick unit in days (year, month, day, hour, minute, second).
+    formatter.scaled = {
+        365.0: "%Y",
+        30.0: "%m.%Y",
+        1.0: day,
+        1 / 24: clock,
+        1 / (24 * 60): clock,
+        1 / (24 * 3600): "%H:%M:%S",
+    }
+    ax.xaxis.set_major_locator(locator)
+    ax.xaxis.set_major_formatter(formatter)
 
 
 def draw_timeline(
@@ -81,7 +102,8 @@ def draw_timeline(
         )
     first = min(run.start for run in shift_runs)
     last = max(run.end for run in shift_runs)
-    ax.set_xlim(*time_axis(first, last, min_span))
+    start, end = time_axis(first, last, min_span)
+    ax.set_xlim(start, end)
     for when, label, icon in weather_changes:
         # A leg opened long before its first segment would squeeze the runs.
         when = min(max(when, first), last)
@@ -98,7 +120,7 @@ def draw_timeline(
         )
     ax.set_yticks(range(len(labels)), labels, fontsize=7)
     ax.set_ylim(len(labels) - 0.5, WEATHER_ROW - 0.55 if weather_changes else -0.9)
-    ax.xaxis.set_major_formatter(mdates.DateFormatter("%H:%M", tz=tz))
+    set_time_ticks(ax, tz, end - start)
     ax.tick_params(axis="x", labelsize=7)
     ax.set_xlabel(gettext("time (%(zone)s)") % {"zone": tz.key}, fontsize=7)
     ax.grid(True, axis="x", linewidth=0.3, alpha=0.6)

@@ -29,3 +29,15 @@ def test_the_pose_count_of_a_segment_says_it_leaves_out_fixes_without_a_position
     pdf = render_report(scenario.event, ReportOptions(no_tiles=True, level="full")).pdf
     text = flat(pdf_text(pdf, tmp_path))
     assert re.search(r"Poses \d+ with a position \(fixes without one left out\)", text)
+
+
+def test_every_page_with_times_names_their_zone_and_writes_them_all_in_it(scenario, tmp_path):
+    pdf = render_report(scenario.event, ReportOptions(no_tiles=True, level="full")).pdf
+    pages = pdf_text(pdf, tmp_path).split("\f")
+    with_times = [page for page in pages if re.search(r"\d\d:\d\d", page)]
+    assert len(with_times) > 1
+    for page in with_times:
+        assert "Asia/Tokyo" in page, page[:300]
+    # No time is written as a UTC stamp (20260504T090000.000000Z, ...T09:00:00Z).
+    text = "\f".join(pages)
+    assert not re.search(r"\d{8}T\d{6}|T\d\d:\d\d:\d\d(\.\d+)?Z", text)
