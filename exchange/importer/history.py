@@ -6,8 +6,9 @@ entries are written as they are (not through simple-history's signals, which
 would stamp them as made now by the import), marked as the archive's
 installation's record (``history_source``), their author a name, never an
 account here.  An entry is skipped, and counted, when its row is not one the
-archive carries (an archive speaks only of its own rows) or when it is dated
-after the import (beyond FTT_IMPORT_CLOCK_TOLERANCE).  The import's own
+archive carries (an archive speaks only of its own rows), when it is dated
+after the import (beyond FTT_IMPORT_CLOCK_TOLERANCE), or when it is dated
+after the finalisation of a test event final here before the import.  The import's own
 entries, made while it adds or changes rows, stay beside them.
 """
 
@@ -27,6 +28,15 @@ from exchange.importer.plan import MalformedRecord
 from exchange.importer.session import ImportSession, fold
 
 KINDS = ("+", "~", "-")
+# The way from a tracked row to its test event.
+EVENT_PATHS = {
+    "test_event": "",
+    "shift": "test_event__",
+    "leg": "shift__test_event__",
+    "segment": "leg__shift__test_event__",
+    "note": "segment__leg__shift__test_event__",
+    "image": "segment__leg__shift__test_event__",
+}
 # The archive table of each tracked record kind's rows.
 TABLES = {
     "test_event": "test_events",
@@ -65,6 +75,15 @@ def _carried(session: ImportSession, name: str) -> set:
     return uids
 
 
+def _final_here(session: ImportSession, name: str, model, ids) -> dict:
+    """Row id: when its test event became final here, for the events final
+    before this import (not those the archive makes final)."""
+    path = EVENT_PATHS[name]
+    rows = model.objects.filter(pk__in=ids, **{f"{path}finalised__isnull": False})
+    rows = rows.exclude(**{f"{path}pk__in": session.arriving})
+    return dict(rows.values_list("pk", f"{path}finalised"))
+
+
 def _import_entries(session: ImportSession, name: str, records: list):
     model = TRACKED[name]
     history = model.history.model
@@ -74,6 +93,7 @@ def _import_entries(session: ImportSession, name: str, records: list):
     ids = dict(model.objects.filter(uid__in=uids).values_list("uid", "pk"))
     stored = history.objects.filter(id__in=ids.values())
     known = set(stored.values_list("id", "history_date", "history_type"))
+    final = _final_here(session, name, model, ids.values())
     fields = value_fields(model)
     references = _References(session, fields, records)
     added = []
@@ -92,6 +112,10 @@ def _import_entries(session: ImportSession, name: str, records: list):
             session.plan.note("history", "refused")
             continue
         pk = ids[uuid.UUID(r["uid"])]
+        if pk in final and at > final[pk] and (pk, at, r["type"]) not in known:
+            # Only an amendment made here changes what is final here.
+            session.plan.note("history", "refused")
+            continue
         if (pk, at, r["type"]) in known:
             session.plan.note("history", "unchanged")
             continue

@@ -303,13 +303,15 @@ def json_report(event: TestEvent, mode: str) -> str:
 def amendments_of(event: TestEvent) -> list[dict]:
     """Changes to a final event after it was finalised, oldest first.
 
-    An entry another installation recorded (``history_source``) is its record,
-    no amendment here; nor is an import's own entry that leaves a row as the
-    entry before it recorded it: it only brings what the carried history
-    already lists."""
+    An entry another installation recorded (``history_source``) is that
+    installation's amendment of an event it made final, named so ("name (at
+    installation)"; the import refuses such entries for an event final here
+    before it).  An import's own entry that leaves a row as the entry before
+    it recorded it is none: it only brings what the carried history already
+    lists."""
     if event.finalised is None:
         return []
-    entries = [e for e in changes_since(event, event.finalised) if not e.history_source]
+    entries = changes_since(event, event.finalised)
     copies = _import_copies(entries)
     return [_described(e) for e in entries if (type(e), e.history_id) not in copies]
 

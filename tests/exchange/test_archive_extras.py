@@ -325,20 +325,18 @@ def test_a_forged_author_is_a_name_from_elsewhere_and_no_amendment_here(
     event = finality.finalise_test_event(logs.close_test_event(take_over.leg.shift.test_event))
     final = export(tmp_path / "final.zip")
     base_station()
+    load(final)
     admin = role_user("administrator")
     entries = _entries(final)
     last = [e for e in entries if e["uid"] == str(take_over.uid)][-1]
-    forged = {
-        **last,
-        "at": (event.finalised + timedelta(seconds=1)).isoformat(),
-        "channel": "admin",
-        "author": admin.username,
-        "reason": "forged",
-    }
-    load(_with_entries(final, [*entries, forged], tmp_path, "forged.zip"))
+    forged = {**last, "channel": "admin", "author": admin.username}
+    before = {**forged, "at": (event.finalised - timedelta(seconds=1)).isoformat()}
+    after = {**forged, "at": (event.finalised + timedelta(seconds=1)).isoformat()}
+    plan = load(_with_entries(final, [*entries, before, after], tmp_path, "forged.zip"))
 
+    assert plan.counts["history"]["refused"] == 1  # the one after the finalisation
     segment = Segment.objects.get(uid=take_over.uid)
-    shown = [e for e in history_of(segment) if e["reason"] == "forged"]
+    shown = [e for e in history_of(segment) if e["channel"] == "admin"]
     assert len(shown) == 1
     assert shown[0]["author"] != admin.username and admin.username in shown[0]["author"]
     assert shown[0]["imported_from"]
