@@ -64,7 +64,11 @@ def _origin_channel(origin: Origin) -> str:
 
 
 def stamp_origin(sender, history_instance, **kwargs) -> None:
-    """simple-history's pre_create_historical_record: add channel, user and reason."""
+    """simple-history's pre_create_historical_record: add channel, user and reason.
+
+    Every entry written through it is a change made here (``history_source``
+    empty); entries another installation recorded are written by the archive
+    import, without these signals."""
     origin = _origin.get()
     history_instance.history_channel = _origin_channel(origin)
     user = _origin_user()
@@ -101,8 +105,9 @@ def write_history(model, *, changed=(), created=()) -> None:
     is_created = f"{pk} IN ({', '.join(['%s'] * len(created_ids))})" if created_ids else "1 = 0"
     sql = (
         f"INSERT INTO {quote(history._meta.db_table)} ({copied}, history_date, history_type,"
-        " history_user_id, history_change_reason, history_channel, history_author)"
-        f" SELECT {copied}, %s, CASE WHEN {is_created} THEN '+' ELSE '~' END, %s, %s, %s, ''"
+        " history_user_id, history_change_reason, history_channel, history_author,"
+        " history_source)"
+        f" SELECT {copied}, %s, CASE WHEN {is_created} THEN '+' ELSE '~' END, %s, %s, %s, '', ''"
         f" FROM {quote(model._meta.db_table)} WHERE {pk} IN ({', '.join(['%s'] * len(kinds))})"
     )
     params = [

@@ -2,8 +2,9 @@
 
 Layout::
 
-    manifest.json          format name and version, what was selected, and the
-                           SHA-256 and size of every other member
+    manifest.json          format name and version, the installation that wrote
+                           it, what was selected, and the SHA-256 and size of
+                           every other member
     data/<table>.jsonl     one JSON object per line, see exchange.records
     files/<storage name>   image and map files, named as in media storage
 
@@ -126,6 +127,7 @@ class ArchiveWriter:
             "format": self.format,
             "version": VERSION,
             "created": datetime.now(UTC).isoformat(),
+            "installation": settings.FTT_INSTALLATION_NAME,
             "selection": self.selection,
             "counts": self.counts,
             "members": self.members,

@@ -4,13 +4,15 @@ from django.utils.translation import gettext, gettext_noop
 
 from exchange import records as rec
 
-OUTCOMES = ("added", "updated", "unchanged", "reused")
+# "refused": history entries an import leaves out (exchange.importer.history).
+OUTCOMES = ("added", "updated", "unchanged", "reused", "refused")
 # The column headings; the rows are the archive's table names.
 HEADINGS = {
     "added": gettext_noop("added"),
     "updated": gettext_noop("updated"),
     "unchanged": gettext_noop("unchanged"),
     "reused": gettext_noop("reused"),
+    "refused": gettext_noop("refused"),
 }
 
 

@@ -3,8 +3,11 @@
 One row per history entry (django-simple-history) of an archived test event,
 shift, leg, segment, note or image: the record (``model``, ``uid``), when
 (``at``), what kind (``type``: + ~ -), through what (``channel``), who
-(``author``: the account's name, as accounts are not carried), why
-(``reason``), and the record's values after the change.  The values refer to
+(``author``: the account's name, as accounts are not carried; an importing
+installation keeps it as a name, never as an account), where (``installation``:
+for an entry imported from a third installation, that one; none means the
+installation named in the manifest), why (``reason``), and the record's values
+after the change.  The values refer to
 other rows the way exchange.records does (uids, keys, institutions, person
 refs); a row that no longer exists is referred to as null.
 
@@ -36,7 +39,7 @@ TRACKED = {
 }
 # simple-history's own columns and the row's id here: not part of the values.
 _OWN = {"id", "history_id", "history_date", "history_type", "history_user"}
-_OWN |= {"history_channel", "history_author", "history_change_reason"}
+_OWN |= {"history_channel", "history_author", "history_source", "history_change_reason"}
 
 
 def value_fields(model) -> list:
@@ -113,6 +116,8 @@ class HistoryExport:
                 "type": entry.history_type,
                 "channel": entry.history_channel,
                 "author": user.get_username() if user is not None else entry.history_author,
+                # Where an imported entry was recorded; none: here.
+                "installation": entry.history_source or None,
                 "reason": entry.history_change_reason or "",
                 "values": values,
             }

@@ -26,18 +26,23 @@ from exchange.importer import Plan, import_bundle
 from exchange.models import ArchiveImport
 
 
-def import_upload(upload, *, dry_run: bool) -> Plan:
+def import_upload(upload, *, dry_run: bool, by=None) -> Plan:
     """Raises ArchiveError (not an FTT archive, damaged) or ImportRefused
     (conflicts with data here); in both cases nothing was written."""
     # The archive reader needs a seekable file on disk, not an upload stream.
     with tempfile.NamedTemporaryFile(suffix=".zip") as copy:
         _copy(upload, copy)
-        return import_file(Path(copy.name), dry_run=dry_run)
+        return import_file(Path(copy.name), dry_run=dry_run, by=by)
 
 
-def import_file(path: Path, *, dry_run: bool) -> Plan:
+def import_file(path: Path, *, dry_run: bool, by=None) -> Plan:
+    """``by``: the account the import's own changes are recorded as made by."""
     with open_archive(str(path)) as bundle:
-        return import_bundle(bundle, dry_run=dry_run)
+        return import_bundle(bundle, dry_run=dry_run, by=_signed_in(by))
+
+
+def _signed_in(user):
+    return user if user is not None and user.is_authenticated else None
 
 
 def queue_import(upload, *, user=None) -> tuple[ArchiveImport, Plan]:
@@ -51,14 +56,14 @@ def queue_import(upload, *, user=None) -> tuple[ArchiveImport, Plan]:
     try:
         with open(upload_copy, "wb") as copy:
             _copy(upload, copy)
-        preview = import_file(upload_copy, dry_run=True)
+        preview = import_file(upload_copy, dry_run=True, by=user)
         with transaction.atomic():
             job = ArchiveImport.objects.create(
                 filename=(getattr(upload, "name", "") or upload_copy.name)[:255],
                 path=str(upload_copy.resolve()),
                 **said_fields("message", jobs.waiting()),
                 **said_fields("verdict", preview.said(), 200),
-                requested_by=user if user is not None and user.is_authenticated else None,
+                requested_by=_signed_in(user),
             )
             import_archive.enqueue(job.pk)
     except BaseException:
@@ -87,7 +92,7 @@ def import_archive(job_id: int) -> str:
         **said_fields("message", said(gettext_noop("importing"))),
     )
     try:
-        plan = import_file(Path(job.path), dry_run=False)
+        plan = import_file(Path(job.path), dry_run=False, by=job.requested_by)
     except Exception as exc:  # refused, malformed or a file gone: the reason is the outcome
         _finish(job, ArchiveImport.Status.FAILED, **said_fields("error", _reason(exc)))
         return ArchiveImport.Status.FAILED

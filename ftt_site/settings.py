@@ -5,6 +5,7 @@ server comes from ``FTT_*`` environment variables; README.md lists them.
 """
 
 import ipaddress
+import socket
 from datetime import timedelta
 from functools import reduce
 from operator import or_
@@ -433,6 +434,12 @@ FTT_ARCHIVE_MAX_MEMBER_BYTES = env_int("FTT_ARCHIVE_MAX_MEMBER_BYTES", 2 * 1024*
 FTT_ARCHIVE_MAX_TOTAL_BYTES = env_int("FTT_ARCHIVE_MAX_TOTAL_BYTES", 20 * 1024**3)
 FTT_ARCHIVE_MAX_RATIO = env_int("FTT_ARCHIVE_MAX_RATIO", 200)
 FTT_ARCHIVE_MAX_FILE_BYTES = env_int("FTT_ARCHIVE_MAX_FILE_BYTES", 256 * 1024**2)
+# This installation's name in the archives it writes: the history another
+# installation imports from them says it was recorded here.
+FTT_INSTALLATION_NAME = env_str("FTT_INSTALLATION_NAME", socket.gethostname())[:150]
+# How far ahead of the importing machine's clock an imported history entry
+# may be dated before it is refused as lying in the future.
+FTT_IMPORT_CLOCK_TOLERANCE = env_int("FTT_IMPORT_CLOCK_TOLERANCE", 300)
 
 # Content-Security-Policy (django-csp) on every page: GUI, admin, API docs.
 # Scripts only from FTT's own static files, so a stored script never runs;

@@ -6,8 +6,9 @@ through what the change came (``history_channel``); who made it is
 simple-history's ``history_user`` (an account, or the robot account whose
 token wrote it), the reason its ``history_change_reason``.
 ``events.history`` fills both from the request or the caller's context.
-Rows brought by an archive name their author in ``history_author`` instead:
-accounts are not carried between installations (exchange.history_records).
+Rows brought by an archive name their author in ``history_author`` instead
+(accounts are not carried between installations) and the installation that
+recorded them in ``history_source`` (exchange.history_records).
 Poses are not tracked: they are only ever added, never changed, and a
 history row per pose would double the cost of the busiest write.
 """
@@ -31,6 +32,10 @@ class ChangeOrigin(models.Model):
     # The account's name where the change was made, for rows another
     # installation recorded; empty for changes made here (history_user).
     history_author = models.CharField(max_length=150, blank=True, default="")
+    # The installation an imported entry was recorded on (the archive's
+    # manifest); empty for changes made here.  An imported entry is that
+    # installation's record: never an amendment here, its author only a name.
+    history_source = models.CharField(max_length=150, blank=True, default="")
 
     class Meta:
         abstract = True

@@ -33,9 +33,18 @@ def _field_name(model, field: str) -> str:
 
 
 def author_of(entry) -> str:
-    """The account that made the change here, or the name another installation gave."""
+    """The account that made the change here, or, for an entry another
+    installation recorded, the name it gave with that installation's name: a
+    name that only looks like an account here never reads as that account."""
     user = entry.history_user
-    return user.get_username() if user is not None else entry.history_author
+    if user is not None:
+        return user.get_username()
+    if entry.history_source:
+        return _("%(author)s (at %(installation)s)") % {
+            "author": entry.history_author or _("FTT"),
+            "installation": entry.history_source,
+        }
+    return entry.history_author
 
 
 def _value(value) -> str | None:
@@ -64,6 +73,7 @@ def describe_entry(entry, previous) -> dict:
         "channel": entry.history_channel,
         "channel_text": word_for(entry.history_channel),
         "reason": entry.history_change_reason or "",
+        "imported_from": entry.history_source or None,
         "changes": changes,
     }
 

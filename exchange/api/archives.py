@@ -104,7 +104,7 @@ class ArchiveImportView(APIView):
         dry_run = str(request.data.get("dry_run", "")).lower() in ("1", "true", "yes", "on")
         try:
             if dry_run:
-                plan, job = import_upload(upload, dry_run=True), None
+                plan, job = import_upload(upload, dry_run=True, by=request.user), None
             else:
                 job, plan = queue_import(upload, user=request.user)
         except (ArchiveError, MalformedRecord) as exc:

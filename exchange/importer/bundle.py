@@ -49,12 +49,18 @@ def announce_changes(session: ImportSession):
         feed.announce(kind, masters[segment], segment=segment, mode=None, count=count)
 
 
-def import_bundle(bundle, *, dry_run: bool = False) -> Plan:
+def import_bundle(bundle, *, dry_run: bool = False, by=None) -> Plan:
     """Apply a verified archive (or any object with ``records(table)`` and
-    ``read_file(name)``).  Raises :class:`ImportRefused`; then nothing changed."""
+    ``read_file(name)``).  Raises :class:`ImportRefused`; then nothing changed.
+
+    The import's own changes are ``by``'s (the administrator who imports), on
+    channel ``import``, with the import as their reason: on a final event that
+    is an amendment (events.services.finality), which only an administrator
+    may make."""
     session = ImportSession(bundle, dry_run)
+    origin = authored("import", user=by, reason=gettext("archive import"))
     try:
-        with authored("import"), transaction.atomic(), finalisations_arriving() as arriving:
+        with origin, transaction.atomic(), finalisations_arriving() as arriving:
             session.arriving = arriving
             for step in STEPS:
                 step(session)

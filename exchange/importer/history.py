@@ -3,13 +3,21 @@
 An entry is added only if this installation has no entry of the same record
 with the same time and kind, so importing an archive again adds nothing.  The
 entries are written as they are (not through simple-history's signals, which
-would stamp them as made now by the import); the import's own entries, made
-while it adds or changes rows, stay beside them.
+would stamp them as made now by the import), marked as the archive's
+installation's record (``history_source``), their author a name, never an
+account here.  An entry is skipped, and counted, when its row is not one the
+archive carries (an archive speaks only of its own rows), when it is dated
+after the import (beyond FTT_IMPORT_CLOCK_TOLERANCE), or when it is dated
+after the finalisation of a test event final here before the import.  The import's own
+entries, made while it adds or changes rows, stay beside them.
 """
 
 import uuid
 from collections import defaultdict
+from datetime import timedelta
 
+from django.conf import settings
+from django.utils import timezone
 from django.utils.translation import gettext
 
 from events.models import Personnel, TestCase
@@ -20,6 +28,24 @@ from exchange.importer.plan import MalformedRecord
 from exchange.importer.session import ImportSession, fold
 
 KINDS = ("+", "~", "-")
+# The way from a tracked row to its test event.
+EVENT_PATHS = {
+    "test_event": "",
+    "shift": "test_event__",
+    "leg": "shift__test_event__",
+    "segment": "leg__shift__test_event__",
+    "note": "segment__leg__shift__test_event__",
+    "image": "segment__leg__shift__test_event__",
+}
+# The archive table of each tracked record kind's rows.
+TABLES = {
+    "test_event": "test_events",
+    "shift": "shifts",
+    "leg": "legs",
+    "segment": "segments",
+    "note": "notes",
+    "image": "images",
+}
 _CHANNELS = {key for key, _label in CHANNELS}
 
 
@@ -39,13 +65,35 @@ def import_history(session: ImportSession):
         _import_entries(session, name, records)
 
 
+def _carried(session: ImportSession, name: str) -> set:
+    uids = set()
+    for uid in session.carried[TABLES[name]]:
+        try:
+            uids.add(uuid.UUID(uid))
+        except ValueError:
+            continue
+    return uids
+
+
+def _final_here(session: ImportSession, name: str, model, ids) -> dict:
+    """Row id: when its test event became final here, for the events final
+    before this import (not those the archive makes final)."""
+    path = EVENT_PATHS[name]
+    rows = model.objects.filter(pk__in=ids, **{f"{path}finalised__isnull": False})
+    rows = rows.exclude(**{f"{path}pk__in": session.arriving})
+    return dict(rows.values_list("pk", f"{path}finalised"))
+
+
 def _import_entries(session: ImportSession, name: str, records: list):
     model = TRACKED[name]
     history = model.history.model
-    uids = {uuid.UUID(r["uid"]) for r in records}
+    carried = _carried(session, name)
+    latest = timezone.now() + timedelta(seconds=settings.FTT_IMPORT_CLOCK_TOLERANCE)
+    uids = {uuid.UUID(r["uid"]) for r in records} & carried
     ids = dict(model.objects.filter(uid__in=uids).values_list("uid", "pk"))
     stored = history.objects.filter(id__in=ids.values())
     known = set(stored.values_list("id", "history_date", "history_type"))
+    final = _final_here(session, name, model, ids.values())
     fields = value_fields(model)
     references = _References(session, fields, records)
     added = []
@@ -54,15 +102,20 @@ def _import_entries(session: ImportSession, name: str, records: list):
             "table": name,
             "uid": r["uid"],
         }
-        pk = ids.get(uuid.UUID(r["uid"]))
-        if pk is None:
-            raise MalformedRecord(
-                gettext("%(where)s: the %(kind)s is neither in the archive nor here.")
-                % {"where": session.where, "kind": name}
-            )
         at = rec.time_in(r["at"], "at")
         if at is None:
             raise MalformedRecord(gettext("%(where)s: it has no time.") % {"where": session.where})
+        if uuid.UUID(r["uid"]) not in carried:
+            session.plan.note("history", "refused")
+            continue
+        if at > latest:
+            session.plan.note("history", "refused")
+            continue
+        pk = ids[uuid.UUID(r["uid"])]
+        if pk in final and at > final[pk] and (pk, at, r["type"]) not in known:
+            # Only an amendment made here changes what is final here.
+            session.plan.note("history", "refused")
+            continue
         if (pk, at, r["type"]) in known:
             session.plan.note("history", "unchanged")
             continue
@@ -77,6 +130,7 @@ def _import_entries(session: ImportSession, name: str, records: list):
             history_type=r["type"],
             history_channel=r["channel"],
             history_author=str(r.get("author") or "")[:150],
+            history_source=str(r.get("installation") or session.source)[:150],
             history_change_reason=r.get("reason") or None,
         )
         for field in fields:

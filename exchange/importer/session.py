@@ -1,7 +1,7 @@
 """What the steps of one import share: the archive, the rows met so far and the
 files written, with the lookups that find a row named by a record."""
 
-from collections import Counter
+from collections import Counter, defaultdict
 
 from django.utils.translation import gettext
 
@@ -39,6 +39,14 @@ class ImportSession:
         self.track_points: Counter = Counter()
         # Test events this archive makes final here (events.services.finality).
         self.arriving: set = set()
+        # The uids of every row the archive carries, by table: its history may
+        # speak only of them.
+        self.carried: dict[str, set[str]] = defaultdict(set)
+        # The installation that wrote the archive (its manifest); an older FTT's
+        # archive or the original FTT's database does not say.
+        manifest = getattr(bundle, "manifest", None) or {}
+        source = manifest.get("installation") if isinstance(manifest, dict) else None
+        self.source = (source if isinstance(source, str) and source.strip() else "?")[:150]
 
     def records(self, table: str):
         for record in self.bundle.records(table):
@@ -49,6 +57,8 @@ class ImportSession:
                         gettext("%(where)s: its %(field)s must be a string.")
                         % {"where": self.where, "field": name}
                     )
+            if "uid" in record:
+                self.carried[table].add(record["uid"])
             yield record
 
     def refuse(self, message: str):

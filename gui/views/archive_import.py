@@ -36,7 +36,7 @@ def archive_import(request):
         upload = form.cleaned_data["archive"]
         try:
             if form.cleaned_data["dry_run"]:
-                plan = import_upload(upload, dry_run=True)
+                plan = import_upload(upload, dry_run=True, by=request.user)
             else:
                 queue_import(upload, user=request.user)
                 # After a POST, a reload must not send the archive again.

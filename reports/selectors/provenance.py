@@ -303,9 +303,12 @@ def json_report(event: TestEvent, mode: str) -> str:
 def amendments_of(event: TestEvent) -> list[dict]:
     """Changes to a final event after it was finalised, oldest first.
 
-    An import's own entry that leaves a row as the entry before it recorded it
-    is no amendment: it only brings what the carried history (another
-    installation's entries, imported with their own dates) already lists."""
+    An entry another installation recorded (``history_source``) is that
+    installation's amendment of an event it made final, named so ("name (at
+    installation)"; the import refuses such entries for an event final here
+    before it).  An import's own entry that leaves a row as the entry before
+    it recorded it is none: it only brings what the carried history already
+    lists."""
     if event.finalised is None:
         return []
     entries = changes_since(event, event.finalised)

@@ -2,12 +2,17 @@
 suggestions, start uncertainties and missed fixes, the test plan; and that an
 archive of an older FTT without them still imports."""
 
+import io
 import json
+from datetime import timedelta
 
 import pytest
+from django.conf import settings
 from django.contrib.auth import get_user_model
 from django.contrib.gis.geos import LineString, MultiPolygon, Polygon
+from django.core.management import CommandError, call_command
 from django.urls import reverse
+from django.utils import timezone
 
 from events.models import (
     Criterion,
@@ -22,12 +27,15 @@ from events.models import (
     TestEvent,
     Vehicle,
 )
+from events.selectors.history import history_of
 from events.services import finality, logs, segments, test_plans
 from exchange.archive import open_archive
 from exchange.export import export_events, select_events
 from exchange.importer import ImportRefused, import_bundle
+from reports.selectors.provenance import amendments_of
 from telemetry.models import Image
 from tests.support.archives import members_of, replace_record, signed_archive
+from tests.support.jobs import run_queued_jobs
 
 pytestmark = pytest.mark.django_db
 
@@ -86,7 +94,10 @@ def test_api_change_reaches_the_base_station_with_author_channel_and_values(
     here = Segment.objects.get(uid=take_over.uid)
     shown = _history(api_client, here)
     api = [e for e in shown if e["channel"] == "api"]
-    assert len(api) == 1 and api[0]["author"] == name and api[0]["kind"] == "changed"
+    assert len(api) == 1 and api[0]["kind"] == "changed"
+    # The robot's account is a name recorded there, not an account here.
+    assert api[0]["author"] == f"{name} (at {settings.FTT_INSTALLATION_NAME})"
+    assert api[0]["imported_from"] == settings.FTT_INSTALLATION_NAME
     moved = [(c["field"], c["before"], c["after"]) for c in api[0]["changes"]]
     assert ("ito_reason", "unassigned", "planner") in moved
     imported = [e for e in shown if e["channel"] == "import"]
@@ -264,3 +275,120 @@ def test_test_plan_judgements_and_leg_links_travel(shift, tmp_path, media_root, 
     assert stale.changes() == 0 and stale.counts["test_cases"] == {"reused": 1}
     assert _plan_of(TestEvent.objects.get()) == expected
     assert Leg.objects.get(uid=leg.uid).test_case.key == "gravel"
+
+
+def _entries(path) -> list[dict]:
+    members = members_of(path.read_bytes())
+    return [json.loads(line) for line in members["data/history.jsonl"].splitlines()]
+
+
+def _with_entries(path, entries: list[dict], tmp_path, name: str):
+    members = members_of(path.read_bytes())
+    body = "".join(json.dumps(e) + "\n" for e in entries).encode()
+    crafted = tmp_path / name
+    crafted.write_bytes(signed_archive({**members, "data/history.jsonl": body}))
+    return crafted
+
+
+def test_imported_history_never_lands_on_rows_outside_the_archive_nor_in_the_future(
+    take_over, tmp_path, media_root, base_station
+):
+    mine = take_over.leg.shift.test_event
+    other = logs.create_test_event(location="Bonn", version="1.0", time_zone="Europe/Berlin")
+    everything = export(tmp_path / "all.zip")
+    one = tmp_path / "one.zip"
+    export_events(one, select_events([str(mine.uid)]))
+    base_station()
+    load(everything)
+    here = TestEvent.objects.get(uid=other.uid)
+    before = here.history.count()
+
+    entries = _entries(one)
+    event_entry = next(e for e in entries if e["uid"] == str(mine.uid))
+    onto_other = {**event_entry, "uid": str(other.uid), "at": "2020-01-01T00:00:00+00:00"}
+    onto_other["values"] = {**event_entry["values"], "location": "forged"}
+    segment_entry = next(e for e in entries if e["uid"] == str(take_over.uid))
+    future = {**segment_entry, "at": (timezone.now() + timedelta(days=1)).isoformat()}
+    plan = load(_with_entries(one, [*entries, onto_other, future], tmp_path, "crafted.zip"))
+
+    assert here.history.count() == before
+    assert not here.history.filter(location="forged").exists()
+    segment = Segment.objects.get(uid=take_over.uid)
+    assert not segment.history.filter(history_date__gt=timezone.now()).exists()
+    assert plan.counts["history"]["refused"] == 2
+    assert any("refused" in line for line in plan.lines())
+
+
+def test_a_forged_author_is_a_name_from_elsewhere_and_no_amendment_here(
+    take_over, tmp_path, media_root, base_station, role_user
+):
+    event = finality.finalise_test_event(logs.close_test_event(take_over.leg.shift.test_event))
+    final = export(tmp_path / "final.zip")
+    base_station()
+    load(final)
+    admin = role_user("administrator")
+    entries = _entries(final)
+    last = [e for e in entries if e["uid"] == str(take_over.uid)][-1]
+    forged = {**last, "channel": "admin", "author": admin.username}
+    before = {**forged, "at": (event.finalised - timedelta(seconds=1)).isoformat()}
+    after = {**forged, "at": (event.finalised + timedelta(seconds=1)).isoformat()}
+    plan = load(_with_entries(final, [*entries, before, after], tmp_path, "forged.zip"))
+
+    assert plan.counts["history"]["refused"] == 1  # the one after the finalisation
+    segment = Segment.objects.get(uid=take_over.uid)
+    shown = [e for e in history_of(segment) if e["channel"] == "admin"]
+    assert len(shown) == 1
+    assert shown[0]["author"] != admin.username and admin.username in shown[0]["author"]
+    assert shown[0]["imported_from"]
+    assert not segment.history.filter(history_user=admin).exists()
+    assert amendments_of(TestEvent.objects.get(uid=event.uid)) == []
+
+
+def test_the_import_s_own_changes_name_the_administrator_who_imported(
+    take_over, tmp_path, media_root, base_station, api_client
+):
+    archive = export(tmp_path / "robot.zip")
+    base_station()
+    admin = api_client("administrator")
+    answer = admin.post(
+        "/api/archives/import/", {"archive": archive.open("rb")}, format="multipart"
+    )
+    assert answer.status_code in (200, 202)
+    assert run_queued_jobs() == 1
+
+    segment = Segment.objects.get(uid=take_over.uid)
+    own = [e for e in history_of(segment) if e["channel"] == "import"]
+    assert own and {e["author"] for e in own} == {admin.user.username}
+    assert {e["imported_from"] for e in own} == {None}
+
+
+def test_ftt_import_by_an_administrator_amends_a_final_event_naming_them(
+    take_over, tmp_path, media_root, base_station, role_user
+):
+    event = finality.finalise_test_event(logs.close_test_event(take_over.leg.shift.test_event))
+    final = export(tmp_path / "final.zip")
+    base_station()
+    load(final)
+    changed = tmp_path / "changed.zip"
+    members = replace_record(
+        members_of(final.read_bytes()),
+        "segments",
+        lambda r: (
+            {**r, "ito_reason": "planner", "annotated": timezone.now().isoformat()}
+            if r["uid"] == str(take_over.uid)
+            else r
+        ),
+    )
+    changed.write_bytes(signed_archive(members))
+    with pytest.raises(CommandError, match="no active administrator"):
+        call_command("ftt_import", str(changed), by="nobody", stdout=io.StringIO())
+    with pytest.raises(CommandError, match="final"):
+        call_command("ftt_import", str(changed), stdout=io.StringIO())
+    admin = role_user("administrator")
+
+    call_command("ftt_import", str(changed), by=admin.username, stdout=io.StringIO())
+
+    assert Segment.objects.get(uid=take_over.uid).ito_reason_id == "planner"
+    listed = amendments_of(TestEvent.objects.get(uid=event.uid))
+    assert listed and {(a["by"], a["channel"]) for a in listed} == {(admin.username, "import")}
+    assert {a["reason"] for a in listed} == {"archive import"}

@@ -4,6 +4,7 @@ import io
 import json
 
 import pytest
+from django.conf import settings
 from django.core.management import CommandError, call_command
 from django.db import connection
 from django.test.utils import CaptureQueriesContext
@@ -151,7 +152,11 @@ def test_a_final_event_arrives_final_with_its_taxonomy_and_amendment(scenario, t
     assert here.taxonomy == event.taxonomy
     assert event_statistics(here).overall.interventions == figures
     assert [(a["record"], a["by"], a["reason"]) for a in amendments_of(here)] == [
-        (f"segment {take_over.uid}", administrator.username, "wrong reason tapped")
+        (
+            f"segment {take_over.uid}",
+            f"{administrator.username} (at {settings.FTT_INSTALLATION_NAME})",
+            "wrong reason tapped",
+        )
     ]
     assert _verify(report) == (True, f"OK: The data of test event '{here}' is unchanged.\n")
     again = tmp_path / "again.json"
