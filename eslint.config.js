@@ -15,6 +15,25 @@ module.exports = [
     },
     rules: {
       "no-unused-vars": ["error", { args: "none" }],
+      // Text from the server (a test case's title, a vehicle's name) is shown, never
+      // parsed: Leaflet puts a string given as a tooltip or popup into innerHTML.
+      "no-restricted-syntax": [
+        "error",
+        {
+          selector: "AssignmentExpression > MemberExpression.left[property.name=/^(innerHTML|outerHTML)$/]",
+          message: "Build elements (dom.js element, textContent): a string assigned here is parsed as HTML.",
+        },
+        {
+          selector: "CallExpression[callee.property.name='insertAdjacentHTML']",
+          message: "Build elements (dom.js element, textContent): this string is parsed as HTML.",
+        },
+        {
+          selector:
+            "CallExpression[callee.property.name=/^(bindTooltip|bindPopup|setTooltipContent|setPopupContent)$/] > " +
+            ":not(CallExpression[callee.name='element'], ArrowFunctionExpression[body.callee.name='element']).arguments:first-child",
+          message: "Give Leaflet an element (dom.js element, textContent): a string is parsed as HTML.",
+        },
+      ],
     },
   },
   {

@@ -10,5 +10,5 @@ class BasemapsConfig(AppConfig):
 
     def ready(self):
         # rasterio is loaded by the code that reads rasters; on SpatiaLite before
-        # the first connection (ftt_site.native_libs), as its GDAL requires.
+        # the first connection (ftt_site.db_spatialite.native_libs), as its GDAL requires.
         confine_gdal()

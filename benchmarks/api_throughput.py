@@ -8,9 +8,9 @@ Builds a throw-away test event with one leg of N GPS poses (default 100 000) ove
   * POST /api/poses/batch/ with batches of 1 000 and 5 000 new poses, and each
     batch again (all known), in process; medians beside the target of 20 000/s,
   * POST /api/poses/ with one pose, in process with a token: the median time and
-    the statements it sends (target: at most 3, in one transaction; BEGIN and
+    the statements it sends (target: at most 2, in one transaction; BEGIN and
     COMMIT not counted).  This is the view; over HTTP the production server's
-    pose route answers it before Django (ftt_site/pose_route.py), with the
+    pose route answers it before Django (ftt_site/inbound/pose_route.py), with the
     same code from the quick check on.
 Everything is deleted afterwards.
 
@@ -49,7 +49,12 @@ import uuid
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 
+# ``--tree PATH`` measures another checkout's code (e.g. main's, in a ``git
+# worktree``) with this file's measurements; ``--against PATH`` runs that after
+# this tree, in the same run, and prints both side by side.
 ROOT = Path(__file__).resolve().parent.parent
+if "--tree" in sys.argv:
+    ROOT = Path(sys.argv[sys.argv.index("--tree") + 1]).resolve()
 sys.path.insert(0, str(ROOT))
 os.environ.setdefault("DJANGO_SETTINGS_MODULE", "ftt_site.settings")
 
@@ -64,13 +69,16 @@ from django.test.utils import CaptureQueriesContext  # noqa: E402
 from rest_framework.authtoken.models import Token  # noqa: E402
 from rest_framework.test import APIClient  # noqa: E402
 
-from events.models import Vehicle  # noqa: E402
+from events.models import Segment, Vehicle  # noqa: E402
 from events.services import deletion, logs, segments  # noqa: E402
 from telemetry.models import Pose  # noqa: E402
 from telemetry.services import recording  # noqa: E402
 from telemetry.services.recording import GpsFix  # noqa: E402
+from telemetry.services.segment_figures import recount_figures  # noqa: E402
 
 SEGMENTS = 20
+# The figures --against compares, by name.
+SUMMARY: dict[str, float] = {}
 
 
 def timed(label, func, rows=None):
@@ -84,7 +92,7 @@ def timed(label, func, rows=None):
 
 TARGET_RATIO = 1.0
 BATCH_TARGET = 20_000  # poses/s through POST /api/poses/batch/ on PostGIS
-SINGLE_QUERIES_TARGET = 3  # queries of one stored pose, in one transaction
+SINGLE_QUERIES_TARGET = 2  # statements of one stored pose, in one transaction (issue 44)
 
 
 def free_port() -> int:
@@ -140,7 +148,7 @@ def ftt_server(kind, port, workers):
         # What scripts/run.sh starts: Gunicorn supervising Uvicorn workers.
         env["FTT_WEB_WORKERS"] = str(workers)
         command = [
-            *("gunicorn", "-c", "ftt_site/gunicorn.conf.py", "-b", f"127.0.0.1:{port}"),
+            *("gunicorn", "-c", "ftt_site/server/gunicorn.conf.py", "-b", f"127.0.0.1:{port}"),
             "ftt_site.asgi:application",
         ]
     elif kind == "gunicorn":
@@ -214,7 +222,9 @@ def hammer(port, path, body_for, headers, clients, seconds) -> int:
                 answered[index] += 1
         conn.close()
 
-    threads = [threading.Thread(target=client, args=(i,)) for i in range(clients)]
+    threads = [
+        threading.Thread(target=client, args=(i,), name=f"client-{i}") for i in range(clients)
+    ]
     for thread in threads:
         thread.start()
     for thread in threads:
@@ -228,27 +238,48 @@ def original_rows(dsn) -> int:
     return int(psql(dsn, "SELECT count(*) FROM pose"))
 
 
-def concurrency(args, master, user):
+def robot_masters(event, t0, count) -> list:
+    """The field's shape: ``count`` robots, each its own vehicle, shift, leg and
+    open master segment."""
+    masters = []
+    for i in range(count):
+        vehicle, _ = Vehicle.objects.get_or_create(key=f"bench-robot-{i}", short_description="b")
+        shift = logs.create_shift(test_event=event, vehicle=vehicle, at=t0)
+        leg = logs.create_leg(shift=shift, at=t0)
+        masters.append(segments.report_mode(leg, "auto", at=t0 + timedelta(seconds=1)).master)
+    return masters
+
+
+def concurrency(args, master, user, robots=None):
+    """Single poses from N clients: into ``master`` (one segment), or with
+    ``robots`` (masters) client i into robots[i % len]: a robot per segment."""
     counts = [int(c) for c in args.clients.split(",")]
     token, _ = Token.objects.get_or_create(user=user)
     port = free_port()
     server = ftt_server(args.server, port, args.workers)
     headers = {"Content-Type": "application/json", "Authorization": f"Token {token.key}"}
     results = {}
+    targets = robots or [master]
+    shape = "one robot per segment" if robots else "all clients into one segment"
     try:
-
+        # Each client thread picks its own segment (thread name -> index).
         def ftt_body():
-            return {"segment": master.pk, "longitude": 8.0, "latitude": 50.0}
+            index = int(threading.current_thread().name.rsplit("-", 1)[-1])
+            return {"segment": targets[index % len(targets)].pk, "longitude": 8.0, "latitude": 50.0}
+
+        def count():
+            return Pose.objects.filter(segment__in=targets).count()
 
         # The first requests import every view module; not counted.
         hammer(port, "/api/poses/", ftt_body, headers, 2, 3)
         for clients in counts:
-            before = Pose.objects.filter(segment=master).count()
+            before = count()
             answered = hammer(port, "/api/poses/", ftt_body, headers, clients, args.seconds)
-            stored = Pose.objects.filter(segment=master).count() - before
+            stored = count() - before
             # Every answered pose is stored once, and nothing unanswered is.
             assert stored == answered, (stored, answered)
             results[clients] = [stored / args.seconds]
+            SUMMARY[f"single/s {clients} clients, {shape}"] = stored / args.seconds
     finally:
         stop(server)
     if args.original:
@@ -283,7 +314,8 @@ def concurrency(args, master, user):
             stop(original)
     load = os.getloadavg()[0]
     print(
-        f"\nPOST single poses, stored poses/s ({args.server} server, {args.workers} workers, "
+        f"\nPOST single poses, {shape}, stored poses/s ({args.server} server, "
+        f"{args.workers} workers, "
         f"{args.seconds:g} s per "
         f"concurrency, load average {load:.1f})"
     )
@@ -329,6 +361,7 @@ def batches(client, master, t0, rounds):
                 answer = client.post("/api/poses/batch/", text, content_type="application/json")
                 rates.append(size / (time.perf_counter() - begin))
                 assert answer.json() == {"stored": stored}, answer.content[:200]
+        SUMMARY[f"batch of {size}, new poses/s"] = statistics.median(new)
         print(
             f"  {size:>5} per batch: new {statistics.median(new):>8,.0f}"
             f"   known {statistics.median(known):>8,.0f}"
@@ -352,6 +385,8 @@ def single_in_process(master, user, rounds=200):
     with CaptureQueriesContext(connection) as captured:
         client.post("/api/poses/", body, format="json")
     statements = [q for q in captured if q["sql"] not in ("BEGIN", "COMMIT")]
+    SUMMARY["one pose in process, ms"] = statistics.median(times) * 1000
+    SUMMARY["one pose in process, statements"] = len(statements)
     print(
         f"POST /api/poses/ one pose, in process: median {statistics.median(times) * 1000:.1f} ms,"
         f" {len(statements)} statements in {len(captured) - len(statements)} BEGIN/COMMIT"
@@ -377,7 +412,16 @@ def main():
         help="the interpreter with the original's Flask, flask-restful, flask-cors, psycopg2",
     )
     parser.add_argument("--original-db", help="the original's PostgreSQL, to count its rows")
+    parser.add_argument(
+        "--robots", type=int, default=0,
+        help="with --clients: also N robots, each its own vehicle, leg and open segment",
+    )  # fmt: skip
+    parser.add_argument("--tree", help="measure this checkout's code instead (see ROOT)")
+    parser.add_argument("--against", help="another checkout, measured after this one")
+    parser.add_argument("--summary", help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.against:
+        return against(args)
     if args.original and not args.original_db:
         parser.error("--original needs --original-db")
     n = args.poses
@@ -407,7 +451,7 @@ def main():
         client.force_authenticate(user)
         # The first request imports every view module (reports pull in matplotlib); not timed.
         client.get("/api/tracks/")
-        # As the production server does once loaded (ftt_site/gunicorn.conf.py).
+        # As the production server does once loaded (ftt_site/server/gunicorn.conf.py).
         gc.freeze()
 
         tracks = timed(
@@ -434,9 +478,40 @@ def main():
         single_in_process(master, user)
         if args.clients:
             concurrency(args, master, user)
+            if args.robots:
+                concurrency(args, master, user, robot_masters(event, t0, args.robots))
+        differences = recount_figures(list(Segment.objects.filter(leg__shift__test_event=event)
+                                           .masters().values_list("pk", flat=True)))  # fmt: skip
+        print(f"ftt_recount_figures: {len(differences)} segments differ {differences or ''}")
+        SUMMARY["figures that differ after the run"] = len(differences)
     finally:
         timed("delete the test event", lambda: deletion.delete(event))
         user.delete()
+        if args.summary:
+            Path(args.summary).write_text(json.dumps(SUMMARY))
+
+
+def against(args):
+    """This tree, then ``--against``'s, each in a process of its own with the
+    same arguments; their figures side by side."""
+    import tempfile
+
+    rest = list(sys.argv[1:])
+    for option in ("--against", "--tree"):
+        while option in rest:
+            at = rest.index(option)
+            del rest[at : at + 2]
+    figures = {}
+    for tree in (ROOT, Path(args.against).resolve()):
+        with tempfile.NamedTemporaryFile(suffix=".json") as out:
+            print(f"\n===== {tree}", flush=True)
+            command = [sys.executable, __file__, *rest, "--tree", str(tree), "--summary", out.name]
+            subprocess.run(command, check=True)
+            figures[tree] = json.loads(Path(out.name).read_text())
+    this, other = figures.values()
+    print(f"\n{'':<52} {'this tree':>12} {'against':>12}   (load {os.getloadavg()[0]:.1f})")
+    for name in this:
+        print(f"{name:<52} {this[name]:>12,.1f} {other.get(name, float('nan')):>12,.1f}")
 
 
 if __name__ == "__main__":

@@ -25,12 +25,12 @@ import django  # noqa: E402
 
 django.setup()
 
-import morecantile  # noqa: E402
 import numpy as np  # noqa: E402
 import rasterio  # noqa: E402
 from django.conf import settings  # noqa: E402
 
 from basemaps.files import inspect_file  # noqa: E402
+from basemaps.grid import WEB_MERCATOR  # noqa: E402
 from basemaps.models import BasemapLayer  # noqa: E402
 from basemaps.selectors.tiles import render_tile  # noqa: E402
 from tests.support.basemaps import CENTRE, utm_profile  # noqa: E402
@@ -74,7 +74,7 @@ def main():
         facts = inspect_file(path)
         layer = BasemapLayer(kind=facts.kind, file="ortho.tif", max_zoom=facts.max_zoom)
         layer.west, layer.south, layer.east, layer.north = facts.bounds
-        tms = morecantile.tms.get("WebMercatorQuad")
+        tms = WEB_MERCATOR
         for zoom in args.zoom:
             # Tiles around the middle: all inside the picture, none at its edge.
             west, south, east, north = facts.bounds

@@ -77,7 +77,7 @@ def rss_mb(pid: int) -> float:
     return int(fields[21]) * PAGE / 2**20
 
 
-class Spool:
+class SpoolFile:
     def __init__(self, path: Path):
         self.path = path
 
@@ -142,12 +142,12 @@ def main() -> None:
         relay.start()
         netloc = f"{url.username}:{url.password}@127.0.0.1:{relay.port}"
         env["FTT_DATABASE_URL"] = urlunsplit(url._replace(netloc=netloc))
-    spool = Spool(bench.work / "spool.sqlite3")
+    spool_file = SpoolFile(bench.work / "spool.sqlite3")
     manage = MANAGE
     if args.collector_root:
         manage = [sys.executable, str(args.collector_root / "manage.py")]
     print(f"collector code: {manage[1]}")
-    collector = bench.collector(spool.path, bench.work / "collector.log", env, manage)
+    collector = bench.collector(spool_file.path, bench.work / "collector.log", env, manage)
     while not Collector.objects.filter(name=bench.key).exists():
         time.sleep(0.2)
     seconds = minutes * 60 + (90 if args.drill == "outage" else 0)
@@ -158,9 +158,9 @@ def main() -> None:
     try:
         mode = robot_mode(bench.leg)
         if args.drill == "outage":
-            filler = (lambda: fill(bench, spool.path, minutes)) if args.fill else None
+            filler = (lambda: fill(bench, spool_file.path, minutes)) if args.fill else None
             log = bench.work / "collector.log"
-            outage(relay, spool, minutes, bench.leg, mode, log, filler, bench.key)
+            outage(relay, spool_file, minutes, bench.leg, mode, log, filler, bench.key)
         else:
             soak(collector, robot, minutes)
     finally:
@@ -191,11 +191,11 @@ def robot_mode(leg):
     return mode
 
 
-def outage(relay, spool, minutes, leg, mode, collector_log, filler=None, name="") -> None:
+def outage(relay, spool_file, minutes, leg, mode, collector_log, filler=None, name="") -> None:
     from std_msgs.msg import Bool
 
     time.sleep(10)  # the robot is found and the first records are stored
-    base = spool.records()
+    base = spool_file.records()
     relay.cut()
     cut_at = time.monotonic()
     print(f"outage begins: spool {base} records ({load()})")
@@ -205,16 +205,16 @@ def outage(relay, spool, minutes, leg, mode, collector_log, filler=None, name=""
         time.sleep(min(60.0, minutes * 60 - (time.monotonic() - cut_at)))
         elapsed = (time.monotonic() - cut_at) / 60
         print(
-            f"  after {elapsed:5.1f} min: spool {spool.records()} records, "
-            f"{spool.megabytes():.1f} MB ({load()})"
+            f"  after {elapsed:5.1f} min: spool {spool_file.records()} records, "
+            f"{spool_file.megabytes():.1f} MB ({load()})"
         )
-    grown, megabytes = spool.records() - base, spool.megabytes()
+    grown, megabytes = spool_file.records() - base, spool_file.megabytes()
     per_minute = grown / minutes
     print(
         f"spool grows {per_minute:.0f} records/min, {megabytes / minutes:.2f} MB/min; "
         f"2 h: {per_minute * 120:.0f} records, {megabytes / minutes * 120:.0f} MB (extrapolated)"
     )
-    backlog_end, kinds = spool.composition()
+    backlog_end, kinds = spool_file.composition()
     print(f"spool at the restore: {sum(kinds.values())} records ({_kinds(kinds)})")
     before = Segment.objects.masters().filter(leg=leg).count()
     relay.restore()
@@ -233,7 +233,7 @@ def outage(relay, spool, minutes, leg, mode, collector_log, filler=None, name=""
         row = Collector.objects.filter(name=name).values_list("pending", flat=True).first()
         shown = max(shown, row or 0)
         masters = Segment.objects.masters().filter(leg=leg).count()
-        left = spool.records(upto=backlog_end)
+        left = spool_file.records(upto=backlog_end)
         if switch_stored is None and masters > before:
             switch_stored = t
             # The order, not the timing: what of the backlog was still unwritten.
@@ -294,10 +294,10 @@ def replay(bench, records: int) -> None:
     from datetime import UTC, datetime, timedelta
 
     from rosbridge_app.collector import events as ev
-    from rosbridge_app.collector.outbox import Outbox
+    from rosbridge_app.collector.spool import Spool
 
-    spool = Spool(bench.work / "spool.sqlite3")
-    outbox = Outbox(spool.path)
+    spool_file = SpoolFile(bench.work / "spool.sqlite3")
+    spool = Spool(spool_file.path)
     t0 = datetime.now(UTC) - timedelta(hours=2)
     at = lambda i: t0 + timedelta(seconds=i * 0.1)  # noqa: E731
     events = [
@@ -312,14 +312,14 @@ def replay(bench, records: int) -> None:
             data = {"lon": 7.0, "lat": 50.0 + i * 1e-7, "alt": None, "status": 0}
             events.append(ev.Event(ev.GPS, at(i), {**data, "accuracy": None, "robot_stamp": at(i)}))
     for start in range(0, len(events), 5000):
-        outbox.append(events[start : start + 5000])
-    outbox.close()
-    print(f"spooled {spool.records()} records, {spool.megabytes():.1f} MB ({load()})")
+        spool.append(events[start : start + 5000])
+    spool.close()
+    print(f"spooled {spool_file.records()} records, {spool_file.megabytes():.1f} MB ({load()})")
     started = time.monotonic()
-    collector = bench.collector(spool.path, bench.work / "collector.log")
+    collector = bench.collector(spool_file.path, bench.work / "collector.log")
     first = None
-    while spool.records() > 0 and time.monotonic() - started < 1800:
-        left = spool.records()
+    while spool_file.records() > 0 and time.monotonic() - started < 1800:
+        left = spool_file.records()
         if first is None and 0 <= left < records:
             first = (time.monotonic(), left)
         time.sleep(0.1)
@@ -367,9 +367,9 @@ def fill(bench, path: Path, minutes: float) -> None:
 
     from rosbridge_app.collector import events as ev
     from rosbridge_app.collector import params as P
-    from rosbridge_app.collector.outbox import Outbox
     from rosbridge_app.collector.pipeline import Pipeline
     from rosbridge_app.collector.simulator import SimConfig, SimulatedRobot
+    from rosbridge_app.collector.spool import Spool
     from rosbridge_app.collector.spooler import SPOOL_INTERVAL, Spooler
 
     options = dict(zip(ROBOT[::2], ROBOT[1::2], strict=True))
@@ -391,8 +391,8 @@ def fill(bench, path: Path, minutes: float) -> None:
     robot = SimulatedRobot(config, "ftt_backlog_fill", clock=lambda: clock.t)
     events = queue.Queue()
     pipeline = Pipeline(events.put, P.read_file(bench.params))
-    outbox = Outbox(path)
-    spooler = Spooler(events, outbox)
+    spool = Spool(path)
+    spooler = Spooler(events, spool)
     robot.pub_fix = _Into(pipeline.on_fix, clock)
     robot.pub_tf = _Into(pipeline.on_tf, clock)
     robot.pub_tf_static = _Into(lambda m, at: pipeline.on_tf(m, at, static=True), clock)
@@ -434,7 +434,7 @@ def fill(bench, path: Path, minutes: float) -> None:
             print(f"  filled {i * step / 60:.0f} min ({time.monotonic() - started:.0f} s)")
     while spooler.spool_once(timeout=0):
         pass
-    outbox.close()
+    spool.close()
     robot.destroy_node()
     print(f"filled {minutes:g} min of the robot in {time.monotonic() - started:.0f} s ({load()})")
 

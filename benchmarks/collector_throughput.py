@@ -822,7 +822,8 @@ def subscription_cost(phase: float = 15.0, phases: int = 4) -> None:
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
 
-    from rosbridge_app.collector.blackbox import Blackbox, message_class
+    from rosbridge_app.collector.blackbox import Blackbox
+    from rosbridge_app.collector.message_fields import message_class
 
     values = {name: spec.default for name, spec in P.SPECS.items()}
     box = Blackbox(lambda event: None, values)

@@ -5,6 +5,6 @@ with the live link's and the collector's timings of each mode switch logged
 from ftt_site.settings import *  # noqa: F403
 
 LOGGING["loggers"] |= {  # noqa: F405
-    "rosbridge_app.consumers": {"level": "DEBUG"},
+    "live.consumers": {"level": "DEBUG"},
     "ftt.collector": {"level": "DEBUG"},
 }

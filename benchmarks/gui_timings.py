@@ -25,21 +25,13 @@ os.environ.setdefault("DJANGO_ALLOW_ASYNC_UNSAFE", "true")
 
 from playwright.sync_api import expect, sync_playwright  # noqa: E402
 
+from benchmarks.cockpit_setup import OPERATOR_AND_SHIFT  # noqa: E402
 from tests.e2e.link import Link  # noqa: E402
 from tests.support.browser import PASSWORD, Server, login, system_chromium  # noqa: E402
 
-SETUP = """
-import json
-from django.contrib.auth.models import Group, User
-from events.models import PoseSource, Vehicle
-from events.services import logs, segments
-from telemetry.services import recording
-u = User.objects.create_user("otto", password={password!r})
-u.groups.add(Group.objects.get(name="operator"))
-PoseSource.objects.get_or_create(key="gps", defaults={{"short_description": "GPS"}})
-v = Vehicle.objects.create(key="bench", short_description="Bench rover")
-e = logs.create_test_event(location="Bench field", time_zone="Europe/Berlin")
-s = logs.create_shift(test_event=e, vehicle=v)
+SETUP = (
+    OPERATOR_AND_SHIFT
+    + """
 other = logs.create_leg(shift=s, weather_id="sunny")
 leg = logs.create_leg(shift=s, weather_id="sunny")
 for i in range({segments}):
@@ -52,6 +44,7 @@ from rosbridge_app.services import collectors
 collectors.heartbeat("bench-collector", vehicle=v, logging=True, leg=leg)
 print(json.dumps({{"event": e.pk, "shift": s.pk, "leg": leg.pk, "other": other.pk}}))
 """
+)
 
 
 def timed(action, check) -> float:

@@ -27,8 +27,6 @@ import sys
 import time
 import tracemalloc
 import uuid
-from collections import defaultdict
-from contextlib import contextmanager
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 
@@ -59,25 +57,6 @@ from telemetry.services.segment_figures import measure_figures  # noqa: E402
 STATISTICS_TARGET = 1.0
 
 REASONS = ("safety", "planner", "unexpected", "goal", "maintenance")
-
-
-class Stages:
-    """Wall and CPU seconds per stage of a report (render_report's ``time_stage``).
-    CPU seconds (all threads of this process) vary far less with the machine's
-    load than wall seconds."""
-
-    def __init__(self):
-        self.wall: dict[str, float] = defaultdict(float)
-        self.cpu: dict[str, float] = defaultdict(float)
-
-    @contextmanager
-    def timed(self, name: str):
-        wall, cpu = time.perf_counter(), time.process_time()
-        try:
-            yield
-        finally:
-            self.wall[name] += time.perf_counter() - wall
-            self.cpu[name] += time.process_time() - cpu
 
 
 def _zigzag(count: int) -> np.ndarray:
@@ -343,18 +322,14 @@ def main():
             return f"{len(json.dumps(event_statistics(event).as_dict())) / 1024:.0f} KiB JSON"
 
         def pdf():
-            stages = Stages()
-            result = profiled(
-                "pdf",
-                lambda: render_report(event, ReportOptions(no_tiles=True), time_stage=stages.timed),
-            )
+            result = profiled("pdf", lambda: render_report(event, ReportOptions(no_tiles=True)))
             out = Path(os.environ.get("FTT_DATA_DIR", "data")) / "benchmark-report.pdf"
             out.write_bytes(result.pdf)
-            rest = result.seconds - sum(stages.wall.values())
             rows = [
-                f"    {name:<38} {sec:6.2f} s (CPU {stages.cpu[name]:5.2f} s)"
-                for name, sec in stages.wall.items()
+                f"    {name:<38} {wall:6.2f} s (CPU {cpu:5.2f} s)"
+                for name, wall, cpu in result.stages.rows()
             ]
+            rest = result.seconds - sum(wall for _name, wall, _cpu in result.stages.rows())
             rows.append(f"    {'rest (segments, tables, JSON)':<38} {rest:6.2f} s")
             return f"{len(result.pdf) / 2**20:.1f} MiB PDF: {out}\n" + "\n".join(rows)
 

@@ -40,11 +40,16 @@ class CommonConfig(AppConfig):
 
             from common.directory import (
                 DirectoryBackend,
+                RoleCheckBackend,
                 apply_directory_role,
                 directory_unreachable,
+                role_check_failed,
             )
 
             populate_user.connect(apply_directory_role, dispatch_uid="ftt-directory-role")
             ldap_error.connect(
                 directory_unreachable, sender=DirectoryBackend, dispatch_uid="ftt-directory-down"
+            )
+            ldap_error.connect(
+                role_check_failed, sender=RoleCheckBackend, dispatch_uid="ftt-role-check-down"
             )

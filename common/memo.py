@@ -7,17 +7,8 @@ whatever is kept must be harmless for that long: the owner picks the time.
 """
 
 import threading
-import weakref
 
 from cachetools import TTLCache
-
-_every: weakref.WeakSet = weakref.WeakSet()
-
-
-def clear_all() -> None:
-    """Forget every kept entry of every cache (tests start from none)."""
-    for memo in list(_every):
-        memo.clear()
 
 
 class Expiring:
@@ -28,7 +19,6 @@ class Expiring:
     def __init__(self, seconds: float, size: int = 4096):
         self._entries = TTLCache(maxsize=size, ttl=seconds)
         self._lock = threading.Lock()
-        _every.add(self)
 
     def get(self, key):
         """The value kept for ``key``, or None when absent or expired."""

@@ -1,4 +1,4 @@
-"""What a web process counts about itself for Prometheus (served by ftt_site.metrics).
+"""What a web process counts about itself for Prometheus (served by ftt_site.monitoring.metrics).
 
 Under Gunicorn each worker keeps its own values; prometheus_client's
 multiprocess mode adds them up at scrape time, so gauges say how they combine.

@@ -74,7 +74,7 @@ class Job(models.Model):
 
 
 class AccountPreference(models.Model):
-    """What an account chose for itself; read by ftt_site.language."""
+    """What an account chose for itself; read by ftt_site.inbound.language."""
 
     user = models.OneToOneField(
         settings.AUTH_USER_MODEL,
@@ -112,6 +112,10 @@ class DirectoryAccount(models.Model):
         verbose_name=_("account"),
     )
     created = models.DateTimeField(auto_now_add=True, verbose_name=_("created"))
+    # When the directory was last asked for this account's role (at sign-in, at
+    # use, on the worker's schedule), answered or not: the next ask waits
+    # FTT_LDAP_RECHECK_SECONDS from here.
+    role_checked = models.DateTimeField(null=True, blank=True, verbose_name=_("role checked"))
 
     class Meta:
         verbose_name = _("directory account")

@@ -3,12 +3,14 @@
 Every writer (services, collector, importers) adds its row here, by the ORM,
 inside the transaction of its change: the feed shows the change exactly when
 it is committed, and a rolled-back change announces nothing.  The live link
-(:mod:`rosbridge_app.consumers`) reads the feed and hears its new rows
-(:mod:`rosbridge_app.wakeup` lists every way), but the feed never calls up to it.
+(:mod:`live.consumers`) reads the feed and hears its new rows
+(:mod:`live.wakeup` lists every way), but the feed never calls up to it.
 """
 
 from datetime import timedelta
 
+from django.db import router
+from django.db.models.signals import post_save
 from django.utils import timezone
 
 from events.models import Announcement, Leg, Segment, Shift, TestEvent
@@ -47,15 +49,20 @@ def _scope(obj) -> tuple[int | None, int | None, int | None]:
 
 def announce(kind: str, obj=None, *, collector_id: int | None = None, **payload) -> Announcement:
     """Add a row about ``obj`` (its test event, shift and leg are the row's scope)."""
+    return _save(_about(kind, obj, collector_id=collector_id, **payload))
+
+
+def _about(kind: str, obj=None, *, collector_id: int | None = None, **payload) -> Announcement:
+    """The unsaved row about ``obj``."""
     test_event, shift, leg = _scope(obj)
     # The scope travels in the payload too: a deleted leg takes its own
     # announcements with it (foreign key), so "leg deleted" is kept leg-less.
     payload.update(test_event=test_event, shift=shift, leg=leg)
     leg_fk = None if kind == "deleted" else leg
-    return _save(Announcement(kind=kind, leg_id=leg_fk, collector_id=collector_id, payload=payload))
+    return Announcement(kind=kind, leg_id=leg_fk, collector_id=collector_id, payload=payload)
 
 
-def record(kind: str, *, leg_id=None, collector_id=None, payload=None) -> Announcement:
+def append(kind: str, *, leg_id=None, collector_id=None, payload=None) -> Announcement:
     """Add one row to the feed as given (the collector link states its own scope)."""
     return _save(
         Announcement(kind=kind, leg_id=leg_id, collector_id=collector_id, payload=payload or {})
@@ -63,9 +70,29 @@ def record(kind: str, *, leg_id=None, collector_id=None, payload=None) -> Announ
 
 
 def _save(event: Announcement) -> Announcement:
-    """The one way a feed row is written; every PRUNE_EVERY-th row also prunes,
-    in the same transaction."""
+    """The one way the ORM writes a feed row (the storage port inserts a track's
+    row in the statement of its figures, then :func:`written` follows)."""
     event.save(force_insert=True)
+    return written(event, saved=True)
+
+
+def settle(event: Announcement) -> Announcement:
+    """A row handed to the storage port with its change: saved now unless the
+    port inserted it in the change's statement."""
+    return _save(event) if event.pk is None else written(event)
+
+
+def written(event: Announcement, *, saved: bool = False) -> Announcement:
+    """What follows a feed row's insert: every PRUNE_EVERY-th row also prunes,
+    in the same transaction, and a row inserted by SQL (``saved`` False) is
+    announced to ``post_save``'s receivers (the live wake-up) as the ORM's
+    save would have."""
+    if not saved:
+        event._state.adding, event._state.db = False, router.db_for_write(Announcement)
+        post_save.send(
+            sender=Announcement, instance=event, created=True, update_fields=None, raw=False,
+            using=event._state.db,
+        )  # fmt: skip
     if event.pk % PRUNE_EVERY == 0:
         prune()
     return event
@@ -87,7 +114,7 @@ def announce_row(obj, *, deleted: bool = False) -> Announcement:
     return announce(kind, obj, **payload)
 
 
-def announce_track(
+def track_announcement(
     segment, points, *, local: bool, heading=None, inside: bool = False
 ) -> Announcement | None:
     """New usable track points as stored, in driving order, given as (x, y) or
@@ -96,7 +123,10 @@ def announce_track(
     between points stored before, a late batch) or too many for a row, the row
     says the segment's track changed (``"changed": true``, no points) and
     browsers draw it again from the server's track.  ``heading`` (radians, map
-    frame) is the last point's, where known: the cockpit turns the robot's marker by it."""
+    frame) is the last point's, where known: the cockpit turns the robot's marker by it.
+    The row is unsaved: the storage port inserts it in the statement of the
+    figures it goes with (:func:`settle` follows).
+    """
     if not points:
         return None
     payload = {"segment": segment.pk, "mode": segment.segment_type_id, "count": len(points)}
@@ -106,7 +136,7 @@ def announce_track(
         payload["changed"] = True
     else:
         payload["points"] = [[x, y] for x, y in points]
-    return announce("local_poses" if local else "poses", segment, **payload)
+    return _about("local_poses" if local else "poses", segment, **payload)
 
 
 def prune() -> int:

@@ -1,6 +1,6 @@
 """Who changes a tracked row, through what and why (events.models.changes).
 
-The web middleware (``ftt_site.change_origin``) names the channel of each
+The web middleware (``ftt_site.inbound.change_origin``) names the channel of each
 request; the collector and the importers wrap their writes in
 :func:`authored`.  Writes outside both (shell, migrations, management
 commands) are recorded as ``system``.  A reason given with an amendment of a

@@ -18,7 +18,7 @@ its free pages.
 import os
 import re
 import shutil
-import sqlite3  # the build Django uses: settings (ftt_site.sqlite_shim) choose it before apps load
+import sqlite3  # the build Django uses: settings (db_spatialite.sqlite_shim) choose it first
 import subprocess
 import tempfile
 from pathlib import Path

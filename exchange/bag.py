@@ -54,6 +54,7 @@ class BagInfo:
     first: datetime
     last: datetime
     messages: int
+    topics: dict[str, str]  # topic → message type, as recorded
 
 
 @dataclass
@@ -69,6 +70,7 @@ def bag_info(path) -> BagInfo:
     try:
         with open_bag(path) as reader:
             start, end, count = reader.start_time, reader.end_time, reader.message_count
+            topics = {c.topic: c.msgtype for c in reader.connections}
     except Exception as exc:  # rosbags raises its own reader errors
         raise BagImportError(
             _("Cannot read %(path)s: %(exc)s") % {"path": path, "exc": exc}
@@ -81,6 +83,7 @@ def bag_info(path) -> BagInfo:
         first=datetime.fromtimestamp(start / 1e9, tz=UTC),
         last=datetime.fromtimestamp(end / 1e9, tz=UTC),
         messages=count,
+        topics=topics,
     )
 
 
@@ -223,6 +226,16 @@ def _counts(snapshots: bool) -> dict:
     return {m.__name__: m.objects.count() for m in models}
 
 
+def _nothing_stored(info: BagInfo, settings: dict) -> str:
+    recorded = ", ".join(f"{topic} ({kind})" for topic, kind in sorted(info.topics.items()))
+    return _(
+        "Nothing of %(path)s was stored: it holds no mode on the mode topic read (%(mode)s) "
+        "and no GPS fix, transform or pose. It holds: %(recorded)s. Name the mode topic "
+        "with --topic robot_mode=… (its type with --mode-type or params.mode_sources), "
+        "or give the robot's --params-file."
+    ) % {"path": info.path.name, "mode": settings["topics.robot_mode"], "recorded": recorded}
+
+
 def import_bag(
     path,
     *,
@@ -259,6 +272,11 @@ def import_bag(
             recorder.apply(batch)
             if progress is not None:
                 progress("storing", min(start + BATCH, len(events)), len(events))
+        if created and not target.segments.exists():
+            # Undone with the transaction: an empty, closed test event would
+            # take this recording's uids, and the corrected import would then
+            # store nothing either.
+            raise BagImportError(_nothing_stored(info, settings))
         if created:
             target.refresh_from_db()
             shift, event = target.shift, target.shift.test_event

@@ -7,6 +7,6 @@ class FttSiteConfig(AppConfig):
     def ready(self):
         from django.contrib.auth.signals import user_logged_in
 
-        from ftt_site.lockout import forgive_own_failures
+        from ftt_site.inbound.lockout import forgive_own_failures
 
         user_logged_in.connect(forgive_own_failures, dispatch_uid="ftt-forgive-own-failures")

@@ -16,11 +16,11 @@ from channels.auth import AuthMiddlewareStack  # noqa: E402
 from channels.routing import ProtocolTypeRouter, URLRouter  # noqa: E402
 from channels.security.websocket import AllowedHostsOriginValidator  # noqa: E402
 
-from ftt_site.loop_watch import lifespan  # noqa: E402
-from ftt_site.pose_route import PoseRoute  # noqa: E402
-from ftt_site.request_limits import RequestLimits  # noqa: E402
-from ftt_site.warmup import warm_up  # noqa: E402
-from rosbridge_app.routing import websocket_urlpatterns  # noqa: E402
+from ftt_site.inbound.limits import RequestLimits  # noqa: E402
+from ftt_site.inbound.pose_route import PoseRoute  # noqa: E402
+from ftt_site.server.loop_watch import lifespan  # noqa: E402
+from ftt_site.server.warmup import warm_up  # noqa: E402
+from live.routing import websocket_urlpatterns  # noqa: E402
 
 warm_up()
 

@@ -12,7 +12,7 @@ from operator import or_
 from pathlib import Path
 from urllib.parse import urlsplit
 
-from ftt_site import sqlite_shim
+from ftt_site.db_spatialite import sqlite_shim
 
 sqlite_shim.install()
 
@@ -73,7 +73,7 @@ SECURE_HSTS_SECONDS = env_int("FTT_HSTS_SECONDS", 31536000 if HTTPS else 0)
 SECURE_HSTS_INCLUDE_SUBDOMAINS = HTTPS
 SECURE_HSTS_PRELOAD = HTTPS
 FTT_BEHIND_PROXY = env_bool("FTT_BEHIND_PROXY", False)
-# The proxies whose forwarded headers are believed (ftt_site.proxies); nobody's
+# The proxies whose forwarded headers are believed (ftt_site.inbound.proxies); nobody's
 # without FTT_BEHIND_PROXY.
 FTT_PROXY_NETWORKS = [
     ipaddress.ip_network(net, strict=False)
@@ -123,6 +123,7 @@ INSTALLED_APPS = [
     "basemaps",
     "reports",
     "rosbridge_app",
+    "live",
     "exchange",
     "gui",
     # Last, so it sees every FileField and deletes files with their rows.
@@ -130,40 +131,40 @@ INSTALLED_APPS = [
 ]
 
 MIDDLEWARE = [
-    # Before anything reads the client's address or scheme (ftt_site.proxies).
-    "ftt_site.proxies.ForwardedHeadersMiddleware",
-    # First and last: request counts and latencies for /metrics (ftt_site.metrics).
+    # Before anything reads the client's address or scheme (ftt_site.inbound.proxies).
+    "ftt_site.inbound.proxies.ForwardedHeadersMiddleware",
+    # First and last: request counts and latencies for /metrics (ftt_site.monitoring.metrics).
     "django_prometheus.middleware.PrometheusBeforeMiddleware",
     "django.middleware.security.SecurityMiddleware",
     "whitenoise.middleware.WhiteNoiseMiddleware",
     "django.contrib.sessions.middleware.SessionMiddleware",
-    # The page's language: the account's preference (ftt_site.language), else the
+    # The page's language: the account's preference (ftt_site.inbound.language), else the
     # browser's Accept-Language, else English.
     "django.middleware.locale.LocaleMiddleware",
     "corsheaders.middleware.CorsMiddleware",
     "django.middleware.common.CommonMiddleware",
     "django.middleware.csrf.CsrfViewMiddleware",
     "django.contrib.auth.middleware.AuthenticationMiddleware",
-    "ftt_site.language.AccountLanguageMiddleware",
+    "ftt_site.inbound.language.AccountLanguageMiddleware",
     "django.contrib.messages.middleware.MessageMiddleware",
     "django.middleware.clickjacking.XFrameOptionsMiddleware",
     "csp.middleware.CSPMiddleware",
     # Who changed a row and through what (events.history).
-    "ftt_site.change_origin.ChangeOriginMiddleware",
+    "ftt_site.inbound.change_origin.ChangeOriginMiddleware",
     # Last: turns a lockout, or a directory that cannot be reached, on any login
-    # path into one answer (ftt_site.lockout).
-    "ftt_site.lockout.DirectoryUnavailableMiddleware",
+    # path into one answer (ftt_site.inbound.lockout).
+    "ftt_site.inbound.lockout.DirectoryUnavailableMiddleware",
     "axes.middleware.AxesMiddleware",
     "django_prometheus.middleware.PrometheusAfterMiddleware",
 ]
 
 # Failed logins on every path (GUI, admin, /api/token/) are counted by
-# django-axes (ftt_site.lockout): an address that fails too often is locked,
+# django-axes (ftt_site.inbound.lockout): an address that fails too often is locked,
 # whatever accounts it tried; an account failed from many addresses is only
 # slowed down, so no stranger can lock someone else out.
 AUTHENTICATION_BACKENDS = [
     "axes.backends.AxesStandaloneBackend",
-    "ftt_site.lockout.AccountPace",
+    "ftt_site.inbound.lockout.AccountPace",
     "django.contrib.auth.backends.ModelBackend",
 ]
 AXES_FAILURE_LIMIT = env_int("FTT_LOGIN_FAILURE_LIMIT", 5)
@@ -182,10 +183,10 @@ FTT_COUNT_ROBOT_REASONS = env_bool("FTT_COUNT_ROBOT_REASONS", False)
 # report draws (reports.services.pose_retention); 0: all poses are kept.
 FTT_POSE_RETENTION_MONTHS = env_int("FTT_POSE_RETENTION_MONTHS", 0)
 # A sign-in forgives only its own account's failures from its address
-# (ftt_site.lockout.forgive_own_failures), never another account's.
+# (ftt_site.inbound.lockout.forgive_own_failures), never another account's.
 AXES_RESET_ON_SUCCESS = False
-AXES_LOCKOUT_CALLABLE = "ftt_site.lockout.locked_out"
-AXES_CLIENT_IP_CALLABLE = "ftt_site.lockout.client_address"
+AXES_LOCKOUT_CALLABLE = "ftt_site.inbound.lockout.locked_out"
+AXES_CLIENT_IP_CALLABLE = "ftt_site.inbound.lockout.client_address"
 
 ROOT_URLCONF = "ftt_site.urls"
 WSGI_APPLICATION = "ftt_site.wsgi.application"
@@ -288,13 +289,13 @@ WHITENOISE_USE_FINDERS = True
 WHITENOISE_AUTOREFRESH = DEBUG
 FILE_UPLOAD_MAX_MEMORY_SIZE = 10 * 1024 * 1024
 DATA_UPLOAD_MAX_MEMORY_SIZE = 50 * 1024 * 1024
-# Checked by ftt_site.request_limits before a body is read: uploads of images,
+# Checked by ftt_site.inbound.limits before a body is read: uploads of images,
 # maps and archives may be large, for accounts that may upload them
-# (ftt_site.uploaders); every other request takes small bodies only.
+# (ftt_site.inbound.uploaders); every other request takes small bodies only.
 FTT_MAX_REQUEST_BODY = env_int("FTT_MAX_REQUEST_BODY", DATA_UPLOAD_MAX_MEMORY_SIZE)
 FTT_MAX_UPLOAD_SIZE = env_int("FTT_MAX_UPLOAD_SIZE", 2 * 1024**3)
 # A request's headers must arrive within FTT_HEADER_TIMEOUT seconds
-# (ftt_site.web_worker); its body, after FTT_BODY_GRACE_SECONDS, at no less than
+# (ftt_site.server.web_worker); its body, after FTT_BODY_GRACE_SECONDS, at no less than
 # FTT_BODY_MIN_RATE bytes per second on average, or it is answered 408.
 FTT_HEADER_TIMEOUT = env_int("FTT_HEADER_TIMEOUT", 10)
 FTT_BODY_GRACE_SECONDS = env_int("FTT_BODY_GRACE_SECONDS", 10)
@@ -317,11 +318,11 @@ FTT_LIVE_POLL_MS = env_int("FTT_LIVE_POLL_MS", 200)
 # a quiet link from a dead one; the page shows its link stale after three missed.
 FTT_LIVE_HEARTBEAT_MS = env_int("FTT_LIVE_HEARTBEAT_MS", 1000)
 # Live links one account, and one client address, may hold open per web process
-# (rosbridge_app.consumers); more are closed with code 4429.
+# (live.consumers); more are closed with code 4429.
 FTT_LIVE_LINKS_PER_ACCOUNT = env_int("FTT_LIVE_LINKS_PER_ACCOUNT", 20)
 FTT_LIVE_LINKS_PER_ADDRESS = env_int("FTT_LIVE_LINKS_PER_ADDRESS", 60)
 # Each process sends the cross-process wake-ups (NOTIFY, Redis) from a thread of
-# its own, at most once per this long (rosbridge_app.wakeup).
+# its own, at most once per this long (live.wakeup).
 FTT_LIVE_NOTIFY_DELAY_MS = env_int("FTT_LIVE_NOTIFY_DELAY_MS", 2)
 if REDIS_URL:
     CHANNEL_LAYERS = {
@@ -361,7 +362,7 @@ REST_FRAMEWORK = {
         "rest_framework.throttling.AnonRateThrottle",
         "rest_framework.throttling.UserRateThrottle",
     ],
-    # REMOTE_ADDR, the client's address by ftt_site.proxies' rule.
+    # REMOTE_ADDR, the client's address by ftt_site.inbound.proxies' rule.
     "NUM_PROXIES": 0,
     "DEFAULT_THROTTLE_RATES": {
         "anon": env_str("FTT_API_RATE_ANON", "120/min"),
@@ -388,8 +389,8 @@ LOGGING = {
     "version": 1,
     "disable_existing_loggers": False,
     "formatters": {"plain": {"format": "%(asctime)s %(levelname)s %(name)s: %(message)s"}},
-    # No robot token from a /legacy/ path in any line (ftt_site.log_masks).
-    "filters": {"robot_tokens": {"()": "ftt_site.log_masks.MaskRobotTokens"}},
+    # No robot token from a /legacy/ path in any line (ftt_site.inbound.log_masks).
+    "filters": {"robot_tokens": {"()": "ftt_site.inbound.log_masks.MaskRobotTokens"}},
     "handlers": {
         "console": {
             "class": "logging.StreamHandler",
@@ -513,6 +514,9 @@ if env_str("FTT_LDAP_SERVER_URI"):
     FTT_LDAP_TIMEOUT = env_int("FTT_LDAP_TIMEOUT", 5)
     # Sign-ins per web process that may wait for the directory at once.
     FTT_LDAP_MAX_SIGN_INS = env_int("FTT_LDAP_MAX_SIGN_INS", 2)
+    # Seconds between two role checks of one directory account, at its use and
+    # on the worker's schedule (common.directory.recheck_role; docs/accounts.md).
+    FTT_LDAP_RECHECK_SECONDS = env_int("FTT_LDAP_RECHECK_SECONDS", 300)
     AUTH_LDAP_CONNECTION_OPTIONS = {
         ldap.OPT_NETWORK_TIMEOUT: FTT_LDAP_TIMEOUT,
         ldap.OPT_TIMEOUT: FTT_LDAP_TIMEOUT,

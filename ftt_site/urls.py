@@ -2,7 +2,8 @@ from django.contrib import admin
 from django.urls import include, path
 from django.views.i18n import JavaScriptCatalog
 
-from ftt_site import health, language, metrics
+from ftt_site.inbound import language
+from ftt_site.monitoring import health, metrics
 
 # Here rather than at start-up: see ftt_site.admin_site.FttAdminConfig.
 admin.autodiscover()

@@ -18,6 +18,11 @@ urlpatterns = [
     path("logout/", auth_views.LogoutView.as_view(), name="logout"),
     path("import/", archive_import.archive_import, name="gui-archive-import"),
     path("gui/api/legs/<int:pk>/tracks/", gui_api.LegTracks.as_view(), name="gui-leg-tracks"),
+    path(
+        "gui/api/legs/<int:pk>/distances/",
+        gui_api.LegDistances.as_view(),
+        name="gui-leg-distances",
+    ),
     path("gui/api/legs/<int:pk>/segments/", gui_api.LegSegments.as_view(), name="gui-segments"),
     path(
         "gui/api/legs/<int:pk>/manual-segment/",

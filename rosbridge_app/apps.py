@@ -1,8 +1,6 @@
 from django.apps import AppConfig
 from django.utils.translation import gettext_lazy as _
 
-from rosbridge_app import sessions, wakeup
-
 
 class RosbridgeAppConfig(AppConfig):
     name = "rosbridge_app"
@@ -12,6 +10,4 @@ class RosbridgeAppConfig(AppConfig):
         # Django's documented place for signal wiring: models load first.
         from rosbridge_app.services import collectors  # noqa: PLC0415
 
-        wakeup.connect()
-        sessions.connect()
         collectors.connect()

@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # README command 1: install what is missing (scripts/setup.sh), migrate the
-# database (SpatiaLite in data/ftt.sqlite3 unless FTT_DATABASE_URL is set),
-# make sure an administrator account exists, and serve FTT (HTTP and
+# database if a migration is missing (SpatiaLite in data/ftt.sqlite3 unless
+# FTT_DATABASE_URL is set), make sure an administrator account exists
+# (manage.py ftt_prepare), and serve FTT (HTTP and
 # websockets) on http://127.0.0.1:8000 with the production server: Gunicorn
-# supervising Uvicorn workers (ftt_site/gunicorn.conf.py; README, Production),
+# supervising Uvicorn workers (ftt_site/server/gunicorn.conf.py; README, Production),
 # and beside it the job worker that makes requested reports and imports
 # (manage.py ftt_worker); Ctrl-C stops both, at once when idle, else after
 # the requests in flight and the job at hand.
@@ -23,10 +24,11 @@ cd "$FTT_ROOT"
 export DJANGO_SETTINGS_MODULE=ftt_site.settings
 py=$FTT_VENV/bin/python
 
-ftt_phase "migrate"
-"$py" manage.py migrate --noinput
-ftt_phase "administrator account"
-"$py" manage.py ftt_ensure_admin
+# One process for the system checks, the migrations still missing (none on a
+# restart) and the administrator account: each manage.py command loads Django
+# and checks everything again (README, Quick start: start-up figures).
+ftt_phase "checks, migrations, administrator account"
+"$py" manage.py ftt_prepare
 ftt_phase_summary
 
 # Reload on code changes only when debugging; a field laptop runs it as is.
@@ -39,7 +41,8 @@ export FTT_WEB_WORKERS=${FTT_WEB_WORKERS:-1}
 # them. A job it was running when stopped the hard way is retried by the next.
 # It runs in a session of its own so that Ctrl-C reaches it once, from here:
 # a second signal makes it abandon the job at hand.
-setsid "$py" manage.py ftt_worker --verbosity 0 &
+# ftt_prepare has just run the system checks.
+setsid "$py" manage.py ftt_worker --verbosity 0 --skip-checks &
 worker=$!
 web=""
 stopping=0
@@ -53,7 +56,7 @@ trap 'stop; wait' EXIT
 ftt_log "FTT at http://$address/ (Django admin at /admin/); Ctrl-C stops it"
 # The script, not `python -m gunicorn`: its master can start a successor on
 # `kill -USR2` (README, Production: restarts and upgrades).
-"$FTT_VENV/bin/gunicorn" -c ftt_site/gunicorn.conf.py "${reload[@]}" --bind "$address" \
+"$FTT_VENV/bin/gunicorn" -c ftt_site/server/gunicorn.conf.py "${reload[@]}" --bind "$address" \
     ftt_site.asgi:application &
 web=$!
 status=0

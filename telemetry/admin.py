@@ -5,7 +5,7 @@ from django.utils.html import format_html
 from django.utils.translation import gettext_lazy as _
 from simple_history.admin import SimpleHistoryAdmin
 
-from events.admin import ServiceDeleteMixin, admin_link
+from events.admin.shared import ServiceDeleteMixin, admin_link
 from telemetry.models import Image, LocalPose, MapImage, Pose
 
 

@@ -15,7 +15,10 @@ from django.utils.translation import gettext as _
 from PIL import Image as PilImage
 
 PHOTO_FORMATS = {"JPEG": "jpg", "PNG": "png", "WEBP": "webp"}
+# What a map is stored as and accepted as (API, collector, archives): record_map checks it.
 MAP_FORMATS = {"PNG": "png"}
+# What the original robots' node API may send a map as; it is stored as a greyscale PNG.
+LEGACY_MAP_FORMATS = PHOTO_FORMATS
 
 
 # What Pillow raises on a file it cannot read or decode.
@@ -56,7 +59,7 @@ def checked_picture(content: bytes, formats: dict[str, str] = PHOTO_FORMATS) -> 
 def greyscale_png(content: bytes) -> bytes:
     """A photo-format picture as the greyscale PNG a map is kept as (the original FTT
     sent and stored its maps as greyscale JPEG)."""
-    checked_picture(content)
+    checked_picture(content, LEGACY_MAP_FORMATS)
     try:
         with PilImage.open(io.BytesIO(content)) as picture:
             out = io.BytesIO()
@@ -64,4 +67,4 @@ def greyscale_png(content: bytes) -> bytes:
             return out.getvalue()
     except UNREADABLE:
         # A PNG's chunks may check while its pixel data does not inflate.
-        raise _unreadable(PHOTO_FORMATS) from None
+        raise _unreadable(LEGACY_MAP_FORMATS) from None

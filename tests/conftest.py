@@ -7,13 +7,13 @@ from django.db import connection
 from django.test import override_settings
 from django.utils import translation
 
-from common import memo
 from events import seeds
 from events.models import Performer, Personnel, PoseSource, TestEvent, Vehicle
 from events.services import logs
 from events.services.robots import ensure_robot_account
-from rosbridge_app import wakeup
+from live import wakeup
 from tests.support.databases import place_migrated_embedded_database, use_migrated_template
+from tests.support.kept import forget_memos
 from tests.support.modes import start_auto
 from tests.support.snapshot import snapshot
 from tests.support.workers import assign_worker_resources
@@ -81,7 +81,7 @@ def _live_link_closed(request):
     if marker and marker.kwargs.get("transaction"):
         request.getfixturevalue("transactional_db")
         yield
-        wakeup.disconnect()
+        wakeup.send_due_and_close()
     else:
         yield
 
@@ -113,9 +113,7 @@ def _site_language():
 
 @pytest.fixture(autouse=True)
 def _fresh_memos():
-    """Tokens, robot bindings and segments kept per process (common.memo) belong
-    to one test: ids are reused after a rolled-back test on SQLite."""
-    memo.clear_all()
+    forget_memos()
 
 
 @pytest.fixture

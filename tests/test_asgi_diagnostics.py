@@ -41,7 +41,7 @@ def test_a_blocked_event_loop_is_reported_once_with_the_blocking_stack(tmp_path)
     import threading
     import time
 
-    from ftt_site.loop_watch import watch_loop
+    from ftt_site.server.loop_watch import watch_loop
 
     said, again = [], threading.Event()
 

@@ -7,7 +7,7 @@ from django.test import Client, RequestFactory
 from events.models import Segment, Vehicle
 from events.services import logs
 from events.services.robots import ensure_robot_account
-from ftt_site.change_origin import channel_of
+from ftt_site.inbound.change_origin import channel_of
 
 
 def test_a_write_of_the_original_robots_api_is_recorded_as_its_own_channel(db):

@@ -1,4 +1,4 @@
-"""manage.py ftt_ensure_admin, which scripts/run.sh calls on every start."""
+"""manage.py ftt_ensure_admin, which scripts/run.sh calls on every start (through ftt_prepare)."""
 
 import stat
 from io import StringIO

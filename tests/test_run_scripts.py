@@ -172,6 +172,23 @@ def test_run_command_also_runs_the_job_worker_that_makes_reports(started):
     assert pdf.content[:4] == b"%PDF"
 
 
+def test_a_restart_runs_no_checks_and_no_migrations_again(started):
+    """The second start of an installation with nothing changed (issue 47, item 2)."""
+    first = started("run.sh")
+    first.wait_until_serving()
+    first.stop()
+    start = first.output()
+    assert "Applying events.0001_initial" in start
+    assert start.count("System check identified") == 1  # once, not per command
+    again = started("run.sh")
+    again.wait_until_serving()
+    restart = again.output()  # the same log file, written anew
+    assert "System checks: nothing changed since they last passed." in restart
+    assert "Migrations: all applied, none to run." in restart
+    assert "Operations to perform" not in restart  # manage.py migrate did not run
+    assert "System check identified" not in restart
+
+
 @pytest.mark.ros
 def test_demo_logs_a_simulated_robot_live_into_the_embedded_database(started):
     domain = (int(os.environ.get("ROS_DOMAIN_ID", "10")) + 100) % 230

@@ -533,7 +533,11 @@ def test_a_commands_help_is_in_the_sites_language():
 
 # Answers for machines stay English: health checks and metrics for monitoring, the
 # lean pose route and the original FTT's robot API for robots (README, Translations).
-FOR_MACHINES = {"ftt_site/health.py", "ftt_site/metrics.py", "ftt_site/pose_route.py"}
+FOR_MACHINES = {
+    "ftt_site/monitoring/health.py",
+    "ftt_site/monitoring/metrics.py",
+    "ftt_site/inbound/pose_route.py",
+}
 
 
 def _answer_words(tree: ast.AST) -> list[ast.AST]:

@@ -11,7 +11,6 @@ import threading
 import zlib
 from pathlib import Path
 
-import morecantile
 from cachetools import LRUCache
 from django.conf import settings
 from PIL import Image, UnidentifiedImageError
@@ -19,13 +18,13 @@ from pmtiles.reader import Reader as PMTilesReader
 from rasterio.errors import RasterioError
 from rio_tiler.errors import RioTilerError, TileOutsideBounds
 
+from basemaps.grid import WEB_MERCATOR
 from basemaps.mbtiles import MBTiles
 from basemaps.models import BasemapLayer
 from basemaps.pmtiles_source import DirectoryTooLarge, bounded_source
 from basemaps.rasters import GeoTiffTiles, NotAGeoTiff
 
 FORMATS = {"png": "PNG", "webp": "WEBP"}
-WEB_MERCATOR = morecantile.tms.get("WebMercatorQuad")
 OPEN_FILES = 8
 # A stored tile larger than this, or picturing more pixels, is not drawn.
 MAX_TILE_BYTES = 4 * 1024 * 1024

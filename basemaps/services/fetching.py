@@ -24,7 +24,8 @@ from django.utils.translation import gettext
 from PIL import Image
 from pmtiles.convert import mbtiles_to_pmtiles
 
-WEB_MERCATOR = morecantile.tms.get("WebMercatorQuad")
+from basemaps.grid import WEB_MERCATOR
+
 USER_AGENT = "FTT-field-test-tool/1.0 (offline basemap preparation; ftt_basemap fetch)"
 FORMATS = {"PNG": "png", "JPEG": "jpg", "WEBP": "webp"}
 # The PMTiles converter spells JPEG the long way.

@@ -1,12 +1,12 @@
 """The segments a search found, as a GeoJSON or CSV download."""
 
 import io
-import json
 
 from django.http import HttpResponse
 from django.utils.translation import gettext as _
 from rest_framework.exceptions import ValidationError
 
+from common import geojson
 from common.spreadsheet import SafeWriter
 from events.selectors.found_segments import COLUMNS, MAX_FOUND
 
@@ -31,19 +31,15 @@ def found_file(rows: list[tuple], kind: str) -> HttpResponse:
 def _geojson(rows) -> HttpResponse:
     properties = [(n, k) for n, k in enumerate(COLUMNS) if k not in ("id", "longitude", "latitude")]
     x, y = COLUMNS.index("longitude"), COLUMNS.index("latitude")
-    features = [
-        {
-            "type": "Feature",
-            "id": row[0],
-            "geometry": None
-            if row[x] is None
-            else {"type": "Point", "coordinates": [row[x], row[y]]},
-            "properties": {k: _text(row[n]) for n, k in properties},
-        }
+    features = (
+        geojson.feature(
+            None if row[x] is None else geojson.point([row[x], row[y]]),
+            {k: _text(row[n]) for n, k in properties},
+            id=row[0],
+        )
         for row in rows
-    ]
-    body = json.dumps({"type": "FeatureCollection", "features": features}, ensure_ascii=False)
-    return _download(body, "application/geo+json", "segments.geojson")
+    )
+    return _download(geojson.collection_text(features), "application/geo+json", "segments.geojson")
 
 
 def _csv(rows) -> HttpResponse:

@@ -159,6 +159,12 @@ class SegmentTypeSerializer(ServiceSerializer):
 
 class LogEntrySerializer(ClientUidMixin, ServiceSerializer):
     is_open = serializers.BooleanField(read_only=True)
+    may_reopen = serializers.SerializerMethodField(
+        help_text="Whether this entry may be re-opened now (only a closed test event, not final)."
+    )
+
+    def get_may_reopen(self, row) -> bool:
+        return logs.may_reopen(row)
 
 
 class TestEventSerializer(LogEntrySerializer):
@@ -171,6 +177,7 @@ class TestEventSerializer(LogEntrySerializer):
             "start",
             "end",
             "is_open",
+            "may_reopen",
             "modified",
             "finalised",
             "finalised_by",
@@ -191,6 +198,7 @@ class ShiftSerializer(LogEntrySerializer):
             "start",
             "end",
             "is_open",
+            "may_reopen",
             "modified",
         ]
         read_only_fields = ["number", "start", "end"]
@@ -209,6 +217,7 @@ class LegSerializer(LogEntrySerializer):
             "start",
             "end",
             "is_open",
+            "may_reopen",
             "modified",
         ]
         read_only_fields = ["number", "start", "end"]
@@ -222,6 +231,10 @@ class SegmentSerializer(ServiceSerializer):
     start_position = GeometryField(read_only=True, allow_null=True)
     is_open = serializers.BooleanField(read_only=True)
     is_master = serializers.BooleanField(read_only=True)
+    unannotated = serializers.BooleanField(
+        read_only=True,
+        help_text="A take-over reason with no annotation yet (Unassigned); false for a master.",
+    )
 
     class Meta:
         model = Segment
@@ -243,6 +256,7 @@ class SegmentSerializer(ServiceSerializer):
             "start_uncertainty",
             "is_open",
             "is_master",
+            "unannotated",
             "modified",
             "annotated",
         ]

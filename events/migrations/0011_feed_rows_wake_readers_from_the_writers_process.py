@@ -1,5 +1,5 @@
 """The feed's table has no NOTIFY trigger: the writer's process wakes the
-live readers after its commit (rosbridge_app.wakeup), on every database."""
+live readers after its commit (live.wakeup), on every database."""
 
 from django.db import migrations
 

@@ -3,8 +3,8 @@ from events.models.configuration import Performer, Personnel, PoseSource, Vehicl
 from events.models.feed import Announcement
 from events.models.hierarchy import Leg, Segment, Shift, TestEvent
 from events.models.notes import Note
+from events.models.plans import Criterion, Judgement, TestCase
 from events.models.robots import RobotAccount
-from events.models.test_plans import Criterion, Judgement, TestCase
 
 __all__ = [
     "Announcement",

@@ -3,7 +3,7 @@
 Services add a row in the same transaction as the change it describes
 (:mod:`events.feed`), so the feed shows a change exactly when it is committed
 and a rolled-back write announces nothing.  The live link
-(:mod:`rosbridge_app.consumers`) tails it.
+(:mod:`live.consumers`) tails it.
 """
 
 from django.db import models

@@ -445,3 +445,15 @@ class Segment(ChangeStamped):
     @property
     def is_ito(self) -> bool:
         return self.segment_type_id == SegmentType.ITO
+
+    @staticmethod
+    def reason_unassigned(ito_reason_id: str | None) -> bool:
+        """Whether a take-over reason naming ``ito_reason_id`` has no annotation yet
+        (Unassigned); for rows read without the model too (the statistics' rows)."""
+        return ito_reason_id in (None, ItoReason.UNASSIGNED)
+
+    @property
+    def unannotated(self) -> bool:
+        """A take-over reason (a child) with no annotation yet: the cockpit marks it and
+        offers the robot's suggestion for it; statistics count the suggestion then."""
+        return self.parent_id is not None and Segment.reason_unassigned(self.ito_reason_id)

@@ -101,6 +101,18 @@ def finalisations_arriving():
         _arriving.reset(token)
 
 
+def final_events(*conditions, **event_filter):
+    """The final test events among those ``conditions`` and ``event_filter``
+    find, whose contents refuse a change (an import's arriving ones aside).
+    A write that must not wait for a statement of its own stores nothing
+    while this finds a row (the storage port's single pose) and then asks
+    :func:`require_amendable` why."""
+    final = TestEvent.objects.filter(*conditions, **event_filter, finalised__isnull=False)
+    if arriving := _arriving.get():
+        final = final.exclude(pk__in=arriving)
+    return final
+
+
 def require_amendable(*conditions, **event_filter) -> None:
     """What a final test event refuses: anything added to it or changed in it
     (poses, local poses, maps, images, notes, judgements, segment and log
@@ -109,9 +121,7 @@ def require_amendable(*conditions, **event_filter) -> None:
     the change history lists the amendment.
 
     ``conditions`` and ``event_filter`` find the test events concerned."""
-    final = TestEvent.objects.filter(*conditions, **event_filter, finalised__isnull=False)
-    if arriving := _arriving.get():
-        final = final.exclude(pk__in=arriving)
+    final = final_events(*conditions, **event_filter)
     finalised = final.values_list("finalised", flat=True).first()
     if finalised is None:
         return

@@ -98,19 +98,30 @@ def close_test_event(event: TestEvent, at: datetime | None = None) -> TestEvent:
     return announce_and_return(event)
 
 
-@transaction.atomic
-def reopen_test_event(event: TestEvent) -> TestEvent:
-    """Only test events re-open; their shifts stay closed, new ones can be added."""
-    event = lock(event)
+def may_reopen(row: TestEvent | Shift | Leg) -> bool:
+    """Only a test event re-opens (its shifts and legs stay closed; new ones can be
+    added), when it is closed and not final. The cockpit's Re-open button shows this."""
+    return isinstance(row, TestEvent) and _reopen_refusal(row) is None
+
+
+def _reopen_refusal(event: TestEvent) -> RuleViolation | None:
     if event.end is None:
-        raise RuleViolation(
+        return RuleViolation(
             _("Test event '%(name)s' is already open.") % {"name": event}, code="open"
         )
     if event.finalised is not None:
-        raise RuleViolation(
+        return RuleViolation(
             _("Test event '%(event)s' is final; it cannot be re-opened.") % {"event": event},
             code="final",
         )
+    return None
+
+
+@transaction.atomic
+def reopen_test_event(event: TestEvent) -> TestEvent:
+    event = lock(event)
+    if refusal := _reopen_refusal(event):
+        raise refusal
     event.end = None
     event.save(update_fields=["end"])
     return announce_and_return(event)

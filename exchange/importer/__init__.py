@@ -36,7 +36,7 @@ What changed is announced in the change feed in the same transaction.
 The modules: ``bundle`` runs the steps in one transaction and turns failures
 into :class:`ImportRefused`; ``session`` holds what the steps share (the rows
 met so far, lookups, files written); ``configuration``, ``logbook`` and
-``test_plans``, ``telemetry`` and ``history`` import those kinds of rows;
+``plans``, ``telemetry`` and ``history`` import those kinds of rows;
 ``plan`` counts the outcome.
 """
 

@@ -11,7 +11,7 @@ from events.models import Segment
 from events.services.finality import finalisations_arriving
 from exchange import records as rec
 from exchange.archive import ArchiveError
-from exchange.importer import configuration, history, logbook, telemetry, test_plans
+from exchange.importer import configuration, history, logbook, plans, telemetry
 from exchange.importer.plan import ImportRefused, MalformedRecord, Plan, describe
 from exchange.importer.session import ImportSession
 
@@ -21,10 +21,10 @@ STEPS = (
     configuration.import_configuration,
     logbook.import_test_events,
     logbook.link_basemaps,
-    test_plans.import_test_cases,
+    plans.import_test_cases,
     logbook.import_shifts,
     logbook.import_legs,
-    test_plans.import_judgements,
+    plans.import_judgements,
     logbook.import_segments,
     logbook.import_notes,
     telemetry.import_poses,

@@ -23,7 +23,7 @@ from events.models import (
 )
 from events.services import finality
 from exchange import records as rec
-from exchange.importer import test_plans
+from exchange.importer import plans
 from exchange.importer.plan import MalformedRecord
 from exchange.importer.session import ImportSession
 from telemetry.models import Image, MapImage, Recording
@@ -254,7 +254,7 @@ def import_legs(session: ImportSession):
             "recording": r.get("recording", ""),
         }
         if "test_case" in r:  # archives from before test plans lack it
-            values["test_case_id"] = test_plans.test_case_id(session, shift_id, r["test_case"])
+            values["test_case_id"] = plans.test_case_id(session, shift_id, r["test_case"])
         clashes = [
             (
                 Leg.objects.filter(shift_id=shift_id, number=r["number"]),

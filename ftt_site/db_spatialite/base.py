@@ -10,12 +10,12 @@ so a writer queued for the write lock would give up sooner than the settings
 promise; the timeout is set again once the extension is in.
 
 The wheels' own PROJ and GDAL are loaded before the first connection loads
-``mod_spatialite`` (``ftt_site.native_libs``).
+``mod_spatialite`` (``ftt_site.db_spatialite.native_libs``).
 """
 
 from django.contrib.gis.db.backends.spatialite import base
 
-from ftt_site import native_libs
+from ftt_site.db_spatialite import native_libs
 
 # What sqlite3.connect uses when OPTIONS has no "timeout".
 SQLITE_DEFAULT_TIMEOUT = 5.0

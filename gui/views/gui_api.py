@@ -30,20 +30,16 @@ from events.api.serializers import (
     touched_rows,
 )
 from events.models import Leg, Note, Segment, SegmentType, Shift, Vehicle
+from events.selectors.cases import test_case_areas, test_case_routes
 from events.selectors.labels import label, leg_numbers, short_label
-from events.selectors.test_cases import test_case_areas, test_case_routes
 from events.services import segments as rules
 from gui.forms import gui_forms
 from rosbridge_app.models import Collector
 from rosbridge_app.selectors.collectors import collector_status, collectors
-from rosbridge_app.selectors.control import (
-    logging_control,
-    parameter_rows,
-    snapshot_control,
-    stores_nothing,
-)
+from rosbridge_app.selectors.control import logging_control, snapshot_control, stores_nothing
 from rosbridge_app.selectors.ending import ACTIONS, ending
 from rosbridge_app.selectors.fleet import fleet
+from rosbridge_app.selectors.parameter_editor import parameter_rows
 from rosbridge_app.services.collectors import issue_command
 from telemetry.api.serializers import ImageSerializer, RecordingSerializer
 from telemetry.models import Image, Recording
@@ -161,6 +157,18 @@ class LegTracks(GuiView):
         if zooms[GPS] is not None:
             body["tolerance_deg"] = tolerance(GPS, zooms[GPS])
         return Response(body)
+
+
+class LegDistances(GuiView):
+    """Every master segment's driven distance, as LegTracks answers it, without
+    the points: the cockpit reads it after each live batch of positions, which it
+    draws itself, so a long leg does not cross the wire for a few numbers."""
+
+    def get(self, request, pk):
+        leg = get_object_or_404(Leg, pk=pk)
+        masters = list(tracks.masters(leg=leg.pk))
+        distances = displayed_distances(masters)
+        return Response({"leg": leg.pk, "distances": {m.pk: distances[m.pk] for m in masters}})
 
 
 def read_ahead(leg: Leg) -> threading.Thread | None:

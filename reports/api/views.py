@@ -18,7 +18,7 @@ from rest_framework.views import APIView
 from common import roles
 from common.api.permissions import RolePermission
 from events.models import TestEvent
-from events.services.test_plans import judge
+from events.services.plans import judge
 from reports.api.serializers import (
     JudgementSerializer,
     ReportRequestSerializer,
@@ -29,6 +29,7 @@ from reports.models import Report
 from reports.selectors import exports
 from reports.selectors.comparison import compare
 from reports.selectors.disengagements import disengagements_csv, mileage_csv, reporting_year_of
+from reports.selectors.plans import test_plan, test_plan_csv
 from reports.selectors.provenance import amendments_of, verify_report
 from reports.selectors.reports import reports_of
 from reports.selectors.routes import (
@@ -39,7 +40,6 @@ from reports.selectors.routes import (
     compare_routes,
 )
 from reports.selectors.statistics import event_statistics
-from reports.selectors.test_plans import test_plan, test_plan_csv
 from reports.services.generation import (
     COMPARE,
     request_comparison,

@@ -93,7 +93,8 @@ def _typeset(events: list[TestEvent], mode: str, routes: dict | None) -> bytes:
         names = {e.pk: _event_name(e) for e in events}
         document = {
             "text": comparison_text(),
-            "generated": fmt.timestamp(timezone.now(), first.tzinfo),
+            # Its one time, named like the event report's: the compared events' zones may differ.
+            "generated": f"{fmt.timestamp(timezone.now(), first.tzinfo)} ({first.time_zone})",
             "events": [_row(names[e["id"]], e) for e in data["test_events"]],
             "versions": [_row(v["version"], v) for v in data["versions"]],
             "vehicles": [_row(v["name"], v) for v in data["vehicles"]],

@@ -3,7 +3,6 @@
 import tempfile
 import time
 from collections.abc import Callable
-from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -14,6 +13,7 @@ from common.said import Said, said
 from events.models import TestEvent
 from reports.documents.options import ReportError, ReportOptions
 from reports.documents.sections import Sections
+from reports.documents.stage_times import StageTimes
 from reports.documents.typesetting import typeset
 from reports.figures import style
 from reports.formatting import written_in
@@ -21,9 +21,6 @@ from reports.selectors.content import has_segments, report_scope, scope_words
 from reports.selectors.provenance import seal_pdf
 
 Progress = Callable[[float, Said], None]
-# Wraps each stage of making a report (statistics, maps, charts, timelines, image
-# encoding, typst), by its name; benchmarks/report_benchmark.py times them.
-StageHook = Callable[[str], AbstractContextManager]
 
 
 @dataclass
@@ -34,14 +31,11 @@ class ReportResult:
     tiles_used: bool
     seconds: float
     warnings: list[str]
+    stages: StageTimes
 
 
 def _silent(_fraction: float, _step: Said) -> None:
     pass
-
-
-def _untimed(_stage: str) -> AbstractContextManager:
-    return nullcontext()
 
 
 def check_reportable(event: TestEvent, options: ReportOptions | None = None) -> None:
@@ -76,21 +70,20 @@ def render_report(
     event: TestEvent,
     options: ReportOptions,
     progress: Progress = _silent,
-    *,
-    time_stage: StageHook = _untimed,
 ) -> ReportResult:
     """The finished PDF as bytes; raises ReportError for a test event without data."""
     started = time.perf_counter()
+    stages = StageTimes()
     check_reportable(event, options)
     style.apply()
     with (
         tempfile.TemporaryDirectory(prefix="ftt-report-") as tmp,
         written_in(options.language or event.language),
     ):
-        sections = Sections(event, options, Path(tmp), progress, time_stage)
+        sections = Sections(event, options, Path(tmp), progress, stages.timed)
         data = sections.document()
         progress(0.95, said(gettext_noop("typesetting")))
-        with time_stage("typst"):
+        with stages.timed(gettext_noop("typesetting")):
             pdf = seal_pdf(typeset("report.typ", data, Path(tmp)))
     progress(1.0, said(gettext_noop("done")))
     return ReportResult(
@@ -100,4 +93,5 @@ def render_report(
         tiles_used=sections.tiles_used,
         seconds=time.perf_counter() - started,
         warnings=sections.warnings,
+        stages=stages,
     )

@@ -5,6 +5,7 @@ from pathlib import Path
 
 from django.conf import settings
 from django.utils.translation import gettext as _
+from django.utils.translation import gettext_noop
 
 from basemaps.selectors.layers import default_layer
 from reports.documents.options import ReportOptions
@@ -47,7 +48,7 @@ class TrackMaps:
 
     def draw(self, runs, shift, new_file, size) -> tuple[str | None, str]:
         """(file name, note) of the map of ``runs``; ``new_file(stem)`` names its file."""
-        with self.time_stage("figures: maps"):
+        with self.time_stage(gettext_noop("figures: maps")):
             lines = [
                 Line(run.path_x, run.path_y, _type_color(run.kind))
                 for run in runs

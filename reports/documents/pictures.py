@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 from django.utils.translation import gettext as _
+from django.utils.translation import gettext_noop
 from PIL import Image as PILImage
 
 from reports.figures.maps import Background
@@ -40,7 +41,7 @@ class Pictures:
             return None
         digest = hashlib.sha256(content).hexdigest()[:20]
         if digest not in self.encoded:
-            with self.time_stage("image encoding"):
+            with self.time_stage(gettext_noop("image encoding")):
                 self.encoded[digest] = self._encode(image.pk, content, digest)
         return self.encoded[digest]
 

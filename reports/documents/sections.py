@@ -26,6 +26,7 @@ from reports.figures.timeline import draw_timeline
 from reports.selectors import content
 from reports.selectors.formulas import FORMULAS
 from reports.selectors.formulas import shown as shown_formulas
+from reports.selectors.plans import test_plan
 from reports.selectors.provenance import keywords, provenance
 from reports.selectors.statistics import (
     CONFIDENCE,
@@ -34,7 +35,6 @@ from reports.selectors.statistics import (
     event_statistics,
     segment_scope,
 )
-from reports.selectors.test_plans import test_plan
 from telemetry.selectors.recordings import recordings_by_master, summary
 from telemetry.selectors.tracks import GAP_SECONDS
 from telemetry.storage.keys import GPS, LOCAL
@@ -82,7 +82,7 @@ class Sections:
         scope = self.options.scope
         # What the report covers, read once: the whole test event, a shift or a leg.
         self.scope_name = content.scope_name(**scope)
-        with self.time_stage("statistics (queries and distances)"):
+        with self.time_stage(gettext_noop("statistics (queries and distances)")):
             stats = event_statistics(event, self.mode, tracks=True, **scope)
         shifts = content.shifts_of(event, self.options.shift)
         self.legs = content.legs_by_shift(shifts, self.options.leg)
@@ -239,7 +239,7 @@ class Sections:
                 ]
             )
         present = [(lab, f) for lab, f, p in zip(labels, per_shift, has, strict=True) if p]
-        with self.time_stage("figures: charts"):
+        with self.time_stage(gettext_noop("figures: charts")):
             charts_out = self._charts(present)
         return {
             "summary": tables.figure_rows(o),
@@ -281,7 +281,7 @@ class Sections:
         return [_name(path) for path in made]
 
     def _timeline(self, shift, runs) -> str | None:
-        with self.time_stage("figures: timelines"):
+        with self.time_stage(gettext_noop("figures: timelines")):
             if not runs:
                 return None
             weather_changes = [
@@ -386,11 +386,11 @@ class Sections:
                 ),
                 (_("Duration"), fmt.duration(run.seconds)),
                 (_("Distance"), fmt.metres(run.distance)),
-                # GPS fixes without a position are not counted: say so.
+                # GPS fixes without a position are not counted: say how many.
                 (
                     _("Poses"),
-                    _("%(count)s with a position (fixes without one left out)")
-                    % {"count": run.pose_count}
+                    _("%(count)s with a position, %(no_fix)s without a fix (left out)")
+                    % {"count": run.pose_count, "no_fix": run.track.no_fix if run.track else 0}
                     if self.mode == GPS
                     else str(run.pose_count),
                 ),

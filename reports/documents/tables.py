@@ -3,8 +3,8 @@
 from django.utils.translation import gettext as _
 
 from reports import formatting as fmt
+from reports.selectors.plans import FAIL, JUDGE, NOT_YET, PASS
 from reports.selectors.statistics import CONFIDENCE, Figures
-from reports.selectors.test_plans import FAIL, JUDGE, NOT_YET, PASS
 
 
 def label_rows(pairs) -> list[list[str]]:

@@ -13,48 +13,37 @@ web server.
 import hashlib
 import io
 import logging
-import math
-import urllib.error
-import urllib.request
 from pathlib import Path
 
+import morecantile
 import numpy as np
+import requests
 from django.utils.translation import gettext
 from PIL import Image
 
+from basemaps.grid import TILE_SIZE, WEB_MERCATOR
 from basemaps.models import BasemapLayer
 from basemaps.selectors.tiles import render_tile
 
 log = logging.getLogger(__name__)
 
-TILE_SIZE = 256
 MAX_ZOOM = 19
 USER_AGENT = "FTT-field-test-report/1.0 (field test tool report generator)"
 
 
-def lonlat_to_tile(lon: float, lat: float, zoom: int) -> tuple[float, float]:
-    """Fractional tile coordinates (Web Mercator, origin at the north-west)."""
-    lat = max(min(lat, 85.0511), -85.0511)
-    n = 2.0**zoom
-    x = (lon + 180.0) / 360.0 * n
-    y = (1.0 - math.asinh(math.tan(math.radians(lat))) / math.pi) / 2.0 * n
-    return x, y
-
-
-def tile_to_lonlat(x: float, y: float, zoom: int) -> tuple[float, float]:
-    n = 2.0**zoom
-    lon = x / n * 360.0 - 180.0
-    lat = math.degrees(math.atan(math.sinh(math.pi * (1 - 2 * y / n))))
-    return lon, lat
+def _corner_tiles(west, south, east, north, zoom) -> tuple[morecantile.Tile, morecantile.Tile]:
+    """The north-west and the south-east tile of a box."""
+    return (
+        WEB_MERCATOR.tile(west, north, zoom, truncate=True),
+        WEB_MERCATOR.tile(east, south, zoom, truncate=True),
+    )
 
 
 def fit_zoom(west, south, east, north, max_tiles: int = 16, max_zoom: int = MAX_ZOOM) -> int:
     """Highest zoom at which the box needs at most ``max_tiles`` tiles."""
     for zoom in range(max_zoom, 0, -1):
-        x0, y0 = lonlat_to_tile(west, north, zoom)
-        x1, y1 = lonlat_to_tile(east, south, zoom)
-        count = (int(x1) - int(x0) + 1) * (int(y1) - int(y0) + 1)
-        if count <= max_tiles:
+        first, last = _corner_tiles(west, south, east, north, zoom)
+        if (last.x - first.x + 1) * (last.y - first.y + 1) <= max_tiles:
             return zoom
     return 1
 
@@ -72,6 +61,8 @@ class TileSource:
         self.fetched = 0
         self.from_cache = 0
         self.failed = 0
+        self.session = requests.Session()  # one connection for a report's tiles
+        self.session.headers["User-Agent"] = USER_AGENT
 
     def tile(self, zoom: int, x: int, y: int) -> Image.Image | None:
         n = 2**zoom
@@ -84,36 +75,37 @@ class TileSource:
             return Image.open(path).convert("RGB")
         if not self.available:
             return None
-        request = urllib.request.Request(
-            self.url.format(z=zoom, x=x, y=y), headers={"User-Agent": USER_AGENT}
-        )
         try:
-            with urllib.request.urlopen(request, timeout=self.timeout) as response:
-                data = response.read()
-            image = Image.open(io.BytesIO(data)).convert("RGB")
-        except urllib.error.HTTPError as exc:
+            response = self.session.get(self.url.format(z=zoom, x=x, y=y), timeout=self.timeout)
+        except requests.RequestException as exc:
+            return self._unavailable(exc)
+        if not response.ok:
             # The server is there but has no such tile: leave this one blank.
-            log.info(gettext("tile %s/%s/%s: HTTP %s"), zoom, x, y, exc.code)
+            log.info(gettext("tile %s/%s/%s: HTTP %s"), zoom, x, y, response.status_code)
             self.failed += 1
             return None
+        data = response.content
+        try:
+            image = Image.open(io.BytesIO(data)).convert("RGB")
         except (OSError, ValueError) as exc:
-            log.warning(gettext("tile server unavailable (%s); drawing maps without tiles"), exc)
-            self.available = False
-            self.failed += 1
-            return None
+            return self._unavailable(exc)
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(data)
         self.fetched += 1
         return image
+
+    def _unavailable(self, exc: Exception) -> None:
+        log.warning(gettext("tile server unavailable (%s); drawing maps without tiles"), exc)
+        self.available = False
+        self.failed += 1
 
     def mosaic(self, west, south, east, north):
         """(RGB array, (west, south, east, north) of the array) or None without tiles."""
         if not self.url:
             return None
         zoom = fit_zoom(west, south, east, north, max_zoom=self.max_zoom)
-        fx0, fy0 = lonlat_to_tile(west, north, zoom)
-        fx1, fy1 = lonlat_to_tile(east, south, zoom)
-        x0, y0, x1, y1 = int(fx0), int(fy0), int(fx1), int(fy1)
+        first, last = _corner_tiles(west, south, east, north, zoom)
+        x0, y0, x1, y1 = first.x, first.y, last.x, last.y
         canvas = Image.new("RGB", ((x1 - x0 + 1) * TILE_SIZE, (y1 - y0 + 1) * TILE_SIZE), "white")
         any_tile = False
         for tx in range(x0, x1 + 1):
@@ -126,8 +118,8 @@ class TileSource:
                     canvas.paste(tile, ((tx - x0) * TILE_SIZE, (ty - y0) * TILE_SIZE))
         if not any_tile:
             return None
-        w, n = tile_to_lonlat(x0, y0, zoom)
-        e, s = tile_to_lonlat(x1 + 1, y1 + 1, zoom)
+        w, n = WEB_MERCATOR.ul(first)
+        e, s = WEB_MERCATOR.bounds(last).right, WEB_MERCATOR.bounds(last).bottom
         return np.asarray(canvas), (w, s, e, n), zoom
 
 

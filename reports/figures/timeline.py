@@ -10,6 +10,7 @@ matplotlib.use("Agg")
 
 import matplotlib.dates as mdates  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
 from django.utils.translation import gettext  # noqa: E402
 
 from reports import formatting as fmt  # noqa: E402
@@ -27,10 +28,21 @@ def time_axis(first, last, min_span=timedelta(0)):
     return first - span * 0.02, first + span * 1.02
 
 
+class DistinctTimeLocator(mdates.AutoDateLocator):
+    """Round local times, each instant once: on the day the clocks go forward the
+    skipped hour's tick (02:00) falls on the next one (03:00) and would repeat it."""
+
+    def __call__(self):
+        return np.unique(super().__call__())
+
+    def tick_values(self, vmin, vmax):
+        return np.unique(super().tick_values(vmin, vmax))
+
+
 def set_time_ticks(ax, tz, span: timedelta) -> None:
     """Ticks at round times, each labelled as finely as their step needs, with the
     day when the axis spans more than one: no label is written twice."""
-    locator = mdates.AutoDateLocator(tz=tz, minticks=3, maxticks=9)
+    locator = DistinctTimeLocator(tz=tz, minticks=3, maxticks=9)
     day = fmt.day_of_month_pattern()
     clock = f"{day} %H:%M" if span > timedelta(days=1) else "%H:%M"
     formatter = mdates.AutoDateFormatter(locator, tz=tz)

@@ -10,10 +10,10 @@
 """
 
 import io
-import json
 from collections import defaultdict
 from xml.etree import ElementTree as ET
 
+from common import geojson
 from common.spreadsheet import SafeWriter
 from events.models import Note, Segment, TestEvent
 from events.selectors.labels import segment_labels
@@ -140,15 +140,11 @@ def tracks_geojson(event: TestEvent) -> dict:
         if len(run.path_x) < 2:
             continue
         features.append(
-            {
-                "type": "Feature",
-                "geometry": {
-                    "type": "LineString",
-                    "coordinates": [
-                        [float(x), float(y)] for x, y in zip(run.path_x, run.path_y, strict=True)
-                    ],
-                },
-                "properties": {
+            geojson.feature(
+                geojson.line(
+                    [[float(x), float(y)] for x, y in zip(run.path_x, run.path_y, strict=True)]
+                ),
+                {
                     "segment_id": run.id,
                     "label": run.label,
                     "type": run.kind,
@@ -162,13 +158,13 @@ def tracks_geojson(event: TestEvent) -> dict:
                     "reasons": sorted({s.reason for s in run.reasons}),
                     "intervention": run.is_intervention,
                 },
-            }
+            )
         )
-    return {"type": "FeatureCollection", "features": features}
+    return geojson.collection(features)
 
 
 def tracks_geojson_text(event: TestEvent) -> str:
-    return json.dumps(tracks_geojson(event), ensure_ascii=False)
+    return geojson.collection_text(tracks_geojson(event)["features"])
 
 
 GPX_NS = "http://www.topografix.com/GPX/1/1"

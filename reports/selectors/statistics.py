@@ -282,10 +282,11 @@ def _effective_end(segment: SegmentRow, last_stamp: datetime | None, children: l
 def counted_reason(child: SegmentRow) -> str:
     """The reason statistics count: the operator's; the robot's suggestion only
     for a take-over still Unassigned and with settings.FTT_COUNT_ROBOT_REASONS."""
-    reason = child.ito_reason_id or ItoReason.UNASSIGNED
-    if reason == ItoReason.UNASSIGNED and settings.FTT_COUNT_ROBOT_REASONS:
-        return child.suggested_reason_id or reason
-    return reason
+    if Segment.reason_unassigned(child.ito_reason_id):
+        if settings.FTT_COUNT_ROBOT_REASONS and child.suggested_reason_id:
+            return child.suggested_reason_id
+        return ItoReason.UNASSIGNED
+    return child.ito_reason_id
 
 
 def segment_scope(

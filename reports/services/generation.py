@@ -32,6 +32,7 @@ from events.models import TestEvent
 from reports.documents.comparison import render_comparison
 from reports.documents.event_report import ReportResult, check_reportable, render_report
 from reports.documents.options import ReportError, ReportOptions, language_problem
+from reports.documents.stage_times import StageTimes
 from reports.models import Report
 from reports.selectors.content import report_scope
 from reports.selectors.routes import (
@@ -310,10 +311,12 @@ def _render(report: Report, progress) -> ReportResult:
         )
     progress(0.1, said(gettext_noop("comparing test events")))
     started = time.perf_counter()
+    stages = StageTimes()
     mode = "local" if report.options.get("local") else "gps"
-    pdf = render_comparison(
-        events, mode, report.options.get("language") or "", routes=report.options.get(ROUTES)
-    )
+    with stages.timed(gettext_noop("comparing test events")):
+        pdf = render_comparison(
+            events, mode, report.options.get("language") or "", routes=report.options.get(ROUTES)
+        )
     return ReportResult(
         pdf=pdf,
         pages_hint=0,
@@ -321,6 +324,7 @@ def _render(report: Report, progress) -> ReportResult:
         tiles_used=False,
         seconds=time.perf_counter() - started,
         warnings=[],
+        stages=stages,
     )
 
 

@@ -12,17 +12,21 @@ For the bag player and for bag imports.  Reading needs only rosbags (no ROS);
 """
 
 import array
-import importlib
+import tempfile
 from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
+import yaml
+from mcap.reader import make_reader
 from rosbags.highlevel import AnyReader
 from rosbags.typesys import Stores, get_typestore
 
 from rosbridge_app.collector.events import Event
+from rosbridge_app.collector.message_fields import message_class
 from rosbridge_app.collector.modes import BOOL, INDUSTRIAL, mode_of
 from rosbridge_app.collector.params import SPECS
 from rosbridge_app.collector.pipeline import Pipeline
@@ -36,6 +40,7 @@ GRID = "nav_msgs/msg/OccupancyGrid"
 IMAGE = "sensor_msgs/msg/Image"
 COMPRESSED = "sensor_msgs/msg/CompressedImage"
 PROGRESS_EVERY = 2000  # routed messages between two progress reports
+METADATA = "metadata.yaml"  # a ROS 2 bag directory's index of its files
 
 
 @dataclass
@@ -51,12 +56,67 @@ class BagMessage:
         return datetime.fromtimestamp(self.time_ns / 1e9, tz=UTC)
 
 
-def open_bag(path: Path) -> AnyReader:
-    """A rosbags reader for a ROS 1 bag file or a ROS 2 bag directory/file."""
+@contextmanager
+def open_bag(path: Path) -> Iterator[AnyReader]:
+    """An open rosbags reader for a ROS 1 bag file, a ROS 2 bag directory or one
+    of its files, or a bare .mcap file (a black-box snapshot, a file from
+    Foxglove or ``mcap`` tools) with no metadata.yaml beside it."""
     path = Path(path)
+    typestore = get_typestore(Stores.ROS2_JAZZY)
+    if path.is_file() and path.suffix == ".mcap" and not (path.parent / METADATA).exists():
+        # rosbags opens a ROS 2 bag only by its directory's metadata.yaml, so the
+        # file gets a folder of its own with the metadata its summary gives.
+        with tempfile.TemporaryDirectory(prefix="ftt-mcap-") as folder:
+            (Path(folder) / path.name).symlink_to(path.resolve())
+            (Path(folder) / METADATA).write_text(_rosbag2_metadata(path))
+            with AnyReader([Path(folder)], default_typestore=typestore) as reader:
+                yield reader
+        return
     if path.is_file() and path.suffix in (".db3", ".mcap"):
         path = path.parent  # rosbag2 is opened by its directory (metadata.yaml)
-    return AnyReader([path], default_typestore=get_typestore(Stores.ROS2_JAZZY))
+    with AnyReader([path], default_typestore=typestore) as reader:
+        yield reader
+
+
+def _rosbag2_metadata(path: Path) -> str:
+    """metadata.yaml (rosbag2 version 8) for one MCAP file, from its summary."""
+    with path.open("rb") as stream:
+        summary = make_reader(stream).get_summary()
+    if summary is None or summary.statistics is None:
+        # A file cut short; the mcap CLI's "mcap recover" writes a whole one.
+        raise ValueError(f"{path.name} has no summary (cut short?); try 'mcap recover'")
+    channels, schemas = summary.channels, summary.schemas
+    counts = summary.statistics.channel_message_counts
+    first = summary.statistics.message_start_time
+    last = summary.statistics.message_end_time
+    topics = [
+        {
+            "topic_metadata": {
+                "name": channel.topic,
+                "type": schemas[channel.schema_id].name if channel.schema_id in schemas else "",
+                "serialization_format": channel.message_encoding,
+                "offered_qos_profiles": channel.metadata.get("offered_qos_profiles", ""),
+            },
+            "message_count": counts.get(channel.id, 0),
+        }
+        for channel in channels.values()
+    ]
+    total = sum(counts.values())
+    return yaml.safe_dump(
+        {
+            "rosbag2_bagfile_information": {
+                "version": 8,
+                "storage_identifier": "mcap",
+                "relative_file_paths": [path.name],
+                "starting_time": {"nanoseconds_since_epoch": first},
+                "duration": {"nanoseconds": last - first},
+                "message_count": total,
+                "topics_with_message_count": topics,
+                "compression_format": "",
+                "compression_mode": "",
+            }
+        }
+    )
 
 
 def latched(connection) -> bool:
@@ -72,6 +132,8 @@ def latched(connection) -> bool:
 def bag_messages(path: Path, topics: set[str] | None = None) -> Iterator[BagMessage]:
     with open_bag(path) as reader:
         connections = [c for c in reader.connections if topics is None or c.topic in topics]
+        if not connections:
+            return  # rosbags reads an empty list as every connection
         latched_ids = {c.id: latched(c) for c in connections}
         for connection, time_ns, raw in reader.messages(connections=connections):
             yield BagMessage(
@@ -199,7 +261,7 @@ def bag_events(
 
 def rclpy_type(msgtype: str):
     package, _, name = msgtype.split("/")
-    return getattr(importlib.import_module(f"{package}.msg"), name)
+    return message_class(f"{package}/msg/{name}")
 
 
 def to_rclpy(value, cls):
@@ -219,8 +281,7 @@ def _convert(value, current, type_name: str):
     if type_name.startswith("sequence<") and "/" in type_name:
         inner = type_name[len("sequence<") :].split(",")[0].rstrip(">")
         package, name = inner.split("/")
-        cls = getattr(importlib.import_module(f"{package}.msg"), name)
-        return [to_rclpy(v, cls) for v in value]
+        return [to_rclpy(v, message_class(f"{package}/msg/{name}")) for v in value]
     if isinstance(current, array.array):
         data = np.asarray(value)
         return array.array(current.typecode, data.astype(np.dtype(current.typecode)).tobytes())

@@ -5,13 +5,12 @@ still serialized (raw subscriptions), so the hot path is one deque append.
 At a switch to ITO, or on request, the messages from ``before`` seconds before
 until ``after`` seconds after are collected; the writer process
 (:mod:`~rosbridge_app.collector.snapshot_writer`) writes them to an MCAP file
-in the pending directory, then a ``recording`` event goes through the outbox
+in the pending directory, then a ``recording`` event goes through the spool
 like everything else.  The recorder moves the file to media storage and
 deletes it only after the row is committed, so an outage or a restart loses
 nothing.
 """
 
-import importlib
 import logging
 import threading
 import time
@@ -247,9 +246,3 @@ def snapshot_topics(params: dict, graph: dict[str, list[str]], resolve) -> dict[
         if types:
             wanted[topic] = types[0]
     return wanted
-
-
-def message_class(typename: str):
-    """The rclpy message class of 'pkg/msg/Type' (needed even for a raw subscription)."""
-    pkg, kind, name = typename.split("/")
-    return getattr(importlib.import_module(f"{pkg}.{kind}"), name)

@@ -20,7 +20,7 @@ from rclpy.qos import (
 from sensor_msgs.msg import CompressedImage, Image, NavSatFix
 from tf2_msgs.msg import TFMessage
 
-from rosbridge_app.collector.blackbox import message_class
+from rosbridge_app.collector.message_fields import message_class
 from rosbridge_app.collector.modes import message_type
 
 log = logging.getLogger("ftt.collector")

@@ -58,15 +58,22 @@ def installed_fields(typename: str) -> dict:
         return typestore_fields(_jazzy(), typename)
     except KeyError:
         pass
-    pkg, kind, name = typename.split("/")
-    if not is_interface_package(pkg) or kind not in _KINDS:
-        raise KeyError(typename)
     try:
-        cls = getattr(importlib.import_module(f"{pkg}.{kind}"), name)
-        fields = cls.get_fields_and_field_types()
+        fields = message_class(typename).get_fields_and_field_types()
     except (ImportError, AttributeError):
         raise KeyError(typename) from None
     return {field: _rosidl_kind(text) for field, text in fields.items()}
+
+
+def message_class(typename: str):
+    """The rclpy class of 'pkg/msg/Type', imported only from an interface package:
+    a type named in a parameter, a bag or the ROS graph never runs another module.
+    ImportError when there is none."""
+    parts = typename.split("/")
+    if len(parts) != 3 or parts[1] not in _KINDS or not is_interface_package(parts[0]):
+        raise ImportError(f"no interface package provides {typename}")
+    pkg, kind, name = parts
+    return getattr(importlib.import_module(f"{pkg}.{kind}"), name)
 
 
 def is_interface_package(pkg: str) -> bool:

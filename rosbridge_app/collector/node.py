@@ -28,7 +28,7 @@ from common.numbers import short
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector import params as P
 from rosbridge_app.collector.answers import logging_answer
-from rosbridge_app.collector.blackbox import Blackbox, message_class, snapshot_topics
+from rosbridge_app.collector.blackbox import Blackbox, snapshot_topics
 from rosbridge_app.collector.conversions import stamp_ns
 from rosbridge_app.collector.hearing import RENEW, RESUBSCRIBE, STREAMS, Hearing
 from rosbridge_app.collector.inputs import (
@@ -39,6 +39,7 @@ from rosbridge_app.collector.inputs import (
     wanted_inputs,
 )
 from rosbridge_app.collector.losses import LossCounter
+from rosbridge_app.collector.message_fields import message_class
 from rosbridge_app.collector.mode_timing import sent_at
 from rosbridge_app.collector.modes import ITO
 from rosbridge_app.collector.pipeline import SECOND_COPY, Pipeline

@@ -132,8 +132,8 @@ SPECS: dict[str, Spec] = {
         "",
         gettext_noop(
             "Mode from any topics (YAML: rule, sources with topic, type, field, auto, ito, "
-            "default, hysteresis; presets in docs/collector.md); empty: topics.robot_mode "
-            "with params.robot_mode_type."
+            "default, hysteresis, stamp; presets: manage.py ftt_mode_presets); empty: "
+            "topics.robot_mode with params.robot_mode_type."
         ),
         multiline=True,
     ),

@@ -1,6 +1,6 @@
 """Events → rows, through the logbook's and telemetry's services only.
 
-Used by the live collector (events from its outbox) and by bag imports
+Used by the live collector (events from its spool) and by bag imports
 (events straight from :class:`~rosbridge_app.collector.pipeline.Pipeline`).
 The leg is asked for at write time: live, that is the open leg of the
 vehicle's open shift, so closing a leg in the GUI and opening another is

@@ -45,8 +45,8 @@ from django.utils.translation import gettext
 
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.held import Held
-from rosbridge_app.collector.outbox import Outbox
 from rosbridge_app.collector.recorder import GivenMaster, Recorder
+from rosbridge_app.collector.spool import Spool
 
 _STATE = "backlog"
 SLICE_SECONDS = 0.5
@@ -66,20 +66,20 @@ class ReplayOrder:
     """``size``: records per slice; ``backlog``: more pending than this is a backlog."""
 
     def __init__(
-        self, outbox: Outbox, size: int, backlog: int | None = None, held: Held | None = None
+        self, spool: Spool, size: int, backlog: int | None = None, held: Held | None = None
     ):
-        self.outbox, self.size, self.held = outbox, size, held
+        self.spool, self.size, self.held = spool, size, held
         self.backlog = size // 4 if backlog is None else backlog
         self.backlog_slice = size  # records per backlog slice, see SLICE_SECONDS
         # Set once the backlog's segment changes are all applied: looking for
         # more would scan the whole backlog every turn.
         self._changes_done = False
         self.stored_change = False  # whether the last write_next stored a segment change
-        saved = outbox.get_state(_STATE)
+        saved = spool.get_state(_STATE)
         # {"end": last id of the backlog, "master": uid open before it, or None}
         self.lane = json.loads(saved) if saved else None
         self._found = (
-            (time.monotonic(), outbox.count_by_kind(self.lane["end"])) if self.lane else None
+            (time.monotonic(), spool.count_by_kind(self.lane["end"])) if self.lane else None
         )
 
     @property
@@ -92,17 +92,17 @@ class ReplayOrder:
         if self.lane is None and self._has_backlog():
             self._changes_done = False
             self.backlog_slice = self.size
-            end = self.outbox.last_id()
-            self._found = time.monotonic(), self.outbox.count_by_kind(end)
+            end = self.spool.last_id()
+            self._found = time.monotonic(), self.spool.count_by_kind(end)
             self.lane = {"end": end, "master": recorder.open_master_uid()}
-            self.outbox.set_state(_STATE, json.dumps(self.lane))
+            self.spool.set_state(_STATE, json.dumps(self.lane))
         if self.lane is None:
-            taken = self._store(recorder, _up_to_change(self.outbox.peek(self.size)), None)
+            taken = self._store(recorder, _up_to_change(self.spool.peek(self.size)), None)
             return taken or self._store_held(recorder, maps=True)
         end = self.lane["end"]
         kinds = sorted(ev.SEGMENT_CHANGES)
         if not self._changes_done:
-            changes = self.outbox.peek(
+            changes = self.spool.peek(
                 self.size,
                 where=f"id <= ? AND kind IN ({', '.join('?' * len(kinds))}) "
                 "AND id NOT IN (SELECT id FROM applied)",
@@ -111,24 +111,24 @@ class ReplayOrder:
             if changes:
                 masters = recorder.apply_changes([event for _, event in changes])
                 ids = [row_id for row_id, _ in changes]
-                self.outbox.mark_applied(list(zip(ids, masters, strict=True)))
+                self.spool.mark_applied(list(zip(ids, masters, strict=True)))
                 self.stored_change = True
                 return len(changes)
             self._changes_done = True
-        live = self.outbox.peek(self.size, where="id > ? AND kind != ?", params=(end, ev.MAP))
+        live = self.spool.peek(self.size, where="id > ? AND kind != ?", params=(end, ev.MAP))
         taken = self._store(recorder, live, None) or self._store_held(recorder, maps=False)
         started = time.monotonic()
-        backlog = self.outbox.peek(
+        backlog = self.spool.peek(
             self.backlog_slice,
             where="(id <= ? AND id NOT IN (SELECT id FROM applied)) OR (id > ? AND kind = ?)",
             params=(end, end, ev.MAP),
         )
         if not backlog:
-            self.outbox.forget_applied()
-            self.outbox.set_state(_STATE, "")
+            self.spool.forget_applied()
+            self.spool.set_state(_STATE, "")
             self._done()
             return taken or self._store_held(recorder, maps=True)
-        marks = self.outbox.applied()
+        marks = self.spool.applied()
         borders = [row_id for row_id, _ in marks]
         runs = itertools.groupby(backlog, key=lambda row: bisect.bisect(borders, row[0]))
         stored = 0
@@ -145,7 +145,7 @@ class ReplayOrder:
         return taken + stored
 
     def _has_backlog(self) -> bool:
-        pending = len(self.outbox)
+        pending = len(self.spool)
         # Held records are younger than the whole spool: behind it, they would
         # wait for each of its segment changes' round trips.
         return pending > self.backlog or bool(pending and self.held is not None and len(self.held))
@@ -153,7 +153,7 @@ class ReplayOrder:
     def _store(self, recorder: Recorder, rows: list, master: GivenMaster | None) -> int:
         if rows:
             recorder.apply([event for _, event in rows], master=master)
-            self.outbox.remove([row_id for row_id, _ in rows])
+            self.spool.remove([row_id for row_id, _ in rows])
             self.stored_change |= any(event.kind in ev.SEGMENT_CHANGES for _, event in rows)
         return len(rows)
 

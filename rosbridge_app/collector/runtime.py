@@ -3,14 +3,14 @@
 * ROS thread: one SingleThreadedExecutor spinning :class:`CollectorNode`;
   callbacks put events on an in-memory queue and return.
 * Spool thread: renders pictures (PNG/JPEG) and appends events to the
-  :class:`Outbox` on disk, a few times a second.
-* Main thread: the only one that talks to the database: applies outbox events
+  :class:`Spool` on disk, a few times a second.
+* Main thread: the only one that talks to the database: applies spool events
   in order through :class:`Recorder`, beats, takes GUI commands, follows the
   vehicle's leg.  When the database is unreachable it says so once, backs off
-  and retries; the outbox keeps growing meanwhile and is replayed in order.
+  and retries; the spool keeps growing meanwhile and is replayed in order.
 
 SIGINT/SIGTERM (rclpy's handlers) stop the ROS thread; then the queue is
-spooled, the outbox is written to the database if it can be, and the process
+spooled, the spool is written to the database if it can be, and the process
 exits.  A SIGKILL loses only what was still in memory (< ~0.1 s of data).
 
 A collector whose node hears nothing while others publish (hearing.py) and
@@ -46,9 +46,9 @@ from events.models import Vehicle
 from events.selectors.logs import open_leg_for_vehicle
 from rosbridge_app.collector.disk_guard import FULL, DiskGuard
 from rosbridge_app.collector.node import CollectorNode
-from rosbridge_app.collector.outbox import Outbox, SpoolFull
 from rosbridge_app.collector.recorder import DatabaseUnavailable, Recorder
 from rosbridge_app.collector.replay import ReplayOrder
+from rosbridge_app.collector.spool import Spool, SpoolFull
 from rosbridge_app.collector.spooler import Spooler, default_spool
 from rosbridge_app.collector.status import Status
 from rosbridge_app.models import CollectorCommand
@@ -56,7 +56,7 @@ from rosbridge_app.services import collectors as link
 
 log = logging.getLogger("ftt.collector")
 
-# Records the writer takes from the outbox per transaction: a backlog after an
+# Records the writer takes from the spool per transaction: a backlog after an
 # outage is replayed in few large bulk inserts (benchmarks/collector_endurance.py),
 # and a live mode switch waits for at most one such slice (collector/replay.py).
 WRITE_BATCH = 2000
@@ -214,25 +214,25 @@ class CollectorRuntime:
             self.node.set_parameters([Parameter("vehicle", value=self.vehicle_key)])
         self.vehicle_key = self.node.get_parameter("vehicle").value
         self.name = self.name or f"{self.host}/{self.vehicle_key or self.node.get_name()}"
-        self.outbox = Outbox(self.spool_path or default_spool(self.name))
+        self.spool = Spool(self.spool_path or default_spool(self.name))
         self.recorder = Recorder(self._leg)
-        self.node.blackbox.directory = self.outbox.path.with_suffix(".snapshots")
-        self.disk = DiskGuard(self.outbox.path)
+        self.node.blackbox.directory = self.spool.path.with_suffix(".snapshots")
+        self.disk = DiskGuard(self.spool.path)
         self.disk.snapshots = self.node.blackbox.directory
         self.node.disk = self.node.blackbox.guard = self.disk
         self.node.configure_disk()
         self.disk.make_reserve()
-        self.spooler = Spooler(self.events, self.outbox, self.disk)
-        self.order = ReplayOrder(self.outbox, WRITE_BATCH, held=self.spooler.held)
-        pending = len(self.outbox)
+        self.spooler = Spooler(self.events, self.spool, self.disk)
+        self.order = ReplayOrder(self.spool, WRITE_BATCH, held=self.spooler.held)
+        pending = len(self.spool)
         log.info(
             gettext("collector %s for vehicle '%s'; spool %s (%d records pending)"),
             self.name,
             self.vehicle_key,
-            self.outbox.path,
+            self.spool.path,
             pending,
         )
-        if self.start_logging or self.outbox.get_state("logging") == "1":
+        if self.start_logging or self.spool.get_state("logging") == "1":
             self.node.set_logging(True)
         self.spooler.start()
         self.executor = SingleThreadedExecutor()
@@ -257,7 +257,7 @@ class CollectorRuntime:
 
     def _persist_logging(self, on: bool) -> None:
         try:
-            self.outbox.set_state("logging", "1" if on else "0")
+            self.spool.set_state("logging", "1" if on else "0")
         except SpoolFull:
             # Logging goes on; only a restart on this full disk would not resume it.
             line = (
@@ -349,7 +349,7 @@ class CollectorRuntime:
 
     def _pending(self) -> int:
         """Records not yet in the database: spooled, or held in memory (disk full)."""
-        return len(self.outbox) + len(self.spooler.held)
+        return len(self.spool) + len(self.spooler.held)
 
     def _say_leg(self) -> None:
         leg = self.recorder.leg
@@ -375,7 +375,7 @@ class CollectorRuntime:
             log.warning(
                 gettext("database unreachable (%s); spooling to %s"),
                 str(exc).strip(),
-                self.outbox.path,
+                self.spool.path,
             )
         for conn in connections.all():
             try:
@@ -388,7 +388,7 @@ class CollectorRuntime:
             log.warning(
                 gettext("database back after %.0f s; replaying %d spooled records"),
                 (timezone.now() - self._db_down_since).total_seconds(),
-                len(self.outbox),
+                len(self.spool),
             )
             self._db_down_since = None
         self.status.database_ok = True
@@ -479,7 +479,7 @@ class CollectorRuntime:
         held = list(self.spooler.held.events)
         if held:
             try:
-                self.outbox.append(held)
+                self.spool.append(held)
             except SpoolFull:
                 log.error(
                     gettext(
@@ -488,12 +488,12 @@ class CollectorRuntime:
                     ),
                     len(held),
                 )
-        left = len(self.outbox)
+        left = len(self.spool)
         if left:
-            log.warning(gettext("%d records stay in %s for the next start"), left, self.outbox.path)
+            log.warning(gettext("%d records stay in %s for the next start"), left, self.spool.path)
         else:
             log.info(gettext("everything written"))
-        self.outbox.close()
+        self.spool.close()
         try:
             self.node.destroy_node()
         except Exception:

@@ -1,6 +1,6 @@
-"""The spool thread: events from the ROS thread into the outbox on disk.
+"""The spool thread: events from the ROS thread into the spool on disk.
 
-It renders pictures (PNG/JPEG) and appends events to the :class:`Outbox` a few
+It renders pictures (PNG/JPEG) and appends events to the :class:`Spool` a few
 times a second; a mode switch, start or stop is appended at once.  When the
 disk budget says so (disk_guard.py), camera frames are dropped, and when the
 spool cannot be written events are held in memory (held.py) instead; they go
@@ -19,7 +19,7 @@ from django.utils.translation import gettext
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.disk_guard import FULL, TIGHT, DiskGuard
 from rosbridge_app.collector.held import Held
-from rosbridge_app.collector.outbox import Outbox, SpoolFull
+from rosbridge_app.collector.spool import Spool, SpoolFull
 
 log = logging.getLogger("ftt.collector")
 
@@ -33,12 +33,12 @@ def default_spool(name: str) -> Path:
 
 
 class Spooler(threading.Thread):
-    def __init__(self, events: queue.Queue, outbox: Outbox, guard: DiskGuard | None = None):
+    def __init__(self, events: queue.Queue, spool: Spool, guard: DiskGuard | None = None):
         super().__init__(name="ftt-spool", daemon=True)
-        self.events, self.outbox = events, outbox
-        self.guard = guard or DiskGuard(outbox.path)
-        self.guard.reusable = outbox.reusable
-        outbox.free_reserve = self.guard.release_reserve
+        self.events, self.spool = events, spool
+        self.guard = guard or DiskGuard(spool.path)
+        self.guard.reusable = spool.reusable
+        spool.free_reserve = self.guard.release_reserve
         self.held = Held(self.guard)
         self.stop = threading.Event()
         # Set after every append: the writer waits on it instead of sleeping.
@@ -99,12 +99,12 @@ class Spooler(threading.Thread):
 
     def _append(self, events: list) -> bool:
         try:
-            self.outbox.append(events)
+            self.spool.append(events)
             return True
         except SpoolFull as exc:
             self.guard.failed(exc)
         except Exception as exc:  # a spool that cannot be written at all: memory still can
             if self.guard.level < FULL:
-                log.error(gettext("cannot write the spool %s: %s"), self.outbox.path, exc)
+                log.error(gettext("cannot write the spool %s: %s"), self.spool.path, exc)
             self.guard.failed(exc)
         return False

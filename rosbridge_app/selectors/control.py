@@ -11,7 +11,7 @@ from django.utils.translation import gettext as _
 
 from common.errors import RuleViolation
 from events.models import Leg
-from rosbridge_app.collector.params import SPECS, InvalidParameter, check, expected_types
+from rosbridge_app.collector.params import SPECS, InvalidParameter, check
 from rosbridge_app.models import Collector
 from rosbridge_app.selectors.collectors import is_online
 
@@ -67,33 +67,6 @@ def snapshot_control(collector: Collector | None) -> tuple[bool, str]:
         "before": f"{before:g}",
         "after": f"{after:g}",
     }
-
-
-def parameter_rows(collector: Collector) -> list[dict]:
-    """The collector's parameters as the editor shows them, from the schema."""
-    values = collector.parameters or {}
-    topics = collector.topics or []
-    rows = []
-    for name in sorted(values):
-        spec = SPECS.get(name)
-        expected = expected_types(name, values)
-        rows.append(
-            {
-                "name": name,
-                "value": values[name],
-                "type": spec.kind if spec else type(values[name]).__name__,
-                "description": _(spec.description) if spec else "",
-                "minimum": spec.minimum if spec else None,
-                "maximum": spec.maximum if spec else None,
-                "choices": list(spec.choices) if spec and spec.choices else None,
-                "multiline": bool(spec and spec.multiline),
-                "expects": list(expected),
-                "suggestions": sorted(
-                    t["name"] for t in topics if set(t.get("types", ())) & set(expected)
-                ),
-            }
-        )
-    return rows
 
 
 def check_parameter_values(collector: Collector, changes: dict) -> dict:

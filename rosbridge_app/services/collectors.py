@@ -206,7 +206,7 @@ def _finish(command, success, message, result):
     command.message = message
     command.result = result
     command.save(update_fields=["done", "success", "message", "result"])
-    feed.record(
+    feed.append(
         Announcement.Kind.COMMAND,
         collector_id=command.collector_id,
         payload={
@@ -221,7 +221,7 @@ def _finish(command, success, message, result):
 
 def announce(kind: str, collector: Collector | None, leg=None, payload: dict | None = None):
     """Add to the change feed; call inside the transaction that stored the data."""
-    return feed.record(
+    return feed.append(
         kind,
         collector_id=collector.pk if collector else None,
         leg_id=leg.pk if leg else None,

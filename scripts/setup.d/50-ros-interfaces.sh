@@ -7,7 +7,8 @@
 # /opt/ros/jazzy), or when there is no rclpy at all (e.g. an aarch64 machine
 # without ROS: the collector cannot run there anyway).
 # FTT_ROS_INTERFACES=DIR[:DIR...] adds the robot team's own interface packages
-# or folders of .msg/.srv files (docs/collector.md: custom message types).
+# or folders of .msg/.srv files (docs/collector.md: custom message types); later
+# setups without the variable build the same folders again.
 # FTT_ROS_PREFIX=DIR builds into DIR instead of the virtualenv, with the rosidl
 # tools an earlier setup installed into the virtualenv (the tests build their
 # fixtures so).
@@ -28,12 +29,20 @@ _ftt_ros_interfaces() {
     local dirs=("$src/tf2_msgs" "$src/industrial_msgs") extra=() teams=()
     # The robot team's own interfaces: ROS 2 packages or folders of .msg files;
     # setup.sh runs in FTT's folder, a relative one is relative to where it started.
-    IFS=: read -r -a extra <<<"${FTT_ROS_INTERFACES:-}"
-    for dir in "${extra[@]}"; do
-        [ -n "$dir" ] || continue
-        [[ $dir == /* ]] || dir=${FTT_CALLER_DIR:-$PWD}/$dir
-        teams+=("$dir")
-    done
+    # Remembered beside the build, so that a later setup (every scripts/run.sh)
+    # without the variable keeps them; FTT_ROS_INTERFACES= (empty) forgets them.
+    local remembered=$prefix/.ftt-ros-interfaces
+    if [ -z "${FTT_ROS_INTERFACES+set}" ] && [ -s "$remembered" ]; then
+        mapfile -t teams <"$remembered"
+        ftt_log "FTT_ROS_INTERFACES from the last setup: ${teams[*]}"
+    else
+        IFS=: read -r -a extra <<<"${FTT_ROS_INTERFACES:-}"
+        for dir in "${extra[@]}"; do
+            [ -n "$dir" ] || continue
+            [[ $dir == /* ]] || dir=${FTT_CALLER_DIR:-$PWD}/$dir
+            teams+=("$dir")
+        done
+    fi
     if ! "$FTT_PY" -c 'import rclpy' >/dev/null 2>&1; then
         ftt_log "no rclpy in $FTT_PY: skipping the ROS interface build"
         [ ${#teams[@]} -eq 0 ] || ftt_log "FTT_ROS_INTERFACES not built: no rclpy to build them for"
@@ -61,21 +70,22 @@ PY
     if FTT_VENV=$prefix ftt_stamp_ok ros-interfaces "$stamp" &&
         _ftt_prefix_python -c 'import tf2_msgs.msg, industrial_msgs.msg' >/dev/null 2>&1; then
         ftt_log "ROS interfaces: already built"
-        return 0
-    fi
-    if _ftt_ros_restore; then
+    elif _ftt_ros_restore; then
         # The tests build interfaces of their own with the tools.
         [ "${FTT_SETUP_MODE:-run}" != test ] || [ "$prefix" != "$FTT_VENV" ] || _ftt_rosidl_tools
-        return 0
-    fi
-    if [ "$prefix" != "$FTT_VENV" ]; then
+    elif [ "$prefix" != "$FTT_VENV" ]; then
         "$FTT_PY" -c 'import rosidl_adapter' 2>/dev/null ||
             ftt_die "FTT_ROS_PREFIX needs the rosidl tools in $FTT_VENV: run scripts/setup.sh first"
         _ftt_ros_build
-        return
+    else
+        _ftt_rosidl_tools
+        _ftt_ros_build
     fi
-    _ftt_rosidl_tools
-    _ftt_ros_build
+    if [ ${#teams[@]} -gt 0 ]; then
+        printf '%s\n' "${teams[@]}" >"$remembered"
+    else
+        rm -f "$remembered"
+    fi
 }
 
 _ftt_rosidl_tools() { # the rosidl generators and CMake helpers, into the virtualenv

@@ -90,7 +90,7 @@ export const Fleet = {
   },
 
   /* A segment or poses event of the change feed: it carries its vehicle's entry
-   * as the server computes it (rosbridge_app.consumers), put in place of the old. */
+   * as the server computes it (live.consumers), put in place of the old. */
   apply(e) {
     if (!this.visible()) return;
     const entry = e.fleet;

@@ -11,8 +11,21 @@ function zoneOptions() {
    locale: the page's language (LANGUAGE) decides (German 26.11.2026, else 2026-11-26). */
 const DAY_ORDER = { de: (p) => `${p.day}.${p.month}.${p.year}` };
 const isoDay = (p) => `${p.year}-${p.month}-${p.day}`;
+/* Building an Intl formatter costs far more than using one, and a long leg's
+   list writes hundreds of times per update: each is built once per set of options. */
+const formats = new Map();
+const MAKE = {
+  date: (options) => new Intl.DateTimeFormat("en-GB", options),
+  number: (options) => new Intl.NumberFormat(LANGUAGE, options),
+};
+function formatter(kind, options) {
+  const key = kind + JSON.stringify(options);
+  let format = formats.get(key);
+  if (!format) formats.set(key, (format = MAKE[kind](options)));
+  return format;
+}
 function parts(iso, options) {
-  const format = new Intl.DateTimeFormat("en-GB", {
+  const format = formatter("date", {
     year: "numeric", month: "2-digit", day: "2-digit",
     hour: "2-digit", minute: "2-digit", second: "2-digit", hourCycle: "h23", ...options,
   });
@@ -31,14 +44,29 @@ const writeDay = (p) => (DAY_ORDER[LANGUAGE.slice(0, 2)] || isoDay)(p);
 const writeClock = (p) => `${p.hour}:${p.minute}:${p.second}`;
 const writeZone = (p) => (p.timeZoneName ? ` ${p.timeZoneName}` : "");
 
+/* A segment's times are written again at each update of the list: each text is
+   kept per zone and instant (a bounded store, emptied when full). */
+const written = new Map();
+function remembered(kind, iso, write) {
+  const key = `${kind}|${zoneOptions().timeZone || ""}|${iso}`;
+  let text = written.get(key);
+  if (text === undefined) {
+    if (written.size > 20000) written.clear();
+    written.set(key, (text = write()));
+  }
+  return text;
+}
+
 export function fmtTime(iso) {
   if (!iso) return "—";
-  const p = zoned(iso, {});
-  return `${writeDay(p)} ${writeClock(p)}${writeZone(p)}`;
+  return remembered("time", iso, () => {
+    const p = zoned(iso, {});
+    return `${writeDay(p)} ${writeClock(p)}${writeZone(p)}`;
+  });
 }
 /* Time of day only: in the segment list the date is the leg's and would push
    duration and distance out of sight on a laptop; the full time is the title. */
-export const fmtClock = (iso) => (iso ? writeClock(zoned(iso, { timeZoneName: undefined })) : "—");
+export const fmtClock = (iso) => (iso ? remembered("clock", iso, () => writeClock(zoned(iso, { timeZoneName: undefined }))) : "—");
 export const fmtDay = (iso) => (iso ? writeDay(parts(iso, {})) : "");
 
 export function fmtDuration(start, end) {
@@ -55,7 +83,7 @@ export function fmtDistance(metres) {
 /* A number in the page's language; with `digits`, exactly that many decimals. */
 export function fmtNumber(value, digits) {
   const fixed = digits === undefined ? {} : { minimumFractionDigits: digits, maximumFractionDigits: digits };
-  return new Intl.NumberFormat(LANGUAGE, fixed).format(value);
+  return formatter("number", fixed).format(value);
 }
 
 /* ROS floats are 32-bit: 0.10000000149011612 is shown as 0.1. */

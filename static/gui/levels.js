@@ -96,9 +96,10 @@ function updateLevelState(level) {
   setBtn("new", Boolean(parentRow));
   setBtn("edit", Boolean(row));
   setBtn("delete", Boolean(row));
-  const reopen = level === "event" && row && !row.is_open;
+  // Which rows re-open is the server's rule (events.services.logs.may_reopen).
+  const reopen = Boolean(row && row.may_reopen);
   setBtn("end", Boolean(row && row.is_open), !reopen);
-  setBtn("reopen", Boolean(reopen), Boolean(reopen));
+  setBtn("reopen", reopen, reopen);
 }
 
 for (const level of Object.keys(LEVELS)) {

@@ -2,6 +2,7 @@
  * map-frame metres.  Tracks are polylines that grow point by point, so live
  * updates never redraw what is already on screen.  Leaflet is the page's global
  * L (django-leaflet's static files, loaded before the modules). */
+import { element } from "./dom.js";
 import { _ } from "./i18n.js";
 
 const COLORS = { auto: "#1a9c3a", ito: "#d22020", selected: "#1f5fbf" };
@@ -84,7 +85,7 @@ class TrackMap {
     this.robot = null;
     this.robotFix = null;
     this.element.dataset.robot = "";
-    this.takeOversKey = null;
+    this.takeOvers = null;
     this.fitted = false;
     this.dropDetail();
     this.markDrawn();
@@ -98,7 +99,7 @@ class TrackMap {
     let t = this.tracks.get(id);
     if (!t) {
       const line = L.polyline(this.toLatLngs(points), this.style(id, mode)).addTo(this.map);
-      line.bindTooltip(() => `${this.labelOf(id)} (${mode.toUpperCase()})`);
+      line.bindTooltip(() => element("span", { textContent: `${this.labelOf(id)} (${mode.toUpperCase()})` }));
       t = { line, mode, overview: points.slice(), live: [] };
       this.tracks.set(id, t);
     } else {
@@ -119,7 +120,8 @@ class TrackMap {
     t.overview.push(...points);
     // A detail answer on its way was read before these points: they follow it.
     if (this.detail && !this.detail.shown) t.live.push(...points);
-    for (const p of this.toLatLngs(points)) t.line.addLatLng(p);
+    // One redraw per batch: each addLatLng would project the whole line again.
+    if (points.length) t.line.setLatLngs(t.line.getLatLngs().concat(this.toLatLngs(points)));
     this.markDrawn();
     if (!this.fitted) this.fitAll();
     else if (this.follow && points.length) this.map.panTo(this.toLatLngs(points.slice(-1))[0]);
@@ -151,16 +153,34 @@ class TrackMap {
   }
   /* spots: [[segment id, point], ...]; the same spots again leave the canvas as it is. */
   setTakeOvers(spots) {
-    const key = JSON.stringify(spots);
-    if (key === this.takeOversKey) return;
-    this.takeOversKey = key;
-    this.markers.clearLayers();
+    // Only circles that are new, moved or gone change: a new take-over on a long
+    // leg adds one circle instead of drawing them all again.
+    const kept = this.takeOvers || new Map(); // segment id -> {key, circle}
+    const now = new Map();
+    let changed = false;
     for (const [id, point] of spots) {
-      L.circleMarker(this.toLatLngs([point])[0], { radius: 7, color: COLORS.ito, weight: 2, fillOpacity: 0.2, renderer: this.renderer })
-        .bindTooltip(() => _("Take-over, %(segment)s", { segment: this.labelOf(id) }))
-        .addTo(this.markers);
+      const key = String(point);
+      let spot = kept.get(id);
+      if (spot && spot.key !== key) {
+        spot.circle.setLatLng(this.toLatLngs([point])[0]);
+        spot.key = key;
+        changed = true;
+      } else if (!spot) {
+        const circle = L.circleMarker(this.toLatLngs([point])[0], { radius: 7, color: COLORS.ito, weight: 2, fillOpacity: 0.2, renderer: this.renderer })
+          .bindTooltip(() => element("span", { textContent: _("Take-over, %(segment)s", { segment: this.labelOf(id) }) }))
+          .addTo(this.markers);
+        spot = { key, circle };
+        changed = true;
+      }
+      now.set(id, spot);
+      kept.delete(id);
     }
-    this.markDrawn();
+    for (const gone of kept.values()) {
+      this.markers.removeLayer(gone.circle);
+      changed = true;
+    }
+    this.takeOvers = now;
+    if (changed) this.markDrawn();
   }
   /* What the canvas shows, on the map element for tests and benchmarks:
    * tracks, their points, take-overs, the detail zoom and when it was drawn.

@@ -49,6 +49,25 @@ const Parameters = {
     input.setAttribute("aria-label", row.name);
     return input;
   },
+  /* Puts a preset's document into the field, to be edited and applied as
+   * any value is; the server checks it as it checks a typed one. */
+  presetPicker(row, input) {
+    const picker = document.createElement("select");
+    picker.className = "preset-picker";
+    picker.setAttribute("aria-label", `${row.name}: ${_("start from a preset")}`);
+    picker.append(new Option(_("Start from a preset…"), ""));
+    for (const preset of row.presets) {
+      const option = new Option(`${preset.name}: ${preset.summary}`, preset.name);
+      picker.append(option);
+    }
+    picker.addEventListener("change", () => {
+      const preset = row.presets.find((p) => p.name === picker.value);
+      if (preset) input.value = preset.document;
+      picker.value = "";
+      input.focus();
+    });
+    return picker;
+  },
   read(row, input) {
     if (row.type === "bool") return input.value === "true";
     if (row.type === "int") return Number.parseInt(input.value, 10);
@@ -72,6 +91,7 @@ const Parameters = {
       name.title = row.description;
       const cell = document.createElement("td");
       const input = this.input(row);
+      if (row.presets && row.presets.length) cell.append(this.presetPicker(row, input));
       cell.append(input);
       if (input._list) cell.append(input._list);
       const help = document.createElement("td");

@@ -89,7 +89,7 @@ function showFound(collection) {
   // a cluster opens as the map zooms in, down to the single circles.
   const points = L.geoJSON({ type: "FeatureCollection", features }, {
     pointToLayer: (f, at) => L.circleMarker(at, { radius: 6, color: "#b00020", weight: 1, fillOpacity: 0.7 }),
-    onEachFeature: (f, layer) => layer.bindTooltip(f.properties.label || ""),
+    onEachFeature: (f, layer) => layer.bindTooltip(element("span", { textContent: f.properties.label || "" })),
   });
   search.found = L.markerClusterGroup({ chunkedLoading: true, showCoverageOnHover: false });
   search.found.addLayer(points);

@@ -50,7 +50,8 @@ export async function openSegmentDialog(id) {
   const { row, kept } = composed(s, await Outbox.pending().catch(() => []));
   if (dialogSegment !== s) return;
   form.elements.ito_reason.replaceChildren(...state.catalogue.reasons.map((r) => new Option(r.label, r.key)));
-  form.elements.ito_reason.value = row.ito_reason || "unassigned";
+  // A take-over reason always names one (Unassigned until annotated); a master shows no form.
+  form.elements.ito_reason.value = row.ito_reason || "";
   for (const f of ["obstacle", "lighting", "slope", "location_type"]) form.elements[f].value = row[f] || "";
   form.elements.initiator.value = row.initiator || "safety_driver";
   form.elements.severity.value = row.severity || "not_applicable";

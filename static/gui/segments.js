@@ -19,49 +19,79 @@ import { openSegmentDialog } from "./segment-dialog.js";
  * stripes, and say what they are in words where they are wide enough.  Each bar is
  * at least 44 px wide to tap; its coloured part keeps its true length. */
 const Timeline = {
+  bars: new Map(), // master id -> {key, b, x, w}: the bars on the strip and what they say
+  track: null,
+  axis: null,
   render() {
     const strip = $("#timeline");
     if (!strip) return;
     const masters = state.segments.filter((s) => s.parent === null).sort((a, b) => (a.start < b.start ? -1 : 1));
     strip.hidden = masters.length === 0;
-    if (!masters.length) return strip.replaceChildren();
+    if (!masters.length) {
+      this.bars.clear();
+      return strip.replaceChildren();
+    }
+    if (!this.track) {
+      this.track = document.createElement("div");
+      this.track.className = "track";
+      this.axis = document.createElement("div");
+      this.axis.className = "axis";
+      this.axis.append(...[0, 1, 2].map(() => document.createElement("span")));
+    }
+    if (strip.firstChild !== this.track) strip.replaceChildren(this.track, this.axis);
+    const firstChild = new Map();
+    for (const s of state.segments) if (s.parent !== null && !firstChild.has(s.parent)) firstChild.set(s.parent, s);
     const now = Date.now();
     const t0 = new Date(masters[0].start).getTime();
-    const t1 = Math.max(...masters.map((m) => (m.end ? new Date(m.end).getTime() : now)), t0 + 1000);
-    const track = document.createElement("div");
-    track.className = "track";
-    track.append(...masters.map((m) => {
+    let t1 = t0 + 1000;
+    for (const m of masters) t1 = Math.max(t1, m.end ? new Date(m.end).getTime() : now);
+    // Only bars whose words changed are built again; the others only move along the axis.
+    const shown = new Map();
+    const bars = masters.map((m) => {
       const start = new Date(m.start).getTime();
       const end = m.end ? new Date(m.end).getTime() : now;
-      const child = state.segments.find((c) => c.parent === m.id);
+      const child = firstChild.get(m.id);
       const target = child || m;
-      const b = document.createElement("button");
-      b.type = "button";
-      const unassigned = child && child.ito_reason === "unassigned" ? " unassigned" : "";
-      b.className = `bar ${m.segment_type}${unassigned}${[m.id, target.id].includes(state.segment) ? " selected" : ""}`;
-      b.style.setProperty("--x", ((start - t0) / (t1 - t0)) * 100);
-      b.style.setProperty("--w", Math.max(((end - start) / (t1 - t0)) * 100, 0.6));
-      const fill = document.createElement("span");
-      fill.className = "fill";
+      // Whether a reason has no annotation yet is the server's word (Segment.unannotated).
+      const unassigned = child && child.unannotated ? " unassigned" : "";
+      const className = `bar ${m.segment_type}${unassigned}${[m.id, target.id].includes(state.segment) ? " selected" : ""}`;
       const reason = child && (state.catalogue.reasons || []).find((r) => r.key === child.ito_reason);
-      if (reason && reason.color) fill.style.backgroundColor = `rgb(${reason.color})`;
-      fill.textContent = child ? `ITO · ${reasonName(child.ito_reason)}` : modeName(m.segment_type);
-      b.append(fill);
-      // The name holds the visible words, so speech control finds the bar by them.
-      b.setAttribute("aria-label", `${segmentLabel(target.id)}: ${fill.textContent}, ${fmtDuration(m.start, m.end)}`);
-      b.title = b.getAttribute("aria-label");
-      b.addEventListener("click", () => selectSegment(target.id));
-      return b;
-    }));
+      const color = reason && reason.color ? `rgb(${reason.color})` : "";
+      const text = child ? `ITO · ${reasonName(child.ito_reason)}` : modeName(m.segment_type);
+      const label = `${segmentLabel(target.id)}: ${text}, ${fmtDuration(m.start, m.end)}`;
+      const key = JSON.stringify([className, color, text, label, target.id]);
+      let bar = this.bars.get(m.id);
+      if (!bar || bar.key !== key) bar = { key, b: this.bar(target.id, className, color, text, label) };
+      const x = String(((start - t0) / (t1 - t0)) * 100);
+      const w = String(Math.max(((end - start) / (t1 - t0)) * 100, 0.6));
+      if (bar.x !== x) bar.b.style.setProperty("--x", (bar.x = x));
+      if (bar.w !== w) bar.b.style.setProperty("--w", (bar.w = w));
+      shown.set(m.id, bar);
+      return bar.b;
+    });
+    this.bars = shown;
+    const kids = this.track.children;
+    if (bars.length !== kids.length || bars.some((b, i) => kids[i] !== b)) this.track.replaceChildren(...bars);
     // The time axis: start, middle and end of the leg so far.
-    const axis = document.createElement("div");
-    axis.className = "axis";
-    axis.append(...[t0, (t0 + t1) / 2, t1].map((t) => {
-      const tick = document.createElement("span");
-      tick.textContent = fmtClock(new Date(t).toISOString());
-      return tick;
-    }));
-    strip.replaceChildren(track, axis);
+    [t0, (t0 + t1) / 2, t1].forEach((time, i) => {
+      const text = fmtClock(new Date(time).toISOString());
+      if (this.axis.children[i].textContent !== text) this.axis.children[i].textContent = text;
+    });
+  },
+  bar(id, className, color, text, label) {
+    const b = document.createElement("button");
+    b.type = "button";
+    b.className = className;
+    const fill = document.createElement("span");
+    fill.className = "fill";
+    if (color) fill.style.backgroundColor = color;
+    fill.textContent = text;
+    b.append(fill);
+    // The name holds the visible words, so speech control finds the bar by them.
+    b.setAttribute("aria-label", label);
+    b.title = label;
+    b.addEventListener("click", () => selectSegment(id));
+    return b;
   },
 };
 
@@ -345,7 +375,7 @@ function updateSegmentButtons() {
   // The robot's reason (params.reason_rules) waits for one tap to become the reason.
   const t = byId(state.segments, target);
   const suggested = $("#reason-suggested");
-  const open = t && t.suggested_reason && t.ito_reason === "unassigned" ? t.suggested_reason : "";
+  const open = t && t.suggested_reason && t.unannotated ? t.suggested_reason : "";
   suggested.hidden = !open;
   suggested.dataset.reason = open;
   suggested.disabled = !CONFIG.canOperate || !open;
@@ -409,10 +439,21 @@ export async function refreshDistances(redraw) {
   }
   refreshDistances.busy = redraw ? "redraw" : "read";
   try {
-    const data = await loadLegTracks(leg);
-    if (leg !== state.selected.leg) return;
-    drawLegTracks(data, redraw);
-    state.tracks = data.segments;
+    if (redraw) {
+      const data = await loadLegTracks(leg);
+      if (leg !== state.selected.leg) return;
+      drawLegTracks(data);
+      state.tracks = data.segments;
+    } else {
+      // The points came with the feed and are drawn: only the figures are read,
+      // so the read costs the same on a long leg as on a fresh one.
+      const data = await api("GET", `legs/${leg}/distances/`, undefined, { root: CONFIG.guiApiRoot });
+      if (leg !== state.selected.leg) return;
+      for (const [id, metres] of Object.entries(data.distances)) {
+        state.tracks[id] ??= { gps: [], local: [], distance_m: null };
+        state.tracks[id].distance_m = metres;
+      }
+    }
     renderSegments();
   } finally {
     refreshDistances.busy = false;

@@ -264,7 +264,11 @@ class BatchResultSerializer(serializers.Serializer):
 
 
 class MapImageSerializer(ClientUidMixin, ServiceSerializer):
-    image = serializers.ImageField(help_text="The map as a PNG file (multipart upload).")
+    # Which formats a map may be is the services' rule (telemetry.pictures.MAP_FORMATS,
+    # checked by record_map); its refusal answers 400 on this field.
+    image = serializers.ImageField(
+        help_text=f"The map as a {'/'.join(MAP_FORMATS)} file (multipart upload)."
+    )
 
     class Meta:
         model = MapImage
@@ -285,11 +289,6 @@ class MapImageSerializer(ClientUidMixin, ServiceSerializer):
             "received",
         ]
         read_only_fields = ["checksum", "received"]
-
-    def validate_image(self, upload):
-        if getattr(getattr(upload, "image", None), "format", None) not in MAP_FORMATS:
-            raise serializers.ValidationError(_("Upload the map as a PNG image."))
-        return upload
 
     def validate(self, attrs):
         # The placement rules are the services' (one place); here they answer

@@ -1,6 +1,6 @@
 """``POST poses/``: one pose, stored and answered the same way whichever way it
 came in (the API view, or the production server's route for the same address,
-ftt_site.pose_route)."""
+ftt_site.inbound.pose_route)."""
 
 from rest_framework import status
 

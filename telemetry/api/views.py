@@ -10,7 +10,7 @@ from rest_framework.exceptions import NotFound
 from rest_framework.parsers import FormParser, MultiPartParser
 from rest_framework.response import Response
 
-from common import roles
+from common import geojson, roles
 from events.api.filters import BBoxFilter, IdFilter, SearchFilterBackend, TimeRangeFilterSet
 from events.api.serializers import PrimaryKeyField
 from events.api.viewsets import ServiceBaseViewSet, ServiceCreateMixin
@@ -263,23 +263,13 @@ class TrackViewSet(viewsets.ViewSet):
         paths = distances.measured_paths(masters, keys.GPS, loaded)
         for track in tracks.segment_tracks(masters, keys.GPS, loaded):
             coordinates = track.coordinates()
-            geometry = (
-                {"type": "LineString", "coordinates": coordinates}
-                if len(coordinates) > 1
-                else {"type": "Point", "coordinates": coordinates[0]}
-            )
             properties = _segment_properties(track.segment)
             properties["point_count"] = len(coordinates)
             properties["distance_m"] = paths[track.segment.pk].distance
             features.append(
-                {
-                    "type": "Feature",
-                    "id": track.segment.pk,
-                    "geometry": geometry,
-                    "properties": properties,
-                }
+                geojson.feature(geojson.path(coordinates), properties, id=track.segment.pk)
             )
-        return Response({"type": "FeatureCollection", "features": features})
+        return Response(geojson.collection(features))
 
 
 class LocalTrackViewSet(viewsets.ViewSet):

@@ -22,11 +22,11 @@ from django.utils.translation import gettext as _
 from common.errors import RuleViolation
 from common.retries import refuse_foreign, stored_row
 from events import rules
-from events.feed import announce_track
+from events.feed import track_announcement
 from events.models import PoseSource, Segment
 from events.selectors.segments import pose_target
 from events.services import deletion
-from events.services.finality import require_amendable
+from events.services.finality import final_events, require_amendable
 from events.services.segments import GpsPosition
 from telemetry import storage
 from telemetry.models import LocalPose, Pose
@@ -139,7 +139,7 @@ def store_poses(
     stored = storage.insert_fixes(master, source_id, fixes, timezone.now())
     new = {p.uid for p in stored}
     refuse_foreign(Pose, [as_uuid(f.uid) for f in fixes], new, segment_id=master.pk)
-    announce_stored(master, keep_figures(master.pk, GPS, stored), local=False)
+    keep_figures(master.pk, GPS, stored, announce=track_row(master, local=False))
     return new
 
 
@@ -165,17 +165,24 @@ def store_pose(
     fix.check()
     received = timezone.now()
     source_id = pose_source_id(master, source_id)
+    event_id = master.leg.shift.test_event_id
     with transaction.atomic():
-        require_amendable(pk=master.leg.shift.test_event_id)
-        stored = storage.insert_pose(master.pk, fix, source_id, received)
+        # A final event refuses the pose in the insert itself (no statement of
+        # its own); only then is it asked why, and an amendment stores it.
+        stored = storage.insert_pose(
+            master.pk, fix, source_id, received, refused_by=final_events(pk=event_id)
+        )
+        if stored is None and final_events(pk=event_id).exists():
+            require_amendable(pk=event_id)
+            stored = storage.insert_pose(master.pk, fix, source_id, received)
         if stored is not None:
             pk, seen = stored
             point = storage.NewPoint(
                 fix.uid, pk, fix.robot_stamp, received, fix.longitude, fix.latitude,
                 fix.fix_status != FixStatus.NO_FIX,
             )  # fmt: skip
-            # The figures row stays locked from here to the commit: only the feed row follows.
-            announce_stored(master, keep_figures(master.pk, GPS, [point], seen), local=False)
+            # The figures and the feed row are one statement; the row stays locked to the commit.
+            keep_figures(master.pk, GPS, [point], seen, announce=track_row(master, local=False))
     if stored is None:
         return known_pose(master, fix, source_id), False
     row = fix.row(master, source_id, received)
@@ -231,14 +238,20 @@ def record_local_poses(segment: Segment, poses: list[MapPose]) -> int:
     stored = {point.uid for point in fresh}
     refuse_foreign(LocalPose, [as_uuid(p.uid) for p in poses], stored, segment_id=master.pk)
     heading = next((p.yaw for p in reversed(poses) if as_uuid(p.uid) in stored), None)
-    announce_stored(master, keep_figures(master.pk, LOCAL, fresh), local=True, heading=heading)
+    keep_figures(master.pk, LOCAL, fresh, announce=track_row(master, local=True, heading=heading))
     return len(fresh)
 
 
-def announce_stored(master: Segment, added: Added, *, local: bool, heading=None) -> None:
-    """Tell open browsers what the track now holds: the usable points a write
-    added, in driving order, when they follow the track's end; else that the
-    track changed inside (a late batch), which they read again.  Written after
-    the figures, whose lock orders the feed rows of one master as their commits."""
-    points = [(p.x, p.y) for p in added.points]
-    announce_track(master, points, local=local, heading=heading, inside=not added.appended)
+def track_row(master: Segment, *, local: bool, heading=None):
+    """How open browsers learn what the track now holds (keep_figures' ``announce``):
+    the usable points a write added, in driving order, when they follow the
+    track's end; else that the track changed inside (a late batch), which they
+    read again."""
+
+    def row(added: Added):
+        points = [(p.x, p.y) for p in added.points]
+        return track_announcement(
+            master, points, local=local, heading=heading, inside=not added.appended
+        )
+
+    return row

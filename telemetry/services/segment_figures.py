@@ -21,6 +21,7 @@ from django.db.models import Max, Min
 from django.db.models.functions import Coalesce
 
 from common import uid_sums
+from events import feed
 from telemetry import storage
 from telemetry.models import LocalPose, Pose, SegmentFigures
 from telemetry.selectors.distances import path_length
@@ -63,28 +64,36 @@ class Added:
     appended: bool
 
 
-def keep_figures(master_id: int, mode: str, new: list[NewPoint], seen=_UNREAD) -> Added:
+def keep_figures(
+    master_id: int, mode: str, new: list[NewPoint], seen=_UNREAD, announce=None
+) -> Added:
     """Add the points just stored on ``master_id`` (the storage port's answer) to its
     figures, in time that depends on the new points, not on the track: an
     upsert, after a read of the row unless the caller gives what it read
     (``seen``, storage.Kept or None).  Call inside the transaction that
     stored them; from then on the figures row is locked until the commit, so
-    concurrent writers of one master learn in commit order where their points lie."""
+    concurrent writers of one master learn in commit order where their points lie.
+    ``announce`` gives the change-feed row of what was added (``Added``,
+    unsaved, or None), which the storage port writes with the figures: the
+    lock orders the feed rows of one master as their commits."""
     if not new:
         return Added([], True)
     rows = sorted((p for p in new if p.usable), key=lambda p: _key(p.robot_stamp, p.received, p.id))
     alone = _alone(new, rows, mode)
     if seen is _UNREAD:
         seen = storage.read_kept(master_id, mode)
-    change = _change(master_id, mode, rows, alone, seen)
-    applied, written = storage.write_change(master_id, mode, seen, change)
-    if not applied:
+    for _attempt in range(2):
+        added = Added(rows, _appends(rows, seen))
+        feed_row = announce(added) if announce is not None else None
+        change = _change(master_id, mode, rows, alone, seen)
+        applied, written = storage.write_change(master_id, mode, seen, change, feed_row)
+        if applied:
+            if feed_row is not None:
+                feed.settle(feed_row)
+            return added
         # Another writer changed the row since it was read; it is locked now.
         seen = written
-        change = _change(master_id, mode, rows, alone, seen)
-        if not storage.write_change(master_id, mode, seen, change)[0]:
-            raise RuntimeError(f"the figures of segment {master_id} changed under their lock")
-    return Added(rows, _appends(rows, seen))
+    raise RuntimeError(f"the figures of segment {master_id} changed under their lock")
 
 
 def _appends(rows: list[NewPoint], seen) -> bool:

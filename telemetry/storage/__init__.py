@@ -34,12 +34,15 @@ def adapter() -> ModuleType:
     return ADAPTERS[connection.vendor]
 
 
-def insert_pose(master_id: int, fix, source_id: int | None, received) -> tuple | None:
+def insert_pose(
+    master_id: int, fix, source_id: int | None, received, refused_by=None
+) -> tuple | None:
     """Store one checked fix on the master segment ``master_id``: (the new row's
     id, what its segment's figures held, ``Kept`` or None), or None when
-    nothing was stored (a known uid, or the segment or pose source no longer
-    exists)."""
-    return adapter().insert_pose(master_id, fix, source_id, received)
+    nothing was stored (a known uid, the segment or pose source no longer
+    exists, or the queryset ``refused_by`` finds a row: a rule the caller
+    states, checked in the same statement)."""
+    return adapter().insert_pose(master_id, fix, source_id, received, refused_by)
 
 
 def insert_fixes(master, source_id: int | None, fixes, received) -> list[NewPoint]:
@@ -64,14 +67,17 @@ def locked_figures(master_id: int, mode: str):
 
 
 def write_change(
-    master_id: int, mode: str, seen: Kept | None, change: Change
+    master_id: int, mode: str, seen: Kept | None, change: Change, feed_row=None
 ) -> tuple[bool, Kept | None]:
     """Add ``change`` to the figures row if it still holds ``seen`` (or, for
     None, does not exist yet): (True, None) when it did, else (False, what the
     row holds now).  When it did not, the row is locked until the transaction
     ends (an upsert locks the row it finds), so what it holds now is what the
-    next ``write_change`` finds."""
-    return adapter().write_change(master_id, mode, seen, change)
+    next ``write_change`` finds.  ``feed_row`` (an unsaved change-feed row) is
+    inserted in the same statement where the database allows (PostgreSQL; its
+    pk is set then) and only when the change applied; else it stays unsaved
+    for the caller (events.feed.settle)."""
+    return adapter().write_change(master_id, mode, seen, change, feed_row)
 
 
 def neighbours(master_id: int, mode: str, first: tuple, last: tuple) -> tuple:

@@ -16,6 +16,7 @@ import psycopg
 from django.core.exceptions import EmptyResultSet
 from django.db import connection, transaction
 
+from events.models import Announcement
 from telemetry.models import LocalPose, Pose, SegmentFigures
 from telemetry.models.poses import FixStatus
 from telemetry.storage import keys, shared
@@ -46,8 +47,8 @@ def bound_cursor(*, binary_results: bool = False):
 # --- writes ------------------------------------------------------------------
 
 
-def insert_pose(master_id: int, fix, source_id: int | None, received):
-    return shared.insert_pose(POINT, master_id, fix, source_id, received)
+def insert_pose(master_id: int, fix, source_id: int | None, received, refused_by=None):
+    return shared.insert_pose(POINT, master_id, fix, source_id, received, refused_by)
 
 
 # What an insert returns of each new row: its uid and id.  The rest of a
@@ -223,11 +224,40 @@ FROM (VALUES (1)) AS one (x) LEFT JOIN held ON TRUE
 """
 
 
-def write_change(master_id, mode, seen, change):
+_FEED = Announcement._meta.db_table
+# The same, and the change's feed row inserted when the upsert applies: the
+# figures and the feed row are one statement, not two round trips.
+_UPSERT_FEED_OR_READ = f"""
+WITH applied AS ({shared.upsert_sql(LEAST, GREATEST)} RETURNING 1),
+fed AS (
+  INSERT INTO {_FEED} (kind, created, collector_id, leg_id, payload)
+  SELECT %s, %s, %s, %s, %s WHERE EXISTS (SELECT 1 FROM applied) RETURNING id
+),
+held AS (
+  SELECT {", ".join(keys.KEPT_COLUMNS)} FROM {shared.FIGURES}
+  WHERE segment_id = %s AND mode = %s AND NOT EXISTS (SELECT 1 FROM applied) FOR UPDATE
+)
+SELECT (SELECT id FROM fed), held.*
+FROM (VALUES (1)) AS one (x) LEFT JOIN held ON TRUE
+"""
+
+
+def write_change(master_id, mode, seen, change, feed_row=None):
     params = shared.upsert_params(master_id, mode, seen, change)
+    if feed_row is None:
+        sql = _UPSERT_OR_READ
+    else:
+        sql = _UPSERT_FEED_OR_READ
+        payload = Announcement._meta.get_field("payload")
+        params += [
+            feed_row.kind, feed_row.created, feed_row.collector_id, feed_row.leg_id,
+            payload.get_db_prep_value(feed_row.payload, connection),
+        ]  # fmt: skip
     with connection.cursor() as cursor:
-        cursor.execute(_UPSERT_OR_READ, [*params, master_id, mode])
+        cursor.execute(sql, [*params, master_id, mode])
         applied, *now = cursor.fetchone()
+    if feed_row is not None and applied is not None:
+        feed_row.pk = applied
     if applied:
         return True, None
     if now[0] is not None:

@@ -24,24 +24,26 @@ def kept_returning(segment_column: str, mode: str) -> str:
     )
 
 
-def one_pose_sql(point: str) -> str:
+def one_pose_sql(point: str, refused: str = "") -> str:
     """One pose, one statement (``point``: the point from longitude and
     latitude in the database's spatial SQL): it stores nothing when the uid is
     known, the segment or a named pose source is gone (the master comes from a
-    per-process cache), and returns what the segment's figures hold, which the
-    pose is then added to."""
+    per-process cache) or the query ``refused`` finds a row, and returns what
+    the segment's figures hold, which the pose is then added to."""
+    guard = f"AND NOT EXISTS ({refused})" if refused else ""
     return f"""
 INSERT INTO {Pose._meta.db_table} ({keys.POSE_COLUMNS})
 SELECT %s, m.id, {point}, %s, %s, %s, %s, %s, %s
 FROM {Segment._meta.db_table} m
 WHERE m.id = %s
   AND (%s IS NULL OR EXISTS (SELECT 1 FROM {PoseSource._meta.db_table} WHERE id = %s))
+  {guard}
 ON CONFLICT DO NOTHING
 RETURNING id, {kept_returning(Pose._meta.db_table + ".segment_id", keys.GPS)}
 """
 
 
-def insert_pose(point: str, master_id: int, fix, source_id, received):
+def insert_pose(point: str, master_id: int, fix, source_id, received, refused_by=None):
     def prepared(name, value):
         return Pose._meta.get_field(name).get_db_prep_value(value, connection)
 
@@ -57,8 +59,13 @@ def insert_pose(point: str, master_id: int, fix, source_id, received):
         source_id,
         source_id,
     ]
+    refused = ""
+    if refused_by is not None:
+        # The rule's own query (its home is the service that passes it), not a copy.
+        refused, refused_params = refused_by.values("pk").order_by().query.sql_with_params()
+        params += refused_params
     with connection.cursor() as cursor:
-        cursor.execute(one_pose_sql(point), params)
+        cursor.execute(one_pose_sql(point, refused), params)
         row = cursor.fetchone()
     return None if row is None else (row[0], kept_from(row[1:]))
 

@@ -28,8 +28,8 @@ LEAST, GREATEST = "MIN", "MAX"
 _UPSERT = shared.upsert_sql(LEAST, GREATEST) + "RETURNING 1"
 
 
-def insert_pose(master_id: int, fix, source_id: int | None, received):
-    return shared.insert_pose(POINT, master_id, fix, source_id, received)
+def insert_pose(master_id: int, fix, source_id: int | None, received, refused_by=None):
+    return shared.insert_pose(POINT, master_id, fix, source_id, received, refused_by)
 
 
 def insert_fixes(master, source_id, fixes, received) -> list[NewPoint]:
@@ -61,7 +61,8 @@ def _insert_new(model, rows) -> list:
     return fresh
 
 
-def write_change(master_id, mode, seen, change):
+def write_change(master_id, mode, seen, change, feed_row=None):
+    # SQLite has no insert inside a WITH: the caller saves ``feed_row``.
     with connection.cursor() as cursor:
         cursor.execute(_UPSERT, shared.upsert_params(master_id, mode, seen, change))
         if cursor.fetchone() is not None:

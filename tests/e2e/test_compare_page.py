@@ -162,3 +162,41 @@ def test_a_viewer_sees_the_figures_but_cannot_make_a_pdf(browser, server, two_ev
     expect(page.locator("#by-event article")).to_have_count(2)
     expect(page.get_by_role("button", name="Make PDF")).to_be_disabled()
     page.close()
+
+
+def test_a_test_case_title_in_a_route_tooltip_is_shown_as_text(browser, server, two_events):
+    """A planned route's tooltip names its test case: a title holding HTML is
+    shown as written, never parsed (issue 48 finding 12)."""
+    first = two_events[0]
+    title = '<img src="/static/gui/favicon.svg" id="planted"><b>Bold loop</b>'
+    case = server.python(
+        f"""
+        from django.contrib.gis.geos import LineString
+        from events.models import TestCase
+        case = TestCase.objects.create(
+            test_event_id={first["event"]}, key="html-title", title={title!r}, planned_runs=1,
+            route=LineString((7.0001, 50.0), (7.0029, 50.0), srid=4326),
+        )
+        print(case.pk)
+        """
+    )
+    case = int(case.strip().splitlines()[-1])
+    page = browser.new_page(**VIEWPORTS["laptop"])
+    login(page, server, "otto")
+    page.goto(f"{server.url}/compare/")
+    routes = page.locator("#routes-form")
+    routes.get_by_label("First leg").select_option(str(first["leg"]))
+    routes.get_by_label("Second route").select_option(f"case:{case}")
+    routes.get_by_label("Threshold (m)").fill("50")
+    page.get_by_role("button", name="Compare routes").click()
+    expect(page.locator("#routes-status")).to_have_text("Routes compared; threshold 50 m.")
+    # The planned route (B, drawn last and on top) is a straight line: its middle is on it.
+    line = page.locator("#routes-map path").nth(1)
+    page.locator("#routes-map").evaluate("(map) => map.scrollIntoView({block: 'center'})")
+    box = line.bounding_box()
+    page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2, steps=5)
+    tooltip = page.locator("#routes-map .leaflet-tooltip")
+    expect(tooltip).to_contain_text(f"B: #{first['event']} html-title: {title} (planned)")
+    expect(tooltip.locator("b, img")).to_have_count(0)
+    expect(page.locator("#planted")).to_have_count(0)
+    page.close()

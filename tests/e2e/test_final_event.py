@@ -46,6 +46,8 @@ def test_final_event_shows_its_amendments_and_a_report_is_verified(page, server,
     login(page, server, "otto")
     choose_event(page, open_leg)
     expect(page.locator('[data-state="event"]')).to_have_text("final, amended 1 time")
+    # Closed but final: the page shows Re-open only where the server says it may.
+    expect(page.locator('[data-action="reopen"][data-level="event"]')).to_be_hidden()
     page.get_by_role("button", name="Reports & exports").click()
     answer = _verify(page, report)
     expect(answer).to_contain_text("OK: The data of test event")

@@ -256,6 +256,10 @@ def test_ros_parameters_are_typed_and_suggest_matching_topics(page, server, open
         expect(dialog.get_by_label("params.pose_min_distance")).to_have_attribute("type", "number")
         gps.fill("/fix")
         dialog.get_by_label("params.pose_min_distance").fill("1.5")
+        # A mode-source preset fills the field, to be applied as a typed value is.
+        sources = dialog.get_by_label("params.mode_sources", exact=True)
+        dialog.get_by_label("params.mode_sources: start from a preset").select_option("bool")
+        expect(sources).to_have_value(re.compile(r"type: std_msgs/msg/Bool, field: data"))
         shot(page, "parameters")
         dialog.get_by_role("button", name="Apply").click()
         expect(page.locator("#notice")).to_contain_text("set_parameters done", timeout=5000)
@@ -263,6 +267,7 @@ def test_ros_parameters_are_typed_and_suggest_matching_topics(page, server, open
         page.get_by_role("button", name="ROS parameters").click()
         expect(dialog.get_by_label("topics.gps_fix")).to_have_value("/fix")
         expect(dialog.get_by_label("params.pose_min_distance")).to_have_value("1.5")
+        expect(sources).to_have_value(re.compile(r"std_msgs/msg/Bool"))
     finally:
         robot.stop()
 

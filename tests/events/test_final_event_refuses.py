@@ -16,6 +16,7 @@ from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.recorder import GivenMaster, Recorder
 from telemetry.models import Image, LocalPose, MapImage, Pose
 from telemetry.services import recording
+from telemetry.services.segment_figures import recount_figures
 from tests.support.images import map_form, png
 from tests.support.snapshot import snapshot
 
@@ -154,3 +155,17 @@ def test_the_collector_stores_nothing_into_a_final_event(final, media_root):
     assert snapshot() == before
     assert not LocalPose.objects.exists() and Pose.objects.count() == 1
     assert not Image.objects.exists() and not MapImage.objects.exists()
+
+
+def test_a_single_pose_amends_a_final_event_only_with_an_administrators_reason(final, api_client):
+    """The single pose's insert refuses a final event itself (docs/ingest.md);
+    the amendment then stores it, with its figures."""
+    master, admin = final["master"], api_client("administrator")
+    body = {"segment": master.pk, **_fix()}
+    refused = admin.post("/api/poses/", body, format="json")
+    assert refused.status_code == 400 and "reason" in refused.json()["errors"]
+    assert Pose.objects.filter(segment=master).count() == 1
+    with authored(user=admin.user, reason="a fix the spool kept"):
+        recording.store_pose(master.pk, recording.GpsFix(7.3, 50.8, robot_stamp=STAMP))
+    assert Pose.objects.filter(segment=master).count() == 2
+    assert recount_figures([master.pk]) == {}

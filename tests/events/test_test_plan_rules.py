@@ -1,4 +1,4 @@
-"""A test plan's rules (events/models/test_plans.py) on every path that writes
+"""A test plan's rules (events/models/plans.py) on every path that writes
 one: Django admin refuses a bad case or criterion with a message at the field,
 the archive import refuses it, and a criterion an older installation stored
 without its value is still read by the API, the CSV and the report."""

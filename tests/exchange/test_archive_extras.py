@@ -28,7 +28,7 @@ from events.models import (
     Vehicle,
 )
 from events.selectors.history import history_of
-from events.services import finality, logs, segments, test_plans
+from events.services import finality, logs, plans, segments
 from exchange.archive import open_archive
 from exchange.export import export_events, select_events
 from exchange.importer import ImportRefused, import_bundle
@@ -261,10 +261,10 @@ def test_test_plan_judgements_and_leg_links_travel(shift, tmp_path, media_root, 
     Criterion.objects.create(test_case=case, kind="forbidden_reasons").reasons.set(["safety"])
     judged = Criterion.objects.create(test_case=case, kind="judged", text="Gate passed cleanly")
     leg = logs.create_leg(shift=shift, test_case=case)
-    test_plans.judge(judged, passed=True, leg=leg, note="clean")
-    test_plans.judge(judged, passed=False, note="not overall")
+    plans.judge(judged, passed=True, leg=leg, note="clean")
+    plans.judge(judged, passed=False, note="not overall")
     morning = export(tmp_path / "morning.zip")
-    test_plans.judge(judged, passed=False, leg=leg, note="touched the gate")
+    plans.judge(judged, passed=False, leg=leg, note="touched the gate")
     evening = export(tmp_path / "evening.zip")
     expected = _plan_of(shift.test_event)
     base_station()

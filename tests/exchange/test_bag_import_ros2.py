@@ -16,12 +16,13 @@ The recording, 60 s from T0 (seconds after T0):
 """
 
 import io
+import shutil
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
 
 import numpy as np
 import pytest
-from django.core.management import call_command
+from django.core.management import CommandError, call_command
 from PIL import Image as PilImage
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
@@ -29,6 +30,7 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from events.models import Leg, Segment, Shift, TestEvent
 from events.services import logs
 from exchange.bag import import_bag
+from rosbridge_app.collector.params import write_file
 from telemetry.models import Image, LocalPose, MapImage, Pose
 
 pytestmark = pytest.mark.django_db
@@ -416,3 +418,81 @@ def test_bool_on_an_unconfigured_topic_is_no_mode(vehicle, media_root, tmp_path)
         fix_at(k) for k in range(LAST + 1)
     ]
     assert MapImage.objects.count() == 1  # the map belongs to the shift, not to a segment
+
+
+def test_a_bare_mcap_file_imports_as_its_bag_directory_does(vehicle, media_root, tmp_path):
+    # A file alone, as the black box writes them or Foxglove saves them: rosbags
+    # itself opens a ROS 2 bag only by its directory's metadata.yaml.
+    (recorded,) = write_bag(tmp_path / "run", storage="mcap").glob("*.mcap")
+    alone = tmp_path / "downloads" / "husky-run.mcap"
+    alone.parent.mkdir()
+    shutil.copyfile(recorded, alone)
+    out = run_command(alone, "--vehicle", "husky")
+    assert "3 master segments" in out
+    assert "added 63 Pose, 63 LocalPose, 1 MapImage, 2 Image" in out
+    found = assert_segments()
+    assert_gps(found)
+    assert_camera(found)
+    assert sorted(p.name for p in alone.parent.iterdir()) == ["husky-run.mcap"]
+
+
+def write_husky_bag(path: Path) -> Path:
+    """The mode on the robot's own topic and a status line: nothing FTT reads
+    by its type (fixes, transforms, poses, maps, images)."""
+    rec = Recording()
+    for k in range(LAST):
+        rec.mode("bool", "/husky/robot_mode", k + 0.5, mode_at(k))
+        rec.add(
+            "/husky/status", "std_msgs/msg/String", k, rec.new("std_msgs/msg/String", data="ok")
+        )
+    return rec.write(path, "sqlite3")
+
+
+def test_an_import_that_stores_nothing_leaves_nothing_and_the_robots_file_fixes_it(
+    vehicle, media_root, tmp_path
+):
+    bag = write_husky_bag(tmp_path / "run")
+    with pytest.raises(CommandError) as refused:
+        run_command(bag, "--vehicle", "husky")
+    said = str(refused.value)
+    assert said.startswith("Nothing of run was stored")
+    assert "/husky/robot_mode (std_msgs/msg/Bool), /husky/status (std_msgs/msg/String)" in said
+    assert "the mode topic read (robot_mode)" in said  # the default it looked at
+    assert row_counts()["TestEvent"] == 0  # no closed, empty event holding the bag's uids
+    # The robot's own parameters file, as ftt_collect saves it, plus one of ROS's own.
+    robot = tmp_path / "husky.yaml"
+    write_file(robot, {"topics.robot_mode": "/husky/robot_mode"})
+    robot.write_text(
+        robot.read_text().replace("ros__parameters:", "ros__parameters:\n    use_sim_time: false")
+    )
+    err = io.StringIO()
+    out = io.StringIO()
+    call_command(
+        "ftt_import_bag",
+        str(bag),
+        "--vehicle",
+        "husky",
+        "--params-file",
+        str(robot),
+        stdout=out,
+        stderr=err,
+    )
+    assert "3 master segments" in out.getvalue()
+    assert "added 0 Pose, 0 LocalPose" in out.getvalue()
+    assert "Not collector parameters, ignored: use_sim_time" in err.getvalue()
+    assert [(m.segment_type_id, m.start) for m in masters()] == [
+        ("auto", at(0.5)),
+        ("ito", at(20.5)),
+        ("auto", at(40.5)),
+    ]
+
+
+def test_an_unreadable_parameters_file_is_named(vehicle, media_root, tmp_path):
+    bag = write_husky_bag(tmp_path / "run")
+    other = tmp_path / "other.yaml"
+    other.write_text("some_other_node:\n  ros__parameters:\n    x: 1\n")
+    with pytest.raises(CommandError, match="has no ros__parameters for ftt_collector"):
+        run_command(bag, "--vehicle", "husky", "--params-file", other)
+    with pytest.raises(CommandError, match="Cannot read parameters file"):
+        run_command(bag, "--vehicle", "husky", "--params-file", tmp_path / "missing.yaml")
+    assert row_counts()["TestEvent"] == 0

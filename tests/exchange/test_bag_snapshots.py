@@ -6,7 +6,7 @@ from datetime import timedelta
 import pytest
 from django.core.management import call_command
 
-from events.models import Segment
+from events.models import Segment, Vehicle
 from rosbridge_app.collector.bag import bag_messages
 from telemetry.models import Recording
 from tests.support.fkie import FKIE_BAG
@@ -50,3 +50,22 @@ def test_every_take_over_of_the_bag_gets_its_window_as_mcap(vehicle, media_root)
         assert [m.val for topic, _, m in back["messages"] if topic == "/robot_mode"] == said
         if said:
             assert "int8 MANUAL" in back["schemas"]["industrial_msgs/msg/RobotMode"]
+    # A snapshot is a recording of its own: the last one imported back, as it was
+    # downloaded (a bare .mcap file), is one take-over from its first fix (the mode
+    # said within params.unknown_mode_wait of it, collector/unknown_mode.py).
+    snapshot = Recording.objects.get(segment=itos[-1])
+    messages = read_mcap(snapshot.file.path)["messages"]
+    first_fix_ns = min(t for topic, t, _ in messages if topic == "/gps_fix")
+    Vehicle.objects.create(key="replay", short_description="Replay", institution="FKIE")
+    call_command(
+        "ftt_import_bag",
+        snapshot.file.path,
+        "--vehicle",
+        "replay",
+        stdout=io.StringIO(),
+        stderr=io.StringIO(),
+    )
+    (replayed,) = Segment.objects.filter(parent=None, leg__shift__vehicle__key="replay")
+    assert replayed.segment_type_id == "ito"
+    assert replayed.start.timestamp() * 1e9 == pytest.approx(first_fix_ns, abs=1e3)
+    assert replayed.poses.count() > 0

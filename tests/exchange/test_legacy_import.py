@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 from django.conf import settings
-from django.core.management import call_command
+from django.core.management import CommandError, call_command
 from django.db import connection
 from PIL import Image as PilImage
 
@@ -255,6 +255,20 @@ def test_dump_file_gives_the_same_rows_as_the_live_database(original, media_root
     # Same uids: reading the live database after its dump changes nothing.
     assert import_bundle(from_database()).changes() == 0
     assert snapshot() == from_dump
+
+
+def test_the_import_s_own_changes_name_the_administrator_who_imported(
+    original, media_root, role_user
+):
+    with pytest.raises(CommandError, match="no active administrator"):
+        call_command("ftt_import_legacy", str(original["dump"]), by="nobody")
+    admin = role_user("administrator")
+    call_command(
+        "ftt_import_legacy", str(original["dump"]), by=admin.username, stdout=io.StringIO()
+    )
+    entries = [e for model in (TestEvent, Segment) for e in model.history.all()]
+    assert entries and {(e.history_channel, e.history_user) for e in entries} == {("import", admin)}
+    assert {e.history_change_reason for e in entries} == {"archive import"}
 
 
 def test_file_that_is_no_dump_is_refused(tmp_path):

@@ -1,63 +1,28 @@
 """Sign-in from a real OpenLDAP directory, on the production server as README configures it."""
 
 import json
-import os
-import re
 import time
 from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 import requests
 
-from tests.support.directory import PERSONS, Directory, slapd_available
-from tests.support.sites import copy_migrated_database
-from tests.support.web import WebServer
+from tests.support.directory import (
+    MARKS,
+    PERSONS,
+    directory_server,
+    sign_in,
+    token_for,
+)
 
-# On SpatiaLite only: drives a server of its own on the embedded database.
-pytestmark = [
-    pytest.mark.spatialite,
-    pytest.mark.skipif(not slapd_available(), reason="needs Debian's slapd"),
-]
-
-
-@pytest.fixture(scope="module")
-def directory(tmp_path_factory):
-    found = Directory(tmp_path_factory.mktemp("directory")).start()
-    yield found
-    found.stop()
+pytestmark = MARKS
 
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory, directory):
-    if os.environ.get("FTT_DATABASE_URL"):
-        pytest.skip("drives a server of its own on the embedded database")
     data_dir = tmp_path_factory.mktemp("directory-server")
-    env = {
-        "FTT_DATA_DIR": str(data_dir),
-        "FTT_ADMIN_PASSWORD": "local-admin-pw-1",
-        "FTT_LOGIN_FAILURE_LIMIT": "3",
-        "FTT_LDAP_TIMEOUT": "2",
-        **directory.environment(),
-    }
-    copy_migrated_database(data_dir)
-    web = WebServer(env, workers=1, log=data_dir / "server.log")
-    web.manage("ftt_ensure_admin")
-    yield web.start(migrate=False)
-    web.stop()
-
-
-def sign_in(server, username: str, password: str) -> tuple[requests.Session, requests.Response]:
-    session = requests.Session()
-    page = session.get(f"{server.url}/login/", timeout=10)
-    token = re.search(r'name="csrfmiddlewaretoken" value="([^"]+)"', page.text).group(1)
-    answer = session.post(
-        f"{server.url}/login/",
-        data={"username": username, "password": password, "csrfmiddlewaretoken": token},
-        headers={"Referer": f"{server.url}/login/"},
-        allow_redirects=False,
-        timeout=30,
-    )
-    return session, answer
+    with directory_server(data_dir, directory, FTT_LOGIN_FAILURE_LIMIT="3") as web:
+        yield web
 
 
 def account(server, username: str) -> dict | None:
@@ -147,12 +112,6 @@ def local_accounts(server):
 def fresh_address(server):
     """The failures of earlier tests no longer count against 127.0.0.1."""
     server.manage("axes_reset")
-
-
-def token_for(server, username: str, password: str) -> requests.Response:
-    return requests.post(
-        f"{server.url}/api/token/", data={"username": username, "password": password}, timeout=30
-    )
 
 
 @pytest.mark.parametrize("uid", ["admin", "lena", "robot-a"])

@@ -1,5 +1,5 @@
 """X-Forwarded-For is believed only from the configured proxies, by one rule
-(ftt_site.proxies) for every use of the client's address: who may read /metrics,
+(ftt_site.inbound.proxies) for every use of the client's address: who may read /metrics,
 whose failed sign-ins count together."""
 
 import ipaddress

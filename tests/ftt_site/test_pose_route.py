@@ -22,8 +22,8 @@ from common.sql import conninfo
 from events.models import Announcement, SegmentType
 from events.services import segments
 from ftt_site.asgi import application
-from ftt_site.pose_route import PATH
-from rosbridge_app.wakeup import CHANNEL
+from ftt_site.inbound.pose_route import PATH
+from live.wakeup import CHANNEL
 from telemetry.models import Pose
 from tests.support.modes import start_auto
 

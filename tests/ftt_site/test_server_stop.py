@@ -3,9 +3,13 @@ request in flight finish."""
 
 import json
 import os
+import re
+import signal
 import socket
+import threading
 import time
 import uuid
+from pathlib import Path
 
 import pytest
 import requests
@@ -93,3 +97,48 @@ def test_sigint_lets_a_request_in_flight_finish(server):
         f"from events.models import Note; print(Note.objects.filter(uid={uid!r}).count())"
     )
     assert count.split()[-1] == "1"
+
+
+def running(pid: str) -> bool:
+    try:
+        return "State:\tZ" not in Path(f"/proc/{pid}/status").read_text()
+    except FileNotFoundError:
+        return False
+
+
+def test_a_hup_replaces_the_workers_and_refuses_no_request(server):
+    """README, Production: ``kill -HUP <master>`` swaps the workers gracefully
+    (with the code the master preloaded); a robot sending meanwhile is answered."""
+    log = server.log_path.read_text
+    old = re.findall(r"Booting worker with pid: (\d+)", log())[-1]
+    answers, stop = [], threading.Event()
+
+    def robot():
+        with requests.Session() as session:
+            while not stop.is_set():
+                try:
+                    answers.append(session.get(f"{server.url}/login/", timeout=30).status_code)
+                except requests.RequestException as error:
+                    answers.append(repr(error))
+
+    sender = threading.Thread(target=robot)
+    sender.start()
+    try:
+        deadline = time.monotonic() + 5
+        while not answers and time.monotonic() < deadline:
+            time.sleep(0.05)
+        server.process.send_signal(signal.SIGHUP)
+        deadline = time.monotonic() + 90
+        while re.findall(r"Booting worker with pid: (\d+)", log())[-1] == old or running(old):
+            assert time.monotonic() < deadline, log()[-3000:]
+            time.sleep(0.1)
+        # A moment of traffic on the new worker alone.
+        seen = len(answers)
+        while len(answers) < seen + 20:
+            assert time.monotonic() < deadline, log()[-3000:]
+            time.sleep(0.05)
+    finally:
+        stop.set()
+        sender.join(30)
+    assert set(answers) == {200}, [a for a in answers if a != 200][:5]
+    assert server.process.poll() is None

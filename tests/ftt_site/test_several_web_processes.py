@@ -107,9 +107,13 @@ def test_a_mode_report_on_one_process_reaches_browsers_on_both(two_servers):
 @pytest.fixture
 def sqlite_server(tmp_path):
     # No FTT_DATABASE_URL and no Redis: the embedded default. Polling once an
-    # hour: a change can only arrive through the wake-up socket.
+    # hour: a change can only arrive through the wake-up socket. A data folder
+    # deeper than a socket's path may be long (107 bytes), as an institution's
+    # shared drives are.
+    data = tmp_path / "projects" / "field-tests-of-our-autonomous-vehicles" / "ftt-data"
+    data.mkdir(parents=True)
     server = WebServer(
-        {"FTT_DATA_DIR": str(tmp_path), "FTT_LIVE_POLL_MS": "3600000"},
+        {"FTT_DATA_DIR": str(data), "FTT_LIVE_POLL_MS": "3600000"},
         log=tmp_path / "server.log",
     )
     try:

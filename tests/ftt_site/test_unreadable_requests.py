@@ -9,7 +9,7 @@ import threading
 import pytest
 import uvicorn
 
-from ftt_site.web_worker import HeaderTimeoutProtocol
+from ftt_site.server.web_worker import HeaderTimeoutProtocol
 from tests.support.web import free_port
 
 

@@ -1,4 +1,4 @@
-"""A web process loads its views before it takes a request (ftt_site.warmup), so
+"""A web process loads its views before it takes a request (ftt_site.server.warmup), so
 the first visitor after a restart does not wait for the imports (about 1.3 s)."""
 
 import json

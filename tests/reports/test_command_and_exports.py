@@ -43,6 +43,23 @@ def test_command_writes_the_pdf(scenario, tmp_path, settings):
     assert f"{out}: written in" in stdout.getvalue()
 
 
+def test_verbosity_2_says_where_the_report_spent_its_time(scenario, tmp_path):
+    stdout, stderr = io.StringIO(), io.StringIO()
+    call_command(
+        "ftt_report", "--test-event", str(scenario.event.pk), "--no-tiles",
+        "-o", str(tmp_path / "r.pdf"), "-v", "2", stdout=stdout, stderr=stderr,
+    )  # fmt: skip
+    total = float(stdout.getvalue().split("written in ")[1].split(" s")[0])
+    seconds = {}
+    for line in stderr.getvalue().splitlines():
+        if line.endswith(" s)") or line.startswith("the rest"):
+            stage, rest = line.rsplit(": ", 1)
+            seconds[stage] = float(rest.split(" s")[0])
+    assert {"statistics (queries and distances)", "figures: maps", "typesetting"} <= set(seconds)
+    assert "the rest (tables, texts)" in seconds
+    assert sum(seconds.values()) == pytest.approx(total, abs=0.1)
+
+
 def test_unknown_test_event_is_a_clear_error(db):
     with pytest.raises(CommandError, match="Test event 999999 does not exist"):
         call_command("ftt_report", "--test-event", "999999")

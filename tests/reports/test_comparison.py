@@ -2,6 +2,7 @@
 checked against values worked out by hand for two copies of the scenario."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -193,3 +194,16 @@ def test_compare_command_writes_a_pdf_with_every_part(two_events, tmp_path):
     assert "β = n / Σ ln(T / t_i)" in text
     with pytest.raises(CommandError, match="99999 does not exist"):
         call_command("ftt_report", "--compare", str(first.event.pk), "99999")
+
+
+def test_the_comparisons_time_names_its_zone(two_events, tmp_path):
+    first, second = two_events
+    second.event.time_zone = "America/Los_Angeles"
+    second.event.save()
+    out = tmp_path / "cmp.pdf"
+    call_command(
+        "ftt_report", "--compare", str(first.event.pk), str(second.event.pk), "-o", str(out)
+    )
+    text = flat(pdf_text(out.read_bytes(), tmp_path))
+    times = re.findall(r"\d\d:\d\d(?::\d\d)? \((\S+)\)", text)
+    assert times == [first.event.time_zone] == ["Asia/Tokyo"]

@@ -158,3 +158,16 @@ def test_the_mileage_table_over_the_api(scenario, dmv, api_client):
     )
     refused = client.get(url + "?year=soon")
     assert refused.status_code == 400 and "year" in refused.json()["errors"]
+
+
+def test_the_disengagement_table_over_the_api_is_the_commands(scenario, dmv, api_client, tmp_path):
+    answer = api_client("viewer").get(
+        f"/api/reports/exports/{scenario.event.pk}/disengagements.csv"
+    )
+    assert answer.status_code == 200 and answer["Content-Type"].startswith("text/csv")
+    header, *rows = list(csv.reader(io.StringIO(answer.content.decode())))
+    assert header == FORM_COLUMNS and len(rows) == 2
+    assert {row[6] for row in rows} <= INITIATORS and {row[7] for row in rows} <= LOCATIONS
+    out = tmp_path / "dmv.csv"
+    call_command("ftt_report", "--test-event", str(scenario.event.pk), "--dmv", str(out))
+    assert answer.content == out.read_bytes()

@@ -7,7 +7,13 @@ import pytest
 from reports.documents.event_report import render_report
 from reports.documents.options import ReportOptions
 from reports.selectors.provenance import data_digest
+from reports.selectors.statistics import event_statistics
+from telemetry.models.poses import FixStatus
+from telemetry.services import recording
+from telemetry.services.recording import GpsFix
 from tests.support.pdf import flat, pdf_text
+
+NO_FIX = FixStatus.NO_FIX
 
 
 @pytest.fixture
@@ -23,12 +29,23 @@ def test_the_printed_verify_command_and_digest_can_be_copied(scenario, text):
     assert data_digest(scenario.event) in text
 
 
-def test_the_pose_count_of_a_segment_says_it_leaves_out_fixes_without_a_position(
+def test_the_pose_count_of_a_segment_says_how_many_fixes_without_a_position_it_leaves_out(
     scenario, tmp_path
 ):
+    master = scenario.masters["A2"]
+    without = [GpsFix(longitude=0.0055 + i / 1e4, latitude=0.0, fix_status=NO_FIX) for i in (0, 1)]
+    assert recording.record_poses(master, without) == 2
     pdf = render_report(scenario.event, ReportOptions(no_tiles=True, level="full")).pdf
     text = flat(pdf_text(pdf, tmp_path))
-    assert re.search(r"Poses \d+ with a position \(fixes without one left out\)", text)
+    rows = re.findall(
+        r"Poses (\d+) with a position, (\d+) without a fix \(left out\) Database id (\d+)", text
+    )
+    counted = {int(pk): (int(kept), int(left_out)) for kept, left_out, pk in rows}
+    assert set(counted) == {m.pk for m in scenario.masters.values()}
+    kept = event_statistics(scenario.event).runs
+    assert {pk: n for pk, (n, _) in counted.items()} == {r.id: r.pose_count for r in kept}
+    assert {pk: left_out for pk, (_, left_out) in counted.items() if left_out} == {master.pk: 2}
+    assert "Positions without a GPS fix (left out): 2" in text
 
 
 def test_every_page_with_times_names_their_zone_and_writes_them_all_in_it(scenario, tmp_path):

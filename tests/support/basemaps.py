@@ -4,7 +4,6 @@ import io
 import sqlite3
 from pathlib import Path
 
-import morecantile
 import numpy as np
 import rasterio
 from PIL import Image
@@ -12,6 +11,8 @@ from pmtiles.tile import Compression, TileType, zxy_to_tileid
 from pmtiles.writer import Writer
 from pyproj import Transformer
 from rasterio.transform import from_origin
+
+from basemaps.grid import WEB_MERCATOR
 
 # Near Wachtberg; the quadrants' colours, clockwise from the north-west.
 CENTRE = (7.12, 50.61)
@@ -23,7 +24,6 @@ QUADRANTS = {
     "sw": (30, 60, 220),
 }
 UTM32N = "EPSG:32632"
-WEB_MERCATOR = morecantile.tms.get("WebMercatorQuad")
 
 
 def utm_zone(lon: float, lat: float) -> str:

@@ -218,7 +218,10 @@ from telemetry.services import map_images
 KEY = "{key}"
 vehicle = Vehicle.objects.get(key=KEY)
 state = {{"logging": False, "leg": None}}
-parameters = {{"topics.gps_fix": "gps_fix", "params.use_tf": True, "params.pose_min_distance": 0.5}}
+parameters = {{
+    "topics.gps_fix": "gps_fix", "params.use_tf": True, "params.pose_min_distance": 0.5,
+    "params.mode_sources": "",
+}}
 graph = [
     {{"name": "/fix", "types": ["sensor_msgs/msg/NavSatFix"]}},
     {{"name": "/camera", "types": ["sensor_msgs/msg/Image"]}},

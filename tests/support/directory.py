@@ -1,16 +1,22 @@
 """A real OpenLDAP server (Debian's slapd) on loopback with a small directory."""
 
+import os
+import re
 import shutil
 import signal
 import subprocess
 import textwrap
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import ldap
+import pytest
+import requests
 from ldap import modlist
 
-from tests.support.web import free_port
+from tests.support.sites import copy_migrated_database
+from tests.support.web import WebServer, free_port
 
 BASE = "dc=ftt,dc=test"
 ADMIN_DN = f"cn=admin,{BASE}"
@@ -40,6 +46,13 @@ PERSONS = {
 
 def slapd_available() -> bool:
     return shutil.which("slapd") is not None or Path("/usr/sbin/slapd").exists()
+
+
+# A directory test module's marks: a server of its own on the embedded database.
+MARKS = [
+    pytest.mark.spatialite,
+    pytest.mark.skipif(not slapd_available(), reason="needs Debian's slapd"),
+]
 
 
 def person_dn(uid: str) -> str:
@@ -144,6 +157,17 @@ class Directory:
             )
         connection.unbind_s()
 
+    def move(self, uid: str, leave: list[str] = (), join: list[str] = ()) -> None:
+        """Takes a person out of groups and into others, as the directory's
+        administrator would."""
+        connection = self._admin_connection()
+        member = [person_dn(uid).encode()]
+        for group in leave:
+            connection.modify_s(group, [(ldap.MOD_DELETE, "member", member)])
+        for group in join:
+            connection.modify_s(group, [(ldap.MOD_ADD, "member", member)])
+        connection.unbind_s()
+
     def pause(self) -> None:
         """SIGSTOP: the server keeps its socket, so connections open and hang."""
         self.process.send_signal(signal.SIGSTOP)
@@ -156,3 +180,55 @@ class Directory:
             self.resume()
             self.process.terminate()
             self.process.wait(10)
+
+
+def sign_in(server, username: str, password: str) -> tuple[requests.Session, requests.Response]:
+    """The sign-in page's form, as a browser sends it."""
+    session = requests.Session()
+    page = session.get(f"{server.url}/login/", timeout=10)
+    token = re.search(r'name="csrfmiddlewaretoken" value="([^"]+)"', page.text).group(1)
+    answer = session.post(
+        f"{server.url}/login/",
+        data={"username": username, "password": password, "csrfmiddlewaretoken": token},
+        headers={"Referer": f"{server.url}/login/"},
+        allow_redirects=False,
+        timeout=30,
+    )
+    return session, answer
+
+
+def token_for(server, username: str, password: str) -> requests.Response:
+    return requests.post(
+        f"{server.url}/api/token/", data={"username": username, "password": password}, timeout=30
+    )
+
+
+@contextmanager
+def running_directory(folder: Path):
+    found = Directory(folder).start()
+    try:
+        yield found
+    finally:
+        found.stop()
+
+
+@contextmanager
+def directory_server(data_dir: Path, directory: Directory, **env: str):
+    """FTT's production server on the embedded database, signing in from
+    ``directory`` as README configures it, with the superuser ``admin``."""
+    if os.environ.get("FTT_DATABASE_URL"):
+        pytest.skip("drives a server of its own on the embedded database")
+    env = {
+        "FTT_DATA_DIR": str(data_dir),
+        "FTT_ADMIN_PASSWORD": "local-admin-pw-1",
+        "FTT_LDAP_TIMEOUT": "2",
+        **env,
+        **directory.environment(),
+    }
+    copy_migrated_database(data_dir)
+    web = WebServer(env, workers=1, log=data_dir / "server.log")
+    web.manage("ftt_ensure_admin")
+    try:
+        yield web.start(migrate=False)
+    finally:
+        web.stop()

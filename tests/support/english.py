@@ -19,7 +19,9 @@ from django.conf import settings
 from django.utils import translation
 
 CATALOGUES = Path(settings.BASE_DIR) / "locale" / "de" / "LC_MESSAGES"
-WORD = re.compile(r"[^\W\d_]{3,}")
+# A whole word: letters between neither letters nor digits, so that a digest
+# ("…b7bad09c…") in a report is no "bad".
+WORD = re.compile(r"\b[^\W\d_]{3,}\b")
 # Names and units that are words of English too, and the placeholders' names.
 ALLOWED = {
     "husky", "jackal", "fkie", "fraunhofer", "rtk", "tokyo", "asia", "europe", "berlin",

@@ -24,7 +24,7 @@ from django.conf import settings
 from django.core.cache import caches
 from django.db import connections
 from django.utils import timezone, translation
-from common import memo
+from tests.support.kept import forget_memos
 
 # What `shell -c` puts in scope (its automatic imports), for every snippet.
 scope = {{name: value for name, value in globals().items() if not name.startswith("_")}}
@@ -42,7 +42,7 @@ for line in iter(pipe.readline, ""):
     finally:
         sys.stdin = pipe
         connections.close_all()
-        memo.clear_all()
+        forget_memos()
         caches["default"].clear()
         translation.activate(settings.LANGUAGE_CODE)
         timezone.deactivate()

@@ -1,7 +1,7 @@
 """The production server for tests and benchmarks, started as scripts/run.sh starts it.
 
 :class:`WebServer` runs Gunicorn with FTT's Uvicorn workers
-(``ftt_site/gunicorn.conf.py``) on loopback, in a process group of its own, and
+(``ftt_site/server/gunicorn.conf.py``) on loopback, in a process group of its own, and
 runs ``manage.py`` commands against the same installation.
 """
 
@@ -41,7 +41,7 @@ def end(process: subprocess.Popen | None, timeout: float) -> None:
 
 
 class WebServer:
-    """``gunicorn -c ftt_site/gunicorn.conf.py ftt_site.asgi:application`` on a free port.
+    """``gunicorn -c ftt_site/server/gunicorn.conf.py ftt_site.asgi:application`` on a free port.
 
     ``env`` adds FTT settings to a copy of this process's environment without its
     own ``FTT_*`` ones; ``root``: the checkout whose code runs (a benchmark compares two).
@@ -100,7 +100,7 @@ class WebServer:
                 "-m",
                 "gunicorn",
                 "-c",
-                str(self.root / "ftt_site" / "gunicorn.conf.py"),
+                str(self.root / "ftt_site" / "server" / "gunicorn.conf.py"),
                 "--bind",
                 f"127.0.0.1:{self.port}",
                 "--workers",

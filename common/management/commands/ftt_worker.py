@@ -1,5 +1,7 @@
-"""``manage.py ftt_worker``: runs queued jobs (reports, archive imports), and
-the pose tables' daily upkeep (``manage.py ftt_pose_storage``).
+"""``manage.py ftt_worker``: runs queued jobs (reports, archive imports), the
+pose tables' daily upkeep (``manage.py ftt_pose_storage``) and, with a
+directory, its role checks every ``FTT_LDAP_RECHECK_SECONDS``
+(``manage.py ftt_directory_recheck``).
 
 django-tasks-db's worker loop, plus a heartbeat and the recovery of jobs a
 dead worker left "running" (common.jobs). Stop it with SIGTERM or Ctrl-C: it
@@ -11,12 +13,14 @@ import gc
 import logging
 import threading
 
+from django.conf import settings
 from django.core.management import call_command
 from django.db import connection
 from django.utils.translation import gettext as _
 from django_tasks_db.management.commands.db_worker import Command as DbWorkerCommand
 
 from common import jobs
+from common.apps import DIRECTORY_BACKEND
 
 log = logging.getLogger(__name__)
 
@@ -25,20 +29,22 @@ UPKEEP_EVERY_S = 24 * 3600
 
 
 class Upkeep(threading.Thread):
-    """Runs ``manage.py ftt_pose_storage`` beside the job loop, once a day."""
+    """Runs a command beside the job loop, at the start and then every ``every_s``."""
 
-    def __init__(self):
-        super().__init__(name="ftt-pose-upkeep", daemon=True)
+    def __init__(self, command: str, every_s: float):
+        super().__init__(name=f"ftt-upkeep-{command}", daemon=True)
+        self.command = command
+        self.every_s = every_s
         self.stopped = threading.Event()
 
     def run(self) -> None:
         try:
             while True:
                 try:
-                    call_command("ftt_pose_storage")
-                except Exception:  # another worker's upkeep, a busy database: tomorrow
-                    log.exception("pose storage upkeep")
-                if self.stopped.wait(UPKEEP_EVERY_S):
+                    call_command(self.command)
+                except Exception:  # another worker's upkeep, a busy database: next time
+                    log.exception("upkeep: %s", self.command)
+                if self.stopped.wait(self.every_s):
                     return
         finally:
             connection.close()
@@ -65,13 +71,17 @@ class Command(DbWorkerCommand):
             )
         heart = jobs.Heart(worker_id)
         heart.start()
-        upkeep = Upkeep()
-        upkeep.start()
+        upkeeps = [Upkeep("ftt_pose_storage", UPKEEP_EVERY_S)]
+        if DIRECTORY_BACKEND in settings.AUTHENTICATION_BACKENDS:
+            upkeeps.append(Upkeep("ftt_directory_recheck", settings.FTT_LDAP_RECHECK_SECONDS))
+        for upkeep in upkeeps:
+            upkeep.start()
         try:
             super().handle(*args, **options)
         finally:
             heart.stop()
-            upkeep.stopped.set()
+            for upkeep in upkeeps:
+                upkeep.stopped.set()
             jobs.forget(worker_id)
             # The exit frees everything; the interpreter's last collection
             # would walk every loaded object first and delay Ctrl-C by seconds.

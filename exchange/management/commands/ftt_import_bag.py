@@ -3,7 +3,9 @@
 import json
 import sys
 import uuid
+from pathlib import Path
 
+import yaml
 from django.core.management.base import BaseCommand, CommandError
 from django.db.models import Q
 from django.utils.translation import gettext as _
@@ -13,6 +15,7 @@ from common.progress import ProgressBar
 from events.models import Leg, TestEvent, Vehicle
 from exchange.bag import BagImportError, import_bag
 from rosbridge_app.collector.modes import MODE_TYPES
+from rosbridge_app.collector.params import NODE_NAME, SPECS, read_file
 
 PHASES = {"reading": gettext_noop("Reading messages"), "storing": gettext_noop("Storing events")}
 
@@ -69,6 +72,14 @@ class Command(BaseCommand):
             help=_("Topic name as for the collector, e.g. robot_mode=/mode or gps_fix=/fix."),
         )
         parser.add_argument(
+            "--params-file",
+            metavar="FILE",
+            help=_(
+                "The robot's ftt_collect parameters file (ROS 2 YAML, as given to "
+                "ftt_collect --params-file); --topic and --param override it."
+            ),
+        )
+        parser.add_argument(
             "--param",
             action="append",
             metavar="NAME=VALUE",
@@ -90,7 +101,18 @@ class Command(BaseCommand):
         )
 
     def handle(
-        self, *args, bag, vehicle, leg, test_event, mode_type, topic, param, snapshot, **options
+        self,
+        *args,
+        bag,
+        vehicle,
+        leg,
+        test_event,
+        mode_type,
+        topic,
+        param,
+        snapshot,
+        params_file,
+        **options,
     ):
         try:
             vehicle_row = Vehicle.objects.get(key=vehicle)
@@ -98,7 +120,10 @@ class Command(BaseCommand):
             raise CommandError(
                 _("No vehicle with key '%(vehicle)s'.") % {"vehicle": vehicle}
             ) from None
-        params = _pairs(topic, "topics.") | _pairs(param, "params.") | _pairs(snapshot, "snapshot.")
+        params = self._from_file(params_file) if params_file else {}
+        params |= (
+            _pairs(topic, "topics.") | _pairs(param, "params.") | _pairs(snapshot, "snapshot.")
+        )
         if mode_type:
             params["params.robot_mode_type"] = mode_type
         self.stderr.write(_("Importing %(bag)s") % {"bag": bag})
@@ -135,3 +160,22 @@ class Command(BaseCommand):
                 "skipped": result.skipped,
             }
         )
+
+    def _from_file(self, path: str) -> dict:
+        try:
+            values = read_file(Path(path))
+        except (OSError, yaml.YAMLError) as exc:
+            raise CommandError(
+                _("Cannot read parameters file %(file)s: %(exc)s") % {"file": path, "exc": exc}
+            ) from None
+        if not values:
+            raise CommandError(
+                _("%(file)s has no ros__parameters for %(node)s (nor for /**).")
+                % {"file": path, "node": NODE_NAME}
+            )
+        # A robot's file may set ROS's own parameters (use_sim_time, …) too.
+        if ignored := sorted(name for name in values if name not in SPECS):
+            self.stderr.write(
+                _("Not collector parameters, ignored: %(names)s") % {"names": ", ".join(ignored)}
+            )
+        return {name: value for name, value in values.items() if name in SPECS}

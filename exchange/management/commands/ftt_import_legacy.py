@@ -1,11 +1,12 @@
 """Import an original FTT database: ``manage.py ftt_import_legacy "host=... dbname=ftt ..."``
-or ``manage.py ftt_import_legacy ftt_dump.sql``."""
+or ``manage.py ftt_import_legacy ftt_dump.sql``, ``--by ADMIN`` naming who imported."""
 
 from django.core.management.base import BaseCommand, CommandError
 from django.utils.translation import gettext as _
 
 from exchange.importer import ImportRefused, import_bundle
 from exchange.legacy import LegacyBundle, LegacyError, open_source
+from exchange.management.importing import add_by_argument, administrator
 
 
 class Command(BaseCommand):
@@ -26,15 +27,17 @@ class Command(BaseCommand):
         parser.add_argument(
             "--dry-run", action="store_true", help=_("Only print what would be imported.")
         )
+        add_by_argument(parser)
 
-    def handle(self, *args, source, dry_run, **options):
+    def handle(self, *args, source, dry_run, by=None, **options):
+        user = administrator(by)
         try:
             original = open_source(source)
             try:
                 bundle = LegacyBundle(original)
             finally:
                 original.close()
-            plan = import_bundle(bundle, dry_run=dry_run)
+            plan = import_bundle(bundle, dry_run=dry_run, by=user)
         except (LegacyError, ImportRefused) as exc:
             raise CommandError(str(exc)) from None
         for line in [*plan.lines(), plan.verdict()]:

@@ -397,6 +397,25 @@ class Command(BaseCommand):
         }
         note = gettext(" (provisional: open segments)") if result.provisional else ""
         self.stdout.write(written + note)
+        if o["verbosity"] >= 2:
+            self._print_stages(result)
+
+    def _print_stages(self, result) -> None:
+        """Where the time went, for an administrator whose report is slow."""
+        rows = result.stages.rows()
+        for stage, wall, cpu in rows:
+            self.stderr.write(
+                gettext("%(stage)s: %(seconds)s s (CPU %(cpu)s s)")
+                % {
+                    "stage": gettext(stage),
+                    "seconds": number_format(wall, 2),
+                    "cpu": number_format(cpu, 2),
+                }
+            )
+        rest = result.seconds - sum(wall for _stage, wall, _cpu in rows)
+        self.stderr.write(
+            gettext("the rest (tables, texts): %(seconds)s s") % {"seconds": number_format(rest, 2)}
+        )
 
 
 def _routes_asked(o) -> bool:

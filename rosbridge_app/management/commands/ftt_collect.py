@@ -33,7 +33,7 @@ class Command(BaseCommand):
             "--spool",
             type=Path,
             default=None,
-            help=_("Local outbox file (default $FTT_DATA_DIR/collector/)."),
+            help=_("Local spool file (default $FTT_DATA_DIR/collector/)."),
         )
         parser.add_argument(
             "--start-logging",

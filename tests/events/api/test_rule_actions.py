@@ -7,7 +7,7 @@ import pytest
 from common import roles
 from events.models import Segment, SegmentType, Shift
 from events.models import TestEvent as TestEventModel
-from events.services import logs, segments
+from events.services import finality, logs, segments
 from tests.support.api import assert_error_shape
 from tests.support.modes import start_auto
 
@@ -45,6 +45,26 @@ def test_reopening_a_test_event_keeps_its_shifts_closed(operator, shift):
     assert response.json()["end"] is None
     shift.refresh_from_db()
     assert shift.end is not None
+    assert_error_shape(operator.post(f"/api/test-events/{event.pk}/reopen/"), 409)
+
+
+def test_a_row_says_whether_it_may_reopen_as_the_reopen_action_answers(operator, leg):
+    """The cockpit shows Re-open from the row's may_reopen: only a closed test event, not final."""
+    event = leg.shift.test_event
+
+    def row(path, pk):
+        return operator.get(f"/api/{path}/{pk}/").json()["may_reopen"]
+
+    assert row("test-events", event.pk) is False  # open
+    logs.close_test_event(event)
+    assert row("shifts", leg.shift_id) is False and row("legs", leg.pk) is False
+    assert (
+        operator.get("/api/shifts/", {"test_event": event.pk}).json()["results"][0]["may_reopen"]
+        is False
+    )
+    assert row("test-events", event.pk) is True
+    finality.finalise_test_event(TestEventModel.objects.get(pk=event.pk))
+    assert row("test-events", event.pk) is False
     assert_error_shape(operator.post(f"/api/test-events/{event.pk}/reopen/"), 409)
 
 

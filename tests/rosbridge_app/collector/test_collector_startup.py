@@ -30,6 +30,7 @@ NOT_FOR_THE_COLLECTOR = (
     "requests",
     "ldap",  # directory sign-in
     "ftt_site.urls",
+    "rosbridge_app.collector.mode_presets",  # for the command and the GUI's editor
 )
 
 # Runs manage.py ftt_collect; at its first subscription it writes the loaded

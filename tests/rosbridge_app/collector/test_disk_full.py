@@ -15,9 +15,9 @@ from events.models import Segment
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.disk_guard import FULL, OK, DiskGuard
 from rosbridge_app.collector.events import Event
-from rosbridge_app.collector.outbox import Outbox
 from rosbridge_app.collector.recorder import Recorder
 from rosbridge_app.collector.replay import ReplayOrder
+from rosbridge_app.collector.spool import Spool
 from rosbridge_app.collector.spooler import Spooler
 from telemetry.models import Pose
 
@@ -68,11 +68,11 @@ def test_a_full_spool_holds_switches_and_thinned_positions_and_the_database_gets
     small_disk, leg, media_root, caplog
 ):
     caplog.set_level(logging.INFO, "ftt.collector")
-    outbox = Outbox(small_disk / "spool.sqlite3")
-    guard = DiskGuard(outbox.path, budget=None, headroom=0)
+    spool = Spool(small_disk / "spool.sqlite3")
+    guard = DiskGuard(spool.path, budget=None, headroom=0)
     guard.make_reserve()
     events = queue.Queue()
-    spooler = Spooler(events, outbox, guard)
+    spooler = Spooler(events, spool, guard)
     t0 = datetime.now(UTC)
     events.put(Event(ev.START, t0))
     switches = {0: "auto", 20: "ito", 40: "auto"}
@@ -93,10 +93,10 @@ def test_a_full_spool_holds_switches_and_thinned_positions_and_the_database_gets
 
     # The database is reachable: everything goes to it, without any free disk.
     recorder = Recorder(lambda: leg)
-    order = ReplayOrder(outbox, 500, held=spooler.held)
+    order = ReplayOrder(spool, 500, held=spooler.held)
     while order.write_next(recorder):
         pass
-    assert len(outbox) == 0 and len(spooler.held) == 0
+    assert len(spool) == 0 and len(spooler.held) == 0
     masters = Segment.objects.filter(leg=leg, parent__isnull=True).order_by("start")
     assert [m.segment_type_id for m in masters] == ["auto", "ito", "auto"]
     stamps = sorted(Pose.objects.values_list("robot_stamp", flat=True))
@@ -111,7 +111,7 @@ def test_a_full_spool_holds_switches_and_thinned_positions_and_the_database_gets
     while guard.level != OK and time.monotonic() < deadline:
         spooler.spool_once(timeout=0.1)
     assert guard.level == OK and "robot disk has room again" in caplog.text
-    assert len(outbox) + len(spooler.held) >= 1 and guard.describe() == ""
+    assert len(spool) + len(spooler.held) >= 1 and guard.describe() == ""
 
 
 def test_a_stuck_snapshot_writer_does_not_hold_the_exit(tmp_path):
@@ -135,15 +135,15 @@ def test_a_stuck_snapshot_writer_does_not_hold_the_exit(tmp_path):
 
 
 def test_a_write_that_meets_a_full_disk_is_spool_full_and_stored_records_still_leave(small_disk):
-    from rosbridge_app.collector.outbox import SpoolFull
+    from rosbridge_app.collector.spool import SpoolFull
 
-    outbox = Outbox(small_disk / "spool.sqlite3")
-    guard = DiskGuard(outbox.path)
+    spool = Spool(small_disk / "spool.sqlite3")
+    guard = DiskGuard(spool.path)
     guard.make_reserve()
-    outbox.free_reserve = guard.release_reserve
+    spool.free_reserve = guard.release_reserve
     t = datetime.now(UTC)
     stored = [Event(ev.MODE, t, {"mode": "auto"})]
-    outbox.append(stored)
+    spool.append(stored)
     # Another tool fills the disk between our check and our write.
     filler = small_disk / "other-tools.bin"
     with open(filler, "wb") as f, pytest.raises(OSError):
@@ -152,8 +152,8 @@ def test_a_write_that_meets_a_full_disk_is_spool_full_and_stored_records_still_l
             f.flush()
     with pytest.raises(SpoolFull):
         for _ in range(20):
-            outbox.append([Event(ev.MAP, t, {}, blob=NOISE)])
-    (row_id, event), *_ = outbox.peek()
+            spool.append([Event(ev.MAP, t, {}, blob=NOISE)])
+    (row_id, event), *_ = spool.peek()
     assert event.kind == ev.MODE
-    outbox.remove([row_id])  # on the reserve, though nothing else fits
-    assert len(outbox) == 0 and not guard.reserve_path.exists()
+    spool.remove([row_id])  # on the reserve, though nothing else fits
+    assert len(spool) == 0 and not guard.reserve_path.exists()

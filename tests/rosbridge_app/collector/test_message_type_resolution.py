@@ -7,7 +7,8 @@ import sys
 import pytest
 
 from rosbridge_app.collector import params as P
-from rosbridge_app.collector.message_fields import is_interface_package
+from rosbridge_app.collector.bag import rclpy_type
+from rosbridge_app.collector.message_fields import is_interface_package, message_class
 
 
 def test_a_module_named_as_a_message_package_is_refused_without_importing_it(capfd):
@@ -18,6 +19,23 @@ def test_a_module_named_as_a_message_package_is_refused_without_importing_it(cap
     out, err = capfd.readouterr()
     assert "Beautiful is better than ugly" not in out + err
     assert "this" not in sys.modules
+
+
+def test_the_collector_and_the_bag_player_never_import_a_module_a_type_names(capfd):
+    """A type reaches the robot's side from parameters stored before the check,
+    from the ROS graph (snapshots) or from a bag (the player): none runs a module."""
+    sys.modules.pop("this", None)
+    for resolve, typename in (
+        (message_class, "this/msg/Zen"),
+        (message_class, "this/srv/Zen"),
+        (rclpy_type, "this/msg/Zen"),
+    ):
+        with pytest.raises(ImportError, match="no interface package"):
+            resolve(typename)
+    out, err = capfd.readouterr()
+    assert "Beautiful is better than ugly" not in out + err
+    assert "this" not in sys.modules
+    assert message_class("std_msgs/msg/String")().data == ""
 
 
 def test_interface_packages_are_told_from_other_modules():

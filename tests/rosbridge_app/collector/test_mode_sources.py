@@ -322,20 +322,3 @@ def test_a_reason_rule_on_a_field_the_type_lacks_is_refused():
             "params.reason_rules",
             "rules: [{topic: /e, type: std_msgs/msg/Bool, field: value, values: [1], reason: x}]",
         )
-
-
-def test_every_preset_of_the_docs_passes_the_check():
-    import re
-
-    docs = (Path(__file__).parents[3] / "docs" / "collector.md").read_text()
-    section = docs.split("### Mode presets")[1].split("###")[0]
-    presets = re.findall(r"```yaml\n(.*?)```", section, re.S)
-    assert len(presets) == 6
-    for text in presets:
-        config = parse(text)  # the types of MAVROS and Autoware are not installed here
-        for source in config.sources:
-            try:
-                installed_fields(source.type)
-            except KeyError:
-                continue
-            P.check("params.mode_sources", text)

@@ -1,5 +1,5 @@
 """After an outage, live data overtakes the spooled backlog without changing where
-anything is stored: the writer's order (collector/replay.py), outbox to database."""
+anything is stored: the writer's order (collector/replay.py), spool to database."""
 
 from datetime import UTC, datetime, timedelta
 
@@ -11,9 +11,9 @@ from rosbridge_app.collector import replay
 from rosbridge_app.collector.disk_guard import DiskGuard
 from rosbridge_app.collector.events import Event
 from rosbridge_app.collector.held import Held
-from rosbridge_app.collector.outbox import Outbox
 from rosbridge_app.collector.recorder import Recorder
 from rosbridge_app.collector.replay import ReplayOrder
+from rosbridge_app.collector.spool import Spool
 from telemetry.models import LocalPose, MapImage, Pose
 from tests.support.images import grey_png
 
@@ -54,30 +54,30 @@ def test_a_live_switch_is_stored_before_the_backlog_and_everything_once(
         _map(ito_at + timedelta(seconds=2), 20),
         *ranges["ito"][40:],
     ]
-    outbox = Outbox(tmp_path / "spool.sqlite3")
-    outbox.append(backlog)
+    spool = Spool(tmp_path / "spool.sqlite3")
+    spool.append(backlog)
     recorder = Recorder(lambda: leg)
-    order = ReplayOrder(outbox, SLICE)
+    order = ReplayOrder(spool, SLICE)
     order.write_next(recorder)  # the database is back: the writer has found the backlog
 
     # Published after the restore, while the backlog is replayed.
     live_at = t0 + timedelta(minutes=5)
     live = [Event(ev.MODE, live_at, {"mode": "auto"}), *_fixes(live_at, 3)]
     live.append(_map(live_at + timedelta(seconds=1), 30))
-    outbox.append(live)
+    spool.append(live)
 
     backlog_left_when_live_stored = None
     turns = restarts = 0
-    while len(outbox):
+    while len(spool):
         if restart and order.replaying and turns == 1:
             # A crash or restart in the middle: the spool says where the backlog goes.
-            recorder, order = Recorder(lambda: leg), ReplayOrder(outbox, SLICE)
+            recorder, order = Recorder(lambda: leg), ReplayOrder(spool, SLICE)
             restarts += 1
         order.write_next(recorder)
         turns += 1
         assert turns < 100
         if backlog_left_when_live_stored is None and Segment.objects.filter(uid=live[0].uid):
-            spooled = {str(e.uid) for _, e in outbox.peek(1000)}
+            spooled = {str(e.uid) for _, e in spool.peek(1000)}
             backlog_left_when_live_stored = sum(str(e.uid) in spooled for e in backlog)
 
     assert backlog_left_when_live_stored and backlog_left_when_live_stored > SLICE
@@ -110,13 +110,13 @@ def test_backlog_slices_grow_while_each_is_stored_within_the_time_a_live_switch_
     monkeypatch.setattr(replay, "SLICE_SECONDS", seconds)
     t0 = datetime.now(UTC) + timedelta(minutes=1)
     positions = _fixes(t0 + timedelta(seconds=1), 200)
-    outbox = Outbox(tmp_path / "spool.sqlite3")
-    outbox.append([Event(ev.START, t0), Event(ev.MODE, t0, {"mode": "auto"}), *positions])
-    order = ReplayOrder(outbox, SLICE)
+    spool = Spool(tmp_path / "spool.sqlite3")
+    spool.append([Event(ev.START, t0), Event(ev.MODE, t0, {"mode": "auto"}), *positions])
+    order = ReplayOrder(spool, SLICE)
     order.write_next(Recorder(lambda: leg))  # finds the backlog, applies its segment changes
 
     recorder, taken = Recorder(lambda: leg), []
-    while len(outbox):
+    while len(spool):
         taken.append(order.write_next(recorder))
         assert len(taken) < 100
 
@@ -133,15 +133,15 @@ def test_a_live_switch_is_committed_before_what_was_spooled_after_it(leg, tmp_pa
     t0 = datetime.now(UTC) + timedelta(minutes=1)
     before, after = _fixes(t0, 3), _fixes(t0 + timedelta(seconds=1), 3)
     switch = Event(ev.MODE, t0 + timedelta(seconds=1), {"mode": "ito"})
-    outbox = Outbox(tmp_path / "spool.sqlite3")
-    outbox.append([Event(ev.START, t0), *before, switch, *after])
-    order, recorder = ReplayOrder(outbox, 100), Recorder(lambda: leg)
+    spool = Spool(tmp_path / "spool.sqlite3")
+    spool.append([Event(ev.START, t0), *before, switch, *after])
+    order, recorder = ReplayOrder(spool, 100), Recorder(lambda: leg)
 
     assert order.write_next(recorder) == 1  # the start alone
     assert order.write_next(recorder) == len(before) + 1
     # The new master is in the database while the positions after it still wait.
     assert Segment.objects.get(uid=switch.uid).segment_type_id == "ito"
-    assert len(outbox) == len(after)
+    assert len(spool) == len(after)
     assert order.write_next(recorder) == len(after)
     assert Pose.objects.filter(segment__uid=switch.uid).count() == 3
 
@@ -150,21 +150,21 @@ def test_a_switch_ends_its_slice_and_the_writer_knows_it_is_stored(leg, tmp_path
     """The collector's writer stores a switch ahead of its heartbeat: slices
     until the one that held the switch (runtime._write_change)."""
     t0 = datetime.now(UTC) + timedelta(minutes=1)
-    outbox = Outbox(tmp_path / "spool.sqlite3")
+    spool = Spool(tmp_path / "spool.sqlite3")
     # Live, not a backlog: fewer records pending than a quarter of a slice.
-    recorder, order = Recorder(lambda: leg), ReplayOrder(outbox, 100)
-    outbox.append([Event(ev.START, t0), Event(ev.MODE, t0, {"mode": "auto"})])
+    recorder, order = Recorder(lambda: leg), ReplayOrder(spool, 100)
+    spool.append([Event(ev.START, t0), Event(ev.MODE, t0, {"mode": "auto"})])
     while order.write_next(recorder):
         pass
     switch_at = t0 + timedelta(seconds=5)
-    outbox.append(
+    spool.append(
         [*_fixes(t0, 2), Event(ev.MODE, switch_at, {"mode": "ito"}), *_fixes(switch_at, 2)]
     )
     while order.write_next(recorder):
         if order.stored_change:
             break
     assert Segment.objects.get(leg=leg, parent=None, end=None).segment_type_id == "ito"
-    assert len(outbox) == 4  # the positions after the switch wait for the next turn
+    assert len(spool) == 4  # the positions after the switch wait for the next turn
     assert order.write_next(recorder) == 4 and not order.stored_change
 
 
@@ -172,16 +172,16 @@ def test_a_live_switch_stored_with_a_backlog_slice_is_known_as_stored(leg, tmp_p
     """The backlog slice stored after the live one in the same turn does not
     hide the switch from the writer."""
     t0 = datetime.now(UTC) + timedelta(minutes=1)
-    outbox = Outbox(tmp_path / "spool.sqlite3")
-    outbox.append([Event(ev.START, t0), Event(ev.MODE, t0, {"mode": "auto"}), *_fixes(t0, 30)])
-    recorder, order = Recorder(lambda: leg), ReplayOrder(outbox, SLICE)
+    spool = Spool(tmp_path / "spool.sqlite3")
+    spool.append([Event(ev.START, t0), Event(ev.MODE, t0, {"mode": "auto"}), *_fixes(t0, 30)])
+    recorder, order = Recorder(lambda: leg), ReplayOrder(spool, SLICE)
     order.write_next(recorder)  # the backlog found, its segment changes applied
     switch = Event(ev.MODE, t0 + timedelta(seconds=10), {"mode": "ito"})
-    outbox.append([switch])
+    spool.append([switch])
     order.write_next(recorder)
     assert Segment.objects.filter(uid=switch.uid).exists()
     assert order.stored_change
-    assert len(outbox) > 0  # the backlog's positions still wait
+    assert len(spool) > 0  # the backlog's positions still wait
 
 
 def test_positions_held_in_memory_do_not_wait_for_each_switch_of_a_small_spool(leg, tmp_path):
@@ -189,18 +189,18 @@ def test_positions_held_in_memory_do_not_wait_for_each_switch_of_a_small_spool(l
     the live data after them. The live data is stored at the second turn, not
     behind one turn per spooled switch."""
     t0 = datetime.now(UTC) + timedelta(minutes=1)
-    outbox = Outbox(tmp_path / "spool.sqlite3")
+    spool = Spool(tmp_path / "spool.sqlite3")
     spooled = [Event(ev.START, t0)]
     for i, mode in enumerate(["auto", "ito", "auto", "ito"]):
         at = t0 + timedelta(seconds=i)
         spooled += [Event(ev.MODE, at, {"mode": mode}), *_fixes(at, 2)]
-    outbox.append(spooled)
+    spool.append(spooled)
     held = Held(DiskGuard(tmp_path / "spool.sqlite3", budget=None, headroom=0))
     live = _fixes(t0 + timedelta(seconds=10), 1)
     for event in live:
         held.add(event)
-    order, recorder = ReplayOrder(outbox, 100, held=held), Recorder(lambda: leg)
-    assert len(outbox) < order.backlog  # small: by its size alone not a backlog
+    order, recorder = ReplayOrder(spool, 100, held=held), Recorder(lambda: leg)
+    assert len(spool) < order.backlog  # small: by its size alone not a backlog
 
     order.write_next(recorder)  # the spool's switches
     order.write_next(recorder)

@@ -4,9 +4,11 @@ created and deleted, never changed)."""
 import uuid
 
 import pytest
+from django.core.exceptions import ValidationError
 
 from common import roles
 from telemetry.models import LocalPose, MapImage, Pose
+from telemetry.pictures import MAP_FORMATS, checked_picture
 from telemetry.services import attachments, map_images, recording
 from telemetry.services.recording import GpsFix, MapPose
 from tests.support.api import CrudTests, assert_error_shape
@@ -208,10 +210,15 @@ class TestMaps(CrudTests):
         assert_error_shape(client.get("/api/maps/current/"), 400)
         assert_error_shape(client.get("/api/maps/current/?shift=abc"), 400)
 
-    def test_not_a_png_is_refused(self, api_client, create_data):
+    def test_not_a_png_is_refused_in_the_words_of_the_map_rule(self, api_client, create_data):
         create_data["image"] = upload(name="map.jpg", fmt="JPEG")
         response = api_client(roles.OPERATOR).post(self.list_url(), create_data, format="multipart")
-        assert "image" in assert_error_shape(response, 400)["errors"]
+        # The API refuses with the rule every map write checks (telemetry.pictures), no copy.
+        with pytest.raises(ValidationError) as rule:
+            checked_picture(png(fmt="JPEG"), MAP_FORMATS)
+        assert assert_error_shape(response, 400)["errors"]["image"] == ["Not a readable PNG image."]
+        assert rule.value.message_dict["image"] == ["Not a readable PNG image."]
+        assert not MapImage.objects.exists()
 
 
 class TestImages(CrudTests):
