@@ -13,6 +13,7 @@ from common import roles
 from events.models import SegmentType, Vehicle
 from events.services import logs, segments
 from events.services.segments import GpsPosition
+from tests.support.api import streamed
 
 # On SpatiaLite too: spatial lookups compile to PostGIS or SpatiaLite functions.
 pytestmark = pytest.mark.spatialite
@@ -120,7 +121,7 @@ def test_found_take_overs_download_as_geojson_and_csv(api_client, take_overs):
     query = {"master": "true", "mode": "ito", "within": polygon(SQUARE, HOLE)}
     geo = client.get("/api/segments/found/", query)
     assert geo.status_code == 200 and geo["Content-Type"] == "application/geo+json"
-    features = json.loads(geo.content)["features"]
+    features = json.loads(streamed(geo))["features"]
     by_id = {f["id"]: f for f in features}
     assert set(by_id) == {take_overs[n] for n in ("corner", "edge", "in_hole_ring")}
     assert by_id[take_overs["edge"]]["geometry"]["coordinates"] == [8.0, 50.25]
@@ -132,7 +133,7 @@ def test_found_take_overs_download_as_geojson_and_csv(api_client, take_overs):
 
     sheet = client.get("/api/segments/found/", {**query, "as": "csv"})
     assert sheet.status_code == 200
-    rows = list(csv.DictReader(io.StringIO(sheet.content.decode())))
+    rows = list(csv.DictReader(io.StringIO(streamed(sheet).decode())))
     assert {int(r["id"]) for r in rows} == set(by_id)
     edge = next(r for r in rows if int(r["id"]) == take_overs["edge"])
     assert (float(edge["longitude"]), float(edge["latitude"])) == (8.0, 50.25)
@@ -146,7 +147,7 @@ def test_a_reason_found_without_its_take_over_is_numbered_under_it(api_client, t
     client = api_client(roles.VIEWER)
     found = client.get("/api/segments/found/", {"master": "false", "reason": "planner"})
     assert found.status_code == 200
-    (feature,) = json.loads(found.content)["features"]
+    (feature,) = json.loads(streamed(found))["features"]
     assert feature["properties"]["label"] == "Leg 1 · #4.1"
     assert feature["properties"]["reason"] == "planner"
     assert feature["properties"]["mode"] == "ITO"
@@ -171,7 +172,7 @@ def test_a_large_area_is_searched_by_post(api_client, take_overs):
     search = {"master": True, "mode": "ito", "within": area}
     geo = client.post("/api/segments/found/", search, format="json")
     assert geo.status_code == 200, geo.content
-    found = {f["id"] for f in json.loads(geo.content)["features"]}
+    found = {f["id"] for f in json.loads(streamed(geo))["features"]}
     assert found == {take_overs["inside"], take_overs["in_hole_ring"]}
     # As the page's download links send it: a form, the area as GeoJSON text.
     form = {"master": "true", "mode": "ito", "within": json.dumps(area), "as": "csv"}
@@ -180,7 +181,7 @@ def test_a_large_area_is_searched_by_post(api_client, take_overs):
         "/api/segments/found/", urlencode(form), content_type="application/x-www-form-urlencoded"
     )
     assert sheet.status_code == 200
-    assert {int(r["id"]) for r in csv.DictReader(io.StringIO(sheet.content.decode()))} == found
+    assert {int(r["id"]) for r in csv.DictReader(io.StringIO(streamed(sheet).decode()))} == found
 
 
 def test_a_bad_area_sent_by_post_is_a_field_message(api_client, db):
