@@ -11,12 +11,16 @@ import threading
 import warnings
 from xml.etree import ElementTree as ET
 
+import httpx
+import pytest
 from django.core.management import call_command
 from django.test import AsyncRequestFactory
 
 from common.api import downloads
 from common.api.downloads import streamed_download
+from ftt_site.asgi import application
 from reports.selectors.exports import CSV_COLUMNS
+from tests.reports.test_route_comparison import drive
 from tests.support.api import streamed
 
 GPX = {"g": "http://www.topografix.com/GPX/1/1"}
@@ -85,3 +89,27 @@ def test_a_streamed_download_is_made_in_batches_on_the_request_thread_under_asgi
     assert b"".join(chunk for chunk, _ in chunks) == "".join(f"{n}\n" for n in range(35)).encode()
     assert len(threads) == 1
     assert response["Content-Disposition"] == 'attachment; filename="segments.csv"'
+
+
+@pytest.mark.django_db(transaction=True)
+def test_the_production_server_streams_an_export_that_reads_the_database(api_client, shift):
+    """Through the ASGI application: the pieces read the database on the request's
+    thread, and Django does not collect them whole first."""
+    legs = [drive(shift, [(7.1 + i * 1e-5, 50.6 + n * 1e-4) for i in range(30)]) for n in range(3)]
+    token = api_client("viewer").token
+
+    async def get(name):
+        transport = httpx.ASGITransport(app=application)
+        async with httpx.AsyncClient(transport=transport, base_url="http://127.0.0.1") as client:
+            url = f"/api/reports/exports/{shift.test_event_id}/{name}"
+            return await client.get(url, headers={"Authorization": f"Token {token}"})
+
+    with warnings.catch_warnings():
+        warnings.filterwarnings("error", message="StreamingHttpResponse must consume")
+        sheet, tracks = asyncio.run(get("segments.csv")), asyncio.run(get("tracks.geojson"))
+    assert sheet.status_code == tracks.status_code == 200
+    rows = list(csv.DictReader(io.StringIO(sheet.text)))
+    assert sorted(int(r["leg"]) for r in rows) == sorted(leg.number for leg in legs)
+    assert {int(r["poses"]) for r in rows} == {30}
+    features = json.loads(tracks.text)["features"]
+    assert sorted(f["properties"]["leg_id"] for f in features) == sorted(leg.pk for leg in legs)
