@@ -10,6 +10,7 @@ from urllib.parse import urlencode
 import pytest
 
 from common import roles
+from common.areas import MAX_CORNERS
 from events.models import SegmentType, Vehicle
 from events.services import logs, segments
 from events.services.segments import GpsPosition
@@ -200,3 +201,20 @@ def test_an_area_nested_too_deeply_is_a_field_message(api_client, db):
     answer = api_client(roles.VIEWER).get("/api/segments/", {"within": deep})
     assert answer.status_code == 400
     assert "nested too deeply" in " ".join(answer.json()["errors"]["within"])
+
+
+def test_an_area_of_more_than_twenty_thousand_corners_is_refused(api_client, take_overs):
+    client = api_client(roles.VIEWER)
+    search = {"master": True, "mode": "ito"}
+    most = {"type": "Polygon", "coordinates": [ring_of(MAX_CORNERS)]}
+    found = client.post("/api/segments/found/", {**search, "within": most}, format="json")
+    assert found.status_code == 200, found.content
+    ids = {f["id"] for f in json.loads(streamed(found))["features"]}
+    assert ids == {take_overs["inside"], take_overs["in_hole_ring"]}
+    # The corners of every ring and part count: here one more than the limit in two parts.
+    half = MAX_CORNERS // 2
+    parts = [[ring_of(half, radius=0.2)], [ring_of(half + 1, lon=9.5, radius=0.2)]]
+    too_many = {"type": "MultiPolygon", "coordinates": parts}
+    answer = client.post("/api/segments/found/", {**search, "within": too_many}, format="json")
+    assert answer.status_code == 400
+    assert "20001 corners; give at most 20000" in " ".join(answer.json()["errors"]["within"])
