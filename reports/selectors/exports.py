@@ -8,14 +8,16 @@
   same line its distance was measured on (joins included).
 * GPX 1.1: one track per master segment with its GPS fixes and their times.
 
-Each is made piece by piece (a line, a feature, a track; tracks read one leg at
-a time), so that a download streams (common.api.downloads) and its cost in
-memory does not grow with the test event.
+Each is made piece by piece (a line, a feature, a track; tracks read a batch of
+legs at a time, POINTS_PER_BATCH), so that a download streams
+(common.api.downloads) and its cost in memory does not grow with the test event.
 """
 
 from collections import defaultdict
 from collections.abc import Iterator
 from xml.etree import ElementTree as ET
+
+from django.db.models import Q, Sum
 
 from common import geojson
 from common.spreadsheet import csv_lines
@@ -27,6 +29,8 @@ from telemetry.storage.keys import GPS
 
 # Segments read from the database at a time.
 BATCH = 2000
+# Kept GPS points whose tracks the tracks exports hold at a time.
+POINTS_PER_BATCH = 100_000
 
 CSV_COLUMNS = (
     "test_event",
@@ -143,12 +147,25 @@ def _segment_rows(event: TestEvent, mode: str) -> Iterator[list]:
 
 
 def _leg_runs(event: TestEvent) -> Iterator:
-    """The event's GPS runs with their tracks, one leg's tracks in memory at a time."""
-    legs = Leg.objects.filter(shift__test_event=event).order_by(
-        "shift__start", "shift_id", "start", "id"
+    """The event's GPS runs with their tracks, a batch of legs at a time: legs of
+    at most POINTS_PER_BATCH kept GPS points together (a longer leg alone), so
+    that memory holds a batch's tracks and the queries do not grow per leg."""
+    points = Sum("segments__figures__points", filter=Q(segments__figures__mode=GPS), default=0)
+    legs = (
+        Leg.objects.filter(shift__test_event=event)
+        .order_by("shift__start", "shift_id", "start", "id")
+        .annotate(points=points)
+        .values_list("id", "points")
     )
-    for leg in legs.values_list("id", flat=True):
-        yield from event_runs(event, GPS, leg=leg)
+    batch, held = [], 0
+    for leg, count in legs:
+        if batch and held + count > POINTS_PER_BATCH:
+            yield from event_runs(event, GPS, legs=batch)
+            batch, held = [], 0
+        batch.append(leg)
+        held += count
+    if batch:
+        yield from event_runs(event, GPS, legs=batch)
 
 
 def track_features(event: TestEvent) -> Iterator[dict]:

@@ -19,6 +19,7 @@ from django.test import AsyncRequestFactory
 from common.api import downloads
 from common.api.downloads import streamed_download
 from ftt_site.asgi import application
+from reports.selectors import exports
 from reports.selectors.exports import CSV_COLUMNS
 from tests.reports.test_route_comparison import drive
 from tests.support.api import streamed
@@ -113,3 +114,21 @@ def test_the_production_server_streams_an_export_that_reads_the_database(api_cli
     assert {int(r["poses"]) for r in rows} == {30}
     features = json.loads(tracks.text)["features"]
     assert sorted(f["properties"]["leg_id"] for f in features) == sorted(leg.pk for leg in legs)
+
+
+def test_the_tracks_exports_hold_a_batch_of_legs_at_a_time(shift, monkeypatch):
+    for n in range(3):
+        drive(shift, [(7.1 + i * 1e-5, 50.6 + n * 1e-4) for i in range(30)])
+    event = shift.test_event
+    whole = "".join(exports.tracks_geojson_pieces(event))
+    batches = []
+    read = exports.event_runs
+    monkeypatch.setattr(exports, "POINTS_PER_BATCH", 40)
+    monkeypatch.setattr(
+        exports,
+        "event_runs",
+        lambda *a, legs, **k: batches.append(legs) or read(*a, legs=legs, **k),
+    )
+    assert "".join(exports.tracks_geojson_pieces(event)) == whole
+    assert [len(legs) for legs in batches] == [1, 1, 1]
+    assert len(json.loads(whole)["features"]) == 3
