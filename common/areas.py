@@ -17,6 +17,9 @@ from django.utils.translation import gettext
 _LONGITUDE_REACH = 540.0
 _WORLD = (-180.0, -90.0, 180.0, 90.0)
 _SHIFTS = {0.0: _WORLD, -360.0: (180.0, -90.0, 540.0, 90.0), 360.0: (-540.0, -90.0, -180.0, 90.0)}
+# Corners an area may have: checking validity and testing each row's point costs
+# time with every corner. A test case's area drawn on a map has a few thousand.
+MAX_CORNERS = 20_000
 
 
 class AreaError(ValueError):
@@ -55,6 +58,12 @@ def area_from_text(text: str) -> MultiPolygon:
         raise AreaError(
             gettext("The area must be a polygon, not a %(kind)s.") % {"kind": geometry.geom_type}
         )
+    corners = _corners(geometry)
+    if corners > MAX_CORNERS:
+        raise AreaError(
+            gettext("The area has %(count)s corners; give at most %(max)s (simplify it).")
+            % {"count": corners, "max": MAX_CORNERS}
+        )
     if geometry.srid not in (None, 4326):
         raise AreaError(gettext("Give the area in WGS84 longitude and latitude."))
     xmin, ymin, xmax, ymax = geometry.extent
@@ -72,6 +81,12 @@ def area_from_text(text: str) -> MultiPolygon:
     if geometry.empty or geometry.area == 0:
         raise AreaError(gettext("The area is empty."))
     return _on_the_globe(geometry)
+
+
+def _corners(geometry) -> int:
+    """Corners of a polygon or multipolygon: its points, less each ring's closing one."""
+    polygons = [geometry] if geometry.geom_type == "Polygon" else list(geometry)
+    return geometry.num_coords - sum(len(polygon) for polygon in polygons)
 
 
 def _on_the_globe(geometry) -> MultiPolygon:

@@ -6,6 +6,7 @@ cells get a leading apostrophe, as OWASP recommends; numbers stay numbers.
 """
 
 import csv
+from collections.abc import Iterable, Iterator, Sequence
 
 _FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
 
@@ -24,3 +25,17 @@ class SafeWriter:
 
     def writerow(self, row):
         return self._writer.writerow([safe_cell(value) for value in row])
+
+
+class _Line:
+    """A file whose ``write`` hands the text back: csv.writer's row, as a string."""
+
+    def write(self, text: str) -> str:
+        return text
+
+
+def csv_lines(rows: Iterable[Sequence]) -> Iterator[str]:
+    """``rows`` (the header first) as SafeWriter's CSV, one line at a time."""
+    writer = SafeWriter(_Line())
+    for row in rows:
+        yield writer.writerow(row)

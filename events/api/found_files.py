@@ -1,19 +1,22 @@
-"""The segments a search found, as a GeoJSON or CSV download."""
+"""The segments a search found, as a GeoJSON or CSV download (streamed:
+common.api.downloads)."""
 
-import io
+import itertools
+from collections.abc import Iterator
 
-from django.http import HttpResponse
+from django.http import StreamingHttpResponse
 from django.utils.translation import gettext as _
 from rest_framework.exceptions import ValidationError
 
 from common import geojson
-from common.spreadsheet import SafeWriter
+from common.api.downloads import streamed_download
+from common.spreadsheet import csv_lines
 from events.selectors.found_segments import COLUMNS, MAX_FOUND
 
 KINDS = ("geojson", "csv")
 
 
-def found_file(rows: list[tuple], kind: str) -> HttpResponse:
+def found_file(request, rows: list[tuple], kind: str) -> StreamingHttpResponse:
     if kind not in KINDS:
         raise ValidationError(
             {"as": [(_("Choose one of: %(kinds)s.") % {"kinds": ", ".join(KINDS)})]}
@@ -24,11 +27,11 @@ def found_file(rows: list[tuple], kind: str) -> HttpResponse:
         ) % {"count": MAX_FOUND}
         raise ValidationError({"detail": [message]})
     if kind == "csv":
-        return _csv(rows)
-    return _geojson(rows)
+        return streamed_download(request, _csv(rows), "text/csv; charset=utf-8", "segments.csv")
+    return streamed_download(request, _geojson(rows), "application/geo+json", "segments.geojson")
 
 
-def _geojson(rows) -> HttpResponse:
+def _geojson(rows) -> Iterator[str]:
     properties = [(n, k) for n, k in enumerate(COLUMNS) if k not in ("id", "longitude", "latitude")]
     x, y = COLUMNS.index("longitude"), COLUMNS.index("latitude")
     features = (
@@ -39,23 +42,12 @@ def _geojson(rows) -> HttpResponse:
         )
         for row in rows
     )
-    return _download(geojson.collection_text(features), "application/geo+json", "segments.geojson")
+    return geojson.collection_chunks(features)
 
 
-def _csv(rows) -> HttpResponse:
-    out = io.StringIO()
-    writer = SafeWriter(out)
-    writer.writerow(COLUMNS)
-    for row in rows:
-        writer.writerow([_text(value) for value in row])
-    return _download(out.getvalue(), "text/csv; charset=utf-8", "segments.csv")
+def _csv(rows) -> Iterator[str]:
+    yield from csv_lines(itertools.chain([COLUMNS], ([_text(v) for v in row] for row in rows)))
 
 
 def _text(value):
     return value.isoformat() if hasattr(value, "isoformat") else value
-
-
-def _download(body: str, content_type: str, name: str) -> HttpResponse:
-    response = HttpResponse(body, content_type=content_type)
-    response["Content-Disposition"] = f'attachment; filename="{name}"'
-    return response

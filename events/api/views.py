@@ -303,7 +303,7 @@ class SegmentViewSet(HistoryMixin, ServiceUpdateMixin, ServiceBaseViewSet):
         ``vehicle``, ``version``, times), unpaged, as a GeoJSON or CSV file.  POST
         takes the same parameters in its body, for an area too large for the URL."""
         rows = found_rows(self.filter_queryset(self.get_queryset()))
-        return found_file(rows, search_params(request, self).get("as", "geojson"))
+        return found_file(request, rows, search_params(request, self).get("as", "geojson"))
 
     @extend_schema(request=s.ChildSerializer, responses={201: s.SegmentSerializer})
     @action(detail=True, methods=["post"])

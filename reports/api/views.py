@@ -16,6 +16,7 @@ from rest_framework.response import Response
 from rest_framework.views import APIView
 
 from common import roles
+from common.api.downloads import streamed_download
 from common.api.permissions import RolePermission
 from events.models import TestEvent
 from events.services.plans import judge
@@ -362,20 +363,27 @@ class ExportView(APIView):
     )
     def get(self, request, test_event_id: int, filename: str):
         event = get_object_or_404(TestEvent, pk=test_event_id)
+        name = f"test-event-{event.pk}-{filename}"
+        content_type = self.formats[filename]
+        # Those that grow with the segments and poses are streamed, the tables
+        # of a few rows per test case or take-over are sent whole.
         if filename == "segments.csv":
-            body = exports.segments_csv(event, _mode(request))
-        elif filename == "disengagements.csv":
+            pieces = exports.segments_csv_lines(event, _mode(request))
+            return streamed_download(request, pieces, content_type, name)
+        if filename == "tracks.geojson":
+            return streamed_download(
+                request, exports.tracks_geojson_pieces(event), content_type, name
+            )
+        if filename == "tracks.gpx":
+            return streamed_download(request, exports.tracks_gpx_pieces(event), content_type, name)
+        if filename == "disengagements.csv":
             body = disengagements_csv([event])
         elif filename == "autonomous-mileage.csv":
             body = mileage_csv([event], _reporting_year(request, event))
-        elif filename == "tracks.geojson":
-            body = exports.tracks_geojson_text(event)
         elif filename == "test-plan.csv":
             body = test_plan_csv(test_plan(event, _mode(request)))
-        elif filename == "test-plan.json":
-            body = json.dumps(test_plan(event, _mode(request)).as_dict(), ensure_ascii=False)
         else:
-            body = exports.tracks_gpx(event)
-        response = HttpResponse(body, content_type=self.formats[filename])
-        response["Content-Disposition"] = f'attachment; filename="test-event-{event.pk}-{filename}"'
+            body = json.dumps(test_plan(event, _mode(request)).as_dict(), ensure_ascii=False)
+        response = HttpResponse(body, content_type=content_type)
+        response["Content-Disposition"] = f'attachment; filename="{name}"'
         return response

@@ -290,15 +290,22 @@ def counted_reason(child: SegmentRow) -> str:
 
 
 def segment_scope(
-    event: TestEvent, *, shift: int | None = None, leg: int | None = None, via: str = ""
+    event: TestEvent,
+    *,
+    shift: int | None = None,
+    leg: int | None = None,
+    legs: list[int] | None = None,
+    via: str = "",
 ) -> dict:
-    """The ORM filter of a test event's segments, narrowed to one shift or leg
-    (ids); ``via`` is the path to the segment, e.g. ``"segment__"``."""
+    """The ORM filter of a test event's segments, narrowed to one shift, one leg
+    or some legs (ids); ``via`` is the path to the segment, e.g. ``"segment__"``."""
     found = {f"{via}leg__shift__test_event": event}
     if shift is not None:
         found[f"{via}leg__shift_id"] = shift
     if leg is not None:
         found[f"{via}leg_id"] = leg
+    if legs is not None:
+        found[f"{via}leg_id__in"] = legs
     return found
 
 
@@ -309,11 +316,12 @@ def event_runs(
     tracks: bool = True,
     shift: int | None = None,
     leg: int | None = None,
+    legs: list[int] | None = None,
 ) -> list[Run]:
     """All master segments of a test event as runs, ordered by leg and time;
-    ``shift`` or ``leg`` (ids) narrow them to one shift or leg (``campaign_runs``
-    of this one event)."""
-    scope = segment_scope(event, shift=shift, leg=leg)
+    ``shift``, ``leg`` or ``legs`` (ids) narrow them to one shift, one leg or
+    some legs (``campaign_runs`` of this one event)."""
+    scope = segment_scope(event, shift=shift, leg=leg, legs=legs)
     return _runs(scope, [event], mode, tracks).get(event.pk, [])
 
 

@@ -1,5 +1,6 @@
 """Statistics, report jobs and exports over the API; background generation."""
 
+import json
 import signal
 
 import pytest
@@ -9,6 +10,7 @@ from django_tasks_db.models import DBTaskResult
 from reports.models import Report
 from reports.services import generation
 from reports.services.generation import request_report, run_job
+from tests.support.api import streamed
 from tests.support.jobs import run_queued_jobs, worker_processes
 from tests.support.pdf import flat, pdf_text
 from tests.support.ros import wait_for
@@ -189,9 +191,9 @@ def test_exports_over_the_api(scenario, api_client):
     csv_response = client.get(base + "segments.csv")
     assert csv_response.status_code == 200
     assert csv_response["Content-Type"].startswith("text/csv")
-    assert csv_response.content.decode().startswith("test_event,shift,leg,label,segment_id")
+    assert streamed(csv_response).decode().startswith("test_event,shift,leg,label,segment_id")
     geo = client.get(base + "tracks.geojson")
-    assert geo.status_code == 200 and geo.json()["type"] == "FeatureCollection"
+    assert geo.status_code == 200 and json.loads(streamed(geo))["type"] == "FeatureCollection"
     gpx = client.get(base + "tracks.gpx")
-    assert gpx.status_code == 200 and b"<trkpt" in gpx.content
+    assert gpx.status_code == 200 and b"<trkpt" in streamed(gpx)
     assert client.get(base + "tracks.kml").status_code == 404

@@ -6,6 +6,7 @@ import io
 import pytest
 
 from events.services import notes, segments
+from tests.support.api import streamed
 
 pytestmark = pytest.mark.django_db
 
@@ -21,7 +22,7 @@ def test_formula_cells_are_written_as_text(api_client, leg, person):
         f"/api/reports/exports/{leg.shift.test_event_id}/segments.csv"
     )
     assert response.status_code == 200
-    rows = list(csv.DictReader(io.StringIO(response.content.decode())))
+    rows = list(csv.DictReader(io.StringIO(streamed(response).decode())))
     reason = next(r for r in rows if r["row"] == "reason")
     assert (reason["obstacle"], reason["lighting"], reason["slope"]) == (
         "'" + FORMULAS[0],

@@ -11,7 +11,7 @@ import shapely
 
 from common import roles
 from reports.selectors import routes
-from tests.reports.test_route_comparison import drive
+from tests.reports.test_route_comparison import GEOD, drive
 
 # About 1.5 m between fixes, wandering like a GPS track driven off any straight line.
 DEGREES_PER_METRE = 1 / 111_000
@@ -68,3 +68,28 @@ def test_one_request_compares_a_bounded_number_of_routes(api_client, shift):
     response = api_client(roles.VIEWER).get("/api/reports/routes/", many)
     assert response.status_code == 400
     assert "at most" in " ".join(response.json()["errors"]["leg"])
+
+
+def test_long_routes_are_compared_within_seconds_and_still_measured_right(api_client, shift):
+    """Legs above the point budget are simplified, and the figures still say what
+    the routes are: a route against itself is 0 m off, a copy moved 5 m north 5 m."""
+    points = wander(6, routes.MAX_POINTS + 1000)
+    north = 5 * DEGREES_PER_METRE
+    original = drive(shift, points)
+    same = drive(shift, points)
+    moved = drive(shift, [(lon, lat + north) for lon, lat in points])
+    client = api_client(roles.VIEWER)
+    started = time.monotonic()
+    alike = client.get("/api/reports/routes/", {"leg": [original.pk, same.pk]})
+    apart = client.get("/api/reports/routes/", {"leg": [original.pk, moved.pk]})
+    elapsed = time.monotonic() - started
+    assert alike.status_code == apart.status_code == 200, (alike.content, apart.content)
+    assert elapsed < 20, elapsed
+    alike, apart = alike.json(), apart.json()
+    assert all(len(p) <= routes.MAX_POINTS for p in [*alike["routes"].values()])
+    assert alike["pairs"][0]["frechet"] == pytest.approx(0, abs=1e-6)
+    assert alike["pairs"][0]["deviation"][f"leg {same.pk}"]["max"] == pytest.approx(0, abs=1e-6)
+    # Both simplified at the tolerance named, so the shift is known to within it.
+    tolerance = max(apart["simplified"].values())
+    shifted = GEOD.inv(*points[0], points[0][0], points[0][1] + north)[2]
+    assert apart["pairs"][0]["frechet"] == pytest.approx(shifted, abs=tolerance + 0.05)

@@ -238,6 +238,16 @@ def post_counting_queries(client, url, body):
     return response, sql, sql[opened[0] + 1 : closed[0]]
 
 
+# --- downloads ------------------------------------------------------------------------
+
+
+def streamed(response) -> bytes:
+    """A download that grows with the data, read as a client reads it: it must be
+    streamed (common.api.downloads), never made whole first."""
+    assert response.streaming, "the download is not streamed"
+    return b"".join(response.streaming_content)
+
+
 # --- archives -------------------------------------------------------------------------
 
 

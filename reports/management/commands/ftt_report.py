@@ -336,23 +336,26 @@ class Command(BaseCommand):
 
     def _exports(self, event, o) -> bool:
         writers = (
-            ("csv", lambda: exports.segments_csv(event, "local" if o["local"] else "gps")),
-            ("geojson", lambda: exports.tracks_geojson_text(event)),
-            ("gpx", lambda: exports.tracks_gpx(event)),
-            ("json", lambda: json_report(event, "local" if o["local"] else "gps")),
-            ("dmv", lambda: disengagements_csv([event], self._months(o))),
+            ("csv", lambda: exports.segments_csv_lines(event, "local" if o["local"] else "gps")),
+            ("geojson", lambda: exports.tracks_geojson_pieces(event)),
+            ("gpx", lambda: exports.tracks_gpx_pieces(event)),
+            ("json", lambda: [json_report(event, "local" if o["local"] else "gps")]),
+            ("dmv", lambda: [disengagements_csv([event], self._months(o))]),
             (
                 "dmv_mileage",
-                lambda: mileage_csv(
-                    [event],
-                    self._year(o) or reporting_year_of(event.start.astimezone(event.tzinfo)),
-                ),
+                lambda: [
+                    mileage_csv(
+                        [event],
+                        self._year(o) or reporting_year_of(event.start.astimezone(event.tzinfo)),
+                    )
+                ],
             ),
         )
         done = False
         for key, make in writers:
             if o[key]:
-                Path(o[key]).write_text(make(), encoding="utf-8")
+                with Path(o[key]).open("w", encoding="utf-8", newline="") as out:
+                    out.writelines(make())
                 self.stdout.write(gettext("%(kind)s: %(file)s") % {"kind": key, "file": o[key]})
                 done = True
         return done

@@ -10,9 +10,11 @@ from urllib.parse import urlencode
 import pytest
 
 from common import roles
+from common.areas import MAX_CORNERS
 from events.models import SegmentType, Vehicle
 from events.services import logs, segments
 from events.services.segments import GpsPosition
+from tests.support.api import streamed
 
 # On SpatiaLite too: spatial lookups compile to PostGIS or SpatiaLite functions.
 pytestmark = pytest.mark.spatialite
@@ -120,7 +122,7 @@ def test_found_take_overs_download_as_geojson_and_csv(api_client, take_overs):
     query = {"master": "true", "mode": "ito", "within": polygon(SQUARE, HOLE)}
     geo = client.get("/api/segments/found/", query)
     assert geo.status_code == 200 and geo["Content-Type"] == "application/geo+json"
-    features = json.loads(geo.content)["features"]
+    features = json.loads(streamed(geo))["features"]
     by_id = {f["id"]: f for f in features}
     assert set(by_id) == {take_overs[n] for n in ("corner", "edge", "in_hole_ring")}
     assert by_id[take_overs["edge"]]["geometry"]["coordinates"] == [8.0, 50.25]
@@ -132,7 +134,7 @@ def test_found_take_overs_download_as_geojson_and_csv(api_client, take_overs):
 
     sheet = client.get("/api/segments/found/", {**query, "as": "csv"})
     assert sheet.status_code == 200
-    rows = list(csv.DictReader(io.StringIO(sheet.content.decode())))
+    rows = list(csv.DictReader(io.StringIO(streamed(sheet).decode())))
     assert {int(r["id"]) for r in rows} == set(by_id)
     edge = next(r for r in rows if int(r["id"]) == take_overs["edge"])
     assert (float(edge["longitude"]), float(edge["latitude"])) == (8.0, 50.25)
@@ -146,7 +148,7 @@ def test_a_reason_found_without_its_take_over_is_numbered_under_it(api_client, t
     client = api_client(roles.VIEWER)
     found = client.get("/api/segments/found/", {"master": "false", "reason": "planner"})
     assert found.status_code == 200
-    (feature,) = json.loads(found.content)["features"]
+    (feature,) = json.loads(streamed(found))["features"]
     assert feature["properties"]["label"] == "Leg 1 · #4.1"
     assert feature["properties"]["reason"] == "planner"
     assert feature["properties"]["mode"] == "ITO"
@@ -171,7 +173,7 @@ def test_a_large_area_is_searched_by_post(api_client, take_overs):
     search = {"master": True, "mode": "ito", "within": area}
     geo = client.post("/api/segments/found/", search, format="json")
     assert geo.status_code == 200, geo.content
-    found = {f["id"] for f in json.loads(geo.content)["features"]}
+    found = {f["id"] for f in json.loads(streamed(geo))["features"]}
     assert found == {take_overs["inside"], take_overs["in_hole_ring"]}
     # As the page's download links send it: a form, the area as GeoJSON text.
     form = {"master": "true", "mode": "ito", "within": json.dumps(area), "as": "csv"}
@@ -180,7 +182,7 @@ def test_a_large_area_is_searched_by_post(api_client, take_overs):
         "/api/segments/found/", urlencode(form), content_type="application/x-www-form-urlencoded"
     )
     assert sheet.status_code == 200
-    assert {int(r["id"]) for r in csv.DictReader(io.StringIO(sheet.content.decode()))} == found
+    assert {int(r["id"]) for r in csv.DictReader(io.StringIO(streamed(sheet).decode()))} == found
 
 
 def test_a_bad_area_sent_by_post_is_a_field_message(api_client, db):
@@ -199,3 +201,20 @@ def test_an_area_nested_too_deeply_is_a_field_message(api_client, db):
     answer = api_client(roles.VIEWER).get("/api/segments/", {"within": deep})
     assert answer.status_code == 400
     assert "nested too deeply" in " ".join(answer.json()["errors"]["within"])
+
+
+def test_an_area_of_more_than_twenty_thousand_corners_is_refused(api_client, take_overs):
+    client = api_client(roles.VIEWER)
+    search = {"master": True, "mode": "ito"}
+    most = {"type": "Polygon", "coordinates": [ring_of(MAX_CORNERS)]}
+    found = client.post("/api/segments/found/", {**search, "within": most}, format="json")
+    assert found.status_code == 200, found.content
+    ids = {f["id"] for f in json.loads(streamed(found))["features"]}
+    assert ids == {take_overs["inside"], take_overs["in_hole_ring"]}
+    # The corners of every ring and part count: here one more than the limit in two parts.
+    half = MAX_CORNERS // 2
+    parts = [[ring_of(half, radius=0.2)], [ring_of(half + 1, lon=9.5, radius=0.2)]]
+    too_many = {"type": "MultiPolygon", "coordinates": parts}
+    answer = client.post("/api/segments/found/", {**search, "within": too_many}, format="json")
+    assert answer.status_code == 400
+    assert "20001 corners; give at most 20000" in " ".join(answer.json()["errors"]["within"])
