@@ -107,6 +107,16 @@ def test_a_long_leg_renders_the_rows_in_view_and_a_take_over_touches_one_row(bro
     )
     assert kept == [True] * len(marked)
     assert page.locator(ROWS).count() < 100
+
+    # Scrolled into the list, a row arriving at the top moves nothing in view.
+    wrap.evaluate("(w) => { w.scrollTop = w.scrollHeight / 2; }")
+    middle = page.locator(ROWS).nth(25)
+    expect(middle).to_be_visible()
+    label = middle.locator("td").first.text_content()
+    y = middle.bounding_box()["y"]
+    server.python(TAKE_OVER.replace('"ito"', '"auto"').format(leg=ids["leg"]))
+    expect(table).to_have_attribute("aria-rowcount", str(MASTERS + 3))
+    assert cell(page, label).bounding_box()["y"] == pytest.approx(y, abs=1)
     assert page.evaluate(OVERFLOWING) == []
     page.close()
 
