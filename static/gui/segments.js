@@ -23,7 +23,7 @@ const Timeline = {
   bars: new Map(), // master id -> {key, b, x, w}: the bars on the strip and what they say
   track: null,
   axis: null,
-  span: null,
+  span: null, // the seconds the strip stands for
   render() {
     const strip = $("#timeline");
     if (!strip) return;
@@ -73,12 +73,18 @@ const Timeline = {
       return bar.b;
     });
     this.bars = shown;
-    const span = String((t1 - t0) / 1000);
-    if (this.span !== span) this.track.style.setProperty("--span", (this.span = span));
+    // The strip reaches a little past now and grows in steps of 2 %: every bar is
+    // laid out again once per step, not at every update of a long leg.
+    const needed = (t1 - t0) / 1000;
+    if (!(this.span >= needed && this.span <= needed * 1.05)) {
+      this.span = Math.max(needed * 1.02, needed + 1);
+      this.track.style.setProperty("--span", String(this.span));
+    }
+    const t2 = t0 + this.span * 1000;
     const kids = this.track.children;
     if (bars.length !== kids.length || bars.some((b, i) => kids[i] !== b)) this.track.replaceChildren(...bars);
-    // The time axis: start, middle and end of the leg so far.
-    [t0, (t0 + t1) / 2, t1].forEach((time, i) => {
+    // The time axis: start, middle and end of the strip.
+    [t0, (t0 + t2) / 2, t2].forEach((time, i) => {
       const text = fmtClock(new Date(time).toISOString());
       if (this.axis.children[i].textContent !== text) this.axis.children[i].textContent = text;
     });

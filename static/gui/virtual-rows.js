@@ -25,10 +25,23 @@ export class VirtualRows {
     this.nodes = new Map(); // item id -> its rendered <tr>
     this.gaps = [];
     this.rowHeight = 47;
+    // Where the list is scrolled and how high it is, kept as they change: read in
+    // a live update they would make the browser lay the page out before its time.
+    this.top = 0;
+    this.height = 0;
+    this.head = 0;
     this.focused = null;
     this.frame = 0;
-    scroller.addEventListener("scroll", () => this.soon());
-    new ResizeObserver(() => this.soon()).observe(scroller);
+    this.measuring = 0;
+    scroller.addEventListener("scroll", () => {
+      this.top = scroller.scrollTop;
+      this.soon();
+    });
+    new ResizeObserver(() => {
+      this.height = scroller.clientHeight;
+      this.head = table.tHead ? table.tHead.offsetHeight : 0;
+      this.soon();
+    }).observe(scroller);
     this.body.addEventListener("focusin", (e) => {
       const tr = e.target.closest("tr[data-id]");
       this.focused = tr ? Number(tr.dataset.id) : null;
@@ -43,18 +56,23 @@ export class VirtualRows {
      (null: every rendered row is written again where it differs). */
   show(items, changed = null) {
     // Scrolled into the list, the row at the top stays there when rows join or leave above it.
-    const top = this.scroller.scrollTop > 0 ? this.items[this.firstInView()] : undefined;
+    const top = this.top > 0 ? this.items[this.firstInView()] : undefined;
     const before = top === undefined ? undefined : this.index.get(top.id);
     this.items = items;
     this.index = new Map(items.map((item, i) => [item.id, i]));
     const after = top === undefined ? undefined : this.index.get(top.id);
-    if (before !== undefined && after !== undefined && after !== before) this.scroller.scrollTop += (after - before) * this.rowHeight;
     this.render(changed);
+    if (before !== undefined && after !== undefined && after !== before) this.scrollTo(this.top + (after - before) * this.rowHeight);
   }
 
   firstInView() {
-    const head = this.table.tHead ? this.table.tHead.offsetHeight : 0;
-    return Math.floor(Math.max(0, this.scroller.scrollTop - head) / this.rowHeight);
+    return Math.floor(Math.max(0, this.top - this.head) / this.rowHeight);
+  }
+
+  /* Its scroll event renders the rows then in view and reads where it ended. */
+  scrollTo(top) {
+    this.scroller.scrollTop = top;
+    this.top = Math.max(0, top);
   }
 
   row(id) {
@@ -72,8 +90,8 @@ export class VirtualRows {
     const top = node ? node.offsetTop : head + i * this.rowHeight;
     const height = node ? node.offsetHeight : this.rowHeight;
     if (!clientHeight) return node || null;
-    if (top - head < scrollTop) this.scroller.scrollTop = top - head;
-    else if (top + height > scrollTop + clientHeight) this.scroller.scrollTop = top + height - clientHeight;
+    if (top - head < scrollTop) this.scrollTo(top - head);
+    else if (top + height > scrollTop + clientHeight) this.scrollTo(top + height - clientHeight);
     this.render(new Set());
     return this.nodes.get(id) || null;
   }
@@ -92,7 +110,7 @@ export class VirtualRows {
     const n = this.items.length;
     if (n <= LIMIT) return { from: 0, to: n, extra: null };
     const first = this.firstInView();
-    const count = Math.ceil(this.scroller.clientHeight / this.rowHeight) + 1;
+    const count = Math.ceil(this.height / this.rowHeight) + 1;
     const from = Math.max(0, Math.min(first, n - count) - MARGIN);
     const to = Math.min(n, first + count + MARGIN);
     const f = this.focused === null ? undefined : this.index.get(this.focused);
@@ -109,6 +127,7 @@ export class VirtualRows {
     const nodes = [];
     const kept = new Map();
     let gaps = 0;
+    let built = false;
     let next = 0; // the position after the last one placed
     const gap = (span) => {
       const tr = this.gaps[gaps] || (this.gaps[gaps] = this.gapRow());
@@ -120,8 +139,10 @@ export class VirtualRows {
       if (i > next) gap(i - next);
       const item = this.items[i];
       let tr = this.nodes.get(item.id);
-      if (!tr) tr = this.build(item);
-      else if (changed === null || changed.has(item.id)) this.update(tr, item);
+      if (!tr) {
+        tr = this.build(item);
+        built = true;
+      } else if (changed === null || changed.has(item.id)) this.update(tr, item);
       const index = String(i + 2); // the header is row 1
       if (tr.getAttribute("aria-rowindex") !== index) tr.setAttribute("aria-rowindex", index);
       kept.set(item.id, tr);
@@ -135,7 +156,7 @@ export class VirtualRows {
     if (this.table.getAttribute("aria-rowcount") !== count) this.table.setAttribute("aria-rowcount", count);
     // A focused row that left the list hands the focus to the list, never to nowhere.
     if (hadFocus && !this.body.contains(document.activeElement)) this.scroller.focus();
-    this.measure();
+    if (built) this.measureSoon();
   }
 
   /* The body's children become `nodes` without taking out the rows that stay:
@@ -159,15 +180,26 @@ export class VirtualRows {
     return tr;
   }
 
-  /* The gaps are as high as the rows they stand for: the rows' height as drawn. */
+  /* The gaps are as high as the rows they stand for: the rows' height as drawn,
+     read before the next frame, when the browser lays the page out anyway. */
+  measureSoon() {
+    if (this.measuring) return;
+    this.measuring = requestAnimationFrame(() => {
+      this.measuring = 0;
+      this.measure();
+    });
+  }
+
   measure() {
-    if (!this.gaps.length || !this.nodes.size) return;
+    this.head = this.table.tHead ? this.table.tHead.offsetHeight : 0;
+    if (!this.nodes.size) return;
     let sum = 0;
     for (const tr of this.nodes.values()) sum += tr.offsetHeight;
     const height = sum / this.nodes.size;
     if (!height || Math.abs(height - this.rowHeight) < 0.5) return;
     this.rowHeight = height;
     this.table.style.setProperty("--row", `${height}px`);
+    this.render(new Set());
   }
 
   /* Arrow keys, Page Up/Down, Home and End move the focus from row to row over
