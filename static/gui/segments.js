@@ -77,7 +77,7 @@ const Timeline = {
     // laid out again once per step, not at every update of a long leg.
     const needed = (t1 - t0) / 1000;
     if (!(this.span >= needed && this.span <= needed * 1.05)) {
-      this.span = Math.max(needed * 1.02, needed + 1);
+      this.span = needed * 1.02;
       this.track.style.setProperty("--span", String(this.span));
     }
     const t2 = t0 + this.span * 1000;

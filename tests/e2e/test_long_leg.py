@@ -10,7 +10,7 @@ import pytest
 from playwright.sync_api import expect
 
 from tests.support.browser import login
-from tests.support.screens import OVERFLOWING, VIEWPORTS
+from tests.support.screens import OVERFLOWING, SMALL, VIEWPORTS
 
 pytestmark = pytest.mark.e2e
 
@@ -41,6 +41,15 @@ segments.report_mode(Leg.objects.get(pk={leg}), "ito")
 """
 
 ROWS = "#segment-table tbody tr[data-id]"
+
+# Whether a rendered row lies inside the list's scrolled box (rendered for where it is now).
+ROW_IN_VIEW = """(sel) => {
+  const box = document.querySelector("#segments-section .table-wrap").getBoundingClientRect();
+  return Array.from(document.querySelectorAll(sel)).some((tr) => {
+    const r = tr.getBoundingClientRect();
+    return r.top >= box.top + 40 && r.bottom <= box.bottom;
+  });
+}"""
 
 
 def cell(page, label):
@@ -151,4 +160,26 @@ def test_the_focused_row_stays_when_it_scrolls_out_and_the_keys_reach_the_end(br
     # Space selects the focused row.
     page.keyboard.press(" ")
     expect(oldest).to_have_class(re.compile(r"\bselected\b"))
+    page.close()
+
+
+def test_a_long_list_on_a_phone_scrolls_only_up_and_down(browser, server):
+    ids = json.loads(
+        server.python(
+            LONG_LEG.replace('key="long-rover"', 'key="long-rover-phone"').format(masters=MASTERS)
+        )
+        .strip()
+        .splitlines()[-1]
+    )
+    page = browser.new_page(**VIEWPORTS["phone"])
+    login(page, server, "otto")
+    page.goto(f"{server.url}/?event={ids['event']}&shift={ids['shift']}&leg={ids['leg']}")
+    expect(cell(page, f"#{MASTERS}")).to_be_visible()
+    wrap = page.locator("#segments-section .table-wrap")
+    for top in ("0", "w.scrollHeight / 2", "w.scrollHeight"):
+        wrap.evaluate(f"(w) => {{ w.scrollTop = {top}; }}")
+        page.wait_for_function(ROW_IN_VIEW, arg=ROWS)
+        assert page.evaluate(OVERFLOWING) == []
+        assert page.evaluate(SMALL, ROWS) == []
+    expect(cell(page, "#1.1")).to_be_visible()
     page.close()
