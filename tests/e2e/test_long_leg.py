@@ -25,7 +25,7 @@ import json
 from events.models import PoseSource, Vehicle
 from events.services import logs, segments
 PoseSource.objects.get_or_create(key="gps", defaults={{"short_description": "GPS"}})
-v = Vehicle.objects.create(key="long-rover", short_description="Long Rover")
+v = Vehicle.objects.create(key={key!r}, short_description="Long Rover")
 e = logs.create_test_event(location="Long field", time_zone="Europe/Berlin")
 s = logs.create_shift(test_event=e, vehicle=v)
 leg = logs.create_leg(shift=s, weather_id="sunny")
@@ -58,6 +58,17 @@ def cell(page, label):
     return page.locator(ROWS).filter(has=number)
 
 
+def open_long_leg(browser, server, key: str, screen: str):
+    """A new leg of MASTERS masters for vehicle ``key``, opened in a page of ``screen``;
+    returns the page and the leg's ids."""
+    code = LONG_LEG.format(masters=MASTERS, key=key)
+    ids = json.loads(server.python(code).strip().splitlines()[-1])
+    page = browser.new_page(**VIEWPORTS[screen])
+    login(page, server, "otto")
+    page.goto(f"{server.url}/?event={ids['event']}&shift={ids['shift']}&leg={ids['leg']}")
+    return page, ids
+
+
 def in_view(row, wrap) -> bool:
     """Whether the row lies inside the list's scrolled box."""
     r, w = row.bounding_box(), wrap.bounding_box()
@@ -67,10 +78,7 @@ def in_view(row, wrap) -> bool:
 
 
 def test_a_long_leg_renders_the_rows_in_view_and_a_take_over_touches_one_row(browser, server, shot):
-    ids = json.loads(server.python(LONG_LEG.format(masters=MASTERS)).strip().splitlines()[-1])
-    page = browser.new_page(**VIEWPORTS["tablet"])
-    login(page, server, "otto")
-    page.goto(f"{server.url}/?event={ids['event']}&shift={ids['shift']}&leg={ids['leg']}")
+    page, ids = open_long_leg(browser, server, "long-rover", "tablet")
     expect(page.locator("#live-status")).to_have_text("live", timeout=LIVE)
     table = page.locator("#segment-table")
     # The whole list's rows and the header row, for a screen reader.
@@ -131,16 +139,7 @@ def test_a_long_leg_renders_the_rows_in_view_and_a_take_over_touches_one_row(bro
 
 
 def test_the_focused_row_stays_when_it_scrolls_out_and_the_keys_reach_the_end(browser, server):
-    ids = json.loads(
-        server.python(
-            LONG_LEG.replace('key="long-rover"', 'key="long-rover-keys"').format(masters=MASTERS)
-        )
-        .strip()
-        .splitlines()[-1]
-    )
-    page = browser.new_page(**VIEWPORTS["laptop"])
-    login(page, server, "otto")
-    page.goto(f"{server.url}/?event={ids['event']}&shift={ids['shift']}&leg={ids['leg']}")
+    page, _ = open_long_leg(browser, server, "long-rover-keys", "laptop")
     newest = cell(page, f"#{MASTERS}")
     expect(newest).to_be_visible()
     wrap = page.locator("#segments-section .table-wrap")
@@ -164,16 +163,7 @@ def test_the_focused_row_stays_when_it_scrolls_out_and_the_keys_reach_the_end(br
 
 
 def test_a_long_list_on_a_phone_scrolls_only_up_and_down(browser, server):
-    ids = json.loads(
-        server.python(
-            LONG_LEG.replace('key="long-rover"', 'key="long-rover-phone"').format(masters=MASTERS)
-        )
-        .strip()
-        .splitlines()[-1]
-    )
-    page = browser.new_page(**VIEWPORTS["phone"])
-    login(page, server, "otto")
-    page.goto(f"{server.url}/?event={ids['event']}&shift={ids['shift']}&leg={ids['leg']}")
+    page, _ = open_long_leg(browser, server, "long-rover-phone", "phone")
     expect(cell(page, f"#{MASTERS}")).to_be_visible()
     wrap = page.locator("#segments-section .table-wrap")
     for top in ("0", "w.scrollHeight / 2", "w.scrollHeight"):
