@@ -14,6 +14,7 @@ import { Live, onSelectedLeg } from "./live.js";
 import { Collector } from "./collector.js";
 import { keepLeg, keptLeg } from "./lastknown.js";
 import { openSegmentDialog } from "./segment-dialog.js";
+import { VirtualRows } from "./virtual-rows.js";
 
 /* The leg's AUTO/ITO bars over a time axis; ITO bars take their reason's colour and
  * stripes, and say what they are in words where they are wide enough.  Each bar is
@@ -22,6 +23,7 @@ const Timeline = {
   bars: new Map(), // master id -> {key, b, x, w}: the bars on the strip and what they say
   track: null,
   axis: null,
+  span: null, // the seconds the strip stands for
   render() {
     const strip = $("#timeline");
     if (!strip) return;
@@ -62,18 +64,27 @@ const Timeline = {
       const key = JSON.stringify([className, color, text, label, target.id]);
       let bar = this.bars.get(m.id);
       if (!bar || bar.key !== key) bar = { key, b: this.bar(target.id, className, color, text, label) };
-      const x = String(((start - t0) / (t1 - t0)) * 100);
-      const w = String(Math.max(((end - start) / (t1 - t0)) * 100, 0.6));
-      if (bar.x !== x) bar.b.style.setProperty("--x", (bar.x = x));
-      if (bar.w !== w) bar.b.style.setProperty("--w", (bar.w = w));
+      // Seconds from the leg's start: a growing leg changes the strip's --span, not every bar.
+      const x = String((start - t0) / 1000);
+      const w = String((end - start) / 1000);
+      if (bar.x !== x) bar.b.style.setProperty("--from", (bar.x = x));
+      if (bar.w !== w) bar.b.style.setProperty("--length", (bar.w = w));
       shown.set(m.id, bar);
       return bar.b;
     });
     this.bars = shown;
+    // The strip reaches a little past now and grows in steps of 2 %: every bar is
+    // laid out again once per step, not at every update of a long leg.
+    const needed = (t1 - t0) / 1000;
+    if (!(this.span >= needed && this.span <= needed * 1.05)) {
+      this.span = needed * 1.02;
+      this.track.style.setProperty("--span", String(this.span));
+    }
+    const t2 = t0 + this.span * 1000;
     const kids = this.track.children;
     if (bars.length !== kids.length || bars.some((b, i) => kids[i] !== b)) this.track.replaceChildren(...bars);
-    // The time axis: start, middle and end of the leg so far.
-    [t0, (t0 + t1) / 2, t1].forEach((time, i) => {
+    // The time axis: start, middle and end of the strip.
+    [t0, (t0 + t2) / 2, t2].forEach((time, i) => {
       const text = fmtClock(new Date(time).toISOString());
       if (this.axis.children[i].textContent !== text) this.axis.children[i].textContent = text;
     });
@@ -163,7 +174,7 @@ function showRows(data) {
   state.segments = [];
   state.labels = {};
   state.shortLabels = {};
-  applyRows(data);
+  applyRows(data, null);
 }
 
 /* A dead link and nothing kept of this leg in this browser: said so, and read once the link is back. */
@@ -189,12 +200,12 @@ export function applySegments(e) {
 }
 
 /* Rows with their labels and the leg's open take-over, as the server answers them. */
-function applyRows(answer) {
+function applyRows(answer, changed = new Set(answer.segments.map((s) => s.id))) {
   answer.segments.forEach(putSegment);
   Object.assign(state.labels, answer.labels);
   Object.assign(state.shortLabels, answer.short_labels);
   state.openTakeOver = answer.open_take_over ?? null;
-  renderSegments();
+  renderSegments(changed);
   drawTakeOvers();
   keepShownLeg();
 }
@@ -249,30 +260,23 @@ function visibleSegments() {
     .sort((a, b) => (a.start < b.start ? 1 : a.start > b.start ? -1 : b.id - a.id));
 }
 
-export function renderSegments() {
+/* The list shows the rows in view on a long leg (virtual-rows.js); `changed`
+ * names the segments a message touched, whose rows alone are written again
+ * (null: every rendered row, e.g. when durations or distances moved on). */
+export function renderSegments(changed = null) {
   renderMode();
   updateSegmentButtons();
   Timeline.render();
-  const tbody = $("#segment-table tbody");
   const rows = visibleSegments();
   $("#segments-empty").hidden = rows.length > 0 || !state.selected.leg;
-  // Only the rows whose words changed are built again, and the list is laid out
-  // again only when its order changed: a message costs the rows it touched.
-  const built = new Map();
-  const trs = rows.map((s) => {
-    const cells = segmentCells(s);
-    const key = JSON.stringify([cells, s.segment_type, s.parent, s.id === state.segment]);
-    const known = shownRows.get(s.id);
-    const tr = known && known.key === key ? known.tr : segmentRow(s, cells);
-    built.set(s.id, { key, tr });
-    return tr;
-  });
-  shownRows = built;
-  const same = trs.length === tbody.children.length && trs.every((tr, i) => tbody.children[i] === tr);
-  if (!same) tbody.replaceChildren(...trs);
+  segmentList().show(rows, changed);
 }
 
-let shownRows = new Map(); // segment id -> {key, tr}: the rows in the table and what they say
+let list = null;
+function segmentList() {
+  list ??= new VirtualRows({ table: $("#segment-table"), scroller: $("#segment-table").closest(".table-wrap"), build: segmentRow, update: updateRow });
+  return list;
+}
 
 function segmentCells(s) {
   const master = s.parent === null ? s.id : s.parent;
@@ -290,22 +294,43 @@ function segmentCells(s) {
   ];
 }
 
-function segmentRow(s, cells) {
+function segmentRow(s) {
   const tr = document.createElement("tr");
   tr.dataset.id = s.id;
-  tr.className = `${s.segment_type} ${s.parent === null ? "master" : "child"}${s.id === state.segment ? " selected" : ""}`;
-  tr.replaceChildren(...cells.map((c) => {
-    const td = document.createElement("td");
-    td.textContent = typeof c === "object" ? c.text : c;
-    if (typeof c === "object") td.title = c.title;
-    return td;
-  }));
-  tr.addEventListener("click", () => selectSegment(s.id === state.segment ? null : s.id));
+  // Focusable for the list's arrow keys (virtual-rows.js); the list itself is the tab stop.
+  tr.tabIndex = -1;
+  tr.append(...segmentCells(s).map(() => document.createElement("td")));
+  updateRow(tr, s);
+  const id = s.id;
+  tr.addEventListener("click", () => selectSegment(id === state.segment ? null : id));
   tr.addEventListener("dblclick", () => {
-    selectSegment(s.id);
-    openSegmentDialog(s.id);
+    selectSegment(id);
+    openSegmentDialog(id);
+  });
+  tr.addEventListener("keydown", (e) => {
+    if (e.key === "Enter") {
+      e.preventDefault();
+      selectSegment(id);
+      openSegmentDialog(id);
+    } else if (e.key === " ") {
+      e.preventDefault();
+      selectSegment(id === state.segment ? null : id);
+    }
   });
   return tr;
+}
+
+/* The row's words written again where they differ: the row keeps its node. */
+function updateRow(tr, s) {
+  const className = `${s.segment_type} ${s.parent === null ? "master" : "child"}${s.id === state.segment ? " selected" : ""}`;
+  if (tr.className !== className) tr.className = className;
+  segmentCells(s).forEach((c, i) => {
+    const td = tr.cells[i];
+    const text = typeof c === "object" ? c.text : c;
+    const title = typeof c === "object" ? c.title : "";
+    if (td.textContent !== text) td.textContent = text;
+    if (td.title !== title) td.title = title;
+  });
 }
 
 function selectSegment(id) {
@@ -313,14 +338,16 @@ function selectSegment(id) {
   saveUrl();
   updateSegmentButtons();
   Timeline.render();
-  $$("#segment-table tbody tr").forEach((tr) => tr.classList.toggle("selected", Number(tr.dataset.id) === id));
+  $$("#segment-table tbody tr[data-id]").forEach((tr) => tr.classList.toggle("selected", Number(tr.dataset.id) === id));
+  // Chosen elsewhere (the timeline, a shared link): the list shows its row.
+  if (id !== null) segmentList().reveal(id);
   const s = byId(state.segments, id);
   const master = s ? (s.parent === null ? s.id : s.parent) : null;
   gpsMap.select(master);
   localMap.select(master);
 }
 
-$("#ito-only").addEventListener("change", renderSegments);
+$("#ito-only").addEventListener("change", () => renderSegments());
 
 async function segmentAction(fn) {
   clearError();
@@ -424,7 +451,7 @@ $("#segment-end").addEventListener("click", () => segmentAction(async () => {
 }));
 $("#segment-edit").addEventListener("click", () => segmentAction(async () => openSegmentDialog(requireSegment())));
 // The dialog's saves put their answers into the list (segment-dialog.js): shown once it closes.
-$("#segment-dialog").addEventListener("close", renderSegments);
+$("#segment-dialog").addEventListener("close", () => renderSegments());
 
 /* Distances come from the server (geodesic); the lines are drawn again from the
  * server's tracks when the feed said a track changed inside (a late batch) or
