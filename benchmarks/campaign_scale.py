@@ -231,7 +231,7 @@ def ingest(batches: int = 10, size: int = 1000) -> float:
     """Poses/s of record_poses into a live segment of an open leg."""
     from events.services import logs, segments
     from events.services.segments import GpsPosition
-    from telemetry.services.recording import GpsFix, record_poses
+    from telemetry.services.pose_writes import GpsFix, record_poses
 
     vehicle, _ = Vehicle.objects.get_or_create(key="live", defaults={"short_description": "Live"})
     event = TestEvent.objects.create(location="live", start=datetime.now(UTC) - timedelta(hours=1))

@@ -17,7 +17,7 @@ from exchange.importer.session import ImportSession
 from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 from telemetry.pictures import MAP_FORMATS, PHOTO_FORMATS, checked_picture
 from telemetry.services.map_images import check_map_placement
-from telemetry.services.recording import GpsFix, MapPose
+from telemetry.services.pose_writes import GpsFix, MapPose
 from telemetry.services.segment_figures import measure_figures
 from telemetry.storage.keys import GPS, LOCAL
 

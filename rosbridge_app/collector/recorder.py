@@ -37,7 +37,7 @@ from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.events import Event
 from telemetry.services.attachments import attach_image, attach_recording
 from telemetry.services.map_images import MapPicture, record_maps
-from telemetry.services.recording import GpsFix, MapPose, record_local_poses, record_poses
+from telemetry.services.pose_writes import GpsFix, MapPose, record_local_poses, record_poses
 
 log = logging.getLogger("ftt.collector")
 _MAP_PER_SHIFT = uuid.UUID("0c6f3d2e-57a4-4c57-9d53-3a7e4c1f2b90")

@@ -20,7 +20,7 @@ from telemetry.api import single_pose
 from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 from telemetry.selectors import distances, tracks
 from telemetry.selectors import maps as map_selectors
-from telemetry.services import attachments, map_images, recording
+from telemetry.services import attachments, map_images, pose_writes
 from telemetry.storage import keys
 
 # --- filters ------------------------------------------------------------------------------
@@ -110,7 +110,7 @@ class PoseViewSet(RobotDataViewSet):
         return self.store_batch(
             request,
             s.PoseBatchSerializer,
-            lambda segment, poses, pose_source=None: recording.record_poses(
+            lambda segment, poses, pose_source=None: pose_writes.record_poses(
                 segment, [s.gps_fix(p) for p in poses], pose_source
             ),
         )
@@ -123,7 +123,7 @@ class LocalPoseViewSet(RobotDataViewSet):
     robot_actions = ("create", "batch")
 
     def create_with_service(self, data):
-        return recording.store_local_pose(data["segment"], s.map_pose(data))
+        return pose_writes.store_local_pose(data["segment"], s.map_pose(data))
 
     @extend_schema(request=s.LocalPoseBatchSerializer, responses={201: s.BatchResultSerializer})
     @action(detail=False, methods=["post"])
@@ -132,7 +132,7 @@ class LocalPoseViewSet(RobotDataViewSet):
         return self.store_batch(
             request,
             s.LocalPoseBatchSerializer,
-            lambda segment, poses: recording.record_local_poses(
+            lambda segment, poses: pose_writes.record_local_poses(
                 segment, [s.map_pose(p) for p in poses]
             ),
         )

@@ -15,7 +15,7 @@ from events.services import finality, logs, segments
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.recorder import GivenMaster, Recorder
 from telemetry.models import Image, LocalPose, MapImage, Pose
-from telemetry.services import recording
+from telemetry.services import pose_writes
 from telemetry.services.segment_figures import recount_figures
 from tests.support.images import map_form, png
 from tests.support.snapshot import snapshot
@@ -29,7 +29,7 @@ STAMP = datetime(2026, 5, 4, 10, 0, tzinfo=UTC)
 def final(leg):
     """A closed and finalised test event: one AUTO master with a pose, a judged criterion."""
     master = segments.report_mode(leg, SegmentType.AUTO).master
-    recording.store_poses(master, [recording.GpsFix(7.1, 50.6, robot_stamp=STAMP)])
+    pose_writes.store_poses(master, [pose_writes.GpsFix(7.1, 50.6, robot_stamp=STAMP)])
     event = leg.shift.test_event
     case = TestCase.objects.create(test_event=event, key="loop", title="Loop")
     criterion = Criterion.objects.create(
@@ -120,7 +120,7 @@ def test_an_administrator_amends_a_final_event_only_with_a_reason(final, api_cli
     refused = admin.post("/api/reports/judgements/", body, format="json")
     assert refused.status_code == 400 and "reason" in refused.json()["errors"]
     with authored(user=admin.user, reason="verdict from the written protocol"):
-        recording.store_poses(final["master"], [recording.GpsFix(7.3, 50.8, robot_stamp=STAMP)])
+        pose_writes.store_poses(final["master"], [pose_writes.GpsFix(7.3, 50.8, robot_stamp=STAMP)])
     assert Pose.objects.filter(segment=final["master"]).count() == 2
 
 
@@ -166,6 +166,6 @@ def test_a_single_pose_amends_a_final_event_only_with_an_administrators_reason(f
     assert refused.status_code == 400 and "reason" in refused.json()["errors"]
     assert Pose.objects.filter(segment=master).count() == 1
     with authored(user=admin.user, reason="a fix the spool kept"):
-        recording.store_pose(master.pk, recording.GpsFix(7.3, 50.8, robot_stamp=STAMP))
+        pose_writes.store_pose(master.pk, pose_writes.GpsFix(7.3, 50.8, robot_stamp=STAMP))
     assert Pose.objects.filter(segment=master).count() == 2
     assert recount_figures([master.pk]) == {}

@@ -19,8 +19,8 @@ from reports.selectors.statistics import event_statistics, figures
 from reports.services.pose_retention import thin_old_poses
 from telemetry.models import LocalPose, Pose, SegmentFigures, ThinnedSegment
 from telemetry.selectors.tracks import load_tracks
-from telemetry.services import recording
-from telemetry.services.recording import GpsFix, MapPose
+from telemetry.services import pose_writes
+from telemetry.services.pose_writes import GpsFix, MapPose
 from telemetry.services.segment_figures import differences
 from telemetry.storage.keys import GPS, LOCAL
 
@@ -47,8 +47,8 @@ def _drive(leg, start, count=600):
                             robot_stamp=stamp))  # fmt: skip
         local.append(MapPose(x=i * 0.5, y=20 * math.sin(i / 150) + 0.01 * math.sin(i * 1.7),
                              frame="map", robot_stamp=stamp))  # fmt: skip
-    recording.record_poses(master, fixes)
-    recording.record_local_poses(master, local)
+    pose_writes.record_poses(master, fixes)
+    pose_writes.record_local_poses(master, local)
     return master
 
 

@@ -12,7 +12,7 @@ from django.core.management import call_command
 from events.models import SegmentType
 from events.services import deletion, segments
 from telemetry.models import LocalPose, Pose
-from telemetry.services import recording
+from telemetry.services import pose_writes
 from telemetry.services.segment_figures import recount_figures
 from telemetry.storage.keys import GPS, LOCAL
 
@@ -26,17 +26,19 @@ def master(leg):
     """An AUTO master with five fixes and five local poses, a detour at the third."""
     master = segments.report_mode(leg, SegmentType.AUTO).master
     points = [(0, 0), (1, 0), (1, 5), (2, 0), (3, 0)]
-    recording.store_poses(
+    pose_writes.store_poses(
         master,
         [
-            recording.GpsFix(7.0 + x * 1e-4, 50.6 + y * 1e-4, robot_stamp=T0 + timedelta(seconds=i))
+            pose_writes.GpsFix(
+                7.0 + x * 1e-4, 50.6 + y * 1e-4, robot_stamp=T0 + timedelta(seconds=i)
+            )
             for i, (x, y) in enumerate(points)
         ],
     )
-    recording.record_local_poses(
+    pose_writes.record_local_poses(
         master,
         [
-            recording.MapPose(float(x), float(y), "map", robot_stamp=T0 + timedelta(seconds=i))
+            pose_writes.MapPose(float(x), float(y), "map", robot_stamp=T0 + timedelta(seconds=i))
             for i, (x, y) in enumerate(points)
         ],
     )

@@ -16,8 +16,8 @@ from events.services.segments import GpsPosition
 from telemetry import storage
 from telemetry.models import LocalPose, Pose, SegmentFigures
 from telemetry.models.poses import FixStatus
-from telemetry.services import pose_partitions, recording
-from telemetry.services.recording import GpsFix, MapPose
+from telemetry.services import pose_partitions, pose_writes
+from telemetry.services.pose_writes import GpsFix, MapPose
 from telemetry.storage import keys, postgresql
 from telemetry.storage.rows import Change
 
@@ -147,7 +147,7 @@ def test_local_tracks_carry_their_first_points_frame(adapter, master):
 
 
 def test_a_track_read_within_the_kept_span_reads_every_stored_point(adapter, master):
-    recording.record_poses(master, [*_fixes(3), GpsFix(7.5, 50.0)])
+    pose_writes.record_poses(master, [*_fixes(3), GpsFix(7.5, 50.0)])
     bounded = list(adapter.track_arrays([master.pk], keys.GPS, keys.GPS))
     every = list(adapter.track_arrays([master.pk], keys.GPS, None))
     assert [a[1].tolist() for a in bounded] == [a[1].tolist() for a in every]
