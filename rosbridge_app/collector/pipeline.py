@@ -2,7 +2,7 @@
 
 The live node calls these methods from its subscriptions, a bag import calls
 them for every message of a bag; both hand the resulting events to the same
-:class:`~rosbridge_app.collector.recorder.Recorder`.  ``at`` is always the
+:class:`~rosbridge_app.collector.event_writer.EventWriter`.  ``at`` is always the
 wall-clock time of the message (receive time live, record time in a bag).
 
 Rules implemented here:

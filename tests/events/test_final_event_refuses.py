@@ -13,7 +13,7 @@ from events.history import authored
 from events.models import Criterion, Judgement, Note, SegmentType, TestCase
 from events.services import finality, logs, segments
 from rosbridge_app.collector import events as ev
-from rosbridge_app.collector.recorder import GivenMaster, Recorder
+from rosbridge_app.collector.event_writer import EventWriter, GivenMaster
 from telemetry.models import Image, LocalPose, MapImage, Pose
 from telemetry.services import pose_writes
 from telemetry.services.segment_figures import recount_figures
@@ -140,18 +140,18 @@ def test_the_admin_adds_no_judgement_to_a_final_event_without_a_reason(
 
 
 def test_the_collector_stores_nothing_into_a_final_event(final, media_root):
-    """The collector's writer (the Recorder the live collector's writer loop
+    """The collector's writer (the EventWriter the live collector's writer loop
     applies its spool with), given a master of a final event by a late backlog."""
     before = snapshot()
     events = [
         ev.Event(ev.GPS, STAMP, {"lon": 7.2, "lat": 50.7}, uid=uuid.uuid4()),
         ev.Event(ev.LOCAL, STAMP, {"x": 1.0, "y": 2.0, "frame": "map"}, uid=uuid.uuid4()),
     ]
-    recorder = Recorder(lambda: None)
+    event_writer = EventWriter(lambda: None)
 
-    recorder.apply(events, GivenMaster(str(final["master"].uid)))
+    event_writer.apply(events, GivenMaster(str(final["master"].uid)))
 
-    assert recorder.skipped == 2
+    assert event_writer.skipped == 2
     assert snapshot() == before
     assert not LocalPose.objects.exists() and Pose.objects.count() == 1
     assert not Image.objects.exists() and not MapImage.objects.exists()

@@ -14,8 +14,8 @@ import pytest
 from events.models import Segment
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.disk_guard import FULL, OK, DiskGuard
+from rosbridge_app.collector.event_writer import EventWriter
 from rosbridge_app.collector.events import Event
-from rosbridge_app.collector.recorder import Recorder
 from rosbridge_app.collector.replay import ReplayOrder
 from rosbridge_app.collector.spool import Spool
 from rosbridge_app.collector.spooler import Spooler
@@ -92,9 +92,9 @@ def test_a_full_spool_holds_switches_and_thinned_positions_and_the_database_gets
     assert "Traceback" not in caplog.text
 
     # The database is reachable: everything goes to it, without any free disk.
-    recorder = Recorder(lambda: leg)
+    event_writer = EventWriter(lambda: leg)
     order = ReplayOrder(spool, 500, held=spooler.held)
-    while order.write_next(recorder):
+    while order.write_next(event_writer):
         pass
     assert len(spool) == 0 and len(spooler.held) == 0
     masters = Segment.objects.filter(leg=leg, parent__isnull=True).order_by("start")

@@ -59,7 +59,7 @@ def _unavailable(exc: BaseException) -> bool:
     return isinstance(exc, OperationalError | InterfaceError)
 
 
-class Recorder:
+class EventWriter:
     def __init__(self, leg_provider: Callable[[], Leg | None]):
         self.leg_provider = leg_provider
         self.state = {
@@ -394,14 +394,14 @@ class Recorder:
         transaction.on_commit(lambda: path.unlink(missing_ok=True))
 
 
-def record_events(leg: Leg, events: list[Event]) -> Recorder:
+def write_events(leg: Leg, events: list[Event]) -> EventWriter:
     """Store events into a fixed leg (a bag import): prepares and applies them."""
-    recorder = Recorder(lambda: leg)
+    event_writer = EventWriter(lambda: leg)
     batch = []
     for event in events:
         try:
             batch.append(event.prepare())
         except Exception as exc:
             log.warning(gettext("dropped a %s event: %s"), event.kind, exc)
-    recorder.apply(batch)
-    return recorder
+    event_writer.apply(batch)
+    return event_writer
