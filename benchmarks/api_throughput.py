@@ -443,7 +443,7 @@ def main():
                     GpsFix(7.0 + i * 1e-6, 50.0 + s * 1e-3, robot_stamp=at + timedelta(seconds=i))
                     for i in range(per)
                 ]
-                pose_writes.record_poses(master, fixes)
+                pose_writes.store_poses(master, fixes)
             return master
 
         master = timed(f"build {n:,} poses via services", build, n)

@@ -5,7 +5,7 @@ total) over a campaign of 100 test events, 1 000 shifts and 30 000 master
 segments; the poses are bulk-loaded with COPY, appended to every segment's
 track at each step.  At each step it prints:
 
-- batch ingest poses/s into a live segment (record_poses, 1 000-pose batches);
+- batch ingest poses/s into a live segment (store_poses, 1 000-pose batches);
 - statistics of the whole campaign (every run of every test event, read at
   once as the comparison reads them) and of one test event, and the
   comparison with growth fit of the whole campaign;
@@ -228,10 +228,10 @@ def timed(func, repeat: int = 3) -> float:
 
 
 def ingest(batches: int = 10, size: int = 1000) -> float:
-    """Poses/s of record_poses into a live segment of an open leg."""
+    """Poses/s of store_poses into a live segment of an open leg."""
     from events.services import logs, segments
     from events.services.segments import GpsPosition
-    from telemetry.services.pose_writes import GpsFix, record_poses
+    from telemetry.services.pose_writes import GpsFix, store_poses
 
     vehicle, _ = Vehicle.objects.get_or_create(key="live", defaults={"short_description": "Live"})
     event = TestEvent.objects.create(location="live", start=datetime.now(UTC) - timedelta(hours=1))
@@ -242,7 +242,7 @@ def ingest(batches: int = 10, size: int = 1000) -> float:
     started = time.perf_counter()
     for b in range(batches):
         fixes = [GpsFix(8.0 + (b * size + i) * 1e-6, 50.0) for i in range(size)]
-        total += record_poses(master, fixes)
+        total += store_poses(master, fixes)
     seconds = time.perf_counter() - started
     return total / seconds
 

@@ -46,7 +46,7 @@ def build(n: int) -> TestEvent:
     for s in range(SEGMENTS):
         at = t0 + timedelta(seconds=1 + s * per)
         master = segments.report_mode(leg, ("ito", "auto")[s % 2], at=at).master
-        pose_writes.record_poses(
+        pose_writes.store_poses(
             master,
             [
                 pose_writes.GpsFix(
@@ -57,7 +57,7 @@ def build(n: int) -> TestEvent:
                 for k in range(per)
             ],
         )
-        pose_writes.record_local_poses(
+        pose_writes.store_local_poses(
             master,
             [
                 pose_writes.MapPose(

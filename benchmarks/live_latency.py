@@ -46,7 +46,7 @@ for i in range({count}):
         kind = "segment"
     else:
         master = segments.report_mode(leg, "auto").master
-        pose_writes.record_poses(master, [pose_writes.GpsFix(7.0 + i * 1e-5, 50.0)] * 1)
+        pose_writes.store_poses(master, [pose_writes.GpsFix(7.0 + i * 1e-5, 50.0)] * 1)
         kind = "poses"
     print("WROTE", kind, time.time(), flush=True)
 """

@@ -88,8 +88,8 @@ for k in range({segments}):
         local.append(pose_writes.MapPose(x + noise[0] * 1e5, y + noise[1] * 1e5, "map",
                                        robot_stamp=stamp))
     for first in range(0, per, 10000):
-        pose_writes.record_poses(master, fixes[first:first + 10000])
-        pose_writes.record_local_poses(master, local[first:first + 10000])
+        pose_writes.store_poses(master, fixes[first:first + 10000])
+        pose_writes.store_local_poses(master, local[first:first + 10000])
 if connection.vendor == "postgresql":
     # What autovacuum does shortly after a bulk load: without statistics the
     # planner sorts 200 000 rows on disk instead of reading the time index.

@@ -36,8 +36,8 @@ from events.services.segments import (
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.events import Event
 from telemetry.services.attachments import attach_image, attach_recording
-from telemetry.services.map_images import MapPicture, record_maps
-from telemetry.services.pose_writes import GpsFix, MapPose, record_local_poses, record_poses
+from telemetry.services.map_images import MapPicture, store_maps
+from telemetry.services.pose_writes import GpsFix, MapPose, store_local_poses, store_poses
 
 log = logging.getLogger("ftt.collector")
 _MAP_PER_SHIFT = uuid.UUID("0c6f3d2e-57a4-4c57-9d53-3a7e4c1f2b90")
@@ -302,7 +302,7 @@ class EventWriter:
             )
             for e in fixes
         ]
-        record_poses(master, rows)
+        store_poses(master, rows)
 
     def _store_locals(self, master: Segment, poses: list[Event]) -> None:
         rows = [
@@ -316,7 +316,7 @@ class EventWriter:
             )
             for e in poses
         ]
-        record_local_poses(master, rows)
+        store_local_poses(master, rows)
 
     def _on_map(self, event: Event) -> None:
         self.state["map"] = event
@@ -330,7 +330,7 @@ class EventWriter:
         if not maps:
             return
         shift = self.leg.shift
-        record_maps(shift, [self._map_picture(event, shift) for event in maps])
+        store_maps(shift, [self._map_picture(event, shift) for event in maps])
         self.state["map_shift_id"] = shift.pk
 
     def _store_map(self, event: Event) -> None:

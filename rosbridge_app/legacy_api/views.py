@@ -155,7 +155,7 @@ class LocalPoseView(LegacyView):
             robot_stamp=stamp,
             uid=self.uid("local", segment.master_id, stamp, x, y),
         )
-        if pose_writes.record_local_poses(segment, [pose]):
+        if pose_writes.store_local_poses(segment, [pose]):
             return info("Created local_pose entry.")
         return info("This local pose is stored already.")
 
@@ -192,7 +192,7 @@ class MapImageView(LegacyView):
                     "KeyError", f"Missing field {name}: the shift has no map to take it from."
                 )
         frame = fields.text(data, "frame_id").lstrip("/") or (newest.frame if newest else "map")
-        _, stored = map_images.record_map(
+        _, stored = map_images.store_map(
             shift,
             png=greyscale_png(fields.picture(data, "image_data")),
             frame=frame,

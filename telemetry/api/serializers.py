@@ -265,7 +265,7 @@ class BatchResultSerializer(serializers.Serializer):
 
 class MapImageSerializer(ClientUidMixin, ServiceSerializer):
     # Which formats a map may be is the services' rule (telemetry.pictures.MAP_FORMATS,
-    # checked by record_map); its refusal answers 400 on this field.
+    # checked by store_map); its refusal answers 400 on this field.
     image = serializers.ImageField(
         help_text=f"The map as a {'/'.join(MAP_FORMATS)} file (multipart upload)."
     )

@@ -110,7 +110,7 @@ class PoseViewSet(RobotDataViewSet):
         return self.store_batch(
             request,
             s.PoseBatchSerializer,
-            lambda segment, poses, pose_source=None: pose_writes.record_poses(
+            lambda segment, poses, pose_source=None: pose_writes.store_poses(
                 segment, [s.gps_fix(p) for p in poses], pose_source
             ),
         )
@@ -132,7 +132,7 @@ class LocalPoseViewSet(RobotDataViewSet):
         return self.store_batch(
             request,
             s.LocalPoseBatchSerializer,
-            lambda segment, poses: pose_writes.record_local_poses(
+            lambda segment, poses: pose_writes.store_local_poses(
                 segment, [s.map_pose(p) for p in poses]
             ),
         )
@@ -153,7 +153,7 @@ class MapImageViewSet(RobotDataViewSet):
         data = dict(serializer.validated_data)
         upload = data.pop("image")
         shift = data.pop("shift")
-        map_image, stored = map_images.record_map(shift, png=upload.read(), **data)
+        map_image, stored = map_images.store_map(shift, png=upload.read(), **data)
         # An unchanged map (or a retried uid) is answered with the map already stored.
         code = status.HTTP_201_CREATED if stored else status.HTTP_200_OK
         return self.respond(map_image, code=code)

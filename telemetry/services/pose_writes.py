@@ -116,23 +116,16 @@ class MapPose:
         )
 
 
-def record_poses(
-    segment: Segment, fixes: list[GpsFix], pose_source: PoseSource | None = None
-) -> int:
-    """Store GPS fixes on the segment's master; returns how many were new."""
-    return len(store_poses(segment, fixes, pose_source))
-
-
 @transaction.atomic
 def store_poses(
     segment: Segment, fixes: list[GpsFix], pose_source: PoseSource | None = None
-) -> set[uuid.UUID]:
-    """Store GPS fixes on the segment's master; returns the uids of the new rows
+) -> int:
+    """Store GPS fixes on the segment's master; returns how many were new
     (known uids are skipped, so a retried batch stores nothing twice)."""
     for fix in fixes:
         fix.check()
     if not fixes:
-        return set()
+        return 0
     master = segment.master
     require_amendable(shifts__legs__segments=master.pk)
     source_id = pose_source_id(master, pose_source.pk if pose_source is not None else None)
@@ -140,7 +133,7 @@ def store_poses(
     new = {p.uid for p in stored}
     refuse_foreign(Pose, [as_uuid(f.uid) for f in fixes], new, segment_id=master.pk)
     keep_figures(master.pk, GPS, stored, announce=track_row(master, local=False))
-    return new
+    return len(new)
 
 
 def pose_source_id(master: Segment, sent: int | None) -> int | None:
@@ -207,7 +200,7 @@ def store_local_pose(segment: Segment, pose: MapPose) -> LocalPose:
     """Store one map-frame pose; the new row, or the row stored first under its
     uid on the same master (common.retries)."""
     uid = as_uuid(pose.uid)
-    if record_local_poses(segment, [pose]):
+    if store_local_poses(segment, [pose]):
         return LocalPose.objects.filter(uid=uid, segment_id=segment.master_id).latest("id")
     return stored_row(LocalPose, uid, segment_id=segment.master_id)
 
@@ -227,7 +220,8 @@ def connect() -> None:
 
 
 @transaction.atomic
-def record_local_poses(segment: Segment, poses: list[MapPose]) -> int:
+def store_local_poses(segment: Segment, poses: list[MapPose]) -> int:
+    """Store map-frame poses on the segment's master; returns how many were new."""
     master = segment.master
     for pose in poses:
         pose.check()

@@ -35,7 +35,7 @@ def field(server):
             leg = logs.create_leg(shift=shift, weather_id="sunny")
             auto = segments.report_mode(leg, "auto").master
             fixes = [pose_writes.GpsFix(7.0, 50.0 + i * 1e-4) for i in range(9)]
-            pose_writes.record_poses(auto, fixes)
+            pose_writes.store_poses(auto, fixes)
             segments.report_mode(leg, "ito", **({"reason": "safety"} if n == 0 else {}))
             events.append({"event": e.pk, "shift": leg.shift_id, "leg": leg.pk})
             if n == 0:

@@ -41,7 +41,7 @@ def two_events(server):
             s = logs.create_shift(test_event=e, vehicle=vehicle, at=t0)
             leg = logs.create_leg(shift=s, at=t0, weather_id="sunny")
             auto = segments.report_mode(leg, "auto", at=at(0), gps=GpsPosition(7.0, 50.0)).master
-            pose_writes.record_poses(
+            pose_writes.store_poses(
                 auto,
                 [
                     pose_writes.GpsFix(7.0 + i * 1e-4, 50.0 + n * 5e-5, robot_stamp=at(i))

@@ -39,10 +39,10 @@ def driven_leg(server):
         leg = logs.create_leg(shift=s, weather_id="sunny")
         first = segments.report_mode(leg, "auto").master
         fixes = [pose_writes.GpsFix(7.0, 50.0 + i * 1e-4) for i in range(20)]
-        pose_writes.record_poses(first, fixes)
+        pose_writes.store_poses(first, fixes)
         ito = segments.report_mode(leg, "ito").master
         fixes = [pose_writes.GpsFix(7.0 + i * 1e-4, 50.002) for i in range(5)]
-        pose_writes.record_poses(ito, fixes)
+        pose_writes.store_poses(ito, fixes)
         segments.report_mode(leg, "auto")
         child = ito.children.get()
         print(json.dumps({"event": e.pk, "shift": s.pk, "leg": leg.pk, "child": child.pk}))
@@ -165,7 +165,7 @@ def test_fleet_names_stay_on_the_map_on_a_phone(browser, server, shot):
             e = logs.create_test_event(location=f"Edge field {name}")
             leg = logs.create_leg(shift=logs.create_shift(test_event=e, vehicle=v))
             auto = segments.report_mode(leg, "auto").master
-            pose_writes.record_poses(auto, [pose_writes.GpsFix(lon, 50.3)])
+            pose_writes.store_poses(auto, [pose_writes.GpsFix(lon, 50.3)])
             collectors.heartbeat(f"edge-{name}", vehicle=v, logging=True, leg=leg)
         """
     )

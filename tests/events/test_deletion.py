@@ -14,9 +14,9 @@ from tests.support.images import PNG
 @pytest.fixture
 def recorded_leg(leg, person, media_root, django_capture_on_commit_callbacks):
     master = segments.report_mode(leg, "ito").master
-    pose_writes.record_poses(master, [pose_writes.GpsFix(7.1, 50.6)])
+    pose_writes.store_poses(master, [pose_writes.GpsFix(7.1, 50.6)])
     image = attachments.attach_image(master, content=PNG)
-    map_image, _ = map_images.record_map(
+    map_image, _ = map_images.store_map(
         leg.shift,
         png=PNG,
         frame="map",

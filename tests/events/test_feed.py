@@ -28,7 +28,7 @@ def last_id():
 def test_new_segment_and_poses_are_announced_with_their_leg(leg):
     before = last_id()
     master = start_auto(leg)
-    pose_writes.record_poses(master, [pose_writes.GpsFix(7.1, 50.6), pose_writes.GpsFix(7.2, 50.7)])
+    pose_writes.store_poses(master, [pose_writes.GpsFix(7.1, 50.6), pose_writes.GpsFix(7.2, 50.7)])
     events = list(Announcement.objects.filter(id__gt=before))
     assert [e.kind for e in events] == ["segment", "poses"]
     assert {e.leg_id for e in events} == {leg.pk}
@@ -39,9 +39,9 @@ def test_new_segment_and_poses_are_announced_with_their_leg(leg):
 def test_repeated_pose_batch_announces_nothing_new(leg):
     master = start_auto(leg)
     fix = pose_writes.GpsFix(7.1, 50.6)
-    pose_writes.record_poses(master, [fix])
+    pose_writes.store_poses(master, [fix])
     before = last_id()
-    pose_writes.record_poses(master, [fix])
+    pose_writes.store_poses(master, [fix])
     assert kinds_since(before) == []
 
 
@@ -91,13 +91,13 @@ def test_the_feed_carries_the_usable_points_as_stored_in_driving_order(leg):
 
     before = last_id()
     # Sent out of order, with a fix that has no position.
-    pose_writes.record_poses(master, [fix(7.3, 30), fix(7.1, 10), fix(7.2, 20, fix_status=-1)])
+    pose_writes.store_poses(master, [fix(7.3, 30), fix(7.1, 10), fix(7.2, 20, fix_status=-1)])
     (batch,) = Announcement.objects.filter(id__gt=before)
     assert batch.payload["points"] == [[7.1, 50.0], [7.3, 50.0]]
     before = last_id()
     pose_writes.store_pose(master.pk, fix(7.4, 40, fix_status=-1))
     assert kinds_since(before) == []  # nothing to draw
-    pose_writes.record_poses(master, [fix(7.15, 15), fix(7.25, 25)])
+    pose_writes.store_poses(master, [fix(7.15, 15), fix(7.25, 25)])
     (late,) = Announcement.objects.filter(id__gt=before)
     assert late.payload["changed"] is True and "points" not in late.payload
     before = last_id()

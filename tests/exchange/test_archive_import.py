@@ -437,7 +437,7 @@ def test_an_archive_lists_poses_in_driving_order_unstamped_last(leg, tmp_path, m
         master,
         [pose_writes.GpsFix(7.0 + i / 1e4, 50.6, robot_stamp=s) for i, s in enumerate(stamps)],
     )
-    pose_writes.record_local_poses(
+    pose_writes.store_local_poses(
         master,
         [pose_writes.MapPose(float(i), 0.0, "map", robot_stamp=s) for i, s in enumerate(stamps)],
     )

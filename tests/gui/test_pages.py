@@ -137,7 +137,7 @@ def test_behind_nginx_the_file_transfer_is_handed_to_the_proxy(client, leg, medi
 def test_leg_tracks_carry_points_and_distance(client, leg):
     member(client, "vera", "viewer")
     master = start_auto(leg)
-    pose_writes.record_poses(
+    pose_writes.store_poses(
         master, [pose_writes.GpsFix(7.0, 50.0), pose_writes.GpsFix(7.0, 50.001)]
     )
     data = client.get(f"/gui/api/legs/{leg.pk}/tracks/").json()
@@ -149,7 +149,7 @@ def test_leg_tracks_carry_points_and_distance(client, leg):
 def test_local_map_endpoint_places_the_newest_map(client, shift, media_root):
     member(client, "vera", "viewer")
     assert client.get(f"/gui/api/shifts/{shift.pk}/local-map/").json()["map"] is None
-    map_images.record_map(
+    map_images.store_map(
         shift,
         png=PNG,
         frame="map",

@@ -34,7 +34,7 @@ def test_the_pose_count_of_a_segment_says_how_many_fixes_without_a_position_it_l
 ):
     master = scenario.masters["A2"]
     without = [GpsFix(longitude=0.0055 + i / 1e4, latitude=0.0, fix_status=NO_FIX) for i in (0, 1)]
-    assert pose_writes.record_poses(master, without) == 2
+    assert pose_writes.store_poses(master, without) == 2
     pdf = render_report(scenario.event, ReportOptions(no_tiles=True, level="full")).pdf
     text = flat(pdf_text(pdf, tmp_path))
     rows = re.findall(

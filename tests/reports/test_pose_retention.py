@@ -47,8 +47,8 @@ def _drive(leg, start, count=600):
                             robot_stamp=stamp))  # fmt: skip
         local.append(MapPose(x=i * 0.5, y=20 * math.sin(i / 150) + 0.01 * math.sin(i * 1.7),
                              frame="map", robot_stamp=stamp))  # fmt: skip
-    pose_writes.record_poses(master, fixes)
-    pose_writes.record_local_poses(master, local)
+    pose_writes.store_poses(master, fixes)
+    pose_writes.store_local_poses(master, local)
     return master
 
 

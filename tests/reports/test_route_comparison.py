@@ -41,7 +41,7 @@ def drive(shift, points):
         pose_writes.GpsFix(lon, lat, robot_stamp=start + timedelta(seconds=i))
         for i, (lon, lat) in enumerate(points)
     ]
-    pose_writes.record_poses(master, fixes)
+    pose_writes.store_poses(master, fixes)
     return leg
 
 

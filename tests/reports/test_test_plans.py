@@ -36,7 +36,7 @@ def drive(leg, mode, points=(), reason=None):
             pose_writes.GpsFix(lon, lat, robot_stamp=master.start + timedelta(milliseconds=i))
             for i, (lon, lat) in enumerate(points)
         ]
-        pose_writes.record_poses(master, fixes)
+        pose_writes.store_poses(master, fixes)
     if reason:
         segments.annotate_segment(master.children.get(), ito_reason=reason)
     return master
@@ -159,7 +159,7 @@ def test_an_open_run_is_not_yet_judged_until_it_reaches_the_distance(api_client,
     assert verdict == "not yet"
     assert progress == f"run 1 of 3 · {length(line(11)):.0f} m of 50 m without intervention"
     more = [(7.1 + i * STEP, 50.6) for i in range(11, 31)]
-    pose_writes.record_poses(
+    pose_writes.store_poses(
         master,
         [
             pose_writes.GpsFix(lon, lat, robot_stamp=master.start + timedelta(seconds=1 + i))

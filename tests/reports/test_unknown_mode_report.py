@@ -27,9 +27,9 @@ def late_mode_event(vehicle, performer, media_root):
     shift = logs.create_shift(test_event=event, vehicle=vehicle, performer=performer, at=T0)
     leg = logs.create_leg(shift=shift, at=T0)
     unknown = segments.report_mode(leg, "unknown", at=at(0), gps=GpsPosition(0.0, 0.0)).master
-    pose_writes.record_poses(unknown, [GpsFix(longitude=STEP, latitude=0.0, robot_stamp=at(30))])
+    pose_writes.store_poses(unknown, [GpsFix(longitude=STEP, latitude=0.0, robot_stamp=at(30))])
     auto = segments.report_mode(leg, "auto", at=at(75), gps=GpsPosition(2 * STEP, 0.0)).master
-    pose_writes.record_poses(auto, [GpsFix(longitude=3 * STEP, latitude=0.0, robot_stamp=at(100))])
+    pose_writes.store_poses(auto, [GpsFix(longitude=3 * STEP, latitude=0.0, robot_stamp=at(100))])
     logs.close_leg(leg, at=at(135))
     return event
 

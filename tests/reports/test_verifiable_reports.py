@@ -67,14 +67,14 @@ def test_digest_reads_no_pose_and_changes_with_every_new_pose(scenario):
     assert verify(_stamp(event, digest)).ok
     # A fix without a position is covered too, and so is a local pose.
     fix = GpsFix(longitude=0.0055, latitude=0.0, fix_status=FixStatus.NO_FIX)
-    assert pose_writes.record_poses(master, [fix]) == 1
+    assert pose_writes.store_poses(master, [fix]) == 1
     after_fix = data_digest(event)
     assert after_fix != digest and not verify(_stamp(event, digest)).ok
-    pose_writes.record_local_poses(master, [MapPose(x=1.0, y=2.0, frame="map")])
+    pose_writes.store_local_poses(master, [MapPose(x=1.0, y=2.0, frame="map")])
     assert data_digest(event) not in (digest, after_fix)
     # The same pose sent again is stored once: the digest stays.
     before_retry = data_digest(event)
-    assert pose_writes.record_poses(master, [fix]) == 0
+    assert pose_writes.store_poses(master, [fix]) == 0
     assert data_digest(event) == before_retry
 
 
@@ -84,7 +84,7 @@ def test_a_report_of_an_earlier_version_still_verifies(scenario):
     legacy = data_digest(event, legacy=True)
     assert legacy != data_digest(event)
     assert verify(_stamp(event, legacy)).ok
-    pose_writes.record_poses(scenario.masters["A2"], [GpsFix(longitude=0.0065, latitude=0.0)])
+    pose_writes.store_poses(scenario.masters["A2"], [GpsFix(longitude=0.0065, latitude=0.0)])
     verdict = verify(_stamp(event, legacy))
     assert not verdict.ok and "changed since the report" in verdict.message
 

@@ -24,7 +24,7 @@ def logging_robot(test_event, key, *, modes, fixes, logging=True):
         segments.report_mode(leg, mode, at=leg.start + timedelta(minutes=minute))
     master = leg.segments.filter(parent__isnull=True).order_by("-start").first()
     if fixes:
-        pose_writes.record_poses(master, fixes)
+        pose_writes.store_poses(master, fixes)
     collectors.heartbeat(f"{key}-collector", vehicle=vehicle, logging=logging, leg=leg)
     return vehicle, leg
 

@@ -287,10 +287,10 @@ for line in sys.stdin:
                 y += 5.56
                 fixes.append(pose_writes.GpsFix(lon, lat))
                 local.append(pose_writes.MapPose(x, y, "map", yaw=0.666))
-            pose_writes.record_poses(open_master(leg), fixes)
-            pose_writes.record_local_poses(open_master(leg), local)
+            pose_writes.store_poses(open_master(leg), fixes)
+            pose_writes.store_local_poses(open_master(leg), local)
         elif word == "map":
-            map_images.record_map(
+            map_images.store_map(
                 leg.shift, png=PNG, frame="map", width=2, height=2, resolution=40.0,
                 origin_x=-10.0, origin_y=-10.0,
             )

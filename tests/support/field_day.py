@@ -85,7 +85,7 @@ def field_day(start=T0, *, vehicle_key="husky", close=True, event=None):
             gps=GpsPosition(lon + index * 1e-4, lat),
             local=LocalPosition(float(index), -0.5, "map"),
         ).master
-        pose_writes.record_poses(
+        pose_writes.store_poses(
             master,
             [
                 pose_writes.GpsFix(
@@ -99,7 +99,7 @@ def field_day(start=T0, *, vehicle_key="husky", close=True, event=None):
                 for k in range(5)
             ],
         )
-        pose_writes.record_local_poses(
+        pose_writes.store_local_poses(
             master,
             [
                 pose_writes.MapPose(
@@ -118,7 +118,7 @@ def field_day(start=T0, *, vehicle_key="husky", close=True, event=None):
     )
     note = notes.add_note(child, text="stopped at the fence", author=person)
     notes.edit_note(note, text="stopped at the fence, post 4")
-    map_images.record_map(
+    map_images.store_map(
         shift,
         png=grey_png(200),
         frame="map",
@@ -158,7 +158,7 @@ def more_logging():
     for index, mode in enumerate(("auto", "ito")):
         t = at + timedelta(minutes=1 + index * 3)
         master = segments.report_mode(leg, mode, at=t, gps=GpsPosition(7.128, 50.616)).master
-        pose_writes.record_poses(
+        pose_writes.store_poses(
             master,
             [
                 pose_writes.GpsFix(longitude=7.128 + k * 1e-5, latitude=50.616, robot_stamp=t)

@@ -46,14 +46,14 @@ def drive(leg):
     leg.start = T0 - timedelta(minutes=1)
     leg.save(update_fields=["start"])
     a1 = segments.report_mode(leg, SegmentType.AUTO, at=_at(0), gps=GpsPosition(0.0, 0.0)).master
-    pose_writes.record_poses(
+    pose_writes.store_poses(
         a1, [GpsFix(0.001, 0.0, robot_stamp=_at(10)), GpsFix(0.002, 0.0, robot_stamp=_at(20))]
     )
     i1 = segments.report_mode(leg, SegmentType.ITO, at=_at(30), gps=GpsPosition(0.0021, 0.0)).master
     a2 = segments.report_mode(
         leg, SegmentType.AUTO, at=_at(60), gps=GpsPosition(0.0025, 0.0)
     ).master
-    pose_writes.record_poses(
+    pose_writes.store_poses(
         a2, [GpsFix(0.003, 0.0, robot_stamp=_at(70)), GpsFix(0.004, 0.0, robot_stamp=_at(80))]
     )
     return {
@@ -109,7 +109,7 @@ def test_many_segments_measured_at_once_match_the_geodesic_step_by_step(leg):
             GpsFix(lon, lat, robot_stamp=_at(at + 1 + i)) for i, (lon, lat) in enumerate(poses)
         ]
         if fixes:
-            pose_writes.record_poses(master, fixes)
+            pose_writes.store_poses(master, fixes)
         return master
 
     empty = run(SegmentType.AUTO, 0)

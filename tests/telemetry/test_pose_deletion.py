@@ -35,7 +35,7 @@ def master(leg):
             for i, (x, y) in enumerate(points)
         ],
     )
-    pose_writes.record_local_poses(
+    pose_writes.store_local_poses(
         master,
         [
             pose_writes.MapPose(float(x), float(y), "map", robot_stamp=T0 + timedelta(seconds=i))

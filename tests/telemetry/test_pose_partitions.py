@@ -44,8 +44,8 @@ def _drive(master, count=240):
                robot_stamp=None if i % 50 == 0 else T0 + timedelta(seconds=i))
         for i in range(count)
     ]  # fmt: skip
-    pose_writes.record_poses(master, fixes)
-    pose_writes.record_local_poses(
+    pose_writes.store_poses(master, fixes)
+    pose_writes.store_local_poses(
         master,
         [MapPose(x=i, y=i * 0.5, frame="map", robot_stamp=T0 + timedelta(seconds=i))
          for i in range(count // 2)],
@@ -107,7 +107,7 @@ def test_migration_back_and_forth_keeps_every_pose_and_figure(leg):
     _assert_same(before, _state(event))
     assert recount_figures([master.pk]) == {}
     # New poses go on with new ids after the moved ones.
-    more = pose_writes.record_poses(master, [GpsFix(8.1, 50.0, robot_stamp=T0)])
+    more = pose_writes.store_poses(master, [GpsFix(8.1, 50.0, robot_stamp=T0)])
     assert more == 1 and Pose.objects.order_by("id").last().id > before[0][-1][0]
 
 
@@ -116,8 +116,8 @@ def test_a_resent_pose_is_stored_once_on_every_write_path(leg):
     fixes = _drive(master)
     count = Pose.objects.count()
     # The batch again: small batches (one statement) and big ones (COPY).
-    assert pose_writes.record_poses(master, fixes[:10]) == 0
-    assert pose_writes.record_poses(master, fixes) == 0
+    assert pose_writes.store_poses(master, fixes[:10]) == 0
+    assert pose_writes.store_poses(master, fixes) == 0
     _, created = pose_writes.store_pose(master.pk, fixes[5])
     assert not created
     assert Pose.objects.count() == count
@@ -130,7 +130,7 @@ def test_a_uid_reused_with_another_stamp_of_its_month_is_ignored(leg):
     count = Pose.objects.count()
     reused = GpsFix(9.0, 51.0, robot_stamp=fixes[1].robot_stamp + timedelta(seconds=5),
                     uid=fixes[1].uid)  # fmt: skip
-    assert pose_writes.record_poses(master, [reused]) == 0
+    assert pose_writes.store_poses(master, [reused]) == 0
     row, created = pose_writes.store_pose(master.pk, reused)
     assert not created and row.point.x == pytest.approx(fixes[1].longitude)
     assert Pose.objects.count() == count
@@ -147,7 +147,7 @@ def test_a_uid_reused_in_another_month_is_a_second_pose(leg):
     fixes = _drive(master)
     count = Pose.objects.count()
     reused = GpsFix(8.01, 50.0, robot_stamp=later, uid=fixes[1].uid)
-    assert pose_writes.record_poses(master, [reused]) == 1
+    assert pose_writes.store_poses(master, [reused]) == 1
     assert Pose.objects.count() == count + 1
     assert recount_figures([master.pk]) == {}
 
@@ -205,10 +205,10 @@ def _drive_with_blind_fixes(leg, *, every_fix_stamped=False):
     master = _master(leg)
     if every_fix_stamped:
         stamps = [T0 + timedelta(seconds=i) for i in range(240)]
-        pose_writes.record_poses(
+        pose_writes.store_poses(
             master, [GpsFix(8.0 + i * 1e-5, 50.0, robot_stamp=t) for i, t in enumerate(stamps)]
         )
-        pose_writes.record_local_poses(
+        pose_writes.store_local_poses(
             master,
             [MapPose(x=i, y=0.0, frame="map", robot_stamp=t) for i, t in enumerate(stamps[:120])],
         )
@@ -218,11 +218,11 @@ def _drive_with_blind_fixes(leg, *, every_fix_stamped=False):
         GpsFix(8.0, 50.0, fix_status=FixStatus.NO_FIX, robot_stamp=stamp)
         for stamp in (datetime(2026, 2, 3, tzinfo=UTC), None, T0 + timedelta(hours=1))
     ]
-    pose_writes.record_poses(master, no_fix)
+    pose_writes.store_poses(master, no_fix)
     blind = segments.report_mode(
         leg, SegmentType.ITO, at=T0 + timedelta(hours=2), gps=GpsPosition(8.1, 50.0)
     ).master
-    pose_writes.record_poses(blind, [GpsFix(8.1, 50.0, fix_status=FixStatus.NO_FIX)])
+    pose_writes.store_poses(blind, [GpsFix(8.1, 50.0, fix_status=FixStatus.NO_FIX)])
     return master, blind
 
 

@@ -84,22 +84,22 @@ def test_random_orders_duplicates_and_late_batches_keep_exact_figures(leg, seed)
     # Live batches in order, each also sent again (a retry after a lost answer).
     for begin in range(0, 60, 20):
         batch = live[begin : begin + 20]
-        pose_writes.record_poses(first, batch)
-        pose_writes.record_poses(first, batch[:5])
+        pose_writes.store_poses(first, batch)
+        pose_writes.store_poses(first, batch[:5])
     # Single poses, one of them twice, and a shuffled batch.
     for fix in live[60:70] + [live[65]]:
         pose_writes.store_pose(first.pk, fix)
     shuffled = live[70:]
     rnd.shuffle(shuffled)
-    pose_writes.record_poses(first, shuffled)
+    pose_writes.store_poses(first, shuffled)
     _assert_kept_equal_poses(leg)
     # The spool of an outage replayed: earlier stamps after later ones, in random batches.
     rnd.shuffle(late)
     for fix in late:
         fix.robot_stamp = fix.robot_stamp and fix.robot_stamp - timedelta(minutes=30)
-    pose_writes.record_poses(first, late[:20])
-    pose_writes.record_poses(first, late[20:])
-    pose_writes.record_local_poses(
+    pose_writes.store_poses(first, late[:20])
+    pose_writes.store_poses(first, late[20:])
+    pose_writes.store_local_poses(
         first, [MapPose(x=rnd.random() * 10, y=i * 0.5, frame="map",
                         robot_stamp=T0 + timedelta(seconds=rnd.randrange(100))) for i in range(30)]
     )  # fmt: skip
@@ -120,7 +120,7 @@ def test_random_orders_duplicates_and_late_batches_keep_exact_figures(leg, seed)
 
 def test_statistics_read_figures_not_poses(leg, test_event):
     master = _open_master(leg)
-    pose_writes.record_poses(master, _fixes(30, 3))
+    pose_writes.store_poses(master, _fixes(30, 3))
     with CaptureQueriesContext(connection) as queries:
         stats = event_statistics(test_event, GPS)
     assert not [q for q in queries if Pose._meta.db_table + '"' in q["sql"]]
@@ -133,7 +133,7 @@ def test_statistics_read_figures_not_poses(leg, test_event):
 
 def test_recount_command_reports_and_sets_right_a_difference(leg):
     master = _open_master(leg)
-    pose_writes.record_poses(master, _fixes(10, 4))
+    pose_writes.store_poses(master, _fixes(10, 4))
     call_command("ftt_recount_figures")
     SegmentFigures.objects.filter(segment=master, mode=GPS).update(length=1.0, points=3)
     with pytest.raises(CommandError):
@@ -144,14 +144,14 @@ def test_recount_command_reports_and_sets_right_a_difference(leg):
 
 def test_deleting_a_segment_deletes_its_figures(leg):
     master = _open_master(leg)
-    pose_writes.record_poses(master, _fixes(5, 5))
+    pose_writes.store_poses(master, _fixes(5, 5))
     Segment.objects.filter(pk=master.pk).delete()
     assert not SegmentFigures.objects.filter(segment_id=master.pk).exists()
 
 
 def test_import_merging_poses_into_a_track_measures_it_again(leg, tmp_path, media_root):
     master = _open_master(leg)
-    pose_writes.record_poses(master, _fixes(40, 6))
+    pose_writes.store_poses(master, _fixes(40, 6))
     export_events(tmp_path / "day.zip", select_events())
     # This installation lost every other pose; the archive brings them back in between.
     Pose.objects.filter(
@@ -167,7 +167,7 @@ def test_import_merging_poses_into_a_track_measures_it_again(leg, tmp_path, medi
 
 def _in_batches(master, share):
     for begin in range(0, len(share), 10):
-        pose_writes.record_poses(master, share[begin : begin + 10])
+        pose_writes.store_poses(master, share[begin : begin + 10])
 
 
 def _one_by_one(master, share):
@@ -208,8 +208,8 @@ def test_two_writers_on_one_segment_at_once(leg, send):
 @pytest.mark.django_db(transaction=True)
 def test_migration_measures_the_tracks_of_an_existing_database(leg):
     master = _open_master(leg)
-    pose_writes.record_poses(master, _fixes(30, 8))
-    pose_writes.record_local_poses(
+    pose_writes.store_poses(master, _fixes(30, 8))
+    pose_writes.store_local_poses(
         master, [MapPose(x=i, y=i * i * 0.1, frame="map") for i in range(5)]
     )
     kept = {(f.segment_id, f.mode): f for f in SegmentFigures.objects.all()}
@@ -226,7 +226,7 @@ def test_migration_measures_the_tracks_of_an_existing_database(leg):
 @pytest.mark.django_db(transaction=True)
 def test_migration_sums_the_uids_left_of_a_thinned_master_and_keeps_its_figures(leg):
     master = _open_master(leg)
-    pose_writes.record_poses(master, _fixes(40, 9))
+    pose_writes.store_poses(master, _fixes(40, 9))
     ThinnedSegment.objects.create(segment=master)
     ids = list(Pose.objects.filter(segment=master).order_by("id").values_list("id", flat=True))
     Pose.objects.filter(pk__in=ids[1:30:2]).delete()
@@ -246,7 +246,7 @@ def test_late_single_pose_in_the_middle_of_a_long_track_reads_only_its_neighbour
     fixes = _fixes(2000, 9)
     late = fixes.pop(1000)
     late.fix_status, late.robot_stamp = FixStatus.FIX, T0 + timedelta(seconds=1000)
-    pose_writes.record_poses(master, fixes)
+    pose_writes.store_poses(master, fixes)
     with CaptureQueriesContext(connection) as queries:
         pose_writes.store_pose(master.pk, late)
     # The track is not read again: one read of the pose table, of the late

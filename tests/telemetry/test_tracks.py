@@ -39,7 +39,7 @@ def test_points_are_ordered_by_robot_clock_and_no_fix_points_are_counted_apart(l
     leg.save(update_fields=["start"])
     a1 = segments.report_mode(leg, SegmentType.AUTO, at=_at(0), gps=GpsPosition(7.0, 50.0)).master
     # Sent out of order (a late batch from the collector's queue), one without a fix.
-    pose_writes.record_poses(
+    pose_writes.store_poses(
         a1,
         [
             GpsFix(7.003, 50.003, robot_stamp=_at(30)),
@@ -49,9 +49,9 @@ def test_points_are_ordered_by_robot_clock_and_no_fix_points_are_counted_apart(l
         ],
     )
     i1 = segments.report_mode(leg, SegmentType.ITO, at=_at(40), gps=GpsPosition(7.004, 50.0)).master
-    pose_writes.record_poses(i1, [GpsFix(7.6, 50.6, fix_status=FixStatus.NO_FIX)])
+    pose_writes.store_poses(i1, [GpsFix(7.6, 50.6, fix_status=FixStatus.NO_FIX)])
     # A pose without robot clock sorts after those with one, by arrival.
-    pose_writes.record_poses(a1, [GpsFix(7.0035, 50.0035)])
+    pose_writes.store_poses(a1, [GpsFix(7.0035, 50.0035)])
     received = Pose.objects.get(segment=a1, robot_stamp=None).received
 
     tracks = load_tracks([a1.pk, i1.pk])
@@ -69,7 +69,7 @@ def test_points_are_ordered_by_robot_clock_and_no_fix_points_are_counted_apart(l
 
 def test_local_points_come_in_driving_order_with_their_frame(leg):
     master = start_auto(leg)
-    pose_writes.record_local_poses(
+    pose_writes.store_local_poses(
         master,
         [
             pose_writes.MapPose(3.0, 30.0, "map", robot_stamp=_at(30)),
@@ -120,14 +120,14 @@ def _closed_segments_with_tracks(leg, count):
     for k in range(count):
         mode = SegmentType.AUTO if k % 2 == 0 else SegmentType.ITO
         master = segments.report_mode(leg, mode, at=_at(100 * k)).master
-        pose_writes.record_poses(
+        pose_writes.store_poses(
             master,
             [
                 GpsFix(7.0 + k * 1e-3 + i * 1e-5, 50.0, robot_stamp=_at(100 * k + i))
                 for i in range(50)
             ],
         )
-        pose_writes.record_local_poses(
+        pose_writes.store_local_poses(
             master,
             [
                 pose_writes.MapPose(k * 100.0 + i, 0.0, "map", robot_stamp=_at(100 * k + i))
@@ -162,8 +162,8 @@ def test_kept_tracks_are_the_tracks_and_a_late_pose_in_a_closed_segment_shows_up
     assert len(unchanged) == 1
 
     # A collector's spool replays a fix driven in the middle of the first segment.
-    pose_writes.record_poses(masters[0], [GpsFix(7.5, 50.5, robot_stamp=_at(10.5))])
-    pose_writes.record_local_poses(
+    pose_writes.store_poses(masters[0], [GpsFix(7.5, 50.5, robot_stamp=_at(10.5))])
+    pose_writes.store_local_poses(
         masters[0], [pose_writes.MapPose(-5.0, 1.0, "map", robot_stamp=_at(10.5))]
     )
     later = kept_tracks(masters)

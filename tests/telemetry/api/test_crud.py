@@ -24,7 +24,7 @@ class TestPoses(CrudTests):
     @pytest.fixture
     def instance(self, auto_master):
         fix = GpsFix(longitude=7.1, latitude=50.7)
-        pose_writes.record_poses(auto_master, [fix])
+        pose_writes.store_poses(auto_master, [fix])
         return Pose.objects.get(uid=fix.uid)
 
     @pytest.fixture
@@ -96,7 +96,7 @@ class TestPoses(CrudTests):
         assert not auto_master.poses.exists()
 
     def test_bounding_box_and_time_filters(self, api_client, auto_master):
-        pose_writes.record_poses(
+        pose_writes.store_poses(
             auto_master,
             [
                 GpsFix(7.0, 50.0, robot_stamp=_at(1)),
@@ -133,7 +133,7 @@ class TestLocalPoses(CrudTests):
     @pytest.fixture
     def instance(self, auto_master):
         pose = MapPose(x=1.0, y=2.0, frame="map")
-        pose_writes.record_local_poses(auto_master, [pose])
+        pose_writes.store_local_poses(auto_master, [pose])
         return LocalPose.objects.get(uid=pose.uid)
 
     @pytest.fixture
@@ -161,7 +161,7 @@ class TestMaps(CrudTests):
 
     @pytest.fixture
     def instance(self, shift, media_root):
-        map_image, _ = map_images.record_map(
+        map_image, _ = map_images.store_map(
             shift,
             png=png(),
             frame="map",

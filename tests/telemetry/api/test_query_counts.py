@@ -24,19 +24,19 @@ pytestmark = pytest.mark.spatialite
 
 def _poses(n, leg):
     master = start_auto(leg)
-    pose_writes.record_poses(master, [GpsFix(7 + i / 1000, 50.0) for i in range(n)])
+    pose_writes.store_poses(master, [GpsFix(7 + i / 1000, 50.0) for i in range(n)])
     segments.report_mode(leg, SegmentType.ITO)
 
 
 def _local_poses(n, leg):
     master = start_auto(leg)
-    pose_writes.record_local_poses(master, [MapPose(i, 0.0, "map") for i in range(n)])
+    pose_writes.store_local_poses(master, [MapPose(i, 0.0, "map") for i in range(n)])
     segments.report_mode(leg, SegmentType.ITO)
 
 
 def _maps(n, leg):
     for _ in range(n):
-        map_images.record_map(
+        map_images.store_map(
             leg.shift,
             png=png(colour=(len(leg.shift.maps.all()), 0, 0)),
             frame="map",

@@ -147,7 +147,7 @@ def test_local_tracks_carry_their_first_points_frame(adapter, master):
 
 
 def test_a_track_read_within_the_kept_span_reads_every_stored_point(adapter, master):
-    pose_writes.record_poses(master, [*_fixes(3), GpsFix(7.5, 50.0)])
+    pose_writes.store_poses(master, [*_fixes(3), GpsFix(7.5, 50.0)])
     bounded = list(adapter.track_arrays([master.pk], keys.GPS, keys.GPS))
     every = list(adapter.track_arrays([master.pk], keys.GPS, None))
     assert [a[1].tolist() for a in bounded] == [a[1].tolist() for a in every]
