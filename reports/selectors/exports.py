@@ -19,7 +19,7 @@ from events.models import Note, Segment, TestEvent
 from events.selectors.labels import segment_labels
 from reports.selectors.content import reasons_by_key
 from reports.selectors.statistics import event_runs
-from telemetry.storage.keys import GPS
+from telemetry.storage.keys import GPS_TRACK
 
 CSV_COLUMNS = (
     "test_event",
@@ -61,7 +61,7 @@ def _name(person) -> str:
     return person.name if person is not None else ""
 
 
-def segments_csv(event: TestEvent, mode: str = GPS) -> str:
+def segments_csv(event: TestEvent, mode: str = GPS_TRACK) -> str:
     tz = event.tzinfo
     runs = {run.id: run for run in event_runs(event, mode)}
     # The event's taxonomy: frozen for a final event (events.selectors.taxonomy).
@@ -136,7 +136,7 @@ def segments_csv(event: TestEvent, mode: str = GPS) -> str:
 def tracks_geojson(event: TestEvent) -> dict:
     tz = event.tzinfo
     features = []
-    for run in event_runs(event, GPS):
+    for run in event_runs(event, GPS_TRACK):
         if len(run.path_x) < 2:
             continue
         features.append(
@@ -175,7 +175,7 @@ def tracks_gpx(event: TestEvent) -> str:
     root = ET.Element(f"{{{GPX_NS}}}gpx", version="1.1", creator="FTT field test tool")
     meta = ET.SubElement(root, f"{{{GPX_NS}}}metadata")
     ET.SubElement(meta, f"{{{GPX_NS}}}name").text = str(event)
-    for run in event_runs(event, GPS):
+    for run in event_runs(event, GPS_TRACK):
         if run.track is None or not len(run.track):
             continue
         trk = ET.SubElement(root, f"{{{GPX_NS}}}trk")

@@ -216,9 +216,9 @@ class EventWriter:
         locals_: list[Event] = []
         self._maps = []
         for event in events:
-            if event.kind == ev.GPS:
+            if event.kind == ev.GPS_FIX:
                 fixes.append(event)
-            elif event.kind == ev.LOCAL:
+            elif event.kind == ev.LOCAL_POSE:
                 locals_.append(event)
             else:
                 if event.kind in ev.SEGMENT_CHANGES:

@@ -259,9 +259,9 @@ class TrackViewSet(viewsets.ViewSet):
         features = []
         # Whole legs: the distance rule needs each master's follower.
         masters = list(tracks.masters(**parent))
-        loaded = tracks.load_tracks([m.pk for m in masters], keys.GPS)
-        paths = distances.measured_paths(masters, keys.GPS, loaded)
-        for track in tracks.segment_tracks(masters, keys.GPS, loaded):
+        loaded = tracks.load_tracks([m.pk for m in masters], keys.GPS_TRACK)
+        paths = distances.measured_paths(masters, keys.GPS_TRACK, loaded)
+        for track in tracks.segment_tracks(masters, keys.GPS_TRACK, loaded):
             coordinates = track.coordinates()
             properties = _segment_properties(track.segment)
             properties["point_count"] = len(coordinates)
@@ -283,9 +283,9 @@ class LocalTrackViewSet(viewsets.ViewSet):
         result = []
         # Whole legs: the distance rule needs each master's follower.
         masters = list(tracks.masters(**parent))
-        loaded = tracks.load_tracks([m.pk for m in masters], keys.LOCAL)
-        paths = distances.measured_paths(masters, keys.LOCAL, loaded)
-        for track in tracks.segment_tracks(masters, keys.LOCAL, loaded):
+        loaded = tracks.load_tracks([m.pk for m in masters], keys.LOCAL_TRACK)
+        paths = distances.measured_paths(masters, keys.LOCAL_TRACK, loaded)
+        for track in tracks.segment_tracks(masters, keys.LOCAL_TRACK, loaded):
             item = _segment_properties(track.segment)
             item.update(
                 frame=track.frame,

@@ -144,8 +144,8 @@ def test_the_collector_stores_nothing_into_a_final_event(final, media_root):
     applies its spool with), given a master of a final event by a late backlog."""
     before = snapshot()
     events = [
-        ev.Event(ev.GPS, STAMP, {"lon": 7.2, "lat": 50.7}, uid=uuid.uuid4()),
-        ev.Event(ev.LOCAL, STAMP, {"x": 1.0, "y": 2.0, "frame": "map"}, uid=uuid.uuid4()),
+        ev.Event(ev.GPS_FIX, STAMP, {"lon": 7.2, "lat": 50.7}, uid=uuid.uuid4()),
+        ev.Event(ev.LOCAL_POSE, STAMP, {"x": 1.0, "y": 2.0, "frame": "map"}, uid=uuid.uuid4()),
     ]
     event_writer = EventWriter(lambda: None)
 

@@ -22,7 +22,7 @@ from telemetry.selectors.tracks import load_tracks
 from telemetry.services import pose_writes
 from telemetry.services.pose_writes import GpsFix, MapPose
 from telemetry.services.segment_figures import differences
-from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 
 pytestmark = pytest.mark.django_db
 
@@ -54,7 +54,7 @@ def _drive(leg, start, count=600):
 
 def _seen(event):
     """The event's statistics as the report prints them (runs and their sums)."""
-    runs = event_statistics(event, GPS).runs
+    runs = event_statistics(event, GPS_TRACK).runs
     return [(r.id, r.distance, r.pose_count, r.start, r.end) for r in runs], figures(runs)
 
 
@@ -85,7 +85,7 @@ def test_old_shifts_are_thinned_to_the_report_drawing_and_figures_stay(leg, othe
     new = _drive(other_leg, RECENT)
     event = leg.shift.test_event
     figures, statistics, digest = _figures(), _seen(event), data_digest(event)
-    tracks = {mode: load_tracks([old.pk, new.pk], mode) for mode in (GPS, LOCAL)}
+    tracks = {mode: load_tracks([old.pk, new.pk], mode) for mode in (GPS_TRACK, LOCAL_TRACK)}
     settings.FTT_POSE_RETENTION_MONTHS = 12
 
     call_command("ftt_pose_storage")
@@ -99,7 +99,7 @@ def test_old_shifts_are_thinned_to_the_report_drawing_and_figures_stay(leg, othe
     # A report built before the thinning still verifies: its digest covered the
     # uids as the figures kept them.
     assert data_digest(event) == digest
-    for mode, model in ((GPS, Pose), (LOCAL, LocalPose)):
+    for mode, model in ((GPS_TRACK, Pose), (LOCAL_TRACK, LocalPose)):
         thinned = load_tracks([old.pk, new.pk], mode)
         # The old shift keeps few points, first and last among them, and the
         # drawing moves by less than half a pixel of its map.

@@ -39,8 +39,8 @@ def test_the_robot_role_records_a_drive_and_cannot_read_accounts(leg, as_robot):
         [
             Event(ev.START, AT),
             Event(ev.MODE, AT + timedelta(seconds=1), {"mode": "auto"}),
-            Event(ev.GPS, AT + timedelta(seconds=2), {"lon": 7.1, "lat": 50.6}),
-            Event(ev.GPS, AT + timedelta(seconds=3), {"lon": 7.1001, "lat": 50.6}),
+            Event(ev.GPS_FIX, AT + timedelta(seconds=2), {"lon": 7.1, "lat": 50.6}),
+            Event(ev.GPS_FIX, AT + timedelta(seconds=3), {"lon": 7.1001, "lat": 50.6}),
         ]
     )
     master = Segment.objects.get(leg=leg, parent__isnull=True)
@@ -49,7 +49,7 @@ def test_the_robot_role_records_a_drive_and_cannot_read_accounts(leg, as_robot):
     # A burst big enough to be copied through a temporary table (COPY_FROM).
     EventWriter(lambda: leg).apply(
         [
-            Event(ev.GPS, AT + timedelta(seconds=4, milliseconds=i), {"lon": 7.1, "lat": 50.6})
+            Event(ev.GPS_FIX, AT + timedelta(seconds=4, milliseconds=i), {"lon": 7.1, "lat": 50.6})
             for i in range(COPY_FROM)
         ]
     )

@@ -21,7 +21,7 @@ from telemetry.selectors.distances import measured_paths, path_length
 from telemetry.selectors.tracks import masters
 from telemetry.services import pose_writes
 from telemetry.services.pose_writes import GpsFix
-from telemetry.storage.keys import GPS
+from telemetry.storage.keys import GPS_TRACK
 from tests.support.modes import start_auto
 
 pytestmark = pytest.mark.django_db
@@ -134,7 +134,7 @@ def test_many_segments_measured_at_once_match_the_geodesic_step_by_step(leg):
         last_lone_pose: None,
     }
 
-    paths = measured_paths(list(masters(leg=leg)), GPS)
+    paths = measured_paths(list(masters(leg=leg)), GPS_TRACK)
 
     for master, points in expected.items():
         if points is None:
@@ -143,4 +143,4 @@ def test_many_segments_measured_at_once_match_the_geodesic_step_by_step(leg):
         lons, lats = zip(*points, strict=True)
         _, _, steps = GEOD.inv(lons[:-1], lats[:-1], lons[1:], lats[1:])
         assert paths[master.pk].distance == pytest.approx(sum(steps), rel=1e-9, abs=1e-6), master
-        assert paths[master.pk].distance == path_length(lons, lats, GPS)
+        assert paths[master.pk].distance == path_length(lons, lats, GPS_TRACK)

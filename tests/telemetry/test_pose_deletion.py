@@ -14,7 +14,7 @@ from events.services import deletion, segments
 from telemetry.models import LocalPose, Pose
 from telemetry.services import pose_writes
 from telemetry.services.segment_figures import recount_figures
-from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 
 pytestmark = pytest.mark.django_db
 
@@ -61,7 +61,7 @@ def _length(master, mode) -> float:
 
 
 @pytest.mark.parametrize(
-    "model, mode, url", [(Pose, GPS, "poses"), (LocalPose, LOCAL, "local-poses")]
+    "model, mode, url", [(Pose, GPS_TRACK, "poses"), (LocalPose, LOCAL_TRACK, "local-poses")]
 )
 def test_a_pose_deleted_through_the_api_leaves_exact_figures(master, api_client, model, mode, url):
     before = _length(master, mode)
@@ -76,7 +76,7 @@ def test_a_pose_deleted_through_the_api_leaves_exact_figures(master, api_client,
 def test_poses_deleted_in_the_admin_leave_exact_figures(master, client, django_user_model):
     client.force_login(django_user_model.objects.create_superuser("root", password="pw"))
     detour = _detour(Pose, master)
-    before = _length(master, GPS)
+    before = _length(master, GPS_TRACK)
 
     answer = client.post(f"/admin/telemetry/pose/{detour.pk}/delete/", {"post": "yes"})
     assert answer.status_code == 302
@@ -85,7 +85,7 @@ def test_poses_deleted_in_the_admin_leave_exact_figures(master, client, django_u
     assert client.post("/admin/telemetry/pose/", chosen).status_code == 302
 
     assert Pose.objects.filter(segment=master).count() == 3
-    assert _length(master, GPS) < before
+    assert _length(master, GPS_TRACK) < before
     _recount_finds_nothing(master)
 
 

@@ -21,7 +21,7 @@ from telemetry.selectors.tracks import load_tracks
 from telemetry.services import pose_partitions, pose_writes
 from telemetry.services.pose_writes import GpsFix, MapPose
 from telemetry.services.segment_figures import differences, recount_figures
-from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 from telemetry.storage.postgresql import gps_tracks_plan
 
 pytestmark = pytest.mark.django_db
@@ -58,7 +58,7 @@ def _state(event, *, uid_sum=True):
     (``uid_sum=False``: a schema from before the figures kept one)."""
     rows = SegmentFigures.objects.all() if uid_sum else SegmentFigures.objects.defer("uid_sum")
     kept = {(f.segment_id, f.mode): f for f in rows}
-    runs = event_statistics(event, GPS).runs
+    runs = event_statistics(event, GPS_TRACK).runs
     return (
         sorted(Pose.objects.values_list("id", "uid", "robot_stamp")),
         sorted(LocalPose.objects.values_list("id", "uid", "x")),
@@ -233,13 +233,13 @@ def test_tracks_read_within_the_kept_span_are_those_of_every_pose(leg, every_fix
     outside the span, and a master with such fixes only included."""
     master, blind = _drive_with_blind_fixes(leg, every_fix_stamped=every_fix_stamped)
     ids = [master.pk, blind.pk]
-    for mode in (GPS, LOCAL):
+    for mode in (GPS_TRACK, LOCAL_TRACK):
         bounded = load_tracks(ids, mode)
         every = load_tracks(ids, mode, within_kept_span=False)
         assert bounded.keys() == every.keys()
         for pk, track in every.items():
             assert _as_read(bounded[pk]) == _as_read(track)
-    gps, local = load_tracks(ids, GPS), load_tracks(ids, LOCAL)
+    gps, local = load_tracks(ids, GPS_TRACK), load_tracks(ids, LOCAL_TRACK)
     assert (len(gps[master.pk]), gps[master.pk].no_fix) == (240, 3)
     assert (len(gps[blind.pk]), gps[blind.pk].no_fix) == (0, 1)
     assert local.keys() == {master.pk} and len(local[master.pk]) == 120
@@ -250,7 +250,7 @@ def test_tracks_read_within_the_kept_span_are_those_of_every_pose(leg, every_fix
 def test_a_track_read_reads_the_months_its_kept_span_covers(leg, every_fix_stamped):
     master, blind = _drive_with_blind_fixes(leg, every_fix_stamped=every_fix_stamped)
     assert len(load_tracks([master.pk])[master.pk]) == 240
-    plan = "\n".join(gps_tracks_plan([master.pk, blind.pk], GPS))
+    plan = "\n".join(gps_tracks_plan([master.pk, blind.pk], GPS_TRACK))
     table = Pose._meta.db_table
     # Not February, where a fix without a position lies, nor the months
     # before; the default partition (poses without the robot's clock) only

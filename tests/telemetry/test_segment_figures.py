@@ -31,7 +31,7 @@ from telemetry.services.segment_figures import (
     measure_figures,
     recount_figures,
 )
-from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 
 # On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
 pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]
@@ -63,7 +63,7 @@ def _open_master(leg, lon=8.0):
 def _assert_kept_equal_poses(leg):
     ids = [m.pk for m in masters(leg=leg)]
     assert recount_figures(ids) == {}
-    for mode in (GPS, LOCAL):
+    for mode in (GPS_TRACK, LOCAL_TRACK):
         kept = kept_distances(list(masters(leg=leg)), mode)
         measured = {
             pk: p.distance for pk, p in measured_paths(list(masters(leg=leg)), mode).items()
@@ -107,14 +107,14 @@ def test_random_orders_duplicates_and_late_batches_keep_exact_figures(leg, seed)
     segments.report_mode(leg, SegmentType.ITO, at=T0 + timedelta(minutes=5),
                          gps=GpsPosition(8.002, 50.0))  # fmt: skip
     _assert_kept_equal_poses(leg)
-    kept = SegmentFigures.objects.get(segment=first, mode=GPS)
+    kept = SegmentFigures.objects.get(segment=first, mode=GPS_TRACK)
     usable = Pose.objects.filter(segment=first).exclude(fix_status=FixStatus.NO_FIX)
     assert (
         kept.points == usable.count()
         and kept.no_fix == Pose.objects.filter(segment=first).count() - kept.points
     )
     assert displayed_distances(list(masters(leg=leg)))[first.pk] == pytest.approx(
-        measured_paths(list(masters(leg=leg)), GPS)[first.pk].distance, abs=TOLERANCE_M
+        measured_paths(list(masters(leg=leg)), GPS_TRACK)[first.pk].distance, abs=TOLERANCE_M
     )
 
 
@@ -122,20 +122,20 @@ def test_statistics_read_figures_not_poses(leg, test_event):
     master = _open_master(leg)
     pose_writes.store_poses(master, _fixes(30, 3))
     with CaptureQueriesContext(connection) as queries:
-        stats = event_statistics(test_event, GPS)
+        stats = event_statistics(test_event, GPS_TRACK)
     assert not [q for q in queries if Pose._meta.db_table + '"' in q["sql"]]
     run = stats.runs[0]
     assert run.distance == pytest.approx(
-        measured_paths([master], GPS)[master.pk].distance, abs=TOLERANCE_M
+        measured_paths([master], GPS_TRACK)[master.pk].distance, abs=TOLERANCE_M
     )
-    assert run.pose_count == SegmentFigures.objects.get(segment=master, mode=GPS).points
+    assert run.pose_count == SegmentFigures.objects.get(segment=master, mode=GPS_TRACK).points
 
 
 def test_recount_command_reports_and_sets_right_a_difference(leg):
     master = _open_master(leg)
     pose_writes.store_poses(master, _fixes(10, 4))
     call_command("ftt_recount_figures")
-    SegmentFigures.objects.filter(segment=master, mode=GPS).update(length=1.0, points=3)
+    SegmentFigures.objects.filter(segment=master, mode=GPS_TRACK).update(length=1.0, points=3)
     with pytest.raises(CommandError):
         call_command("ftt_recount_figures")
     call_command("ftt_recount_figures", "--fix")
@@ -218,7 +218,7 @@ def test_migration_measures_the_tracks_of_an_existing_database(leg):
     executor.loader.build_graph()
     executor.migrate(executor.loader.graph.leaf_nodes())
     again = {(f.segment_id, f.mode): f for f in SegmentFigures.objects.all()}
-    assert again.keys() == kept.keys() == {(master.pk, GPS), (master.pk, LOCAL)}
+    assert again.keys() == kept.keys() == {(master.pk, GPS_TRACK), (master.pk, LOCAL_TRACK)}
     for key, figures in kept.items():
         assert differences(figures, again[key]) == []
 
@@ -230,12 +230,12 @@ def test_migration_sums_the_uids_left_of_a_thinned_master_and_keeps_its_figures(
     ThinnedSegment.objects.create(segment=master)
     ids = list(Pose.objects.filter(segment=master).order_by("id").values_list("id", flat=True))
     Pose.objects.filter(pk__in=ids[1:30:2]).delete()
-    kept = SegmentFigures.objects.get(segment=master, mode=GPS)
+    kept = SegmentFigures.objects.get(segment=master, mode=GPS_TRACK)
     executor = MigrationExecutor(connection)
     executor.migrate([("telemetry", "0014_tracks_read_in_one_statement")])
     executor.loader.build_graph()
     executor.migrate(executor.loader.graph.leaf_nodes())
-    again = SegmentFigures.objects.get(segment=master, mode=GPS)
+    again = SegmentFigures.objects.get(segment=master, mode=GPS_TRACK)
     left = Pose.objects.filter(segment=master).values_list("uid", flat=True)
     assert again.uid_sum == uid_sums.combined(uid_sums.uid_sum(left)) != kept.uid_sum
     assert differences(kept, again) == [f"uid_sum: {kept.uid_sum!r} != {again.uid_sum!r}"]
@@ -258,7 +258,7 @@ def test_late_single_pose_in_the_middle_of_a_long_track_reads_only_its_neighbour
     ]
     assert len(reads) == 1 and reads[0].count("LIMIT 1") >= 2
     _assert_kept_equal_poses(leg)
-    kept = SegmentFigures.objects.get(segment=master, mode=GPS)
+    kept = SegmentFigures.objects.get(segment=master, mode=GPS_TRACK)
     assert (
         kept.points
         == Pose.objects.filter(segment=master).exclude(fix_status=FixStatus.NO_FIX).count()

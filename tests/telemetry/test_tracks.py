@@ -21,7 +21,7 @@ from telemetry.selectors.track_drawing import drawn, fit_zoom
 from telemetry.selectors.tracks import Track, load_tracks
 from telemetry.services import pose_writes
 from telemetry.services.pose_writes import GpsFix
-from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 from tests.support.kept import forget_kept_tracks
 from tests.support.modes import start_auto
 
@@ -77,7 +77,7 @@ def test_local_points_come_in_driving_order_with_their_frame(leg):
             pose_writes.MapPose(2.0, 20.0, "map", robot_stamp=_at(20)),
         ],
     )
-    track = load_tracks([master.pk], LOCAL)[master.pk]
+    track = load_tracks([master.pk], LOCAL_TRACK)[master.pk]
     assert track.x.tolist() == [1.0, 2.0, 3.0] and track.y.tolist() == [10.0, 20.0, 30.0]
     assert np.allclose(track.t, [_at(s).timestamp() for s in (10, 20, 30)], atol=1e-3)
     assert track.frame == "map"
@@ -105,12 +105,12 @@ def test_fit_zoom_is_the_zoom_a_map_of_that_size_shows_the_whole_leg_at():
     # 0.01 degrees of longitude (about 700 m at 50 N) across 700 pixels needs zoom 16.6:
     # the whole leg shows at 16; twice the pixels take one zoom more.
     track = Track(1, np.array([7.0, 7.01]), np.array([50.0, 50.0]), np.zeros(2))
-    assert fit_zoom(GPS, [track], 700, 500) == 16
-    assert fit_zoom(GPS, [track], 1400, 1000) == 17
+    assert fit_zoom(GPS_TRACK, [track], 700, 500) == 16
+    assert fit_zoom(GPS_TRACK, [track], 1400, 1000) == 17
     # 100 m of map frame in 800 pixels: 8 pixels a metre, zoom 3 (2**3).
     local = Track(1, np.array([0.0, 100.0]), np.array([0.0, 50.0]), np.zeros(2))
-    assert fit_zoom(LOCAL, [local], 800, 800) == 3
-    assert fit_zoom(GPS, [], 800, 600) is None
+    assert fit_zoom(LOCAL_TRACK, [local], 800, 800) == 3
+    assert fit_zoom(GPS_TRACK, [], 800, 600) is None
 
 
 def _closed_segments_with_tracks(leg, count):
@@ -155,7 +155,7 @@ def test_kept_tracks_are_the_tracks_and_a_late_pose_in_a_closed_segment_shows_up
     first = kept_tracks(masters)
     with CaptureQueriesContext(connection) as unchanged:
         again = kept_tracks(masters)
-    for mode in (GPS, LOCAL):
+    for mode in (GPS_TRACK, LOCAL_TRACK):
         _same(first[mode], load_tracks(ids, mode))
         _same(again[mode], first[mode])
     # Nothing changed: only the poses are counted, no track is read again.
@@ -167,9 +167,9 @@ def test_kept_tracks_are_the_tracks_and_a_late_pose_in_a_closed_segment_shows_up
         masters[0], [pose_writes.MapPose(-5.0, 1.0, "map", robot_stamp=_at(10.5))]
     )
     later = kept_tracks(masters)
-    for mode in (GPS, LOCAL):
+    for mode in (GPS_TRACK, LOCAL_TRACK):
         _same(later[mode], load_tracks(ids, mode))
-    gps, local = later[GPS][masters[0].pk], later[LOCAL][masters[0].pk]
+    gps, local = later[GPS_TRACK][masters[0].pk], later[LOCAL_TRACK][masters[0].pk]
     assert len(gps) == len(local) == 51
     assert gps.x[10:13].tolist() == [7.0 + 10 * 1e-5, 7.5, 7.0 + 11 * 1e-5]
     assert local.x[10:13].tolist() == [10.0, -5.0, 11.0]

@@ -55,7 +55,7 @@ def _robot_second(t: datetime, second: int) -> list[Event]:
     for i in range(10):
         at = t + timedelta(seconds=second + i / 10)
         lat = 50.0 + (second * 10 + i) * 1e-5
-        out.append(Event(ev.GPS, at, {"lon": 7.0, "lat": lat, "robot_stamp": at}))
+        out.append(Event(ev.GPS_FIX, at, {"lon": 7.0, "lat": lat, "robot_stamp": at}))
     grid = {"frame": "map", "width": 2, "height": 2, "resolution": 0.1}
     grid.update(origin_x=0.0, origin_y=0.0, checksum=str(second))
     out.append(Event(ev.MAP, t + timedelta(seconds=second), grid, blob=NOISE))
@@ -106,7 +106,7 @@ def test_a_full_spool_holds_switches_and_thinned_positions_and_the_database_gets
     assert len(stamps) < 590  # thinned indeed
 
     # The spool has room again (the writer emptied it): back to it, said once.
-    events.put(Event(ev.GPS, t0 + timedelta(seconds=61), {"lon": 7.0, "lat": 51.0}))
+    events.put(Event(ev.GPS_FIX, t0 + timedelta(seconds=61), {"lon": 7.0, "lat": 51.0}))
     deadline = time.monotonic() + 10
     while guard.level != OK and time.monotonic() < deadline:
         spooler.spool_once(timeout=0.1)

@@ -110,7 +110,7 @@ def test_follows_a_new_leg_and_gives_a_new_shift_its_map(leg, media_root):
             Event(ev.START, at(0)),
             Event(ev.MODE, at(1), {"mode": "auto", "gps": [7.1, 50.6], "local": None}),
             Event(ev.MAP, at(1), grid, blob=png),
-            Event(ev.GPS, at(2), {"lon": 7.1, "lat": 50.6}),
+            Event(ev.GPS_FIX, at(2), {"lon": 7.1, "lat": 50.6}),
         ]
     )
     first = Segment.objects.get(leg=leg)
@@ -118,7 +118,7 @@ def test_follows_a_new_leg_and_gives_a_new_shift_its_map(leg, media_root):
     logs.close_leg(leg)
     event_writer.sync()
     assert event_writer.leg is None  # no open leg: keeps going, writes nothing
-    event_writer.apply([Event(ev.GPS, at(3), {"lon": 7.2, "lat": 50.6})])
+    event_writer.apply([Event(ev.GPS_FIX, at(3), {"lon": 7.2, "lat": 50.6})])
     assert Pose.objects.count() == 1
     new_shift = logs.create_shift(test_event=leg.shift.test_event, vehicle=vehicle)
     new_leg = logs.create_leg(shift=new_shift)
@@ -199,8 +199,8 @@ def test_interleaved_fixes_and_local_poses_land_in_the_segment_of_their_time(leg
         out = []
         for i in range(n):
             t = at(start + i * 0.1)
-            out.append(Event(ev.GPS, t, {"lon": 7.0, "lat": 50.0 + (start * 100 + i) * 1e-6}))
-            out.append(Event(ev.LOCAL, t, {"x": start * 100 + i, "y": 0.0, "frame": "map"}))
+            out.append(Event(ev.GPS_FIX, t, {"lon": 7.0, "lat": 50.0 + (start * 100 + i) * 1e-6}))
+            out.append(Event(ev.LOCAL_POSE, t, {"x": start * 100 + i, "y": 0.0, "frame": "map"}))
         return out
 
     batch = [Event(ev.START, at(0)), Event(ev.MODE, at(1), {"mode": "auto"})]

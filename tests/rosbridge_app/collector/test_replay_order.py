@@ -25,8 +25,8 @@ def _fixes(start: datetime, count: int) -> list[Event]:
     out = []
     for i in range(count):
         t = start + timedelta(seconds=0.1 * (i + 1))
-        out.append(Event(ev.GPS, t, {"lon": 7.0, "lat": 50.0 + i * 1e-6, "robot_stamp": t}))
-        out.append(Event(ev.LOCAL, t, {"x": float(i), "y": 0.0, "frame": "map", "yaw": 0.0}))
+        out.append(Event(ev.GPS_FIX, t, {"lon": 7.0, "lat": 50.0 + i * 1e-6, "robot_stamp": t}))
+        out.append(Event(ev.LOCAL_POSE, t, {"x": float(i), "y": 0.0, "frame": "map", "yaw": 0.0}))
     return out
 
 
