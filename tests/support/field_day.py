@@ -71,7 +71,7 @@ def field_day(start=T0, *, vehicle_key="husky", close=True, event=None):
         at=at + timedelta(minutes=2),
         default_pose_source=source,
         weather_id="drizzle",
-        pose_writes="/data/bags/leg-1.mcap",
+        recording="/data/bags/leg-1.mcap",
         note="wet grass",
     )
     lon, lat = 7.12796, 50.61568
