@@ -72,8 +72,8 @@ from rest_framework.test import APIClient  # noqa: E402
 from events.models import Segment, Vehicle  # noqa: E402
 from events.services import deletion, logs, segments  # noqa: E402
 from telemetry.models import Pose  # noqa: E402
-from telemetry.services import recording  # noqa: E402
-from telemetry.services.recording import GpsFix  # noqa: E402
+from telemetry.services import pose_writes  # noqa: E402
+from telemetry.services.pose_writes import GpsFix  # noqa: E402
 from telemetry.services.segment_figures import recount_figures  # noqa: E402
 
 SEGMENTS = 20
@@ -443,7 +443,7 @@ def main():
                     GpsFix(7.0 + i * 1e-6, 50.0 + s * 1e-3, robot_stamp=at + timedelta(seconds=i))
                     for i in range(per)
                 ]
-                recording.record_poses(master, fixes)
+                pose_writes.store_poses(master, fixes)
             return master
 
         master = timed(f"build {n:,} poses via services", build, n)

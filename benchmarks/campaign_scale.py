@@ -5,7 +5,7 @@ total) over a campaign of 100 test events, 1 000 shifts and 30 000 master
 segments; the poses are bulk-loaded with COPY, appended to every segment's
 track at each step.  At each step it prints:
 
-- batch ingest poses/s into a live segment (record_poses, 1 000-pose batches);
+- batch ingest poses/s into a live segment (store_poses, 1 000-pose batches);
 - statistics of the whole campaign (every run of every test event, read at
   once as the comparison reads them) and of one test event, and the
   comparison with growth fit of the whole campaign;
@@ -56,7 +56,7 @@ from events.models import Leg, Segment, Shift, TestEvent, Vehicle  # noqa: E402
 from telemetry.models import Pose  # noqa: E402
 from telemetry.selectors import distances  # noqa: E402
 from telemetry.selectors.tracks import load_tracks  # noqa: E402
-from telemetry.storage.keys import GPS, LOCAL  # noqa: E402
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK  # noqa: E402
 
 try:
     from telemetry.models import SegmentFigures
@@ -173,7 +173,7 @@ def _keep_figures(masters: list[Segment], per: int, added: dict[int, int]) -> No
     """The figures the write path would have kept, from the generated tracks
     (``added``: the uid sum of each master's poses just loaded)."""
     kept_sums = (
-        dict(SegmentFigures.objects.filter(mode=GPS).values_list("segment_id", "uid_sum"))
+        dict(SegmentFigures.objects.filter(mode=GPS_TRACK).values_list("segment_id", "uid_sum"))
         if uid_sum is not None
         else {}
     )
@@ -186,7 +186,8 @@ def _keep_figures(masters: list[Segment], per: int, added: dict[int, int]) -> No
         )
         rows.append(
             SegmentFigures(
-                segment_id=m.pk, mode=GPS, points=per, length=distances.path_length(lon, lat, GPS),
+                segment_id=m.pk, mode=GPS_TRACK, points=per,
+                length=distances.path_length(lon, lat, GPS_TRACK),
                 first_x=lon[0], first_y=lat[0], last_x=lon[-1], last_y=lat[-1],
                 last_robot_stamp=last, last_received=last,
                 last_id=None, first_stamp=first, last_stamp=last,
@@ -228,10 +229,10 @@ def timed(func, repeat: int = 3) -> float:
 
 
 def ingest(batches: int = 10, size: int = 1000) -> float:
-    """Poses/s of record_poses into a live segment of an open leg."""
+    """Poses/s of store_poses into a live segment of an open leg."""
     from events.services import logs, segments
     from events.services.segments import GpsPosition
-    from telemetry.services.recording import GpsFix, record_poses
+    from telemetry.services.pose_writes import GpsFix, store_poses
 
     vehicle, _ = Vehicle.objects.get_or_create(key="live", defaults={"short_description": "Live"})
     event = TestEvent.objects.create(location="live", start=datetime.now(UTC) - timedelta(hours=1))
@@ -242,7 +243,7 @@ def ingest(batches: int = 10, size: int = 1000) -> float:
     started = time.perf_counter()
     for b in range(batches):
         fixes = [GpsFix(8.0 + (b * size + i) * 1e-6, 50.0) for i in range(size)]
-        total += record_poses(master, fixes)
+        total += store_poses(master, fixes)
     seconds = time.perf_counter() - started
     return total / seconds
 
@@ -260,7 +261,7 @@ def segment_list(leg_masters: list[Segment]) -> None:
         from telemetry.selectors.kept_tracks import kept_tracks
 
         kept = kept_tracks(leg_masters)
-        distances.displayed_distances(leg_masters, kept[GPS], kept[LOCAL])
+        distances.displayed_distances(leg_masters, kept[GPS_TRACK], kept[LOCAL_TRACK])
 
 
 def sizes() -> dict:
@@ -300,17 +301,17 @@ def measure(step: int) -> dict:
     leg_masters = one_leg(one)
 
     def campaign_statistics():
-        runs_of = campaign_runs(events, GPS)
+        runs_of = campaign_runs(events, GPS_TRACK)
         return figures([run for e in events for run in runs_of[e.pk]])
 
     figures_now = {
         "ingest poses/s": ingest(),
         "statistics of the campaign s": timed(campaign_statistics),
-        "statistics of one event s": timed(lambda: event_statistics(one, GPS)),
-        "comparison + growth, all events s": timed(lambda: compare(events, GPS)),
+        "statistics of one event s": timed(lambda: event_statistics(one, GPS_TRACK)),
+        "comparison + growth, all events s": timed(lambda: compare(events, GPS_TRACK)),
         "PDF of one event s": timed(lambda: one_pdf(one), repeat=1),
         "segment list s": timed(lambda: segment_list(leg_masters)),
-        "one leg's tracks s": timed(lambda: load_tracks([m.pk for m in leg_masters], GPS)),
+        "one leg's tracks s": timed(lambda: load_tracks([m.pk for m in leg_masters], GPS_TRACK)),
     }
     millions = step / 1e6
     figures_now.update({f"{k} MB per M poses": v / 1e6 / millions for k, v in sizes().items()})

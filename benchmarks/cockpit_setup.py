@@ -7,7 +7,7 @@ import json
 from django.contrib.auth.models import Group, User
 from events.models import PoseSource, Vehicle
 from events.services import logs, segments
-from telemetry.services import recording
+from telemetry.services import pose_writes
 u = User.objects.create_user("otto", password={password!r})
 u.groups.add(Group.objects.get(name="operator"))
 PoseSource.objects.get_or_create(key="gps", defaults={{"short_description": "GPS"}})

@@ -307,10 +307,12 @@ def replay(bench, records: int) -> None:
     for i in range(records):
         if i % 2:
             data = {"x": i * 0.01, "y": 0.0, "yaw": 0.0, "frame": "map", "robot_stamp": at(i)}
-            events.append(ev.Event(ev.LOCAL, at(i), data))
+            events.append(ev.Event(ev.LOCAL_POSE, at(i), data))
         else:
             data = {"lon": 7.0, "lat": 50.0 + i * 1e-7, "alt": None, "status": 0}
-            events.append(ev.Event(ev.GPS, at(i), {**data, "accuracy": None, "robot_stamp": at(i)}))
+            events.append(
+                ev.Event(ev.GPS_FIX, at(i), {**data, "accuracy": None, "robot_stamp": at(i)})
+            )
     for start in range(0, len(events), 5000):
         spool.append(events[start : start + 5000])
     spool.close()

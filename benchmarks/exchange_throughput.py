@@ -31,7 +31,7 @@ from events.services import logs, segments  # noqa: E402
 from exchange.archive import open_archive  # noqa: E402
 from exchange.export import export_events  # noqa: E402
 from exchange.importer import import_bundle  # noqa: E402
-from telemetry.services import recording  # noqa: E402
+from telemetry.services import pose_writes  # noqa: E402
 
 SEGMENTS = 20
 
@@ -46,10 +46,10 @@ def build(n: int) -> TestEvent:
     for s in range(SEGMENTS):
         at = t0 + timedelta(seconds=1 + s * per)
         master = segments.report_mode(leg, ("ito", "auto")[s % 2], at=at).master
-        recording.record_poses(
+        pose_writes.store_poses(
             master,
             [
-                recording.GpsFix(
+                pose_writes.GpsFix(
                     longitude=7.0 + (s * per + k) * 1e-6,
                     latitude=50.0,
                     robot_stamp=at + timedelta(seconds=k),
@@ -57,10 +57,10 @@ def build(n: int) -> TestEvent:
                 for k in range(per)
             ],
         )
-        recording.record_local_poses(
+        pose_writes.store_local_poses(
             master,
             [
-                recording.MapPose(
+                pose_writes.MapPose(
                     x=k * 0.1, y=s, frame="map", robot_stamp=at + timedelta(seconds=k)
                 )
                 for k in range(per)

@@ -36,8 +36,8 @@ other = logs.create_leg(shift=s, weather_id="sunny")
 leg = logs.create_leg(shift=s, weather_id="sunny")
 for i in range({segments}):
     auto = segments.report_mode(leg, "auto").master
-    fixes = [recording.GpsFix(7.0 + i * 1e-3, 50.0 + j * 1e-5) for j in range(200)]
-    recording.record_poses(auto, fixes)
+    fixes = [pose_writes.GpsFix(7.0 + i * 1e-3, 50.0 + j * 1e-5) for j in range(200)]
+    pose_writes.store_poses(auto, fixes)
     segments.report_mode(leg, "ito")
 segments.report_mode(leg, "auto")
 from rosbridge_app.services import collectors

@@ -37,7 +37,7 @@ except ImportError:
     from common.sql import bound_cursor
     from telemetry.selectors import packed_tracks
 from telemetry.selectors.tracks import load_tracks  # noqa: E402
-from telemetry.storage.keys import GPS  # noqa: E402
+from telemetry.storage.keys import GPS_TRACK  # noqa: E402
 
 POSES = Pose._meta.db_table
 
@@ -50,7 +50,7 @@ def leg_masters() -> list[int]:
 def plan(ids: list[int]) -> list[str]:
     """The pose query's plan as load_tracks runs it (before the bound: one parameter)."""
     if hasattr(packed_tracks, "gps_tracks_plan"):
-        return packed_tracks.gps_tracks_plan(ids, GPS, analyze=True)
+        return packed_tracks.gps_tracks_plan(ids, GPS_TRACK, analyze=True)
     with transaction.atomic(), bound_cursor() as cursor:
         cursor.execute("SET LOCAL jit = off")
         cursor.execute("EXPLAIN (ANALYZE, BUFFERS) " + packed_tracks.gps_tracks_sql(), [ids])
@@ -63,14 +63,14 @@ def parts(ids: list[int], repeat: int) -> dict[str, float]:
     rest of ``load_tracks`` is Python (arrays, tracks)."""
     if hasattr(packed_tracks, "_read"):  # one statement, no transaction
         sql, columns = packed_tracks.gps_tracks_sql(), packed_tracks._GPS_COLUMNS
-        read = timed(lambda: packed_tracks._read(sql, columns, ids, GPS), repeat)
+        read = timed(lambda: packed_tracks._read(sql, columns, ids, GPS_TRACK), repeat)
         return {"the one statement": read}
     best = dict.fromkeys(("begin + first statement", "pose query", "commit"), math.inf)
     for _ in range(repeat):
         started = time.perf_counter()
         with transaction.atomic():
             if hasattr(packed_tracks, "_span"):
-                span, unstamped, _ = packed_tracks._span(ids, GPS)
+                span, unstamped, _ = packed_tracks._span(ids, GPS_TRACK)
                 query, params = packed_tracks.gps_tracks_sql(unstamped), {"ids": ids, **span}
             else:  # one pose table: JIT off, then the query
                 with connection.cursor() as cursor:
@@ -95,7 +95,7 @@ def main():
     parser.add_argument("--parts", action="store_true", help="time each round trip of a read")
     args = parser.parse_args()
     ids = leg_masters()
-    points = sum(len(t) for t in load_tracks(ids, GPS).values())
+    points = sum(len(t) for t in load_tracks(ids, GPS_TRACK).values())
     with connection.cursor() as cursor:
         # A plain table is its own tree's one row, not a leaf.
         leaves = "greatest(count(*) FILTER (WHERE isleaf), 1)"
@@ -112,7 +112,7 @@ def main():
             cursor.execute("SELECT 1")
 
     for r in range(args.rounds):
-        tracks = timed(lambda: load_tracks(ids, GPS), args.repeat)
+        tracks = timed(lambda: load_tracks(ids, GPS_TRACK), args.repeat)
         trip = timed(empty, args.repeat)
         print(
             f"round {r + 1}: load_tracks {tracks * 1e3:.3f} ms, empty statement {trip * 1e3:.3f} ms"

@@ -37,7 +37,7 @@ WRITER = """
 import time
 from events.models import Leg
 from events.services import segments
-from telemetry.services import recording
+from telemetry.services import pose_writes
 leg = Leg.objects.get(pk={leg})
 for i in range({count}):
     time.sleep(0.1)
@@ -46,7 +46,7 @@ for i in range({count}):
         kind = "segment"
     else:
         master = segments.report_mode(leg, "auto").master
-        recording.record_poses(master, [recording.GpsFix(7.0 + i * 1e-5, 50.0)] * 1)
+        pose_writes.store_poses(master, [pose_writes.GpsFix(7.0 + i * 1e-5, 50.0)] * 1)
         kind = "poses"
     print("WROTE", kind, time.time(), flush=True)
 """

@@ -35,8 +35,8 @@ SETUP = (
 leg = logs.create_leg(shift=s, weather_id="sunny")
 for i in range({segments}):
     master = segments.report_mode(leg, "ito" if i % 2 else "auto").master
-    fixes = [recording.GpsFix(7.0 + i * 1e-3, 50.0 + j * 1e-5) for j in range(200)]
-    recording.record_poses(master, fixes)
+    fixes = [pose_writes.GpsFix(7.0 + i * 1e-3, 50.0 + j * 1e-5) for j in range(200)]
+    pose_writes.store_poses(master, fixes)
 from rosbridge_app.services import collectors
 collectors.heartbeat("bench-collector", vehicle=v, logging=True, leg=leg)
 print(json.dumps({{"event": e.pk, "shift": s.pk, "leg": leg.pk}}))
@@ -53,9 +53,9 @@ print(time.time(), master.pk)
 
 POSES = """
 from events.models import Segment
-from telemetry.services import recording
-fixes = [recording.GpsFix(7.5 + {k} * 1e-5, 50.0 + j * 1e-6) for j in range(20)]
-recording.record_poses(Segment.objects.get(pk={master}), fixes)
+from telemetry.services import pose_writes
+fixes = [pose_writes.GpsFix(7.5 + {k} * 1e-5, 50.0 + j * 1e-6) for j in range(20)]
+pose_writes.store_poses(Segment.objects.get(pk={master}), fixes)
 """
 
 SHOWN = "(mode) => document.querySelector('#mode-panel').dataset.mode === mode"

@@ -45,7 +45,7 @@ from django.db import connection, transaction  # noqa: E402
 from events.models import Leg, Segment, Shift, TestEvent, Vehicle  # noqa: E402
 from telemetry.models import Pose  # noqa: E402
 from telemetry.selectors.tracks import load_tracks  # noqa: E402
-from telemetry.storage.keys import GPS  # noqa: E402
+from telemetry.storage.keys import GPS_TRACK  # noqa: E402
 
 try:  # the storage port's PostgreSQL adapter, or a checkout before it
     from telemetry.storage.postgresql import gps_tracks_plan
@@ -164,7 +164,7 @@ def build(shifts: int, segments: int, poses: int) -> TestEvent:
         pose_rows.clear()
         # The figures the write path keeps (the report and the track reads use them).
         with transaction.atomic():
-            measure_figures([m.pk for m in masters], (GPS,))
+            measure_figures([m.pk for m in masters], (GPS_TRACK,))
         Shift.objects.filter(pk=shift.pk).update(end=t)
         Leg.objects.filter(pk=leg.pk).update(end=t)
         t += timedelta(hours=1)
@@ -315,7 +315,7 @@ def main():
             return f"{overall.total_distance / 1000:.2f} km, {overall.interventions} interventions"
 
         def tracks():
-            loaded = profiled("tracks", load_tracks, master_ids, GPS)
+            loaded = profiled("tracks", load_tracks, master_ids, GPS_TRACK)
             return f"{sum(len(t) for t in loaded.values())} points of {len(loaded)} segments"
 
         def api_json():
@@ -368,7 +368,7 @@ def explain(master_ids: list[int]) -> None:
     """PostgreSQL's plan of the tracks query, run once with EXPLAIN ANALYZE."""
     if connection.vendor != "postgresql":
         return
-    print("\n".join(line[:160] for line in gps_tracks_plan(master_ids, GPS, analyze=True)))
+    print("\n".join(line[:160] for line in gps_tracks_plan(master_ids, GPS_TRACK, analyze=True)))
 
 
 def _location(shifts: int, segments: int, poses: int) -> str:

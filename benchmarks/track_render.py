@@ -64,7 +64,7 @@ from django.db import connection
 from django.utils import timezone
 from events.models import PoseSource, Vehicle
 from events.services import logs, segments
-from telemetry.services import recording
+from telemetry.services import pose_writes
 PoseSource.objects.get_or_create(key="gps", defaults={{"short_description": "GPS"}})
 v = Vehicle.objects.create(key="tracks-{tag}", short_description="Bench rover")
 e = logs.create_test_event(location="Track render {tag}", time_zone="Europe/Berlin")
@@ -83,13 +83,13 @@ for k in range({segments}):
         stamp = t0 + timedelta(seconds=i * 0.1)
         x, y = 300 * r * math.cos(a) + i * 5e-4, 200 * r * math.sin(a)
         noise = rng.gauss(0, 2e-7), rng.gauss(0, 2e-7)
-        fixes.append(recording.GpsFix(7.0 + x / 71700 + noise[0], 50.0 + y / 111200 + noise[1],
+        fixes.append(pose_writes.GpsFix(7.0 + x / 71700 + noise[0], 50.0 + y / 111200 + noise[1],
                                       robot_stamp=stamp))
-        local.append(recording.MapPose(x + noise[0] * 1e5, y + noise[1] * 1e5, "map",
+        local.append(pose_writes.MapPose(x + noise[0] * 1e5, y + noise[1] * 1e5, "map",
                                        robot_stamp=stamp))
     for first in range(0, per, 10000):
-        recording.record_poses(master, fixes[first:first + 10000])
-        recording.record_local_poses(master, local[first:first + 10000])
+        pose_writes.store_poses(master, fixes[first:first + 10000])
+        pose_writes.store_local_poses(master, local[first:first + 10000])
 if connection.vendor == "postgresql":
     # What autovacuum does shortly after a bulk load: without statistics the
     # planner sorts 200 000 rows on disk instead of reading the time index.

@@ -2,7 +2,7 @@
 
 The collector's own code does the work: :func:`rosbridge_app.collector.bag.bag_events`
 turns the bag into the events a collector logging during the recording would
-have produced, and its :class:`~rosbridge_app.collector.recorder.Recorder`
+have produced, and its :class:`~rosbridge_app.collector.event_writer.EventWriter`
 stores them through the services.  What this module adds:
 
 * stable uids: each event's uid is derived from the recording (first and last
@@ -31,12 +31,12 @@ from events.services import logs
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.bag import bag_events, open_bag
 from rosbridge_app.collector.blackbox import snapshot_topics
+from rosbridge_app.collector.event_writer import EventWriter
 from rosbridge_app.collector.events import Event
 from rosbridge_app.collector.mcap_files import MessageDefinitions, write_mcap
 from rosbridge_app.collector.message_fields import installed_fields, recorded_fields
 from rosbridge_app.collector.modes import ITO
 from rosbridge_app.collector.params import SPECS, InvalidParameter, check
-from rosbridge_app.collector.recorder import Recorder
 from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 
 NAMESPACE = uuid.UUID("b3f5a6f0-8e0c-4a51-9d8e-2c1a7d4e6b20")
@@ -260,7 +260,7 @@ def import_bag(
         stabilise(events, uuid.uuid5(info.uid, str(target.uid)))
         if snapshots:
             events += snapshot_events(info, settings, events, Path(scratch.name))
-        recorder = Recorder(lambda: target)
+        event_writer = EventWriter(lambda: target)
         unreadable = 0
         for start in range(0, len(events), BATCH):
             batch = []
@@ -269,7 +269,7 @@ def import_bag(
                     batch.append(event.prepare())
                 except Exception:  # a picture that cannot be decoded, as when live
                     unreadable += 1
-            recorder.apply(batch)
+            event_writer.apply(batch)
             if progress is not None:
                 progress("storing", min(start + BATCH, len(events)), len(events))
         if created and not target.segments.exists():
@@ -289,5 +289,5 @@ def import_bag(
         leg=target,
         events=len(events),
         added={name: after[name] - before[name] for name in after},
-        skipped=recorder.skipped + unreadable,
+        skipped=event_writer.skipped + unreadable,
     )

@@ -8,6 +8,6 @@ class TelemetryConfig(AppConfig):
 
     def ready(self):
         # Django's documented place for signal wiring: models load first.
-        from telemetry.services import recording  # noqa: PLC0415
+        from telemetry.services import pose_writes  # noqa: PLC0415
 
-        recording.connect()
+        pose_writes.connect()

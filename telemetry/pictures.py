@@ -15,7 +15,7 @@ from django.utils.translation import gettext as _
 from PIL import Image as PilImage
 
 PHOTO_FORMATS = {"JPEG": "jpg", "PNG": "png", "WEBP": "webp"}
-# What a map is stored as and accepted as (API, collector, archives): record_map checks it.
+# What a map is stored as and accepted as (API, collector, archives): store_map checks it.
 MAP_FORMATS = {"PNG": "png"}
 # What the original robots' node API may send a map as; it is stored as a greyscale PNG.
 LEGACY_MAP_FORMATS = PHOTO_FORMATS

@@ -123,7 +123,7 @@ class ImportSession:
 
     def master(self, uid) -> Segment:
         """The master of segment ``uid`` (id only): data sent for an ITO reason is
-        stored on its master, as when recording."""
+        stored on its master, as the live services store it."""
         if uid not in self.masters:
             self.masters[uid] = Segment(pk=self.segment(uid).master_id)
         return self.masters[uid]

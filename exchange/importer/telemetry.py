@@ -17,9 +17,9 @@ from exchange.importer.session import ImportSession
 from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 from telemetry.pictures import MAP_FORMATS, PHOTO_FORMATS, checked_picture
 from telemetry.services.map_images import check_map_placement
-from telemetry.services.recording import GpsFix, MapPose
+from telemetry.services.pose_writes import GpsFix, MapPose
 from telemetry.services.segment_figures import measure_figures
-from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 
 BATCH = 2000
 # Every MCAP file starts with these bytes (the format's magic).
@@ -55,7 +55,7 @@ def _add_track_points(session: ImportSession, table, model, build):
             session.track_points[(table, row.segment_id)] += 1
         session.plan.note(table, "unchanged", len(batch) - len(fresh))
     # An archive's poses may fall anywhere in a stored track: measure it again.
-    mode = GPS if model is Pose else LOCAL
+    mode = GPS_TRACK if model is Pose else LOCAL_TRACK
     measure_figures({seg for kind, seg in session.track_points if kind == table}, [mode])
 
 

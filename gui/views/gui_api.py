@@ -56,7 +56,7 @@ from telemetry.selectors.track_drawing import (
     thinned,
     tolerance,
 )
-from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 
 
 @extend_schema(exclude=True)
@@ -72,7 +72,7 @@ class TrackQuery(serializers.Serializer):
         required=False, min_value=MIN_LOCAL_ZOOM, max_value=MAX_ZOOM
     )
     fit = serializers.CharField(required=False)
-    map = serializers.ChoiceField(choices=[GPS, LOCAL], required=False)
+    map = serializers.ChoiceField(choices=[GPS_TRACK, LOCAL_TRACK], required=False)
     bbox = serializers.CharField(required=False)
     bbox_zoom = serializers.IntegerField(
         required=False, min_value=MIN_LOCAL_ZOOM, max_value=MAX_ZOOM
@@ -95,7 +95,7 @@ class TrackQuery(serializers.Serializer):
 
     def validate(self, attrs):
         # Only the local map zooms below 0: ``zoom`` is the GPS map's unless map=local.
-        for name in () if attrs.get("map") == LOCAL else ("zoom", "bbox_zoom"):
+        for name in () if attrs.get("map") == LOCAL_TRACK else ("zoom", "bbox_zoom"):
             if attrs.get(name, 0) < 0:
                 message = _("Give a zoom level from 0 to %(max)s.") % {"max": MAX_ZOOM}
                 raise serializers.ValidationError({name: message})
@@ -129,9 +129,9 @@ class LegTracks(GuiView):
         if "map" in q:
             return Response(_in_view(leg, masters, q))
         loaded = kept_tracks(masters)
-        gps, local = loaded[GPS], loaded[LOCAL]
-        zooms = {GPS: q.get("zoom"), LOCAL: q.get("local_zoom")}
-        for mode, loaded in ((GPS, gps), (LOCAL, local)):
+        gps, local = loaded[GPS_TRACK], loaded[LOCAL_TRACK]
+        zooms = {GPS_TRACK: q.get("zoom"), LOCAL_TRACK: q.get("local_zoom")}
+        for mode, loaded in ((GPS_TRACK, gps), (LOCAL_TRACK, local)):
             if zooms[mode] is None and "fit" in q:
                 zooms[mode] = fit_zoom(mode, list(loaded.values()), *q["fit"])
         distances = displayed_distances(masters)
@@ -143,8 +143,8 @@ class LegTracks(GuiView):
                 "mode": mode,
                 "ito": mode == SegmentType.ITO,
                 # [lat, lon]: the order Leaflet takes.
-                "gps": [] if g is None else _drawn(g, GPS, zooms[GPS]),
-                "local": [] if lo is None else _drawn(lo, LOCAL, zooms[LOCAL]),
+                "gps": [] if g is None else _drawn(g, GPS_TRACK, zooms[GPS_TRACK]),
+                "local": [] if lo is None else _drawn(lo, LOCAL_TRACK, zooms[LOCAL_TRACK]),
                 "distance_m": distances[segment_id],
                 # Where a take-over circle goes when the master has a start position.
                 "start": _lat_lon(master.start_position),
@@ -153,9 +153,9 @@ class LegTracks(GuiView):
                 else [master.start_local_x, master.start_local_y],
             }
         body = {"leg": leg.pk, "segments": segments, **leg_labels(leg)}
-        body.update(zoom=zooms[GPS], local_zoom=zooms[LOCAL])
-        if zooms[GPS] is not None:
-            body["tolerance_deg"] = tolerance(GPS, zooms[GPS])
+        body.update(zoom=zooms[GPS_TRACK], local_zoom=zooms[LOCAL_TRACK])
+        if zooms[GPS_TRACK] is not None:
+            body["tolerance_deg"] = tolerance(GPS_TRACK, zooms[GPS_TRACK])
         return Response(body)
 
 
@@ -233,7 +233,7 @@ def _drawn(track, mode, zoom, box=None, box_zoom=None) -> list[list[float]]:
         x, y = drawn(track.x, track.y, outside, box, inside)
     # 1e-7 degrees is 1 cm; the 17 digits a float prints would triple the bytes.
     # GPS points go as [lat, lon], the order Leaflet takes.
-    pairs = np.column_stack([y, x] if mode == GPS else [x, y])
+    pairs = np.column_stack([y, x] if mode == GPS_TRACK else [x, y])
     return np.round(pairs, 7).tolist()
 
 

@@ -46,15 +46,17 @@ from reports.services.generation import (
     request_comparison,
     request_report,
 )
-from telemetry.storage.keys import MODES
+from telemetry.storage.keys import TRACK_KINDS
 
-MODE_PARAM = OpenApiParameter("mode", str, enum=list(MODES), description="gps (default) or local")
+MODE_PARAM = OpenApiParameter(
+    "mode", str, enum=list(TRACK_KINDS), description="gps (default) or local"
+)
 
 
 def _mode(request) -> str:
     mode = request.query_params.get("mode", "gps")
-    if mode not in MODES:
-        message = _("mode must be one of %(modes)s.") % {"modes": ", ".join(MODES)}
+    if mode not in TRACK_KINDS:
+        message = _("mode must be one of %(modes)s.") % {"modes": ", ".join(TRACK_KINDS)}
         raise ValidationError({"mode": [message]})
     return mode
 

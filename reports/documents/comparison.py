@@ -21,7 +21,7 @@ from reports.documents.wording import comparison_text
 from reports.figures import style
 from reports.figures.growth import growth_chart, hotspot_chart
 from reports.selectors.comparison import compare
-from telemetry.storage.keys import GPS
+from telemetry.storage.keys import GPS_TRACK
 
 
 def _row(name: str, group: dict) -> list[str]:
@@ -70,7 +70,7 @@ def _event_name(event: TestEvent) -> str:
 
 
 def render_comparison(
-    events: list[TestEvent], mode: str = GPS, language: str = "", routes: dict | None = None
+    events: list[TestEvent], mode: str = GPS_TRACK, language: str = "", routes: dict | None = None
 ) -> bytes:
     """The comparison PDF in ``language`` (default: comparison_language); ``routes``
     ({"leg": [ids], "case": [ids], "threshold": metres}) adds the routes section."""

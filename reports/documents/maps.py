@@ -12,12 +12,12 @@ from reports.documents.options import ReportOptions
 from reports.documents.pictures import Pictures
 from reports.figures.maps import Line, MapPainter
 from reports.figures.tiles import LayerTiles, TileSource
-from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 
 
 def tile_source(event, options: ReportOptions, mode: str) -> TileSource | LayerTiles | None:
     """A tile URL given for this report, else the event's basemap, else the site's."""
-    if options.no_tiles or mode == LOCAL:
+    if options.no_tiles or mode == LOCAL_TRACK:
         return None
     tile_url = options.tile_url
     if tile_url is None:
@@ -57,19 +57,19 @@ class TrackMaps:
             if not lines:
                 return None, _("No positions recorded.")
             path = str(new_file("map"))
-            if self.mode == GPS:
+            if self.mode == GPS_TRACK:
                 result = self.painter.gps_map(lines, path, size=size)
             else:
                 background = self.pictures.background(shift)
                 result = self.painter.local_map(lines, background, path, size=size)
             if result is None:
                 return None, _("No positions recorded.")
-            if self.mode == GPS and result.tiles:
+            if self.mode == GPS_TRACK and result.tiles:
                 self.tiles_used = True
             return Path(result.path).name, result.note
 
     def tiles_note(self) -> str:
-        if self.mode != GPS:
+        if self.mode != GPS_TRACK:
             return ""
         if self.tiles is None:
             return _(

@@ -37,7 +37,7 @@ from reports.selectors.statistics import (
 )
 from telemetry.selectors.recordings import recordings_by_master, summary
 from telemetry.selectors.tracks import GAP_SECONDS
-from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 
 DEFAULT_LOGO = TEMPLATE_DIR / "logo.svg"
 FONT_NOTE = gettext_noop(
@@ -59,7 +59,7 @@ class Sections:
         self.progress = progress
         self.time_stage = time_stage
         self.tz = event.tzinfo
-        self.mode = LOCAL if options.local else GPS
+        self.mode = LOCAL_TRACK if options.local else GPS_TRACK
         self.warnings: list[str] = []
         self.reasons = content.reasons_by_key(event)
         self.pictures = Pictures(root, options.image_appendix, self.warnings, time_stage)
@@ -391,7 +391,7 @@ class Sections:
                     _("Poses"),
                     _("%(count)s with a position, %(no_fix)s without a fix (left out)")
                     % {"count": run.pose_count, "no_fix": run.track.no_fix if run.track else 0}
-                    if self.mode == GPS
+                    if self.mode == GPS_TRACK
                     else str(run.pose_count),
                 ),
                 (_("Database id"), str(run.id)),
@@ -507,7 +507,7 @@ class Sections:
 
 
 def _position_mode(mode: str) -> str:
-    return "GPS (WGS84)" if mode == GPS else _("local map frame")
+    return "GPS (WGS84)" if mode == GPS_TRACK else _("local map frame")
 
 
 def _name(path) -> str | None:

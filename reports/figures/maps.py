@@ -29,7 +29,7 @@ from reports.figures import style  # noqa: E402
 from reports.figures.style import rgb  # noqa: E402
 from reports.projection import local_frame  # noqa: E402
 from telemetry.selectors.track_drawing import simplified  # noqa: E402
-from telemetry.storage.keys import GPS  # noqa: E402
+from telemetry.storage.keys import GPS_TRACK  # noqa: E402
 
 PAD_FRACTION = 0.1
 PAD_MIN_M = 10.0
@@ -170,7 +170,7 @@ def drawing_tolerance(bounds, size, dpi: int = DPI) -> float:
 def map_tolerance(mode: str, lines: list[Line], size) -> tuple[float, list[Line]]:
     """The tolerance a map of ``lines`` (GPS: longitude, latitude) thins them by,
     and the lines in the map's units (metres) that it applies to."""
-    if mode == GPS:
+    if mode == GPS_TRACK:
         lines = _projected(lines)
     return drawing_tolerance(_padded_bounds(lines, size), size), lines
 

@@ -11,7 +11,7 @@ import numpy as np
 
 from reports.figures.maps import nice_length, scale_label
 from reports.projection import local_frame
-from telemetry.storage.keys import GPS
+from telemetry.storage.keys import GPS_TRACK
 
 # Enough points for a 4 cm sketch: more cannot be seen and only fill the PDF.
 MAX_POINTS = 400
@@ -34,7 +34,7 @@ def track_sketch(x, y, mode: str, width_pt: float, height_pt: float) -> dict | N
     centre = float((x.min() + x.max()) / 2), float((y.min() + y.max()) / 2)
     # Thinned by index first, so only the points drawn are projected.
     x, y = _thinned(x, y)
-    if mode == GPS:
+    if mode == GPS_TRACK:
         forward, _ = local_frame(*centre)
         x, y = forward.transform(x, y)
         x, y = np.asarray(x), np.asarray(y)

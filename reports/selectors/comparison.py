@@ -16,7 +16,7 @@ from reports.selectors import formulas
 from reports.selectors.growth import crow_amsaa
 from reports.selectors.hotspots import hotspots
 from reports.selectors.statistics import CONFIDENCE, Estimate, Run, campaign_runs, figures
-from telemetry.storage.keys import GPS
+from telemetry.storage.keys import GPS_TRACK
 
 
 def growth_points(runs: list[Run]) -> tuple[list[float], float]:
@@ -77,7 +77,7 @@ def _group(extra: dict, runs: list[Run]) -> dict:
 
 
 @cyclic_gc.paused()
-def compare(events: list[TestEvent], mode: str = GPS) -> dict:
+def compare(events: list[TestEvent], mode: str = GPS_TRACK) -> dict:
     """JSON-ready comparison of the given test events, oldest first."""
     events = sorted(events, key=lambda e: (e.start, e.pk))
     runs_of = campaign_runs(events, mode)

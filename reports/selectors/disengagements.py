@@ -24,7 +24,7 @@ from common.spreadsheet import SafeWriter
 from events.models import Segment, TestEvent, Vehicle
 from reports.selectors.content import reasons_by_key
 from reports.selectors.statistics import campaign_runs
-from telemetry.storage.keys import GPS
+from telemetry.storage.keys import GPS_TRACK
 
 METRES_PER_MILE = 1609.344
 CAPABLE = "VEHICLE IS CAPABLE OF OPERATING WITHOUT A DRIVER (Yes or No)"
@@ -88,7 +88,7 @@ def _runs_in(events: list[TestEvent], months: set[tuple[int, int]] | None):
     """(event, run, (year, month) the run starts in, in the event's zone) of ``events``,
     only those starting in ``months`` when given."""
     events = sorted(events, key=lambda e: (e.start, e.pk))
-    runs = campaign_runs(events, GPS)
+    runs = campaign_runs(events, GPS_TRACK)
     for event in events:
         tz = event.tzinfo
         for run in runs[event.pk]:

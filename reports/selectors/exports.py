@@ -25,7 +25,7 @@ from events.models import Leg, Note, Segment, TestEvent
 from events.selectors.labels import segment_labels
 from reports.selectors.content import reasons_by_key
 from reports.selectors.statistics import event_runs
-from telemetry.storage.keys import GPS
+from telemetry.storage.keys import GPS_TRACK
 
 # Segments read from the database at a time.
 BATCH = 2000
@@ -72,7 +72,7 @@ def _name(person) -> str:
     return person.name if person is not None else ""
 
 
-def segments_csv_lines(event: TestEvent, mode: str = GPS) -> Iterator[str]:
+def segments_csv_lines(event: TestEvent, mode: str = GPS_TRACK) -> Iterator[str]:
     """segments.csv, a line at a time: the segments are read in batches, and a
     master's distance, pose count and end come from its kept figures (no pose is
     read)."""
@@ -150,7 +150,9 @@ def _leg_runs(event: TestEvent) -> Iterator:
     """The event's GPS runs with their tracks, a batch of legs at a time: legs of
     at most POINTS_PER_BATCH kept GPS points together (a longer leg alone), so
     that memory holds a batch's tracks and the queries do not grow per leg."""
-    points = Sum("segments__figures__points", filter=Q(segments__figures__mode=GPS), default=0)
+    points = Sum(
+        "segments__figures__points", filter=Q(segments__figures__mode=GPS_TRACK), default=0
+    )
     legs = (
         Leg.objects.filter(shift__test_event=event)
         .order_by("shift__start", "shift_id", "start", "id")
@@ -160,12 +162,12 @@ def _leg_runs(event: TestEvent) -> Iterator:
     batch, held = [], 0
     for leg, count in legs:
         if batch and held + count > POINTS_PER_BATCH:
-            yield from event_runs(event, GPS, legs=batch)
+            yield from event_runs(event, GPS_TRACK, legs=batch)
             batch, held = [], 0
         batch.append(leg)
         held += count
     if batch:
-        yield from event_runs(event, GPS, legs=batch)
+        yield from event_runs(event, GPS_TRACK, legs=batch)
 
 
 def track_features(event: TestEvent) -> Iterator[dict]:

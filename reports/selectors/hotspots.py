@@ -25,7 +25,7 @@ from scipy.spatial import cKDTree
 from reports.projection import local_frame
 from reports.selectors.formulas import HOTSPOT_RADIUS_M
 from reports.selectors.statistics import Run
-from telemetry.storage.keys import GPS
+from telemetry.storage.keys import GPS_TRACK
 
 
 @dataclass(slots=True)
@@ -50,7 +50,7 @@ def metres(points: list[TakeOver], mode: str) -> np.ndarray:
     """N x 2 positions in metres (east, north) around the points' centre."""
     x = np.array([p.x for p in points], dtype=float)
     y = np.array([p.y for p in points], dtype=float)
-    if mode == GPS and len(points):
+    if mode == GPS_TRACK and len(points):
         forward, _ = local_frame(float(x.mean()), float(y.mean()))
         x, y = forward.transform(x, y)
     return np.column_stack([np.asarray(x, dtype=float), np.asarray(y, dtype=float)])
@@ -84,7 +84,7 @@ def _linked_groups(xy: np.ndarray, radius: float) -> list[int]:
     return connected_components(links, directed=False)[1].tolist()
 
 
-def hotspots(runs_of: dict[int, list[Run]], mode: str = GPS) -> list[dict]:
+def hotspots(runs_of: dict[int, list[Run]], mode: str = GPS_TRACK) -> list[dict]:
     """JSON-ready hotspots, numbered; each lists its take-overs with the segment's
     id, GUI label, test event, shift and leg (enough for a link to the segment)."""
     points = take_overs(runs_of)

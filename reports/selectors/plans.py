@@ -19,7 +19,7 @@ from django.utils.translation import gettext as _
 from common.spreadsheet import SafeWriter
 from events.models import Criterion, Judgement, Leg, TestCase, TestEvent
 from reports.selectors.statistics import Figures, Run, event_runs, figures
-from telemetry.storage.keys import GPS
+from telemetry.storage.keys import GPS_TRACK
 
 PASS, FAIL, NOT_YET, JUDGE = "pass", "fail", "not yet", "needs a judgement"
 Kind = Criterion.Kind
@@ -105,7 +105,7 @@ class PlanResult:
         }
 
 
-def test_plan(event: TestEvent, mode: str = GPS, runs: list[Run] | None = None) -> PlanResult:
+def test_plan(event: TestEvent, mode: str = GPS_TRACK, runs: list[Run] | None = None) -> PlanResult:
     """Every test case of the event with its legs' and its own verdicts."""
     runs = event_runs(event, mode) if runs is None else runs
     by_leg: dict[int, list[Run]] = {}

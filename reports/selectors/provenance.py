@@ -36,7 +36,7 @@ from events.selectors.history import KINDS, author_of, entries_since, word_for
 from events.selectors.taxonomy import taxonomy_of, taxonomy_version
 from reports.selectors.statistics import event_statistics
 from telemetry.models import Image, LocalPose, Pose, SegmentFigures
-from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 
 DIGEST_PREFIX = "ftt-digest-sha256-"
 BUILT_PREFIX = "ftt-built-"
@@ -175,7 +175,7 @@ def canonical_records(event: TestEvent, *, legacy: bool = False) -> list[tuple[s
 def pose_records(event: TestEvent) -> list[tuple[str, str, dict]]:
     """The event's poses by the uid sums their segments' figures keep."""
     records = []
-    for table, mode in (("poses", GPS), ("local_poses", LOCAL)):
+    for table, mode in (("poses", GPS_TRACK), ("local_poses", LOCAL_TRACK)):
         kept = SegmentFigures.objects.filter(segment__leg__shift__test_event=event, mode=mode)
         total = uid_sums.combined(*kept.values_list("uid_sum", flat=True))
         records.append((table, "all", {"uid_sum": total}))

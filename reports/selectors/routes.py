@@ -27,7 +27,7 @@ from django.utils.translation import gettext as _
 from events.models import Leg, TestCase
 from reports.projection import local_frame
 from telemetry.selectors.tracks import masters, segment_tracks
-from telemetry.storage.keys import GPS
+from telemetry.storage.keys import GPS_TRACK
 
 # Metres from the other route beyond which a stretch is drawn as a deviation.
 DEFAULT_THRESHOLD = 5.0
@@ -55,7 +55,7 @@ class Route:
 
 
 def leg_route(leg: Leg) -> Route:
-    tracks = segment_tracks(masters(leg=leg), GPS)
+    tracks = segment_tracks(masters(leg=leg), GPS_TRACK)
     lon = np.concatenate([t.x for t in tracks]) if tracks else np.empty(0)
     lat = np.concatenate([t.y for t in tracks]) if tracks else np.empty(0)
     shift = leg.shift

@@ -48,7 +48,7 @@ from reports.selectors.formulas import FORMULAS, keyed
 from telemetry.selectors.distances import kept_paths, measured_paths
 from telemetry.selectors.tracks import Track
 from telemetry.storage import plain_rows
-from telemetry.storage.keys import GPS
+from telemetry.storage.keys import GPS_TRACK
 
 CONFIDENCE = 0.90
 
@@ -311,7 +311,7 @@ def segment_scope(
 
 def event_runs(
     event: TestEvent,
-    mode: str = GPS,
+    mode: str = GPS_TRACK,
     *,
     tracks: bool = True,
     shift: int | None = None,
@@ -326,7 +326,7 @@ def event_runs(
 
 
 @cyclic_gc.paused()
-def campaign_runs(events: list[TestEvent], mode: str = GPS) -> dict[int, list[Run]]:
+def campaign_runs(events: list[TestEvent], mode: str = GPS_TRACK) -> dict[int, list[Run]]:
     """{test event id: ``event_runs`` of it, without tracks} for many test events
     in their given order, read with one query per table, not one per event."""
     found = _runs({"leg__shift__test_event__in": events}, events, mode, tracks=False)
@@ -471,7 +471,7 @@ def _grouped(runs: list[Run], key) -> dict[int, Figures]:
 
 def event_statistics(
     event: TestEvent,
-    mode: str = GPS,
+    mode: str = GPS_TRACK,
     runs: list[Run] | None = None,
     *,
     tracks: bool = False,

@@ -25,7 +25,7 @@ from reports.figures.maps import Line, map_tolerance
 from telemetry.models import LocalPose, Pose, SegmentFigures, ThinnedSegment
 from telemetry.selectors.track_drawing import simplified
 from telemetry.storage import keys
-from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 
 log = logging.getLogger(__name__)
 
@@ -57,7 +57,7 @@ def thin_old_poses(months: int | None = None, now: datetime | None = None) -> in
 
 def _points(mode: str, master_ids: list[int]) -> dict[int, tuple[list, np.ndarray, np.ndarray]]:
     """(ids, x, y) of each master's drawn points, in driving order."""
-    if mode == GPS:
+    if mode == GPS_TRACK:
         rows = Pose.objects.filter(keys.USABLE_FIX, segment_id__in=master_ids)
         rows = rows.values_list("segment_id", "id", "point")
         split = [(seg, pk, p.x, p.y) for seg, pk, p in rows.order_by("segment_id", *_order())]
@@ -98,7 +98,7 @@ def thin_shift(shift_id: int) -> int:
         Segment.objects.filter(leg__shift_id=shift_id, parent=None).values_list("pk", flat=True)
     )
     deleted = kept_total = 0
-    for mode, model in ((GPS, Pose), (LOCAL, LocalPose)):
+    for mode, model in ((GPS_TRACK, Pose), (LOCAL_TRACK, LocalPose)):
         tracks = _points(mode, masters)
         if not tracks:
             continue

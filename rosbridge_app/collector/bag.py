@@ -8,7 +8,7 @@ For the bag player and for bag imports.  Reading needs only rosbags (no ROS);
   live node's subscriptions do;
 * :func:`bag_events` returns the events a live collector would have produced
   had it been logging while the bag was recorded; store them with
-  :func:`rosbridge_app.collector.recorder.record_events`.
+  :func:`rosbridge_app.collector.event_writer.write_events`.
 """
 
 import array

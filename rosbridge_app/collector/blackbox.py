@@ -6,7 +6,7 @@ At a switch to ITO, or on request, the messages from ``before`` seconds before
 until ``after`` seconds after are collected; the writer process
 (:mod:`~rosbridge_app.collector.snapshot_writer`) writes them to an MCAP file
 in the pending directory, then a ``recording`` event goes through the spool
-like everything else.  The recorder moves the file to media storage and
+like everything else.  The event writer moves the file to media storage and
 deletes it only after the row is committed, so an outage or a restart loses
 nothing.
 """

@@ -14,8 +14,8 @@ from datetime import datetime
 
 # data: mode, robot_stamp, start_uncertainty (s), gps [lon, lat] | None, local [x, y, frame] | None
 MODE = "mode"
-GPS = "gps"  # data: lon, lat, alt, status, accuracy, robot_stamp
-LOCAL = "local"  # data: x, y, yaw, frame, robot_stamp
+GPS_FIX = "gps"  # data: lon, lat, alt, status, accuracy, robot_stamp
+LOCAL_POSE = "local"  # data: x, y, yaw, frame, robot_stamp
 MAP = "map"  # data: frame, width, height, resolution, origin_*, robot_stamp, checksum; blob PNG
 IMAGE = "image"  # data: master (uid of the mode event), suffix, description, robot_stamp; blob
 # data: master (uid or None: the open one), reason, path of the pending MCAP file,
@@ -23,7 +23,7 @@ IMAGE = "image"  # data: master (uid of the mode event), suffix, description, ro
 RECORDING = "recording"
 START = "start"
 STOP = "stop"
-KINDS = (MODE, GPS, LOCAL, MAP, IMAGE, RECORDING, START, STOP)
+KINDS = (MODE, GPS_FIX, LOCAL_POSE, MAP, IMAGE, RECORDING, START, STOP)
 # Events that open or close a segment: they move the positions after them to
 # another master, and an operator waits to see them (spooled at once).
 SEGMENT_CHANGES = frozenset({MODE, START, STOP})

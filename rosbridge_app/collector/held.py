@@ -22,7 +22,7 @@ from rosbridge_app.collector.events import Event
 REPORT_PERIOD = 1.0
 # A day of thinned GPS and local positions; more are counted and dropped.
 MAX_POSITIONS = 200_000
-_POSITIONS = frozenset({ev.GPS, ev.LOCAL})
+_POSITIONS = frozenset({ev.GPS_FIX, ev.LOCAL_POSE})
 _CHANGES = frozenset({ev.MODE, ev.START, ev.STOP})
 
 

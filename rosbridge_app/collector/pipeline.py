@@ -2,7 +2,7 @@
 
 The live node calls these methods from its subscriptions, a bag import calls
 them for every message of a bag; both hand the resulting events to the same
-:class:`~rosbridge_app.collector.recorder.Recorder`.  ``at`` is always the
+:class:`~rosbridge_app.collector.event_writer.EventWriter`.  ``at`` is always the
 wall-clock time of the message (receive time live, record time in a bag).
 
 Rules implemented here:
@@ -294,7 +294,7 @@ class Pipeline:
 
     def _emit_fix(self, at: datetime, fix: dict) -> None:
         self.last_fix_recorded = True
-        self.sink(Event(ev.GPS, at, dict(fix)))
+        self.sink(Event(ev.GPS_FIX, at, dict(fix)))
 
     def on_tf(self, msg, at: datetime, static: bool = False) -> None:
         if not self.params["params.use_tf"]:
@@ -348,7 +348,7 @@ class Pipeline:
         self.last_local = (at, pose)
         if self.logging and self.open_mode is not None:
             if self.local_thinner.offer(pose["x"], pose["y"], _measured(at, pose), pose["yaw"]):
-                self.sink(Event(ev.LOCAL, at, dict(pose)))
+                self.sink(Event(ev.LOCAL_POSE, at, dict(pose)))
         elif self.logging:
             if self.local_thinner.offer(pose["x"], pose["y"], _measured(at, pose), pose["yaw"]):
                 self.waiting.poses.append((at, pose))
@@ -356,7 +356,7 @@ class Pipeline:
 
     def _record_local(self, at: datetime, pose: dict) -> None:
         self.local_thinner.keep(pose["x"], pose["y"], _measured(at, pose), pose["yaw"])
-        self.sink(Event(ev.LOCAL, at, dict(pose)))
+        self.sink(Event(ev.LOCAL_POSE, at, dict(pose)))
 
     # --- map ----------------------------------------------------------------------------
 

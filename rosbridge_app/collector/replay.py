@@ -44,8 +44,8 @@ import time
 from django.utils.translation import gettext
 
 from rosbridge_app.collector import events as ev
+from rosbridge_app.collector.event_writer import EventWriter, GivenMaster
 from rosbridge_app.collector.held import Held
-from rosbridge_app.collector.recorder import GivenMaster, Recorder
 from rosbridge_app.collector.spool import Spool
 
 _STATE = "backlog"
@@ -86,7 +86,7 @@ class ReplayOrder:
     def replaying(self) -> bool:
         return self.lane is not None
 
-    def write_next(self, recorder: Recorder) -> int:
+    def write_next(self, event_writer: EventWriter) -> int:
         """Store the next slices; how many records were taken or marked."""
         self.stored_change = False
         if self.lane is None and self._has_backlog():
@@ -94,11 +94,11 @@ class ReplayOrder:
             self.backlog_slice = self.size
             end = self.spool.last_id()
             self._found = time.monotonic(), self.spool.count_by_kind(end)
-            self.lane = {"end": end, "master": recorder.open_master_uid()}
+            self.lane = {"end": end, "master": event_writer.open_master_uid()}
             self.spool.set_state(_STATE, json.dumps(self.lane))
         if self.lane is None:
-            taken = self._store(recorder, _up_to_change(self.spool.peek(self.size)), None)
-            return taken or self._store_held(recorder, maps=True)
+            taken = self._store(event_writer, _up_to_change(self.spool.peek(self.size)), None)
+            return taken or self._store_held(event_writer, maps=True)
         end = self.lane["end"]
         kinds = sorted(ev.SEGMENT_CHANGES)
         if not self._changes_done:
@@ -109,14 +109,14 @@ class ReplayOrder:
                 params=(end, *kinds),
             )
             if changes:
-                masters = recorder.apply_changes([event for _, event in changes])
+                masters = event_writer.apply_changes([event for _, event in changes])
                 ids = [row_id for row_id, _ in changes]
                 self.spool.mark_applied(list(zip(ids, masters, strict=True)))
                 self.stored_change = True
                 return len(changes)
             self._changes_done = True
         live = self.spool.peek(self.size, where="id > ? AND kind != ?", params=(end, ev.MAP))
-        taken = self._store(recorder, live, None) or self._store_held(recorder, maps=False)
+        taken = self._store(event_writer, live, None) or self._store_held(event_writer, maps=False)
         started = time.monotonic()
         backlog = self.spool.peek(
             self.backlog_slice,
@@ -127,14 +127,14 @@ class ReplayOrder:
             self.spool.forget_applied()
             self.spool.set_state(_STATE, "")
             self._done()
-            return taken or self._store_held(recorder, maps=True)
+            return taken or self._store_held(event_writer, maps=True)
         marks = self.spool.applied()
         borders = [row_id for row_id, _ in marks]
         runs = itertools.groupby(backlog, key=lambda row: bisect.bisect(borders, row[0]))
         stored = 0
         for run, rows in runs:
             master = marks[run - 1][1] if run else self.lane["master"]
-            stored += self._store(recorder, list(rows), GivenMaster(master))
+            stored += self._store(event_writer, list(rows), GivenMaster(master))
             if time.monotonic() - started > SLICE_SECONDS:
                 break  # each run costs its round trips: live data waits no longer
         if stored == self.backlog_slice:  # a short slice (the last, or maps) tells nothing
@@ -150,14 +150,14 @@ class ReplayOrder:
         # wait for each of its segment changes' round trips.
         return pending > self.backlog or bool(pending and self.held is not None and len(self.held))
 
-    def _store(self, recorder: Recorder, rows: list, master: GivenMaster | None) -> int:
+    def _store(self, event_writer: EventWriter, rows: list, master: GivenMaster | None) -> int:
         if rows:
-            recorder.apply([event for _, event in rows], master=master)
+            event_writer.apply([event for _, event in rows], master=master)
             self.spool.remove([row_id for row_id, _ in rows])
             self.stored_change |= any(event.kind in ev.SEGMENT_CHANGES for _, event in rows)
         return len(rows)
 
-    def _store_held(self, recorder: Recorder, maps: bool) -> int:
+    def _store_held(self, event_writer: EventWriter, maps: bool) -> int:
         if self.held is None or not len(self.held):
             return 0
         with self.held.lock:
@@ -165,7 +165,7 @@ class ReplayOrder:
         if events:
             # Not under the lock: the spool thread goes on holding meanwhile. Should it
             # move these to the spool too, they are stored again later as nothing (uids).
-            recorder.apply(events)
+            event_writer.apply(events)
             self.stored_change |= any(event.kind in ev.SEGMENT_CHANGES for event in events)
             with self.held.lock:
                 self.held.remove(events)

@@ -5,7 +5,7 @@
 * Spool thread: renders pictures (PNG/JPEG) and appends events to the
   :class:`Spool` on disk, a few times a second.
 * Main thread: the only one that talks to the database: applies spool events
-  in order through :class:`Recorder`, beats, takes GUI commands, follows the
+  in order through :class:`EventWriter`, beats, takes GUI commands, follows the
   vehicle's leg.  When the database is unreachable it says so once, backs off
   and retries; the spool keeps growing meanwhile and is replayed in order.
 
@@ -45,8 +45,8 @@ from events import feed
 from events.models import Vehicle
 from events.selectors.logs import open_leg_for_vehicle
 from rosbridge_app.collector.disk_guard import FULL, DiskGuard
+from rosbridge_app.collector.event_writer import DatabaseUnavailable, EventWriter
 from rosbridge_app.collector.node import CollectorNode
-from rosbridge_app.collector.recorder import DatabaseUnavailable, Recorder
 from rosbridge_app.collector.replay import ReplayOrder
 from rosbridge_app.collector.spool import Spool, SpoolFull
 from rosbridge_app.collector.spooler import Spooler, default_spool
@@ -215,7 +215,7 @@ class CollectorRuntime:
         self.vehicle_key = self.node.get_parameter("vehicle").value
         self.name = self.name or f"{self.host}/{self.vehicle_key or self.node.get_name()}"
         self.spool = Spool(self.spool_path or default_spool(self.name))
-        self.recorder = Recorder(self._leg)
+        self.event_writer = EventWriter(self._leg)
         self.node.blackbox.directory = self.spool.path.with_suffix(".snapshots")
         self.disk = DiskGuard(self.spool.path)
         self.disk.snapshots = self.node.blackbox.directory
@@ -307,7 +307,7 @@ class CollectorRuntime:
                         self.spooler.urgent.wait(PACE)
                     continue
                 if t >= next_sync:
-                    self.recorder.sync()
+                    self.event_writer.sync()
                     self._say_leg()
                     next_sync = t + SYNC
                 self.spooler.spooled.wait(0.05)
@@ -333,7 +333,7 @@ class CollectorRuntime:
                 return
 
     def _write_batch(self) -> bool:
-        taken = self.order.write_next(self.recorder)
+        taken = self.order.write_next(self.event_writer)
         if not taken:
             self.status.pending = 0
             return False
@@ -352,7 +352,7 @@ class CollectorRuntime:
         return len(self.spool) + len(self.spooler.held)
 
     def _say_leg(self) -> None:
-        leg = self.recorder.leg
+        leg = self.event_writer.leg
         self.status.leg = f"{leg} of {leg.shift}" if leg is not None else None
         key = leg.pk if leg is not None else None
         if key == self._said_no_leg:
@@ -395,7 +395,7 @@ class CollectorRuntime:
 
     def _heartbeat(self) -> None:
         close_old_connections()
-        leg = self.recorder.leg
+        leg = self.event_writer.leg
         fields = {
             "vehicle": self._vehicle(),
             "host": self.host,

@@ -18,7 +18,7 @@ from rosbridge_app.legacy_api.answers import LegacyRefusal, info, refusal, warn
 from rosbridge_app.legacy_api.fields import CURRENT_LEG, CURRENT_SEGMENT, CURRENT_SHIFT
 from telemetry.models import Image
 from telemetry.pictures import greyscale_png
-from telemetry.services import attachments, map_images, recording
+from telemetry.services import attachments, map_images, pose_writes
 
 # The original's segment_type ids.
 MODE_OF_TYPE = {1: "ito", 2: "auto"}
@@ -84,13 +84,13 @@ class SegmentView(LegacyView):
                 # The node's newest fix at the switch, which it never posts as a
                 # pose: without it the new take-over's track would start up to
                 # send_pose_period later.
-                fix = recording.GpsFix(
+                fix = pose_writes.GpsFix(
                     longitude=gps.longitude,
                     latitude=gps.latitude,
                     robot_stamp=stamp,
                     uid=self.uid("switch", report.master.pk, stamp, gps.longitude, gps.latitude),
                 )
-                recording.store_poses(report.master, [fix])
+                pose_writes.store_poses(report.master, [fix])
             return info(f"Created {mode.upper()} parent segment entry.")
         return info(f"The {mode.upper()} segment is open already; nothing changed.")
 
@@ -125,13 +125,13 @@ class PoseView(LegacyView):
         )
         lng, lat = fields.number(data, "lng"), fields.number(data, "lat")
         stamp = fields.robot_time(data, "orig_secs")
-        fix = recording.GpsFix(
+        fix = pose_writes.GpsFix(
             longitude=lng,
             latitude=lat,
             robot_stamp=stamp,
             uid=self.uid("pose", segment.master_id, stamp, lng, lat),
         )
-        if recording.store_poses(segment, [fix]):
+        if pose_writes.store_poses(segment, [fix]):
             return info("Created pose entry.")
         return info("This pose is stored already.")
 
@@ -148,14 +148,14 @@ class LocalPoseView(LegacyView):
             return warn("A local pose at exactly (0, 0) is a failed TF lookup; not stored.")
         stamp = fields.robot_time(data, "orig_secs")
         frame = fields.text(data, "frame_id").lstrip("/")
-        pose = recording.MapPose(
+        pose = pose_writes.MapPose(
             x=x,
             y=y,
             frame=frame,
             robot_stamp=stamp,
             uid=self.uid("local", segment.master_id, stamp, x, y),
         )
-        if recording.record_local_poses(segment, [pose]):
+        if pose_writes.store_local_poses(segment, [pose]):
             return info("Created local_pose entry.")
         return info("This local pose is stored already.")
 
@@ -192,7 +192,7 @@ class MapImageView(LegacyView):
                     "KeyError", f"Missing field {name}: the shift has no map to take it from."
                 )
         frame = fields.text(data, "frame_id").lstrip("/") or (newest.frame if newest else "map")
-        _, stored = map_images.record_map(
+        _, stored = map_images.store_map(
             shift,
             png=greyscale_png(fields.picture(data, "image_data")),
             frame=frame,

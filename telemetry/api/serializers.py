@@ -1,4 +1,4 @@
-"""Shapes of robot-recorded data; storing it is up to ``telemetry.services.recording``."""
+"""Shapes of robot-recorded data; storing it is up to ``telemetry.services.pose_writes``."""
 
 import re
 import uuid
@@ -24,7 +24,7 @@ from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 from telemetry.models.poses import FixStatus
 from telemetry.pictures import MAP_FORMATS
 from telemetry.services.map_images import check_map_placement
-from telemetry.services.recording import (
+from telemetry.services.pose_writes import (
     DEFAULT_FIX_STATUS,
     FIX_STATUSES,
     GpsFix,
@@ -265,7 +265,7 @@ class BatchResultSerializer(serializers.Serializer):
 
 class MapImageSerializer(ClientUidMixin, ServiceSerializer):
     # Which formats a map may be is the services' rule (telemetry.pictures.MAP_FORMATS,
-    # checked by record_map); its refusal answers 400 on this field.
+    # checked by store_map); its refusal answers 400 on this field.
     image = serializers.ImageField(
         help_text=f"The map as a {'/'.join(MAP_FORMATS)} file (multipart upload)."
     )

@@ -20,7 +20,7 @@ from telemetry.api import single_pose
 from telemetry.models import Image, LocalPose, MapImage, Pose, Recording
 from telemetry.selectors import distances, tracks
 from telemetry.selectors import maps as map_selectors
-from telemetry.services import attachments, map_images, recording
+from telemetry.services import attachments, map_images, pose_writes
 from telemetry.storage import keys
 
 # --- filters ------------------------------------------------------------------------------
@@ -110,7 +110,7 @@ class PoseViewSet(RobotDataViewSet):
         return self.store_batch(
             request,
             s.PoseBatchSerializer,
-            lambda segment, poses, pose_source=None: recording.record_poses(
+            lambda segment, poses, pose_source=None: pose_writes.store_poses(
                 segment, [s.gps_fix(p) for p in poses], pose_source
             ),
         )
@@ -123,7 +123,7 @@ class LocalPoseViewSet(RobotDataViewSet):
     robot_actions = ("create", "batch")
 
     def create_with_service(self, data):
-        return recording.store_local_pose(data["segment"], s.map_pose(data))
+        return pose_writes.store_local_pose(data["segment"], s.map_pose(data))
 
     @extend_schema(request=s.LocalPoseBatchSerializer, responses={201: s.BatchResultSerializer})
     @action(detail=False, methods=["post"])
@@ -132,7 +132,7 @@ class LocalPoseViewSet(RobotDataViewSet):
         return self.store_batch(
             request,
             s.LocalPoseBatchSerializer,
-            lambda segment, poses: recording.record_local_poses(
+            lambda segment, poses: pose_writes.store_local_poses(
                 segment, [s.map_pose(p) for p in poses]
             ),
         )
@@ -153,7 +153,7 @@ class MapImageViewSet(RobotDataViewSet):
         data = dict(serializer.validated_data)
         upload = data.pop("image")
         shift = data.pop("shift")
-        map_image, stored = map_images.record_map(shift, png=upload.read(), **data)
+        map_image, stored = map_images.store_map(shift, png=upload.read(), **data)
         # An unchanged map (or a retried uid) is answered with the map already stored.
         code = status.HTTP_201_CREATED if stored else status.HTTP_200_OK
         return self.respond(map_image, code=code)
@@ -259,9 +259,9 @@ class TrackViewSet(viewsets.ViewSet):
         features = []
         # Whole legs: the distance rule needs each master's follower.
         masters = list(tracks.masters(**parent))
-        loaded = tracks.load_tracks([m.pk for m in masters], keys.GPS)
-        paths = distances.measured_paths(masters, keys.GPS, loaded)
-        for track in tracks.segment_tracks(masters, keys.GPS, loaded):
+        loaded = tracks.load_tracks([m.pk for m in masters], keys.GPS_TRACK)
+        paths = distances.measured_paths(masters, keys.GPS_TRACK, loaded)
+        for track in tracks.segment_tracks(masters, keys.GPS_TRACK, loaded):
             coordinates = track.coordinates()
             properties = _segment_properties(track.segment)
             properties["point_count"] = len(coordinates)
@@ -283,9 +283,9 @@ class LocalTrackViewSet(viewsets.ViewSet):
         result = []
         # Whole legs: the distance rule needs each master's follower.
         masters = list(tracks.masters(**parent))
-        loaded = tracks.load_tracks([m.pk for m in masters], keys.LOCAL)
-        paths = distances.measured_paths(masters, keys.LOCAL, loaded)
-        for track in tracks.segment_tracks(masters, keys.LOCAL, loaded):
+        loaded = tracks.load_tracks([m.pk for m in masters], keys.LOCAL_TRACK)
+        paths = distances.measured_paths(masters, keys.LOCAL_TRACK, loaded)
+        for track in tracks.segment_tracks(masters, keys.LOCAL_TRACK, loaded):
             item = _segment_properties(track.segment)
             item.update(
                 frame=track.frame,

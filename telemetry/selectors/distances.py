@@ -31,7 +31,7 @@ from events.models import Segment
 from telemetry.models import SegmentFigures
 from telemetry.selectors.tracks import Coordinate, Track, load_tracks
 from telemetry.storage import plain_rows
-from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 
 WGS84 = Geod(ellps="WGS84")
 _A = WGS84.a
@@ -55,7 +55,7 @@ def _steps(x: np.ndarray, y: np.ndarray, mode: str, inside: np.ndarray | None = 
     """Length of each step x[i] -> x[i + 1].  Where ``inside`` is given, only the
     steps it marks are measured exactly: the others join two polylines laid end
     to end, and the caller ignores them."""
-    if mode != GPS:
+    if mode != GPS_TRACK:
         return np.hypot(np.diff(x), np.diff(y))
     steps = _short_steps(x, y)
     far = (steps > SHORT_STEP) | (np.abs(y[:-1]) > POLAR) | (np.abs(y[1:]) > POLAR)
@@ -134,7 +134,7 @@ def start_points(masters: list[Segment], mode: str) -> dict[int, tuple[float, fl
     deferred ``start_position`` or passed rows rather than segments (the
     statistics do, for thousands of segments) the GPS positions are read as
     plain floats in one query instead of one geometry object per segment."""
-    if mode != GPS:
+    if mode != GPS_TRACK:
         return {
             m.pk: (m.start_local_x, m.start_local_y)
             for m in masters
@@ -186,7 +186,7 @@ def _neighbours(
 
 
 def measured_paths(
-    masters: Iterable[Segment], mode: str = GPS, tracks: dict[int, Track] | None = None
+    masters: Iterable[Segment], mode: str = GPS_TRACK, tracks: dict[int, Track] | None = None
 ) -> dict[int, MeasuredPath]:
     """Paths of the given master segments, keyed by id, measured on their poses
     (for drawing them; ``kept_distances`` gives the distances without reading poses).
@@ -251,7 +251,7 @@ class KeptPath:
     last_stamp: datetime | None = None
 
 
-def kept_paths(masters: Iterable[Segment], mode: str = GPS) -> dict[int, KeptPath]:
+def kept_paths(masters: Iterable[Segment], mode: str = GPS_TRACK) -> dict[int, KeptPath]:
     """The distance rule on the figures kept at write time (SegmentFigures): the
     join from the start position to the first point, the kept length of the
     track, the join from its last point to the next start.  No pose is read, so
@@ -294,7 +294,7 @@ def kept_paths(masters: Iterable[Segment], mode: str = GPS) -> dict[int, KeptPat
     return paths
 
 
-def kept_distances(masters: Iterable[Segment], mode: str = GPS) -> dict[int, float | None]:
+def kept_distances(masters: Iterable[Segment], mode: str = GPS_TRACK) -> dict[int, float | None]:
     """{master id: distance} by ``kept_paths``."""
     return {pk: path.distance for pk, path in kept_paths(masters, mode).items()}
 
@@ -302,6 +302,6 @@ def kept_distances(masters: Iterable[Segment], mode: str = GPS) -> dict[int, flo
 def displayed_distances(masters: list[Segment]) -> dict[int, float | None]:
     """What a list shows for one leg's masters: the GPS distance where one was
     measured, else the local one, else None (nothing measured)."""
-    by_gps = kept_distances(masters, GPS)
-    by_local = kept_distances(masters, LOCAL)
+    by_gps = kept_distances(masters, GPS_TRACK)
+    by_local = kept_distances(masters, LOCAL_TRACK)
     return {pk: d if d is not None else by_local[pk] for pk, d in by_gps.items()}

@@ -12,7 +12,7 @@ from django.db.models import Count, Max, Value
 from events.models import Segment
 from telemetry.models import LocalPose, Pose
 from telemetry.selectors.tracks import Track, load_tracks
-from telemetry.storage.keys import GPS, MODES
+from telemetry.storage.keys import GPS_TRACK, TRACK_KINDS
 
 # {(mode, segment id): (key, track)}, bounded in points (x, y and t: 24 bytes
 # each, so about 100 MB), least recently read dropped first.
@@ -40,11 +40,13 @@ def _keep(slot: tuple[str, int], key: tuple, track: Track) -> None:
 _reading = threading.Lock()
 
 
-def pose_counts(segment_ids: list[int], modes=MODES) -> dict[tuple[str, int], tuple[int, int]]:
+def pose_counts(
+    segment_ids: list[int], modes=TRACK_KINDS
+) -> dict[tuple[str, int], tuple[int, int]]:
     """{(mode, segment id): (poses stored, newest pose id)} of the segments
     that have poses, in one query (an index-only count on PostgreSQL)."""
     parts = [
-        (Pose if mode == GPS else LocalPose)
+        (Pose if mode == GPS_TRACK else LocalPose)
         .objects.filter(segment_id__in=segment_ids)
         .values("segment_id")
         .annotate(_n=Count("id"), _newest=Max("id"), _mode=Value(mode))
@@ -58,7 +60,7 @@ def pose_counts(segment_ids: list[int], modes=MODES) -> dict[tuple[str, int], tu
     return {(mode, seg): (n, newest) for mode, seg, n, newest in rows}
 
 
-def kept_tracks(segments: list[Segment], modes=MODES) -> dict[str, dict[int, Track]]:
+def kept_tracks(segments: list[Segment], modes=TRACK_KINDS) -> dict[str, dict[int, Track]]:
     """``load_tracks`` of each mode for the map, which asks again at every
     visit, zoom and live update: {mode: {segment id: track}}.
 
@@ -111,4 +113,4 @@ def keeps_any(segments: list[Segment]) -> bool:
     """Whether this process keeps a track of any of ``segments``, current or
     not (no query: what ``kept_tracks`` would then read is what changed)."""
     with _lock:
-        return any((mode, s.pk) in _kept for mode in MODES for s in segments)
+        return any((mode, s.pk) in _kept for mode in TRACK_KINDS for s in segments)

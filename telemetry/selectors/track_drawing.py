@@ -5,7 +5,7 @@ import numpy as np
 import shapely
 
 from telemetry.selectors.tracks import Track
-from telemetry.storage.keys import GPS
+from telemetry.storage.keys import GPS_TRACK
 
 # Zoom levels Leaflet offers on the GPS map; a tolerance below 1e-9 degrees
 # (0.1 mm) keeps every point anyway.
@@ -32,7 +32,7 @@ def local_zoom_tolerance(zoom: int) -> float:
 
 def tolerance(mode: str, zoom: int) -> float:
     """What a track may be thinned by at ``zoom`` of its map without a visible change."""
-    return zoom_tolerance(zoom) if mode == GPS else local_zoom_tolerance(zoom)
+    return zoom_tolerance(zoom) if mode == GPS_TRACK else local_zoom_tolerance(zoom)
 
 
 def _mercator(latitude: np.ndarray) -> np.ndarray:
@@ -49,12 +49,12 @@ def fit_zoom(mode: str, tracks: list[Track], width: int, height: int) -> int | N
         return None
     x = np.concatenate(xs)
     y = np.concatenate([t.y for t in tracks if len(t)])
-    if mode == GPS:
+    if mode == GPS_TRACK:
         y = _mercator(y)
     # A track of one point (or a straight line) still gets a finite zoom.
     span_x = max(float(x.max() - x.min()), 1e-12)
     span_y = max(float(y.max() - y.min()), 1e-12)
-    if mode == GPS:
+    if mode == GPS_TRACK:
         pixels_per_unit = min(width / span_x, height / span_y) * 360 / 256
         low = 0
     else:

@@ -15,7 +15,7 @@ from django.db.models.functions import Coalesce
 from events.models import Segment
 from telemetry import storage
 from telemetry.models import Pose
-from telemetry.storage.keys import GPS, MODES, USABLE_FIX
+from telemetry.storage.keys import GPS_TRACK, TRACK_KINDS, USABLE_FIX
 
 # Two consecutive points further apart in time than this are reported as a gap.
 GAP_SECONDS = 10.0
@@ -64,7 +64,7 @@ class Track:
 
 
 def load_tracks(
-    segment_ids: list[int], mode: str = GPS, *, within_kept_span: bool = True
+    segment_ids: list[int], mode: str = GPS_TRACK, *, within_kept_span: bool = True
 ) -> dict[int, Track]:
     """Tracks of the given master segments; segments without points are absent.
 
@@ -72,10 +72,10 @@ def load_tracks(
     PostgreSQL only the month partitions they span are read);
     ``within_kept_span=False`` reads every pose, for measuring the figures
     themselves (telemetry.services.segment_figures)."""
-    if mode not in MODES:
-        raise ValueError(f"mode must be one of {MODES}")
+    if mode not in TRACK_KINDS:
+        raise ValueError(f"mode must be one of {TRACK_KINDS}")
     arrays = storage.track_arrays(segment_ids, mode, mode if within_kept_span else None)
-    if mode == GPS:
+    if mode == GPS_TRACK:
         return {seg: Track(seg, x, y, t, no_fix=no_fix) for seg, x, y, t, no_fix in arrays}
     return {seg: Track(seg, x, y, t, frame=frame) for seg, x, y, t, frame in arrays}
 
@@ -114,7 +114,7 @@ def masters(*, leg=None, shift=None, test_event=None) -> QuerySet[Segment]:
 
 def segment_tracks(
     segments: QuerySet[Segment] | list[Segment],
-    mode: str = GPS,
+    mode: str = GPS_TRACK,
     loaded: dict[int, Track] | None = None,
 ) -> list[SegmentTrack]:
     """One track per master that has usable points, in the masters' order.

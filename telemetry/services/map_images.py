@@ -68,14 +68,14 @@ class MapPicture:
         return tuple(getattr(self, name) for name in MapImage.PLACEMENT_FIELDS)
 
 
-def record_map(shift: Shift, **fields) -> tuple[MapImage, bool]:
+def store_map(shift: Shift, **fields) -> tuple[MapImage, bool]:
     """Store a map (the fields of :class:`MapPicture`) for the shift unless it equals
     the newest one; returns (map, stored)."""
-    return record_maps(shift, [MapPicture(**fields)])[0]
+    return store_maps(shift, [MapPicture(**fields)])[0]
 
 
 @transaction.atomic
-def record_maps(shift: Shift, maps: list[MapPicture]) -> list[tuple[MapImage, bool]]:
+def store_maps(shift: Shift, maps: list[MapPicture]) -> list[tuple[MapImage, bool]]:
     """Store maps in order, each unless it equals the newest one before it (a known
     uid gives the map stored first); returns (map, stored) for each.
 

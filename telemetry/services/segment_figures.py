@@ -27,7 +27,7 @@ from telemetry.models import LocalPose, Pose, SegmentFigures
 from telemetry.selectors.distances import path_length
 from telemetry.selectors.tracks import load_tracks
 from telemetry.storage import keys
-from telemetry.storage.keys import GPS, LOCAL, MODES
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK, TRACK_KINDS
 from telemetry.storage.rows import Change, NewPoint
 
 # Figures are float sums taken in another order than a measurement of the
@@ -39,7 +39,7 @@ _NEVER = datetime(1, 1, 1, tzinfo=UTC)
 
 
 def _model(mode):
-    return Pose if mode == GPS else LocalPose
+    return Pose if mode == GPS_TRACK else LocalPose
 
 
 def _key(robot_stamp, received, pk) -> tuple:
@@ -234,7 +234,7 @@ def _measure(figures: SegmentFigures, measured=_UNREAD) -> None:
     figures.max_x, figures.max_y = float(x.max()), float(y.max())
 
 
-def measure_figures(master_ids: Iterable[int], modes=MODES) -> None:
+def measure_figures(master_ids: Iterable[int], modes=TRACK_KINDS) -> None:
     """Measure the figures of ``master_ids`` from their poses again (after an
     import merged poses into them).  Call inside the writing transaction."""
     for mode in modes:
@@ -248,7 +248,7 @@ def sum_uids_again() -> None:
     """Set the uid sum of every kept figures row from the poses stored, and
     nothing else (figures kept before they kept a sum, thinned ones too), in
     one pass over each pose table."""
-    for mode in MODES:
+    for mode in TRACK_KINDS:
         sums = _uid_sums(None, mode)
         rows = list(SegmentFigures.objects.filter(mode=mode))
         for figures in rows:
@@ -288,7 +288,7 @@ def recount_figures(
     kept = {
         (f.segment_id, f.mode): f for f in SegmentFigures.objects.filter(segment_id__in=master_ids)
     }
-    for mode in (GPS, LOCAL):
+    for mode in (GPS_TRACK, LOCAL_TRACK):
         measured = _measured(master_ids, mode)
         for master_id in master_ids:
             fresh = SegmentFigures(segment_id=master_id, mode=mode)

@@ -17,9 +17,9 @@ from telemetry.models.poses import FixStatus
 
 # The two kinds of track: GPS poses (longitude, latitude) and local poses
 # (map-frame metres).  Also the ``mode`` of a segment's kept figures row.
-GPS = "gps"
-LOCAL = "local"
-MODES = (GPS, LOCAL)
+GPS_TRACK = "gps"
+LOCAL_TRACK = "local"
+TRACK_KINDS = (GPS_TRACK, LOCAL_TRACK)
 
 # The first key may be missing (a pose without the robot's clock): it sorts last.
 DRIVING_ORDER = ("robot_stamp", "received", "id")
@@ -49,7 +49,7 @@ USABLE_FIX_SQL = f"fix_status <> {int(FixStatus.NO_FIX)}"
 
 def usable(queryset, mode: str):
     """The usable points of a pose ``queryset`` of ``mode``."""
-    return queryset.filter(USABLE_FIX) if mode == GPS else queryset
+    return queryset.filter(USABLE_FIX) if mode == GPS_TRACK else queryset
 
 
 # The columns of a GPS pose row and of a local pose row, in the order every

@@ -388,7 +388,7 @@ def _seconds(stamps: bytes | None) -> np.ndarray:
 
 def track_arrays(segment_ids: list[int], mode: str, kept_mode: str | None):
     ids = [int(pk) for pk in segment_ids]
-    if mode == keys.GPS:
+    if mode == keys.GPS_TRACK:
         for seg, points, stamps, no_fix in _read(gps_tracks_sql(), _GPS_COLUMNS, ids, kept_mode):
             points = np.frombuffer(points or b"", dtype=_WKB_POINT)
             x, y = points["x"].astype(float), points["y"].astype(float)

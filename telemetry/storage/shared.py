@@ -39,7 +39,7 @@ WHERE m.id = %s
   AND (%s IS NULL OR EXISTS (SELECT 1 FROM {PoseSource._meta.db_table} WHERE id = %s))
   {guard}
 ON CONFLICT DO NOTHING
-RETURNING id, {kept_returning(Pose._meta.db_table + ".segment_id", keys.GPS)}
+RETURNING id, {kept_returning(Pose._meta.db_table + ".segment_id", keys.GPS_TRACK)}
 """
 
 
@@ -132,7 +132,7 @@ def upsert_params(master_id: int, mode: str, seen: Kept | None, change: Change) 
 
 def _point_sql(mode: str) -> tuple[str, str]:
     # The points of a track as (id, x, y); GPS: usable fixes only.
-    if mode == keys.GPS:
+    if mode == keys.GPS_TRACK:
         return f"SELECT id, ST_X(point), ST_Y(point) FROM {Pose._meta.db_table}", (
             keys.USABLE_FIX_SQL
         )

@@ -84,11 +84,11 @@ class _Coordinate(Func):
 
 
 def _rows(segment_ids, mode):
-    model = Pose if mode == keys.GPS else LocalPose
+    model = Pose if mode == keys.GPS_TRACK else LocalPose
     qs = model.objects.filter(segment_id__in=segment_ids).annotate(
         _t=_Epoch(Coalesce("robot_stamp", "received"))
     )
-    if mode == keys.GPS:
+    if mode == keys.GPS_TRACK:
         qs = qs.annotate(
             _x=_Coordinate("point", function="ST_X"), _y=_Coordinate("point", function="ST_Y")
         )
@@ -105,18 +105,18 @@ def track_arrays(segment_ids, mode: str, kept_mode: str | None):
     buckets: dict[int, tuple[list, list, list, list]] = {}
     no_fix: dict[int, int] = {}
     for seg, x, y, t, extra in _rows(list(segment_ids), mode):
-        if mode == keys.GPS and extra == FixStatus.NO_FIX:
+        if mode == keys.GPS_TRACK and extra == FixStatus.NO_FIX:
             no_fix[seg] = no_fix.get(seg, 0) + 1
             continue
         bucket = buckets.setdefault(seg, ([], [], [], []))
         bucket[0].append(x)
         bucket[1].append(y)
         bucket[2].append(t)
-        if mode == keys.LOCAL and not bucket[3]:
+        if mode == keys.LOCAL_TRACK and not bucket[3]:
             bucket[3].append(extra)
     for seg, (xs, ys, ts, frame) in buckets.items():
         x, y, t = (np.asarray(v, dtype=float) for v in (xs, ys, ts))
-        yield seg, x, y, t, (no_fix.pop(seg, 0) if mode == keys.GPS else (frame or [""])[0])
+        yield seg, x, y, t, (no_fix.pop(seg, 0) if mode == keys.GPS_TRACK else (frame or [""])[0])
     for seg, count in no_fix.items():
         yield seg, np.empty(0), np.empty(0), np.empty(0), count
 

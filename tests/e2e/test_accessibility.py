@@ -26,7 +26,7 @@ def field(server):
         from events.models import Vehicle
         from events.services import logs, segments
         from rosbridge_app.services import collectors
-        from telemetry.services import recording
+        from telemetry.services import pose_writes
         v = Vehicle.objects.create(key="axe-rover", short_description="Axe Rover")
         events = []
         for n in range(2):
@@ -34,7 +34,8 @@ def field(server):
             shift = logs.create_shift(test_event=e, vehicle=v)
             leg = logs.create_leg(shift=shift, weather_id="sunny")
             auto = segments.report_mode(leg, "auto").master
-            recording.record_poses(auto, [recording.GpsFix(7.0, 50.0 + i * 1e-4) for i in range(9)])
+            fixes = [pose_writes.GpsFix(7.0, 50.0 + i * 1e-4) for i in range(9)]
+            pose_writes.store_poses(auto, fixes)
             segments.report_mode(leg, "ito", **({"reason": "safety"} if n == 0 else {}))
             events.append({"event": e.pk, "shift": leg.shift_id, "leg": leg.pk})
             if n == 0:

@@ -29,7 +29,7 @@ def two_events(server):
         from events.models import Vehicle
         from events.services import logs, segments
         from events.services.segments import GpsPosition
-        from telemetry.services import recording
+        from telemetry.services import pose_writes
         vehicle = Vehicle.objects.create(key="compare-rover", short_description="Compare Rover")
         ids = []
         for n, version in enumerate(("1.0 Ölberg", "2.0")):
@@ -41,10 +41,10 @@ def two_events(server):
             s = logs.create_shift(test_event=e, vehicle=vehicle, at=t0)
             leg = logs.create_leg(shift=s, at=t0, weather_id="sunny")
             auto = segments.report_mode(leg, "auto", at=at(0), gps=GpsPosition(7.0, 50.0)).master
-            recording.record_poses(
+            pose_writes.store_poses(
                 auto,
                 [
-                    recording.GpsFix(7.0 + i * 1e-4, 50.0 + n * 5e-5, robot_stamp=at(i))
+                    pose_writes.GpsFix(7.0 + i * 1e-4, 50.0 + n * 5e-5, robot_stamp=at(i))
                     for i in range(1, 30)
                 ],
             )

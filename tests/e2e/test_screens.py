@@ -30,7 +30,7 @@ def driven_leg(server):
         import json
         from events.models import Performer, PoseSource, Vehicle
         from events.services import logs, segments
-        from telemetry.services import recording
+        from telemetry.services import pose_writes
         Performer.objects.get_or_create(institution="Fraunhofer FKIE")
         PoseSource.objects.get_or_create(key="gps", defaults={"short_description": "GPS"})
         v = Vehicle.objects.create(key="cockpit-rover", short_description="Cockpit Rover")
@@ -38,9 +38,11 @@ def driven_leg(server):
         s = logs.create_shift(test_event=e, vehicle=v)
         leg = logs.create_leg(shift=s, weather_id="sunny")
         first = segments.report_mode(leg, "auto").master
-        recording.record_poses(first, [recording.GpsFix(7.0, 50.0 + i * 1e-4) for i in range(20)])
+        fixes = [pose_writes.GpsFix(7.0, 50.0 + i * 1e-4) for i in range(20)]
+        pose_writes.store_poses(first, fixes)
         ito = segments.report_mode(leg, "ito").master
-        recording.record_poses(ito, [recording.GpsFix(7.0 + i * 1e-4, 50.002) for i in range(5)])
+        fixes = [pose_writes.GpsFix(7.0 + i * 1e-4, 50.002) for i in range(5)]
+        pose_writes.store_poses(ito, fixes)
         segments.report_mode(leg, "auto")
         child = ito.children.get()
         print(json.dumps({"event": e.pk, "shift": s.pk, "leg": leg.pk, "child": child.pk}))
@@ -157,13 +159,13 @@ def test_fleet_names_stay_on_the_map_on_a_phone(browser, server, shot):
         from events.models import Vehicle
         from events.services import logs, segments
         from rosbridge_app.services import collectors
-        from telemetry.services import recording
+        from telemetry.services import pose_writes
         for name, lon in (("West", 7.20), ("East", 7.21)):
             v = Vehicle.objects.create(key=f"edge-{name}", short_description=f"Edge rover {name}")
             e = logs.create_test_event(location=f"Edge field {name}")
             leg = logs.create_leg(shift=logs.create_shift(test_event=e, vehicle=v))
             auto = segments.report_mode(leg, "auto").master
-            recording.record_poses(auto, [recording.GpsFix(lon, 50.3)])
+            pose_writes.store_poses(auto, [pose_writes.GpsFix(lon, 50.3)])
             collectors.heartbeat(f"edge-{name}", vehicle=v, logging=True, leg=leg)
         """
     )

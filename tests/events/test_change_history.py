@@ -15,7 +15,7 @@ from exchange.export import export_events, select_events
 from exchange.importer import import_bundle
 from reports.selectors.statistics import event_statistics
 from rosbridge_app.collector import events as ev
-from rosbridge_app.collector.recorder import record_events
+from rosbridge_app.collector.event_writer import write_events
 from tests.support.accounts import signed_in, staff_user
 
 # On SpatiaLite too: events/history.py writes history rows in raw SQL.
@@ -179,7 +179,7 @@ def _new_vehicle():
 
 def test_the_collector_records_its_mode_changes_as_collector(leg):
     now = timezone.now()
-    record_events(
+    write_events(
         leg,
         [
             ev.Event(ev.START, now),

@@ -7,16 +7,16 @@ from common.errors import RuleViolation
 from events.models import Leg, Note, Segment, Shift
 from events.services import deletion, notes, segments
 from telemetry.models import Image, MapImage, Pose
-from telemetry.services import attachments, map_images, recording
+from telemetry.services import attachments, map_images, pose_writes
 from tests.support.images import PNG
 
 
 @pytest.fixture
 def recorded_leg(leg, person, media_root, django_capture_on_commit_callbacks):
     master = segments.report_mode(leg, "ito").master
-    recording.record_poses(master, [recording.GpsFix(7.1, 50.6)])
+    pose_writes.store_poses(master, [pose_writes.GpsFix(7.1, 50.6)])
     image = attachments.attach_image(master, content=PNG)
-    map_image, _ = map_images.record_map(
+    map_image, _ = map_images.store_map(
         leg.shift,
         png=PNG,
         frame="map",

@@ -10,7 +10,7 @@ from common.errors import RuleViolation
 from events import feed
 from events.models import Announcement
 from events.services import logs, notes, segments
-from telemetry.services import recording
+from telemetry.services import pose_writes
 from tests.support.modes import start_auto
 
 # On SpatiaLite too: feed rows wake readers by trigger on PostgreSQL, by the writer on SpatiaLite.
@@ -28,7 +28,7 @@ def last_id():
 def test_new_segment_and_poses_are_announced_with_their_leg(leg):
     before = last_id()
     master = start_auto(leg)
-    recording.record_poses(master, [recording.GpsFix(7.1, 50.6), recording.GpsFix(7.2, 50.7)])
+    pose_writes.store_poses(master, [pose_writes.GpsFix(7.1, 50.6), pose_writes.GpsFix(7.2, 50.7)])
     events = list(Announcement.objects.filter(id__gt=before))
     assert [e.kind for e in events] == ["segment", "poses"]
     assert {e.leg_id for e in events} == {leg.pk}
@@ -38,10 +38,10 @@ def test_new_segment_and_poses_are_announced_with_their_leg(leg):
 
 def test_repeated_pose_batch_announces_nothing_new(leg):
     master = start_auto(leg)
-    fix = recording.GpsFix(7.1, 50.6)
-    recording.record_poses(master, [fix])
+    fix = pose_writes.GpsFix(7.1, 50.6)
+    pose_writes.store_poses(master, [fix])
     before = last_id()
-    recording.record_poses(master, [fix])
+    pose_writes.store_poses(master, [fix])
     assert kinds_since(before) == []
 
 
@@ -87,20 +87,20 @@ def test_the_feed_carries_the_usable_points_as_stored_in_driving_order(leg):
     t0 = timezone.now()
 
     def fix(lon, seconds, **kwargs):
-        return recording.GpsFix(lon, 50.0, robot_stamp=t0 + timedelta(seconds=seconds), **kwargs)
+        return pose_writes.GpsFix(lon, 50.0, robot_stamp=t0 + timedelta(seconds=seconds), **kwargs)
 
     before = last_id()
     # Sent out of order, with a fix that has no position.
-    recording.record_poses(master, [fix(7.3, 30), fix(7.1, 10), fix(7.2, 20, fix_status=-1)])
+    pose_writes.store_poses(master, [fix(7.3, 30), fix(7.1, 10), fix(7.2, 20, fix_status=-1)])
     (batch,) = Announcement.objects.filter(id__gt=before)
     assert batch.payload["points"] == [[7.1, 50.0], [7.3, 50.0]]
     before = last_id()
-    recording.store_pose(master.pk, fix(7.4, 40, fix_status=-1))
+    pose_writes.store_pose(master.pk, fix(7.4, 40, fix_status=-1))
     assert kinds_since(before) == []  # nothing to draw
-    recording.record_poses(master, [fix(7.15, 15), fix(7.25, 25)])
+    pose_writes.store_poses(master, [fix(7.15, 15), fix(7.25, 25)])
     (late,) = Announcement.objects.filter(id__gt=before)
     assert late.payload["changed"] is True and "points" not in late.payload
     before = last_id()
-    recording.store_pose(master.pk, fix(7.5, 50))
+    pose_writes.store_pose(master.pk, fix(7.5, 50))
     (appended,) = Announcement.objects.filter(id__gt=before)
     assert appended.payload["points"] == [[7.5, 50.0]]

@@ -13,9 +13,9 @@ from events.history import authored
 from events.models import Criterion, Judgement, Note, SegmentType, TestCase
 from events.services import finality, logs, segments
 from rosbridge_app.collector import events as ev
-from rosbridge_app.collector.recorder import GivenMaster, Recorder
+from rosbridge_app.collector.event_writer import EventWriter, GivenMaster
 from telemetry.models import Image, LocalPose, MapImage, Pose
-from telemetry.services import recording
+from telemetry.services import pose_writes
 from telemetry.services.segment_figures import recount_figures
 from tests.support.images import map_form, png
 from tests.support.snapshot import snapshot
@@ -29,7 +29,7 @@ STAMP = datetime(2026, 5, 4, 10, 0, tzinfo=UTC)
 def final(leg):
     """A closed and finalised test event: one AUTO master with a pose, a judged criterion."""
     master = segments.report_mode(leg, SegmentType.AUTO).master
-    recording.store_poses(master, [recording.GpsFix(7.1, 50.6, robot_stamp=STAMP)])
+    pose_writes.store_poses(master, [pose_writes.GpsFix(7.1, 50.6, robot_stamp=STAMP)])
     event = leg.shift.test_event
     case = TestCase.objects.create(test_event=event, key="loop", title="Loop")
     criterion = Criterion.objects.create(
@@ -120,7 +120,7 @@ def test_an_administrator_amends_a_final_event_only_with_a_reason(final, api_cli
     refused = admin.post("/api/reports/judgements/", body, format="json")
     assert refused.status_code == 400 and "reason" in refused.json()["errors"]
     with authored(user=admin.user, reason="verdict from the written protocol"):
-        recording.store_poses(final["master"], [recording.GpsFix(7.3, 50.8, robot_stamp=STAMP)])
+        pose_writes.store_poses(final["master"], [pose_writes.GpsFix(7.3, 50.8, robot_stamp=STAMP)])
     assert Pose.objects.filter(segment=final["master"]).count() == 2
 
 
@@ -140,18 +140,18 @@ def test_the_admin_adds_no_judgement_to_a_final_event_without_a_reason(
 
 
 def test_the_collector_stores_nothing_into_a_final_event(final, media_root):
-    """The collector's writer (the Recorder the live collector's writer loop
+    """The collector's writer (the EventWriter the live collector's writer loop
     applies its spool with), given a master of a final event by a late backlog."""
     before = snapshot()
     events = [
-        ev.Event(ev.GPS, STAMP, {"lon": 7.2, "lat": 50.7}, uid=uuid.uuid4()),
-        ev.Event(ev.LOCAL, STAMP, {"x": 1.0, "y": 2.0, "frame": "map"}, uid=uuid.uuid4()),
+        ev.Event(ev.GPS_FIX, STAMP, {"lon": 7.2, "lat": 50.7}, uid=uuid.uuid4()),
+        ev.Event(ev.LOCAL_POSE, STAMP, {"x": 1.0, "y": 2.0, "frame": "map"}, uid=uuid.uuid4()),
     ]
-    recorder = Recorder(lambda: None)
+    event_writer = EventWriter(lambda: None)
 
-    recorder.apply(events, GivenMaster(str(final["master"].uid)))
+    event_writer.apply(events, GivenMaster(str(final["master"].uid)))
 
-    assert recorder.skipped == 2
+    assert event_writer.skipped == 2
     assert snapshot() == before
     assert not LocalPose.objects.exists() and Pose.objects.count() == 1
     assert not Image.objects.exists() and not MapImage.objects.exists()
@@ -166,6 +166,6 @@ def test_a_single_pose_amends_a_final_event_only_with_an_administrators_reason(f
     assert refused.status_code == 400 and "reason" in refused.json()["errors"]
     assert Pose.objects.filter(segment=master).count() == 1
     with authored(user=admin.user, reason="a fix the spool kept"):
-        recording.store_pose(master.pk, recording.GpsFix(7.3, 50.8, robot_stamp=STAMP))
+        pose_writes.store_pose(master.pk, pose_writes.GpsFix(7.3, 50.8, robot_stamp=STAMP))
     assert Pose.objects.filter(segment=master).count() == 2
     assert recount_figures([master.pk]) == {}

@@ -429,16 +429,17 @@ def test_an_archive_of_a_final_event_new_here_brings_all_of_it(day, tmp_path, wi
 def test_an_archive_lists_poses_in_driving_order_unstamped_last(leg, tmp_path, media_root):
     """Issue 42, defect 3: the same order on PostgreSQL and SpatiaLite."""
     from events.models import SegmentType
-    from telemetry.services import recording
+    from telemetry.services import pose_writes
 
     master = segments.report_mode(leg, SegmentType.AUTO).master
     stamps = [None, T0 + timedelta(seconds=2), None, T0 + timedelta(seconds=1)]
-    recording.store_poses(
-        master, [recording.GpsFix(7.0 + i / 1e4, 50.6, robot_stamp=s) for i, s in enumerate(stamps)]
-    )
-    recording.record_local_poses(
+    pose_writes.store_poses(
         master,
-        [recording.MapPose(float(i), 0.0, "map", robot_stamp=s) for i, s in enumerate(stamps)],
+        [pose_writes.GpsFix(7.0 + i / 1e4, 50.6, robot_stamp=s) for i, s in enumerate(stamps)],
+    )
+    pose_writes.store_local_poses(
+        master,
+        [pose_writes.MapPose(float(i), 0.0, "map", robot_stamp=s) for i, s in enumerate(stamps)],
     )
     export_all(tmp_path / "order.zip")
     members = members_of((tmp_path / "order.zip").read_bytes())

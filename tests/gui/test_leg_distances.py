@@ -6,7 +6,7 @@ from django.db import connection
 from django.test.utils import CaptureQueriesContext
 
 from events.services import segments
-from telemetry.services import recording
+from telemetry.services import pose_writes
 from tests.support.accounts import signed_in
 from tests.support.kept import forget_kept_tracks
 from tests.support.modes import start_auto
@@ -15,7 +15,7 @@ pytestmark = pytest.mark.django_db
 
 
 def _drive(master, east, n=50):
-    recording.record_poses(master, [recording.GpsFix(east, 50.0 + i * 1e-5) for i in range(n)])
+    pose_writes.store_poses(master, [pose_writes.GpsFix(east, 50.0 + i * 1e-5) for i in range(n)])
 
 
 def _get(client, leg, what):
@@ -43,7 +43,7 @@ def test_a_late_pose_changes_the_distance_in_the_next_read(client, leg):
     master = start_auto(leg)
     _drive(master, 7.0)
     before = _get(client, leg, "distances")["distances"][str(master.pk)]
-    recording.record_poses(master, [recording.GpsFix(7.0, 50.01, robot_stamp=None)])
+    pose_writes.store_poses(master, [pose_writes.GpsFix(7.0, 50.01, robot_stamp=None)])
     after = _get(client, leg, "distances")["distances"][str(master.pk)]
     assert after > before + 500
 

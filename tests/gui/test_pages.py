@@ -13,7 +13,7 @@ from events.models import Announcement, ItoReason, Performer, PoseSource
 from events.services import segments
 from rosbridge_app.models import Collector
 from rosbridge_app.services import collectors
-from telemetry.services import attachments, map_images, recording
+from telemetry.services import attachments, map_images, pose_writes
 from tests.support.images import PNG, jpeg
 from tests.support.modes import start_auto
 from tests.support.pages import asset_urls, external_assets
@@ -137,7 +137,9 @@ def test_behind_nginx_the_file_transfer_is_handed_to_the_proxy(client, leg, medi
 def test_leg_tracks_carry_points_and_distance(client, leg):
     member(client, "vera", "viewer")
     master = start_auto(leg)
-    recording.record_poses(master, [recording.GpsFix(7.0, 50.0), recording.GpsFix(7.0, 50.001)])
+    pose_writes.store_poses(
+        master, [pose_writes.GpsFix(7.0, 50.0), pose_writes.GpsFix(7.0, 50.001)]
+    )
     data = client.get(f"/gui/api/legs/{leg.pk}/tracks/").json()
     track = data["segments"][str(master.pk)]
     assert track["gps"] == [[50.0, 7.0], [50.001, 7.0]]
@@ -147,7 +149,7 @@ def test_leg_tracks_carry_points_and_distance(client, leg):
 def test_local_map_endpoint_places_the_newest_map(client, shift, media_root):
     member(client, "vera", "viewer")
     assert client.get(f"/gui/api/shifts/{shift.pk}/local-map/").json()["map"] is None
-    map_images.record_map(
+    map_images.store_map(
         shift,
         png=PNG,
         frame="map",

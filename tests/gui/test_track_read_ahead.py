@@ -6,7 +6,7 @@ import pytest
 from django.db import connection
 from django.test.utils import CaptureQueriesContext
 
-from telemetry.services import recording
+from telemetry.services import pose_writes
 from tests.support.accounts import signed_in
 from tests.support.kept import forget_kept_tracks
 from tests.support.modes import start_auto
@@ -19,8 +19,8 @@ pytestmark = pytest.mark.django_db(transaction=True)
 def driven_leg(client, leg):
     signed_in(client, "vera", "viewer")
     master = start_auto(leg)
-    recording.record_poses(master, [recording.GpsFix(7.0, 50.0 + i * 1e-5) for i in range(300)])
-    recording.record_local_poses(master, [recording.MapPose(i, 0.0, "map") for i in range(300)])
+    pose_writes.store_poses(master, [pose_writes.GpsFix(7.0, 50.0 + i * 1e-5) for i in range(300)])
+    pose_writes.store_local_poses(master, [pose_writes.MapPose(i, 0.0, "map") for i in range(300)])
     return leg, master
 
 
@@ -61,7 +61,7 @@ def test_a_pose_stored_after_the_read_ahead_is_in_the_answer(client, driven_leg)
     forget_kept_tracks()
     _open_cockpit(client, leg)
     # The robot drives on after the page opened, 3 km north.
-    recording.record_poses(master, [recording.GpsFix(7.0, 50.03)])
+    pose_writes.store_poses(master, [pose_writes.GpsFix(7.0, 50.03)])
     body, _ = _tracks(client, leg)
     track = body["segments"][str(master.pk)]
     assert track["gps"][-1] == [50.03, 7.0]

@@ -10,7 +10,7 @@ from django.test.utils import CaptureQueriesContext
 
 from events.services import segments
 from telemetry.selectors.track_drawing import zoom_tolerance
-from telemetry.services import recording
+from telemetry.services import pose_writes
 from tests.support.accounts import signed_in
 from tests.support.kept import forget_kept_tracks
 from tests.support.modes import start_auto
@@ -29,10 +29,10 @@ def zigzag_leg(client, leg):
     signed_in(client, "vera", "viewer")
     master = start_auto(leg)
     fixes = [
-        recording.GpsFix(7.0 + (ZIGZAG if (i // 100) % 2 else 0.0), 50.0 + i * 1e-5)
+        pose_writes.GpsFix(7.0 + (ZIGZAG if (i // 100) % 2 else 0.0), 50.0 + i * 1e-5)
         for i in range(2000)
     ]
-    recording.record_poses(master, fixes)
+    pose_writes.store_poses(master, fixes)
     return leg, master
 
 
@@ -128,8 +128,8 @@ def test_a_wrong_view_is_refused_with_a_field_message(client, zigzag_leg, params
 
 def test_the_local_map_zooms_below_zero(client, zigzag_leg):
     leg, master = zigzag_leg
-    recording.record_local_poses(
-        master, [recording.MapPose(float(i), 0.0, "map") for i in range(50)]
+    pose_writes.store_local_poses(
+        master, [pose_writes.MapPose(float(i), 0.0, "map") for i in range(50)]
     )
     body = tracks(client, leg, map="local", zoom=-3, bbox="0,-1,10,1", bbox_zoom=-1)
     # A straight line keeps its ends and the point past the view where its detail ends.
@@ -147,7 +147,7 @@ def test_reading_the_tracks_takes_as_many_queries_for_many_segments_as_for_one(
     client, zigzag_leg, params
 ):
     leg, master = zigzag_leg
-    recording.record_local_poses(master, [recording.MapPose(i, 0.0, "map") for i in range(20)])
+    pose_writes.store_local_poses(master, [pose_writes.MapPose(i, 0.0, "map") for i in range(20)])
     # A process's first request looks up what it keeps for the next ones (the
     # account's language, the site's caches): not counted.
     tracks(client, leg, **params)
@@ -155,11 +155,11 @@ def test_reading_the_tracks_takes_as_many_queries_for_many_segments_as_for_one(
     one = [_queries_for_tracks(client, leg, **params), _queries_for_tracks(client, leg, **params)]
     for k in range(5):
         master = segments.report_mode(leg, "ito" if k % 2 == 0 else "auto").master
-        recording.record_poses(
-            master, [recording.GpsFix(7.01 + k * 1e-3, 50.0 + i * 1e-5) for i in range(20)]
+        pose_writes.store_poses(
+            master, [pose_writes.GpsFix(7.01 + k * 1e-3, 50.0 + i * 1e-5) for i in range(20)]
         )
-        recording.record_local_poses(
-            master, [recording.MapPose(k + i, 0.0, "map") for i in range(20)]
+        pose_writes.store_local_poses(
+            master, [pose_writes.MapPose(k + i, 0.0, "map") for i in range(20)]
         )
     forget_kept_tracks()
     # The first read of the tracks, then one that finds them kept.
@@ -173,7 +173,7 @@ def test_a_pose_that_arrives_late_for_a_closed_segment_is_in_the_next_read(clien
     leg, master = zigzag_leg
     segments.report_mode(leg, "ito")
     before = tracks(client, leg)["segments"][str(master.pk)]
-    recording.record_poses(master, [recording.GpsFix(7.3, 50.0005, robot_stamp=None)])
+    pose_writes.store_poses(master, [pose_writes.GpsFix(7.3, 50.0005, robot_stamp=None)])
     after = tracks(client, leg)["segments"][str(master.pk)]
     assert len(after["gps"]) == len(before["gps"]) + 1 == 2001
     assert after["gps"][-1] == [50.0005, 7.3]

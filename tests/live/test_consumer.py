@@ -16,7 +16,7 @@ from live import consumers, wakeup
 from live.consumers import LiveConsumer
 from rosbridge_app.selectors.fleet import fleet
 from rosbridge_app.services import collectors
-from telemetry.services import recording
+from telemetry.services import pose_writes
 
 pytestmark = [
     pytest.mark.django_db(transaction=True),
@@ -74,7 +74,7 @@ async def test_new_segment_and_poses_arrive_without_asking(viewer, leg):
     # How fast is measured by benchmarks/live_latency.py; here: they arrive unasked.
     communicator, _ = await connect(viewer, leg=leg.pk)
     master = (await database_sync_to_async(segments.report_mode)(leg, "auto")).master
-    await database_sync_to_async(recording.record_poses)(master, [recording.GpsFix(7.0, 50.0)])
+    await database_sync_to_async(pose_writes.store_poses)(master, [pose_writes.GpsFix(7.0, 50.0)])
     received = []
     while len(received) < 2:
         received += await next_events(communicator)
@@ -111,7 +111,7 @@ async def test_other_legs_poses_are_not_sent(viewer, leg, shift):
     events = await next_events(communicator)
     assert [e["kind"] for e in events] == ["log"]  # pickers hear about every level
     master = (await database_sync_to_async(segments.report_mode)(other, "ito")).master
-    await database_sync_to_async(recording.record_poses)(master, [recording.GpsFix(7.0, 50.0)])
+    await database_sync_to_async(pose_writes.store_poses)(master, [pose_writes.GpsFix(7.0, 50.0)])
     assert await communicator.receive_nothing(timeout=0.8)
     await communicator.disconnect()
 
@@ -129,15 +129,17 @@ async def test_fleet_view_hears_every_legs_mode_and_gps_but_not_its_local_poses(
     communicator, _ = await connect(viewer, fleet=True)
     for robot_leg in (leg, other):
         master = (await database_sync_to_async(segments.report_mode)(robot_leg, "ito")).master
-        await database_sync_to_async(recording.record_poses)(master, [recording.GpsFix(7.0, 50.0)])
+        await database_sync_to_async(pose_writes.store_poses)(
+            master, [pose_writes.GpsFix(7.0, 50.0)]
+        )
     received = []
     while len(received) < 4:
         received += await next_events(communicator)
     assert sorted((e["leg"], e["kind"]) for e in received) == sorted(
         (robot_leg.pk, kind) for robot_leg in (leg, other) for kind in ("segment", "poses")
     )
-    await database_sync_to_async(recording.record_local_poses)(
-        master, [recording.MapPose(1.0, 2.0, "map")]
+    await database_sync_to_async(pose_writes.store_local_poses)(
+        master, [pose_writes.MapPose(1.0, 2.0, "map")]
     )
     assert await communicator.receive_nothing(timeout=0.8)
     await communicator.disconnect()
@@ -279,8 +281,8 @@ async def test_sockets_closed_while_subscribing_leave_and_the_others_get_every_r
     assert len(poller.consumers) == 1
     master = await database_sync_to_async(lambda: leg.segments.get(end__isnull=True))()
     for i in range(20):
-        await database_sync_to_async(recording.record_poses)(
-            master, [recording.GpsFix(7.0 + i / 1000, 50.0)]
+        await database_sync_to_async(pose_writes.store_poses)(
+            master, [pose_writes.GpsFix(7.0 + i / 1000, 50.0)]
         )
     received = []
     while len(received) < 20:
@@ -297,7 +299,7 @@ async def test_a_fleet_view_gets_each_vehicles_entry_as_the_fleet_read_gives_it(
     )
     communicator, _ = await connect(viewer, fleet=True)
     master = (await database_sync_to_async(segments.report_mode)(leg, "ito")).master
-    await database_sync_to_async(recording.record_poses)(master, [recording.GpsFix(7.0, 50.0)])
+    await database_sync_to_async(pose_writes.store_poses)(master, [pose_writes.GpsFix(7.0, 50.0)])
     received = []
     while len(received) < 2:
         received += await next_events(communicator)

@@ -15,7 +15,7 @@ from reports.documents.event_report import render_report
 from reports.documents.options import ReportOptions
 from reports.selectors.statistics import event_statistics
 from rosbridge_app.collector.bag import bag_events
-from rosbridge_app.collector.recorder import record_events
+from rosbridge_app.collector.event_writer import write_events
 from tests.support.fkie import FKIE_BAG
 from tests.support.pdf import flat, pdf_text, save_pages
 
@@ -28,7 +28,7 @@ def fkie_event(vehicle, media_root):
     event = logs.create_test_event(location="FKIE Wachtberg", time_zone="Europe/Berlin", at=start)
     shift = logs.create_shift(test_event=event, vehicle=vehicle, at=start)
     leg = logs.create_leg(shift=shift, at=start, weather_id="sunny")
-    record_events(leg, bag_events(FKIE_BAG, {"params.robot_mode_type": "industrial"}))
+    write_events(leg, bag_events(FKIE_BAG, {"params.robot_mode_type": "industrial"}))
     last = Segment.objects.filter(leg=leg).aggregate(Max("end"))["end__max"]
     return logs.close_test_event(event, at=last)
 

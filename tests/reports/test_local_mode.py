@@ -14,8 +14,8 @@ from reports.documents.event_report import render_report
 from reports.documents.options import ReportOptions
 from reports.figures.maps import Background, Line, MapPainter
 from reports.selectors.statistics import event_statistics
-from telemetry.services import map_images, recording
-from telemetry.services.recording import MapPose
+from telemetry.services import map_images, pose_writes
+from telemetry.services.pose_writes import MapPose
 from tests.support.pdf import flat, pdf_text, save_pages
 from tests.support.scenario import T0
 
@@ -33,7 +33,7 @@ def local_event(vehicle, performer, media_root):
     event = logs.create_test_event(location="Halle 3", time_zone="Europe/Berlin", at=T0)
     shift = logs.create_shift(test_event=event, vehicle=vehicle, performer=performer, at=T0)
     leg = logs.create_leg(shift=shift, at=T0)
-    map_images.record_map(
+    map_images.store_map(
         shift,
         png=_grid_png(),
         frame="map",
@@ -52,12 +52,12 @@ def local_event(vehicle, performer, media_root):
         ]
 
     auto = segments.report_mode(leg, "auto", at=T0, local=LocalPosition(0.0, 0.0, "map")).master
-    recording.record_local_poses(auto, poses([(3, 0), (3, 4)], T0))
+    pose_writes.store_local_poses(auto, poses([(3, 0), (3, 4)], T0))
     t1 = T0 + timedelta(seconds=60)
     ito = segments.report_mode(
         leg, "ito", at=t1, local=LocalPosition(6.0, 8.0, "map"), reason="safety"
     ).master
-    recording.record_local_poses(ito, poses([(6, 9)], t1))
+    pose_writes.store_local_poses(ito, poses([(6, 9)], t1))
     logs.close_leg(leg, at=T0 + timedelta(seconds=100))
     return event
 

@@ -10,7 +10,7 @@ import pytest
 from events.services import logs
 from reports.documents.event_report import render_report
 from reports.documents.options import ReportOptions
-from telemetry.services import recording
+from telemetry.services import pose_writes
 from tests.support.pdf import has_row, pdf_text
 from tests.support.scenario import CHI2_95, STEP_M, T0, _at, _fixes, _switch
 
@@ -28,7 +28,7 @@ def calm_event(vehicle, performer, media_root):
     _switch(leg, "auto", T0, 0, 0.000)
     _switch(leg, "ito", T0, 100, 0.003, reason="goal")
     last = _switch(leg, "auto", T0, 130, 0.004)
-    recording.record_poses(last, _fixes(T0, [(150, 0.005), (190, 0.006)]))
+    pose_writes.store_poses(last, _fixes(T0, [(150, 0.005), (190, 0.006)]))
     logs.close_test_event(event, at=_at(T0, 200))
     return event
 

@@ -9,8 +9,8 @@ from reports.documents.options import ReportOptions
 from reports.selectors.provenance import data_digest
 from reports.selectors.statistics import event_statistics
 from telemetry.models.poses import FixStatus
-from telemetry.services import recording
-from telemetry.services.recording import GpsFix
+from telemetry.services import pose_writes
+from telemetry.services.pose_writes import GpsFix
 from tests.support.pdf import flat, pdf_text
 
 NO_FIX = FixStatus.NO_FIX
@@ -34,7 +34,7 @@ def test_the_pose_count_of_a_segment_says_how_many_fixes_without_a_position_it_l
 ):
     master = scenario.masters["A2"]
     without = [GpsFix(longitude=0.0055 + i / 1e4, latitude=0.0, fix_status=NO_FIX) for i in (0, 1)]
-    assert recording.record_poses(master, without) == 2
+    assert pose_writes.store_poses(master, without) == 2
     pdf = render_report(scenario.event, ReportOptions(no_tiles=True, level="full")).pdf
     text = flat(pdf_text(pdf, tmp_path))
     rows = re.findall(

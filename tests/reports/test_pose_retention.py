@@ -19,10 +19,10 @@ from reports.selectors.statistics import event_statistics, figures
 from reports.services.pose_retention import thin_old_poses
 from telemetry.models import LocalPose, Pose, SegmentFigures, ThinnedSegment
 from telemetry.selectors.tracks import load_tracks
-from telemetry.services import recording
-from telemetry.services.recording import GpsFix, MapPose
+from telemetry.services import pose_writes
+from telemetry.services.pose_writes import GpsFix, MapPose
 from telemetry.services.segment_figures import differences
-from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 
 pytestmark = pytest.mark.django_db
 
@@ -47,14 +47,14 @@ def _drive(leg, start, count=600):
                             robot_stamp=stamp))  # fmt: skip
         local.append(MapPose(x=i * 0.5, y=20 * math.sin(i / 150) + 0.01 * math.sin(i * 1.7),
                              frame="map", robot_stamp=stamp))  # fmt: skip
-    recording.record_poses(master, fixes)
-    recording.record_local_poses(master, local)
+    pose_writes.store_poses(master, fixes)
+    pose_writes.store_local_poses(master, local)
     return master
 
 
 def _seen(event):
     """The event's statistics as the report prints them (runs and their sums)."""
-    runs = event_statistics(event, GPS).runs
+    runs = event_statistics(event, GPS_TRACK).runs
     return [(r.id, r.distance, r.pose_count, r.start, r.end) for r in runs], figures(runs)
 
 
@@ -85,7 +85,7 @@ def test_old_shifts_are_thinned_to_the_report_drawing_and_figures_stay(leg, othe
     new = _drive(other_leg, RECENT)
     event = leg.shift.test_event
     figures, statistics, digest = _figures(), _seen(event), data_digest(event)
-    tracks = {mode: load_tracks([old.pk, new.pk], mode) for mode in (GPS, LOCAL)}
+    tracks = {mode: load_tracks([old.pk, new.pk], mode) for mode in (GPS_TRACK, LOCAL_TRACK)}
     settings.FTT_POSE_RETENTION_MONTHS = 12
 
     call_command("ftt_pose_storage")
@@ -99,7 +99,7 @@ def test_old_shifts_are_thinned_to_the_report_drawing_and_figures_stay(leg, othe
     # A report built before the thinning still verifies: its digest covered the
     # uids as the figures kept them.
     assert data_digest(event) == digest
-    for mode, model in ((GPS, Pose), (LOCAL, LocalPose)):
+    for mode, model in ((GPS_TRACK, Pose), (LOCAL_TRACK, LocalPose)):
         thinned = load_tracks([old.pk, new.pk], mode)
         # The old shift keeps few points, first and last among them, and the
         # drawing moves by less than half a pixel of its map.

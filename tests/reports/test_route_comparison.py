@@ -16,7 +16,7 @@ from events.models import SegmentType, TestCase
 from events.services import logs, segments
 from reports.models import Report
 from reports.services.generation import run_job
-from telemetry.services import recording
+from telemetry.services import pose_writes
 from tests.support.pdf import flat, has_row, pdf_text, save_pages
 
 GEOD = Geod(ellps="WGS84")
@@ -38,10 +38,10 @@ def drive(shift, points):
     master = segments.report_mode(leg, SegmentType.AUTO).master
     start = master.start
     fixes = [
-        recording.GpsFix(lon, lat, robot_stamp=start + timedelta(seconds=i))
+        pose_writes.GpsFix(lon, lat, robot_stamp=start + timedelta(seconds=i))
         for i, (lon, lat) in enumerate(points)
     ]
-    recording.record_poses(master, fixes)
+    pose_writes.store_poses(master, fixes)
     return leg
 
 

@@ -13,7 +13,7 @@ from events.models import Criterion, ItoReason, SegmentType, TestCase
 from events.services import logs, segments
 from reports.documents.event_report import render_report
 from reports.documents.options import ReportOptions
-from telemetry.services import recording
+from telemetry.services import pose_writes
 from tests.support.pdf import flat, pdf_text, save_pages
 
 Kind = Criterion.Kind
@@ -33,10 +33,10 @@ def drive(leg, mode, points=(), reason=None):
     master = segments.report_mode(leg, mode).master
     if points:
         fixes = [
-            recording.GpsFix(lon, lat, robot_stamp=master.start + timedelta(milliseconds=i))
+            pose_writes.GpsFix(lon, lat, robot_stamp=master.start + timedelta(milliseconds=i))
             for i, (lon, lat) in enumerate(points)
         ]
-        recording.record_poses(master, fixes)
+        pose_writes.store_poses(master, fixes)
     if reason:
         segments.annotate_segment(master.children.get(), ito_reason=reason)
     return master
@@ -159,10 +159,10 @@ def test_an_open_run_is_not_yet_judged_until_it_reaches_the_distance(api_client,
     assert verdict == "not yet"
     assert progress == f"run 1 of 3 · {length(line(11)):.0f} m of 50 m without intervention"
     more = [(7.1 + i * STEP, 50.6) for i in range(11, 31)]
-    recording.record_poses(
+    pose_writes.store_poses(
         master,
         [
-            recording.GpsFix(lon, lat, robot_stamp=master.start + timedelta(seconds=1 + i))
+            pose_writes.GpsFix(lon, lat, robot_stamp=master.start + timedelta(seconds=1 + i))
             for i, (lon, lat) in enumerate(more)
         ],
     )

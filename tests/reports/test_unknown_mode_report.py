@@ -10,8 +10,8 @@ from events.services.segments import GpsPosition
 from reports.documents.event_report import render_report
 from reports.documents.options import ReportOptions
 from reports.selectors.statistics import event_statistics
-from telemetry.services import recording
-from telemetry.services.recording import GpsFix
+from telemetry.services import pose_writes
+from telemetry.services.pose_writes import GpsFix
 from tests.support.pdf import flat, has_row, pdf_text
 from tests.support.scenario import STEP, STEP_M, T0
 
@@ -27,9 +27,9 @@ def late_mode_event(vehicle, performer, media_root):
     shift = logs.create_shift(test_event=event, vehicle=vehicle, performer=performer, at=T0)
     leg = logs.create_leg(shift=shift, at=T0)
     unknown = segments.report_mode(leg, "unknown", at=at(0), gps=GpsPosition(0.0, 0.0)).master
-    recording.record_poses(unknown, [GpsFix(longitude=STEP, latitude=0.0, robot_stamp=at(30))])
+    pose_writes.store_poses(unknown, [GpsFix(longitude=STEP, latitude=0.0, robot_stamp=at(30))])
     auto = segments.report_mode(leg, "auto", at=at(75), gps=GpsPosition(2 * STEP, 0.0)).master
-    recording.record_poses(auto, [GpsFix(longitude=3 * STEP, latitude=0.0, robot_stamp=at(100))])
+    pose_writes.store_poses(auto, [GpsFix(longitude=3 * STEP, latitude=0.0, robot_stamp=at(100))])
     logs.close_leg(leg, at=at(135))
     return event
 

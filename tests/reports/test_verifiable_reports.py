@@ -20,8 +20,8 @@ from reports.selectors.provenance import amendments_of, data_digest, verify
 from reports.selectors.statistics import event_statistics
 from telemetry.models import LocalPose, Pose
 from telemetry.models.poses import FixStatus
-from telemetry.services import recording
-from telemetry.services.recording import GpsFix, MapPose
+from telemetry.services import pose_writes
+from telemetry.services.pose_writes import GpsFix, MapPose
 from tests.support.accounts import staff_user
 from tests.support.pdf import flat, pdf_text
 
@@ -67,14 +67,14 @@ def test_digest_reads_no_pose_and_changes_with_every_new_pose(scenario):
     assert verify(_stamp(event, digest)).ok
     # A fix without a position is covered too, and so is a local pose.
     fix = GpsFix(longitude=0.0055, latitude=0.0, fix_status=FixStatus.NO_FIX)
-    assert recording.record_poses(master, [fix]) == 1
+    assert pose_writes.store_poses(master, [fix]) == 1
     after_fix = data_digest(event)
     assert after_fix != digest and not verify(_stamp(event, digest)).ok
-    recording.record_local_poses(master, [MapPose(x=1.0, y=2.0, frame="map")])
+    pose_writes.store_local_poses(master, [MapPose(x=1.0, y=2.0, frame="map")])
     assert data_digest(event) not in (digest, after_fix)
     # The same pose sent again is stored once: the digest stays.
     before_retry = data_digest(event)
-    assert recording.record_poses(master, [fix]) == 0
+    assert pose_writes.store_poses(master, [fix]) == 0
     assert data_digest(event) == before_retry
 
 
@@ -84,7 +84,7 @@ def test_a_report_of_an_earlier_version_still_verifies(scenario):
     legacy = data_digest(event, legacy=True)
     assert legacy != data_digest(event)
     assert verify(_stamp(event, legacy)).ok
-    recording.record_poses(scenario.masters["A2"], [GpsFix(longitude=0.0065, latitude=0.0)])
+    pose_writes.store_poses(scenario.masters["A2"], [GpsFix(longitude=0.0065, latitude=0.0)])
     verdict = verify(_stamp(event, legacy))
     assert not verdict.ok and "changed since the report" in verdict.message
 

@@ -10,7 +10,7 @@ from events.services import logs, segments
 from rosbridge_app.selectors.fleet import FORGET_AFTER, fleet
 from rosbridge_app.services import collectors
 from telemetry.models.poses import FixStatus
-from telemetry.services import recording
+from telemetry.services import pose_writes
 
 pytestmark = pytest.mark.django_db
 
@@ -24,7 +24,7 @@ def logging_robot(test_event, key, *, modes, fixes, logging=True):
         segments.report_mode(leg, mode, at=leg.start + timedelta(minutes=minute))
     master = leg.segments.filter(parent__isnull=True).order_by("-start").first()
     if fixes:
-        recording.record_poses(master, fixes)
+        pose_writes.store_poses(master, fixes)
     collectors.heartbeat(f"{key}-collector", vehicle=vehicle, logging=logging, leg=leg)
     return vehicle, leg
 
@@ -34,10 +34,10 @@ def test_each_logging_vehicle_shows_where_it_is_its_mode_and_last_take_over(test
         test_event,
         "rover-a",
         modes=[("auto", 0), ("ito", 5), ("auto", 7)],
-        fixes=[recording.GpsFix(7.1, 50.6), recording.GpsFix(7.2, 50.7)],
+        fixes=[pose_writes.GpsFix(7.1, 50.6), pose_writes.GpsFix(7.2, 50.7)],
     )
     b, leg_b = logging_robot(
-        test_event, "rover-b", modes=[("ito", 3)], fixes=[recording.GpsFix(8.0, 51.0)]
+        test_event, "rover-b", modes=[("ito", 3)], fixes=[pose_writes.GpsFix(8.0, 51.0)]
     )
     logging_robot(test_event, "parked", modes=[("auto", 0)], fixes=[], logging=False)
 
@@ -65,9 +65,9 @@ def test_the_position_is_the_end_of_the_track_even_while_a_new_segment_has_none_
         "rover",
         modes=[("auto", 0)],
         fixes=[
-            recording.GpsFix(7.0, 50.0),
-            recording.GpsFix(7.5, 50.5),
-            recording.GpsFix(9.0, 52.0, fix_status=FixStatus.NO_FIX),
+            pose_writes.GpsFix(7.0, 50.0),
+            pose_writes.GpsFix(7.5, 50.5),
+            pose_writes.GpsFix(9.0, 52.0, fix_status=FixStatus.NO_FIX),
         ],
     )
     segments.report_mode(leg, "ito", at=leg.start + timedelta(minutes=1))
@@ -103,7 +103,7 @@ def test_the_fleet_is_read_in_one_query_however_many_vehicles(
 ):
     for n in range(3):
         logging_robot(
-            test_event, f"rover-{n}", modes=[("ito", n)], fixes=[recording.GpsFix(7.0 + n, 50.0)]
+            test_event, f"rover-{n}", modes=[("ito", n)], fixes=[pose_writes.GpsFix(7.0 + n, 50.0)]
         )
 
     with django_assert_num_queries(1):

@@ -10,8 +10,8 @@ from django.db import DatabaseError, connection, transaction
 
 from events.models import Segment
 from rosbridge_app.collector import events as ev
+from rosbridge_app.collector.event_writer import EventWriter
 from rosbridge_app.collector.events import Event
-from rosbridge_app.collector.recorder import Recorder
 from telemetry.models import Pose
 from telemetry.storage.postgresql import COPY_FROM
 
@@ -35,21 +35,21 @@ def as_robot(db):
 
 
 def test_the_robot_role_records_a_drive_and_cannot_read_accounts(leg, as_robot):
-    Recorder(lambda: leg).apply(
+    EventWriter(lambda: leg).apply(
         [
             Event(ev.START, AT),
             Event(ev.MODE, AT + timedelta(seconds=1), {"mode": "auto"}),
-            Event(ev.GPS, AT + timedelta(seconds=2), {"lon": 7.1, "lat": 50.6}),
-            Event(ev.GPS, AT + timedelta(seconds=3), {"lon": 7.1001, "lat": 50.6}),
+            Event(ev.GPS_FIX, AT + timedelta(seconds=2), {"lon": 7.1, "lat": 50.6}),
+            Event(ev.GPS_FIX, AT + timedelta(seconds=3), {"lon": 7.1001, "lat": 50.6}),
         ]
     )
     master = Segment.objects.get(leg=leg, parent__isnull=True)
     assert master.segment_type_id == "auto"
     assert Pose.objects.filter(segment=master).count() == 2
     # A burst big enough to be copied through a temporary table (COPY_FROM).
-    Recorder(lambda: leg).apply(
+    EventWriter(lambda: leg).apply(
         [
-            Event(ev.GPS, AT + timedelta(seconds=4, milliseconds=i), {"lon": 7.1, "lat": 50.6})
+            Event(ev.GPS_FIX, AT + timedelta(seconds=4, milliseconds=i), {"lon": 7.1, "lat": 50.6})
             for i in range(COPY_FROM)
         ]
     )

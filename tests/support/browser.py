@@ -212,7 +212,7 @@ from events.selectors.logs import open_leg_for_vehicle, open_master
 from events.services import segments
 from events.services.segments import GpsPosition, LocalPosition
 from rosbridge_app.services import collectors
-from telemetry.services import recording
+from telemetry.services import pose_writes
 from telemetry.services import map_images
 
 KEY = "{key}"
@@ -285,12 +285,12 @@ for line in sys.stdin:
                 lat += 0.00005
                 x += 7.07
                 y += 5.56
-                fixes.append(recording.GpsFix(lon, lat))
-                local.append(recording.MapPose(x, y, "map", yaw=0.666))
-            recording.record_poses(open_master(leg), fixes)
-            recording.record_local_poses(open_master(leg), local)
+                fixes.append(pose_writes.GpsFix(lon, lat))
+                local.append(pose_writes.MapPose(x, y, "map", yaw=0.666))
+            pose_writes.store_poses(open_master(leg), fixes)
+            pose_writes.store_local_poses(open_master(leg), local)
         elif word == "map":
-            map_images.record_map(
+            map_images.store_map(
                 leg.shift, png=PNG, frame="map", width=2, height=2, resolution=40.0,
                 origin_x=-10.0, origin_y=-10.0,
             )

@@ -6,7 +6,7 @@ from events.models import Performer, Personnel, PoseSource, Vehicle, Weather
 from events.services import logs, notes, segments
 from events.services.segments import GpsPosition, LocalPosition
 from telemetry.models.poses import FixStatus
-from telemetry.services import attachments, map_images, recording
+from telemetry.services import attachments, map_images, pose_writes
 from tests.support.images import grey_png, jpeg
 
 T0 = datetime(2026, 5, 4, 8, 0, tzinfo=UTC)
@@ -85,10 +85,10 @@ def field_day(start=T0, *, vehicle_key="husky", close=True, event=None):
             gps=GpsPosition(lon + index * 1e-4, lat),
             local=LocalPosition(float(index), -0.5, "map"),
         ).master
-        recording.record_poses(
+        pose_writes.store_poses(
             master,
             [
-                recording.GpsFix(
+                pose_writes.GpsFix(
                     longitude=lon + index * 1e-4 + k * 1e-6,
                     latitude=lat + k * 1e-6,
                     altitude=101.25,
@@ -99,10 +99,10 @@ def field_day(start=T0, *, vehicle_key="husky", close=True, event=None):
                 for k in range(5)
             ],
         )
-        recording.record_local_poses(
+        pose_writes.store_local_poses(
             master,
             [
-                recording.MapPose(
+                pose_writes.MapPose(
                     x=index + k * 0.5,
                     y=k * 0.25,
                     frame="map",
@@ -118,7 +118,7 @@ def field_day(start=T0, *, vehicle_key="husky", close=True, event=None):
     )
     note = notes.add_note(child, text="stopped at the fence", author=person)
     notes.edit_note(note, text="stopped at the fence, post 4")
-    map_images.record_map(
+    map_images.store_map(
         shift,
         png=grey_png(200),
         frame="map",
@@ -158,10 +158,10 @@ def more_logging():
     for index, mode in enumerate(("auto", "ito")):
         t = at + timedelta(minutes=1 + index * 3)
         master = segments.report_mode(leg, mode, at=t, gps=GpsPosition(7.128, 50.616)).master
-        recording.record_poses(
+        pose_writes.store_poses(
             master,
             [
-                recording.GpsFix(longitude=7.128 + k * 1e-5, latitude=50.616, robot_stamp=t)
+                pose_writes.GpsFix(longitude=7.128 + k * 1e-5, latitude=50.616, robot_stamp=t)
                 for k in range(3)
             ],
         )

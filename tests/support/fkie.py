@@ -3,14 +3,14 @@
 from pathlib import Path
 
 from telemetry.selectors.distances import path_length
-from telemetry.storage.keys import GPS
+from telemetry.storage.keys import GPS_TRACK
 
 FKIE_BAG = Path(__file__).resolve().parents[2].parent / "shared" / "fixtures" / "fkie_test.bag"
 
 
 def gps_path_length(points: list[tuple[float, float]]) -> float:
     """Metres along (longitude, latitude) points."""
-    return path_length([p[0] for p in points], [p[1] for p in points], GPS)
+    return path_length([p[0] for p in points], [p[1] for p in points], GPS_TRACK)
 
 
 def master_path_length(master) -> float:

@@ -26,8 +26,8 @@ from datetime import UTC, datetime, timedelta
 from events.models import Personnel
 from events.services import logs, notes, segments
 from events.services.segments import GpsPosition
-from telemetry.services import attachments, recording
-from telemetry.services.recording import GpsFix
+from telemetry.services import attachments, pose_writes
+from telemetry.services.pose_writes import GpsFix
 from tests.support.images import png
 
 STEP = 0.001
@@ -116,15 +116,15 @@ def build_scenario(vehicle, other_vehicle, performer, text=HOSTILE) -> Scenario:
     m = {}
     m["A1"] = _switch(leg1, "auto", T0, 0, 0.000)
     a1_poses = [(5, 0.0005), (10, 0.001), (15, 0.0015), (20, 0.002)]
-    recording.record_poses(m["A1"], _fixes(T0, a1_poses))
+    pose_writes.store_poses(m["A1"], _fixes(T0, a1_poses))
     m["I1"] = _switch(leg1, "ito", T0, 100, 0.003, reason="safety")
     segments.annotate_segment(m["I1"].children.get(), obstacle=text, lighting=text, slope=text)
     segments.add_ito_child(m["I1"], reason="planner", at=_at(T0, 120))
-    recording.record_poses(m["I1"], _fixes(T0, [(110, 0.0035)]))
+    pose_writes.store_poses(m["I1"], _fixes(T0, [(110, 0.0035)]))
     notes.add_note(m["I1"], text=f"note {text}", author=people["operator"])
     attachments.attach_image(m["I1"], content=png((64, 48), (40, 120, 200)), description=text)
     m["A2"] = _switch(leg1, "auto", T0, 160, 0.004)
-    recording.record_poses(m["A2"], _fixes(T0, [(170, 0.005), (180, 0.006)]))
+    pose_writes.store_poses(m["A2"], _fixes(T0, [(170, 0.005), (180, 0.006)]))
     logs.close_leg(leg1, at=_at(T0, 400))
     logs.close_shift(s1, at=_at(T0, 400))
 
@@ -133,13 +133,13 @@ def build_scenario(vehicle, other_vehicle, performer, text=HOSTILE) -> Scenario:
     )
     leg2 = logs.create_leg(shift=s2, at=T1, weather_id="rainy")
     m["A3"] = _switch(leg2, "auto", T1, 0, 0.010)
-    recording.record_poses(m["A3"], _fixes(T1, [(10, 0.011), (20, 0.012), (40, 0.013)]))
+    pose_writes.store_poses(m["A3"], _fixes(T1, [(10, 0.011), (20, 0.012), (40, 0.013)]))
     m["I2"] = _switch(leg2, "ito", T1, 300, 0.014, reason="goal")
     # A robot whose mode message has no stamp: it switched up to 0.8 s earlier.
     m["A4"] = _switch(leg2, "auto", T1, 330, 0.016, uncertainty=0.8)
-    recording.record_poses(m["A4"], _fixes(T1, [(340, 0.017), (350, 0.018), (360, 0.019)]))
+    pose_writes.store_poses(m["A4"], _fixes(T1, [(340, 0.017), (350, 0.018), (360, 0.019)]))
     m["I3"] = _switch(leg2, "ito", T1, 630, 0.020, reason="unexpected")
-    recording.record_poses(m["I3"], _fixes(T1, [(640, 0.021)]))
+    pose_writes.store_poses(m["I3"], _fixes(T1, [(640, 0.021)]))
     logs.count_missed_fixes(leg2.pk, 12)  # as the robot's collector estimated
     logs.close_leg(leg2, at=_at(T1, 700))
     logs.close_shift(s2, at=_at(T1, 700))
@@ -155,5 +155,5 @@ def build_open_scenario(vehicle, performer):
     leg = logs.create_leg(shift=shift, at=T0)
     _switch(leg, "ito", T0, 0, 0.0, reason="safety")
     auto = _switch(leg, "auto", T0, 60, 0.001)
-    recording.record_poses(auto, _fixes(T0, [(70, 0.002), (90, 0.003)]))
+    pose_writes.store_poses(auto, _fixes(T0, [(70, 0.002), (90, 0.003)]))
     return event

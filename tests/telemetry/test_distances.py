@@ -19,9 +19,9 @@ from reports.selectors.exports import segments_csv_lines
 from reports.selectors.statistics import event_runs
 from telemetry.selectors.distances import measured_paths, path_length
 from telemetry.selectors.tracks import masters
-from telemetry.services import recording
-from telemetry.services.recording import GpsFix
-from telemetry.storage.keys import GPS
+from telemetry.services import pose_writes
+from telemetry.services.pose_writes import GpsFix
+from telemetry.storage.keys import GPS_TRACK
 from tests.support.modes import start_auto
 
 pytestmark = pytest.mark.django_db
@@ -46,14 +46,14 @@ def drive(leg):
     leg.start = T0 - timedelta(minutes=1)
     leg.save(update_fields=["start"])
     a1 = segments.report_mode(leg, SegmentType.AUTO, at=_at(0), gps=GpsPosition(0.0, 0.0)).master
-    recording.record_poses(
+    pose_writes.store_poses(
         a1, [GpsFix(0.001, 0.0, robot_stamp=_at(10)), GpsFix(0.002, 0.0, robot_stamp=_at(20))]
     )
     i1 = segments.report_mode(leg, SegmentType.ITO, at=_at(30), gps=GpsPosition(0.0021, 0.0)).master
     a2 = segments.report_mode(
         leg, SegmentType.AUTO, at=_at(60), gps=GpsPosition(0.0025, 0.0)
     ).master
-    recording.record_poses(
+    pose_writes.store_poses(
         a2, [GpsFix(0.003, 0.0, robot_stamp=_at(70)), GpsFix(0.004, 0.0, robot_stamp=_at(80))]
     )
     return {
@@ -109,7 +109,7 @@ def test_many_segments_measured_at_once_match_the_geodesic_step_by_step(leg):
             GpsFix(lon, lat, robot_stamp=_at(at + 1 + i)) for i, (lon, lat) in enumerate(poses)
         ]
         if fixes:
-            recording.record_poses(master, fixes)
+            pose_writes.store_poses(master, fixes)
         return master
 
     empty = run(SegmentType.AUTO, 0)
@@ -134,7 +134,7 @@ def test_many_segments_measured_at_once_match_the_geodesic_step_by_step(leg):
         last_lone_pose: None,
     }
 
-    paths = measured_paths(list(masters(leg=leg)), GPS)
+    paths = measured_paths(list(masters(leg=leg)), GPS_TRACK)
 
     for master, points in expected.items():
         if points is None:
@@ -143,4 +143,4 @@ def test_many_segments_measured_at_once_match_the_geodesic_step_by_step(leg):
         lons, lats = zip(*points, strict=True)
         _, _, steps = GEOD.inv(lons[:-1], lats[:-1], lons[1:], lats[1:])
         assert paths[master.pk].distance == pytest.approx(sum(steps), rel=1e-9, abs=1e-6), master
-        assert paths[master.pk].distance == path_length(lons, lats, GPS)
+        assert paths[master.pk].distance == path_length(lons, lats, GPS_TRACK)

@@ -68,7 +68,7 @@ def test_maps_are_png_only_also_on_the_service_path(shift, media_root):
     from telemetry.services import map_images
 
     with pytest.raises(ValidationError, match="PNG"):
-        map_images.record_map(
+        map_images.store_map(
             shift,
             png=image_bytes(fmt="WEBP"),
             frame="map",

@@ -12,9 +12,9 @@ from django.core.management import call_command
 from events.models import SegmentType
 from events.services import deletion, segments
 from telemetry.models import LocalPose, Pose
-from telemetry.services import recording
+from telemetry.services import pose_writes
 from telemetry.services.segment_figures import recount_figures
-from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 
 pytestmark = pytest.mark.django_db
 
@@ -26,17 +26,19 @@ def master(leg):
     """An AUTO master with five fixes and five local poses, a detour at the third."""
     master = segments.report_mode(leg, SegmentType.AUTO).master
     points = [(0, 0), (1, 0), (1, 5), (2, 0), (3, 0)]
-    recording.store_poses(
+    pose_writes.store_poses(
         master,
         [
-            recording.GpsFix(7.0 + x * 1e-4, 50.6 + y * 1e-4, robot_stamp=T0 + timedelta(seconds=i))
+            pose_writes.GpsFix(
+                7.0 + x * 1e-4, 50.6 + y * 1e-4, robot_stamp=T0 + timedelta(seconds=i)
+            )
             for i, (x, y) in enumerate(points)
         ],
     )
-    recording.record_local_poses(
+    pose_writes.store_local_poses(
         master,
         [
-            recording.MapPose(float(x), float(y), "map", robot_stamp=T0 + timedelta(seconds=i))
+            pose_writes.MapPose(float(x), float(y), "map", robot_stamp=T0 + timedelta(seconds=i))
             for i, (x, y) in enumerate(points)
         ],
     )
@@ -59,7 +61,7 @@ def _length(master, mode) -> float:
 
 
 @pytest.mark.parametrize(
-    "model, mode, url", [(Pose, GPS, "poses"), (LocalPose, LOCAL, "local-poses")]
+    "model, mode, url", [(Pose, GPS_TRACK, "poses"), (LocalPose, LOCAL_TRACK, "local-poses")]
 )
 def test_a_pose_deleted_through_the_api_leaves_exact_figures(master, api_client, model, mode, url):
     before = _length(master, mode)
@@ -74,7 +76,7 @@ def test_a_pose_deleted_through_the_api_leaves_exact_figures(master, api_client,
 def test_poses_deleted_in_the_admin_leave_exact_figures(master, client, django_user_model):
     client.force_login(django_user_model.objects.create_superuser("root", password="pw"))
     detour = _detour(Pose, master)
-    before = _length(master, GPS)
+    before = _length(master, GPS_TRACK)
 
     answer = client.post(f"/admin/telemetry/pose/{detour.pk}/delete/", {"post": "yes"})
     assert answer.status_code == 302
@@ -83,7 +85,7 @@ def test_poses_deleted_in_the_admin_leave_exact_figures(master, client, django_u
     assert client.post("/admin/telemetry/pose/", chosen).status_code == 302
 
     assert Pose.objects.filter(segment=master).count() == 3
-    assert _length(master, GPS) < before
+    assert _length(master, GPS_TRACK) < before
     _recount_finds_nothing(master)
 
 

@@ -18,10 +18,10 @@ from telemetry import storage
 from telemetry.models import LocalPose, Pose, SegmentFigures
 from telemetry.models.poses import FixStatus
 from telemetry.selectors.tracks import load_tracks
-from telemetry.services import pose_partitions, recording
-from telemetry.services.recording import GpsFix, MapPose
+from telemetry.services import pose_partitions, pose_writes
+from telemetry.services.pose_writes import GpsFix, MapPose
 from telemetry.services.segment_figures import differences, recount_figures
-from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 from telemetry.storage.postgresql import gps_tracks_plan
 
 pytestmark = pytest.mark.django_db
@@ -44,8 +44,8 @@ def _drive(master, count=240):
                robot_stamp=None if i % 50 == 0 else T0 + timedelta(seconds=i))
         for i in range(count)
     ]  # fmt: skip
-    recording.record_poses(master, fixes)
-    recording.record_local_poses(
+    pose_writes.store_poses(master, fixes)
+    pose_writes.store_local_poses(
         master,
         [MapPose(x=i, y=i * 0.5, frame="map", robot_stamp=T0 + timedelta(seconds=i))
          for i in range(count // 2)],
@@ -58,7 +58,7 @@ def _state(event, *, uid_sum=True):
     (``uid_sum=False``: a schema from before the figures kept one)."""
     rows = SegmentFigures.objects.all() if uid_sum else SegmentFigures.objects.defer("uid_sum")
     kept = {(f.segment_id, f.mode): f for f in rows}
-    runs = event_statistics(event, GPS).runs
+    runs = event_statistics(event, GPS_TRACK).runs
     return (
         sorted(Pose.objects.values_list("id", "uid", "robot_stamp")),
         sorted(LocalPose.objects.values_list("id", "uid", "x")),
@@ -107,7 +107,7 @@ def test_migration_back_and_forth_keeps_every_pose_and_figure(leg):
     _assert_same(before, _state(event))
     assert recount_figures([master.pk]) == {}
     # New poses go on with new ids after the moved ones.
-    more = recording.record_poses(master, [GpsFix(8.1, 50.0, robot_stamp=T0)])
+    more = pose_writes.store_poses(master, [GpsFix(8.1, 50.0, robot_stamp=T0)])
     assert more == 1 and Pose.objects.order_by("id").last().id > before[0][-1][0]
 
 
@@ -116,9 +116,9 @@ def test_a_resent_pose_is_stored_once_on_every_write_path(leg):
     fixes = _drive(master)
     count = Pose.objects.count()
     # The batch again: small batches (one statement) and big ones (COPY).
-    assert recording.record_poses(master, fixes[:10]) == 0
-    assert recording.record_poses(master, fixes) == 0
-    _, created = recording.store_pose(master.pk, fixes[5])
+    assert pose_writes.store_poses(master, fixes[:10]) == 0
+    assert pose_writes.store_poses(master, fixes) == 0
+    _, created = pose_writes.store_pose(master.pk, fixes[5])
     assert not created
     assert Pose.objects.count() == count
     assert recount_figures([master.pk]) == {}
@@ -130,8 +130,8 @@ def test_a_uid_reused_with_another_stamp_of_its_month_is_ignored(leg):
     count = Pose.objects.count()
     reused = GpsFix(9.0, 51.0, robot_stamp=fixes[1].robot_stamp + timedelta(seconds=5),
                     uid=fixes[1].uid)  # fmt: skip
-    assert recording.record_poses(master, [reused]) == 0
-    row, created = recording.store_pose(master.pk, reused)
+    assert pose_writes.store_poses(master, [reused]) == 0
+    row, created = pose_writes.store_pose(master.pk, reused)
     assert not created and row.point.x == pytest.approx(fixes[1].longitude)
     assert Pose.objects.count() == count
     assert recount_figures([master.pk]) == {}
@@ -147,7 +147,7 @@ def test_a_uid_reused_in_another_month_is_a_second_pose(leg):
     fixes = _drive(master)
     count = Pose.objects.count()
     reused = GpsFix(8.01, 50.0, robot_stamp=later, uid=fixes[1].uid)
-    assert recording.record_poses(master, [reused]) == 1
+    assert pose_writes.store_poses(master, [reused]) == 1
     assert Pose.objects.count() == count + 1
     assert recount_figures([master.pk]) == {}
 
@@ -205,10 +205,10 @@ def _drive_with_blind_fixes(leg, *, every_fix_stamped=False):
     master = _master(leg)
     if every_fix_stamped:
         stamps = [T0 + timedelta(seconds=i) for i in range(240)]
-        recording.record_poses(
+        pose_writes.store_poses(
             master, [GpsFix(8.0 + i * 1e-5, 50.0, robot_stamp=t) for i, t in enumerate(stamps)]
         )
-        recording.record_local_poses(
+        pose_writes.store_local_poses(
             master,
             [MapPose(x=i, y=0.0, frame="map", robot_stamp=t) for i, t in enumerate(stamps[:120])],
         )
@@ -218,11 +218,11 @@ def _drive_with_blind_fixes(leg, *, every_fix_stamped=False):
         GpsFix(8.0, 50.0, fix_status=FixStatus.NO_FIX, robot_stamp=stamp)
         for stamp in (datetime(2026, 2, 3, tzinfo=UTC), None, T0 + timedelta(hours=1))
     ]
-    recording.record_poses(master, no_fix)
+    pose_writes.store_poses(master, no_fix)
     blind = segments.report_mode(
         leg, SegmentType.ITO, at=T0 + timedelta(hours=2), gps=GpsPosition(8.1, 50.0)
     ).master
-    recording.record_poses(blind, [GpsFix(8.1, 50.0, fix_status=FixStatus.NO_FIX)])
+    pose_writes.store_poses(blind, [GpsFix(8.1, 50.0, fix_status=FixStatus.NO_FIX)])
     return master, blind
 
 
@@ -233,13 +233,13 @@ def test_tracks_read_within_the_kept_span_are_those_of_every_pose(leg, every_fix
     outside the span, and a master with such fixes only included."""
     master, blind = _drive_with_blind_fixes(leg, every_fix_stamped=every_fix_stamped)
     ids = [master.pk, blind.pk]
-    for mode in (GPS, LOCAL):
+    for mode in (GPS_TRACK, LOCAL_TRACK):
         bounded = load_tracks(ids, mode)
         every = load_tracks(ids, mode, within_kept_span=False)
         assert bounded.keys() == every.keys()
         for pk, track in every.items():
             assert _as_read(bounded[pk]) == _as_read(track)
-    gps, local = load_tracks(ids, GPS), load_tracks(ids, LOCAL)
+    gps, local = load_tracks(ids, GPS_TRACK), load_tracks(ids, LOCAL_TRACK)
     assert (len(gps[master.pk]), gps[master.pk].no_fix) == (240, 3)
     assert (len(gps[blind.pk]), gps[blind.pk].no_fix) == (0, 1)
     assert local.keys() == {master.pk} and len(local[master.pk]) == 120
@@ -250,7 +250,7 @@ def test_tracks_read_within_the_kept_span_are_those_of_every_pose(leg, every_fix
 def test_a_track_read_reads_the_months_its_kept_span_covers(leg, every_fix_stamped):
     master, blind = _drive_with_blind_fixes(leg, every_fix_stamped=every_fix_stamped)
     assert len(load_tracks([master.pk])[master.pk]) == 240
-    plan = "\n".join(gps_tracks_plan([master.pk, blind.pk], GPS))
+    plan = "\n".join(gps_tracks_plan([master.pk, blind.pk], GPS_TRACK))
     table = Pose._meta.db_table
     # Not February, where a fix without a position lies, nor the months
     # before; the default partition (poses without the robot's clock) only

@@ -23,15 +23,15 @@ from telemetry.models import Pose, SegmentFigures, ThinnedSegment
 from telemetry.models.poses import FixStatus
 from telemetry.selectors.distances import displayed_distances, kept_distances, measured_paths
 from telemetry.selectors.tracks import masters
-from telemetry.services import recording
-from telemetry.services.recording import GpsFix, MapPose
+from telemetry.services import pose_writes
+from telemetry.services.pose_writes import GpsFix, MapPose
 from telemetry.services.segment_figures import (
     TOLERANCE_M,
     differences,
     measure_figures,
     recount_figures,
 )
-from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 
 # On SpatiaLite too: poses, figures and tracks are stored by the SQL of each database.
 pytestmark = [pytest.mark.spatialite, pytest.mark.django_db]
@@ -63,7 +63,7 @@ def _open_master(leg, lon=8.0):
 def _assert_kept_equal_poses(leg):
     ids = [m.pk for m in masters(leg=leg)]
     assert recount_figures(ids) == {}
-    for mode in (GPS, LOCAL):
+    for mode in (GPS_TRACK, LOCAL_TRACK):
         kept = kept_distances(list(masters(leg=leg)), mode)
         measured = {
             pk: p.distance for pk, p in measured_paths(list(masters(leg=leg)), mode).items()
@@ -84,22 +84,22 @@ def test_random_orders_duplicates_and_late_batches_keep_exact_figures(leg, seed)
     # Live batches in order, each also sent again (a retry after a lost answer).
     for begin in range(0, 60, 20):
         batch = live[begin : begin + 20]
-        recording.record_poses(first, batch)
-        recording.record_poses(first, batch[:5])
+        pose_writes.store_poses(first, batch)
+        pose_writes.store_poses(first, batch[:5])
     # Single poses, one of them twice, and a shuffled batch.
     for fix in live[60:70] + [live[65]]:
-        recording.store_pose(first.pk, fix)
+        pose_writes.store_pose(first.pk, fix)
     shuffled = live[70:]
     rnd.shuffle(shuffled)
-    recording.record_poses(first, shuffled)
+    pose_writes.store_poses(first, shuffled)
     _assert_kept_equal_poses(leg)
     # The spool of an outage replayed: earlier stamps after later ones, in random batches.
     rnd.shuffle(late)
     for fix in late:
         fix.robot_stamp = fix.robot_stamp and fix.robot_stamp - timedelta(minutes=30)
-    recording.record_poses(first, late[:20])
-    recording.record_poses(first, late[20:])
-    recording.record_local_poses(
+    pose_writes.store_poses(first, late[:20])
+    pose_writes.store_poses(first, late[20:])
+    pose_writes.store_local_poses(
         first, [MapPose(x=rnd.random() * 10, y=i * 0.5, frame="map",
                         robot_stamp=T0 + timedelta(seconds=rnd.randrange(100))) for i in range(30)]
     )  # fmt: skip
@@ -107,35 +107,35 @@ def test_random_orders_duplicates_and_late_batches_keep_exact_figures(leg, seed)
     segments.report_mode(leg, SegmentType.ITO, at=T0 + timedelta(minutes=5),
                          gps=GpsPosition(8.002, 50.0))  # fmt: skip
     _assert_kept_equal_poses(leg)
-    kept = SegmentFigures.objects.get(segment=first, mode=GPS)
+    kept = SegmentFigures.objects.get(segment=first, mode=GPS_TRACK)
     usable = Pose.objects.filter(segment=first).exclude(fix_status=FixStatus.NO_FIX)
     assert (
         kept.points == usable.count()
         and kept.no_fix == Pose.objects.filter(segment=first).count() - kept.points
     )
     assert displayed_distances(list(masters(leg=leg)))[first.pk] == pytest.approx(
-        measured_paths(list(masters(leg=leg)), GPS)[first.pk].distance, abs=TOLERANCE_M
+        measured_paths(list(masters(leg=leg)), GPS_TRACK)[first.pk].distance, abs=TOLERANCE_M
     )
 
 
 def test_statistics_read_figures_not_poses(leg, test_event):
     master = _open_master(leg)
-    recording.record_poses(master, _fixes(30, 3))
+    pose_writes.store_poses(master, _fixes(30, 3))
     with CaptureQueriesContext(connection) as queries:
-        stats = event_statistics(test_event, GPS)
+        stats = event_statistics(test_event, GPS_TRACK)
     assert not [q for q in queries if Pose._meta.db_table + '"' in q["sql"]]
     run = stats.runs[0]
     assert run.distance == pytest.approx(
-        measured_paths([master], GPS)[master.pk].distance, abs=TOLERANCE_M
+        measured_paths([master], GPS_TRACK)[master.pk].distance, abs=TOLERANCE_M
     )
-    assert run.pose_count == SegmentFigures.objects.get(segment=master, mode=GPS).points
+    assert run.pose_count == SegmentFigures.objects.get(segment=master, mode=GPS_TRACK).points
 
 
 def test_recount_command_reports_and_sets_right_a_difference(leg):
     master = _open_master(leg)
-    recording.record_poses(master, _fixes(10, 4))
+    pose_writes.store_poses(master, _fixes(10, 4))
     call_command("ftt_recount_figures")
-    SegmentFigures.objects.filter(segment=master, mode=GPS).update(length=1.0, points=3)
+    SegmentFigures.objects.filter(segment=master, mode=GPS_TRACK).update(length=1.0, points=3)
     with pytest.raises(CommandError):
         call_command("ftt_recount_figures")
     call_command("ftt_recount_figures", "--fix")
@@ -144,14 +144,14 @@ def test_recount_command_reports_and_sets_right_a_difference(leg):
 
 def test_deleting_a_segment_deletes_its_figures(leg):
     master = _open_master(leg)
-    recording.record_poses(master, _fixes(5, 5))
+    pose_writes.store_poses(master, _fixes(5, 5))
     Segment.objects.filter(pk=master.pk).delete()
     assert not SegmentFigures.objects.filter(segment_id=master.pk).exists()
 
 
 def test_import_merging_poses_into_a_track_measures_it_again(leg, tmp_path, media_root):
     master = _open_master(leg)
-    recording.record_poses(master, _fixes(40, 6))
+    pose_writes.store_poses(master, _fixes(40, 6))
     export_events(tmp_path / "day.zip", select_events())
     # This installation lost every other pose; the archive brings them back in between.
     Pose.objects.filter(
@@ -167,12 +167,12 @@ def test_import_merging_poses_into_a_track_measures_it_again(leg, tmp_path, medi
 
 def _in_batches(master, share):
     for begin in range(0, len(share), 10):
-        recording.record_poses(master, share[begin : begin + 10])
+        pose_writes.store_poses(master, share[begin : begin + 10])
 
 
 def _one_by_one(master, share):
     for fix in share:
-        recording.store_pose(master.pk, fix)
+        pose_writes.store_pose(master.pk, fix)
 
 
 @pytest.mark.postgis_only
@@ -208,8 +208,8 @@ def test_two_writers_on_one_segment_at_once(leg, send):
 @pytest.mark.django_db(transaction=True)
 def test_migration_measures_the_tracks_of_an_existing_database(leg):
     master = _open_master(leg)
-    recording.record_poses(master, _fixes(30, 8))
-    recording.record_local_poses(
+    pose_writes.store_poses(master, _fixes(30, 8))
+    pose_writes.store_local_poses(
         master, [MapPose(x=i, y=i * i * 0.1, frame="map") for i in range(5)]
     )
     kept = {(f.segment_id, f.mode): f for f in SegmentFigures.objects.all()}
@@ -218,7 +218,7 @@ def test_migration_measures_the_tracks_of_an_existing_database(leg):
     executor.loader.build_graph()
     executor.migrate(executor.loader.graph.leaf_nodes())
     again = {(f.segment_id, f.mode): f for f in SegmentFigures.objects.all()}
-    assert again.keys() == kept.keys() == {(master.pk, GPS), (master.pk, LOCAL)}
+    assert again.keys() == kept.keys() == {(master.pk, GPS_TRACK), (master.pk, LOCAL_TRACK)}
     for key, figures in kept.items():
         assert differences(figures, again[key]) == []
 
@@ -226,16 +226,16 @@ def test_migration_measures_the_tracks_of_an_existing_database(leg):
 @pytest.mark.django_db(transaction=True)
 def test_migration_sums_the_uids_left_of_a_thinned_master_and_keeps_its_figures(leg):
     master = _open_master(leg)
-    recording.record_poses(master, _fixes(40, 9))
+    pose_writes.store_poses(master, _fixes(40, 9))
     ThinnedSegment.objects.create(segment=master)
     ids = list(Pose.objects.filter(segment=master).order_by("id").values_list("id", flat=True))
     Pose.objects.filter(pk__in=ids[1:30:2]).delete()
-    kept = SegmentFigures.objects.get(segment=master, mode=GPS)
+    kept = SegmentFigures.objects.get(segment=master, mode=GPS_TRACK)
     executor = MigrationExecutor(connection)
     executor.migrate([("telemetry", "0014_tracks_read_in_one_statement")])
     executor.loader.build_graph()
     executor.migrate(executor.loader.graph.leaf_nodes())
-    again = SegmentFigures.objects.get(segment=master, mode=GPS)
+    again = SegmentFigures.objects.get(segment=master, mode=GPS_TRACK)
     left = Pose.objects.filter(segment=master).values_list("uid", flat=True)
     assert again.uid_sum == uid_sums.combined(uid_sums.uid_sum(left)) != kept.uid_sum
     assert differences(kept, again) == [f"uid_sum: {kept.uid_sum!r} != {again.uid_sum!r}"]
@@ -246,9 +246,9 @@ def test_late_single_pose_in_the_middle_of_a_long_track_reads_only_its_neighbour
     fixes = _fixes(2000, 9)
     late = fixes.pop(1000)
     late.fix_status, late.robot_stamp = FixStatus.FIX, T0 + timedelta(seconds=1000)
-    recording.record_poses(master, fixes)
+    pose_writes.store_poses(master, fixes)
     with CaptureQueriesContext(connection) as queries:
-        recording.store_pose(master.pk, late)
+        pose_writes.store_pose(master.pk, late)
     # The track is not read again: one read of the pose table, of the late
     # point's two neighbours.
     reads = [
@@ -258,7 +258,7 @@ def test_late_single_pose_in_the_middle_of_a_long_track_reads_only_its_neighbour
     ]
     assert len(reads) == 1 and reads[0].count("LIMIT 1") >= 2
     _assert_kept_equal_poses(leg)
-    kept = SegmentFigures.objects.get(segment=master, mode=GPS)
+    kept = SegmentFigures.objects.get(segment=master, mode=GPS_TRACK)
     assert (
         kept.points
         == Pose.objects.filter(segment=master).exclude(fix_status=FixStatus.NO_FIX).count()

@@ -19,9 +19,9 @@ from telemetry.models.poses import FixStatus
 from telemetry.selectors.kept_tracks import kept_tracks
 from telemetry.selectors.track_drawing import drawn, fit_zoom
 from telemetry.selectors.tracks import Track, load_tracks
-from telemetry.services import recording
-from telemetry.services.recording import GpsFix
-from telemetry.storage.keys import GPS, LOCAL
+from telemetry.services import pose_writes
+from telemetry.services.pose_writes import GpsFix
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 from tests.support.kept import forget_kept_tracks
 from tests.support.modes import start_auto
 
@@ -39,7 +39,7 @@ def test_points_are_ordered_by_robot_clock_and_no_fix_points_are_counted_apart(l
     leg.save(update_fields=["start"])
     a1 = segments.report_mode(leg, SegmentType.AUTO, at=_at(0), gps=GpsPosition(7.0, 50.0)).master
     # Sent out of order (a late batch from the collector's queue), one without a fix.
-    recording.record_poses(
+    pose_writes.store_poses(
         a1,
         [
             GpsFix(7.003, 50.003, robot_stamp=_at(30)),
@@ -49,9 +49,9 @@ def test_points_are_ordered_by_robot_clock_and_no_fix_points_are_counted_apart(l
         ],
     )
     i1 = segments.report_mode(leg, SegmentType.ITO, at=_at(40), gps=GpsPosition(7.004, 50.0)).master
-    recording.record_poses(i1, [GpsFix(7.6, 50.6, fix_status=FixStatus.NO_FIX)])
+    pose_writes.store_poses(i1, [GpsFix(7.6, 50.6, fix_status=FixStatus.NO_FIX)])
     # A pose without robot clock sorts after those with one, by arrival.
-    recording.record_poses(a1, [GpsFix(7.0035, 50.0035)])
+    pose_writes.store_poses(a1, [GpsFix(7.0035, 50.0035)])
     received = Pose.objects.get(segment=a1, robot_stamp=None).received
 
     tracks = load_tracks([a1.pk, i1.pk])
@@ -69,15 +69,15 @@ def test_points_are_ordered_by_robot_clock_and_no_fix_points_are_counted_apart(l
 
 def test_local_points_come_in_driving_order_with_their_frame(leg):
     master = start_auto(leg)
-    recording.record_local_poses(
+    pose_writes.store_local_poses(
         master,
         [
-            recording.MapPose(3.0, 30.0, "map", robot_stamp=_at(30)),
-            recording.MapPose(1.0, 10.0, "map", robot_stamp=_at(10)),
-            recording.MapPose(2.0, 20.0, "map", robot_stamp=_at(20)),
+            pose_writes.MapPose(3.0, 30.0, "map", robot_stamp=_at(30)),
+            pose_writes.MapPose(1.0, 10.0, "map", robot_stamp=_at(10)),
+            pose_writes.MapPose(2.0, 20.0, "map", robot_stamp=_at(20)),
         ],
     )
-    track = load_tracks([master.pk], LOCAL)[master.pk]
+    track = load_tracks([master.pk], LOCAL_TRACK)[master.pk]
     assert track.x.tolist() == [1.0, 2.0, 3.0] and track.y.tolist() == [10.0, 20.0, 30.0]
     assert np.allclose(track.t, [_at(s).timestamp() for s in (10, 20, 30)], atol=1e-3)
     assert track.frame == "map"
@@ -105,12 +105,12 @@ def test_fit_zoom_is_the_zoom_a_map_of_that_size_shows_the_whole_leg_at():
     # 0.01 degrees of longitude (about 700 m at 50 N) across 700 pixels needs zoom 16.6:
     # the whole leg shows at 16; twice the pixels take one zoom more.
     track = Track(1, np.array([7.0, 7.01]), np.array([50.0, 50.0]), np.zeros(2))
-    assert fit_zoom(GPS, [track], 700, 500) == 16
-    assert fit_zoom(GPS, [track], 1400, 1000) == 17
+    assert fit_zoom(GPS_TRACK, [track], 700, 500) == 16
+    assert fit_zoom(GPS_TRACK, [track], 1400, 1000) == 17
     # 100 m of map frame in 800 pixels: 8 pixels a metre, zoom 3 (2**3).
     local = Track(1, np.array([0.0, 100.0]), np.array([0.0, 50.0]), np.zeros(2))
-    assert fit_zoom(LOCAL, [local], 800, 800) == 3
-    assert fit_zoom(GPS, [], 800, 600) is None
+    assert fit_zoom(LOCAL_TRACK, [local], 800, 800) == 3
+    assert fit_zoom(GPS_TRACK, [], 800, 600) is None
 
 
 def _closed_segments_with_tracks(leg, count):
@@ -120,17 +120,17 @@ def _closed_segments_with_tracks(leg, count):
     for k in range(count):
         mode = SegmentType.AUTO if k % 2 == 0 else SegmentType.ITO
         master = segments.report_mode(leg, mode, at=_at(100 * k)).master
-        recording.record_poses(
+        pose_writes.store_poses(
             master,
             [
                 GpsFix(7.0 + k * 1e-3 + i * 1e-5, 50.0, robot_stamp=_at(100 * k + i))
                 for i in range(50)
             ],
         )
-        recording.record_local_poses(
+        pose_writes.store_local_poses(
             master,
             [
-                recording.MapPose(k * 100.0 + i, 0.0, "map", robot_stamp=_at(100 * k + i))
+                pose_writes.MapPose(k * 100.0 + i, 0.0, "map", robot_stamp=_at(100 * k + i))
                 for i in range(50)
             ],
         )
@@ -155,21 +155,21 @@ def test_kept_tracks_are_the_tracks_and_a_late_pose_in_a_closed_segment_shows_up
     first = kept_tracks(masters)
     with CaptureQueriesContext(connection) as unchanged:
         again = kept_tracks(masters)
-    for mode in (GPS, LOCAL):
+    for mode in (GPS_TRACK, LOCAL_TRACK):
         _same(first[mode], load_tracks(ids, mode))
         _same(again[mode], first[mode])
     # Nothing changed: only the poses are counted, no track is read again.
     assert len(unchanged) == 1
 
     # A collector's spool replays a fix driven in the middle of the first segment.
-    recording.record_poses(masters[0], [GpsFix(7.5, 50.5, robot_stamp=_at(10.5))])
-    recording.record_local_poses(
-        masters[0], [recording.MapPose(-5.0, 1.0, "map", robot_stamp=_at(10.5))]
+    pose_writes.store_poses(masters[0], [GpsFix(7.5, 50.5, robot_stamp=_at(10.5))])
+    pose_writes.store_local_poses(
+        masters[0], [pose_writes.MapPose(-5.0, 1.0, "map", robot_stamp=_at(10.5))]
     )
     later = kept_tracks(masters)
-    for mode in (GPS, LOCAL):
+    for mode in (GPS_TRACK, LOCAL_TRACK):
         _same(later[mode], load_tracks(ids, mode))
-    gps, local = later[GPS][masters[0].pk], later[LOCAL][masters[0].pk]
+    gps, local = later[GPS_TRACK][masters[0].pk], later[LOCAL_TRACK][masters[0].pk]
     assert len(gps) == len(local) == 51
     assert gps.x[10:13].tolist() == [7.0 + 10 * 1e-5, 7.5, 7.0 + 11 * 1e-5]
     assert local.x[10:13].tolist() == [10.0, -5.0, 11.0]

@@ -14,8 +14,8 @@ import pytest
 from events.models import Segment
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.disk_guard import FULL, OK, DiskGuard
+from rosbridge_app.collector.event_writer import EventWriter
 from rosbridge_app.collector.events import Event
-from rosbridge_app.collector.recorder import Recorder
 from rosbridge_app.collector.replay import ReplayOrder
 from rosbridge_app.collector.spool import Spool
 from rosbridge_app.collector.spooler import Spooler
@@ -55,7 +55,7 @@ def _robot_second(t: datetime, second: int) -> list[Event]:
     for i in range(10):
         at = t + timedelta(seconds=second + i / 10)
         lat = 50.0 + (second * 10 + i) * 1e-5
-        out.append(Event(ev.GPS, at, {"lon": 7.0, "lat": lat, "robot_stamp": at}))
+        out.append(Event(ev.GPS_FIX, at, {"lon": 7.0, "lat": lat, "robot_stamp": at}))
     grid = {"frame": "map", "width": 2, "height": 2, "resolution": 0.1}
     grid.update(origin_x=0.0, origin_y=0.0, checksum=str(second))
     out.append(Event(ev.MAP, t + timedelta(seconds=second), grid, blob=NOISE))
@@ -92,9 +92,9 @@ def test_a_full_spool_holds_switches_and_thinned_positions_and_the_database_gets
     assert "Traceback" not in caplog.text
 
     # The database is reachable: everything goes to it, without any free disk.
-    recorder = Recorder(lambda: leg)
+    event_writer = EventWriter(lambda: leg)
     order = ReplayOrder(spool, 500, held=spooler.held)
-    while order.write_next(recorder):
+    while order.write_next(event_writer):
         pass
     assert len(spool) == 0 and len(spooler.held) == 0
     masters = Segment.objects.filter(leg=leg, parent__isnull=True).order_by("start")
@@ -106,7 +106,7 @@ def test_a_full_spool_holds_switches_and_thinned_positions_and_the_database_gets
     assert len(stamps) < 590  # thinned indeed
 
     # The spool has room again (the writer emptied it): back to it, said once.
-    events.put(Event(ev.GPS, t0 + timedelta(seconds=61), {"lon": 7.0, "lat": 51.0}))
+    events.put(Event(ev.GPS_FIX, t0 + timedelta(seconds=61), {"lon": 7.0, "lat": 51.0}))
     deadline = time.monotonic() + 10
     while guard.level != OK and time.monotonic() < deadline:
         spooler.spool_once(timeout=0.1)

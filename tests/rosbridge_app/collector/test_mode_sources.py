@@ -243,7 +243,7 @@ def test_a_recording_with_the_robots_own_type_gives_the_scripted_segments(
         ("ito", 20.01),
         ("auto", 33.02),
     ]
-    assert sum(e.kind == ev.GPS for e in events) > 30
+    assert sum(e.kind == ev.GPS_FIX for e in events) > 30
     # The importer checks the sources against the recording's own definitions
     # (ftt_robot_msgs is not installed) and stores the same segments.
     result = import_bag(

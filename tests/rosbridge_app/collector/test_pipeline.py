@@ -88,7 +88,7 @@ def test_parked_robot_adds_no_rows_and_bad_fixes_are_ignored(pipe, sink):
         pipe.on_fix(fix(i * 0.1, 50.0, 7.0), at(i * 0.1))
     pipe.on_fix(fix(11, float("nan"), 7.0), at(11))
     pipe.on_fix(fix(12, 51.0, 7.0, status=-1), at(12))
-    assert kinds(sink).count(ev.GPS) == 1
+    assert kinds(sink).count(ev.GPS_FIX) == 1
 
 
 def test_fixes_of_a_driver_that_leaves_the_status_unset_are_recorded_and_said_once(
@@ -98,7 +98,7 @@ def test_fixes_of_a_driver_that_leaves_the_status_unset_are_recorded_and_said_on
     pipe.on_mode(mode(True), at(0))
     for i in range(3):
         pipe.on_fix(fix(i, 50.0 + i * 1e-4, 7.0, status=-2), at(i))
-    assert kinds(sink).count(ev.GPS) == 3
+    assert kinds(sink).count(ev.GPS_FIX) == 3
     said = [r for r in caplog.records if "NavSatStatus unset" in r.getMessage()]
     assert len(said) == 1
 
@@ -111,7 +111,7 @@ def test_switch_starts_the_new_segment_where_the_robot_is(pipe, sink):
     pipe.on_fix(fix(1.1, 50.000011, 7.0), at(1.1))  # 0.1 m: thinned away
     pipe.on_mode(mode(True), at(1.2))
     tail = sink[-3:]
-    assert kinds(tail) == [ev.GPS, ev.MODE, ev.GPS]
+    assert kinds(tail) == [ev.GPS_FIX, ev.MODE, ev.GPS_FIX]
     # The skipped fix ends the old segment and starts the new one.
     assert tail[0].data["lat"] == tail[2].data["lat"] == 50.000011
     assert tail[1].data["gps"] == [7.0, 50.000011]
@@ -121,9 +121,9 @@ def test_no_local_pose_without_a_complete_tf_chain(pipe, sink):
     pipe.start_logging(at(0))
     pipe.on_mode(mode(True), at(0))
     pipe.on_tf(tf_msg(0, "odom", "base_link", 5, 5), at(0))  # map→odom unknown
-    assert ev.LOCAL not in kinds(sink)
+    assert ev.LOCAL_POSE not in kinds(sink)
     pipe.on_tf(tf_msg(0, "map", "odom", 1, 0), at(0.05))
-    local = [e for e in sink if e.kind == ev.LOCAL]
+    local = [e for e in sink if e.kind == ev.LOCAL_POSE]
     assert [(e.data["x"], e.data["y"]) for e in local] == [(6, 5)]
 
 
@@ -133,7 +133,7 @@ def test_turning_on_the_spot_is_recorded_with_yaw(pipe, sink):
     pipe.on_tf(tf_msg(0, "map", "odom", 0, 0), at(0), static=True)
     for i in range(10):
         pipe.on_tf(tf_msg(i, "odom", "base_link", 1, 1, yaw=i * 0.3), at(i))
-    yaws = [e.data["yaw"] for e in sink if e.kind == ev.LOCAL]
+    yaws = [e.data["yaw"] for e in sink if e.kind == ev.LOCAL_POSE]
     assert len(yaws) == 10
     assert yaws[-1] == pytest.approx(2.7)
 
@@ -225,10 +225,10 @@ def test_thinned_fkie_path_is_within_one_percent_of_full_rate():
         if e is None or e.kind == ev.MODE:
             kept += gps_path_length(segment)
             segment = []
-        elif e.kind == ev.GPS:
+        elif e.kind == ev.GPS_FIX:
             segment.append((e.data["lon"], e.data["lat"]))
     full = full_rate_length()
-    thinned = sum(1 for e in events if e.kind == ev.GPS)
+    thinned = sum(1 for e in events if e.kind == ev.GPS_FIX)
     assert abs(kept - full) / full < 0.01
     assert thinned < 1000  # from 21 722 fixes
     assert 215 < kept < 230

@@ -9,9 +9,9 @@ from events.models import Segment
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector import replay
 from rosbridge_app.collector.disk_guard import DiskGuard
+from rosbridge_app.collector.event_writer import EventWriter
 from rosbridge_app.collector.events import Event
 from rosbridge_app.collector.held import Held
-from rosbridge_app.collector.recorder import Recorder
 from rosbridge_app.collector.replay import ReplayOrder
 from rosbridge_app.collector.spool import Spool
 from telemetry.models import LocalPose, MapImage, Pose
@@ -25,8 +25,8 @@ def _fixes(start: datetime, count: int) -> list[Event]:
     out = []
     for i in range(count):
         t = start + timedelta(seconds=0.1 * (i + 1))
-        out.append(Event(ev.GPS, t, {"lon": 7.0, "lat": 50.0 + i * 1e-6, "robot_stamp": t}))
-        out.append(Event(ev.LOCAL, t, {"x": float(i), "y": 0.0, "frame": "map", "yaw": 0.0}))
+        out.append(Event(ev.GPS_FIX, t, {"lon": 7.0, "lat": 50.0 + i * 1e-6, "robot_stamp": t}))
+        out.append(Event(ev.LOCAL_POSE, t, {"x": float(i), "y": 0.0, "frame": "map", "yaw": 0.0}))
     return out
 
 
@@ -56,9 +56,9 @@ def test_a_live_switch_is_stored_before_the_backlog_and_everything_once(
     ]
     spool = Spool(tmp_path / "spool.sqlite3")
     spool.append(backlog)
-    recorder = Recorder(lambda: leg)
+    event_writer = EventWriter(lambda: leg)
     order = ReplayOrder(spool, SLICE)
-    order.write_next(recorder)  # the database is back: the writer has found the backlog
+    order.write_next(event_writer)  # the database is back: the writer has found the backlog
 
     # Published after the restore, while the backlog is replayed.
     live_at = t0 + timedelta(minutes=5)
@@ -71,9 +71,9 @@ def test_a_live_switch_is_stored_before_the_backlog_and_everything_once(
     while len(spool):
         if restart and order.replaying and turns == 1:
             # A crash or restart in the middle: the spool says where the backlog goes.
-            recorder, order = Recorder(lambda: leg), ReplayOrder(spool, SLICE)
+            event_writer, order = EventWriter(lambda: leg), ReplayOrder(spool, SLICE)
             restarts += 1
-        order.write_next(recorder)
+        order.write_next(event_writer)
         turns += 1
         assert turns < 100
         if backlog_left_when_live_stored is None and Segment.objects.filter(uid=live[0].uid):
@@ -113,11 +113,11 @@ def test_backlog_slices_grow_while_each_is_stored_within_the_time_a_live_switch_
     spool = Spool(tmp_path / "spool.sqlite3")
     spool.append([Event(ev.START, t0), Event(ev.MODE, t0, {"mode": "auto"}), *positions])
     order = ReplayOrder(spool, SLICE)
-    order.write_next(Recorder(lambda: leg))  # finds the backlog, applies its segment changes
+    order.write_next(EventWriter(lambda: leg))  # finds the backlog, applies its segment changes
 
-    recorder, taken = Recorder(lambda: leg), []
+    event_writer, taken = EventWriter(lambda: leg), []
     while len(spool):
-        taken.append(order.write_next(recorder))
+        taken.append(order.write_next(event_writer))
         assert len(taken) < 100
 
     assert Pose.objects.count() + LocalPose.objects.count() == len(positions)
@@ -135,14 +135,14 @@ def test_a_live_switch_is_committed_before_what_was_spooled_after_it(leg, tmp_pa
     switch = Event(ev.MODE, t0 + timedelta(seconds=1), {"mode": "ito"})
     spool = Spool(tmp_path / "spool.sqlite3")
     spool.append([Event(ev.START, t0), *before, switch, *after])
-    order, recorder = ReplayOrder(spool, 100), Recorder(lambda: leg)
+    order, event_writer = ReplayOrder(spool, 100), EventWriter(lambda: leg)
 
-    assert order.write_next(recorder) == 1  # the start alone
-    assert order.write_next(recorder) == len(before) + 1
+    assert order.write_next(event_writer) == 1  # the start alone
+    assert order.write_next(event_writer) == len(before) + 1
     # The new master is in the database while the positions after it still wait.
     assert Segment.objects.get(uid=switch.uid).segment_type_id == "ito"
     assert len(spool) == len(after)
-    assert order.write_next(recorder) == len(after)
+    assert order.write_next(event_writer) == len(after)
     assert Pose.objects.filter(segment__uid=switch.uid).count() == 3
 
 
@@ -152,20 +152,20 @@ def test_a_switch_ends_its_slice_and_the_writer_knows_it_is_stored(leg, tmp_path
     t0 = datetime.now(UTC) + timedelta(minutes=1)
     spool = Spool(tmp_path / "spool.sqlite3")
     # Live, not a backlog: fewer records pending than a quarter of a slice.
-    recorder, order = Recorder(lambda: leg), ReplayOrder(spool, 100)
+    event_writer, order = EventWriter(lambda: leg), ReplayOrder(spool, 100)
     spool.append([Event(ev.START, t0), Event(ev.MODE, t0, {"mode": "auto"})])
-    while order.write_next(recorder):
+    while order.write_next(event_writer):
         pass
     switch_at = t0 + timedelta(seconds=5)
     spool.append(
         [*_fixes(t0, 2), Event(ev.MODE, switch_at, {"mode": "ito"}), *_fixes(switch_at, 2)]
     )
-    while order.write_next(recorder):
+    while order.write_next(event_writer):
         if order.stored_change:
             break
     assert Segment.objects.get(leg=leg, parent=None, end=None).segment_type_id == "ito"
     assert len(spool) == 4  # the positions after the switch wait for the next turn
-    assert order.write_next(recorder) == 4 and not order.stored_change
+    assert order.write_next(event_writer) == 4 and not order.stored_change
 
 
 def test_a_live_switch_stored_with_a_backlog_slice_is_known_as_stored(leg, tmp_path):
@@ -174,11 +174,11 @@ def test_a_live_switch_stored_with_a_backlog_slice_is_known_as_stored(leg, tmp_p
     t0 = datetime.now(UTC) + timedelta(minutes=1)
     spool = Spool(tmp_path / "spool.sqlite3")
     spool.append([Event(ev.START, t0), Event(ev.MODE, t0, {"mode": "auto"}), *_fixes(t0, 30)])
-    recorder, order = Recorder(lambda: leg), ReplayOrder(spool, SLICE)
-    order.write_next(recorder)  # the backlog found, its segment changes applied
+    event_writer, order = EventWriter(lambda: leg), ReplayOrder(spool, SLICE)
+    order.write_next(event_writer)  # the backlog found, its segment changes applied
     switch = Event(ev.MODE, t0 + timedelta(seconds=10), {"mode": "ito"})
     spool.append([switch])
-    order.write_next(recorder)
+    order.write_next(event_writer)
     assert Segment.objects.filter(uid=switch.uid).exists()
     assert order.stored_change
     assert len(spool) > 0  # the backlog's positions still wait
@@ -199,13 +199,13 @@ def test_positions_held_in_memory_do_not_wait_for_each_switch_of_a_small_spool(l
     live = _fixes(t0 + timedelta(seconds=10), 1)
     for event in live:
         held.add(event)
-    order, recorder = ReplayOrder(spool, 100, held=held), Recorder(lambda: leg)
+    order, event_writer = ReplayOrder(spool, 100, held=held), EventWriter(lambda: leg)
     assert len(spool) < order.backlog  # small: by its size alone not a backlog
 
-    order.write_next(recorder)  # the spool's switches
-    order.write_next(recorder)
+    order.write_next(event_writer)  # the spool's switches
+    order.write_next(event_writer)
     assert Pose.objects.filter(uid=live[0].uid).exists()
-    while order.write_next(recorder):
+    while order.write_next(event_writer):
         pass
     masters = Segment.objects.filter(leg=leg, parent__isnull=True).order_by("start")
     assert [m.segment_type_id for m in masters] == ["auto", "ito", "auto", "ito"]

@@ -75,7 +75,7 @@ def test_a_mode_within_the_wait_starts_the_first_segment_at_the_first_position(p
     assert masters(pipe.events) == [("auto", 0.0)]
     mode = next(e for e in pipe.events if e.kind == ev.MODE)
     assert mode.data["gps"] == [8.0, 50.0] and mode.data["local"] == [0.0, 0.0, "map"]
-    for kind in (ev.GPS, ev.LOCAL):
+    for kind in (ev.GPS_FIX, ev.LOCAL_POSE):
         assert positions(pipe.events, kind) == positions(known_events, kind)
         assert positions(pipe.events, kind)[0] == 0.0
 
@@ -88,7 +88,7 @@ def test_after_the_wait_a_segment_of_unknown_mode_holds_the_track_until_the_mode
     assert masters(pipe.events) == [("unknown", 0.0), ("ito", 15.0)]
     events = pipe.events
     switch = next(i for i, e in enumerate(events) if e.kind == ev.MODE and e.data["mode"] == "ito")
-    for kind in (ev.GPS, ev.LOCAL):
+    for kind in (ev.GPS_FIX, ev.LOCAL_POSE):
         before = positions(events[:switch], kind)
         # Every second of the 15 s before the mode was known is in the unknown segment.
         assert before[0] == 0.0 and before[-1] >= 14.0
@@ -103,14 +103,14 @@ def test_a_wait_without_new_positions_ends_at_the_tick(pipe):
     assert masters(pipe.events) == []
     pipe.tick(at(10.0))
     assert masters(pipe.events) == [("unknown", 0.0)]
-    assert positions(pipe.events, ev.GPS)[0] == 0.0
+    assert positions(pipe.events, ev.GPS_FIX)[0] == 0.0
 
 
 def test_logging_stopped_before_the_mode_is_known_keeps_the_track(pipe):
     drive(pipe, 3.0)
     pipe.stop_logging(at(3.0))
     assert masters(pipe.events) == [("unknown", 0.0)]
-    assert positions(pipe.events, ev.LOCAL)[0] == 0.0
+    assert positions(pipe.events, ev.LOCAL_POSE)[0] == 0.0
     assert pipe.events[-1].kind == ev.STOP
     # The next logging waits afresh; a mode heard now opens its segment at once.
     pipe.on_mode_value("auto", at(4.0))

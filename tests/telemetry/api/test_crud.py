@@ -9,8 +9,8 @@ from django.core.exceptions import ValidationError
 from common import roles
 from telemetry.models import LocalPose, MapImage, Pose
 from telemetry.pictures import MAP_FORMATS, checked_picture
-from telemetry.services import attachments, map_images, recording
-from telemetry.services.recording import GpsFix, MapPose
+from telemetry.services import attachments, map_images, pose_writes
+from telemetry.services.pose_writes import GpsFix, MapPose
 from tests.support.api import CrudTests, assert_error_shape
 from tests.support.images import png, upload
 
@@ -24,7 +24,7 @@ class TestPoses(CrudTests):
     @pytest.fixture
     def instance(self, auto_master):
         fix = GpsFix(longitude=7.1, latitude=50.7)
-        recording.record_poses(auto_master, [fix])
+        pose_writes.store_poses(auto_master, [fix])
         return Pose.objects.get(uid=fix.uid)
 
     @pytest.fixture
@@ -96,7 +96,7 @@ class TestPoses(CrudTests):
         assert not auto_master.poses.exists()
 
     def test_bounding_box_and_time_filters(self, api_client, auto_master):
-        recording.record_poses(
+        pose_writes.store_poses(
             auto_master,
             [
                 GpsFix(7.0, 50.0, robot_stamp=_at(1)),
@@ -133,7 +133,7 @@ class TestLocalPoses(CrudTests):
     @pytest.fixture
     def instance(self, auto_master):
         pose = MapPose(x=1.0, y=2.0, frame="map")
-        recording.record_local_poses(auto_master, [pose])
+        pose_writes.store_local_poses(auto_master, [pose])
         return LocalPose.objects.get(uid=pose.uid)
 
     @pytest.fixture
@@ -161,7 +161,7 @@ class TestMaps(CrudTests):
 
     @pytest.fixture
     def instance(self, shift, media_root):
-        map_image, _ = map_images.record_map(
+        map_image, _ = map_images.store_map(
             shift,
             png=png(),
             frame="map",

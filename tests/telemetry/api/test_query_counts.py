@@ -11,8 +11,8 @@ from events import feed
 from events.models import Announcement, Segment, SegmentType
 from events.services import segments
 from telemetry.models import Pose
-from telemetry.services import attachments, map_images, recording
-from telemetry.services.recording import GpsFix, MapPose
+from telemetry.services import attachments, map_images, pose_writes
+from telemetry.services.pose_writes import GpsFix, MapPose
 from telemetry.storage.postgresql import COPY_FROM
 from tests.support.api import LIST_QUERIES, assert_constant_queries, post_counting_queries
 from tests.support.images import png
@@ -24,19 +24,19 @@ pytestmark = pytest.mark.spatialite
 
 def _poses(n, leg):
     master = start_auto(leg)
-    recording.record_poses(master, [GpsFix(7 + i / 1000, 50.0) for i in range(n)])
+    pose_writes.store_poses(master, [GpsFix(7 + i / 1000, 50.0) for i in range(n)])
     segments.report_mode(leg, SegmentType.ITO)
 
 
 def _local_poses(n, leg):
     master = start_auto(leg)
-    recording.record_local_poses(master, [MapPose(i, 0.0, "map") for i in range(n)])
+    pose_writes.store_local_poses(master, [MapPose(i, 0.0, "map") for i in range(n)])
     segments.report_mode(leg, SegmentType.ITO)
 
 
 def _maps(n, leg):
     for _ in range(n):
-        map_images.record_map(
+        map_images.store_map(
             leg.shift,
             png=png(colour=(len(leg.shift.maps.all()), 0, 0)),
             frame="map",

@@ -8,8 +8,8 @@ from common import roles
 from events.models import SegmentType
 from events.services import logs, segments
 from telemetry.models.poses import FixStatus
-from telemetry.services import recording
-from telemetry.services.recording import GpsFix, MapPose
+from telemetry.services import pose_writes
+from telemetry.services.pose_writes import GpsFix, MapPose
 from tests.support.api import assert_error_shape
 
 # After the fixtures opened the leg "now": the services refuse times before a parent starts.
@@ -24,7 +24,7 @@ def at(seconds):
 def driven_leg(leg):
     """AUTO then ITO; poses sent out of order, one ITO pose posted to the reason."""
     auto = segments.report_mode(leg, SegmentType.AUTO, at=at(0)).master
-    recording.record_poses(
+    pose_writes.store_poses(
         auto,
         [
             GpsFix(7.2, 50.2, robot_stamp=at(3)),
@@ -33,13 +33,13 @@ def driven_leg(leg):
             GpsFix(7.1, 50.1, robot_stamp=at(2)),
         ],
     )
-    recording.record_local_poses(
+    pose_writes.store_local_poses(
         auto,
         [MapPose(2.0, 0.0, "map", robot_stamp=at(2)), MapPose(0.0, 0.0, "map", robot_stamp=at(1))],
     )
     ito = segments.report_mode(leg, SegmentType.ITO, at=at(10)).master
-    recording.record_poses(ito.children.get(), [GpsFix(7.3, 50.3, robot_stamp=at(11))])
-    recording.record_poses(ito, [GpsFix(7.4, 50.4, robot_stamp=at(12))])
+    pose_writes.store_poses(ito.children.get(), [GpsFix(7.3, 50.3, robot_stamp=at(11))])
+    pose_writes.store_poses(ito, [GpsFix(7.4, 50.4, robot_stamp=at(12))])
     return leg, auto, ito
 
 
@@ -68,7 +68,7 @@ def test_tracks_of_a_shift_and_test_event_include_every_leg(api_client, driven_l
     leg, auto, ito = driven_leg
     later = logs.create_leg(shift=leg.shift, at=at(20))
     master = segments.report_mode(later, SegmentType.AUTO, at=at(21)).master
-    recording.record_poses(master, [GpsFix(8.0, 51.0)])
+    pose_writes.store_poses(master, [GpsFix(8.0, 51.0)])
     client = api_client(roles.VIEWER)
     for query in ({"shift": leg.shift_id}, {"test_event": leg.shift.test_event_id}):
         features = client.get("/api/tracks/", query).json()["features"]

@@ -16,8 +16,8 @@ from events.services.segments import GpsPosition
 from telemetry import storage
 from telemetry.models import LocalPose, Pose, SegmentFigures
 from telemetry.models.poses import FixStatus
-from telemetry.services import pose_partitions, recording
-from telemetry.services.recording import GpsFix, MapPose
+from telemetry.services import pose_partitions, pose_writes
+from telemetry.services.pose_writes import GpsFix, MapPose
 from telemetry.storage import keys, postgresql
 from telemetry.storage.rows import Change
 
@@ -127,7 +127,7 @@ def test_tracks_come_in_driving_order_unstamped_last_and_no_fixes_counted(adapte
     adapter.insert_fixes(master, None, late, _at(101))
     adapter.insert_fixes(master, None, [GpsFix(7.0, 50.0, fix_status=FixStatus.NO_FIX)], _at(102))
     adapter.insert_fixes(master, None, [GpsFix(7.002, 50.0, robot_stamp=_at(20))], _at(103))
-    [(seg, x, y, t, no_fix)] = adapter.track_arrays([master.pk], keys.GPS, None)
+    [(seg, x, y, t, no_fix)] = adapter.track_arrays([master.pk], keys.GPS_TRACK, None)
     assert seg == master.pk
     assert x.tolist() == [7.001, 7.002, 7.003, 7.004]
     # Seconds to the millisecond (SQLite's julianday is no finer).
@@ -141,15 +141,15 @@ def test_tracks_come_in_driving_order_unstamped_last_and_no_fixes_counted(adapte
 def test_local_tracks_carry_their_first_points_frame(adapter, master):
     adapter.insert_local_poses(master, [MapPose(2.0, 0.0, "late", robot_stamp=_at(2))], _at(5))
     adapter.insert_local_poses(master, [MapPose(1.0, 0.0, "first", robot_stamp=_at(1))], _at(6))
-    [(_seg, x, _y, _t, frame)] = adapter.track_arrays([master.pk], keys.LOCAL, None)
+    [(_seg, x, _y, _t, frame)] = adapter.track_arrays([master.pk], keys.LOCAL_TRACK, None)
     assert x.tolist() == [1.0, 2.0]
     assert frame == "first"
 
 
 def test_a_track_read_within_the_kept_span_reads_every_stored_point(adapter, master):
-    recording.record_poses(master, [*_fixes(3), GpsFix(7.5, 50.0)])
-    bounded = list(adapter.track_arrays([master.pk], keys.GPS, keys.GPS))
-    every = list(adapter.track_arrays([master.pk], keys.GPS, None))
+    pose_writes.store_poses(master, [*_fixes(3), GpsFix(7.5, 50.0)])
+    bounded = list(adapter.track_arrays([master.pk], keys.GPS_TRACK, keys.GPS_TRACK))
+    every = list(adapter.track_arrays([master.pk], keys.GPS_TRACK, None))
     assert [a[1].tolist() for a in bounded] == [a[1].tolist() for a in every]
     assert len(every[0][1]) == 4
 
@@ -162,7 +162,7 @@ def _change(points, uid_sum="1"):
 
 
 def test_the_figures_upsert_applies_only_while_the_row_holds_what_was_read(adapter, master):
-    mode = keys.GPS
+    mode = keys.GPS_TRACK
     assert adapter.read_kept(master.pk, mode) is None
     assert adapter.write_change(master.pk, mode, None, _change(1)) == (True, None)
     seen = adapter.read_kept(master.pk, mode)
@@ -185,13 +185,13 @@ def test_neighbours_and_points_between_follow_driving_order(adapter, master):
     def key(p):
         return (p.robot_stamp, p.received, p.id)
 
-    before, after = adapter.neighbours(master.pk, keys.GPS, key(stamped[1]), key(stamped[2]))
+    before, after = adapter.neighbours(master.pk, keys.GPS_TRACK, key(stamped[1]), key(stamped[2]))
     assert before[0] == stamped[0].id and after[0] == stamped[3].id
-    before, after = adapter.neighbours(master.pk, keys.GPS, key(stamped[3]), key(stamped[3]))
+    before, after = adapter.neighbours(master.pk, keys.GPS_TRACK, key(stamped[3]), key(stamped[3]))
     assert before[0] == stamped[2].id and after[0] == unstamped.id
-    _before, after = adapter.neighbours(master.pk, keys.GPS, key(unstamped), key(unstamped))
+    _before, after = adapter.neighbours(master.pk, keys.GPS_TRACK, key(unstamped), key(unstamped))
     assert after is None
-    between = adapter.points_between(master.pk, keys.GPS, key(stamped[2]), key(unstamped))
+    between = adapter.points_between(master.pk, keys.GPS_TRACK, key(stamped[2]), key(unstamped))
     assert [p[0] for p in between] == [stamped[2].id, stamped[3].id, unstamped.id]
 
 
@@ -218,8 +218,13 @@ def test_a_masters_queryset_holds_the_segments_without_a_parent(master):
 
 
 def test_the_locked_figures_row_is_made_empty_or_taken_as_it_is(adapter, master):
-    made = adapter.locked_figures(master.pk, keys.LOCAL)
-    assert (made.segment_id, made.mode, made.points, made.length) == (master.pk, keys.LOCAL, 0, 0)
+    made = adapter.locked_figures(master.pk, keys.LOCAL_TRACK)
+    assert (made.segment_id, made.mode, made.points, made.length) == (
+        master.pk,
+        keys.LOCAL_TRACK,
+        0,
+        0,
+    )
     SegmentFigures.objects.filter(pk=made.pk).update(points=7)
-    assert adapter.locked_figures(master.pk, keys.LOCAL).points == 7
-    assert SegmentFigures.objects.filter(segment=master, mode=keys.LOCAL).count() == 1
+    assert adapter.locked_figures(master.pk, keys.LOCAL_TRACK).points == 7
+    assert SegmentFigures.objects.filter(segment=master, mode=keys.LOCAL_TRACK).count() == 1

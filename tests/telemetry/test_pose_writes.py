@@ -12,7 +12,7 @@ from common.errors import RuleViolation
 from events.models import PoseSource
 from events.services import segments
 from telemetry.models import Image, LocalPose, MapImage, Pose
-from telemetry.services import attachments, map_images, recording
+from telemetry.services import attachments, map_images, pose_writes
 from tests.support.images import PNG
 
 
@@ -23,38 +23,40 @@ def ito(leg):
 
 def test_fixes_sent_for_a_reason_are_stored_on_its_master(ito):
     child = ito.children.get()
-    recording.record_poses(child, [recording.GpsFix(7.0, 50.0)])
+    pose_writes.store_poses(child, [pose_writes.GpsFix(7.0, 50.0)])
     assert Pose.objects.get().segment == ito
 
 
 def test_pose_keeps_altitude_fix_quality_accuracy_and_default_pose_source(ito, pose_source):
-    fix = recording.GpsFix(7.0, 50.0, altitude=123.4, fix_status=2, horizontal_accuracy=0.02)
-    recording.record_poses(ito, [fix])
+    fix = pose_writes.GpsFix(7.0, 50.0, altitude=123.4, fix_status=2, horizontal_accuracy=0.02)
+    pose_writes.store_poses(ito, [fix])
     pose = Pose.objects.get()
     assert (pose.altitude, pose.fix_status, pose.horizontal_accuracy) == (123.4, 2, 0.02)
     assert pose.pose_source == pose_source
 
 
 def test_a_single_pose_takes_the_legs_default_pose_source_as_it_is_now(ito, pose_source):
-    recording.store_pose(ito.pk, recording.GpsFix(7.0, 50.0))
+    pose_writes.store_pose(ito.pk, pose_writes.GpsFix(7.0, 50.0))
     rtk = PoseSource.objects.create(key="rtk", short_description="RTK base 2")
     ito.leg.default_pose_source = rtk
     ito.leg.save(update_fields=["default_pose_source"])
-    recording.store_pose(ito.pk, recording.GpsFix(7.0, 50.1))
+    pose_writes.store_pose(ito.pk, pose_writes.GpsFix(7.0, 50.1))
     assert [p.pose_source for p in Pose.objects.order_by("id")] == [pose_source, rtk]
 
 
 def test_a_batch_keeps_every_value_exactly_including_the_missing_ones(ito):
     plus_two = timezone.get_fixed_timezone(120)
     fixes = [
-        recording.GpsFix(-0.1234567890123, -45.987654321, altitude=-12.5, horizontal_accuracy=1e-9),
-        recording.GpsFix(179.9999999, 89.9999999, altitude=None, horizontal_accuracy=None),
-        recording.GpsFix(
+        pose_writes.GpsFix(
+            -0.1234567890123, -45.987654321, altitude=-12.5, horizontal_accuracy=1e-9
+        ),
+        pose_writes.GpsFix(179.9999999, 89.9999999, altitude=None, horizontal_accuracy=None),
+        pose_writes.GpsFix(
             7.0, 50.0, fix_status=-1, robot_stamp=datetime(2026, 5, 4, 12, 0, 1, 250001, plus_two)
         ),
-        recording.GpsFix(7.0, 50.0, robot_stamp=datetime(1999, 12, 31, 23, 59, 59, 999999, UTC)),
+        pose_writes.GpsFix(7.0, 50.0, robot_stamp=datetime(1999, 12, 31, 23, 59, 59, 999999, UTC)),
     ]
-    recording.record_poses(ito, fixes)
+    pose_writes.store_poses(ito, fixes)
     stored = {p.uid: p for p in Pose.objects.all()}
     for fix in fixes:
         pose = stored[fix.uid]
@@ -65,10 +67,10 @@ def test_a_batch_keeps_every_value_exactly_including_the_missing_ones(ito):
 
 def test_whole_degrees_beside_fractional_ones_are_stored_as_given(ito):
     fixes = [
-        recording.GpsFix(7, 50, altitude=3, horizontal_accuracy=1),
-        recording.GpsFix(7.5, 50.25, altitude=3.5, horizontal_accuracy=0.5),
+        pose_writes.GpsFix(7, 50, altitude=3, horizontal_accuracy=1),
+        pose_writes.GpsFix(7.5, 50.25, altitude=3.5, horizontal_accuracy=0.5),
     ]
-    recording.record_poses(ito, fixes)
+    pose_writes.store_poses(ito, fixes)
     stored = {p.uid: p for p in Pose.objects.all()}
     for fix in fixes:
         pose = stored[fix.uid]
@@ -77,30 +79,30 @@ def test_whole_degrees_beside_fractional_ones_are_stored_as_given(ito):
 
 
 def test_retried_points_are_stored_once(ito):
-    fixes = [recording.GpsFix(7.0 + i * 1e-5, 50.0, uid=uuid.uuid4()) for i in range(5)]
-    assert recording.record_poses(ito, fixes) == 5
-    assert recording.record_poses(ito, fixes) == 0
+    fixes = [pose_writes.GpsFix(7.0 + i * 1e-5, 50.0, uid=uuid.uuid4()) for i in range(5)]
+    assert pose_writes.store_poses(ito, fixes) == 5
+    assert pose_writes.store_poses(ito, fixes) == 0
     assert Pose.objects.count() == 5
 
 
 def test_non_finite_values_are_refused_and_nothing_is_written(ito):
-    fixes = [recording.GpsFix(7.0, 50.0), recording.GpsFix(7.0, 50.0, altitude=math.inf)]
+    fixes = [pose_writes.GpsFix(7.0, 50.0), pose_writes.GpsFix(7.0, 50.0, altitude=math.inf)]
     with pytest.raises(RuleViolation):
-        recording.record_poses(ito, fixes)
+        pose_writes.store_poses(ito, fixes)
     assert not Pose.objects.exists()
 
 
 def test_local_pose_keeps_yaw_and_zero_coordinates(ito):
-    recording.record_local_poses(ito, [recording.MapPose(0.0, 0.0, "map", yaw=1.5)])
+    pose_writes.store_local_poses(ito, [pose_writes.MapPose(0.0, 0.0, "map", yaw=1.5)])
     pose = LocalPose.objects.get()
     assert (pose.x, pose.y, pose.yaw, pose.frame) == (0.0, 0.0, 1.5, "map")
 
 
 def test_unchanged_map_is_not_stored_again_but_a_changed_one_is(leg, media_root):
     meta = dict(frame="map", width=1, height=1, resolution=0.05, origin_x=1.0, origin_y=2.0)
-    first, stored = map_images.record_map(leg.shift, png=PNG, origin_yaw=0.3, **meta)
-    again, stored_again = map_images.record_map(leg.shift, png=PNG, origin_yaw=0.3, **meta)
-    moved, stored_moved = map_images.record_map(leg.shift, png=PNG, origin_yaw=0.5, **meta)
+    first, stored = map_images.store_map(leg.shift, png=PNG, origin_yaw=0.3, **meta)
+    again, stored_again = map_images.store_map(leg.shift, png=PNG, origin_yaw=0.3, **meta)
+    moved, stored_moved = map_images.store_map(leg.shift, png=PNG, origin_yaw=0.5, **meta)
     assert (stored, stored_again, stored_moved) == (True, False, True)
     assert again == first
     assert MapImage.objects.count() == 2
@@ -110,14 +112,14 @@ def test_unchanged_map_is_not_stored_again_but_a_changed_one_is(leg, media_root)
 def test_a_batch_of_maps_is_stored_in_order_like_one_map_at_a_time(leg, media_root):
     meta = dict(frame="map", width=1, height=1, resolution=0.05, origin_x=1.0, origin_y=2.0)
     retried = uuid.uuid4()
-    map_images.record_map(leg.shift, png=PNG, origin_yaw=0.1, uid=retried, **meta)
+    map_images.store_map(leg.shift, png=PNG, origin_yaw=0.1, uid=retried, **meta)
     batch = [
         map_images.MapPicture(png=PNG, origin_yaw=0.1, uid=retried, **meta),  # a retry
         map_images.MapPicture(png=PNG, origin_yaw=0.2, **meta),
         map_images.MapPicture(png=PNG, origin_yaw=0.2, **meta),  # unchanged
         map_images.MapPicture(png=PNG, origin_yaw=0.3, uid=uuid.uuid4(), **meta),
     ]
-    results = map_images.record_maps(leg.shift, batch)
+    results = map_images.store_maps(leg.shift, batch)
     assert [stored for _, stored in results] == [False, True, False, True]
     assert results[2][0] == results[1][0]
     yaws = list(leg.shift.maps.order_by("received", "id").values_list("origin_yaw", flat=True))

@@ -36,8 +36,8 @@ from events.services.segments import (
 from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.events import Event
 from telemetry.services.attachments import attach_image, attach_recording
-from telemetry.services.map_images import MapPicture, record_maps
-from telemetry.services.recording import GpsFix, MapPose, record_local_poses, record_poses
+from telemetry.services.map_images import MapPicture, store_maps
+from telemetry.services.pose_writes import GpsFix, MapPose, store_local_poses, store_poses
 
 log = logging.getLogger("ftt.collector")
 _MAP_PER_SHIFT = uuid.UUID("0c6f3d2e-57a4-4c57-9d53-3a7e4c1f2b90")
@@ -59,7 +59,7 @@ def _unavailable(exc: BaseException) -> bool:
     return isinstance(exc, OperationalError | InterfaceError)
 
 
-class Recorder:
+class EventWriter:
     def __init__(self, leg_provider: Callable[[], Leg | None]):
         self.leg_provider = leg_provider
         self.state = {
@@ -216,9 +216,9 @@ class Recorder:
         locals_: list[Event] = []
         self._maps = []
         for event in events:
-            if event.kind == ev.GPS:
+            if event.kind == ev.GPS_FIX:
                 fixes.append(event)
-            elif event.kind == ev.LOCAL:
+            elif event.kind == ev.LOCAL_POSE:
                 locals_.append(event)
             else:
                 if event.kind in ev.SEGMENT_CHANGES:
@@ -302,7 +302,7 @@ class Recorder:
             )
             for e in fixes
         ]
-        record_poses(master, rows)
+        store_poses(master, rows)
 
     def _store_locals(self, master: Segment, poses: list[Event]) -> None:
         rows = [
@@ -316,7 +316,7 @@ class Recorder:
             )
             for e in poses
         ]
-        record_local_poses(master, rows)
+        store_local_poses(master, rows)
 
     def _on_map(self, event: Event) -> None:
         self.state["map"] = event
@@ -330,7 +330,7 @@ class Recorder:
         if not maps:
             return
         shift = self.leg.shift
-        record_maps(shift, [self._map_picture(event, shift) for event in maps])
+        store_maps(shift, [self._map_picture(event, shift) for event in maps])
         self.state["map_shift_id"] = shift.pk
 
     def _store_map(self, event: Event) -> None:
@@ -394,14 +394,14 @@ class Recorder:
         transaction.on_commit(lambda: path.unlink(missing_ok=True))
 
 
-def record_events(leg: Leg, events: list[Event]) -> Recorder:
+def write_events(leg: Leg, events: list[Event]) -> EventWriter:
     """Store events into a fixed leg (a bag import): prepares and applies them."""
-    recorder = Recorder(lambda: leg)
+    event_writer = EventWriter(lambda: leg)
     batch = []
     for event in events:
         try:
             batch.append(event.prepare())
         except Exception as exc:
             log.warning(gettext("dropped a %s event: %s"), event.kind, exc)
-    recorder.apply(batch)
-    return recorder
+    event_writer.apply(batch)
+    return event_writer

@@ -32,7 +32,7 @@ from telemetry import storage
 from telemetry.models import LocalPose, Pose
 from telemetry.models.poses import FixStatus
 from telemetry.services.segment_figures import Added, keep_figures, measure_figures
-from telemetry.storage.keys import GPS, LOCAL
+from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 from telemetry.storage.rows import as_uuid
 
 # The fix statuses a pose may carry and the one it gets when none is sent; every
@@ -116,31 +116,24 @@ class MapPose:
         )
 
 
-def record_poses(
-    segment: Segment, fixes: list[GpsFix], pose_source: PoseSource | None = None
-) -> int:
-    """Store GPS fixes on the segment's master; returns how many were new."""
-    return len(store_poses(segment, fixes, pose_source))
-
-
 @transaction.atomic
 def store_poses(
     segment: Segment, fixes: list[GpsFix], pose_source: PoseSource | None = None
-) -> set[uuid.UUID]:
-    """Store GPS fixes on the segment's master; returns the uids of the new rows
+) -> int:
+    """Store GPS fixes on the segment's master; returns how many were new
     (known uids are skipped, so a retried batch stores nothing twice)."""
     for fix in fixes:
         fix.check()
     if not fixes:
-        return set()
+        return 0
     master = segment.master
     require_amendable(shifts__legs__segments=master.pk)
     source_id = pose_source_id(master, pose_source.pk if pose_source is not None else None)
     stored = storage.insert_fixes(master, source_id, fixes, timezone.now())
     new = {p.uid for p in stored}
     refuse_foreign(Pose, [as_uuid(f.uid) for f in fixes], new, segment_id=master.pk)
-    keep_figures(master.pk, GPS, stored, announce=track_row(master, local=False))
-    return new
+    keep_figures(master.pk, GPS_TRACK, stored, announce=track_row(master, local=False))
+    return len(new)
 
 
 def pose_source_id(master: Segment, sent: int | None) -> int | None:
@@ -182,7 +175,9 @@ def store_pose(
                 fix.fix_status != FixStatus.NO_FIX,
             )  # fmt: skip
             # The figures and the feed row are one statement; the row stays locked to the commit.
-            keep_figures(master.pk, GPS, [point], seen, announce=track_row(master, local=False))
+            keep_figures(
+                master.pk, GPS_TRACK, [point], seen, announce=track_row(master, local=False)
+            )
     if stored is None:
         return known_pose(master, fix, source_id), False
     row = fix.row(master, source_id, received)
@@ -207,7 +202,7 @@ def store_local_pose(segment: Segment, pose: MapPose) -> LocalPose:
     """Store one map-frame pose; the new row, or the row stored first under its
     uid on the same master (common.retries)."""
     uid = as_uuid(pose.uid)
-    if record_local_poses(segment, [pose]):
+    if store_local_poses(segment, [pose]):
         return LocalPose.objects.filter(uid=uid, segment_id=segment.master_id).latest("id")
     return stored_row(LocalPose, uid, segment_id=segment.master_id)
 
@@ -215,7 +210,7 @@ def store_local_pose(segment: Segment, pose: MapPose) -> LocalPose:
 def _track_point_deleted(sender, instance, **kwargs) -> None:
     # Every write that changes poses keeps the figures: a deleted point is a
     # step less, and its neighbours join (measured again from the poses).
-    measure_figures([instance.segment_id], [GPS if sender is Pose else LOCAL])
+    measure_figures([instance.segment_id], [GPS_TRACK if sender is Pose else LOCAL_TRACK])
 
 
 def connect() -> None:
@@ -227,7 +222,8 @@ def connect() -> None:
 
 
 @transaction.atomic
-def record_local_poses(segment: Segment, poses: list[MapPose]) -> int:
+def store_local_poses(segment: Segment, poses: list[MapPose]) -> int:
+    """Store map-frame poses on the segment's master; returns how many were new."""
     master = segment.master
     for pose in poses:
         pose.check()
@@ -238,7 +234,9 @@ def record_local_poses(segment: Segment, poses: list[MapPose]) -> int:
     stored = {point.uid for point in fresh}
     refuse_foreign(LocalPose, [as_uuid(p.uid) for p in poses], stored, segment_id=master.pk)
     heading = next((p.yaw for p in reversed(poses) if as_uuid(p.uid) in stored), None)
-    keep_figures(master.pk, LOCAL, fresh, announce=track_row(master, local=True, heading=heading))
+    keep_figures(
+        master.pk, LOCAL_TRACK, fresh, announce=track_row(master, local=True, heading=heading)
+    )
     return len(fresh)
 
 
