@@ -178,7 +178,7 @@ def test_ending_the_test_event_asks_first_and_names_both_robots_their_legs_and_t
         expect(confirm.locator('button[value="yes"]')).to_be_in_viewport()
         assert page.evaluate(OVERFLOWING) == []
         assert page.evaluate(SMALL, "#confirm-dialog button") == []
-        shot(page, f"{screen}-end-confirmation")
+        shot(page, f"{screen}-end-confirmation", full_page=False)
     page.set_viewport_size(VIEWPORTS["tablet"]["viewport"])
     confirm.get_by_role("button", name="Cancel").click()
     # Called off: nothing ended.
