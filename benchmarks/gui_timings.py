@@ -8,6 +8,10 @@ from the navigation, with an empty HTTP cache as routing leaves it).  Target:
 page interactive <= 1.5 s, each action <= 300 ms; a stalled or cut link shown,
 live again once it is back, and what was kept during a cut sent, <= 5 s each.
 Run: .venv/bin/python benchmarks/gui_timings.py [--repeat 5]
+The long leg (issue 49: 250 segments, the main thread's busy share and
+switch -> banner beside main) is benchmarks/long_leg.py's; --long-leg runs it
+with the arguments that follow:
+  .venv/bin/python benchmarks/gui_timings.py --long-leg --main /work/main --segments 250
 """
 
 import argparse
@@ -111,9 +115,19 @@ def link_figures(browser, server, url, repeat, figures):
 
 
 def main():
+    if "--long-leg" in sys.argv:
+        from benchmarks import long_leg
+
+        sys.argv = [long_leg.__file__, *sys.argv[sys.argv.index("--long-leg") + 1 :]]
+        return long_leg.main()
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--segments", type=int, default=20)
+    parser.add_argument(
+        "--long-leg",
+        action="store_true",
+        help="run benchmarks/long_leg.py instead, with the arguments after this one",
+    )
     args = parser.parse_args()
     server = Server(Path(tempfile.mkdtemp()), "http://127.0.0.1:9/tiles/{z}/{x}/{y}.png")
     server.start()

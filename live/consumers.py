@@ -22,7 +22,9 @@ from channels.exceptions import StopConsumer
 from channels.generic.websocket import AsyncJsonWebsocketConsumer
 from django.conf import settings
 from django.contrib import auth
+from django.core.serializers.json import DjangoJSONEncoder
 from django.db import connections
+from django.utils import translation
 from django.utils.translation import gettext
 from psycopg import AsyncConnection
 
@@ -320,6 +322,7 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
             return
         self.watch = {"test_event": None, "shift": None, "leg": None}
         self.fleet = False
+        self.language = settings.LANGUAGE_CODE
         self.subscribed = False
         self.sent: set[int] = set()
         self.poller = FeedReader.for_loop()
@@ -374,6 +377,12 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
         """A logout in this socket's session (live.sessions)."""
         await self._end_session()
 
+    async def encode_json(self, content):
+        """Events are read once for every page; their words (segment labels, lazy)
+        are written in this page's language."""
+        with translation.override(self.language):
+            return DjangoJSONEncoder().encode(content)
+
     async def send_json(self, content, close=False):
         """Send, or leave at once if the browser has gone: Uvicorn raises
         ClientDisconnected (an OSError) and then never calls disconnect()."""
@@ -424,6 +433,10 @@ class LiveConsumer(AsyncJsonWebsocketConsumer):
             self.watch[key] = value if isinstance(value, int) and value > 0 else None
         # The fleet view watches every logging robot, not one leg.
         self.fleet = content.get("fleet") is True
+        # The page's language, which the server chose for it: the words events carry.
+        language = content.get("language")
+        if language in dict(settings.LANGUAGES):
+            self.language = language
         last_id = content.get("last_id")
         first, last = await _bounds()
         if isinstance(last_id, int) and last_id < last:

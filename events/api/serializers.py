@@ -8,6 +8,7 @@ from datetime import timedelta
 
 from django.db.models import IntegerField
 from django.utils import timezone
+from django.utils.functional import lazy
 from django.utils.translation import gettext
 from rest_framework import serializers
 from rest_framework_gis.fields import GeometryField
@@ -286,6 +287,11 @@ def open_take_over_ids(leg_ids) -> dict[int, int | None]:
     return found
 
 
+# Worded when written out, in the reader's language: the live feed reads these once
+# for every open page, whatever language each page is in (live/consumers.py).
+_label_later = lazy(label, str)
+
+
 def touched_rows(segment_ids) -> dict[int, dict]:
     """{changed segment id: {"segments": the rows that change touched, as the API
     shows them, "labels": their labels, "short_labels": the same within their leg,
@@ -302,7 +308,7 @@ def touched_rows(segment_ids) -> dict[int, dict]:
         pk: {
             "open_take_over": take_overs[rows[0].leg_id] if rows else None,
             "segments": SegmentSerializer(rows, many=True).data,
-            "labels": {c.pk: label(*numbers[c.pk]) for c in rows if c.pk in numbers},
+            "labels": {c.pk: _label_later(*numbers[c.pk]) for c in rows if c.pk in numbers},
             "short_labels": {c.pk: short_label(numbers[c.pk][1]) for c in rows if c.pk in numbers},
         }
         for pk, rows in touched.items()

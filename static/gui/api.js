@@ -4,7 +4,7 @@
 import { CONFIG } from "./dom.js";
 import { _ } from "./i18n.js";
 
-const NETWORK_MESSAGE = _("The server cannot be reached. Check the network connection and try again.");
+export const NETWORK_MESSAGE = _("The server cannot be reached. Check the network connection and try again.");
 
 export class ApiError extends Error {
   constructor(message, status, errors) {

@@ -1,11 +1,14 @@
 /* The robot panel: the shift's vehicle's collector (ftt_collect), its inputs,
  * Start/Stop logging and Snapshot now; commands go to the robot through /gui/api/. */
 import { CONFIG, $ } from "./dom.js";
-import { ApiError, api, plainMessage } from "./api.js";
+import { ApiError, NETWORK_MESSAGE, api, plainMessage } from "./api.js";
 import { clearError, notice, showError } from "./feedback.js";
 import { current, state, vehicleName } from "./state.js";
 import { _ } from "./i18n.js";
 import { fmtNumber } from "./format.js";
+
+// How long the robot panel waits for the server before it says it cannot reach it.
+const STATUS_MS = 5000;
 
 export const Collector = {
   status: null,
@@ -25,10 +28,17 @@ export const Collector = {
       box.textContent = _("Asking for the robot's status…");
     }
     try {
-      this.status = await api("GET", `collectors/?vehicle=${shift.vehicle}&leg=${state.selected.leg || ""}`, undefined, { root: CONFIG.guiApiRoot });
+      // A half-open link would keep the last answer on screen as if it were now.
+      this.status = await api("GET", `collectors/?vehicle=${shift.vehicle}&leg=${state.selected.leg || ""}`, undefined, { root: CONFIG.guiApiRoot, signal: AbortSignal.timeout(STATUS_MS) });
     } catch (err) {
       this.status = null;
-      box.textContent = err.status === 404 ? _("Collector status is not available on this server.") : plainMessage(err);
+      if (err.status === 404) box.textContent = _("Collector status is not available on this server.");
+      else box.textContent = err.name === "TimeoutError" ? NETWORK_MESSAGE : plainMessage(err);
+      // Without an answer there is nothing current to show of the robot.
+      $("#collector-inputs").replaceChildren();
+      $("#collector-warning").hidden = true;
+      $("#logging-why").textContent = "";
+      $("#snapshot-why").textContent = "";
       button.disabled = true;
       $("#snapshot-now").disabled = true;
       return;

@@ -132,11 +132,24 @@ async function formOf(level) {
   return forms[level];
 }
 
+// How long End and New leg wait for the server to say what they end.
+const ASK_MS = 2000;
+
 /* What `action` on row `id` would end, as the server reads it (nothing is
  * written), as lines for the confirmation; none when it ends nothing that
  * a robot logs into. */
 async function endingLines(action, id) {
-  const e = await api("GET", `ending/?action=${action}&id=${id}`, undefined, { root: CONFIG.guiApiRoot });
+  // Without the server's answer nothing can be asked, so nothing is ended; a dead
+  // or half-open link is said at once, not after the browser gives up.
+  const noAnswer = () => new ApiError(_("The server does not answer, so it cannot say what this ends: nothing was ended. Try again when the link is back."), 0);
+  if (!["live", "connecting"].includes(Live.link)) throw noAnswer();
+  let e;
+  try {
+    e = await api("GET", `ending/?action=${action}&id=${id}`, undefined, { root: CONFIG.guiApiRoot, signal: AbortSignal.timeout(ASK_MS) });
+  } catch (err) {
+    if (err instanceof ApiError) throw err;
+    throw noAnswer();
+  }
   const lines = [];
   const names = (rows) => rows.map((r) => r.name).join(", ");
   if (e.vehicles.length) {

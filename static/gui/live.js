@@ -103,6 +103,8 @@ export const Live = {
       leg: state.selected.leg,
       fleet: state.view === "fleet",
       last_id: state.lastEventId,
+      // The words events carry (segment labels) come in the page's language.
+      language: document.documentElement.lang,
     }));
   },
   receive(message) {

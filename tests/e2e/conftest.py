@@ -133,8 +133,10 @@ def shot(request):
     folder.mkdir(parents=True)
     counter = iter(range(1, 1000))
 
-    def take(page, name: str):
-        page.screenshot(path=str(folder / f"{next(counter):02d}-{name}.png"), full_page=True)
+    def take(page, name: str, full_page: bool = True):
+        # A modal's backdrop covers the window, not the page: a whole-page
+        # picture of one shows the part above the window undimmed.
+        page.screenshot(path=str(folder / f"{next(counter):02d}-{name}.png"), full_page=full_page)
 
     return take
 

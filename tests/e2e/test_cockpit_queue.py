@@ -178,7 +178,7 @@ def test_ending_the_test_event_asks_first_and_names_both_robots_their_legs_and_t
         expect(confirm.locator('button[value="yes"]')).to_be_in_viewport()
         assert page.evaluate(OVERFLOWING) == []
         assert page.evaluate(SMALL, "#confirm-dialog button") == []
-        shot(page, f"{screen}-end-confirmation")
+        shot(page, f"{screen}-end-confirmation", full_page=False)
     page.set_viewport_size(VIEWPORTS["tablet"]["viewport"])
     confirm.get_by_role("button", name="Cancel").click()
     # Called off: nothing ended.
@@ -200,6 +200,68 @@ def test_ending_the_test_event_asks_first_and_names_both_robots_their_legs_and_t
     page.locator('[data-action="end"][data-level="event"]').click()
     confirm.locator('button[value="yes"]').click()
     expect(state).to_have_text("closed")
+
+
+# A collector that beats as logging into its leg and never takes the stop order
+# (one the operator cannot reach, say): the leg ends, the robot logs on into it.
+DEAF_COLLECTOR = """
+import time
+from events.models import Leg
+from rosbridge_app.services import collectors
+leg = Leg.objects.get(pk={leg})
+print("READY", flush=True)
+while True:
+    collectors.heartbeat("sim-{key}-a", vehicle=leg.shift.vehicle, logging=True, leg=leg)
+    time.sleep(0.5)
+"""
+
+
+def test_end_on_a_stalled_link_says_at_once_it_ended_nothing_and_a_deaf_collector_is_shown(
+    page, server, link, open_leg
+):
+    ids = json.loads(server.python(SECOND_ROBOT.format(key=open_leg)).strip().splitlines()[-1])
+    deaf = server.spawn(DEAF_COLLECTOR.format(leg=ids["leg"], key=open_leg))
+    try:
+        assert any(line.startswith("READY") for line in deaf.stdout)
+        page.set_viewport_size(VIEWPORTS["tablet"]["viewport"])
+        login(page, link, "otto")
+        page.goto(f"{link.url}/?event={ids['event']}&shift={ids['shift']}&leg={ids['leg']}")
+        expect(page.locator("#live-status")).to_have_text("live", timeout=LIVE)
+        state = page.locator('[data-state="event"]')
+        expect(state).to_have_text("open")
+        warning = page.locator("#collector-warning")
+        expect(warning).to_be_hidden()
+
+        # Half-open: the badge still says live when End is tapped.
+        link.stall()
+        end = page.locator('[data-action="end"][data-level="event"]')
+        end.click()
+        error = page.locator("#error")
+        expect(error).to_contain_text("nothing was ended", timeout=3000)
+        expect(page.locator("#confirm-dialog")).to_be_hidden()
+        # Once the badge no longer says live, the answer comes without trying.
+        expect(page.locator("#live-status")).not_to_have_text("live", timeout=6000)
+        error.locator(".dismiss").click()
+        end.click()
+        expect(error).to_contain_text("nothing was ended", timeout=500)
+
+        link.restore()
+        expect(page.locator("#live-status")).to_have_text("live", timeout=LIVE)
+        error.locator(".dismiss").click()
+        end.click()
+        confirm = page.locator("#confirm-dialog")
+        expect(confirm.locator(".items li").nth(0)).to_contain_text("Logging stops on:")
+        confirm.locator('button[value="yes"]').click()
+        expect(state).to_have_text("closed")
+        # The robot did not stop: the cockpit says that it logs into nothing.
+        expect(warning).to_contain_text(
+            "Leg 1, which has ended: nothing is stored. Start a new leg.", timeout=10_000
+        )
+    finally:
+        deaf.terminate()
+        deaf.wait(10)
+    legs = page.request.get(f"{link.url}/api/legs/?test_event={ids['event']}").json()
+    assert not any(leg["is_open"] for leg in legs["results"])
 
 
 def test_signing_out_leaves_neither_the_queue_nor_the_kept_cockpit(page, server, link, open_leg):

@@ -75,6 +75,11 @@ def test_a_stalled_link_is_shown_stale_within_5_s_and_catches_up(
         expect(mode).to_contain_text(re.compile(r"^last known: AUTO, \d+ s ago$"), timeout=5000)
         assert time.monotonic() - stalled <= 5
         expect(page.locator("#mode-panel")).to_have_attribute("data-link", "lost")
+        # The robot panel keeps no input's age from before the stall as if it were now.
+        expect(page.locator("#collector-status")).to_have_text(
+            re.compile("^The server cannot be reached"), timeout=15_000
+        )
+        expect(page.locator("#collector-inputs li")).to_have_count(0)
         for screen, options in VIEWPORTS.items():
             page.set_viewport_size(options["viewport"])
             shot(page, f"{screen}-stale")

@@ -3,6 +3,7 @@ included (segment rows, the pickers, the who-line): none of FTT's own English
 words (tests/support/english.py)."""
 
 import json
+import re
 
 import pytest
 from playwright.sync_api import expect
@@ -39,9 +40,32 @@ def test_the_german_cockpit_shows_no_english(browser, server):
         rows = page.locator("#segment-table tbody tr")
         expect(rows).to_have_count(2)  # AUTO, then the take-over
         expect(page.locator("html")).to_have_attribute("lang", "de")
-        shown = page.evaluate(
-            # Leaflet's own controls (zoom, its attribution) speak Leaflet's words.
-            """() => {
+        assert english_in(shown_words(page), {"Kran", "Kiesgrube"}) == []
+        assert "geschlossen" in shown_words(page) and "offen" in shown_words(page)
+        # The take-over ends live: the rows that arrive by the live feed speak German too.
+        expect(page.locator("#live-status")).to_have_attribute("data-state", "ok", timeout=15_000)
+        server.python(LIVE_END.format(leg=chosen["leg"]))
+        expect(rows).to_have_count(3)
+        expect(rows.first.locator("td").first).to_have_attribute(
+            "title", re.compile(r"^Etappe 1 · #3 ")
+        )
+        assert english_in(shown_words(page), {"Kran", "Kiesgrube"}) == []
+    finally:
+        context.close()
+
+
+LIVE_END = """
+from events.models import Leg
+from events.services import segments
+segments.report_mode(Leg.objects.get(pk={leg}), "auto")
+"""
+
+
+def shown_words(page) -> str:
+    """The page's text with its titles, labels, placeholders and options."""
+    return page.evaluate(
+        # Leaflet's own controls (zoom, its attribution) speak Leaflet's words.
+        """() => {
                 const own = document.querySelectorAll(".leaflet-control-container");
                 for (const control of own) control.remove();
                 return [document.body.innerText, ...[...document.querySelectorAll(
@@ -49,8 +73,4 @@ def test_the_german_cockpit_shows_no_english(browser, server):
                     [e.title, e.getAttribute("aria-label"), e.placeholder, e.textContent].join(" "))
                 ].join(" ");
             }"""
-        )
-        assert "geschlossen" in shown and "offen" in shown
-        assert english_in(shown, {"Kran", "Kiesgrube"}) == []
-    finally:
-        context.close()
+    )
