@@ -187,9 +187,9 @@ class CollectorRuntime:
             options = db.settings_dict.setdefault("OPTIONS", {})
             # One thread writes, so a pool (the web server's) gains nothing and
             # its reconnection backs off, doubling up to minutes, while the writer
-            # waits up to the pool's timeout per attempt: after an outage the
-            # collector came back 30-60 s after the database did. A plain
-            # connection, kept open and checked, is tried again every RECONNECT.
+            # waits up to the pool's timeout per attempt, so the collector would
+            # come back long after the database. A plain connection, kept open
+            # and checked, is tried again every RECONNECT.
             if options.pop("pool", None) is not None:
                 db.settings_dict["CONN_MAX_AGE"] = None
                 db.settings_dict["CONN_HEALTH_CHECKS"] = True
