@@ -257,10 +257,10 @@ def one_leg(event: TestEvent) -> list[Segment]:
 def segment_list(leg_masters: list[Segment]) -> None:
     try:
         distances.displayed_distances(leg_masters)
-    except TypeError:  # before the figures: the list measured the kept tracks
-        from telemetry.selectors.kept_tracks import kept_tracks
+    except TypeError:  # before the figures: the list measured the cached tracks
+        from telemetry.selectors.cached_tracks import cached_tracks
 
-        kept = kept_tracks(leg_masters)
+        kept = cached_tracks(leg_masters)
         distances.displayed_distances(leg_masters, kept[GPS_TRACK], kept[LOCAL_TRACK])
 
 

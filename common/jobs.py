@@ -32,8 +32,8 @@ from django.utils.translation import gettext_noop
 from django_tasks.base import TaskResultStatus
 from django_tasks_db.models import DBTaskResult
 
+from common.deferred_text import deferred
 from common.models import JobWorker
-from common.said import said
 
 log = logging.getLogger(__name__)
 
@@ -47,7 +47,7 @@ _interrupted: dict[str, Callable] = {}
 
 
 def when_interrupted(task):
-    """Register ``handler(*args, retried: bool, reason: Said, **kwargs)`` for ``task``.
+    """Register ``handler(*args, retried: bool, reason: DeferredText, **kwargs)`` for ``task``.
 
     Called with the task's own arguments when a worker died while running it.
     """
@@ -85,8 +85,8 @@ def forget(worker_id: str) -> None:
 def waiting(now=None):
     """What a queued job's row says until a worker takes it."""
     if worker_running(now):
-        return said(gettext_noop("waiting for the job worker"))
-    return said(gettext_noop("waiting: no job worker runs (start manage.py ftt_worker)"))
+        return deferred(gettext_noop("waiting for the job worker"))
+    return deferred(gettext_noop("waiting: no job worker runs (start manage.py ftt_worker)"))
 
 
 def worker_running(now=None) -> bool:
@@ -139,14 +139,14 @@ def _recover(task_id, worker_id: str, now) -> str | None:
             return None  # another worker was quicker
         attempts = len(result.worker_ids)
         retried = attempts < MAX_ATTEMPTS
-        reason = said(
+        reason = deferred(
             gettext_noop(
                 "The job worker stopped during attempt %(attempt)s of %(attempts)s "
                 "(restart or crash of %(worker)s)."
             ),
             attempt=attempts,
             attempts=MAX_ATTEMPTS,
-            worker=worker_id or said(gettext_noop("an unknown worker")),
+            worker=worker_id or deferred(gettext_noop("an unknown worker")),
         )
         if retried:
             result.status = TaskResultStatus.READY

@@ -5,7 +5,7 @@ from django.conf import settings
 from django.db import models
 from django.utils.translation import gettext_lazy as _
 
-from common.said import shown
+from common.deferred_text import in_reader_language
 
 
 class JobWorker(models.Model):
@@ -41,7 +41,8 @@ class Job(models.Model):
         max_length=200, blank=True, help_text=_("The step running now."), verbose_name=_("message")
     )
     error = models.TextField(blank=True, verbose_name=_("error"))
-    # The message and error as text and values (common.said), shown in the reader's language.
+    # The message and error as text and values (common.deferred_text), read in the
+    # reader's language.
     message_said = models.JSONField(default=dict, blank=True, verbose_name=_("message (words)"))
     error_said = models.JSONField(default=dict, blank=True, verbose_name=_("error (words)"))
     requested_by = models.ForeignKey(
@@ -62,11 +63,11 @@ class Job(models.Model):
 
     @property
     def shown_message(self) -> str:
-        return shown(self.message, self.message_said)
+        return in_reader_language(self.message, self.message_said)
 
     @property
     def shown_error(self) -> str:
-        return shown(self.error, self.error_said)
+        return in_reader_language(self.error, self.error_said)
 
     @property
     def is_finished(self) -> bool:

@@ -24,7 +24,7 @@ class ProgressBar:
 
     def __call__(self, fraction: float, step) -> None:
         """The report renderer's callback: a fraction and what is being done
-        (common.said.Said, said in the command's language)."""
+        (common.deferred_text.DeferredText, said in the command's language)."""
         self.show(fraction, after=f"{100 * fraction:3.0f}% {str(step)[:40]:<40}")
 
     def count(self, label: str, done: int, total: int) -> None:

@@ -147,7 +147,7 @@ SEEDED_TEXTS = {
 }
 
 
-def shown(model_name: str, key: str, text: str) -> str:
+def catalogue_text(model_name: str, key: str, text: str) -> str:
     """A catalogue entry's text as its reader sees it: the seeded words in the
     reader's language; an entry an administrator added or rewrote, as written."""
     return gettext(text) if text and text in SEEDED_TEXTS.get((model_name, key), ()) else text

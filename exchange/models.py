@@ -3,8 +3,8 @@
 from django.db import models
 from django.utils.translation import gettext_lazy as _
 
+from common.deferred_text import in_reader_language
 from common.models import Job
-from common.said import shown
 from exchange.counts import count_lines
 
 
@@ -34,7 +34,7 @@ class ArchiveImport(Job):
 
     @property
     def shown_verdict(self) -> str:
-        return shown(self.verdict, self.verdict_said)
+        return in_reader_language(self.verdict, self.verdict_said)
 
     def __str__(self):
         return f"Import {self.pk} of {self.filename} ({self.status})"

@@ -20,7 +20,7 @@ from django.utils.translation import gettext_noop
 from django_tasks import task
 
 from common import jobs
-from common.said import Said, said, said_fields
+from common.deferred_text import DeferredText, deferred, deferred_fields
 from exchange.archive import open_archive
 from exchange.importer import Plan, import_bundle
 from exchange.models import ArchiveImport
@@ -61,8 +61,8 @@ def queue_import(upload, *, user=None) -> tuple[ArchiveImport, Plan]:
             job = ArchiveImport.objects.create(
                 filename=(getattr(upload, "name", "") or upload_copy.name)[:255],
                 path=str(upload_copy.resolve()),
-                **said_fields("message", jobs.waiting()),
-                **said_fields("verdict", preview.said(), 200),
+                **deferred_fields("message", jobs.waiting()),
+                **deferred_fields("verdict", preview.verdict_text(), 200),
                 requested_by=_signed_in(user),
             )
             import_archive.enqueue(job.pk)
@@ -89,17 +89,17 @@ def import_archive(job_id: int) -> str:
         return job.status
     ArchiveImport.objects.filter(pk=job_id).update(
         status=ArchiveImport.Status.RUNNING,
-        **said_fields("message", said(gettext_noop("importing"))),
+        **deferred_fields("message", deferred(gettext_noop("importing"))),
     )
     try:
         plan = import_file(Path(job.path), dry_run=False, by=job.requested_by)
     except Exception as exc:  # refused, malformed or a file gone: the reason is the outcome
-        _finish(job, ArchiveImport.Status.FAILED, **said_fields("error", _reason(exc)))
+        _finish(job, ArchiveImport.Status.FAILED, **deferred_fields("error", _reason(exc)))
         return ArchiveImport.Status.FAILED
     _finish(
         job,
         ArchiveImport.Status.DONE,
-        **said_fields("verdict", plan.said(), 200),
+        **deferred_fields("verdict", plan.verdict_text(), 200),
         changes=plan.changes(),
         counts={table: dict(counts) for table, counts in plan.counts.items()},
         lines=plan.lines(),
@@ -108,17 +108,17 @@ def import_archive(job_id: int) -> str:
 
 
 @jobs.when_interrupted(import_archive)
-def _worker_stopped(job_id: int, *, retried: bool, reason: Said) -> None:
+def _worker_stopped(job_id: int, *, retried: bool, reason: DeferredText) -> None:
     if retried:
-        again = said(gettext_noop("queued again: %(reason)s"), reason=reason)
+        again = deferred(gettext_noop("queued again: %(reason)s"), reason=reason)
         ArchiveImport.objects.filter(pk=job_id).update(
-            status=ArchiveImport.Status.QUEUED, **said_fields("message", again, 200)
+            status=ArchiveImport.Status.QUEUED, **deferred_fields("message", again, 200)
         )
         return
     job = ArchiveImport.objects.filter(pk=job_id).first()
     if job is not None:
-        nothing = said(gettext_noop("%(reason)s Nothing was imported."), reason=reason)
-        _finish(job, ArchiveImport.Status.FAILED, **said_fields("error", nothing))
+        nothing = deferred(gettext_noop("%(reason)s Nothing was imported."), reason=reason)
+        _finish(job, ArchiveImport.Status.FAILED, **deferred_fields("error", nothing))
 
 
 def _reason(exc: Exception) -> str:
@@ -138,7 +138,7 @@ def _finish(job: ArchiveImport, status: str, **fields) -> None:
         Path(job.path).unlink(missing_ok=True)
     ArchiveImport.objects.filter(pk=job.pk).update(
         status=status,
-        **said_fields("message", said(FINISHED[status])),
+        **deferred_fields("message", deferred(FINISHED[status])),
         path="",
         finished=timezone.now(),
         **fields,

@@ -407,8 +407,7 @@ FTT_TILE_URL = env_str("FTT_TILE_URL", "https://tile.openstreetmap.org/{z}/{x}/{
 # Tile servers an external basemap layer may name (basemaps.hosts): names, or
 # "*.domain" for the names below it; IP addresses only listed exactly.
 FTT_TILE_HOSTS = env_list("FTT_TILE_HOSTS", urlsplit(FTT_TILE_URL).hostname or "")
-# PDF reports: where map tiles are cached, and how requested reports run
-# ("thread" in the web process, or "subprocess": manage.py ftt_report --job ID).
+# PDF reports: where map tiles are cached.
 FTT_TILE_CACHE = Path(env_str("FTT_TILE_CACHE", str(DATA_DIR / "tile_cache")))
 # Basemaps (docs/basemaps.md): largest file an administrator may upload, and how
 # many tiles per second ``ftt_basemap fetch`` asks of a tile server.

@@ -12,8 +12,8 @@ from events.models import Performer, Personnel, PoseSource, TestEvent, Vehicle
 from events.services import logs
 from events.services.robots import ensure_robot_account
 from live import wakeup
+from tests.support.caches import forget_memos
 from tests.support.databases import place_migrated_embedded_database, use_migrated_template
-from tests.support.kept import forget_memos
 from tests.support.modes import start_auto
 from tests.support.snapshot import snapshot
 from tests.support.workers import assign_worker_resources

@@ -7,7 +7,7 @@ from pathlib import Path
 from django.conf import settings
 
 from common.memo import Expiring
-from tests.support.kept import MEMOS
+from tests.support.caches import MEMOS
 
 
 def test_every_memo_of_the_code_is_forgotten_between_tests():

@@ -18,8 +18,8 @@ from django.utils import translation
 
 from common.models import AccountPreference
 from rosbridge_app.collector import conversions, params
+from rosbridge_app.collector.deaf_watch import RESUBSCRIBE, DeafWatch
 from rosbridge_app.collector.disk_guard import DiskGuard
-from rosbridge_app.collector.hearing import RESUBSCRIBE, Hearing
 from tests.support.sites import APPS
 from tests.support.typst_words import TypstWords
 
@@ -111,14 +111,14 @@ def test_the_collectors_words_follow_the_sites_language(caplog):
     """What an operator reads from the collector (its log, its hearing text in the
     GUI) is in FTT_LANGUAGE (settings.LANGUAGE_CODE), German here."""
     with translation.override("de"), caplog.at_level(logging.WARNING):
-        hearing = Hearing(0.0)
-        step = hearing.check(10.0, 0, 5.0, True, lambda: ["/fix"])
+        watch = DeafWatch(0.0)
+        step = watch.check(10.0, 0, 5.0, True, lambda: ["/fix"])
     assert step == RESUBSCRIBE
     assert (
-        hearing.text
+        watch.text
         == "Roboter sendet, Collector empfängt nichts (/fix) seit 5 s: Abonnements neu angelegt"
     )
-    assert hearing.text in caplog.text
+    assert watch.text in caplog.text
 
 
 @pytest.mark.django_db
@@ -470,7 +470,7 @@ def test_figures_are_written_in_the_readers_language():
 
 
 # Where a background job writes its row: its step and failure are kept as words
-# (common.said.said_fields), so that each reader gets them in their language.
+# (common.deferred_text.deferred_fields), so that each reader gets them in their language.
 JOB_WRITERS = ["reports/services/generation.py", "exchange/uploads.py", "common/jobs.py"]
 
 
@@ -492,7 +492,7 @@ def test_job_rows_keep_words_not_sentences():
     assert _found(_modules(*JOB_WRITERS), _job_words) == []
     sample = ast.parse(
         'Report.objects.update(message="done")\nrow.error = f"failed: {e}"\n'
-        'Report.objects.update(**said_fields("message", said(gettext_noop("done"))))\n'
+        'Report.objects.update(**deferred_fields("message", deferred(gettext_noop("done"))))\n'
     )
     assert sorted(ast.unparse(n) for n in _job_words(sample)) == ["'done'", "f'failed: {e}'"]
 

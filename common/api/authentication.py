@@ -15,7 +15,7 @@ from common.memo import Expiring
 
 # key -> (user, token, group names, when the directory last checked the
 # account's role or NOT_THE_DIRECTORYS).  A robot posting single poses sends the
-# same token many times a second; each lookup was a round trip of its own.
+# same token many times a second, so its lookup is kept rather than asked again.
 # A token deleted, an account deactivated or a role changed through this
 # process is forgotten at once (common.apps connects clear to those changes);
 # through another process it is honoured within this many seconds.

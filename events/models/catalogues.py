@@ -26,11 +26,11 @@ class Catalogue(models.Model):
     @property
     def shown_short(self) -> str:
         """The short description in the reader's language if it is the seeded one."""
-        return seeds.shown(self._meta.model_name, self.key, self.short_description)
+        return seeds.catalogue_text(self._meta.model_name, self.key, self.short_description)
 
     @property
     def shown_long(self) -> str:
-        return seeds.shown(self._meta.model_name, self.key, self.long_description)
+        return seeds.catalogue_text(self._meta.model_name, self.key, self.long_description)
 
 
 class Weather(Catalogue):

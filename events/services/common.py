@@ -23,8 +23,8 @@ def lock(model_instance: Model, *read_along: str) -> Model:
 
     NO KEY UPDATE: writers that lock the same row still queue, but a row that
     only references it (a note's foreign key, checked at COMMIT with KEY SHARE)
-    does not wait for it; FOR UPDATE made such commits deadlock with mode
-    reports under 200 concurrent clients (409s on PostgreSQL)."""
+    does not wait for it; FOR UPDATE would make such commits deadlock with
+    concurrent mode reports."""
     rows = type(model_instance).objects.select_related(*read_along)
     return rows.select_for_update(no_key=True, of=("self",)).get(pk=model_instance.pk)
 

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 from django.core.exceptions import ValidationError
 from django.utils.translation import gettext_noop
 
-from common.said import Said, said
+from common.deferred_text import DeferredText, deferred
 from exchange.counts import count_lines
 
 
@@ -35,13 +35,13 @@ class Plan:
 
     def verdict(self) -> str:
         """In the active language."""
-        return str(self.said())
+        return str(self.verdict_text())
 
-    def said(self) -> Said:
+    def verdict_text(self) -> DeferredText:
         if self.dry_run:
             would = gettext_noop("Would change %(count)s row(s); dry run, nothing written.")
-            return said(would, count=self.changes())
-        return said(gettext_noop("Changed %(count)s row(s)."), count=self.changes())
+            return deferred(would, count=self.changes())
+        return deferred(gettext_noop("Changed %(count)s row(s)."), count=self.changes())
 
     def lines(self) -> list[str]:
         return count_lines(self.counts)

@@ -1,10 +1,9 @@
 """What a web process loads before it takes its first request.
 
 Django imports the views on the first request that resolves a URL, and the
-views import the reports' figures and statistics (matplotlib, scipy.stats):
-about 1.3 s on the 2-core machine, which the first visitor after a (re)start
-waited for on top of their own page (benchmarks/track_render.py, the cold
-visit).  Done while the process starts, before it listens, nobody waits.
+views import the reports' figures and statistics (matplotlib, scipy.stats),
+which the first visitor after a (re)start would wait for on top of their own
+page.  Done while the process starts, before it listens, nobody waits.
 """
 
 from django.template.loader import get_template

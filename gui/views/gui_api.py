@@ -44,8 +44,8 @@ from rosbridge_app.services.collectors import issue_command
 from telemetry.api.serializers import ImageSerializer, RecordingSerializer
 from telemetry.models import Image, Recording
 from telemetry.selectors import tracks
+from telemetry.selectors.cached_tracks import cached_tracks, caches_any
 from telemetry.selectors.distances import displayed_distances
-from telemetry.selectors.kept_tracks import keeps_any, kept_tracks
 from telemetry.selectors.maps import current_map
 from telemetry.selectors.overlay import map_corners, overlay
 from telemetry.selectors.track_drawing import (
@@ -128,7 +128,7 @@ class LegTracks(GuiView):
         masters = list(tracks.masters(leg=leg.pk))
         if "map" in q:
             return Response(_in_view(leg, masters, q))
-        loaded = kept_tracks(masters)
+        loaded = cached_tracks(masters)
         gps, local = loaded[GPS_TRACK], loaded[LOCAL_TRACK]
         zooms = {GPS_TRACK: q.get("zoom"), LOCAL_TRACK: q.get("local_zoom")}
         for mode, loaded in ((GPS_TRACK, gps), (LOCAL_TRACK, local)):
@@ -172,18 +172,18 @@ class LegDistances(GuiView):
 
 
 def read_ahead(leg: Leg) -> threading.Thread | None:
-    """Starts reading what LegTracks answers from (the kept tracks of both maps)
+    """Starts reading what LegTracks answers from (the cached tracks of both maps)
     in a thread of its own, and returns the thread.
 
     The cockpit's page calls it for the leg it opens: its scripts ask for the
     tracks about half a second after the page, and a process that has not kept
     them yet (the first visit after a restart) reads them meanwhile instead of
-    after the request (``kept_tracks`` lets the request wait for this read).
+    after the request (``cached_tracks`` lets the request wait for this read).
     Where the process keeps any of them it starts nothing (None): the request
     then reads only what changed, and a thread with a connection and a second
     count of the poses would only load the machine while the page starts."""
     masters = list(tracks.masters(leg=leg.pk))
-    if not masters or keeps_any(masters):
+    if not masters or caches_any(masters):
         return None
     thread = threading.Thread(target=_read_leg, args=(masters,), name="tracks-read-ahead")
     thread.daemon = True
@@ -193,7 +193,7 @@ def read_ahead(leg: Leg) -> threading.Thread | None:
 
 def _read_leg(masters: list[Segment]) -> None:
     try:
-        kept_tracks(masters)
+        cached_tracks(masters)
     except DatabaseError:
         # Only a head start: the tracks request reads whatever is not kept yet.
         pass
@@ -212,7 +212,7 @@ def _in_view(leg, masters, q) -> dict:
     mode = q["map"]
     box = q["bbox"]
     segments = {}
-    for segment_id, track in kept_tracks(masters, [mode])[mode].items():
+    for segment_id, track in cached_tracks(masters, [mode])[mode].items():
         if len(track):
             segments[segment_id] = _drawn(track, mode, q.get("zoom"), box, q["bbox_zoom"])
     return {

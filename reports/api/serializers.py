@@ -19,7 +19,7 @@ class ReportSerializer(serializers.ModelSerializer):
     compare = serializers.SerializerMethodField()
     scope = serializers.SerializerMethodField()
     expected_seconds = serializers.SerializerMethodField()
-    # In the reader's language (common.said).
+    # In the reader's language (common.deferred_text).
     message = serializers.CharField(source="shown_message", read_only=True)
     error = serializers.CharField(source="shown_error", read_only=True)
 

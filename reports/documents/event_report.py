@@ -9,7 +9,7 @@ from pathlib import Path
 from django.utils.translation import gettext_noop
 
 from common import cyclic_gc
-from common.said import Said, said
+from common.deferred_text import DeferredText, deferred
 from events.models import TestEvent
 from reports.documents.options import ReportError, ReportOptions
 from reports.documents.sections import Sections
@@ -20,7 +20,7 @@ from reports.formatting import written_in
 from reports.selectors.content import has_segments, report_scope, scope_words
 from reports.selectors.provenance import seal_pdf
 
-Progress = Callable[[float, Said], None]
+Progress = Callable[[float, DeferredText], None]
 
 
 @dataclass
@@ -34,7 +34,7 @@ class ReportResult:
     stages: StageTimes
 
 
-def _silent(_fraction: float, _step: Said) -> None:
+def _silent(_fraction: float, _step: DeferredText) -> None:
     pass
 
 
@@ -82,10 +82,10 @@ def render_report(
     ):
         sections = Sections(event, options, Path(tmp), progress, stages.timed)
         data = sections.document()
-        progress(0.95, said(gettext_noop("typesetting")))
+        progress(0.95, deferred(gettext_noop("typesetting")))
         with stages.timed(gettext_noop("typesetting")):
             pdf = seal_pdf(typeset("report.typ", data, Path(tmp)))
-    progress(1.0, said(gettext_noop("done")))
+    progress(1.0, deferred(gettext_noop("done")))
     return ReportResult(
         pdf=pdf,
         pages_hint=len(data["shifts"]),

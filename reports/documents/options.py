@@ -6,7 +6,7 @@ from django.conf import settings
 from django.utils.translation import gettext as _
 from django.utils.translation import gettext_lazy
 
-from common.said import Said
+from common.deferred_text import DeferredText
 from reports.figures.tiles import MAX_ZOOM
 
 MAX_TIMELINE_HOURS = 48
@@ -25,16 +25,16 @@ class ReportError(Exception):
     """The report cannot be made; the message says why in words for a person.
 
     Raised with the English text (marked with gettext_noop) and its values, kept
-    as ``said``, so the job's row shows it in its reader's language; ``str()`` is
+    as ``deferred``, so the job's row shows it in its reader's language; ``str()`` is
     the active language's. A refusal passed on from a check that already said it
     (a route that cannot be drawn) stays in the language it was said in."""
 
     def __init__(self, text: str, **values):
-        self.said = Said(text, values)
+        self.deferred = DeferredText(text, values)
         super().__init__(text)
 
     def __str__(self) -> str:
-        return str(self.said)
+        return str(self.deferred)
 
 
 @dataclass

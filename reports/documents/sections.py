@@ -11,7 +11,7 @@ from django.utils import timezone
 from django.utils.translation import gettext as _
 from django.utils.translation import gettext_noop, ngettext, pgettext
 
-from common.said import Said, said
+from common.deferred_text import DeferredText, deferred
 from events.selectors.taxonomy import taxonomy_words
 from reports import formatting as fmt
 from reports.documents import tables
@@ -24,8 +24,7 @@ from reports.figures import charts
 from reports.figures.sketch import track_sketch
 from reports.figures.timeline import draw_timeline
 from reports.selectors import content
-from reports.selectors.formulas import FORMULAS
-from reports.selectors.formulas import shown as shown_formulas
+from reports.selectors.formulas import FORMULAS, translated_definitions
 from reports.selectors.plans import test_plan
 from reports.selectors.provenance import keywords, provenance
 from reports.selectors.statistics import (
@@ -78,7 +77,7 @@ class Sections:
 
     def document(self) -> dict:
         event = self.event
-        self.progress(0.02, said(gettext_noop("statistics")))
+        self.progress(0.02, deferred(gettext_noop("statistics")))
         scope = self.options.scope
         # What the report covers, read once: the whole test event, a shift or a leg.
         self.scope_name = content.scope_name(**scope)
@@ -93,11 +92,11 @@ class Sections:
         total_steps = 2 + len(shifts) + len(stats.runs)
         self.step = 0
 
-        def tick(step: Said):
+        def tick(step: DeferredText):
             self.step += 1
             self.progress(0.05 + 0.9 * self.step / total_steps, step)
 
-        tick(said(gettext_noop("global statistics")))
+        tick(deferred(gettext_noop("global statistics")))
         global_section = self._global(stats, shifts)
         shift_sections = []
         for shift in shifts:
@@ -330,7 +329,7 @@ class Sections:
         )
         overview, overview_note = self.maps.draw(runs, shift, self._file, OVERVIEW_SIZE)
         timeline = self._timeline(shift, runs)
-        tick(said(gettext_noop("shift %(number)s"), number=shift.number))
+        tick(deferred(gettext_noop("shift %(number)s"), number=shift.number))
         legs = {leg.id: leg for leg in self.legs[shift.id]}
         segments = []
         level = self.options.level
@@ -338,7 +337,7 @@ class Sections:
             if level == FULL or (level == STANDARD and run.kind == "ito"):
                 segments.append(self._segment(run, legs[run.leg_id], full=level == FULL))
             tick(
-                said(
+                deferred(
                     gettext_noop("shift %(number)s, segment %(index)s"),
                     number=shift.number,
                     index=index,
@@ -481,7 +480,7 @@ class Sections:
             r.shown_short for k, r in sorted(self.reasons.items()) if k not in stats.counted_reasons
         ]
         return {
-            "formulas": [list(pair) for pair in shown_formulas(FORMULAS).items()],
+            "formulas": [list(pair) for pair in translated_definitions(FORMULAS).items()],
             "counted": counted,
             "not_counted": not_counted,
             "confidence": f"{round(CONFIDENCE * 100)} %",

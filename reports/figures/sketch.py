@@ -1,7 +1,7 @@
 """Segment maps as vector sketches that typst draws from JSON.
 
-A report has one small map per segment; drawing 300 of them with matplotlib
-took most of a report's time (tick layout alone was half of it).  A sketch is
+A report has one small map per segment; drawn with matplotlib they would take
+most of a report's time.  A sketch is
 only the track, its start and a scale bar, scaled into a box in points, so
 typst draws it as a few vector paths in no measurable time.  The shift's
 overview map (with tiles) stays a matplotlib figure.

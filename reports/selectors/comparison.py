@@ -35,7 +35,7 @@ def growth_points(runs: list[Run]) -> tuple[list[float], float]:
     return at, driven
 
 
-def shown(f: dict) -> dict[str, str]:
+def written_figures(f: dict) -> dict[str, str]:
     """A group's figures as the PDF writes them (reports.formatting), so the GUI
     shows the same text without deciding any rounding or unit itself."""
     mdbi, mtbi = Estimate(**f["mdbi"]), Estimate(**f["mtbi"])
@@ -73,7 +73,7 @@ def _with_bounds(value: float, lower: float, upper: float) -> str:
 
 def _group(extra: dict, runs: list[Run]) -> dict:
     data = figures(runs).as_dict()
-    return {**extra, "figures": data, "shown": shown(data)}
+    return {**extra, "figures": data, "shown": written_figures(data)}
 
 
 @cyclic_gc.paused()

@@ -6,7 +6,7 @@ from collections import defaultdict
 from django.utils.translation import gettext as _
 from django.utils.translation import gettext_noop
 
-from common.said import Said, said
+from common.deferred_text import DeferredText, deferred
 from events.models import ItoReason, Leg, Note, Segment, Shift, TestEvent
 from events.selectors.taxonomy import taxonomy_of
 from reports.selectors.statistics import segment_scope
@@ -56,21 +56,21 @@ def reasons_by_key(event: TestEvent) -> dict[str, ItoReason]:
     }
 
 
-def scope_words(*, shift: int | None = None, leg: int | None = None) -> Said:
+def scope_words(*, shift: int | None = None, leg: int | None = None) -> DeferredText:
     """What a report covers, as words a job's row keeps: "Shift 2 · Leg 1"."""
     if leg is not None:
         row = Leg.objects.select_related("shift").filter(pk=leg).first()
         if row is None:
-            return said(gettext_noop("a deleted leg"))
-        return said(
+            return deferred(gettext_noop("a deleted leg"))
+        return deferred(
             gettext_noop("Shift %(shift)s · Leg %(leg)s"), shift=row.shift.number, leg=row.number
         )
     if shift is not None:
         row = Shift.objects.filter(pk=shift).first()
         if row is None:
-            return said(gettext_noop("a deleted shift"))
-        return said(gettext_noop("Shift %(shift)s"), shift=row.number)
-    return said(gettext_noop("Test event"))
+            return deferred(gettext_noop("a deleted shift"))
+        return deferred(gettext_noop("Shift %(shift)s"), shift=row.number)
+    return deferred(gettext_noop("Test event"))
 
 
 def scope_name(*, shift: int | None = None, leg: int | None = None) -> str:

@@ -131,6 +131,6 @@ def keyed(pairs) -> dict[str, str]:
     return {name: _definition(text) for name, text in pairs}
 
 
-def shown(pairs) -> dict[str, str]:
+def translated_definitions(pairs) -> dict[str, str]:
     """Each name and definition in the active language, in order."""
     return {_(name): _definition(text) for name, text in pairs}

@@ -1,4 +1,4 @@
-"""What a report was built from, so that it can be checked later (issue 26).
+"""What a report was built from, so that it can be checked later.
 
 The digest covers the canonical content of every row in a test event's scope:
 values as people and figures see them, keyed by uid and catalogue keys, never

@@ -26,8 +26,8 @@ from django.utils.translation import gettext_noop
 from django_tasks import task
 
 from common import jobs
+from common.deferred_text import DeferredText, deferred, deferred_fields
 from common.errors import RuleViolation, TooManyWaiting
-from common.said import Said, said, said_fields
 from events.models import TestEvent
 from reports.documents.comparison import render_comparison
 from reports.documents.event_report import ReportResult, check_reportable, render_report
@@ -73,7 +73,7 @@ def request_report(
             test_event=test_event,
             options=opts.as_dict(),
             requested_by=user if user is not None and user.is_authenticated else None,
-            **said_fields("message", jobs.waiting()),
+            **deferred_fields("message", jobs.waiting()),
         )
         make_report.enqueue(report.pk)
     return report
@@ -119,7 +119,7 @@ def request_comparison(
                 **({ROUTES: routes} if routes else {}),
             },
             requested_by=user if user is not None and user.is_authenticated else None,
-            **said_fields("message", jobs.waiting()),
+            **deferred_fields("message", jobs.waiting()),
         )
         make_report.enqueue(report.pk)
     return report
@@ -184,18 +184,20 @@ def make_report(report_id: int) -> str:
 
 
 @jobs.when_interrupted(make_report)
-def _worker_stopped(report_id: int, *, retried: bool, reason: Said) -> None:
+def _worker_stopped(report_id: int, *, retried: bool, reason: DeferredText) -> None:
     if retried:
         Report.objects.filter(pk=report_id).update(
             status=Report.Status.QUEUED,
             progress=0.0,
-            **said_fields(
-                "message", said(gettext_noop("queued again: %(reason)s"), reason=reason), 200
+            **deferred_fields(
+                "message", deferred(gettext_noop("queued again: %(reason)s"), reason=reason), 200
             ),
             updated=timezone.now(),
         )
     else:
-        _fail(report_id, said(gettext_noop("%(reason)s Request the report again."), reason=reason))
+        _fail(
+            report_id, deferred(gettext_noop("%(reason)s Request the report again."), reason=reason)
+        )
 
 
 # A requested report reads no file and fetches no URL chosen by the requester:
@@ -260,39 +262,41 @@ def run_job(report_id: int) -> Report:
             return report
         Report.objects.filter(pk=report_id).update(
             status=Report.Status.RUNNING,
-            **said_fields("message", said(gettext_noop("starting"))),
+            **deferred_fields("message", deferred(gettext_noop("starting"))),
             updated=timezone.now(),
         )
         last = [0.0]
 
-        def progress(fraction: float, step: Said) -> None:
+        def progress(fraction: float, step: DeferredText) -> None:
             now = time.monotonic()
             if now - last[0] < PROGRESS_INTERVAL_S and fraction < 1.0:
                 return
             last[0] = now
             Report.objects.filter(pk=report_id).update(
                 progress=round(fraction, 3),
-                **said_fields("message", step, 200),
+                **deferred_fields("message", step, 200),
                 updated=timezone.now(),
             )
 
         try:
             result = _render(report, progress)
         except ReportError as exc:
-            return _fail(report_id, exc.said)
+            return _fail(report_id, exc.deferred)
         except Exception as exc:  # a worker must record every failure on its row
             log.exception("report %s failed", report_id)
             unexpected = gettext_noop("Unexpected error: %(kind)s: %(error)s")
-            return _fail(report_id, said(unexpected, kind=exc.__class__.__name__, error=str(exc)))
+            return _fail(
+                report_id, deferred(unexpected, kind=exc.__class__.__name__, error=str(exc))
+            )
         except BaseException:  # the worker was told twice to stop: it drops the report
             stopped = gettext_noop("The job worker was stopped while it made the report.")
-            _fail(report_id, said(stopped))
+            _fail(report_id, deferred(stopped))
             raise
         report.refresh_from_db()
         report.pdf.save(f"report-{report.pk}.pdf", ContentFile(result.pdf), save=False)
         report.status = Report.Status.DONE
         report.progress = 1.0
-        report.message, report.message_said = "done", said(gettext_noop("done")).as_json()
+        report.message, report.message_said = "done", deferred(gettext_noop("done")).as_json()
         report.provisional = result.provisional
         report.finished = timezone.now()
         report.error, report.error_said = "\n".join(result.warnings), {}
@@ -309,7 +313,7 @@ def _render(report: Report, progress) -> ReportResult:
         raise ReportError(
             gettext_noop("A test event of this comparison was deleted; request it again.")
         )
-    progress(0.1, said(gettext_noop("comparing test events")))
+    progress(0.1, deferred(gettext_noop("comparing test events")))
     started = time.perf_counter()
     stages = StageTimes()
     mode = "local" if report.options.get("local") else "gps"
@@ -328,11 +332,11 @@ def _render(report: Report, progress) -> ReportResult:
     )
 
 
-def _fail(report_id: int, why: Said) -> Report:
+def _fail(report_id: int, why: DeferredText) -> Report:
     Report.objects.filter(pk=report_id).update(
         status=Report.Status.FAILED,
-        **said_fields("error", why),
-        **said_fields("message", said(gettext_noop("failed"))),
+        **deferred_fields("error", why),
+        **deferred_fields("message", deferred(gettext_noop("failed"))),
         finished=timezone.now(),
     )
     return Report.objects.get(pk=report_id)

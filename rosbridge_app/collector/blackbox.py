@@ -74,7 +74,7 @@ class Blackbox:
         self.guard = None  # the collector's DiskGuard: no snapshot on a (nearly) full disk
         self._futures: list = []
         self.written = 0
-        self._dropped_said = (0, 0.0)  # count and time of the last warning
+        self._dropped_warned = (0, 0.0)  # count and time of the last warning
         # Waits for the writer process, one file after the other.
         self._pool = ThreadPoolExecutor(1, thread_name_prefix="ftt-snapshot")
         self.writer = WriterProcess()
@@ -135,15 +135,15 @@ class Blackbox:
             self.pending.remove(snap)
             self._futures.append(self._pool.submit(self._write, snap, dict(self.types)))
         self._futures = [f for f in self._futures if not f.done()]
-        said, said_at = self._dropped_said
-        if self.buffer.dropped > said and time.monotonic() - said_at > 60:
+        warned, warned_at = self._dropped_warned
+        if self.buffer.dropped > warned and time.monotonic() - warned_at > 60:
             log.warning(
                 gettext(
                     "snapshot buffer full (snapshot.buffer_mb): %d oldest messages dropped so far"
                 ),
                 self.buffer.dropped,
             )
-            self._dropped_said = (self.buffer.dropped, time.monotonic())
+            self._dropped_warned = (self.buffer.dropped, time.monotonic())
 
     def close(self, wait: bool = True, within: float | None = None) -> None:
         """Write what is pending with the messages it has, then stop the writer;

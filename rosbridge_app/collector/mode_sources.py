@@ -368,7 +368,7 @@ class Combiner:
     def __init__(self, config: ModeSources):
         self.config = config
         n = len(config.sources)
-        self.said: list[str | None] = [None] * n  # confirmed, per source
+        self.confirmed: list[str | None] = [None] * n  # confirmed, per source
         # (mode, since, robot stamp, uncertainty) of a value within its hysteresis
         self.pending: list[tuple | None] = [None] * n
         self.clocks = [ModeClock() for _ in range(n)]
@@ -392,9 +392,9 @@ class Combiner:
             return []  # says nothing
         start, stamp, uncertainty = placed
         if not source.hysteresis:
-            self.said[index], self.pending[index] = mode, None
+            self.confirmed[index], self.pending[index] = mode, None
             return self._combine(Switch(mode, start, stamp, uncertainty))
-        if mode == self.said[index]:
+        if mode == self.confirmed[index]:
             self.pending[index] = None  # a flicker shorter than the hysteresis
             return []
         pending = self.pending[index]
@@ -416,18 +416,18 @@ class Combiner:
                 robot_stamp = stamp + held if stamp is not None else None
                 due.append((i, Switch(mode, since + held, robot_stamp, uncertainty)))
         for i, switch in sorted(due, key=lambda d: d[1].at):
-            self.said[i], self.pending[i] = switch.mode, None
+            self.confirmed[i], self.pending[i] = switch.mode, None
             changes += self._combine(switch)
         return changes
 
     def _combine(self, switch: Switch) -> list[Switch]:
-        said = self.said
+        confirmed = self.confirmed
         if self.config.rule == "first":
-            mode = next((m for m in said if m is not None), None)
-        elif ITO in said:
+            mode = next((m for m in confirmed if m is not None), None)
+        elif ITO in confirmed:
             mode = ITO
         else:
-            mode = AUTO if AUTO in said else None
+            mode = AUTO if AUTO in confirmed else None
         if mode is None or mode == self.mode:
             return []
         self.mode = mode

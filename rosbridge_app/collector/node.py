@@ -30,7 +30,7 @@ from rosbridge_app.collector import params as P
 from rosbridge_app.collector.answers import logging_answer
 from rosbridge_app.collector.blackbox import Blackbox, snapshot_topics
 from rosbridge_app.collector.conversions import stamp_ns
-from rosbridge_app.collector.hearing import RENEW, RESUBSCRIBE, STREAMS, Hearing
+from rosbridge_app.collector.deaf_watch import RENEW, RESUBSCRIBE, STREAMS, DeafWatch
 from rosbridge_app.collector.inputs import (
     drained_subscription,
     is_mode_input,
@@ -80,7 +80,7 @@ class CollectorNode(Node):
         # Called (executor thread) when re-created subscriptions did not help either.
         self.on_deaf = on_deaf or (lambda: None)
         self.on_first_message = on_first_message
-        self._hearing = Hearing(time.monotonic())
+        self._deaf_watch = DeafWatch(time.monotonic())
         self.inputs: dict[str, dict] = {}
         self.topics: list = []
         self._errors: dict[str, float] = {}
@@ -470,17 +470,17 @@ class CollectorNode(Node):
         self._watch_hearing(time.monotonic())
         self._log_losses(time.monotonic())
 
-    # --- hearing watchdog ---------------------------------------------------------------
+    # --- deaf watch -------------------------------------------------------------------
 
     @property
     def hearing(self) -> str:
         """Empty, or what the GUI shows while the collector hears nothing."""
-        return self._hearing.text
+        return self._deaf_watch.text
 
     def _watch_hearing(self, t: float) -> None:
         received = sum(info["count"] for info in self.inputs.values())
         timeout = self.get_parameter("params.deaf_timeout").value
-        action = self._hearing.check(
+        action = self._deaf_watch.check(
             t, received, timeout, self.pipeline.logging, self._published_streams
         )
         if action == RESUBSCRIBE:

@@ -13,7 +13,7 @@ SIGINT/SIGTERM (rclpy's handlers) stop the ROS thread; then the queue is
 spooled, the spool is written to the database if it can be, and the process
 exits.  A SIGKILL loses only what was still in memory (< ~0.1 s of data).
 
-A collector whose node hears nothing while others publish (hearing.py) and
+A collector whose node hears nothing while others publish (deaf_watch.py) and
 whose re-created subscriptions did not help either renews itself: the same
 clean stop, then the process executes itself again (same pid, new DDS
 participant), resuming its logging state from the spool.
@@ -171,7 +171,7 @@ class CollectorRuntime:
         return code
 
     def _deaf(self) -> None:
-        """The node's hearing watchdog gave up on re-created subscriptions."""
+        """The node's deaf watch gave up on re-created subscriptions."""
         renewed = float(os.environ.get(RENEWED_ENV) or 0.0)
         if time.time() - renewed < RENEW_AT_MOST_EVERY_S:
             log.warning(gettext("renewed %.0f s ago already: not again yet"), time.time() - renewed)
@@ -187,9 +187,9 @@ class CollectorRuntime:
             options = db.settings_dict.setdefault("OPTIONS", {})
             # One thread writes, so a pool (the web server's) gains nothing and
             # its reconnection backs off, doubling up to minutes, while the writer
-            # waits up to the pool's timeout per attempt: after an outage the
-            # collector came back 30-60 s after the database did. A plain
-            # connection, kept open and checked, is tried again every RECONNECT.
+            # waits up to the pool's timeout per attempt, so the collector would
+            # come back long after the database. A plain connection, kept open
+            # and checked, is tried again every RECONNECT.
             if options.pop("pool", None) is not None:
                 db.settings_dict["CONN_MAX_AGE"] = None
                 db.settings_dict["CONN_HEALTH_CHECKS"] = True

@@ -192,8 +192,8 @@ def sent_ids(data: dict) -> tuple[int, GpsFix, int | None]:
 
 
 class PoseListSerializer(serializers.ListSerializer):
-    """Checks a batch of poses in one pass of pydantic's compiled validators, about
-    twenty times faster than field by field.  Any batch it does not accept whole
+    """Checks a batch of poses in one pass of pydantic's compiled validators, far
+    faster than field by field.  Any batch it does not accept whole
     is checked again by DRF, so a wrong batch gets DRF's usual field messages."""
 
     def to_internal_value(self, data):

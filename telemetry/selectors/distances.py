@@ -151,8 +151,8 @@ def start_points(masters: list[Segment], mode: str) -> dict[int, tuple[float, fl
         if m.pk not in deferred and m.start_position is not None
     }
     if deferred:
-        # By leg, not by id: a statistics run names ten legs instead of a thousand
-        # ids, whose quoting took longer than the query.
+        # By leg, not by id: a statistics run names a few legs instead of many
+        # ids, whose quoting would take longer than the query.
         rows = (
             Segment.objects.filter(
                 leg__in={m.leg_id for m in masters if m.pk in deferred},
@@ -258,7 +258,7 @@ def kept_paths(masters: Iterable[Segment], mode: str = GPS_TRACK) -> dict[int, K
     the time does not depend on how many are stored.  Pass whole legs, as for
     ``measured_paths``; distance None where fewer than two points are known."""
     neighbours = _neighbours(masters, mode)
-    # By leg, not by id (quoting a campaign's 30 000 ids took longer than the
+    # By leg, not by id (quoting a campaign's ids would take longer than the
     # query); plain rows of the columns used, not model instances.
     figures = SegmentFigures.objects.filter(
         segment__leg__in={m.leg_id for m, _, _ in neighbours}, mode=mode, points__gt=0

@@ -101,8 +101,8 @@ def drawn(
 
 
 def thinned(track: Track, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
-    """``simplified`` of a whole track, remembered on the track: a kept track
-    (``kept_tracks.kept_tracks``) is thinned once per zoom, not once per request."""
+    """``simplified`` of a whole track, remembered on the track: a cached track
+    (``cached_tracks.cached_tracks``) is thinned once per zoom, not once per request."""
     found = track.memo.get(tolerance)
     if found is None:
         found = track.memo[tolerance] = simplified(track.x, track.y, tolerance)

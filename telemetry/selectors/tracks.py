@@ -2,7 +2,7 @@
 
 Points are in driving order (``telemetry.storage.keys``).  Fixes flagged "no fix" carry
 no usable position and are dropped.  Drawing a track is ``track_drawing``'s
-job, keeping tracks between the map's reads ``kept_tracks``'.
+job, keeping tracks between the map's reads ``cached_tracks``'.
 """
 
 from dataclasses import dataclass, field

@@ -8,7 +8,7 @@ from django.test.utils import CaptureQueriesContext
 from events.services import segments
 from telemetry.services import pose_writes
 from tests.support.accounts import signed_in
-from tests.support.kept import forget_kept_tracks
+from tests.support.caches import forget_cached_tracks
 from tests.support.modes import start_auto
 
 pytestmark = pytest.mark.django_db
@@ -58,11 +58,11 @@ def test_the_read_does_not_grow_with_segments(client, leg):
     signed_in(client, "vera", "viewer")
     _drive(start_auto(leg), 7.0)
     _get(client, leg, "distances")
-    forget_kept_tracks()
+    forget_cached_tracks()
     one = _queries(client, leg)
     for k in range(6):
         _drive(segments.report_mode(leg, "ito" if k % 2 == 0 else "auto").master, 7.01 + k * 1e-3)
-    forget_kept_tracks()
+    forget_cached_tracks()
     assert _queries(client, leg) == one
 
 

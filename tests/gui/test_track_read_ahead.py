@@ -8,7 +8,7 @@ from django.test.utils import CaptureQueriesContext
 
 from telemetry.services import pose_writes
 from tests.support.accounts import signed_in
-from tests.support.kept import forget_kept_tracks
+from tests.support.caches import forget_cached_tracks
 from tests.support.modes import start_auto
 
 # Committed for real, as a server runs it: the read ahead has a connection of its own.
@@ -42,12 +42,12 @@ def _tracks(client, leg):
 
 def test_after_the_page_the_tracks_answer_reads_no_track(client, driven_leg):
     leg, master = driven_leg
-    forget_kept_tracks()
+    forget_cached_tracks()
     cold, cold_queries = _tracks(client, leg)
     _, warm_queries = _tracks(client, leg)
     assert warm_queries < cold_queries
 
-    forget_kept_tracks()
+    forget_cached_tracks()
     _open_cockpit(client, leg)
     ahead, queries = _tracks(client, leg)
     # The same answer as a read of its own, with the queries of an answer whose tracks were kept.
@@ -58,7 +58,7 @@ def test_after_the_page_the_tracks_answer_reads_no_track(client, driven_leg):
 
 def test_a_pose_stored_after_the_read_ahead_is_in_the_answer(client, driven_leg):
     leg, master = driven_leg
-    forget_kept_tracks()
+    forget_cached_tracks()
     _open_cockpit(client, leg)
     # The robot drives on after the page opened, 3 km north.
     pose_writes.store_poses(master, [pose_writes.GpsFix(7.0, 50.03)])

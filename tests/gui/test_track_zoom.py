@@ -12,7 +12,7 @@ from events.services import segments
 from telemetry.selectors.track_drawing import zoom_tolerance
 from telemetry.services import pose_writes
 from tests.support.accounts import signed_in
-from tests.support.kept import forget_kept_tracks
+from tests.support.caches import forget_cached_tracks
 from tests.support.modes import start_auto
 
 pytestmark = pytest.mark.django_db
@@ -151,7 +151,7 @@ def test_reading_the_tracks_takes_as_many_queries_for_many_segments_as_for_one(
     # A process's first request looks up what it keeps for the next ones (the
     # account's language, the site's caches): not counted.
     tracks(client, leg, **params)
-    forget_kept_tracks()
+    forget_cached_tracks()
     one = [_queries_for_tracks(client, leg, **params), _queries_for_tracks(client, leg, **params)]
     for k in range(5):
         master = segments.report_mode(leg, "ito" if k % 2 == 0 else "auto").master
@@ -161,7 +161,7 @@ def test_reading_the_tracks_takes_as_many_queries_for_many_segments_as_for_one(
         pose_writes.store_local_poses(
             master, [pose_writes.MapPose(k + i, 0.0, "map") for i in range(20)]
         )
-    forget_kept_tracks()
+    forget_cached_tracks()
     # The first read of the tracks, then one that finds them kept.
     assert [
         _queries_for_tracks(client, leg, **params),

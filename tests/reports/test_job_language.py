@@ -1,4 +1,4 @@
-"""A job's step and why it failed, read in the reader's language (common.said):
+"""A job's step and why it failed, read in the reader's language (common.deferred_text):
 the row keeps the words, not one language's sentence."""
 
 import io

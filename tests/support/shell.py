@@ -24,7 +24,7 @@ from django.conf import settings
 from django.core.cache import caches
 from django.db import connections
 from django.utils import timezone, translation
-from tests.support.kept import forget_memos
+from tests.support.caches import forget_memos
 
 # What `shell -c` puts in scope (its automatic imports), for every snippet.
 scope = {{name: value for name, value in globals().items() if not name.startswith("_")}}

@@ -16,13 +16,13 @@ from events.services import segments
 from events.services.segments import GpsPosition
 from telemetry.models import Pose
 from telemetry.models.poses import FixStatus
-from telemetry.selectors.kept_tracks import kept_tracks
+from telemetry.selectors.cached_tracks import cached_tracks
 from telemetry.selectors.track_drawing import drawn, fit_zoom
 from telemetry.selectors.tracks import Track, load_tracks
 from telemetry.services import pose_writes
 from telemetry.services.pose_writes import GpsFix
 from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
-from tests.support.kept import forget_kept_tracks
+from tests.support.caches import forget_cached_tracks
 from tests.support.modes import start_auto
 
 pytestmark = pytest.mark.django_db
@@ -148,13 +148,13 @@ def _same(a: dict, b: dict):
         assert (a[seg].frame, a[seg].no_fix) == (b[seg].frame, b[seg].no_fix)
 
 
-def test_kept_tracks_are_the_tracks_and_a_late_pose_in_a_closed_segment_shows_up(leg):
+def test_cached_tracks_are_the_tracks_and_a_late_pose_in_a_closed_segment_shows_up(leg):
     masters = _closed_segments_with_tracks(leg, 3)
     ids = [m.pk for m in masters]
-    forget_kept_tracks()
-    first = kept_tracks(masters)
+    forget_cached_tracks()
+    first = cached_tracks(masters)
     with CaptureQueriesContext(connection) as unchanged:
-        again = kept_tracks(masters)
+        again = cached_tracks(masters)
     for mode in (GPS_TRACK, LOCAL_TRACK):
         _same(first[mode], load_tracks(ids, mode))
         _same(again[mode], first[mode])
@@ -166,7 +166,7 @@ def test_kept_tracks_are_the_tracks_and_a_late_pose_in_a_closed_segment_shows_up
     pose_writes.store_local_poses(
         masters[0], [pose_writes.MapPose(-5.0, 1.0, "map", robot_stamp=_at(10.5))]
     )
-    later = kept_tracks(masters)
+    later = cached_tracks(masters)
     for mode in (GPS_TRACK, LOCAL_TRACK):
         _same(later[mode], load_tracks(ids, mode))
     gps, local = later[GPS_TRACK][masters[0].pk], later[LOCAL_TRACK][masters[0].pk]

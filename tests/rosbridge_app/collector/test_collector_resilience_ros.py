@@ -129,7 +129,7 @@ def test_a_collector_that_hears_nothing_while_the_robot_publishes_recovers_by_it
     from rclpy.qos import qos_profile_sensor_data
     from sensor_msgs.msg import NavSatFix
 
-    from rosbridge_app.collector.hearing import DEAF
+    from rosbridge_app.collector.deaf_watch import DEAF
 
     collector = start_collector(
         params={**EVERY_FIX, "params.deaf_timeout": 3.0, "params.sensor_reliable": True},

@@ -1,4 +1,4 @@
-"""The hearing watchdog: a collector whose side of DDS has gone deaf.
+"""The deaf watch: a collector whose side of DDS has gone deaf.
 
 While logging, nothing heard for ``params.deaf_timeout`` seconds although other
 nodes publish sensor topics the collector subscribes to means its side of DDS
@@ -21,7 +21,7 @@ RESUBSCRIBE = "resubscribe"
 RENEW = "renew"
 
 
-class Hearing:
+class DeafWatch:
     """Decides, once a tick, what a deaf collector does; ``text`` is empty or
     what the GUI shows while the collector hears nothing."""
 

@@ -1,18 +1,18 @@
 """What this test process keeps between reads: the tracks
-(telemetry.selectors.kept_tracks) and the per-process memos (common.memo)."""
+(telemetry.selectors.cached_tracks) and the per-process memos (common.memo)."""
 
 from common.api.authentication import known_tokens
 from events.selectors import robots, segments
-from telemetry.selectors import kept_tracks
+from telemetry.selectors import cached_tracks
 
 # Every common.memo.Expiring of the code (tests/test_memos.py checks that none is missing).
 MEMOS = (known_tokens, robots._bindings, segments._pose_targets)
 
 
-def forget_kept_tracks() -> None:
+def forget_cached_tracks() -> None:
     """Empties them, so that the next read is a fresh one."""
-    with kept_tracks._lock:
-        kept_tracks._kept.clear()
+    with cached_tracks._lock:
+        cached_tracks._cache.clear()
 
 
 def forget_memos() -> None:

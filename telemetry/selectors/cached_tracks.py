@@ -1,7 +1,7 @@
-"""Tracks kept between the map's reads in each web process.
+"""Tracks cached between the map's reads in each web process.
 
 The map asks for a leg's tracks at every visit, zoom and live update; a track
-read before is used again while its segment is unchanged (``kept_tracks``).
+read before is used again while its segment is unchanged (``cached_tracks``).
 """
 
 import threading
@@ -16,25 +16,25 @@ from telemetry.storage.keys import GPS_TRACK, TRACK_KINDS
 
 # {(mode, segment id): (key, track)}, bounded in points (x, y and t: 24 bytes
 # each, so about 100 MB), least recently read dropped first.
-_kept: LRUCache = LRUCache(maxsize=4_000_000, getsizeof=lambda kept: len(kept[1]))
+_cache: LRUCache = LRUCache(maxsize=4_000_000, getsizeof=lambda entry: len(entry[1]))
 _lock = threading.Lock()
 
 
-def _kept_for(slot: tuple[str, int], key: tuple) -> Track | None:
-    """The track kept in ``slot`` if it was read for ``key``."""
+def _cached_for(slot: tuple[str, int], key: tuple) -> Track | None:
+    """The track cached in ``slot`` if it was read for ``key``."""
     with _lock:
-        kept = _kept.get(slot)
-    return kept[1] if kept is not None and kept[0] == key else None
+        entry = _cache.get(slot)
+    return entry[1] if entry is not None and entry[0] == key else None
 
 
-def _keep(slot: tuple[str, int], key: tuple, track: Track) -> None:
+def _remember(slot: tuple[str, int], key: tuple, track: Track) -> None:
     with _lock:
-        _kept.pop(slot, None)
-        if len(track) <= _kept.maxsize:
-            _kept[slot] = (key, track)
+        _cache.pop(slot, None)
+        if len(track) <= _cache.maxsize:
+            _cache[slot] = (key, track)
 
 
-# Held while tracks that are not kept are read, so a request that arrives
+# Held while tracks that are not cached are read, so a request that arrives
 # during a read ahead of the same leg (gui.views.gui_api.read_ahead) waits for
 # it and takes its tracks instead of reading them a second time.
 _reading = threading.Lock()
@@ -60,7 +60,7 @@ def pose_counts(
     return {(mode, seg): (n, newest) for mode, seg, n, newest in rows}
 
 
-def kept_tracks(segments: list[Segment], modes=TRACK_KINDS) -> dict[str, dict[int, Track]]:
+def cached_tracks(segments: list[Segment], modes=TRACK_KINDS) -> dict[str, dict[int, Track]]:
     """``load_tracks`` of each mode for the map, which asks again at every
     visit, zoom and live update: {mode: {segment id: track}}.
 
@@ -74,10 +74,10 @@ def kept_tracks(segments: list[Segment], modes=TRACK_KINDS) -> dict[str, dict[in
     by_id = {s.pk: s for s in segments}
     counts = pose_counts(list(by_id), modes)
     found: dict[str, dict[int, Track]] = {mode: {} for mode in modes}
-    if _take_kept(found, by_id, counts):
+    if _take_cached(found, by_id, counts):
         return found
     with _reading:
-        if _take_kept(found, by_id, counts):
+        if _take_cached(found, by_id, counts):
             return found
         for mode, tracks in found.items():
             ids = [seg for (m, seg) in counts if m == mode and seg not in tracks]
@@ -89,19 +89,19 @@ def kept_tracks(segments: list[Segment], modes=TRACK_KINDS) -> dict[str, dict[in
             tracks.update(read)
             for seg, track in read.items():
                 key = (by_id[seg].uid, *counts[mode, seg])
-                # What the track was read for, so results derived from it can be kept too.
+                # What the track was read for, so results derived from it can be cached too.
                 track.memo["kept"] = (mode, *key)
-                _keep((mode, seg), key, track)
+                _remember((mode, seg), key, track)
     return found
 
 
-def _take_kept(found: dict[str, dict[int, Track]], by_id: dict, counts: dict) -> bool:
-    """Puts the kept tracks of ``counts`` into ``found``; True when all were kept."""
+def _take_cached(found: dict[str, dict[int, Track]], by_id: dict, counts: dict) -> bool:
+    """Puts the cached tracks of ``counts`` into ``found``; True when all were cached."""
     complete = True
     for (mode, seg), count in counts.items():
         if seg in found[mode]:
             continue
-        track = _kept_for((mode, seg), (by_id[seg].uid, *count))
+        track = _cached_for((mode, seg), (by_id[seg].uid, *count))
         if track is None:
             complete = False
         else:
@@ -109,8 +109,8 @@ def _take_kept(found: dict[str, dict[int, Track]], by_id: dict, counts: dict) ->
     return complete
 
 
-def keeps_any(segments: list[Segment]) -> bool:
-    """Whether this process keeps a track of any of ``segments``, current or
-    not (no query: what ``kept_tracks`` would then read is what changed)."""
+def caches_any(segments: list[Segment]) -> bool:
+    """Whether this process caches a track of any of ``segments``, current or
+    not (no query: what ``cached_tracks`` would then read is what changed)."""
     with _lock:
-        return any((mode, s.pk) in _kept for mode in TRACK_KINDS for s in segments)
+        return any((mode, s.pk) in _cache for mode in TRACK_KINDS for s in segments)
