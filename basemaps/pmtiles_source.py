@@ -20,13 +20,20 @@ class DirectoryTooLarge(ValueError):
 def check_unpacked_size(packed: bytes, limit: int = MAX_DIRECTORY_BYTES) -> None:
     """Refuse (DirectoryTooLarge) gzip data that unpacks to more than ``limit``
     bytes, unpacking no more than that."""
-    unpacker = zlib.decompressobj(wbits=31)
-    try:
-        unpacker.decompress(packed, limit)
-    except zlib.error:
-        return  # not gzip: the library says so itself
-    if unpacker.unconsumed_tail:
-        raise DirectoryTooLarge(limit)
+    # gzip.decompress, as the library calls it, unpacks every member of the
+    # stream one after the other, so the bound counts them all together.
+    left = limit
+    while packed:
+        unpacker = zlib.decompressobj(wbits=31)
+        try:
+            left -= len(unpacker.decompress(packed, left + 1))
+        except zlib.error:
+            return  # not gzip: the library says so itself
+        if left < 0:
+            raise DirectoryTooLarge(limit)
+        if not unpacker.eof:
+            return  # cut short: the library says so itself
+        packed = unpacker.unused_data
 
 
 def bounded_source(handle):

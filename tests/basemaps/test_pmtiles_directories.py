@@ -8,7 +8,7 @@ from django.core.exceptions import ValidationError
 from pmtiles.tile import Compression, TileType, serialize_header
 
 from basemaps.files import inspect_file
-from basemaps.pmtiles_source import MAX_DIRECTORY_BYTES
+from basemaps.pmtiles_source import MAX_DIRECTORY_BYTES, DirectoryTooLarge, check_unpacked_size
 
 
 def bomb(path):
@@ -47,3 +47,11 @@ def bomb(path):
 def test_a_directory_that_unpacks_beyond_the_bound_is_refused_at_upload(tmp_path):
     with pytest.raises(ValidationError, match="gzip bomb"):
         inspect_file(bomb(tmp_path / "bomb.pmtiles"))
+
+
+def test_a_bomb_behind_a_small_first_gzip_member_is_refused_too():
+    # gzip.decompress unpacks the members one after the other.
+    packed = gzip.compress(b"directory") + gzip.compress(bytes(MAX_DIRECTORY_BYTES))
+    with pytest.raises(DirectoryTooLarge):
+        check_unpacked_size(packed)
+    check_unpacked_size(gzip.compress(b"a") + gzip.compress(bytes(MAX_DIRECTORY_BYTES - 1)))
