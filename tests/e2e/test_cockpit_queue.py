@@ -202,21 +202,26 @@ def test_ending_the_test_event_asks_first_and_names_both_robots_their_legs_and_t
     expect(state).to_have_text("closed")
 
 
+def otto_keeps_a_reason_offline(page, link, open_leg, robot):
+    """Otto's cockpit on a cut link keeps a Safety reason for take-over #1.1."""
+    robot.do("ito")
+    page.set_viewport_size(VIEWPORTS["tablet"]["viewport"])
+    login(page, link, "otto")
+    page.evaluate(CONTROLLED)
+    choose_event(page, open_leg)
+    expect(page.locator("#live-status")).to_have_text("live", timeout=LIVE)
+    expect(page.locator("#who")).to_have_text("Otto Operator")
+    expect(page.locator("#quick-target")).to_have_text("Reason for #1.1:")
+    link.cut()
+    expect(page.locator("#live-status")).not_to_have_text("live", timeout=5000)
+    page.get_by_role("button", name="Safety", exact=True).click()
+    expect(page.locator("#outbox")).to_have_text("1 waiting to send")
+
+
 def test_signing_out_leaves_neither_the_queue_nor_the_kept_cockpit(page, server, link, open_leg):
     robot = Robot(server, open_leg)
     try:
-        robot.do("ito")
-        page.set_viewport_size(VIEWPORTS["tablet"]["viewport"])
-        login(page, link, "otto")
-        page.evaluate(CONTROLLED)
-        choose_event(page, open_leg)
-        expect(page.locator("#live-status")).to_have_text("live", timeout=LIVE)
-        expect(page.locator("#who")).to_have_text("Otto Operator")
-        expect(page.locator("#quick-target")).to_have_text("Reason for #1.1:")
-        link.cut()
-        expect(page.locator("#live-status")).not_to_have_text("live", timeout=5000)
-        page.get_by_role("button", name="Safety", exact=True).click()
-        expect(page.locator("#outbox")).to_have_text("1 waiting to send")
+        otto_keeps_a_reason_offline(page, link, open_leg, robot)
         page.get_by_role("button", name="Sign out").click()
         confirm = page.locator("#confirm-dialog")
         expect(confirm).to_contain_text("1 change made here is not sent yet")
@@ -254,17 +259,7 @@ def test_writes_kept_by_a_session_that_ended_elsewhere_wait_for_their_own_accoun
     (issue 48 finding 6)."""
     robot = Robot(server, open_leg)
     try:
-        robot.do("ito")
-        page.set_viewport_size(VIEWPORTS["tablet"]["viewport"])
-        login(page, link, "otto")
-        page.evaluate(CONTROLLED)
-        choose_event(page, open_leg)
-        expect(page.locator("#live-status")).to_have_text("live", timeout=LIVE)
-        expect(page.locator("#quick-target")).to_have_text("Reason for #1.1:")
-        link.cut()
-        expect(page.locator("#live-status")).not_to_have_text("live", timeout=5000)
-        page.get_by_role("button", name="Safety", exact=True).click()
-        expect(page.locator("#outbox")).to_have_text("1 waiting to send")
+        otto_keeps_a_reason_offline(page, link, open_leg, robot)
         # A reload on the dead link opens the kept cockpit: the service worker
         # answers from its copies for a while after such a miss.
         page.reload()
