@@ -11,6 +11,7 @@ from pmtiles.tile import deserialize_header
 # Far above what a directory of the largest real archives unpacks to (the
 # specification keeps the root under 16 KiB and leaves under a few megabytes).
 MAX_DIRECTORY_BYTES = 32 * 1024 * 1024
+_PIECE = 1024 * 1024
 
 
 class DirectoryTooLarge(ValueError):
@@ -20,13 +21,24 @@ class DirectoryTooLarge(ValueError):
 def check_unpacked_size(packed: bytes, limit: int = MAX_DIRECTORY_BYTES) -> None:
     """Refuse (DirectoryTooLarge) gzip data that unpacks to more than ``limit``
     bytes, unpacking no more than that."""
-    unpacker = zlib.decompressobj(wbits=31)
-    try:
-        unpacker.decompress(packed, limit)
-    except zlib.error:
-        return  # not gzip: the library says so itself
-    if unpacker.unconsumed_tail:
-        raise DirectoryTooLarge(limit)
+    # gzip.decompress, as the library calls it, unpacks every member of the
+    # stream one after the other, so the bound counts them all together; the
+    # unpacked bytes are counted a piece at a time and not kept.
+    left = limit
+    while packed:
+        unpacker = zlib.decompressobj(wbits=31)
+        while not unpacker.eof:
+            try:
+                piece = unpacker.decompress(packed, _PIECE)
+            except zlib.error:
+                return  # not gzip: the library says so itself
+            left -= len(piece)
+            if left < 0:
+                raise DirectoryTooLarge(limit)
+            if not piece and len(unpacker.unconsumed_tail) == len(packed):
+                return  # cut short: the library says so itself
+            packed = unpacker.unconsumed_tail
+        packed = unpacker.unused_data
 
 
 def bounded_source(handle):

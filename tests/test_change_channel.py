@@ -4,7 +4,7 @@ import json
 
 from django.test import Client, RequestFactory
 
-from events.models import Segment, Vehicle
+from events.models import Segment, TestEvent, Vehicle
 from events.services import logs
 from events.services.robots import ensure_robot_account
 from ftt_site.inbound.change_origin import channel_of
@@ -30,3 +30,24 @@ def test_an_authorization_header_does_not_make_a_page_call_an_api_write():
     assert channel_of(page_call) == "gui"
     assert channel_of(factory.post("/api/segments/")) == "api"
     assert channel_of(factory.post("/admin/events/segment/1/change/")) == "admin"
+
+
+def test_a_session_write_with_an_authorization_header_stays_the_gui_s(role_user):
+    operator = role_user("operator")
+    page = Client()
+    page.force_login(operator)
+    written = {}
+    for name, client, headers in (
+        ("session", page, {"HTTP_AUTHORIZATION": "Basic b3R0bzpwdw=="}),
+        ("token", Client(), {"HTTP_AUTHORIZATION": f"Token {operator.auth_token.key}"}),
+    ):
+        answer = client.post(
+            "/api/test-events/",
+            json.dumps({"location": name}),
+            content_type="application/json",
+            **headers,
+        )
+        assert answer.status_code == 201, answer.content
+        event = TestEvent.objects.get(pk=answer.json()["id"])
+        written[name] = [e.history_channel for e in event.history.all()]
+    assert written == {"session": ["gui"], "token": ["api"]}

@@ -47,6 +47,9 @@ TYPE_NAME = re.compile(r"^[A-Za-z][\w]*/msg/[A-Za-z][\w]*$")
 _STEP = re.compile(r"([A-Za-z_]\w*)((?:\[\d+\])*)")
 _KEYS = {"topic", "type", "field", "auto", "ito", "default", "hysteresis", "stamp"}
 TIME_TYPE = "builtin_interfaces/msg/Time"
+# Entries (sources, rules) and values of one mapping a document may have: far
+# more than a robot names, few enough that checking and applying stay quick.
+MAX_ENTRIES = 100
 
 
 class InvalidModeSources(ValueError):
@@ -147,6 +150,11 @@ def matchers(name: str, index: int, raw) -> tuple:
     if raw is None:
         return ()
     items = raw if isinstance(raw, list) else [raw]
+    if len(items) > MAX_ENTRIES:
+        raise InvalidModeSources(
+            _("source %(n)d: %(key)s has more than %(limit)d values")
+            % {"n": index, "key": name, "limit": MAX_ENTRIES}
+        )
     out = []
     for item in items:
         if isinstance(item, dict):
@@ -188,6 +196,11 @@ def load_entries(text: str, key: str, allowed: set) -> tuple[dict, list] | None:
         raise InvalidModeSources(_("not valid YAML: nested too deeply")) from None
     if not isinstance(data, dict) or not isinstance(data.get(key), list):
         raise InvalidModeSources(_("expected '%(key)s:' with a list") % {"key": key})
+    if len(data[key]) > MAX_ENTRIES:
+        # YAML aliases repeat an entry for a few characters each.
+        raise InvalidModeSources(
+            _("%(key)s has more than %(limit)d entries") % {"key": key, "limit": MAX_ENTRIES}
+        )
     entries = []
     for n, raw in enumerate(data[key], start=1):
         where = {"n": n, "key": key}

@@ -7,9 +7,9 @@ were closed elsewhere in the meantime.  A snapshot on request needs an online,
 logging collector with snapshots on: it is stored on the open segment.
 """
 
+from django.core.exceptions import ValidationError
 from django.utils.translation import gettext as _
 
-from common.errors import RuleViolation
 from events.models import Leg
 from rosbridge_app.collector.params import SPECS, InvalidParameter, check
 from rosbridge_app.models import Collector
@@ -71,7 +71,8 @@ def snapshot_control(collector: Collector | None) -> tuple[bool, str]:
 
 def check_parameter_values(collector: Collector, changes: dict) -> dict:
     """Changed values as the collector will take them, checked against the
-    schema now, so a wrong value is refused with a field message at once."""
+    schema now, so a wrong value is refused with a field message at once (a
+    wrong value, 400, not a state that forbids it)."""
     current = collector.parameters or {}
     errors, checked = {}, {}
     for name, value in changes.items():
@@ -83,5 +84,5 @@ def check_parameter_values(collector: Collector, changes: dict) -> dict:
         except InvalidParameter as exc:
             errors[name] = [str(exc)]
     if errors:
-        raise RuleViolation(errors)
+        raise ValidationError(errors)
     return checked

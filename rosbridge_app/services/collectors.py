@@ -6,6 +6,7 @@ finishes commands and announces what it stored.
 
 from datetime import timedelta
 
+from django.core.exceptions import ValidationError
 from django.db import transaction
 from django.utils import timezone
 from django.utils.translation import gettext
@@ -29,7 +30,6 @@ COMMAND_EXPIRY = timedelta(seconds=30)
 # --- GUI side ---------------------------------------------------------------------------
 
 
-@transaction.atomic
 def issue_command(
     collector: Collector,
     kind: str,
@@ -46,6 +46,20 @@ def issue_command(
     if kind not in CollectorCommand.Kind.values:
         raise RuleViolation({"kind": [(gettext("Unknown command '%(kind)s'.") % {"kind": kind})]})
     arguments = dict(arguments or {})
+    if kind == CollectorCommand.Kind.SET_PARAMETERS:
+        # Checked before the transaction: parsing a document parameter then
+        # holds no write lock (the embedded database takes it at BEGIN).
+        values = arguments.get("parameters")
+        if not isinstance(values, dict) or not values:
+            raise ValidationError(
+                {"parameters": [gettext("Give the parameters to set as a non-empty object.")]}
+            )
+        arguments["parameters"] = check_parameter_values(collector, values)
+    return _issued(collector, kind, arguments, user, leg)
+
+
+@transaction.atomic
+def _issued(collector, kind, arguments, user, leg) -> CollectorCommand:
     if kind in (CollectorCommand.Kind.START_LOGGING, CollectorCommand.Kind.STOP_LOGGING):
         allowed, reason = logging_control(collector, leg)
         starting = kind == CollectorCommand.Kind.START_LOGGING
@@ -59,13 +73,6 @@ def issue_command(
             )
         if leg is not None:
             arguments.setdefault("leg", leg.pk)
-    elif kind == CollectorCommand.Kind.SET_PARAMETERS:
-        values = arguments.get("parameters")
-        if not isinstance(values, dict) or not values:
-            raise RuleViolation(
-                {"parameters": [gettext("Give the parameters to set as a non-empty object.")]}
-            )
-        arguments["parameters"] = check_parameter_values(collector, values)
     elif kind == CollectorCommand.Kind.SNAPSHOT:
         allowed, reason = snapshot_control(collector)
         if not allowed:

@@ -88,6 +88,17 @@ async function keptAnswer(cache, request) {
   return cache.match(request, { ignoreSearch: true, ignoreVary: true });
 }
 
+/* A sign-in starts a session, perhaps another account's: the copies kept for the
+ * one before are dropped, and the page after it is asked of the server even just
+ * after a miss (a kept cockpit names the account before, and would send the
+ * writes that account kept). */
+function signingIn(request) {
+  return request.method === "POST" && new URL(request.url).pathname.startsWith("/login");
+}
+
 self.addEventListener("fetch", (event) => {
-  if (kept(event.request)) event.respondWith(answer(event.request, (p) => event.waitUntil(p)));
+  if (signingIn(event.request)) {
+    deadUntil = 0;
+    event.waitUntil(caches.delete(CACHE));
+  } else if (kept(event.request)) event.respondWith(answer(event.request, (p) => event.waitUntil(p)));
 });

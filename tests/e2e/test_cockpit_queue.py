@@ -264,21 +264,26 @@ def test_end_on_a_stalled_link_says_at_once_it_ended_nothing_and_a_deaf_collecto
     assert not any(leg["is_open"] for leg in legs["results"])
 
 
+def otto_keeps_a_reason_offline(page, link, open_leg, robot):
+    """Otto's cockpit on a cut link keeps a Safety reason for take-over #1.1."""
+    robot.do("ito")
+    page.set_viewport_size(VIEWPORTS["tablet"]["viewport"])
+    login(page, link, "otto")
+    page.evaluate(CONTROLLED)
+    choose_event(page, open_leg)
+    expect(page.locator("#live-status")).to_have_text("live", timeout=LIVE)
+    expect(page.locator("#who")).to_have_text("Otto Operator")
+    expect(page.locator("#quick-target")).to_have_text("Reason for #1.1:")
+    link.cut()
+    expect(page.locator("#live-status")).not_to_have_text("live", timeout=5000)
+    page.get_by_role("button", name="Safety", exact=True).click()
+    expect(page.locator("#outbox")).to_have_text("1 waiting to send")
+
+
 def test_signing_out_leaves_neither_the_queue_nor_the_kept_cockpit(page, server, link, open_leg):
     robot = Robot(server, open_leg)
     try:
-        robot.do("ito")
-        page.set_viewport_size(VIEWPORTS["tablet"]["viewport"])
-        login(page, link, "otto")
-        page.evaluate(CONTROLLED)
-        choose_event(page, open_leg)
-        expect(page.locator("#live-status")).to_have_text("live", timeout=LIVE)
-        expect(page.locator("#who")).to_have_text("Otto Operator")
-        expect(page.locator("#quick-target")).to_have_text("Reason for #1.1:")
-        link.cut()
-        expect(page.locator("#live-status")).not_to_have_text("live", timeout=5000)
-        page.get_by_role("button", name="Safety", exact=True).click()
-        expect(page.locator("#outbox")).to_have_text("1 waiting to send")
+        otto_keeps_a_reason_offline(page, link, open_leg, robot)
         page.get_by_role("button", name="Sign out").click()
         confirm = page.locator("#confirm-dialog")
         expect(confirm).to_contain_text("1 change made here is not sent yet")
@@ -304,3 +309,45 @@ def test_signing_out_leaves_neither_the_queue_nor_the_kept_cockpit(page, server,
     # Otto's kept reason was never sent, under anybody's name.
     take_over = row(page, "#1.1").get_attribute("data-id")
     assert api_get(page, link, f"segments/{take_over}/")["ito_reason"] == "unassigned"
+
+
+def test_writes_kept_by_a_session_that_ended_elsewhere_wait_for_their_own_account(
+    page, server, link, open_leg
+):
+    """No sign-out: Otto's session ends (cookies gone), Ada signs in on the same
+    browser just after the service worker answered from its copies. She gets her
+    own cockpit, not Otto's kept one; Otto's kept reason is neither shown to her
+    nor sent under her name; it goes when Otto signs in again, in his name
+    (issue 48 finding 6)."""
+    robot = Robot(server, open_leg)
+    try:
+        otto_keeps_a_reason_offline(page, link, open_leg, robot)
+        # A reload on the dead link opens the kept cockpit: the service worker
+        # answers from its copies for a while after such a miss.
+        page.reload()
+        expect(page.locator("#who")).to_have_text("Otto Operator")
+        expect(page.locator("#outbox")).to_have_text("1 waiting to send")
+        # Otto's tab is closed while the link is down; his session ends meanwhile.
+        page.goto("about:blank")
+        page.context.clear_cookies()
+
+        link.restore()
+        login(page, link, "ada")
+        choose_event(page, open_leg)
+        expect(page.locator("#live-status")).to_have_text("live", timeout=10_000)
+        expect(page.locator("#who")).to_have_text("Ada Admin")
+        expect(page.locator("#outbox")).to_be_hidden()
+        assert page.evaluate(KEPT_WRITES) == 1
+
+        page.context.clear_cookies()
+        login(page, link, "otto")
+        choose_event(page, open_leg)
+        expect(page.locator("#live-status")).to_have_text("live", timeout=10_000)
+        until_nothing_kept(page)
+    finally:
+        robot.stop()
+    take_over = row(page, "#1.1").get_attribute("data-id")
+    assert api_get(page, link, f"segments/{take_over}/")["ito_reason"] == "safety"
+    history = api_get(page, link, f"segments/{take_over}/history/")
+    reasons = [e for e in history if any(c["field"] == "ito_reason" for c in e["changes"])]
+    assert [e["author"] for e in reasons] == ["otto"]

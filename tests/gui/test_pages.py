@@ -231,7 +231,7 @@ def test_viewer_cannot_command_and_parameter_types_are_checked(client, leg, vehi
     client.logout()
     member(client, "otto", "operator")
     response = client.post(url, body, content_type="application/json")
-    assert response.status_code == 409
+    assert response.status_code == 400
     assert response.json()["errors"] == {"params.use_tf": ["params.use_tf must be true or false"]}
     body["arguments"]["parameters"] = {"params.use_tf": False, "params.pose_min_distance": 2}
     assert client.post(url, body, content_type="application/json").status_code == 202

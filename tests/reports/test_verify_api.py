@@ -149,3 +149,14 @@ def test_a_copied_stamp_a_second_stamp_or_an_edited_report_does_not_verify(
     other = pdf.replace(str(event.uid).encode(), str(uuid.uuid4()).encode(), 1)
     answer = _upload(viewer, "two.pdf", other).json()
     assert answer["ok"] is False and "more than one FTT stamp" in answer["message"]
+
+
+def test_a_text_file_holding_a_report_s_stamp_and_seal_is_no_report(scenario, api_client, tmp_path):
+    pdf = _pdf(scenario.event, tmp_path)
+    viewer = api_client("viewer")
+    stamp = re.search(rb"ftt-digest-sha256-\S{64}.*?ftt-event-[0-9a-f-]{36}", pdf, re.S)
+    seal = pdf[pdf.rindex(b"\n%ftt-seal-") :]
+    for copied in (b"All is well.\n" + stamp.group(0), b"All is well.\n" + stamp.group(0) + seal):
+        answer = _upload(viewer, "letter.txt", copied)
+        assert answer.status_code == 400, answer.content
+        assert "no FTT data digest" in answer.json()["errors"]["file"][0]

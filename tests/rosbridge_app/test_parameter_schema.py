@@ -5,10 +5,12 @@ parameter's name, not later by the robot.
 """
 
 import pytest
+from django.db import connection
 from django.utils import timezone
 
 from rosbridge_app.collector.params import SPECS
 from rosbridge_app.models import Collector, CollectorCommand
+from rosbridge_app.selectors import control
 
 pytestmark = pytest.mark.django_db
 
@@ -54,7 +56,7 @@ def operator(client, role_user):
 )
 def test_a_wrong_value_is_refused_at_once_under_its_name(operator, collector, name, value, message):
     response = send(operator, collector, {name: value})
-    assert response.status_code in (400, 409), response.content
+    assert response.status_code == 400, response.content
     assert message in " ".join(response.json()["errors"][name])
     assert not CollectorCommand.objects.exists()
 
@@ -90,6 +92,57 @@ def test_the_editor_rows_come_from_the_schema(operator, collector):
 @pytest.mark.parametrize("name", ["params.mode_sources", "params.reason_rules"])
 def test_yaml_nested_too_deeply_is_refused_under_its_name(operator, collector, name):
     response = send(operator, collector, {name: "[" * 5000 + "]" * 5000})
-    assert response.status_code in (400, 409), response.content
+    assert response.status_code == 400, response.content
     assert "nested too deeply" in " ".join(response.json()["errors"][name])
     assert not CollectorCommand.objects.exists()
+
+
+SOURCE = "{topic: /mode, type: std_msgs/msg/String, field: data, auto: [A]}"
+
+
+@pytest.mark.parametrize(
+    "name, text, message",
+    [
+        # YAML aliases repeat one source or one list of values for two characters each.
+        (
+            "params.mode_sources",
+            f"s: &s {SOURCE}\nsources: [{', '.join(['*s'] * 3000)}]",
+            "sources has more than 100 entries",
+        ),
+        (
+            "params.mode_sources",
+            "v: &v " + "[" + ", ".join(["A"] * 101) + "]\n"
+            "sources: [{topic: /mode, type: std_msgs/msg/String, field: data, auto: *v}]",
+            "auto has more than 100 values",
+        ),
+        (
+            "params.reason_rules",
+            "r: &r {topic: /e, type: std_msgs/msg/String, field: data, values: [x], reason: X}\n"
+            f"rules: [{', '.join(['*r'] * 3000)}]",
+            "rules has more than 100 entries",
+        ),
+    ],
+)
+def test_a_document_of_thousands_of_entries_is_refused_under_its_name(
+    operator, collector, name, text, message
+):
+    assert len(text) < 20_000
+    response = send(operator, collector, {name: text})
+    assert response.status_code == 400, response.content
+    assert message in " ".join(response.json()["errors"][name])
+    assert not CollectorCommand.objects.exists()
+
+
+def test_a_parameter_is_checked_before_the_command_s_transaction(operator, collector, monkeypatch):
+    # The embedded database takes its write lock when a transaction begins.
+    depth_outside = len(connection.savepoint_ids)
+    depths = []
+
+    def check(name, value):
+        depths.append(len(connection.savepoint_ids))
+        return value
+
+    monkeypatch.setattr(control, "check", check)
+    response = send(operator, collector, {"params.mode_sources": f"sources: [{SOURCE}]"})
+    assert response.status_code == 202, response.content
+    assert depths == [depth_outside]
