@@ -218,3 +218,36 @@ def test_a_killed_snapshot_writer_is_replaced_and_the_collector_goes_on(
         what="the next AUTO master",
     )
     assert collector.alive()
+
+
+@pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_a_stop_prints_no_traceback_from_the_snapshot_writer(ros, start_collector, stop):
+    """A snapshot dropped for its size leaves the word of the writer started
+    for it unread: the collector's exit then resets the pipe, not closes it."""
+    from std_msgs.msg import String
+
+    blob = ros.publisher(String, "/blob")
+    collector = start_collector(
+        params={
+            "snapshot.before": 1.0,
+            "snapshot.after": 4.0,
+            "snapshot.topics": "blob",
+            "snapshot.disk_budget_mb": 1,
+        }
+    )
+    wait_for_subscribers(blob, 1)
+    answer = ros.trigger("/ftt_snapshot")
+    assert answer.success, answer.message
+    for _ in range(40):  # 2.5 MB in the window, above the budget; paced, as a sensor's
+        blob.publish(String(data="x" * 64 * 1024))
+        time.sleep(0.02)
+    wait_for(
+        lambda: "MB is more than the disk budget" in collector.output(),
+        20,
+        what="the snapshot dropped for the disk budget",
+    )
+    assert "snapshot writer process started" in collector.output()
+    assert collector.stop(stop) == 0
+    output = collector.output()
+    assert "Traceback" not in output, output
+    assert "ConnectionResetError" not in output, output
