@@ -82,3 +82,52 @@ def test_a_full_disk_during_an_outage_loses_no_switch_and_the_collector_goes_on(
     )
     assert output.count("robot disk full (") == 1 and "Traceback" not in output, output
     assert stopping < 15
+
+
+def test_a_full_disk_while_the_database_answers_keeps_every_position(
+    ros, start_collector, robot_leg
+):
+    """Nothing needs the disk while the database answers: a robot whose disk is
+    full (less free than spool.disk_headroom_mb) still has its track stored at
+    the rate it drives, not thinned to the report's resolution."""
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from sensor_msgs.msg import NavSatFix
+    from std_msgs.msg import Bool
+
+    from events.models import Segment
+    from telemetry.models import Pose
+    from tests.support.ros import wait_for
+
+    sent = 30  # 3 s at 10 Hz
+    collector = start_collector(
+        params={
+            "spool.disk_headroom_mb": 1_000_000,  # more than any test machine has free
+            "params.sensor_reliable": True,
+            "params.pose_min_distance": 0.0,
+            "params.pose_min_period": 0.0,
+        },
+        args=["--start-logging"],
+    )
+    mode = ros.publisher(Bool, "/robot_mode")
+    fixes = ros.publisher(
+        NavSatFix, "/gps_fix", QoSProfile(depth=sent, reliability=ReliabilityPolicy.RELIABLE)
+    )
+    for publisher in (mode, fixes):
+        ros.wait_subscribed(publisher)
+    mode.publish(Bool(data=True))
+    master = wait_for(
+        lambda: Segment.objects.filter(leg=robot_leg, parent__isnull=True).first(),
+        what="the AUTO master",
+    )
+    assert "robot disk full (" in collector.output()
+    fix = NavSatFix()
+    for i in range(sent):
+        t = time.time()
+        fix.header.stamp.sec, fix.header.stamp.nanosec = int(t), int(t % 1 * 1e9)
+        fix.latitude, fix.longitude = 50.6 + i * 1e-5, 7.1
+        fixes.publish(fix)
+        time.sleep(0.1)  # the robot's rate
+    stored = Pose.objects.filter(segment=master)
+    wait_for(lambda: stored.count() >= sent, 10, what=f"{sent} stored fixes")
+    points = stored.values_list("point", flat=True)
+    assert sorted(round((p.y - 50.6) * 1e5) for p in points) == list(range(sent))
