@@ -6,7 +6,7 @@ from urllib.parse import urlsplit, urlunsplit
 
 import pytest
 
-from tests.rosbridge_app.collector.conftest import VEHICLE
+from tests.rosbridge_app.collector.conftest import VEHICLE, logging_robot
 from tests.support import diskfull
 from tests.support.ros import copy_default_params, requires_ros
 
@@ -90,34 +90,16 @@ def test_a_full_disk_while_the_database_answers_keeps_every_position(
     """Nothing needs the disk while the database answers: a robot whose disk is
     full (less free than spool.disk_headroom_mb) still has its track stored at
     the rate it drives, not thinned to the report's resolution."""
-    from rclpy.qos import QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import NavSatFix
-    from std_msgs.msg import Bool
 
-    from events.models import Segment
     from telemetry.models import Pose
     from tests.support.ros import wait_for
 
     sent = 30  # 3 s at 10 Hz
-    collector = start_collector(
-        params={
-            "spool.disk_headroom_mb": 1_000_000,  # more than any test machine has free
-            "params.sensor_reliable": True,
-            "params.pose_min_distance": 0.0,
-            "params.pose_min_period": 0.0,
-        },
-        args=["--start-logging"],
-    )
-    mode = ros.publisher(Bool, "/robot_mode")
-    fixes = ros.publisher(
-        NavSatFix, "/gps_fix", QoSProfile(depth=sent, reliability=ReliabilityPolicy.RELIABLE)
-    )
-    for publisher in (mode, fixes):
-        ros.wait_subscribed(publisher)
-    mode.publish(Bool(data=True))
-    master = wait_for(
-        lambda: Segment.objects.filter(leg=robot_leg, parent__isnull=True).first(),
-        what="the AUTO master",
+    # More headroom than any test machine has free: the disk is full.
+    params = {"spool.disk_headroom_mb": 1_000_000}
+    collector, fixes, master = logging_robot(
+        ros, start_collector, robot_leg, sent, params, auto=True
     )
     assert "robot disk full (" in collector.output()
     fix = NavSatFix()
