@@ -4,7 +4,8 @@
 Within a bound, in this order of importance: mode switches and segment
 changes (start, stop) always; positions thinned to the report's resolution
 (one per ``REPORT_PERIOD`` per kind, plus the last one before and the first
-one after each segment change, so every segment's track keeps its ends); the
+one after each segment change, so every segment's track keeps its ends),
+all of them while the database answers (nothing waits for the disk then); the
 latest map only. Camera frames are not kept. The writer takes these events
 straight to the database once it is reachable (collector/replay.py), or the
 spool takes them back once the disk has room; both in order.
@@ -27,8 +28,12 @@ _CHANGES = frozenset({ev.MODE, ev.START, ev.STOP})
 
 
 class Held:
-    def __init__(self, guard: DiskGuard):
+    """``database_ok`` tells whether the database answers: the writer then takes
+    what is held straight to it, so positions are kept at full rate."""
+
+    def __init__(self, guard: DiskGuard, database_ok=lambda: False):
         self.guard = guard
+        self.database_ok = database_ok
         self.events: deque[Event] = deque()
         # Held by whoever moves events out (the writer or the spool thread),
         # so the two never take the same ones.
@@ -66,7 +71,8 @@ class Held:
     def _add_position(self, event: Event) -> None:
         t = event.at.timestamp()
         kept = self._kept_at.get(event.kind)
-        if self._positions >= MAX_POSITIONS or (kept is not None and t - kept < REPORT_PERIOD):
+        thinned = kept is not None and t - kept < REPORT_PERIOD and not self.database_ok()
+        if self._positions >= MAX_POSITIONS or thinned:
             dropped = self._skipped.get(event.kind)
             if dropped is not None:
                 self.guard.count("positions")

@@ -222,7 +222,7 @@ class CollectorRuntime:
         self.node.disk = self.node.blackbox.guard = self.disk
         self.node.configure_disk()
         self.disk.make_reserve()
-        self.spooler = Spooler(self.events, self.spool, self.disk)
+        self.spooler = Spooler(self.events, self.spool, self.disk, lambda: self.status.database_ok)
         self.order = ReplayOrder(self.spool, WRITE_BATCH, held=self.spooler.held)
         pending = len(self.spool)
         log.info(

@@ -33,13 +33,19 @@ def default_spool(name: str) -> Path:
 
 
 class Spooler(threading.Thread):
-    def __init__(self, events: queue.Queue, spool: Spool, guard: DiskGuard | None = None):
+    def __init__(
+        self,
+        events: queue.Queue,
+        spool: Spool,
+        guard: DiskGuard | None = None,
+        database_ok=lambda: False,
+    ):
         super().__init__(name="ftt-spool", daemon=True)
         self.events, self.spool = events, spool
         self.guard = guard or DiskGuard(spool.path)
         self.guard.reusable = spool.reusable
         spool.free_reserve = self.guard.release_reserve
-        self.held = Held(self.guard)
+        self.held = Held(self.guard, database_ok)
         self.stop = threading.Event()
         # Set after every append: the writer waits on it instead of sleeping.
         self.spooled = threading.Event()

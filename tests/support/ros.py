@@ -16,8 +16,11 @@ from pathlib import Path
 
 import pytest
 
+from tests.support.workers import assign_worker_resources
+
 ROOT = Path(__file__).resolve().parents[2]
-# Set by the root conftest (tests/support/workers.py) for this worker.
+# This worker's own; the root conftest's pytest_configure may not have run yet.
+assign_worker_resources()
 DOMAIN_ID = int(os.environ["FTT_ROS_DOMAIN_ID"])
 
 # Set for this process before rclpy loads (in-process publishers) and inherited

@@ -20,10 +20,19 @@ def redis_url(url: str) -> str:
     return urlunsplit(parts._replace(path=f"/{db}"))
 
 
+_assigned = False
+
+
 def assign_worker_resources() -> None:
     """Moves this process's ROS domain and Redis database to the worker's own,
     before rclpy or a channel layer reads them (the processes the tests start
-    inherit them)."""
+    inherit them). Once per process: a conftest given on the command line is
+    imported before the root conftest's pytest_configure, and its imports
+    call this first."""
+    global _assigned
+    if _assigned:
+        return
+    _assigned = True
     base = os.environ.get("FTT_ROS_DOMAIN_ID") or os.environ.get("ROS_DOMAIN_ID")
     if base is None:
         base = str(40 + os.getppid() % 20)

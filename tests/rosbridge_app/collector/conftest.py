@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from events.models import Vehicle
+from events.models import Segment, Vehicle
 from events.services import logs
 from rosbridge_app.models import Collector
 from tests.support.ros import (
@@ -108,6 +108,38 @@ def start_collector(procs, tmp_path, robot_leg):
         return p
 
     return start
+
+
+def logging_robot(ros, start_collector, leg, depth: int, params=None, auto: bool = False):
+    """A collector logging with thinning off and the robot's reliable GPS
+    publisher (keeping ``depth`` fixes, so the reliable protocol can repeat
+    what the transport dropped): (collector, fix publisher, the master its
+    first mode opened)."""
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from sensor_msgs.msg import NavSatFix
+    from std_msgs.msg import Bool
+
+    collector = start_collector(
+        params={
+            "params.sensor_reliable": True,
+            "params.pose_min_distance": 0.0,
+            "params.pose_min_period": 0.0,
+            **(params or {}),
+        },
+        args=["--start-logging"],
+    )
+    mode = ros.publisher(Bool, "/robot_mode")
+    fixes = ros.publisher(
+        NavSatFix, "/gps_fix", QoSProfile(depth=depth, reliability=ReliabilityPolicy.RELIABLE)
+    )
+    for publisher in (mode, fixes):
+        ros.wait_subscribed(publisher)
+    mode.publish(Bool(data=auto))
+    master = wait_for(
+        lambda: Segment.objects.filter(leg=leg, parent__isnull=True).first(),
+        what="the first master",
+    )
+    return collector, fixes, master
 
 
 # What builds a team's interfaces at setup: the hook and the scripts it calls.

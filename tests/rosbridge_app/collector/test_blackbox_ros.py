@@ -218,3 +218,68 @@ def test_a_killed_snapshot_writer_is_replaced_and_the_collector_goes_on(
         what="the next AUTO master",
     )
     assert collector.alive()
+
+
+@pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_a_stop_prints_no_traceback_from_the_snapshot_writer(ros, start_collector, stop):
+    """A snapshot dropped for its size leaves the word of the writer started
+    for it unread: the collector's exit then resets the pipe, not closes it."""
+    from std_msgs.msg import String
+
+    blob = ros.publisher(String, "/blob")
+    collector = start_collector(
+        params={
+            "snapshot.before": 1.0,
+            "snapshot.after": 4.0,
+            "snapshot.topics": "blob",
+            "snapshot.disk_budget_mb": 1,
+        }
+    )
+    wait_for_subscribers(blob, 1)
+    answer = ros.trigger("/ftt_snapshot")
+    assert answer.success, answer.message
+    for _ in range(40):  # 2.5 MB in the window, above the budget; paced, as a sensor's
+        blob.publish(String(data="x" * 64 * 1024))
+        time.sleep(0.02)
+    wait_for(
+        lambda: "MB is more than the disk budget" in collector.output(),
+        20,
+        what="the snapshot dropped for the disk budget",
+    )
+    assert "snapshot writer process started" in collector.output()
+    assert collector.stop(stop) == 0
+    output = collector.output()
+    assert "Traceback" not in output, output
+    assert "ConnectionResetError" not in output, output
+
+
+def test_a_take_over_snapshot_holds_the_mode_source_topic(ros, start_collector, robot_leg):
+    """Default snapshot topics: a robot whose mode comes from a mode source
+    (here the String preset) has that topic in its take-over's snapshot."""
+    from sensor_msgs.msg import NavSatFix
+    from std_msgs.msg import String
+
+    from rosbridge_app.collector.mode_presets import preset
+
+    mode = ros.publisher(String, "/robot/mode")
+    fix = ros.publisher(NavSatFix, "/gps_fix", 100)
+    start_collector(
+        params={
+            "params.mode_sources": preset("string").document,
+            "snapshot.before": 3.0,
+            "snapshot.after": 1.0,
+        }
+    )
+    wait_for_subscribers(mode, 2)  # the mode source and the black box
+    assert ros.set_logging(True).success
+    mode.publish(String(data="AUTO"))
+    for i in range(10):
+        fix.publish(NavSatFix(latitude=40.0 + i * 1e-4, longitude=9.0))
+        time.sleep(0.1)  # the robot drives a second in AUTO
+    mode.publish(String(data="manual"))  # the take-over
+
+    _, recording = take_over_snapshot(robot_leg)
+    back = read_mcap(recording.file.path)
+    modes = [m.data for topic, _, m in back["messages"] if topic == "/robot/mode"]
+    assert modes == ["AUTO", "manual"]
+    assert recording.topics["/robot/mode"] == {"type": "std_msgs/msg/String", "count": 2}

@@ -6,7 +6,7 @@ from urllib.parse import urlsplit, urlunsplit
 
 import pytest
 
-from tests.rosbridge_app.collector.conftest import VEHICLE
+from tests.rosbridge_app.collector.conftest import VEHICLE, logging_robot
 from tests.support import diskfull
 from tests.support.ros import copy_default_params, requires_ros
 
@@ -82,3 +82,34 @@ def test_a_full_disk_during_an_outage_loses_no_switch_and_the_collector_goes_on(
     )
     assert output.count("robot disk full (") == 1 and "Traceback" not in output, output
     assert stopping < 15
+
+
+def test_a_full_disk_while_the_database_answers_keeps_every_position(
+    ros, start_collector, robot_leg
+):
+    """Nothing needs the disk while the database answers: a robot whose disk is
+    full (less free than spool.disk_headroom_mb) still has its track stored at
+    the rate it drives, not thinned to the report's resolution."""
+    from sensor_msgs.msg import NavSatFix
+
+    from telemetry.models import Pose
+    from tests.support.ros import wait_for
+
+    sent = 30  # 3 s at 10 Hz
+    # More headroom than any test machine has free: the disk is full.
+    params = {"spool.disk_headroom_mb": 1_000_000}
+    collector, fixes, master = logging_robot(
+        ros, start_collector, robot_leg, sent, params, auto=True
+    )
+    assert "robot disk full (" in collector.output()
+    fix = NavSatFix()
+    for i in range(sent):
+        t = time.time()
+        fix.header.stamp.sec, fix.header.stamp.nanosec = int(t), int(t % 1 * 1e9)
+        fix.latitude, fix.longitude = 50.6 + i * 1e-5, 7.1
+        fixes.publish(fix)
+        time.sleep(0.1)  # the robot's rate
+    stored = Pose.objects.filter(segment=master)
+    wait_for(lambda: stored.count() >= sent, 10, what=f"{sent} stored fixes")
+    points = stored.values_list("point", flat=True)
+    assert sorted(round((p.y - 50.6) * 1e5) for p in points) == list(range(sent))

@@ -4,8 +4,8 @@ import time
 
 import pytest
 
-from events.models import Segment
 from telemetry.models import Pose
+from tests.rosbridge_app.collector.conftest import logging_robot
 from tests.support.ros import requires_ros, wait_for
 
 pytestmark = [pytest.mark.ros, requires_ros]
@@ -14,31 +14,9 @@ BURST = 1500
 
 
 def test_a_burst_of_fixes_is_stored_without_loss(ros, start_collector, robot_leg):
-    from rclpy.qos import QoSProfile, ReliabilityPolicy
     from sensor_msgs.msg import NavSatFix
-    from std_msgs.msg import Bool
 
-    start_collector(
-        params={
-            "params.sensor_reliable": True,
-            "params.pose_min_distance": 0.0,
-            "params.pose_min_period": 0.0,
-        },
-        args=["--start-logging"],
-    )
-    mode = ros.publisher(Bool, "/robot_mode")
-    # The publisher keeps the whole burst, so the reliable protocol can repeat
-    # what the transport dropped; what is lost after that is the collector's.
-    fix_publisher = ros.publisher(
-        NavSatFix, "/gps_fix", QoSProfile(depth=BURST, reliability=ReliabilityPolicy.RELIABLE)
-    )
-    for pub in (mode, fix_publisher):
-        ros.wait_subscribed(pub)
-    mode.publish(Bool(data=False))
-    master = wait_for(
-        lambda: Segment.objects.filter(leg=robot_leg, parent__isnull=True).first(),
-        what="the ITO master",
-    )
+    _, fix_publisher, master = logging_robot(ros, start_collector, robot_leg, BURST)
     fix = NavSatFix()
     fix.status.status = 0
     start = time.time()
