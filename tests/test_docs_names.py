@@ -58,10 +58,14 @@ def is_path(span: str) -> bool:
 
 
 def path_exists(span: str) -> bool:
-    """A file or folder of the checkout, ``app/0013`` (a migration), or
-    ``folder/module.name`` (a name in a module, written as a path)."""
+    """A file or folder of the checkout, ``app/0013`` (a migration),
+    ``folder/module.name`` (a name in a module, written as a path), or
+    ``folder/test_file.py::test_name`` (a test)."""
     if (ROOT / span).exists():
         return True
+    if "::" in span:  # a test, as pytest names it: file::function
+        file, _, name = span.partition("::")
+        return (ROOT / file).is_file() and name.split("[")[0] in top_names(ROOT / file)
     head, _, last = span.rpartition("/")
     if re.fullmatch(r"\d{4}", last):
         return any((ROOT / head / "migrations").glob(f"{last}_*.py"))
@@ -199,3 +203,16 @@ def test_every_documented_path_and_name_exists():
 )
 def test_a_name_is_resolved_as_a_reader_would(name, exists):
     assert dotted_resolves(name) is exists
+
+
+@pytest.mark.parametrize(
+    ("span", "exists"),
+    [
+        ("tests/test_docs_names.py::test_every_documented_path_and_name_exists", True),
+        ("tests/test_docs_names.py::test_every_documented_path_and_name_exists[x]", True),
+        ("tests/test_docs_names.py::test_no_such_test", False),
+        ("tests/no_such_file.py::test_every_documented_path_and_name_exists", False),
+    ],
+)
+def test_a_test_is_found_as_pytest_names_it(span, exists):
+    assert path_exists(span) is exists

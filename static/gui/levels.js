@@ -141,7 +141,7 @@ const ASK_MS = 2000;
 async function endingLines(action, id) {
   // Without the server's answer nothing can be asked, so nothing is ended; a dead
   // or half-open link is said at once, not after the browser gives up.
-  const noAnswer = () => new ApiError(_("The server does not answer, so it cannot say what this ends: nothing was ended. Try again when the link is back."), 0);
+  const noAnswer = () => new ApiError(_("The server does not answer, so it cannot say what this ends: nothing was ended. Try again when the connection is back."), 0);
   if (!["live", "connecting"].includes(Live.link)) throw noAnswer();
   let e;
   try {

@@ -7,9 +7,9 @@ import time
 import numpy as np
 import pytest
 import yaml
+from django.core.exceptions import ValidationError
 from PIL import Image as PilImage
 
-from common.errors import RuleViolation
 from events.models import Segment, Vehicle
 from events.services import logs
 from rosbridge_app.models import Collector, CollectorCommand
@@ -231,7 +231,7 @@ def test_parameters_services_and_gui_commands(ros, start_collector, robot_leg):
     wait_for(lambda: Collector.objects.get(pk=record.pk).logging, 5, what="logging again")
 
     # A wrong value is refused before it reaches the robot.
-    with pytest.raises(RuleViolation, match="true or false"):
+    with pytest.raises(ValidationError, match="true or false"):
         issue_command(record, "set_parameters", {"parameters": {"params.use_tf": "yes"}})
     good = issue_command(
         record, "set_parameters", {"parameters": {"params.pose_min_distance": 2.0}}

@@ -3,6 +3,7 @@
 from datetime import timedelta
 
 import pytest
+from django.core.exceptions import ValidationError
 from django.utils import timezone
 
 from common.errors import RuleViolation
@@ -50,7 +51,8 @@ def test_commands_are_taken_once_and_answered(vehicle, leg):
     collector = heartbeat("robot/husky", vehicle=vehicle)
     with pytest.raises(RuleViolation):
         issue_command(collector, "self_destruct")
-    with pytest.raises(RuleViolation):
+    # A wrong value is the request's fault (400 under its name), not a state's.
+    with pytest.raises(ValidationError, match="non-empty object"):
         issue_command(collector, CollectorCommand.Kind.SET_PARAMETERS, {"parameters": {}})
     command = issue_command(collector, CollectorCommand.Kind.START_LOGGING, leg=leg)
     assert take_commands(collector) == [command]
