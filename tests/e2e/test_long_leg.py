@@ -52,6 +52,19 @@ ROW_IN_VIEW = """(sel) => {
 }"""
 
 
+# The number of a rendered row inside the list's scrolled box whose place in the
+# list is past the given one, or null.
+ROW_IN_VIEW_BEYOND = """([sel, beyond]) => {
+  const box = document.querySelector("#segments-section .table-wrap").getBoundingClientRect();
+  const row = Array.from(document.querySelectorAll(sel)).find((tr) => {
+    const r = tr.getBoundingClientRect();
+    return Number(tr.getAttribute("aria-rowindex")) > beyond
+      && r.top >= box.top + 40 && r.bottom <= box.bottom;
+  });
+  return row ? row.querySelector("td").textContent : null;
+}"""
+
+
 def cell(page, label):
     """The row whose number cell reads ``label``, if rendered."""
     number = page.locator("td:first-child", has_text=re.compile(rf"^{re.escape(label)}$"))
@@ -127,9 +140,10 @@ def test_a_long_leg_renders_the_rows_in_view_and_a_take_over_touches_one_row(bro
 
     # Scrolled into the list, a row arriving at the top moves nothing in view.
     wrap.evaluate("(w) => { w.scrollTop = w.scrollHeight / 2; }")
-    middle = page.locator(ROWS).nth(25)
-    expect(middle).to_be_visible()
-    label = middle.locator("td").first.text_content()
+    # A row in view once the list has rendered for the new place (the scroll
+    # event comes after scrollTop is set, so the rows before it are still there).
+    label = page.wait_for_function(ROW_IN_VIEW_BEYOND, arg=[ROWS, MASTERS // 4]).json_value()
+    middle = cell(page, label)
     y = middle.bounding_box()["y"]
     server.python(TAKE_OVER.replace('"ito"', '"auto"').format(leg=ids["leg"]))
     expect(table).to_have_attribute("aria-rowcount", str(MASTERS + 3))
