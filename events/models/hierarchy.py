@@ -270,10 +270,6 @@ class Segment(ChangeStamped):
     """A master is one continuous run in one mode; ITO children carry reasons."""
 
     objects = SegmentQuerySet.as_manager()
-    # The same in hand-written SQL over the segment table: a master, and the
-    # id of a segment's master (its own for a master).
-    MASTER_SQL = "parent_id IS NULL"
-    MASTER_ID_SQL = "COALESCE(parent_id, id)"
 
     # Who initiated a take-over and how severe it was: the fields regulators'
     # disengagement reports ask for (California DMV); defaults need no tap.
