@@ -98,3 +98,40 @@ def shown_words(page) -> str:
                 ].join(" ");
             }"""
     )
+
+
+OFFLINE_ROBOT = """
+from datetime import timedelta
+from django.utils import timezone
+from events.models import Vehicle
+from events.services import logs, segments
+from rosbridge_app.models import Collector
+from rosbridge_app.services import collectors
+v = Vehicle.objects.create(key="bagger", short_description="Bagger")
+e = logs.create_test_event(location="Tagebau", time_zone="Europe/Berlin")
+leg = logs.create_leg(shift=logs.create_shift(test_event=e, vehicle=v), weather_id="sunny")
+segments.report_mode(leg, "auto")
+collectors.heartbeat("bagger-collector", vehicle=v, logging=True, leg=leg)
+# Heard a minute ago: logging, but offline, and no position sent yet.
+heard = timezone.now() - timedelta(minutes=1)
+Collector.objects.filter(name="bagger-collector").update(last_seen=heard)
+"""
+
+
+def test_the_german_fleet_lists_a_robot_without_position_and_offline_in_german(browser, server):
+    server.python(OFFLINE_ROBOT)
+    context = browser.new_context(locale="de-DE")
+    try:
+        page = context.new_page()
+        page.goto(f"{server.url}/login/")
+        page.get_by_label("Benutzername").fill("vera")
+        page.get_by_label("Passwort").fill(PASSWORD)
+        page.get_by_role("button", name="Anmelden").click()
+        page.wait_for_url(f"{server.url}/")
+        page.goto(f"{server.url}/?view=fleet")
+        robot = page.locator(".fleet-vehicle", has_text="Bagger")
+        expect(robot).to_be_visible()
+        words = robot.evaluate("(b) => [b.innerText, b.title].join(' ')")
+        assert english_in(without(words, stored_names(server))) == []
+    finally:
+        context.close()
