@@ -268,21 +268,27 @@ NO_ANNOTATION = {
 }
 
 
+# A master segment: one without a parent (an ITO child's data belongs to its
+# master, ``Segment.master``); for expressions that cannot start from
+# ``Segment.objects.masters()``.
+IS_MASTER = Q(parent__isnull=True)
+
+
 class SegmentQuerySet(models.QuerySet):
     def masters(self):
-        """The master segments: those without a parent (an ITO child's data
-        belongs to its master, ``Segment.master``)."""
-        return self.filter(parent__isnull=True)
+        """The master segments."""
+        return self.filter(IS_MASTER)
 
     def children(self):
         """The ITO children: the segments under a master."""
-        return self.filter(parent__isnull=False)
+        return self.filter(~IS_MASTER)
 
 
 class Segment(ChangeStamped):
     """A master is one continuous run in one mode; ITO children carry reasons."""
 
     objects = SegmentQuerySet.as_manager()
+    IS_MASTER = IS_MASTER
 
     # Who initiated a take-over and how severe it was: the fields regulators'
     # disengagement reports ask for (California DMV); defaults need no tap.

@@ -28,14 +28,14 @@ def numbers_of(segments: QuerySet) -> dict[int, tuple[int, str]]:
     # need are read, and the chosen ones among them marked.
     rows = (
         Segment.objects.filter(
-            Q(parent__isnull=True, leg_id__in=chosen.values("leg_id"))
+            Segment.IS_MASTER & Q(leg_id__in=chosen.values("leg_id"))
             | Q(parent_id__in=chosen.values("parent_id"))
         )
         .annotate(
             # Masters are numbered per leg, reasons per master.
             n=Window(
                 RowNumber(),
-                partition_by=[F("parent_id"), Case(When(parent__isnull=True, then=F("leg_id")))],
+                partition_by=[F("parent_id"), Case(When(Segment.IS_MASTER, then=F("leg_id")))],
                 order_by=[F("start").asc(), F("id").asc()],
             ),
             chosen=ExpressionWrapper(Q(pk__in=chosen.values("pk")), output_field=BooleanField()),
