@@ -255,25 +255,40 @@ class Leg(LogEntry):
         return str(_("Leg %(number)s") % {"number": self.number})
 
 
+# A master's annotation: none.  Reasons (children) carry it; a master keeps every
+# field at what a new reason starts with (docs/architecture.md, the rule table).
+NO_ANNOTATION = {
+    "ito_reason": None,
+    "obstacle": "",
+    "lighting": "",
+    "slope": "",
+    "initiator": "safety_driver",
+    "severity": "not_applicable",
+    "location_type": "",
+}
+
+
+# A master segment: one without a parent (an ITO child's data belongs to its
+# master, ``Segment.master``); for expressions that cannot start from
+# ``Segment.objects.masters()``.
+IS_MASTER = Q(parent__isnull=True)
+
+
 class SegmentQuerySet(models.QuerySet):
     def masters(self):
-        """The master segments: those without a parent (an ITO child's data
-        belongs to its master, ``Segment.master``)."""
-        return self.filter(parent__isnull=True)
+        """The master segments."""
+        return self.filter(IS_MASTER)
 
     def children(self):
         """The ITO children: the segments under a master."""
-        return self.filter(parent__isnull=False)
+        return self.filter(~IS_MASTER)
 
 
 class Segment(ChangeStamped):
     """A master is one continuous run in one mode; ITO children carry reasons."""
 
     objects = SegmentQuerySet.as_manager()
-    # The same in hand-written SQL over the segment table: a master, and the
-    # id of a segment's master (its own for a master).
-    MASTER_SQL = "parent_id IS NULL"
-    MASTER_ID_SQL = "COALESCE(parent_id, id)"
+    IS_MASTER = IS_MASTER
 
     # Who initiated a take-over and how severe it was: the fields regulators'
     # disengagement reports ask for (California DMV); defaults need no tap.
@@ -289,15 +304,8 @@ class Segment(ChangeStamped):
         ("desired", _("desired")),
         ("not_applicable", _("not applicable")),
     )
-    ANNOTATION_FIELDS = (
-        "ito_reason",
-        "obstacle",
-        "lighting",
-        "slope",
-        "initiator",
-        "severity",
-        "location_type",
-    )
+    NO_ANNOTATION = NO_ANNOTATION
+    ANNOTATION_FIELDS = tuple(NO_ANNOTATION)
 
     uid = models.UUIDField(default=uuid.uuid4, unique=True, editable=False, verbose_name=_("uid"))
     leg = models.ForeignKey(
@@ -336,10 +344,16 @@ class Segment(ChangeStamped):
     lighting = models.CharField(max_length=500, blank=True, verbose_name=_("lighting"))
     slope = models.CharField(max_length=500, blank=True, verbose_name=_("slope"))
     initiator = models.CharField(
-        max_length=32, choices=INITIATORS, default="safety_driver", verbose_name=_("initiator")
+        max_length=32,
+        choices=INITIATORS,
+        default=NO_ANNOTATION["initiator"],
+        verbose_name=_("initiator"),
     )
     severity = models.CharField(
-        max_length=32, choices=SEVERITIES, default="not_applicable", verbose_name=_("severity")
+        max_length=32,
+        choices=SEVERITIES,
+        default=NO_ANNOTATION["severity"],
+        verbose_name=_("severity"),
     )
     # Free text with suggestions (settings.FTT_LOCATION_TYPES: field, road, yard, …).
     location_type = models.CharField(max_length=64, blank=True, verbose_name=_("location type"))
@@ -397,8 +411,7 @@ class Segment(ChangeStamped):
                 name="segment_children_are_ito",
             ),
             models.CheckConstraint(
-                condition=Q(parent__isnull=False)
-                | Q(ito_reason__isnull=True, obstacle="", lighting="", slope=""),
+                condition=Q(parent__isnull=False) | Q(**NO_ANNOTATION),
                 name="segment_masters_have_no_annotation",
             ),
             # Statistics count interventions by reason; a child without one

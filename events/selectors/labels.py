@@ -5,67 +5,62 @@ the numbers stay readable however many legs a test event has: "Leg 2 · #7".
 An ITO reason (child) is numbered under its master: "Leg 2 · #7.1".  The
 database id stays a technical detail.
 
-The database numbers them (``_NUMBERED``, window functions that PostgreSQL and
-SQLite share), so a label costs its own row, not a read of its whole leg.  The
-masters' window reads the partial index ``segment_master_order`` in its own
-order; only the numbers of the chosen segments' masters leave the window.
+The database numbers them (window functions, one query per call): masters
+per leg, reasons per master, in driving order.  Only the rows the numbers
+need are read: the masters of the chosen segments' legs and the reasons of
+their masters; the masters' window reads the partial index
+``segment_master_order`` in its own order.
 """
 
-from django.core.exceptions import EmptyResultSet
-from django.db import connection
-from django.db.models import QuerySet
+from django.db.models import BooleanField, Case, ExpressionWrapper, F, Q, QuerySet, When, Window
+from django.db.models.functions import RowNumber
 from django.utils.translation import gettext as _
 from django.utils.translation import gettext_noop
 
-from events.models import Leg, Segment
-
-_NUMBERED = """
-WITH chosen AS (
-    SELECT id, leg_id, parent_id, {master_id} AS master_id FROM {segment} WHERE id IN ({chosen})
-),
-masters AS (
-    SELECT id, n FROM (
-        SELECT id, ROW_NUMBER() OVER (PARTITION BY leg_id ORDER BY start, id) AS n
-        FROM {segment}
-        WHERE {master} AND leg_id IN (SELECT leg_id FROM chosen)
-    ) numbered
-    WHERE id IN (SELECT master_id FROM chosen)
-),
-children AS (
-    SELECT id, ROW_NUMBER() OVER (PARTITION BY parent_id ORDER BY start, id) AS n
-    FROM {segment}
-    WHERE parent_id IN (SELECT parent_id FROM chosen)
-)
-SELECT chosen.id, leg.number, master.n, child.n
-FROM chosen
-JOIN {leg} leg ON leg.id = chosen.leg_id
-LEFT JOIN masters master ON master.id = chosen.master_id
-LEFT JOIN children child ON child.id = chosen.id
-"""
+from events.models import Segment
 
 
 def numbers_of(segments: QuerySet) -> dict[int, tuple[int, str]]:
     """{segment id: (its leg's number, its number "7" or "7.1")} for the segments
     of a queryset, each numbered among every segment of its leg; one query."""
-    try:
-        chosen, params = segments.order_by().values("id").query.sql_with_params()
-    except EmptyResultSet:  # a filter that can match nothing (pk__in=[])
-        return {}
-    sql = _NUMBERED.format(
-        segment=Segment._meta.db_table,
-        leg=Leg._meta.db_table,
-        chosen=chosen,
-        master=Segment.MASTER_SQL,
-        master_id=Segment.MASTER_ID_SQL,
+    chosen = segments.order_by()
+    # A filter on the rows would cut the windows short: the rows the numbers
+    # need are read, and the chosen ones among them marked.
+    rows = (
+        Segment.objects.filter(
+            Segment.IS_MASTER & Q(leg_id__in=chosen.values("leg_id"))
+            | Q(parent_id__in=chosen.values("parent_id"))
+        )
+        .annotate(
+            # Masters are numbered per leg, reasons per master.
+            n=Window(
+                RowNumber(),
+                partition_by=[F("parent_id"), Case(When(Segment.IS_MASTER, then=F("leg_id")))],
+                order_by=[F("start").asc(), F("id").asc()],
+            ),
+            chosen=ExpressionWrapper(Q(pk__in=chosen.values("pk")), output_field=BooleanField()),
+        )
+        .order_by()
+        .values_list("pk", "parent_id", "leg__number", "n", "chosen")
     )
-    with connection.cursor() as cursor:
-        cursor.execute(sql, params)
-        return {pk: (leg, _number(master, child)) for pk, leg, master, child in cursor.fetchall()}
+    masters, numbers = {}, {}
+    for pk, parent, leg_number, n, picked in rows:
+        if parent is None:
+            masters[pk] = n
+        if picked:
+            numbers[pk] = (parent, leg_number, n)
+    return {
+        pk: (leg_number, _number(masters, parent, n))
+        for pk, (parent, leg_number, n) in numbers.items()
+    }
 
 
-def _number(master: int | None, child: int | None) -> str:
-    own = "?" if master is None else str(master)
-    return own if child is None else f"{own}.{child}"
+def _number(masters: dict[int, int], parent: int | None, n: int) -> str:
+    """A master's own number, or a reason's under its master's ("?" for a
+    master outside the chosen segments' legs)."""
+    if parent is None:
+        return str(n)
+    return f"{masters.get(parent, '?')}.{n}"
 
 
 def leg_numbers(leg_id: int) -> dict[int, str]:

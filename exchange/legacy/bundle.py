@@ -430,7 +430,7 @@ class LegacyBundle:
         users annotate an ITO master, FTT keeps reasons on children only, so the
         first child takes over what it lacks."""
         master = r["parent_id"] is None
-        annotation = {"ito_reason": None, "obstacle": "", "lighting": "", "slope": ""}
+        annotation = dict(Segment.NO_ANNOTATION)
         if not master:
             for name in ("obstacle", "lighting", "slope"):
                 annotation[name] = fit(r[name], Segment, name)

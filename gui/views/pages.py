@@ -175,6 +175,8 @@ def index(request):
             "tileUrl": settings.FTT_TILE_URL,
             "tileAttribution": getattr(settings, "FTT_TILE_ATTRIBUTION", ""),
             "canOperate": roles.has_role(user, roles.OPERATOR),
+            # A take-over reason's fields and what a new reason holds (the segment dialog).
+            "annotation": Segment.NO_ANNOTATION,
             "isAdmin": is_admin,
             "user": user.get_full_name() or user.get_username(),
             # Whose writes this browser keeps offline (outbox.js): only theirs are sent.

@@ -211,12 +211,12 @@ export const Fleet = {
       modeWord.textContent = mode;
       const details = document.createElement("span");
       details.className = "details";
-      const where = v.position ? "" : " · no position yet";
-      const offline = v.collector.online ? "" : " · collector offline";
-      details.textContent = `${takeover} · ${leg}${where}${offline}`;
+      const where = v.position ? [] : [_("no position yet")];
+      const offline = v.collector.online ? [] : [_("collector offline")];
+      details.textContent = [takeover, leg, ...where, ...offline].join(" · ");
       // Its visible text is its name, so speech control finds it by what is shown.
       b.append(dot, name, " ", modeWord, " ", details);
-      b.title = `${v.vehicle.name}: open its cockpit`;
+      b.title = _("%(vehicle)s: open its cockpit", { vehicle: v.vehicle.name });
       b.addEventListener("click", () => this.open(v));
       const li = document.createElement("li");
       li.append(b);

@@ -12,7 +12,8 @@ import { showSnapshots } from "./snapshots.js";
 
 const segmentDialog = $("#segment-dialog");
 export let dialogSegment = null;
-const ANNOTATION = ["ito_reason", "obstacle", "lighting", "slope", "initiator", "severity", "location_type"];
+// A reason's fields, as the server names them (Segment.NO_ANNOTATION, in the page's CONFIG).
+const ANNOTATION = Object.keys(CONFIG.annotation);
 // The annotation as the dialog showed it: Save sends only what the operator changed.
 let shownValues = {};
 
@@ -52,9 +53,7 @@ export async function openSegmentDialog(id) {
   form.elements.ito_reason.replaceChildren(...state.catalogue.reasons.map((r) => new Option(r.label, r.key)));
   // A take-over reason always names one (Unassigned until annotated); a master shows no form.
   form.elements.ito_reason.value = row.ito_reason || "";
-  for (const f of ["obstacle", "lighting", "slope", "location_type"]) form.elements[f].value = row[f] || "";
-  form.elements.initiator.value = row.initiator || "safety_driver";
-  form.elements.severity.value = row.severity || "not_applicable";
+  for (const f of ANNOTATION) if (f !== "ito_reason") form.elements[f].value = row[f] || CONFIG.annotation[f];
   form.elements.change_reason.value = "";
   shownValues = Object.fromEntries(ANNOTATION.map((f) => [f, form.elements[f].value]));
   $(".kept-changes", segmentDialog).hidden = !kept;

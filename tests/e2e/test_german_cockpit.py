@@ -8,7 +8,7 @@ import re
 import pytest
 from playwright.sync_api import expect
 
-from tests.support.browser import PASSWORD
+from tests.support.browser import german_page
 from tests.support.english import english_in
 
 pytestmark = pytest.mark.e2e
@@ -28,14 +28,7 @@ print(json.dumps({"event": e.pk, "shift": leg.shift_id, "leg": leg.pk}))
 
 def test_the_german_cockpit_shows_no_english(browser, server):
     chosen = json.loads(server.python(TAKE_OVER).strip().splitlines()[-1])
-    context = browser.new_context(locale="de-DE")
-    try:
-        page = context.new_page()
-        page.goto(f"{server.url}/login/")
-        page.get_by_label("Benutzername").fill("vera")
-        page.get_by_label("Passwort").fill(PASSWORD)
-        page.get_by_role("button", name="Anmelden").click()
-        page.wait_for_url(f"{server.url}/")
+    with german_page(browser, server) as page:
         page.goto(f"{server.url}/?{'&'.join(f'{k}={v}' for k, v in chosen.items())}")
         rows = page.locator("#segment-table tbody tr")
         expect(rows).to_have_count(2)  # AUTO, then the take-over
@@ -53,8 +46,6 @@ def test_the_german_cockpit_shows_no_english(browser, server):
             "title", re.compile(r"^Etappe 1 · #3 ")
         )
         assert english_in(without(shown_words(page), named)) == []
-    finally:
-        context.close()
 
 
 LIVE_END = """
@@ -98,3 +89,31 @@ def shown_words(page) -> str:
                 ].join(" ");
             }"""
     )
+
+
+OFFLINE_ROBOT = """
+from datetime import timedelta
+from django.utils import timezone
+from events.models import Vehicle
+from events.services import logs, segments
+from rosbridge_app.models import Collector
+from rosbridge_app.services import collectors
+v = Vehicle.objects.create(key="bagger", short_description="Bagger")
+e = logs.create_test_event(location="Tagebau", time_zone="Europe/Berlin")
+leg = logs.create_leg(shift=logs.create_shift(test_event=e, vehicle=v), weather_id="sunny")
+segments.report_mode(leg, "auto")
+collectors.heartbeat("bagger-collector", vehicle=v, logging=True, leg=leg)
+# Heard a minute ago: logging, but offline, and no position sent yet.
+heard = timezone.now() - timedelta(minutes=1)
+Collector.objects.filter(name="bagger-collector").update(last_seen=heard)
+"""
+
+
+def test_the_german_fleet_lists_a_robot_without_position_and_offline_in_german(browser, server):
+    server.python(OFFLINE_ROBOT)
+    with german_page(browser, server) as page:
+        page.goto(f"{server.url}/?view=fleet")
+        robot = page.locator(".fleet-vehicle", has_text="Bagger")
+        expect(robot).to_be_visible()
+        words = robot.evaluate("(b) => [b.innerText, b.title].join(' ')")
+        assert english_in(without(words, stored_names(server))) == []

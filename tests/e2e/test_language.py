@@ -6,20 +6,13 @@ import re
 import pytest
 from playwright.sync_api import expect
 
-from tests.support.browser import PASSWORD, choose_event, login
+from tests.support.browser import PASSWORD, choose_event, german_page, login
 
 pytestmark = pytest.mark.e2e
 
 
 def test_a_german_browser_gets_the_cockpit_in_german(browser, server, open_leg):
-    context = browser.new_context(locale="de-DE")
-    try:
-        page = context.new_page()
-        page.goto(f"{server.url}/login/")
-        page.get_by_label("Benutzername").fill("vera")
-        page.get_by_label("Passwort").fill(PASSWORD)
-        page.get_by_role("button", name="Anmelden").click()
-        page.wait_for_url(f"{server.url}/")
+    with german_page(browser, server) as page:
         choose_event(page, open_leg)
         expect(page.locator("html")).to_have_attribute("lang", "de")
         expect(page.get_by_role("button", name="Abmelden")).to_be_visible()
@@ -29,8 +22,6 @@ def test_a_german_browser_gets_the_cockpit_in_german(browser, server, open_leg):
         expect(page.locator("#pick-shift option:checked")).to_have_text(
             re.compile(r"^Schicht 1 · ")
         )
-    finally:
-        context.close()
 
 
 # The choice is kept on the account, so this test signs in as a viewer of its

@@ -1,7 +1,8 @@
 """The database itself refuses states the services never create."""
 
 import pytest
-from django.db import IntegrityError, transaction
+from django.db import IntegrityError, connection, transaction
+from django.db.migrations.executor import MigrationExecutor
 from django.utils import timezone
 
 from events.models import Leg, Segment, Shift
@@ -33,6 +34,30 @@ def test_auto_children_and_annotated_masters_are_refused_by_the_database(leg):
         Segment.objects.create(leg=leg, parent=master, segment_type_id="auto", start=master.start)
     with pytest.raises(IntegrityError), transaction.atomic():
         Segment.objects.filter(pk=master.pk).update(obstacle="rock")
+
+
+@pytest.mark.parametrize(
+    "annotation",
+    [{"initiator": "remote_operator"}, {"severity": "critical"}, {"location_type": "road"}],
+)
+def test_a_master_with_a_reasons_regulator_fields_is_refused_by_the_database(leg, annotation):
+    master = start_auto(leg)
+    with pytest.raises(IntegrityError), transaction.atomic():
+        Segment.objects.filter(pk=master.pk).update(**annotation)
+    reason = segments.add_ito_child(segments.report_mode(leg, "ito").master, reason="unassigned")
+    Segment.objects.filter(pk=reason.pk).update(**annotation)
+
+
+@pytest.mark.django_db(transaction=True)
+def test_the_upgrade_clears_what_a_master_held_of_a_reasons_fields(leg):
+    master = start_auto(leg)
+    executor = MigrationExecutor(connection)
+    executor.migrate([("events", "0027_history_source")])
+    Segment.objects.filter(pk=master.pk).update(initiator="other", location_type="yard")
+    executor.loader.build_graph()
+    executor.migrate(executor.loader.graph.leaf_nodes())
+    master.refresh_from_db()
+    assert (master.initiator, master.location_type) == ("safety_driver", "")
 
 
 def test_end_before_start_is_refused_by_the_database(leg):

@@ -8,6 +8,7 @@ and writes segments and poses through the service layer when the test tells
 it to on stdin.  After each write has committed it prints "DONE <unix time>".
 """
 
+import contextlib
 import os
 import re
 import subprocess
@@ -193,6 +194,22 @@ s["_auth_user_backend"] = "django.contrib.auth.backends.ModelBackend"
 s["_auth_user_hash"] = user.get_session_auth_hash()
 s.create()
 """
+
+
+@contextlib.contextmanager
+def german_page(browser, server, username="vera"):
+    """A page of a German browser, signed in as ``username`` (the login form in German)."""
+    context = browser.new_context(locale="de-DE")
+    try:
+        page = context.new_page()
+        page.goto(f"{server.url}/login/")
+        page.get_by_label("Benutzername").fill(username)
+        page.get_by_label("Passwort").fill(PASSWORD)
+        page.get_by_role("button", name="Anmelden").click()
+        page.wait_for_url(f"{server.url}/")
+        yield page
+    finally:
+        context.close()
 
 
 def login(page, server, username):
