@@ -39,10 +39,14 @@ whether the collector ran on. Needs root (it mounts a tmpfs).
 ``replay``: the writer alone, without ROS traffic: a spool of ``--records``
 GPS fixes and local poses interleaved as the robot sends them (what a long
 outage leaves, apart from the maps) is written by a starting collector;
-prints records per second.
+prints records per second. ``--against /work/main`` runs the same replay
+with that checkout's collector right after this one's and prints the two
+figures side by side; ``--busy N`` keeps N busy loops (one core each)
+running meanwhile, as a robot's own work does.
 
     FTT_DATABASE_URL=postgis://... .venv/bin/python benchmarks/collector_endurance.py \\
-        outage [--fill] | soak [--minutes N] | replay [--records N] | diskfull
+        outage [--fill] | soak [--minutes N] | diskfull
+        | replay [--records N] [--against /work/main] [--busy 2]
 
 Issue 16's targets: a 2-hour outage with a documented spool size and replay at
 >= 5 000 records/s; RSS flat over 1 hour. The load average is printed with
@@ -70,6 +74,11 @@ from rosbridge_app.models import Collector
 from tests.support.diskfull import Relay
 
 PAGE = os.sysconf("SC_PAGE_SIZE")
+
+
+def cpu_seconds(pid: int) -> float:
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 def rss_mb(pid: int) -> float:
@@ -116,6 +125,10 @@ def main() -> None:
         type=Path,
         help="run the collector from this checkout (A/B against main: /work/main)",
     )
+    parser.add_argument(
+        "--against", type=Path, help="replay: also run this checkout's collector, side by side"
+    )
+    parser.add_argument("--busy", type=int, default=0, help="replay: busy loops meanwhile")
     args = parser.parse_args()
     minutes = args.minutes or (120.0 if args.drill == "outage" else 60.0)
     if connection.vendor != "postgresql":
@@ -123,10 +136,19 @@ def main() -> None:
     # Snapshots are part of what fills a robot's disk.
     bench = Bench(args.drill, **({} if args.drill == "diskfull" else {"snapshot.enabled": False}))
     if args.drill == "replay":
+        trees = [("this tree", MANAGE)]
+        if args.against:
+            trees.append((str(args.against), [sys.executable, str(args.against / "manage.py")]))
+        busy = [subprocess.Popen([sys.executable, "-c", "while 1: pass"]) for _ in range(args.busy)]
         try:
-            replay(bench, args.records)
+            rates = [(label, replay(bench, args.records, manage, label)) for label, manage in trees]
         finally:
+            for loop in busy:
+                loop.kill()
             bench.close()
+        print(f"\nreplay of {args.records} records, {args.busy} busy loops:")
+        for label, rate in rates:
+            print(f"  {label:<40} {rate:>8.0f} records/s  [target >= 5000/s]")
         return
     if args.drill == "diskfull":
         try:
@@ -290,13 +312,13 @@ def _kinds(kinds: dict) -> str:
     return ", ".join(f"{kind} {count}" for kind, count in kinds.items())
 
 
-def replay(bench, records: int) -> None:
+def replay(bench, records: int, manage=MANAGE, label: str = "this tree") -> float:
     from datetime import UTC, datetime, timedelta
 
     from rosbridge_app.collector import events as ev
     from rosbridge_app.collector.spool import Spool
 
-    spool_file = SpoolFile(bench.work / "spool.sqlite3")
+    spool_file = SpoolFile(bench.work / f"replay-{len(list(bench.work.glob('replay-*')))}.sqlite3")
     spool = Spool(spool_file.path)
     t0 = datetime.now(UTC) - timedelta(hours=2)
     at = lambda i: t0 + timedelta(seconds=i * 0.1)  # noqa: E731
@@ -318,25 +340,30 @@ def replay(bench, records: int) -> None:
     spool.close()
     print(f"spooled {spool_file.records()} records, {spool_file.megabytes():.1f} MB ({load()})")
     started = time.monotonic()
-    collector = bench.collector(spool_file.path, bench.work / "collector.log")
+    collector = bench.collector(spool_file.path, bench.work / "collector.log", manage=manage)
     first = None
     while spool_file.records() > 0 and time.monotonic() - started < 1800:
         left = spool_file.records()
         if first is None and 0 <= left < records:
             first = (time.monotonic(), left)
+            cpu = cpu_seconds(collector.pid)
         time.sleep(0.1)
     done = time.monotonic()
+    if first is not None:
+        cpu = cpu_seconds(collector.pid) - cpu
     collector.send_signal(2)
     collector.wait(60)
     if first is None:
-        print("nothing was replayed")
-        return
+        print(f"{label}: nothing was replayed")
+        return 0.0
     took = done - first[0]
     print(
-        f"replay: {first[1]} records written in {took:.1f} s after the first batch: "
+        f"{label}: replay: {first[1]} records written in {took:.1f} s after the first batch: "
         f"{first[1] / took:.0f} records/s ({load()}); collector started "
-        f"{first[0] - started:.1f} s before the first batch was written"
+        f"{first[0] - started:.1f} s before the first batch was written; the collector's "
+        f"CPU meanwhile {cpu:.1f} s ({cpu / first[1] * 1e6:.0f} us per record)"
     )
+    return first[1] / took
 
 
 class _Into:

@@ -7,8 +7,9 @@ snapshot files) counts against ``spool.disk_budget_mb``, and the file system
 must keep ``spool.disk_headroom_mb`` free for the rest of the robot. Checked
 before every write, it degrades in this order:
 
-* ``TIGHT`` (90 % of the budget, or less than twice the headroom free): camera
-  frames and snapshots are dropped, everything else is still spooled;
+* ``TIGHT`` (90 % of the budget, or less than twice the headroom free):
+  snapshots are dropped, and camera frames while the database does not answer
+  (the spooler asks); everything else is still spooled;
 * ``FULL`` (budget or headroom reached, or a write failed for want of space):
   nothing more goes to disk; :mod:`~rosbridge_app.collector.held` keeps mode
   switches and segment changes, the latest map and positions thinned to the
@@ -257,8 +258,12 @@ class DiskGuard:
 
 def _tiers(level: int) -> str:
     if level == TIGHT:
-        return _("camera frames and snapshots are dropped, everything else is spooled")
+        return _(
+            "snapshots are dropped, and camera frames while the database does not answer; "
+            "everything else is spooled"
+        )
     return _(
         "nothing more is spooled; mode switches and segment changes, the latest map and "
-        "positions thinned to the report's resolution are kept in memory"
+        "positions are kept in memory (positions thinned to the report's resolution and "
+        "camera frames dropped while the database does not answer)"
     )

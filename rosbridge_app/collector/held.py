@@ -6,7 +6,8 @@ changes (start, stop) always; positions thinned to the report's resolution
 (one per ``REPORT_PERIOD`` per kind, plus the last one before and the first
 one after each segment change, so every segment's track keeps its ends),
 all of them while the database answers (nothing waits for the disk then); the
-latest map only. Camera frames are not kept. The writer takes these events
+latest map only. Camera frames are kept only while the database answers
+(within ``MAX_FRAME_BYTES``); else they are dropped. The writer takes these events
 straight to the database once it is reachable (collector/replay.py), or the
 spool takes them back once the disk has room; both in order.
 """
@@ -23,6 +24,9 @@ from rosbridge_app.collector.events import Event
 REPORT_PERIOD = 1.0
 # A day of thinned GPS and local positions; more are counted and dropped.
 MAX_POSITIONS = 200_000
+# Frames wait in memory only for a database that answers: a few seconds of
+# camera at most, however large the frames.
+MAX_FRAME_BYTES = 64 * 1024 * 1024
 _POSITIONS = frozenset({ev.GPS_FIX, ev.LOCAL_POSE})
 _CHANGES = frozenset({ev.MODE, ev.START, ev.STOP})
 
@@ -39,6 +43,7 @@ class Held:
         # so the two never take the same ones.
         self.lock = threading.RLock()
         self._positions = 0
+        self._frame_bytes = 0
         self._kept_at: dict[str, float] = {}
         self._skipped: dict[str, Event] = {}  # the newest position not kept, per kind
 
@@ -58,7 +63,11 @@ class Held:
             elif kind in _POSITIONS:
                 self._add_position(event)
             elif kind == ev.IMAGE:
-                self.guard.count("frames")
+                size = len(event.blob or b"")
+                if self.database_ok() and self._frame_bytes + size <= MAX_FRAME_BYTES:
+                    self._append(event)
+                else:
+                    self.guard.count("frames")
             elif kind == ev.MAP:
                 older = [e for e in self.events if e.kind == ev.MAP]
                 for e in older:
@@ -85,6 +94,8 @@ class Held:
     def _append(self, event: Event) -> None:
         if event.kind in _POSITIONS:
             self._positions += 1
+        elif event.kind == ev.IMAGE:
+            self._frame_bytes += len(event.blob or b"")
         self.events.append(event)
 
     def peek(self, limit: int, maps: bool = True) -> list[Event]:
@@ -102,6 +113,7 @@ class Held:
         gone = {id(e) for e in taken}
         self.events = deque(e for e in self.events if id(e) not in gone)
         self._positions -= sum(1 for e in taken if e.kind in _POSITIONS)
+        self._frame_bytes -= sum(len(e.blob or b"") for e in taken if e.kind == ev.IMAGE)
 
     def flush_skipped(self) -> None:
         """The newest positions not kept go in too (nothing more follows them)."""

@@ -256,8 +256,9 @@ SPECS: dict[str, Spec] = {
         4000,
         gettext_noop(
             "Disk for everything the collector writes: spool, snapshots, pending files (MB); "
-            "near it camera frames and snapshots are dropped, at it records are held in memory, "
-            "positions thinned (docs/collector.md, 'A full disk')."
+            "near it snapshots are dropped, at it records are held in memory; camera frames "
+            "dropped and positions thinned while the database does not answer "
+            "(docs/collector.md, 'A full disk')."
         ),
         minimum=1,
         maximum=1_000_000,

@@ -2,8 +2,9 @@
 
 It renders pictures (PNG/JPEG) and appends events to the :class:`Spool` a few
 times a second; a mode switch, start or stop is appended at once.  When the
-disk budget says so (disk_guard.py), camera frames are dropped, and when the
-spool cannot be written events are held in memory (held.py) instead; they go
+disk budget says so (disk_guard.py), camera frames are dropped unless the
+database answers, and when the spool cannot be written events are held in
+memory (held.py) instead; they go
 back to the spool, in order, before anything newer, once it has room.
 """
 
@@ -69,7 +70,7 @@ class Spooler(threading.Thread):
                 event = self.events.get(timeout=max(0.0, deadline - time.monotonic()))
             except queue.Empty:
                 break
-            if event.kind == ev.IMAGE and self.guard.level >= TIGHT:
+            if event.kind == ev.IMAGE and self.guard.level >= TIGHT and not self.held.database_ok():
                 self.guard.count("frames")  # before rendering: the first thing given up
             else:
                 try:

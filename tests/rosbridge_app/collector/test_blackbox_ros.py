@@ -253,33 +253,50 @@ def test_a_stop_prints_no_traceback_from_the_snapshot_writer(ros, start_collecto
     assert "ConnectionResetError" not in output, output
 
 
-def test_a_take_over_snapshot_holds_the_mode_source_topic(ros, start_collector, robot_leg):
+def test_a_take_over_snapshot_holds_the_mode_source_and_reason_rule_topics(
+    ros, start_collector, robot_leg
+):
     """Default snapshot topics: a robot whose mode comes from a mode source
-    (here the String preset) has that topic in its take-over's snapshot."""
+    (here the String preset) and whose take-over reasons come from a reason
+    rule has both topics in its take-over's snapshot."""
     from sensor_msgs.msg import NavSatFix
-    from std_msgs.msg import String
+    from std_msgs.msg import Bool, String
 
     from rosbridge_app.collector.mode_presets import preset
 
     mode = ros.publisher(String, "/robot/mode")
+    estop = ros.publisher(Bool, "/safety/estop")
     fix = ros.publisher(NavSatFix, "/gps_fix", 100)
     start_collector(
         params={
             "params.mode_sources": preset("string").document,
+            "params.reason_rules": (
+                "rules: [{topic: /safety/estop, type: std_msgs/msg/Bool, field: data,"
+                " values: [true], reason: safety}]"
+            ),
             "snapshot.before": 3.0,
             "snapshot.after": 1.0,
         }
     )
-    wait_for_subscribers(mode, 2)  # the mode source and the black box
+    # Each: its input and the black box.
+    wait_for_subscribers(mode, 2)
+    wait_for_subscribers(estop, 2)
     assert ros.set_logging(True).success
     mode.publish(String(data="AUTO"))
     for i in range(10):
         fix.publish(NavSatFix(latitude=40.0 + i * 1e-4, longitude=9.0))
+        if i % 5 == 0:
+            estop.publish(Bool(data=False))
         time.sleep(0.1)  # the robot drives a second in AUTO
-    mode.publish(String(data="manual"))  # the take-over
+    estop.publish(Bool(data=True))  # the safety controller stops it ...
+    mode.publish(String(data="manual"))  # ... and the operator takes over
 
     _, recording = take_over_snapshot(robot_leg)
     back = read_mcap(recording.file.path)
     modes = [m.data for topic, _, m in back["messages"] if topic == "/robot/mode"]
     assert modes == ["AUTO", "manual"]
     assert recording.topics["/robot/mode"] == {"type": "std_msgs/msg/String", "count": 2}
+    # The e-stop may arrive just after the switch: the snapshot's "after" holds it.
+    estops = [m.data for topic, _, m in back["messages"] if topic == "/safety/estop"]
+    assert estops == [False, False, True]
+    assert recording.topics["/safety/estop"] == {"type": "std_msgs/msg/Bool", "count": 3}

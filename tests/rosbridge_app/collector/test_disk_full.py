@@ -13,7 +13,7 @@ import pytest
 
 from events.models import Segment
 from rosbridge_app.collector import events as ev
-from rosbridge_app.collector.disk_guard import FULL, OK, DiskGuard
+from rosbridge_app.collector.disk_guard import FULL, OK, TIGHT, DiskGuard
 from rosbridge_app.collector.event_writer import EventWriter
 from rosbridge_app.collector.events import Event
 from rosbridge_app.collector.replay import ReplayOrder
@@ -157,3 +157,26 @@ def test_a_write_that_meets_a_full_disk_is_spool_full_and_stored_records_still_l
     assert event.kind == ev.MODE
     spool.remove([row_id])  # on the reserve, though nothing else fits
     assert len(spool) == 0 and not guard.reserve_path.exists()
+
+
+@pytest.mark.parametrize("database_ok", [True, False])
+def test_a_nearly_full_disk_drops_camera_frames_only_while_the_database_is_away(
+    tmp_path, database_ok
+):
+    import shutil
+
+    spool = Spool(tmp_path / "spool.sqlite3")
+    # Less than twice the headroom free, more than the headroom: nearly full.
+    free = shutil.disk_usage(tmp_path).free
+    guard = DiskGuard(spool.path, budget=None, headroom=int(free / 1.5))
+    events = queue.Queue()
+    spooler = Spooler(events, spool, guard, database_ok=lambda: database_ok)
+    frame = Event(ev.IMAGE, datetime.now(UTC), {"master": None}, blob=b"jpeg")
+    events.put(Event(ev.GPS_FIX, frame.at, {"lon": 7.0, "lat": 50.0}))
+    spooler.spool_once(timeout=0)
+    assert guard.level == TIGHT
+    events.put(frame)
+    spooler.spool_once(timeout=0)
+    kinds = [event.kind for _, event in spool.peek(10)]
+    assert kinds == ([ev.GPS_FIX, ev.IMAGE] if database_ok else [ev.GPS_FIX])
+    assert guard.given_up["frames"] == (0 if database_ok else 1)

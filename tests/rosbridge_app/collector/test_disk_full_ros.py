@@ -84,32 +84,55 @@ def test_a_full_disk_during_an_outage_loses_no_switch_and_the_collector_goes_on(
     assert stopping < 15
 
 
-def test_a_full_disk_while_the_database_answers_keeps_every_position(
+def test_a_full_disk_while_the_database_answers_keeps_every_position_and_camera_frame(
     ros, start_collector, robot_leg
 ):
     """Nothing needs the disk while the database answers: a robot whose disk is
     full (less free than spool.disk_headroom_mb) still has its track stored at
-    the rate it drives, not thinned to the report's resolution."""
-    from sensor_msgs.msg import NavSatFix
+    the rate it drives, not thinned to the report's resolution, and the camera
+    frames before a mode switch stored with the switch."""
+    from sensor_msgs.msg import Image, NavSatFix
+    from std_msgs.msg import Bool
 
+    from events.models import Segment
+    from telemetry.models import Image as StoredImage
     from telemetry.models import Pose
     from tests.support.ros import wait_for
 
     sent = 30  # 3 s at 10 Hz
     # More headroom than any test machine has free: the disk is full.
-    params = {"spool.disk_headroom_mb": 1_000_000}
+    params = {
+        "spool.disk_headroom_mb": 1_000_000,
+        "params.image_buffer_size": 3,
+        "params.image_buffer_step": 0.2,
+    }
     collector, fixes, master = logging_robot(
         ros, start_collector, robot_leg, sent, params, auto=True
     )
     assert "robot disk full (" in collector.output()
+    camera = ros.publisher(Image, "/image", sent)
+    mode = ros.publisher(Bool, "/robot_mode")
+    for publisher in (camera, mode):
+        ros.wait_subscribed(publisher)
     fix = NavSatFix()
+    frame = Image(height=48, width=64, encoding="rgb8", step=64 * 3, data=bytes(48 * 64 * 3))
     for i in range(sent):
         t = time.time()
         fix.header.stamp.sec, fix.header.stamp.nanosec = int(t), int(t % 1 * 1e9)
+        frame.header.stamp = fix.header.stamp
         fix.latitude, fix.longitude = 50.6 + i * 1e-5, 7.1
         fixes.publish(fix)
+        camera.publish(frame)
         time.sleep(0.1)  # the robot's rate
     stored = Pose.objects.filter(segment=master)
     wait_for(lambda: stored.count() >= sent, 10, what=f"{sent} stored fixes")
     points = stored.values_list("point", flat=True)
     assert sorted(round((p.y - 50.6) * 1e5) for p in points) == list(range(sent))
+    mode.publish(Bool(data=False))  # the take-over: the buffered frames go with it
+    ito = wait_for(
+        lambda: Segment.objects.filter(leg=robot_leg, parent=None, segment_type_id="ito").first(),
+        what="the ITO master",
+    )
+    frames = StoredImage.objects.filter(segment=ito)
+    wait_for(lambda: frames.count() >= 3, 10, what="the three frames before the take-over")
+    assert frames.count() == 3
