@@ -226,7 +226,7 @@ class DiskGuard:
         g = self.given_up
         parts = []
         if self.level == FULL:
-            head = _("robot disk full: positions thinned since %(since)s") % {"since": since}
+            head = _("robot disk full since %(since)s") % {"since": since}
         else:
             head = _("robot disk nearly full since %(since)s") % {"since": since}
         if g["snapshots"]:

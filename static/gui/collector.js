@@ -69,7 +69,7 @@ export const Collector = {
     const queue = c.pending ? ` · ${_("%(count)s records not yet stored", { count: fmtNumber(c.pending) })}` : "";
     // Set by the collector's watchdog, e.g. "robot publishes, collector hears nothing (…)".
     const hearing = c.online && c.hearing ? ` · ${c.hearing}` : "";
-    // Set by the collector's disk guard, e.g. "robot disk full: positions thinned since 14:03, …";
+    // Set by the collector's disk guard, e.g. "robot disk full since 14:03, 2 snapshots dropped, …";
     // shown offline too, as the robot's last word (like the records not yet stored).
     const disk = c.disk ? ` · ${c.disk}` : "";
     $("#collector-status").textContent = _("%(vehicle)s (collector %(name)s): %(online)s, %(doing)s", { vehicle: vehicleName(current("shift").vehicle), name: c.name, online: c.online ? _("online") : _("offline"), doing }) + queue + hearing + disk;

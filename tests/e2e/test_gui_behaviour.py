@@ -281,7 +281,7 @@ collectors.heartbeat(
     state="logging; {pending} records waiting", pending={pending}, disk="{disk}",
 )
 """
-DISK_FULL = "robot disk full: positions thinned since 14:03, 2 snapshots dropped"
+DISK_FULL = "robot disk full since 14:03, 2 snapshots dropped, 40 positions thinned out"
 
 
 def test_robot_panel_shows_the_collectors_backlog_and_full_disk_until_gone(page, server, open_leg):

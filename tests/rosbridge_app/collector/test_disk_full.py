@@ -85,7 +85,7 @@ def test_a_full_spool_holds_switches_and_thinned_positions_and_the_database_gets
             spooler.spool_once(timeout=0)
     # 60 × 150 kB of maps never fit 2 MB: the spool filled, the recording went on.
     assert guard.level == FULL
-    assert guard.describe().startswith("robot disk full: positions thinned since ")
+    assert guard.describe().startswith("robot disk full since ")
     held = list(spooler.held.events)
     assert [e.kind for e in held].count(ev.MAP) == 1 and ev.IMAGE not in {e.kind for e in held}
     assert caplog.text.count("robot disk full") == 1  # once, not once per failed write
