@@ -109,6 +109,7 @@ class CollectorNode(Node):
         self._snapshot_subs: dict[str, object] = {}
         self._master: str | None = None
         self.pipeline = Pipeline(self._watch_modes(sink), self.current_parameters())
+        self.pipeline.mode_publisher = self._mode_publisher
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._parameters_changed)
         self._make_services()
@@ -453,6 +454,15 @@ class CollectorNode(Node):
         if info is not None and info.get("qos") != text:
             info["qos"] = text
             log.warning("%s (%s): %s", name, info["topic"], text)
+
+    def _mode_publisher(self) -> bool:
+        """Whether a publisher of the mode is connected: a silent one says its
+        mode only on change (collector/unknown_mode.py)."""
+        return any(
+            self.count_publishers(info["topic"])
+            for name, info in self.inputs.items()
+            if is_mode_input(name)
+        )
 
     def _take_modes(self) -> None:
         """Mode messages go ahead of the sensor backlog being drained."""
