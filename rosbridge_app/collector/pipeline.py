@@ -241,7 +241,7 @@ class Pipeline:
                     self._heard_again(mode, received)
                     return
                 self._settle_first_word()
-            elif waiting.says_what_was_held(at):
+            elif waiting.says_what_was_held(at, self._first_held_robot_time()):
                 self._switch(mode, waiting.first_at(), held=waiting.take())
                 return
             else:
@@ -251,6 +251,10 @@ class Pipeline:
                 return
         if mode != self.open_mode:
             self._switch(mode, at, robot_stamp, uncertainty)
+
+    def _first_held_robot_time(self) -> datetime:
+        firsts = [held[0] for held in (self.waiting.fixes, self.waiting.poses) if held]
+        return min(_robot_time(first) for first in firsts)
 
     def _heard_again(self, mode: str, received: datetime) -> None:
         """The mode is still ``mode``: a repeat proves the first word periodic."""

@@ -79,10 +79,11 @@ class ModeWait:
         first = self.first_at()
         return first is not None and (at - first).total_seconds() >= wait
 
-    def says_what_was_held(self, at: datetime) -> bool:
-        """Whether a first mode said at ``at`` (robot time), heard within the
-        wait, covers the held positions without repeating itself."""
-        return at <= self.first_at() or not self.listening
+    def says_what_was_held(self, at: datetime, first: datetime) -> bool:
+        """Whether a first mode said at ``at``, heard within the wait, covers
+        the held positions without repeating itself; ``first``: the first held
+        position's time on the same clock (the robot's)."""
+        return at <= first or not self.listening
 
     def repeats(self, received: datetime) -> bool | None:
         """The pending first word heard again at ``received``: True if it is
