@@ -5,10 +5,12 @@ Two figures per input, under their own names:
 * **dropped**: messages the publisher sent that the collector never handled
   (lost in DDS, or overwritten in the subscription's queue while the
   collector was starved).  Each DDS message carries its publisher's sequence
-  number (rmw's ``publication_sequence_number``); a jump by k means k - 1
-  sent messages were dropped.  A number going back is another publisher or
-  a restarted one: counting starts afresh (one publisher per topic is what
-  this tells; several interleaved are not counted).
+  number (rmw's ``publication_sequence_number``, which does not name the
+  publisher); a jump by k means k - 1 sent messages were dropped.  A number
+  is taken to follow the nearest lower one heard last (several publishers
+  of one topic, up to PUBLISHERS, each keep their own count); a number below
+  all of them is a new or restarted publisher.  Interleaved publishers with
+  close numbers may hide a drop, never invent one beyond the true jumps.
 * **publisher gaps**: messages the publisher did not send at its own rate (a
   loaded robot whose timer fired late): nothing was lost.  A topic published
   at a steady rate whose stamps jump by k periods lacks k - 1 messages there;
@@ -32,6 +34,8 @@ PAUSE = 2.0
 WINDOW = 50
 # Intervals needed before gaps are judged.
 FIRST = 5
+# Publishers of one topic whose sequence numbers are followed at once.
+PUBLISHERS = 4
 
 
 class LossCounter:
@@ -39,7 +43,8 @@ class LossCounter:
 
     def __init__(self):
         self.last: float | None = None
-        self.last_sequence: int | None = None
+        # The last sequence number of each publisher heard recently.
+        self.sequences: deque[int] = deque(maxlen=PUBLISHERS)
         self.intervals: deque[float] = deque(maxlen=WINDOW)
         self.median: float | None = None
         self.period: float | None = None
@@ -81,9 +86,14 @@ class LossCounter:
     def _count_dropped(self, sequence: int | None) -> int:
         if sequence is None:
             return 0
-        last, self.last_sequence = self.last_sequence, sequence
-        if last is None or sequence <= last:
+        # The publisher whose last number is the nearest below this one sent it.
+        below = [last for last in self.sequences if last < sequence]
+        if not below:
+            self.sequences.append(sequence)  # a new or restarted publisher
             return 0
+        last = max(below)
+        self.sequences.remove(last)
+        self.sequences.append(sequence)
         self.dropped += sequence - last - 1
         return sequence - last - 1
 

@@ -73,6 +73,17 @@ def test_sequence_numbers_tell_the_publishers_gaps_from_messages_dropped():
     assert (counter.dropped, counter.gaps) == (5, 3)
 
 
+def test_two_publishers_on_one_topic_are_not_taken_for_drops():
+    counter = LossCounter()
+    # A driver that has run for a while and a second one just started, interleaved.
+    for i in range(100):
+        counter.seen(None, 5000 + i)
+        counter.seen(None, 1 + i)
+    assert counter.dropped == 0
+    counter.seen(None, 5000 + 102)  # the first one's next two never arrived
+    assert counter.dropped == 2
+
+
 def test_a_pause_of_the_publisher_is_not_a_loss():
     counter = LossCounter()
     for stamp in [i * 0.1 for i in range(10)] + [30 + i * 0.1 for i in range(10)]:
