@@ -75,7 +75,7 @@ for leg in {legs!r}:
             for m in masters
         ],
         "poses": Pose.objects.filter(segment__leg_id=leg).count(),
-        "missed": (inputs.get("gps_fix") or {{}}).get("missed"),
+        "missed": (inputs.get("gps_fix") or {{}}).get("dropped"),
     }}
 print("RESULTS", json.dumps(out))
 """

@@ -109,6 +109,7 @@ class CollectorNode(Node):
         self._snapshot_subs: dict[str, object] = {}
         self._master: str | None = None
         self.pipeline = Pipeline(self._watch_modes(sink), self.current_parameters())
+        self.pipeline.mode_publisher = self._mode_publisher
         self.add_on_set_parameters_callback(self._check_parameters)
         self.add_post_set_parameters_callback(self._parameters_changed)
         self._make_services()
@@ -326,42 +327,57 @@ class CollectorNode(Node):
                 first()
             answer = None
             try:
-                if info is None:
+                if info is None or not is_mode_input(name):
                     answer = handler(msg, at)
                 else:
                     answer = handler(msg, at, sent_at(info))
             finally:
                 # Counted even when the handler fails: the message did arrive.
-                info = self.inputs.get(name)
-                if info is not None and answer is not SECOND_COPY:
-                    info["count"] += 1
-                    info["last_received"] = at.isoformat()
+                heard = self.inputs.get(name)
+                if heard is not None and answer is not SECOND_COPY:
+                    heard["count"] += 1
+                    heard["last_received"] = at.isoformat()
                     if name in LOSS_INPUTS:
-                        self._count_losses(name, msg, info)
+                        self._count_losses(name, msg, info, heard)
 
         return self._safe(name, receive)
 
-    def _count_losses(self, name: str, msg, info: dict) -> None:
+    def _count_losses(self, name: str, msg, info, heard: dict) -> None:
         counter = self._losses.setdefault(name, LossCounter())
         stamp = getattr(getattr(msg, "header", None), "stamp", None)
-        counter.seen(stamp_ns(stamp) / 1e9 if stamp is not None else None)
-        info.update(counter.report())
+        sequence = info.get("publication_sequence_number") if info else None
+        counter.seen(stamp_ns(stamp) / 1e9 if stamp is not None else None, sequence)
+        heard.update(counter.report())
 
     def _log_losses(self, t: float) -> None:
-        """Say in the log, at most every LOSS_LOG_PERIOD, when an input lost messages."""
+        """Say in the log, at most every LOSS_LOG_PERIOD, when an input lost
+        messages (a warning) or its publisher sent fewer than its rate (news)."""
         if t - self._losses_logged < LOSS_LOG_PERIOD:
             return
         self._losses_logged = t
         for name, counter in self._losses.items():
-            new = counter.missed - counter.logged
+            new = counter.dropped - counter.logged
             if new > 0:
-                counter.logged = counter.missed
+                counter.logged = counter.dropped
                 log.warning(
-                    gettext("%s: about %d messages missed in %g s (%d so far)"),
+                    gettext("%s: %d messages dropped in %g s (%d so far)"),
                     name,
                     new,
                     LOSS_LOG_PERIOD,
-                    counter.missed,
+                    counter.dropped,
+                )
+            gaps = counter.gaps - counter.logged_gaps
+            if gaps > 0:
+                counter.logged_gaps = counter.gaps
+                log.info(
+                    gettext(
+                        "%s: publisher gaps: about %d messages not sent at its rate in %g s "
+                        "(%d so far); nothing was lost"
+                    ),
+                    name,
+                    gaps,
+                    LOSS_LOG_PERIOD,
+                    counter.gaps,
                 )
 
     def _subscribe(self) -> None:
@@ -384,7 +400,8 @@ class CollectorNode(Node):
                 msg_type,
                 topic,
                 self._input(name, handler),
-                with_info=mode,
+                # Loss inputs read their publisher's sequence numbers (losses.py).
+                with_info=mode or name in LOSS_INPUTS,
                 ahead=None if mode else self._take_modes,
             )
             try:
@@ -453,6 +470,15 @@ class CollectorNode(Node):
         if info is not None and info.get("qos") != text:
             info["qos"] = text
             log.warning("%s (%s): %s", name, info["topic"], text)
+
+    def _mode_publisher(self) -> bool:
+        """Whether a publisher of the mode is connected: a silent one says its
+        mode only on change (collector/unknown_mode.py)."""
+        return any(
+            self.count_publishers(info["topic"])
+            for name, info in self.inputs.items()
+            if is_mode_input(name)
+        )
 
     def _take_modes(self) -> None:
         """Mode messages go ahead of the sensor backlog being drained."""

@@ -180,8 +180,9 @@ SPECS: dict[str, Spec] = {
     "params.unknown_mode_wait": Spec(
         10.0,
         gettext_noop(
-            "Seconds to wait for the robot's first mode after logging starts; positions meanwhile "
-            "join the first segment, after it they go to a segment of unknown mode (s)."
+            "Seconds to wait for the robot's first mode after logging starts, and for it to "
+            "repeat; positions meanwhile join the first segment if that mode was latched or "
+            "periodic, else and after the wait they go to a segment of unknown mode (s)."
         ),
         minimum=0.0,
     ),

@@ -9,8 +9,9 @@ Rules implemented here:
 * the first mode after logging starts opens a segment, later ones only when
   the mode changes; the last mode is kept while logging is off, so a
   publisher that only sends on change is not missed;
-* positions before the first mode are held and join the first segment, or a
-  segment of unknown mode when the mode stays unknown (unknown_mode.py);
+* positions before the first mode are held and join the first segment when
+  that mode says what they were, else a segment of unknown mode
+  (unknown_mode.py);
 * a segment starts at the last known GPS and local positions when they are
   fresh, and the latest fix closes the old segment and opens the new one, so
   per-segment paths add up to the whole path;
@@ -35,16 +36,19 @@ from rosbridge_app.collector import events as ev
 from rosbridge_app.collector.events import Event
 from rosbridge_app.collector.mode_sources import Combiner, Switch
 from rosbridge_app.collector.mode_sources import parse as parse_mode_sources
-from rosbridge_app.collector.mode_timing import ModeClock, stamp_of
+from rosbridge_app.collector.mode_timing import ModeClock, plausible, stamp_of
 from rosbridge_app.collector.modes import ITO, UNKNOWN, mode_of
 from rosbridge_app.collector.params import SPECS
 from rosbridge_app.collector.reason_rules import ReasonWatcher
 from rosbridge_app.collector.reason_rules import parse as parse_reason_rules
 from rosbridge_app.collector.tf_buffer import TfBuffer, TfLookupError
 from rosbridge_app.collector.thinning import Thinner
-from rosbridge_app.collector.unknown_mode import ModeWait
+from rosbridge_app.collector.unknown_mode import FirstWord, ModeWait
 
 log = logging.getLogger("ftt.collector")
+
+# The reason a switch suggests is asked of the rules at the switch (the default).
+ASK = object()
 
 # Returned by a handler for a second copy of a message it has already had, so
 # the node does not count that copy as received (see Node._input).
@@ -62,9 +66,19 @@ def _measured(at: datetime, value: dict) -> float:
     return _seconds(stamp if stamp is not None else at)
 
 
+def _robot_time(held: tuple[datetime, dict]) -> datetime:
+    """A held position's time on the clock mode messages are placed by."""
+    at, value = held
+    stamp = value.get("robot_stamp")
+    return stamp if plausible(stamp, at) else at
+
+
 class Pipeline:
     def __init__(self, sink: Callable[[Event], None], params: dict | None = None):
         self.sink = sink
+        # Whether a publisher of the mode is connected now: the live node says;
+        # a recording cannot (unknown_mode.py).
+        self.mode_publisher: Callable[[], bool] = lambda: False
         self.params = {name: spec.default for name, spec in SPECS.items()}
         self.gps_thinner = Thinner(geographic=True)
         self.said_unknown_status = False  # logged once per run
@@ -149,7 +163,10 @@ class Pipeline:
         mode: when logging stops, and when the collector stops while logging
         (a restart continues that segment, as any left open)."""
         if self.logging and self.open_mode is None and self.waiting:
-            self._switch(UNKNOWN, self.waiting.first_at())
+            if self.waiting.word is not None:
+                self._settle_first_word()
+            else:
+                self._switch(UNKNOWN, self.waiting.first_at(), held=self.waiting.take())
 
     # --- mode ---------------------------------------------------------------------------
 
@@ -165,7 +182,9 @@ class Pipeline:
         if mode != self.last_mode and log.isEnabledFor(logging.DEBUG):
             # benchmarks/fleet.py splits a switch's way to the screen with it.
             log.debug("mode %s start=%.6f received=%.6f", mode, start.timestamp(), at.timestamp())
-        self.on_mode_value(mode, start, robot_stamp=robot_stamp, uncertainty=uncertainty)
+        self.on_mode_value(
+            mode, start, robot_stamp=robot_stamp, uncertainty=uncertainty, received=at
+        )
         return None
 
     def on_mode_source(
@@ -178,16 +197,21 @@ class Pipeline:
             return SECOND_COPY
         # A reason rule on the same topic sees the message before the switch it causes.
         self.on_reason_signal(self.mode_sources.config.sources[indices[0]].topic, msg, at)
-        self._apply([switch for switches in offers if switches for switch in switches])
+        switches = [switch for switches in offers if switches for switch in switches]
+        if switches:
+            self._apply(switches, at)
+        elif self.mode_sources.mode is not None:
+            self._heard_again(self.mode_sources.mode, at)
         return None
 
-    def _apply(self, switches: list[Switch]) -> None:
+    def _apply(self, switches: list[Switch], received: datetime) -> None:
         for switch in switches:
             self.on_mode_value(
                 switch.mode,
                 switch.at,
                 robot_stamp=switch.robot_stamp,
                 uncertainty=switch.uncertainty,
+                received=received,
             )
 
     def on_reason_signal(self, topic: str, msg, at: datetime) -> None:
@@ -196,11 +220,74 @@ class Pipeline:
             self.reasons.offer(topic, msg, at)
 
     def on_mode_value(
-        self, mode: str, at: datetime, *, robot_stamp=None, uncertainty: float | None = None
+        self,
+        mode: str,
+        at: datetime,
+        *,
+        robot_stamp=None,
+        uncertainty: float | None = None,
+        received: datetime | None = None,
     ) -> None:
+        """The robot's mode is ``mode`` since ``at``; ``received``: when the
+        message saying so came (``at`` if not given)."""
         self.last_mode = mode
-        if self.logging and mode != self.open_mode:
+        if not self.logging:
+            return
+        received = received or at
+        waiting = self.waiting
+        if self.open_mode is None and waiting:
+            if waiting.word is not None:
+                if mode == waiting.word.mode:
+                    self._heard_again(mode, received)
+                    return
+                self._settle_first_word()
+            elif waiting.says_what_was_held(at, self._first_held_robot_time()):
+                self._switch(mode, waiting.first_at(), held=waiting.take())
+                return
+            else:
+                waiting.word = FirstWord(
+                    mode, at, received, robot_stamp, uncertainty, self._reason(mode, at)
+                )
+                return
+        if mode != self.open_mode:
             self._switch(mode, at, robot_stamp, uncertainty)
+
+    def _first_held_robot_time(self) -> datetime:
+        firsts = [held[0] for held in (self.waiting.fixes, self.waiting.poses) if held]
+        return min(_robot_time(first) for first in firsts)
+
+    def _heard_again(self, mode: str, received: datetime) -> None:
+        """The mode is still ``mode``: a repeat proves the first word periodic."""
+        waiting = self.waiting
+        if self.open_mode is None and waiting.word is not None and mode == waiting.word.mode:
+            if waiting.repeats(received):
+                self._switch(mode, waiting.first_at(), held=waiting.take())
+            else:
+                self._settle_first_word()
+
+    def _settle_first_word(self) -> None:
+        """The first word was a switch: what was held before it has no known mode."""
+        word, first = self.waiting.word, self.waiting.first_at()
+        fixes, poses = self.waiting.take()
+
+        def split(held):
+            before = [h for h in held if _robot_time(h) < word.at]
+            # As at every switch, the last position before it starts the new track.
+            return before, before[-1:] + held[len(before) :]
+
+        (fixes_before, fixes_after), (poses_before, poses_after) = split(fixes), split(poses)
+        self._switch(UNKNOWN, first, held=(fixes_before, poses_before))
+        self._switch(
+            word.mode,
+            word.at,
+            word.robot_stamp,
+            word.uncertainty,
+            held=(fixes_after, poses_after),
+            reason=word.reason,
+        )
+
+    def _reason(self, mode: str, at: datetime) -> str | None:
+        return self.reasons.reason_at(at) if self.reasons and mode == ITO else None
 
     def _fresh(self, sample, at: datetime):
         if sample is None:
@@ -210,13 +297,14 @@ class Pipeline:
             return None
         return value
 
-    def _switch(self, mode: str, at: datetime, robot_stamp=None, uncertainty=None) -> None:
+    def _switch(
+        self, mode: str, at: datetime, robot_stamp=None, uncertainty=None, held=None, reason=ASK
+    ) -> None:
+        """``held``: (fixes, poses) held before the mode was known that belong
+        to this segment."""
         if self.open_mode is not None:
             self._close_track(at)
-        fixes, poses = self.waiting.take() if self.open_mode is None else ([], [])
-        if fixes or poses:
-            # The track driven before the mode was known belongs to this segment.
-            at = min([at] + [held[0][0] for held in (fixes, poses) if held])
+        fixes, poses = held or ([], [])
         fix = fixes[0][1] if fixes else self._fresh(self.last_fix, at)
         local = poses[0][1] if poses else self._fresh(self.last_local, at)
         master = uuid.uuid4()
@@ -230,9 +318,7 @@ class Pipeline:
                     "start_uncertainty": uncertainty,
                     "gps": [fix["lon"], fix["lat"]] if fix else None,
                     "local": [local["x"], local["y"], local["frame"]] if local else None,
-                    "suggested_reason": (
-                        self.reasons.reason_at(at) if self.reasons and mode == ITO else None
-                    ),
+                    "suggested_reason": self._reason(mode, at) if reason is ASK else reason,
                 },
                 uid=master,
             )
@@ -279,14 +365,25 @@ class Pipeline:
                 self._emit_fix(at, fix)
         elif self.logging:
             if self.gps_thinner.offer(fix["lon"], fix["lat"], _measured(at, fix)):
-                self.waiting.fixes.append((at, fix))
+                self._hold(self.waiting.fixes, at, fix)
             self._end_wait(at)
 
     def _end_wait(self, at: datetime) -> None:
-        """The mode stayed unknown too long: a segment of unknown mode takes the held positions."""
-        if self.logging and self.open_mode is None:
-            if self.waiting.is_over(at, self.params["params.unknown_mode_wait"]):
-                self._switch(UNKNOWN, self.waiting.first_at())
+        """The mode stayed unknown too long: a segment of unknown mode takes the
+        held positions; a first word that can no longer prove periodic is a switch."""
+        if not (self.logging and self.open_mode is None and self.waiting):
+            return
+        waiting = self.waiting
+        if waiting.word is not None:
+            if at >= waiting.undecided_until(self.params["params.unknown_mode_wait"]):
+                self._settle_first_word()
+        elif waiting.is_over(at, self.params["params.unknown_mode_wait"]):
+            self._switch(UNKNOWN, waiting.first_at(), held=waiting.take())
+
+    def _hold(self, held, at: datetime, value: dict) -> None:
+        if not self.waiting:
+            self.waiting.listening = self.mode_publisher()
+        held.append((at, value))
 
     def _record_fix(self, at: datetime, fix: dict) -> None:
         self.gps_thinner.keep(fix["lon"], fix["lat"], _measured(at, fix))
@@ -351,7 +448,7 @@ class Pipeline:
                 self.sink(Event(ev.LOCAL_POSE, at, dict(pose)))
         elif self.logging:
             if self.local_thinner.offer(pose["x"], pose["y"], _measured(at, pose), pose["yaw"]):
-                self.waiting.poses.append((at, pose))
+                self._hold(self.waiting.poses, at, pose)
             self._end_wait(at)
 
     def _record_local(self, at: datetime, pose: dict) -> None:
@@ -410,7 +507,7 @@ class Pipeline:
         """Called about once a second: stores a map held back by send_map_period
         and confirms mode source values that held for their hysteresis."""
         if self.mode_sources is not None:
-            self._apply(self.mode_sources.tick(at))
+            self._apply(self.mode_sources.tick(at), at)
         self._end_wait(at)
         if self.map_pending:
             self._maybe_store_map(at)

@@ -6,24 +6,55 @@ the bag importer alike (both through the pipeline):
 
 * positions (GPS fixes and local poses) that arrive while logging into an open
   leg before any mode is known are held, thinned as usual;
-* if the mode becomes known within ``params.unknown_mode_wait`` seconds of the
-  first held position, the first master starts at that position and takes
-  every held position;
-* if the wait passes first, or logging or the collector (SIGINT, SIGTERM)
-  stops before a mode is known, a master of *unknown* mode opens at the first
-  held position, takes the held positions and records later ones as they come;
-  the first known mode closes it like any switch. A hard kill (SIGKILL, power)
-  loses what is held: at most the wait.
+* the first mode heard says what the held positions were, and the first
+  master starts at the first held position and takes them all, when
+
+  - it was sent at or before the first held position (a latched sample: a
+    transient-local publisher gives a late joiner its last message with the
+    time it was sent; or one delivered late), or
+  - no mode publisher was connected when the first position was held (the
+    robot's mode node started later; a recording does not say when its
+    recorder joined the mode topic), and it came within
+    ``params.unknown_mode_wait`` seconds of the first held position, or
+  - its publisher repeats it (periodic): the same mode is heard again within
+    the wait, no sooner than the first message came after the first held
+    position, so the held positions lie within one period before it;
+
+* otherwise it is a switch (an on-change publisher the collector was already
+  connected to said nothing while the robot drove): the held positions before
+  its time go to a master of *unknown* mode, the switch keeps its own time,
+  and the reason rules are asked at that time.  It is stored once it cannot
+  prove periodic any more: another mode, a repeat too soon, the wait passed
+  since it came, or logging stopping;
+* if the wait passes with no mode at all, or logging or the collector
+  (SIGINT, SIGTERM) stops before a mode is known, a master of unknown mode
+  opens at the first held position, takes the held positions and records
+  later ones as they come; the first known mode closes it like any switch.
+  A hard kill (SIGKILL, power) loses what is held: at most the wait.
 
 The statistics count unknown masters as time and distance without a known
 mode (reports/selectors/statistics.py). Free of ROS.
 """
 
 from collections import deque
-from datetime import datetime
+from datetime import datetime, timedelta
+from typing import NamedTuple
 
 # Thinned positions of each kind kept while waiting (hours at the default thinning).
 MAX_HELD = 50_000
+
+
+class FirstWord(NamedTuple):
+    """The first mode heard while positions are held, not yet known to say what
+    they were: when it was said (``at``, robot time), when it was received, the
+    timing of its switch and the reason the rules suggested then."""
+
+    mode: str
+    at: datetime
+    received: datetime
+    robot_stamp: datetime | None
+    uncertainty: float | None
+    reason: str | None
 
 
 class ModeWait:
@@ -32,6 +63,9 @@ class ModeWait:
     def __init__(self):
         self.fixes: deque[tuple[datetime, dict]] = deque(maxlen=MAX_HELD)
         self.poses: deque[tuple[datetime, dict]] = deque(maxlen=MAX_HELD)
+        # Whether a mode publisher was connected when the first position was held.
+        self.listening = False
+        self.word: FirstWord | None = None
 
     def __bool__(self) -> bool:
         return bool(self.fixes or self.poses)
@@ -45,6 +79,26 @@ class ModeWait:
         first = self.first_at()
         return first is not None and (at - first).total_seconds() >= wait
 
+    def says_what_was_held(self, at: datetime, first: datetime) -> bool:
+        """Whether a first mode said at ``at``, heard within the wait, covers
+        the held positions without repeating itself; ``first``: the first held
+        position's time on the same clock (the robot's)."""
+        return at <= first or not self.listening
+
+    def repeats(self, received: datetime) -> bool | None:
+        """The pending first word heard again at ``received``: True if it is
+        periodic enough to cover the held positions, False if not; None when
+        no word is pending."""
+        word = self.word
+        if word is None:
+            return None
+        return received - word.received >= word.received - self.first_at()
+
+    def undecided_until(self, wait: float) -> datetime | None:
+        """After this time the pending first word can no longer prove periodic."""
+        word = self.word
+        return None if word is None else word.received + timedelta(seconds=wait)
+
     def take(self) -> tuple[list[tuple[datetime, dict]], list[tuple[datetime, dict]]]:
         """The held fixes and poses, oldest first; nothing is held afterwards."""
         fixes, poses = list(self.fixes), list(self.poses)
@@ -54,3 +108,5 @@ class ModeWait:
     def clear(self) -> None:
         self.fixes.clear()
         self.poses.clear()
+        self.listening = False
+        self.word = None

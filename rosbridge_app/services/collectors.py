@@ -122,10 +122,11 @@ _ANNOUNCED = ("logging", "leg_id", "state", "stopped", "vehicle_id", "disk")
 
 
 def _newly_missed(before: dict | None, collector: Collector) -> int:
-    """GPS fixes estimated lost since the last heartbeat of this run of the collector."""
+    """GPS fixes the collector dropped since the last heartbeat of this run (a
+    publisher's own gaps are not lost fixes: collector/losses.py)."""
 
     def missed(inputs) -> int:
-        return int(((inputs or {}).get("gps_fix") or {}).get("missed") or 0)
+        return int(((inputs or {}).get("gps_fix") or {}).get("dropped") or 0)
 
     now = missed(collector.inputs)
     if before is None or before["pid"] != collector.pid:

@@ -76,11 +76,12 @@ export const Collector = {
     inputs.replaceChildren(...Object.entries(c.inputs || {}).map(([name, info]) => {
       const li = document.createElement("li");
       const age = info && typeof info.age === "number" ? _("%(age)s s ago", { age: fmtNumber(info.age, 1) }) : _("no data yet");
-      // Estimated by the collector from gaps in the robot's stamps (losses.py).
-      const missed = info && info.missed ? " · " + _("about %(count)s missed", { count: info.missed }) : "";
+      // Counted by the collector (losses.py): sent but never handled, and not sent at the publisher's rate.
+      const dropped = info && info.dropped ? " · " + _("%(count)s dropped", { count: info.dropped }) : "";
+      const gaps = info && info.publisher_gaps ? " · " + _("publisher gaps: about %(count)s", { count: info.publisher_gaps }) : "";
       // Said by the collector when a publisher's QoS does not match its subscription.
       const qos = info && info.qos ? ` · ${info.qos}` : "";
-      li.textContent = `${name}: ${age}${missed}${qos}`;
+      li.textContent = `${name}: ${age}${dropped}${gaps}${qos}`;
       return li;
     }));
     button.textContent = c.logging ? _("Stop logging") : _("Start logging");

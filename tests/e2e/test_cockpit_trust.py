@@ -92,3 +92,26 @@ def test_a_stalled_link_is_shown_stale_within_5_s_and_catches_up(
         expect(page.locator("#mode-panel")).to_have_attribute("data-link", "live")
     finally:
         robot.stop()
+
+
+def test_the_robot_panel_tells_dropped_messages_from_publisher_gaps(page, server, open_leg):
+    # A loaded simulator's heartbeat (issue 45): 724 fixes it never sent, 3 the collector dropped.
+    server.python(
+        f"""
+        from django.utils import timezone
+        from events.models import Leg
+        from rosbridge_app.services import collectors
+        leg = Leg.objects.get(shift__vehicle__key="{open_leg}")
+        gps = {{"count": 900, "last_received": timezone.now().isoformat(), "rate": 9.6,
+                "dropped": 3, "publisher_gaps": 724}}
+        collectors.heartbeat(
+            "{open_leg}", vehicle=leg.shift.vehicle, logging=True, leg=leg,
+            inputs={{"gps_fix": gps}},
+        )
+        """
+    )
+    login(page, server, "otto")
+    choose_event(page, open_leg)
+    expect(page.locator("#collector-inputs li")).to_have_text(
+        re.compile(r"^gps_fix: [\d.]+ s ago · 3 dropped · publisher gaps: about 724$")
+    )

@@ -42,28 +42,60 @@ def test_a_clock_far_from_the_receive_time_is_not_believed():
     assert clock.place("auto", s(3600), None, s(0)) == (s(0), None, None)
 
 
-def test_missed_fixes_are_counted_from_gaps_against_the_measured_rate():
+def test_gaps_in_the_stamps_are_counted_against_the_measured_rate():
     counter = LossCounter()
     stamps = [i * 0.1 for i in range(60)]
-    del stamps[40:43]  # three fixes lost
+    del stamps[40:43]  # three fixes not sent
     del stamps[30]  # and one more
     for stamp in stamps:
         counter.seen(1000 + stamp)
-    assert counter.report() == {"missed": 4, "rate": 10.0}
+    # Without sequence numbers nothing says the collector dropped them.
+    assert counter.report() == {"dropped": 0, "publisher_gaps": 4, "rate": 10.0}
+
+
+def test_sequence_numbers_tell_the_publishers_gaps_from_messages_dropped():
+    counter = LossCounter()
+    sent = list(range(60))  # (sequence number, stamp in tenths): one per beat
+    skipped = {20, 21, 22}  # beats the loaded publisher's timer missed: never sent
+    sequence = 0
+    received = []
+    for beat in sent:
+        if beat in skipped:
+            continue
+        sequence += 1
+        received.append((sequence, beat))
+    del received[40:45]  # five sent ones the collector's queue overwrote
+    for number, beat in received:
+        counter.seen(1000 + beat * 0.1, number)
+    assert counter.report() == {"dropped": 5, "publisher_gaps": 3, "rate": 10.0}
+    # A restarted publisher numbers from 1 again: no drop, no gap.
+    counter.seen(1000 + 60 * 0.1, 1)
+    assert (counter.dropped, counter.gaps) == (5, 3)
+
+
+def test_two_publishers_on_one_topic_are_not_taken_for_drops():
+    counter = LossCounter()
+    # A driver that has run for a while and a second one just started, interleaved.
+    for i in range(100):
+        counter.seen(None, 5000 + i)
+        counter.seen(None, 1 + i)
+    assert counter.dropped == 0
+    counter.seen(None, 5000 + 102)  # the first one's next two never arrived
+    assert counter.dropped == 2
 
 
 def test_a_pause_of_the_publisher_is_not_a_loss():
     counter = LossCounter()
     for stamp in [i * 0.1 for i in range(10)] + [30 + i * 0.1 for i in range(10)]:
         counter.seen(1000 + stamp)
-    assert counter.report()["missed"] == 0
+    assert counter.report()["publisher_gaps"] == 0
 
 
-def test_a_jittery_publisher_that_loses_nothing_has_nothing_missed():
+def test_a_jittery_publisher_that_loses_nothing_has_no_gaps():
     counter = LossCounter()
     # A loaded robot's timer: every third message 40 ms late, the next one early.
     late = [0.04 if i % 3 == 1 else -0.04 if i % 3 == 2 else 0 for i in range(300)]
     for i, shift in enumerate(late):
         counter.seen(1000 + i * 0.1 + shift)
-    assert counter.missed == 0
+    assert counter.gaps == 0
     assert counter.report()["rate"] == pytest.approx(10, abs=0.2)

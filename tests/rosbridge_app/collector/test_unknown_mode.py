@@ -131,3 +131,52 @@ def test_nothing_is_held_while_logging_is_off():
     pipe = Pipeline(events.append, {"params.unknown_mode_wait": 0.0})
     drive(pipe, 5.0)
     assert events == []
+
+
+def listening_pipe() -> Pipeline:
+    """A live collector connected to a mode publisher before the first position."""
+    events: list = []
+    pipeline = Pipeline(events.append, {"params.unknown_mode_wait": WAIT})
+    pipeline.events = events
+    pipeline.mode_publisher = lambda: True
+    pipeline.start_logging(at(0))
+    return pipeline
+
+
+def test_only_a_latched_or_periodic_first_mode_takes_the_track_held_before_it():
+    # A latched sample: the robot said AUTO a minute before the collector joined.
+    latched = listening_pipe()
+    drive(latched, 3.0)
+    latched.on_mode_value("auto", at(-60.0), received=at(3.0))
+    assert masters(latched.events) == [("auto", 0.0)]
+
+    # A periodic mode: heard at 0.8 s and again a period later.
+    periodic = listening_pipe()
+    drive(periodic, 0.8)
+    periodic.on_mode_value("auto", at(0.8))
+    drive(periodic, 1.0, start=0.8)
+    assert masters(periodic.events) == []  # not yet known to be periodic
+    periodic.on_mode_value("auto", at(1.8))
+    assert masters(periodic.events) == [("auto", 0.0)]
+
+    # A switch after 4 s of silence; the 10 Hz repeats that follow cannot make
+    # it periodic: the 4 s before it have no known mode, the switch keeps its time.
+    on_change = listening_pipe()
+    drive(on_change, 4.0)
+    for tenth in range(40, 50):
+        on_change.on_mode_value("auto", at(tenth / 10))
+    drive(on_change, 1.0, start=4.0)
+    assert masters(on_change.events) == [("unknown", 0.0), ("auto", 4.0)]
+    switch = next(i for i, e in enumerate(on_change.events) if e.data.get("mode") == "auto")
+    before = positions(on_change.events[:switch], ev.GPS_FIX)
+    assert before[0] == 0.0 and 3.0 <= before[-1] < 4.0
+
+
+def test_a_first_mode_that_cannot_prove_periodic_is_stored_as_a_switch_while_logging_goes_on():
+    pipe = listening_pipe()
+    drive(pipe, 2.0)
+    pipe.on_mode_value("ito", at(2.0))
+    drive(pipe, 9.9, start=2.0)
+    assert masters(pipe.events) == []  # a repeat within the wait would make it periodic
+    drive(pipe, 0.2, start=11.9)
+    assert masters(pipe.events) == [("unknown", 0.0), ("ito", 2.0)]

@@ -1,7 +1,8 @@
 """A robot that says its mode only on change, without a latched topic, over DDS:
-what it drove before its first switch is stored, and the statistics say how
-much of it had no known mode (collector/unknown_mode.py); a collector stopped
-while it waits for the first mode stores what it held."""
+what it drove before its first switch is stored under unknown mode, not under
+the mode after the switch, the switch keeps its own time, and the statistics
+say how much had no known mode (collector/unknown_mode.py); a collector
+stopped while it waits for the first mode stores what it held."""
 
 import math
 import signal
@@ -74,13 +75,9 @@ def track(segment) -> list[float]:
     return [p.point.y for p in segment.poses.order_by("robot_stamp", "received", "id")]
 
 
-@pytest.mark.parametrize(
-    ("wait", "modes"),
-    [(2.0, ["unknown", "auto", "ito"]), (30.0, ["auto", "ito"])],
-    ids=["mode_after_the_wait", "mode_within_the_wait"],
-)
+@pytest.mark.parametrize("wait", [2.0, 30.0], ids=["mode_after_the_wait", "mode_within_the_wait"])
 def test_a_robot_that_says_its_mode_only_on_change_loses_nothing(
-    ros, start_collector, robot_leg, wait, modes
+    ros, start_collector, robot_leg, wait
 ):
     from std_msgs.msg import Bool
 
@@ -93,6 +90,7 @@ def test_a_robot_that_says_its_mode_only_on_change_loses_nothing(
 
     drive(BEFORE_SWITCH)
     before = len(sent)
+    said = time.time()
     mode.publish(Bool(data=True))  # its first word: AUTO
     drive(1.5)
     mode.publish(Bool(data=False))  # ITO
@@ -101,23 +99,79 @@ def test_a_robot_that_says_its_mode_only_on_change_loses_nothing(
     assert ros.set_logging(False).success
 
     found = masters(robot_leg)
-    assert [m.segment_type_id for m in found] == modes
-    first = found[0]
-    stored = track(first)
-    # Every fix and local pose sent before the first mode message is in the first segment.
-    assert stored[:before] == pytest.approx(sent[:before])
-    assert LocalPose.objects.filter(segment=first, x__lt=before).count() == before
+    # The robot was connected and silent: its first word is a switch, within the wait or not.
+    assert [m.segment_type_id for m in found] == ["unknown", "auto", "ito"]
+    unknown, auto = found[0], found[1]
+    stored = track(unknown)
+    # Every fix and local pose sent before the first mode message has no known mode.
+    assert stored == pytest.approx(sent[:before])
+    assert LocalPose.objects.filter(segment=unknown).count() == before
+    # AUTO's track starts at the last pose before it, as at every switch, and no earlier.
+    assert not LocalPose.objects.filter(segment=auto, x__lt=before - 1).exists()
+    # AUTO starts when the robot said it (its DDS send time), not at the first position.
+    assert abs(auto.start.timestamp() - said) < 0.05
 
     figures = event_statistics(robot_leg.shift.test_event).overall
-    if wait < BEFORE_SWITCH:
-        unknown, auto = found[0], found[1]
-        assert figures.unknown_seconds == (auto.start - unknown.start).total_seconds()
-        assert 0 < figures.unknown_seconds <= BEFORE_SWITCH + 1.0
-        path = [(8.0, y) for y in stored] + [(auto.start_position.x, auto.start_position.y)]
-        assert figures.unknown_distance == pytest.approx(gps_path_length(path), rel=1e-6)
-        assert figures.unknown_distance > 0
-    else:
-        assert (figures.unknown_seconds, figures.unknown_distance) == (0.0, 0.0)
+    assert figures.unknown_seconds == (auto.start - unknown.start).total_seconds()
+    assert 0 < figures.unknown_seconds <= BEFORE_SWITCH + 1.0
+    path = [(8.0, y) for y in stored] + [(auto.start_position.x, auto.start_position.y)]
+    assert figures.unknown_distance == pytest.approx(gps_path_length(path), rel=1e-6)
+    assert figures.unknown_distance > 0
+
+
+OBSTACLE = "/obstacle"
+REASONS = f"""
+window: 2.0
+rules:
+  - {{topic: {OBSTACLE}, type: std_msgs/msg/Bool, field: data, values: [true], reason: safety}}
+"""
+
+
+def test_a_collector_started_late_keeps_the_auto_driving_before_a_switch_as_unknown(
+    ros, start_collector, robot_leg
+):
+    from std_msgs.msg import Bool
+
+    # The robot drives in AUTO and says so once, before any collector listens.
+    mode = ros.publisher(Bool, "/robot_mode")  # volatile, only on change
+    obstacle = ros.publisher(Bool, OBSTACLE)
+    mode.publish(Bool(data=True))
+    start_collector(
+        params={"params.unknown_mode_wait": 5.0, "params.reason_rules": REASONS, **UNTHINNED}
+    )
+    for publisher in (mode, obstacle):
+        ros.wait_subscribed(publisher)
+    robot = Robot(ros)
+    assert ros.set_logging(True).success
+    robot.drive(2.5)
+    # An obstacle seen and gone again just before the driver takes over.
+    obstacle.publish(Bool(data=True))
+    robot.drive(0.3)
+    obstacle.publish(Bool(data=False))
+    robot.drive(0.2)
+    before = len(robot.sent)
+    switched = time.time()
+    mode.publish(Bool(data=False))  # ITO
+    robot.drive(1.0)
+    # Stored once a repeat can no longer make it a periodic mode (the wait after
+    # it), while logging goes on.
+    wait_for(lambda: len(masters(robot_leg)) == 2, 20, what="the switch stored")
+    assert ros.set_logging(False).success
+    wait_for(lambda: Pose.objects.count() >= len(robot.sent), 20, what="every fix sent")
+
+    unknown, ito = masters(robot_leg)
+    assert (unknown.segment_type_id, ito.segment_type_id) == ("unknown", "ito")
+    assert track(unknown) == pytest.approx(robot.sent[:before])
+    # ITO's track goes on from the last fix before the switch.
+    assert track(ito) == pytest.approx(robot.sent[before - 1 :])
+    # The switch at its real time, and the reason rules asked then: the obstacle
+    # ended 0.2 s before it, within the rule's window.
+    assert abs(ito.start.timestamp() - switched) < 0.05
+    [takeover] = ito.children.all()
+    assert (takeover.suggested_reason_id, takeover.ito_reason_id) == ("safety", "unassigned")
+    figures = event_statistics(robot_leg.shift.test_event).overall
+    assert figures.unknown_seconds == pytest.approx(3.0, abs=0.5)
+    assert figures.manual_distance > 0 and figures.auto_distance == 0
 
 
 @pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
