@@ -366,7 +366,7 @@ def batches(client, master, t0, rounds):
     print(f"POST /api/poses/batch/, median of {rounds}, poses/s (target {BATCH_TARGET:,})")
     sent = 0
     for size in (1000, 5000):
-        new, known = [], []
+        new, known, cpu = [], [], []
         for _ in range(rounds):
             body = {
                 "segment": master.pk,
@@ -387,14 +387,20 @@ def batches(client, master, t0, rounds):
             # Encoded before the clock starts: a robot's client does that, not FTT.
             text = json.dumps(body)
             for stored, rates in ((size, new), (0, known)):
-                begin = time.perf_counter()
+                begin, cpu_begin = time.perf_counter(), time.process_time()
                 answer = client.post("/api/poses/batch/", text, content_type="application/json")
                 rates.append(size / (time.perf_counter() - begin))
+                if stored:
+                    cpu.append(time.process_time() - cpu_begin)
                 assert answer.json() == {"stored": stored}, answer.content[:200]
         SUMMARY[f"batch of {size}, new poses/s"] = statistics.median(new)
+        # This process's CPU per new batch (the database's is not in it): on a
+        # shared machine it moves less with the load than the rate does.
+        SUMMARY[f"batch of {size}, new, Python CPU ms"] = statistics.median(cpu) * 1000
         print(
             f"  {size:>5} per batch: new {statistics.median(new):>8,.0f}"
             f"   known {statistics.median(known):>8,.0f}"
+            f"   (new: {statistics.median(cpu) * 1000:.0f} ms of this process's CPU)"
             f"   (load average {os.getloadavg()[0]:.1f})"
         )
 
