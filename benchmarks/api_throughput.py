@@ -327,6 +327,8 @@ def concurrency(args, master, user, robots=None):
 
         # The first requests import every view module; not counted.
         hammer(port, "/api/poses/", ftt_body, headers, 2, 3)
+        if robots is None:
+            batches_over_http(port, headers, master, args.batches)
         for clients in counts:
             before = count()
             answered = hammer(port, "/api/poses/", ftt_body, headers, clients, args.seconds)
@@ -403,6 +405,51 @@ def batches(client, master, t0, rounds):
             f"   (new: {statistics.median(cpu) * 1000:.0f} ms of this process's CPU)"
             f"   (load average {os.getloadavg()[0]:.1f})"
         )
+
+
+def batch_body(master, size, start) -> str:
+    """A batch of ``size`` full poses (as the collector sends them) from second
+    ``start`` of the leg on, encoded (a robot's client does that, not FTT)."""
+    t0 = master.start
+    poses = [
+        {
+            "uid": str(uuid.uuid4()),
+            "longitude": 8.0,
+            "latitude": 50.0 + i * 1e-6,
+            "altitude": 120.0,
+            "fix_status": 0,
+            "horizontal_accuracy": 0.03,
+            "robot_stamp": (t0 + timedelta(seconds=start + i)).isoformat(),
+        }
+        for i in range(size)
+    ]
+    return json.dumps({"segment": master.pk, "poses": poses})
+
+
+def batches_over_http(port, headers, master, rounds):
+    """New batches of 1 000 and 5 000 through the server (body upload, the
+    server's parsing and its database connection included)."""
+    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=300)
+    start = 10**6  # after the in-process batches
+    try:
+        for size in (1000, 5000):
+            rates = []
+            for _ in range(rounds):
+                text = batch_body(master, size, start)
+                start += size
+                begin = time.perf_counter()
+                conn.request("POST", "/api/poses/batch/", text, headers)
+                answer = conn.getresponse()
+                body = answer.read()
+                rates.append(size / (time.perf_counter() - begin))
+                assert json.loads(body) == {"stored": size}, body[:200]
+            SUMMARY[f"batch of {size} over HTTP, new poses/s"] = statistics.median(rates)
+            print(
+                f"POST /api/poses/batch/ over HTTP, {size} per batch: new"
+                f" {statistics.median(rates):,.0f} poses/s (load average {os.getloadavg()[0]:.1f})"
+            )
+    finally:
+        conn.close()
 
 
 def single_in_process(master, user, rounds=200):
