@@ -19,6 +19,15 @@ production``, the default, is Gunicorn with 2 Uvicorn workers as scripts/run.sh
 starts it; ``daphne`` and ``gunicorn`` with 2 sync workers for comparison) and
 lets that many clients POST single poses to /api/poses/ for ``--seconds`` each;
 the stored rows are counted in the database and must equal the answered requests.
+Before them it posts the batches of 1 000 and 5 000 again, over HTTP.  With
+``--robots N`` the single poses run a second time in the field's shape: N
+robots, each its own vehicle, leg and open segment.
+
+``--against PATH[=DATABASE_URL]`` (repeatable) measures other checkouts
+after this one (e.g. 9f3f5ae and main in ``git worktree``s; 9f3f5ae on a
+database migrated by its own code), then the original once, and prints all
+figures side by side (docs/ingest.md has the command).  Every FTT run ends
+with the figures recount (``ftt_recount_figures``).
 
 ``--original PATH`` (the original FTT's ``ftt_server/scripts/api.py``, from
 github.com/fkie/field_test_tool) starts that server too, unchanged, as it ships
