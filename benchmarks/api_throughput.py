@@ -379,24 +379,9 @@ def batches(client, master, t0, rounds):
     for size in (1000, 5000):
         new, known, cpu = [], [], []
         for _ in range(rounds):
-            body = {
-                "segment": master.pk,
-                "poses": [
-                    {
-                        "uid": str(uuid.uuid4()),
-                        "longitude": 8.0,
-                        "latitude": 50.0 + i * 1e-6,
-                        "altitude": 120.0,
-                        "fix_status": 0,
-                        "horizontal_accuracy": 0.03,
-                        "robot_stamp": (t0 + timedelta(seconds=sent + i)).isoformat(),
-                    }
-                    for i in range(size)
-                ],
-            }
-            sent += size
             # Encoded before the clock starts: a robot's client does that, not FTT.
-            text = json.dumps(body)
+            text = batch_body(master, size, t0 + timedelta(seconds=sent))
+            sent += size
             for stored, rates in ((size, new), (0, known)):
                 begin, cpu_begin = time.perf_counter(), time.process_time()
                 answer = client.post("/api/poses/batch/", text, content_type="application/json")
@@ -417,9 +402,8 @@ def batches(client, master, t0, rounds):
 
 
 def batch_body(master, size, start) -> str:
-    """A batch of ``size`` full poses (as the collector sends them) from second
-    ``start`` of the leg on, encoded (a robot's client does that, not FTT)."""
-    t0 = master.start
+    """A batch of ``size`` full poses (as the collector sends them), a second
+    apart from ``start`` on, encoded (a robot's client does that, not FTT)."""
     poses = [
         {
             "uid": str(uuid.uuid4()),
@@ -428,7 +412,7 @@ def batch_body(master, size, start) -> str:
             "altitude": 120.0,
             "fix_status": 0,
             "horizontal_accuracy": 0.03,
-            "robot_stamp": (t0 + timedelta(seconds=start + i)).isoformat(),
+            "robot_stamp": (start + timedelta(seconds=i)).isoformat(),
         }
         for i in range(size)
     ]
@@ -439,13 +423,14 @@ def batches_over_http(port, headers, master, rounds):
     """New batches of 1 000 and 5 000 through the server (body upload, the
     server's parsing and its database connection included)."""
     conn = http.client.HTTPConnection("127.0.0.1", port, timeout=300)
-    start = 10**6  # after the in-process batches
+    # After the in-process batches.
+    start = master.start + timedelta(days=12)
     try:
         for size in (1000, 5000):
             rates = []
             for _ in range(rounds):
                 text = batch_body(master, size, start)
-                start += size
+                start += timedelta(seconds=size)
                 begin = time.perf_counter()
                 conn.request("POST", "/api/poses/batch/", text, headers)
                 answer = conn.getresponse()
