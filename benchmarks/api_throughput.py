@@ -19,6 +19,15 @@ production``, the default, is Gunicorn with 2 Uvicorn workers as scripts/run.sh
 starts it; ``daphne`` and ``gunicorn`` with 2 sync workers for comparison) and
 lets that many clients POST single poses to /api/poses/ for ``--seconds`` each;
 the stored rows are counted in the database and must equal the answered requests.
+Before them it posts the batches of 1 000 and 5 000 again, over HTTP.  With
+``--robots N`` the single poses run a second time in the field's shape: N
+robots, each its own vehicle, leg and open segment.
+
+``--against PATH[=DATABASE_URL]`` (repeatable) measures other checkouts
+after this one (e.g. 9f3f5ae and main in ``git worktree``s; 9f3f5ae on a
+database migrated by its own code), then the original once, and prints all
+figures side by side (docs/ingest.md has the command).  Every FTT run ends
+with the figures recount (``ftt_recount_figures``).
 
 ``--original PATH`` (the original FTT's ``ftt_server/scripts/api.py``, from
 github.com/fkie/field_test_tool) starts that server too, unchanged, as it ships
@@ -72,9 +81,17 @@ from rest_framework.test import APIClient  # noqa: E402
 from events.models import Segment, Vehicle  # noqa: E402
 from events.services import deletion, logs, segments  # noqa: E402
 from telemetry.models import Pose  # noqa: E402
-from telemetry.services import pose_writes  # noqa: E402
-from telemetry.services.pose_writes import GpsFix  # noqa: E402
-from telemetry.services.segment_figures import recount_figures  # noqa: E402
+
+# A tree from before the kept figures (9f3f5ae) stores poses in
+# telemetry.services.recording and has no recount.
+try:
+    from telemetry.services import pose_writes  # noqa: E402
+    from telemetry.services.segment_figures import recount_figures  # noqa: E402
+except ImportError:
+    from telemetry.services import recording as pose_writes  # noqa: E402
+
+    recount_figures = None
+GpsFix = pose_writes.GpsFix
 
 SEGMENTS = 20
 # The figures --against compares, by name.
@@ -147,8 +164,11 @@ def ftt_server(kind, port, workers):
     if kind == "production":
         # What scripts/run.sh starts: Gunicorn supervising Uvicorn workers.
         env["FTT_WEB_WORKERS"] = str(workers)
+        config = "ftt_site/server/gunicorn.conf.py"
+        if not (ROOT / config).exists():
+            config = "ftt_site/gunicorn.conf.py"  # where older trees have it
         command = [
-            *("gunicorn", "-c", "ftt_site/server/gunicorn.conf.py", "-b", f"127.0.0.1:{port}"),
+            *("gunicorn", "-c", config, "-b", f"127.0.0.1:{port}"),
             "ftt_site.asgi:application",
         ]
     elif kind == "gunicorn":
@@ -250,9 +270,53 @@ def robot_masters(event, t0, count) -> list:
     return masters
 
 
+# The original's rates ({clients: stored poses/s}), measured once per run: it
+# has one open segment its robot writes to ("Current Segment", as its ROS node
+# sends), so both shapes are compared with the same figures.
+ORIGINAL = None
+
+
+def original_rates(args, counts) -> dict[int, float]:
+    """The original FTT's stored poses/s at each count of clients, POSTing
+    single poses to its ``/pose`` as its robot node does."""
+    rates = {}
+    prepare_original(args.original_db)
+    port = free_port()
+    launcher = [args.original_python, "-c", ORIGINAL_LAUNCHER, args.original_db]
+    server_args = ["--server_ip", "127.0.0.1", "--server_port", str(port)]
+    original = start([*launcher, args.original, *server_args], port)
+    try:
+
+        def original_body():
+            return {
+                "segment_id": "Current Segment",
+                "lat": 50.0,
+                "lng": 8.0,
+                "pose_source_id": 1,
+                "orig_secs": time.time(),
+            }
+
+        plain = {"Content-Type": "application/json"}
+        hammer(port, "/pose", original_body, plain, 2, 3)
+        for clients in counts:
+            before = original_rows(args.original_db)
+            answered = hammer(port, "/pose", original_body, plain, clients, args.seconds)
+            stored = original_rows(args.original_db) - before
+            if stored != answered:
+                # Its one connection, shared by the request threads, loses rows
+                # (upstream's KNOWN_ISSUES); only stored rows count.
+                print(f"  original, {clients} clients: {answered} answered, {stored} stored")
+            rates[clients] = stored / args.seconds
+            SUMMARY[f"original single/s {clients} clients"] = rates[clients]
+    finally:
+        stop(original)
+    return rates
+
+
 def concurrency(args, master, user, robots=None):
     """Single poses from N clients: into ``master`` (one segment), or with
     ``robots`` (masters) client i into robots[i % len]: a robot per segment."""
+    global ORIGINAL
     counts = [int(c) for c in args.clients.split(",")]
     token, _ = Token.objects.get_or_create(user=user)
     port = free_port()
@@ -272,6 +336,8 @@ def concurrency(args, master, user, robots=None):
 
         # The first requests import every view module; not counted.
         hammer(port, "/api/poses/", ftt_body, headers, 2, 3)
+        if robots is None:
+            batches_over_http(port, headers, master, args.batches)
         for clients in counts:
             before = count()
             answered = hammer(port, "/api/poses/", ftt_body, headers, clients, args.seconds)
@@ -283,35 +349,10 @@ def concurrency(args, master, user, robots=None):
     finally:
         stop(server)
     if args.original:
-        prepare_original(args.original_db)
-        port = free_port()
-        launcher = [args.original_python, "-c", ORIGINAL_LAUNCHER, args.original_db]
-        server_args = ["--server_ip", "127.0.0.1", "--server_port", str(port)]
-        original = start([*launcher, args.original, *server_args], port)
-        try:
-
-            def original_body():
-                return {
-                    "segment_id": "Current Segment",
-                    "lat": 50.0,
-                    "lng": 8.0,
-                    "pose_source_id": 1,
-                    "orig_secs": time.time(),
-                }
-
-            plain = {"Content-Type": "application/json"}
-            hammer(port, "/pose", original_body, plain, 2, 3)
-            for clients in counts:
-                before = original_rows(args.original_db)
-                answered = hammer(port, "/pose", original_body, plain, clients, args.seconds)
-                stored = original_rows(args.original_db) - before
-                if stored != answered:
-                    # Its one connection, shared by the request threads, loses rows
-                    # (upstream's KNOWN_ISSUES); only stored rows count.
-                    print(f"  original, {clients} clients: {answered} answered, {stored} stored")
-                results[clients].append(stored / args.seconds)
-        finally:
-            stop(original)
+        if ORIGINAL is None:
+            ORIGINAL = original_rates(args, counts)
+        for clients in counts:
+            results[clients].append(ORIGINAL[clients])
     load = os.getloadavg()[0]
     print(
         f"\nPOST single poses, {shape}, stored poses/s ({args.server} server, "
@@ -336,37 +377,73 @@ def batches(client, master, t0, rounds):
     print(f"POST /api/poses/batch/, median of {rounds}, poses/s (target {BATCH_TARGET:,})")
     sent = 0
     for size in (1000, 5000):
-        new, known = [], []
+        new, known, cpu = [], [], []
         for _ in range(rounds):
-            body = {
-                "segment": master.pk,
-                "poses": [
-                    {
-                        "uid": str(uuid.uuid4()),
-                        "longitude": 8.0,
-                        "latitude": 50.0 + i * 1e-6,
-                        "altitude": 120.0,
-                        "fix_status": 0,
-                        "horizontal_accuracy": 0.03,
-                        "robot_stamp": (t0 + timedelta(seconds=sent + i)).isoformat(),
-                    }
-                    for i in range(size)
-                ],
-            }
-            sent += size
             # Encoded before the clock starts: a robot's client does that, not FTT.
-            text = json.dumps(body)
+            text = batch_body(master, size, t0 + timedelta(seconds=sent))
+            sent += size
             for stored, rates in ((size, new), (0, known)):
-                begin = time.perf_counter()
+                begin, cpu_begin = time.perf_counter(), time.process_time()
                 answer = client.post("/api/poses/batch/", text, content_type="application/json")
                 rates.append(size / (time.perf_counter() - begin))
+                if stored:
+                    cpu.append(time.process_time() - cpu_begin)
                 assert answer.json() == {"stored": stored}, answer.content[:200]
         SUMMARY[f"batch of {size}, new poses/s"] = statistics.median(new)
+        # This process's CPU per new batch (the database's is not in it): on a
+        # shared machine it moves less with the load than the rate does.
+        SUMMARY[f"batch of {size}, new, Python CPU ms"] = statistics.median(cpu) * 1000
         print(
             f"  {size:>5} per batch: new {statistics.median(new):>8,.0f}"
             f"   known {statistics.median(known):>8,.0f}"
+            f"   (new: {statistics.median(cpu) * 1000:.0f} ms of this process's CPU)"
             f"   (load average {os.getloadavg()[0]:.1f})"
         )
+
+
+def batch_body(master, size, start) -> str:
+    """A batch of ``size`` full poses (as the collector sends them), a second
+    apart from ``start`` on, encoded (a robot's client does that, not FTT)."""
+    poses = [
+        {
+            "uid": str(uuid.uuid4()),
+            "longitude": 8.0,
+            "latitude": 50.0 + i * 1e-6,
+            "altitude": 120.0,
+            "fix_status": 0,
+            "horizontal_accuracy": 0.03,
+            "robot_stamp": (start + timedelta(seconds=i)).isoformat(),
+        }
+        for i in range(size)
+    ]
+    return json.dumps({"segment": master.pk, "poses": poses})
+
+
+def batches_over_http(port, headers, master, rounds):
+    """New batches of 1 000 and 5 000 through the server (body upload, the
+    server's parsing and its database connection included)."""
+    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=300)
+    # After the in-process batches.
+    start = master.start + timedelta(days=12)
+    try:
+        for size in (1000, 5000):
+            rates = []
+            for _ in range(rounds):
+                text = batch_body(master, size, start)
+                start += timedelta(seconds=size)
+                begin = time.perf_counter()
+                conn.request("POST", "/api/poses/batch/", text, headers)
+                answer = conn.getresponse()
+                body = answer.read()
+                rates.append(size / (time.perf_counter() - begin))
+                assert json.loads(body) == {"stored": size}, body[:200]
+            SUMMARY[f"batch of {size} over HTTP, new poses/s"] = statistics.median(rates)
+            print(
+                f"POST /api/poses/batch/ over HTTP, {size} per batch: new"
+                f" {statistics.median(rates):,.0f} poses/s (load average {os.getloadavg()[0]:.1f})"
+            )
+    finally:
+        conn.close()
 
 
 def single_in_process(master, user, rounds=200):
@@ -417,7 +494,11 @@ def main():
         help="with --clients: also N robots, each its own vehicle, leg and open segment",
     )  # fmt: skip
     parser.add_argument("--tree", help="measure this checkout's code instead (see ROOT)")
-    parser.add_argument("--against", help="another checkout, measured after this one")
+    parser.add_argument(
+        "--against", action="append", default=[], metavar="PATH[=DATABASE_URL]",
+        help="another checkout, measured after this one (repeatable); a tree whose "
+        "migrations differ needs a database of its own, migrated by its code",
+    )  # fmt: skip
     parser.add_argument("--summary", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.against:
@@ -480,10 +561,13 @@ def main():
             concurrency(args, master, user)
             if args.robots:
                 concurrency(args, master, user, robot_masters(event, t0, args.robots))
-        differences = recount_figures(list(Segment.objects.filter(leg__shift__test_event=event)
-                                           .masters().values_list("pk", flat=True)))  # fmt: skip
-        print(f"ftt_recount_figures: {len(differences)} segments differ {differences or ''}")
-        SUMMARY["figures that differ after the run"] = len(differences)
+        if recount_figures is None:
+            print("ftt_recount_figures: this tree keeps no figures")
+        else:
+            masters = Segment.objects.filter(leg__shift__test_event=event).masters()
+            differences = recount_figures(list(masters.values_list("pk", flat=True)))
+            print(f"ftt_recount_figures: {len(differences)} segments differ {differences or ''}")
+            SUMMARY["figures that differ after the run"] = len(differences)
     finally:
         timed("delete the test event", lambda: deletion.delete(event))
         user.delete()
@@ -492,26 +576,53 @@ def main():
 
 
 def against(args):
-    """This tree, then ``--against``'s, each in a process of its own with the
-    same arguments; their figures side by side."""
+    """This tree, then each ``--against`` tree, each in a process of its own with
+    the same arguments (and the database given with the tree), then the
+    original once; their figures side by side, with each tree's single-pose
+    rates over the original's."""
     import tempfile
 
     rest = list(sys.argv[1:])
-    for option in ("--against", "--tree"):
+    for option in ("--against", "--tree", "--original", "--original-python", "--original-db"):
         while option in rest:
             at = rest.index(option)
             del rest[at : at + 2]
+    trees = [(ROOT, os.environ["FTT_DATABASE_URL"])]
+    for given in args.against:
+        path, _, database = given.partition("=")
+        trees.append((Path(path).resolve(), database or os.environ["FTT_DATABASE_URL"]))
     figures = {}
-    for tree in (ROOT, Path(args.against).resolve()):
+    for tree, database in trees:
         with tempfile.NamedTemporaryFile(suffix=".json") as out:
             print(f"\n===== {tree}", flush=True)
             command = [sys.executable, __file__, *rest, "--tree", str(tree), "--summary", out.name]
-            subprocess.run(command, check=True)
-            figures[tree] = json.loads(Path(out.name).read_text())
-    this, other = figures.values()
-    print(f"\n{'':<52} {'this tree':>12} {'against':>12}   (load {os.getloadavg()[0]:.1f})")
-    for name in this:
-        print(f"{name:<52} {this[name]:>12,.1f} {other.get(name, float('nan')):>12,.1f}")
+            env = {**os.environ, "FTT_DATABASE_URL": database}
+            subprocess.run(command, check=True, env=env)
+            figures[tree.name] = json.loads(Path(out.name).read_text())
+    if args.original and args.clients:
+        print("\n===== the original FTT", flush=True)
+        counts = [int(c) for c in args.clients.split(",")]
+        original_rates(args, counts)
+        figures["original"] = dict(SUMMARY)
+        for tree in trees:
+            mine = figures[tree[0].name]
+            for name in list(mine):
+                if name.startswith("single/s "):
+                    clients = int(name.split()[1])
+                    mine[f"  ratio to the original{name[8:]}"] = (
+                        mine[name] / SUMMARY[f"original single/s {clients} clients"]
+                    )
+    names = list(dict.fromkeys(n for found in figures.values() for n in found))
+    columns = list(figures)
+    print(f"\n{'':<60}" + "".join(f"{c[:14]:>15}" for c in columns)
+          + f"   (load {os.getloadavg()[0]:.1f})")  # fmt: skip
+    for name in names:
+        cells = []
+        for column in columns:
+            value = figures[column].get(name)
+            shown = "-" if value is None else format(value, ",.2f" if "ratio" in name else ",.1f")
+            cells.append(f"{shown:>15}")
+        print(f"{name:<60}" + "".join(cells))
 
 
 if __name__ == "__main__":

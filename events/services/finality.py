@@ -105,8 +105,8 @@ def final_events(*conditions, **event_filter):
     """The final test events among those ``conditions`` and ``event_filter``
     find, whose contents refuse a change (an import's arriving ones aside).
     A write that must not wait for a statement of its own stores nothing
-    while this finds a row (the storage port's single pose) and then asks
-    :func:`require_amendable` why."""
+    while this finds a row (the storage port's single pose and GPS batch)
+    and then asks :func:`require_amendable` why."""
     final = TestEvent.objects.filter(*conditions, **event_filter, finalised__isnull=False)
     if arriving := _arriving.get():
         final = final.exclude(pk__in=arriving)

@@ -46,10 +46,24 @@ def _label(name: str) -> str:
     return {"longitude": _("Longitude"), "latitude": _("Latitude")}[name]
 
 
+def _within(value, bounds) -> bool:
+    # A float in range (inf is not, NaN compares false); anything else is
+    # left to the full check.
+    return type(value) is float and bounds[0] <= value <= bounds[1]
+
+
 @dataclass(frozen=True)
 class GpsPosition:
     longitude: float
     latitude: float
+
+    @classmethod
+    def check(cls, longitude, latitude) -> None:
+        """The rule without building a position: it runs per stored pose, and
+        only a position it does not pass at once is checked in full (the
+        messages)."""
+        if not (_within(longitude, LONGITUDE_RANGE) and _within(latitude, LATITUDE_RANGE)):
+            cls(longitude, latitude)
 
     def __post_init__(self):
         errors = {}

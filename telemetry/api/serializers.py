@@ -2,12 +2,11 @@
 
 import re
 import uuid
-from typing import Annotated
+from typing import Annotated, NotRequired
 
 from django.utils.translation import gettext as _
 from pydantic import (
     AwareDatetime,
-    BaseModel,
     BeforeValidator,
     Field,
     Strict,
@@ -15,6 +14,7 @@ from pydantic import (
     ValidationError,
 )
 from rest_framework import serializers
+from typing_extensions import TypedDict
 
 from common.errors import RuleViolation
 from events.api.serializers import ClientUidMixin, PrimaryKeyField, ServiceSerializer
@@ -142,18 +142,24 @@ def _text(value):
     return value
 
 
-class _FastPoseItem(BaseModel):
-    """What PoseItemSerializer accepts, no more (a few inputs it also takes are left to it)."""
+class _FastPoseItem(TypedDict):
+    """What PoseItemSerializer accepts, no more (a few inputs it also takes are
+    left to it).  Checked into a plain dict: the fields not sent stay out, as
+    DRF leaves them, and no model object is made per pose."""
 
     # An explicit null is refused, as by DRF; a missing uid gets one in gps_fix.
-    uid: uuid.UUID = Field(default=None)
-    longitude: float = Field(ge=LONGITUDE_RANGE[0], le=LONGITUDE_RANGE[1], allow_inf_nan=False)
-    latitude: float = Field(ge=LATITUDE_RANGE[0], le=LATITUDE_RANGE[1], allow_inf_nan=False)
-    altitude: float | None = Field(default=None, allow_inf_nan=False)
-    fix_status: Annotated[int, Strict()] = DEFAULT_FIX_STATUS
-    horizontal_accuracy: float | None = Field(default=None, allow_inf_nan=False)
+    uid: NotRequired[uuid.UUID]
+    longitude: Annotated[
+        float, Field(ge=LONGITUDE_RANGE[0], le=LONGITUDE_RANGE[1], allow_inf_nan=False)
+    ]
+    latitude: Annotated[
+        float, Field(ge=LATITUDE_RANGE[0], le=LATITUDE_RANGE[1], allow_inf_nan=False)
+    ]
+    altitude: NotRequired[Annotated[float | None, Field(allow_inf_nan=False)]]
+    fix_status: NotRequired[Annotated[int, Strict()]]
+    horizontal_accuracy: NotRequired[Annotated[float | None, Field(allow_inf_nan=False)]]
     # Aware only: DRF reads a naive time in the server's zone.
-    robot_stamp: Annotated[AwareDatetime, BeforeValidator(_text)] | None = None
+    robot_stamp: NotRequired[Annotated[AwareDatetime, BeforeValidator(_text)] | None]
 
 
 _FAST_POSES = TypeAdapter(list[_FastPoseItem])
@@ -167,7 +173,10 @@ class _FastPose(_FastPoseItem):
     the ids the storing statement looks up."""
 
     segment: _RowId
-    pose_source: _RowId | None = None
+    pose_source: NotRequired[_RowId | None]
+
+
+_FAST_POSE = TypeAdapter(_FastPose)
 
 
 def sent_pose(data) -> tuple[int, GpsFix, int | None] | None:
@@ -177,12 +186,13 @@ def sent_pose(data) -> tuple[int, GpsFix, int | None] | None:
     if not isinstance(data, dict):
         return None
     try:
-        item = _FastPose.model_validate(data)
+        item = _FAST_POSE.validate_python(data)
     except ValidationError:
         return None
-    if item.fix_status not in FIX_STATUSES:
+    if item.get("fix_status", DEFAULT_FIX_STATUS) not in FIX_STATUSES:
         return None
-    return item.segment, gps_fix(_as_validated(item)), item.pose_source
+    segment, source = item.pop("segment"), item.pop("pose_source", None)
+    return segment, gps_fix(_as_validated(item)), source
 
 
 def sent_ids(data: dict) -> tuple[int, GpsFix, int | None]:
@@ -202,19 +212,18 @@ class PoseListSerializer(serializers.ListSerializer):
                 items = _FAST_POSES.validate_python(data)
             except ValidationError:
                 items = None
-            if items is not None and all(i.fix_status in FIX_STATUSES for i in items):
+            if items is not None and all(
+                i.get("fix_status", DEFAULT_FIX_STATUS) in FIX_STATUSES for i in items
+            ):
                 return [_as_validated(item) for item in items]
         return super().to_internal_value(data)
 
 
-def _as_validated(item: _FastPoseItem) -> dict:
-    # The shape PoseItemSerializer gives (see gps_fix): fields not sent are left out.
-    data = {"point": {"x": item.longitude, "y": item.latitude}, "fix_status": item.fix_status}
-    sent = item.__pydantic_fields_set__
-    for name in ("uid", "altitude", "horizontal_accuracy", "robot_stamp"):
-        if name in sent:
-            data[name] = getattr(item, name)
-    return data
+def _as_validated(item: dict) -> dict:
+    # The shape PoseItemSerializer gives (see gps_fix), from pydantic's own dict.
+    item["point"] = {"x": item.pop("longitude"), "y": item.pop("latitude")}
+    item.setdefault("fix_status", DEFAULT_FIX_STATUS)
+    return item
 
 
 class PoseItemSerializer(PoseSerializer):

@@ -54,12 +54,17 @@ class GpsFix:
 
     def check(self) -> None:
         """The rules every stored fix satisfies, whichever way it is stored."""
-        GpsPosition(self.longitude, self.latitude)
-        for name in ("altitude", "horizontal_accuracy"):
-            value = getattr(self, name)
-            if value is not None and not math.isfinite(value):
-                message = _("%(name)s must be a finite number.") % {"name": name.replace("_", " ")}
-                raise RuleViolation({name: [message]})
+        GpsPosition.check(self.longitude, self.latitude)
+        altitude, accuracy = self.altitude, self.horizontal_accuracy
+        if (altitude is not None and not math.isfinite(altitude)) or (
+            accuracy is not None and not math.isfinite(accuracy)
+        ):
+            for name in ("altitude", "horizontal_accuracy"):
+                value = getattr(self, name)
+                if value is not None and not math.isfinite(value):
+                    words = name.replace("_", " ")
+                    message = _("%(name)s must be a finite number.") % {"name": words}
+                    raise RuleViolation({name: [message]})
         if self.fix_status not in FIX_STATUSES:
             message = _("Unknown fix status %(status)s.") % {"status": self.fix_status}
             raise RuleViolation({"fix_status": [message]})
@@ -127,11 +132,17 @@ def store_poses(
     if not fixes:
         return 0
     master = segment.master
-    require_amendable(shifts__legs__segments=master.pk)
     source_id = pose_source_id(master, pose_source.pk if pose_source is not None else None)
-    stored = storage.insert_fixes(master, source_id, fixes, timezone.now())
+    received = timezone.now()
+    # As for one pose (store_pose): a final event refuses the batch in its insert.
+    final = final_events(shifts__legs__segments=master.pk)
+    stored = storage.insert_fixes(master, source_id, fixes, received, refused_by=final)
+    if not stored and final.exists():
+        require_amendable(shifts__legs__segments=master.pk)
+        stored = storage.insert_fixes(master, source_id, fixes, received)
     new = {p.uid for p in stored}
-    refuse_foreign(Pose, [as_uuid(f.uid) for f in fixes], new, segment_id=master.pk)
+    if len(new) < len(fixes):
+        refuse_foreign(Pose, [as_uuid(f.uid) for f in fixes], new, segment_id=master.pk)
     keep_figures(master.pk, GPS_TRACK, stored, announce=track_row(master, local=False))
     return len(new)
 

@@ -45,9 +45,11 @@ def insert_pose(
     return adapter().insert_pose(master_id, fix, source_id, received, refused_by)
 
 
-def insert_fixes(master, source_id: int | None, fixes, received) -> list[NewPoint]:
-    """Store checked fixes on ``master``, each uid once; the new rows."""
-    return adapter().insert_fixes(master, source_id, fixes, received)
+def insert_fixes(master, source_id: int | None, fixes, received, refused_by=None) -> list[NewPoint]:
+    """Store checked fixes on ``master``, each uid once; the new rows.  Nothing
+    is stored while the queryset ``refused_by`` finds a row (a rule the caller
+    states, checked in the insert's statement where the database allows)."""
+    return adapter().insert_fixes(master, source_id, fixes, received, refused_by)
 
 
 def insert_local_poses(master, poses, received) -> list[NewPoint]:

@@ -51,37 +51,47 @@ def insert_pose(master_id: int, fix, source_id: int | None, received, refused_by
     return shared.insert_pose(POINT, master_id, fix, source_id, received, refused_by)
 
 
-# What an insert returns of each new row: its uid and id.  The rest of a
-# NewPoint is what was sent, so no stamp or coordinate travels back.
-_RETURNING = "RETURNING uid, id"
+def _numbered(sent: str, target: str) -> str:
+    """The insert ``target`` of the rows ``sent`` gives (each numbered ``n`` by
+    its place in the batch), answering with the place and the id of each new
+    row in the order sent: the rest of a NewPoint is what was sent, so no uid, stamp or
+    coordinate travels back.  Of a uid sent twice the first is stored, the
+    smaller place.  ``target`` ends where a caller's rule may add its
+    ``WHERE NOT EXISTS``."""
+    return f"""
+WITH sent AS ({sent}),
+stored AS ({target} {{refused}} ON CONFLICT DO NOTHING RETURNING uid, id)
+SELECT min(sent.n), stored.id FROM stored JOIN sent ON sent.u = stored.uid
+GROUP BY stored.id ORDER BY 1
+"""
+
 
 # One statement with one array per column: its cost does not grow with the
 # batch on the client side (no per-row SQL text, no per-row geometry object),
 # and ON CONFLICT makes a concurrent retry of the same uid a no-op, not an error.
 # The arrays travel as binary parameters (%b): psycopg packs a list of floats,
 # uuids or datetimes in C.
-_FIXES_INSERT = f"""
-INSERT INTO {Pose._meta.db_table} ({keys.POSE_COLUMNS})
-SELECT u, %b, ST_SetSRID(ST_MakePoint(x, y), 4326), a, f, h, %b, r, %b
-FROM unnest(%b::uuid[], %b::float8[], %b::float8[], %b::float8[], %b::int2[],
-            %b::float8[], %b::timestamptz[]) AS t(u, x, y, a, f, h, r)
-ON CONFLICT DO NOTHING
-{_RETURNING}
-"""
+_FIXES_INTO = f"""INSERT INTO {Pose._meta.db_table} ({keys.POSE_COLUMNS})
+SELECT u, %b, ST_SetSRID(ST_MakePoint(x, y), 4326), a, f, h, %b, r, %b FROM sent"""
+_FIXES_INSERT = _numbered(
+    "SELECT * FROM unnest(%b::int4[], %b::uuid[], %b::float8[], %b::float8[], %b::float8[], "
+    "%b::int2[], %b::float8[], %b::timestamptz[]) AS t(n, u, x, y, a, f, h, r)",
+    _FIXES_INTO,
+)
 
 # As for fixes (a replayed outage spool is two thirds local poses).
-_LOCAL_INSERT = f"""
-INSERT INTO {LocalPose._meta.db_table} ({keys.LOCAL_POSE_COLUMNS})
-SELECT u, %b, f, x, y, w, r, %b
-FROM unnest(%b::uuid[], %b::text[], %b::float8[], %b::float8[], %b::float8[],
-            %b::timestamptz[]) AS t(u, f, x, y, w, r)
-ON CONFLICT DO NOTHING
-{_RETURNING}
-"""
+_LOCAL_INTO = f"""INSERT INTO {LocalPose._meta.db_table} ({keys.LOCAL_POSE_COLUMNS})
+SELECT u, %b, f, x, y, w, r, %b FROM sent"""
+_LOCAL_INSERT = _numbered(
+    "SELECT * FROM unnest(%b::int4[], %b::uuid[], %b::text[], %b::float8[], %b::float8[], "
+    "%b::float8[], %b::timestamptz[]) AS t(n, u, f, x, y, w, r)",
+    _LOCAL_INTO,
+)
 
 
-def insert_fixes(master, source_id, fixes, received) -> list[NewPoint]:
+def insert_fixes(master, source_id, fixes, received, refused_by=None) -> list[NewPoint]:
     columns = (
+        list(range(len(fixes))),
         [as_uuid(f.uid) for f in fixes],
         floats(f.longitude for f in fixes),
         floats(f.latitude for f in fixes),
@@ -91,7 +101,7 @@ def insert_fixes(master, source_id, fixes, received) -> list[NewPoint]:
         [f.robot_stamp for f in fixes],
     )
     stored = _insert_columns(
-        _POSE_STAGING, _FIXES_INSERT, columns, [master.pk, source_id, received]
+        _POSE_STAGING, _FIXES_INSERT, columns, [master.pk, source_id, received], refused_by
     )
     return _new_points(stored, fixes, received, lambda f: (f.longitude, f.latitude,
                        f.fix_status != FixStatus.NO_FIX))  # fmt: skip
@@ -99,6 +109,7 @@ def insert_fixes(master, source_id, fixes, received) -> list[NewPoint]:
 
 def insert_local_poses(master, poses, received) -> list[NewPoint]:
     columns = (
+        list(range(len(poses))),
         [as_uuid(p.uid) for p in poses],
         [p.frame for p in poses],
         floats(p.x for p in poses),
@@ -110,14 +121,21 @@ def insert_local_poses(master, poses, received) -> list[NewPoint]:
     return _new_points(stored, poses, received, lambda p: (p.x, p.y, True))
 
 
-def _insert_columns(staging, insert: str, columns, params) -> list[tuple]:
-    """Store the rows given as column lists (the uid's first, in the staging
-    table's order) whose uid is new; returns them.  ``params`` come before
-    the columns in ``insert`` and are the staging insert's own parameters."""
+def _insert_columns(staging, insert: str, columns, params, refused_by=None) -> list[tuple]:
+    """Store the rows given as column lists (their places first, then the
+    uids, in the staging table's order) whose uid is new, unless the queryset
+    ``refused_by`` finds a row; returns (place, id) of each.  ``params`` come
+    after the columns in ``insert`` and are the staging insert's own
+    parameters."""
+    refused, refused_params = "", []
+    if refused_by is not None:
+        # The rule's own query (its home is the service that passes it), not a copy.
+        sql, refused_params = refused_by.values("pk").order_by().query.sql_with_params()
+        refused = f"WHERE NOT EXISTS ({sql})"
     if len(columns[0]) >= COPY_FROM:
-        return _copy_new(staging, zip(*columns, strict=True), params)
+        return _copy_new(staging, zip(*columns, strict=True), [*params, *refused_params], refused)
     with bound_cursor() as cursor:
-        cursor.execute(insert, [*params, *columns])
+        cursor.execute(insert.format(refused=refused), [*columns, *params, *refused_params])
         return cursor.fetchall()
 
 
@@ -151,61 +169,45 @@ class _Staging:
 
 _POSE_STAGING = _Staging(
     "ftt_pose_in",
-    "u uuid, x float8, y float8, a float8, f int2, h float8, r timestamptz",
-    ("uuid", "float8", "float8", "float8", "int2", "float8", "timestamptz"),
-    f"""
-WITH moved AS (DELETE FROM ftt_pose_in RETURNING *)
-INSERT INTO {Pose._meta.db_table} ({keys.POSE_COLUMNS})
-SELECT u, %s, ST_SetSRID(ST_MakePoint(x, y), 4326), a, f, h, %s, r, %s FROM moved
-ON CONFLICT DO NOTHING
-{_RETURNING}
-""",
+    "n int4, u uuid, x float8, y float8, a float8, f int2, h float8, r timestamptz",
+    ("int4", "uuid", "float8", "float8", "float8", "int2", "float8", "timestamptz"),
+    _numbered("DELETE FROM ftt_pose_in RETURNING *", _FIXES_INTO.replace("%b", "%s")),
 )
 
 _LOCAL_POSE_STAGING = _Staging(
     "ftt_local_pose_in",
-    "u uuid, frame text, x float8, y float8, yaw float8, r timestamptz",
-    ("uuid", "text", "float8", "float8", "float8", "timestamptz"),
-    f"""
-WITH moved AS (DELETE FROM ftt_local_pose_in RETURNING *)
-INSERT INTO {LocalPose._meta.db_table} ({keys.LOCAL_POSE_COLUMNS})
-SELECT u, %s, frame, x, y, yaw, r, %s FROM moved
-ON CONFLICT DO NOTHING
-{_RETURNING}
-""",
+    "n int4, u uuid, f text, x float8, y float8, w float8, r timestamptz",
+    ("int4", "uuid", "text", "float8", "float8", "float8", "timestamptz"),
+    _numbered("DELETE FROM ftt_local_pose_in RETURNING *", _LOCAL_INTO.replace("%b", "%s")),
 )
 
 
-def _copy_new(staging: _Staging, rows, params) -> list[tuple]:
+def _copy_new(staging: _Staging, rows, params, refused: str) -> list[tuple]:
     """Copy ``rows`` (tuples in the staging table's column order) and store those
-    whose uid is new; returns their (uid, id)."""
+    whose uid is new (``refused``: the caller's condition); returns their
+    (place, id)."""
     with bound_cursor() as cursor:
         cursor.execute(staging.create())
         with cursor.copy(f"COPY {staging.name} FROM STDIN (FORMAT BINARY)") as copy:
             copy.set_types(staging.types)
             for row in rows:
                 copy.write_row(row)
-        cursor.execute(staging.insert, params)
+        cursor.execute(staging.insert.format(refused=refused), params)
         return cursor.fetchall()
 
 
 def _new_points(stored, sent, received, position) -> list[NewPoint]:
-    """NewPoints of the ``stored`` (uid, id) rows from what was ``sent``;
+    """NewPoints of the ``stored`` (place, id) rows from what was ``sent``;
     ``position`` gives a sent item's (x, y, usable)."""
-    by_uid = {}
-    for item in sent:
-        # The first of a uid sent twice in one batch is the one stored.
-        by_uid.setdefault(as_uuid(item.uid), item)
     points = []
-    for uid, pk in stored:
-        uid = as_uuid(uid)
-        item = by_uid[uid]
+    for place, pk in stored:
+        item = sent[place]
         x, y, usable = position(item)
         stamp = item.robot_stamp
         if stamp is not None and stamp.tzinfo is None:
             # Stored as UTC (Django's connections use UTC), so compared as UTC.
             stamp = stamp.replace(tzinfo=UTC)
-        points.append(NewPoint(uid, pk, stamp, received, float(x), float(y), usable))
+        points.append(NewPoint(as_uuid(item.uid), pk, stamp, received, float(x), float(y), usable))
     return points
 
 

@@ -32,7 +32,9 @@ def insert_pose(master_id: int, fix, source_id: int | None, received, refused_by
     return shared.insert_pose(POINT, master_id, fix, source_id, received, refused_by)
 
 
-def insert_fixes(master, source_id, fixes, received) -> list[NewPoint]:
+def insert_fixes(master, source_id, fixes, received, refused_by=None) -> list[NewPoint]:
+    if refused_by is not None and refused_by.exists():
+        return []
     rows = [fix.row(master, source_id, received) for fix in fixes]
     return [
         NewPoint(r.uid, r.pk, r.robot_stamp, r.received, r.point.x, r.point.y,
