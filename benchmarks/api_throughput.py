@@ -82,7 +82,7 @@ from events.models import Segment, Vehicle  # noqa: E402
 from events.services import deletion, logs, segments  # noqa: E402
 from telemetry.models import Pose  # noqa: E402
 
-# A tree from before the kept figures (9f3f5ae) stores poses in
+# A tree from before the stored figures (9f3f5ae) stores poses in
 # telemetry.services.recording and has no recount.
 try:
     from telemetry.services import pose_writes  # noqa: E402

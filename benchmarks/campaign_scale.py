@@ -165,14 +165,14 @@ def grow(masters: list[Segment], have: int, want: int) -> float:
                     copy.write(chunk)
         cursor.execute(f"ANALYZE {table}")
     if SegmentFigures is not None:
-        _keep_figures(masters, per_next, added)
+        _add_to_figures(masters, per_next, added)
     return time.perf_counter() - started
 
 
-def _keep_figures(masters: list[Segment], per: int, added: dict[int, int]) -> None:
+def _add_to_figures(masters: list[Segment], per: int, added: dict[int, int]) -> None:
     """The figures the write path would have kept, from the generated tracks
     (``added``: the uid sum of each master's poses just loaded)."""
-    kept_sums = (
+    stored_sums = (
         dict(SegmentFigures.objects.filter(mode=GPS_TRACK).values_list("segment_id", "uid_sum"))
         if uid_sum is not None
         else {}
@@ -195,7 +195,7 @@ def _keep_figures(masters: list[Segment], per: int, added: dict[int, int]) -> No
             )
         )  # fmt: skip
         if uid_sum is not None:
-            rows[-1].uid_sum = combined(kept_sums.get(m.pk, 0), added[m.pk])
+            rows[-1].uid_sum = combined(stored_sums.get(m.pk, 0), added[m.pk])
     fields = [
         f.name
         for f in SegmentFigures._meta.concrete_fields

@@ -20,7 +20,7 @@ class CommonConfig(AppConfig):
         from common.api.authentication import known_tokens
         from common.metrics import observe_pool
 
-        # Whatever may revoke or change what a kept token grants.
+        # Whatever may revoke or change what a cached token grants.
         user = get_user_model()
         for sender in (Token, user, Group):
             post_save.connect(known_tokens.clear, sender=sender, weak=False)

@@ -34,7 +34,7 @@ class _Line:
         return text
 
 
-def csv_lines(rows: Iterable[Sequence]) -> Iterator[str]:
+def csv_rows(rows: Iterable[Sequence]) -> Iterator[str]:
     """``rows`` (the header first) as SafeWriter's CSV, one line at a time."""
     writer = SafeWriter(_Line())
     for row in rows:

@@ -17,7 +17,7 @@ class EventsConfig(AppConfig):
         from events.selectors.robots import forget_bindings
         from events.selectors.segments import forget_pose_targets
 
-        # What a robot may write into, kept per process for a few seconds.
+        # What a robot may write into, cached per process for a few seconds.
         for sender in (RobotAccount, Vehicle, get_user_model()):
             post_save.connect(forget_bindings, sender=sender, weak=False)
             post_delete.connect(forget_bindings, sender=sender, weak=False)

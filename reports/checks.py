@@ -2,9 +2,9 @@
 
 from django.core.checks import Error, register
 
-from reports.dmv_words import check_dmv_settings
+from reports.dmv_choices import check_dmv_settings
 
 
 @register()
-def dmv_words_known(app_configs, **kwargs):
+def dmv_choices_known(app_configs, **kwargs):
     return [Error(problem, id="ftt.E010") for problem in check_dmv_settings()]

@@ -38,7 +38,7 @@ def written_in(language: str) -> Iterator[None]:
 
 def localised(text: str) -> str:
     """Text with figures written with a decimal point, in the report's language
-    (also what the figures' tick labels go through, reports.figures.style)."""
+    (also what the figures' tick labels go through, reports.charts.style)."""
     mark = _DECIMAL.get(_LANGUAGE.get())
     return text.replace(".", mark) if mark else text
 

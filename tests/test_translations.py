@@ -386,7 +386,7 @@ def test_the_commands_help_and_output_are_marked_for_translation():
 
 # Loggers whose lines an operator reads (the collector's console, the report's tile
 # source); log.debug and log.exception (with its traceback) are for engineers.
-OPERATOR_LOGS = ["rosbridge_app/collector/*.py", COMMANDS, "reports/figures/tiles.py"]
+OPERATOR_LOGS = ["rosbridge_app/collector/*.py", COMMANDS, "reports/charts/tiles.py"]
 READ_LEVELS = {"info", "warning", "error", "critical"}
 
 
@@ -438,10 +438,10 @@ DECIMALS = re.compile(r"^(\.[1-9]\d*)?[gGeE]$|^\.[1-9]\d*[f%]$")
 FIGURE_MAKERS = {"plt.subplots", "plt.figure", "add_axes", "add_subplot"}
 
 
-def _figure_words(tree: ast.AST) -> list[ast.AST]:
+def _chart_words(tree: ast.AST) -> list[ast.AST]:
     """Figures formatted without the report's or the command's language
     (reports.formatting, django.utils.formats.number_format), and figures made
-    without the tick formatter of reports/figures/style.py."""
+    without the tick formatter of reports/charts/style.py."""
     found = []
     for node in ast.walk(tree):
         if isinstance(node, ast.FormattedValue) and isinstance(node.format_spec, ast.JoinedStr):
@@ -454,17 +454,17 @@ def _figure_words(tree: ast.AST) -> list[ast.AST]:
     return found
 
 
-def test_figures_are_written_in_the_readers_language():
+def test_charts_are_written_in_the_readers_language():
     """Report figures and charts (the PDF is in the report's language) and what the
     commands print: every decimal through the language's formatting."""
     modules = [
         p
-        for p in _modules("reports/figures/*.py", "reports/documents/*.py", COMMANDS)
+        for p in _modules("reports/charts/*.py", "reports/documents/*.py", COMMANDS)
         if p.name != "style.py"
     ]
-    assert _found(modules, _figure_words) == []
+    assert _found(modules, _chart_words) == []
     sample = ast.parse('f"{x:.2f} m"\nf"{n:.0f} m"\nf"{x:g}"\nplt.subplots(figsize=s)\n')
-    assert sorted(ast.unparse(n) for n in _figure_words(sample)) == [
+    assert sorted(ast.unparse(n) for n in _chart_words(sample)) == [
         "plt.subplots(figsize=s)", "{x:.2f}", "{x:g}",
     ]  # fmt: skip
 

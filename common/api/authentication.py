@@ -1,4 +1,4 @@
-"""API tokens, checked with the account's groups in the same query, and kept
+"""API tokens, checked with the account's groups in the same query, and cached
 for a few seconds per process."""
 
 import copy
@@ -15,7 +15,7 @@ from common.memo import Expiring
 
 # key -> (user, token, group names, when the directory last checked the
 # account's role or NOT_THE_DIRECTORYS).  A robot posting single poses sends the
-# same token many times a second, so its lookup is kept rather than asked again.
+# same token many times a second, so its lookup is cached rather than asked again.
 # A token deleted, an account deactivated or a role changed through this
 # process is forgotten at once (common.apps connects clear to those changes);
 # through another process it is honoured within this many seconds.
@@ -56,7 +56,7 @@ def token_account(key: str):
     return user, token
 
 
-# The last field of a kept token for an account the directory did not make.
+# The last field of a cached token for an account the directory did not make.
 NOT_THE_DIRECTORYS = "local"
 
 
@@ -107,7 +107,7 @@ def _look_up(key):
 
 class TokenAuthentication(authentication.TokenAuthentication):
     """DRF's token check, reading the account's groups (its roles) with the token
-    and the user: one query instead of two, and none while the token is kept."""
+    and the user: one query instead of two, and none while the token is cached."""
 
     keyword = KEYWORD
 

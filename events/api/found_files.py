@@ -10,7 +10,7 @@ from rest_framework.exceptions import ValidationError
 
 from common import geojson
 from common.api.downloads import streamed_download
-from common.spreadsheet import csv_lines
+from common.spreadsheet import csv_rows
 from events.selectors.found_segments import COLUMNS, MAX_FOUND
 
 KINDS = ("geojson", "csv")
@@ -46,7 +46,7 @@ def _geojson(rows) -> Iterator[str]:
 
 
 def _csv(rows) -> Iterator[str]:
-    yield from csv_lines(itertools.chain([COLUMNS], ([_text(v) for v in row] for row in rows)))
+    yield from csv_rows(itertools.chain([COLUMNS], ([_text(v) for v in row] for row in rows)))
 
 
 def _text(value):

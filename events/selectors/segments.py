@@ -9,14 +9,14 @@ from events.models import Segment
 # segment id -> its master, with the master's leg and shift.  What is used of
 # them does not change while the segment exists (a master's parent, leg, shift,
 # test event, vehicle and mode are set when it opens); a deleted segment is
-# noticed by the writer, whose statement finds no row.  Kept a minute in case
+# noticed by the writer, whose statement finds no row.  Cached a minute in case
 # an administrator edits a mode by hand in another process.
 _pose_targets = Expiring(60.0)
 
 
 def pose_target(segment_id: int) -> Segment | None:
     """The master segment a pose sent to ``segment_id`` is stored on, with its leg
-    and shift loaded; None for an unknown id.  Kept per process (one query per
+    and shift loaded; None for an unknown id.  Cached per process (one query per
     segment, not per pose)."""
     master = _pose_targets.get(segment_id)
     if master is None:

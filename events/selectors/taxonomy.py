@@ -40,7 +40,7 @@ def taxonomy_version(event: TestEvent) -> str:
     return "current catalogue"
 
 
-def taxonomy_words(event: TestEvent) -> str:
+def taxonomy_text(event: TestEvent) -> str:
     """``taxonomy_version`` as its reader writes it (the PDF's provenance)."""
     if event.taxonomy is not None and event.finalised is not None:
         return _("frozen %(when)s UTC") % {"when": f"{event.finalised:%Y-%m-%d %H:%M:%S}"}

@@ -61,7 +61,7 @@ class AccountPace:
         return None
 
 
-def _in_words(seconds: int) -> str:
+def _duration_text(seconds: int) -> str:
     if seconds < 60:
         return ngettext("%(n)s second", "%(n)s seconds", seconds) % {"n": seconds}
     minutes = math.ceil(seconds / 60)
@@ -83,7 +83,9 @@ def locked_out(request, original_response=None, credentials=None):
     seconds = getattr(request, "ftt_account_wait", None) or int(
         get_cool_off(request).total_seconds()
     )
-    message = _("Too many failed sign-ins. Try again in %(wait)s.") % {"wait": _in_words(seconds)}
+    message = _("Too many failed sign-ins. Try again in %(wait)s.") % {
+        "wait": _duration_text(seconds)
+    }
     return _paused(request, message, 429, seconds)
 
 
@@ -108,7 +110,7 @@ class DirectoryUnavailableMiddleware:
         message = _(
             "The directory cannot be reached, so directory accounts cannot sign in now; "
             "local accounts still can. Try again in %(wait)s."
-        ) % {"wait": _in_words(seconds)}
+        ) % {"wait": _duration_text(seconds)}
         return _paused(request, message, 503, seconds)
 
 

@@ -176,7 +176,7 @@ def read_ahead(leg: Leg) -> threading.Thread | None:
     in a thread of its own, and returns the thread.
 
     The cockpit's page calls it for the leg it opens: its scripts ask for the
-    tracks about half a second after the page, and a process that has not kept
+    tracks about half a second after the page, and a process that has not cached
     them yet (the first visit after a restart) reads them meanwhile instead of
     after the request (``cached_tracks`` lets the request wait for this read).
     Where the process keeps any of them it starts nothing (None): the request
@@ -195,7 +195,7 @@ def _read_leg(masters: list[Segment]) -> None:
     try:
         cached_tracks(masters)
     except DatabaseError:
-        # Only a head start: the tracks request reads whatever is not kept yet.
+        # Only a head start: the tracks request reads whatever is not cached yet.
         pass
     finally:
         # This thread's own connection; the thread ends here.

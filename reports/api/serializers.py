@@ -5,8 +5,8 @@ from django.utils.translation import gettext_lazy as _
 from rest_framework import serializers
 
 from events.models import Criterion, Leg
+from reports.charts.tiles import MAX_ZOOM
 from reports.documents.options import LEVELS, MAX_TIMELINE_HOURS, STANDARD
-from reports.figures.tiles import MAX_ZOOM
 from reports.models import Report
 from reports.selectors.content import scope_name
 from reports.selectors.reports import expected_seconds

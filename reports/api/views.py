@@ -370,7 +370,7 @@ class ExportView(APIView):
         # Those that grow with the segments and poses are streamed, the tables
         # of a few rows per test case or take-over are sent whole.
         if filename == "segments.csv":
-            pieces = exports.segments_csv_lines(event, _mode(request))
+            pieces = exports.segments_csv_rows(event, _mode(request))
             return streamed_download(request, pieces, content_type, name)
         if filename == "tracks.geojson":
             return streamed_download(

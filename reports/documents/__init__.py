@@ -1,5 +1,5 @@
 """The PDF documents: a test event's report and the comparison of several.
 
-They read (through the selectors) and draw (reports.figures) but store nothing;
+They read (through the selectors) and draw (reports.charts) but store nothing;
 reports.services.generation keeps what they make.
 """

@@ -14,12 +14,12 @@ from django.utils.translation import gettext_noop
 
 from events.models import ItoReason, TestEvent
 from reports import formatting as fmt
+from reports.charts import style
+from reports.charts.growth import growth_chart, hotspot_chart
 from reports.documents.options import ReportError
 from reports.documents.routes import routes_section
 from reports.documents.typesetting import typeset
 from reports.documents.wording import comparison_text
-from reports.figures import style
-from reports.figures.growth import growth_chart, hotspot_chart
 from reports.selectors.comparison import compare
 from telemetry.storage.keys import GPS_TRACK
 

@@ -11,13 +11,13 @@ from django.utils.translation import gettext_noop
 from common import cyclic_gc
 from common.deferred_text import DeferredText, deferred
 from events.models import TestEvent
+from reports.charts import style
 from reports.documents.options import ReportError, ReportOptions
 from reports.documents.sections import Sections
 from reports.documents.stage_times import StageTimes
 from reports.documents.typesetting import typeset
-from reports.figures import style
 from reports.formatting import written_in
-from reports.selectors.content import has_segments, report_scope, scope_words
+from reports.selectors.content import has_segments, report_scope, scope_text
 from reports.selectors.provenance import seal_pdf
 
 Progress = Callable[[float, DeferredText], None]
@@ -55,7 +55,7 @@ def check_reportable(event: TestEvent, options: ReportOptions | None = None) -> 
                 gettext_noop(
                     "%(scope)s of test event %(event)s has no segments yet: nothing to report."
                 ),
-                scope=scope_words(**scope),
+                scope=scope_text(**scope),
                 event=event.pk,
             )
         raise ReportError(

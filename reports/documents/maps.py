@@ -8,10 +8,10 @@ from django.utils.translation import gettext as _
 from django.utils.translation import gettext_noop
 
 from basemaps.selectors.layers import default_layer
+from reports.charts.maps import Line, MapPainter
+from reports.charts.tiles import LayerTiles, TileSource
 from reports.documents.options import ReportOptions
 from reports.documents.pictures import Pictures
-from reports.figures.maps import Line, MapPainter
-from reports.figures.tiles import LayerTiles, TileSource
 from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 
 

@@ -7,7 +7,7 @@ from django.utils.translation import gettext as _
 from django.utils.translation import gettext_lazy
 
 from common.deferred_text import DeferredText
-from reports.figures.tiles import MAX_ZOOM
+from reports.charts.tiles import MAX_ZOOM
 
 MAX_TIMELINE_HOURS = 48
 

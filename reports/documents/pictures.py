@@ -11,7 +11,7 @@ from django.utils.translation import gettext as _
 from django.utils.translation import gettext_noop
 from PIL import Image as PILImage
 
-from reports.figures.maps import Background
+from reports.charts.maps import Background
 from telemetry.models import Image
 from telemetry.selectors.maps import current_map
 

@@ -8,8 +8,8 @@ from django.utils.translation import gettext as _
 from django.utils.translation import gettext_noop
 
 from reports import formatting as fmt
+from reports.charts.maps import Line, MapPainter
 from reports.documents.options import ReportError
-from reports.figures.maps import Line, MapPainter
 from reports.selectors.routes import chosen_routes, compare_routes
 
 # A, B, C, ... in the colours of the GUI's comparison page, and their names.

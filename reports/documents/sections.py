@@ -12,17 +12,17 @@ from django.utils.translation import gettext as _
 from django.utils.translation import gettext_noop, ngettext, pgettext
 
 from common.deferred_text import DeferredText, deferred
-from events.selectors.taxonomy import taxonomy_words
+from events.selectors.taxonomy import taxonomy_text
 from reports import formatting as fmt
+from reports.charts import bars
+from reports.charts.sketch import track_sketch
+from reports.charts.timeline import draw_timeline
 from reports.documents import tables
 from reports.documents.maps import TrackMaps, tile_source
 from reports.documents.options import FULL, STANDARD, ReportOptions
 from reports.documents.pictures import Pictures
 from reports.documents.typesetting import TEMPLATE_DIR
 from reports.documents.wording import report_text, shift_name
-from reports.figures import charts
-from reports.figures.sketch import track_sketch
-from reports.figures.timeline import draw_timeline
 from reports.selectors import content
 from reports.selectors.formulas import FORMULAS, translated_definitions
 from reports.selectors.plans import test_plan
@@ -49,7 +49,7 @@ MAX_GAPS_LISTED = 200
 
 
 class Sections:
-    """Builds the document; figure and picture files go into ``root``."""
+    """Builds the document; chart and picture files go into ``root``."""
 
     def __init__(self, event, options: ReportOptions, root: Path, progress, time_stage):
         self.event = event
@@ -64,7 +64,7 @@ class Sections:
         self.pictures = Pictures(root, options.image_appendix, self.warnings, time_stage)
         tiles = tile_source(event, options, self.mode)
         self.maps = TrackMaps(self.mode, tiles, self.pictures, time_stage)
-        self.figure_count = 0
+        self.file_count = 0
         self.appendix: list[dict] = []
 
     @property
@@ -72,8 +72,8 @@ class Sections:
         return self.maps.tiles_used
 
     def _file(self, stem: str, suffix: str = ".png") -> Path:
-        self.figure_count += 1
-        return self.root / f"{stem}-{self.figure_count}{suffix}"
+        self.file_count += 1
+        return self.root / f"{stem}-{self.file_count}{suffix}"
 
     def document(self) -> dict:
         event = self.event
@@ -131,7 +131,7 @@ class Sections:
             # The stamp's UTC form is for --verify (keywords); the reader sees the
             # report's one zone.
             "built": fmt.timestamp(built, self.tz),
-            "taxonomy": taxonomy_words(self.event),
+            "taxonomy": taxonomy_text(self.event),
             "final": fmt.timestamp(final, self.tz) if final else None,
             "amendments": [
                 _("%(when)s: %(record)s %(kind)s by %(who)s")
@@ -254,20 +254,20 @@ class Sections:
             return []
         names = [label for label, _ in present]
         made = (
-            charts.distance_chart(
+            bars.distance_chart(
                 names,
                 [f.auto_distance for _, f in present],
                 [f.manual_distance for _, f in present],
                 str(self._file("distance", ".svg")),
             ),
-            charts.reasons_chart(
+            bars.reasons_chart(
                 names,
                 [f.interventions_by_reason for _, f in present],
                 self.reasons,
                 str(self._file("reasons", ".svg")),
             ),
         ) + tuple(
-            charts.estimate_chart(
+            bars.estimate_chart(
                 names,
                 [getattr(f, key) for _, f in present],
                 str(self._file(key, ".svg")),

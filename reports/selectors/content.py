@@ -56,7 +56,7 @@ def reasons_by_key(event: TestEvent) -> dict[str, ItoReason]:
     }
 
 
-def scope_words(*, shift: int | None = None, leg: int | None = None) -> DeferredText:
+def scope_text(*, shift: int | None = None, leg: int | None = None) -> DeferredText:
     """What a report covers, as words a job's row keeps: "Shift 2 · Leg 1"."""
     if leg is not None:
         row = Leg.objects.select_related("shift").filter(pk=leg).first()
@@ -75,7 +75,7 @@ def scope_words(*, shift: int | None = None, leg: int | None = None) -> Deferred
 
 def scope_name(*, shift: int | None = None, leg: int | None = None) -> str:
     """What a report covers, in the active language."""
-    return str(scope_words(shift=shift, leg=leg))
+    return str(scope_text(shift=shift, leg=leg))
 
 
 def shifts_of(event: TestEvent, shift: int | None = None) -> list[Shift]:

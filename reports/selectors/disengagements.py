@@ -10,7 +10,7 @@ OL 311R), with the form's columns, headers and word lists.
 
 FTT's own words are mapped to the form's by settings (``FTT_DMV_INITIATORS``,
 ``FTT_DMV_LOCATIONS``, ``FTT_DMV_LOCATION_DEFAULT``, ``FTT_DMV_DRIVERLESS_VEHICLES``;
-docs/report.md), checked at start by ``reports.dmv_words``.
+docs/report.md), checked at start by ``reports.dmv_choices``.
 """
 
 import calendar

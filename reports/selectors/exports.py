@@ -20,7 +20,7 @@ from xml.etree import ElementTree as ET
 from django.db.models import Q, Sum
 
 from common import geojson
-from common.spreadsheet import csv_lines
+from common.spreadsheet import csv_rows
 from events.models import Leg, Note, Segment, TestEvent
 from events.selectors.labels import segment_labels
 from reports.selectors.content import reasons_by_key
@@ -72,11 +72,11 @@ def _name(person) -> str:
     return person.name if person is not None else ""
 
 
-def segments_csv_lines(event: TestEvent, mode: str = GPS_TRACK) -> Iterator[str]:
+def segments_csv_rows(event: TestEvent, mode: str = GPS_TRACK) -> Iterator[str]:
     """segments.csv, a line at a time: the segments are read in batches, and a
-    master's distance, pose count and end come from its kept figures (no pose is
+    master's distance, pose count and end come from its stored figures (no pose is
     read)."""
-    yield from csv_lines(_segment_rows(event, mode))
+    yield from csv_rows(_segment_rows(event, mode))
 
 
 def _segment_rows(event: TestEvent, mode: str) -> Iterator[list]:

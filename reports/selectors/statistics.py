@@ -45,7 +45,7 @@ from events.models import ItoReason, Leg, Segment, SegmentType, TestEvent
 from events.selectors.labels import segment_labels
 from events.selectors.taxonomy import counted_reasons, counted_reasons_of
 from reports.selectors.formulas import FORMULAS, keyed
-from telemetry.selectors.distances import kept_paths, measured_paths
+from telemetry.selectors.distances import measured_paths, stored_paths
 from telemetry.selectors.tracks import Track
 from telemetry.storage import plain_rows
 from telemetry.storage.keys import GPS_TRACK
@@ -351,7 +351,7 @@ def _driving_order(scope: dict) -> list[SegmentRow]:
 
 def _runs(scope: dict, events: list[TestEvent], mode: str, tracks: bool) -> dict[int, list[Run]]:
     """The runs of the segments in ``scope`` by test event.  Distances, pose
-    counts and the end of an open segment come from the figures kept at write
+    counts and the end of an open segment come from the figures stored at write
     time; only ``tracks`` (for drawing and the exports) reads the poses."""
     segments = _driving_order(scope)
     counted = counted_reasons_of(events)
@@ -360,7 +360,7 @@ def _runs(scope: dict, events: list[TestEvent], mode: str, tracks: bool) -> dict
     for s in segments:
         if s.parent_id is not None:
             children[s.parent_id].append(s)
-    kept = kept_paths(masters, mode)
+    kept = stored_paths(masters, mode)
     paths = measured_paths(masters, mode) if tracks else {}
     # Only the masters are labelled: each is numbered among its leg's masters all the same.
     labels = segment_labels(Segment.objects.filter(**scope, parent=None))

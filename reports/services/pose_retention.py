@@ -2,7 +2,7 @@
 
 Off unless ``FTT_POSE_RETENTION_MONTHS`` is set.  A shift whose newest pose is
 older than that many months keeps, of each master's track, the points its map
-in the report draws (``reports.figures.maps.map_tolerance``: half a pixel of the
+in the report draws (``reports.charts.maps.map_tolerance``: half a pixel of the
 shift's map, Douglas-Peucker as every drawing does); the others are deleted.
 The per-segment figures were kept from every pose at write time and stay as
 they are; a ThinnedSegment row marks the master, so a recount leaves it.  GPS fixes without a
@@ -20,8 +20,8 @@ from django.db.models import Max
 from django.utils import timezone
 
 from events.models import Segment
+from reports.charts.maps import Line, map_tolerance
 from reports.documents.sections import OVERVIEW_SIZE
-from reports.figures.maps import Line, map_tolerance
 from telemetry.models import LocalPose, Pose, SegmentFigures, ThinnedSegment
 from telemetry.selectors.track_drawing import simplified
 from telemetry.storage import keys
@@ -79,7 +79,7 @@ def _order():
     return keys.order_by()
 
 
-def kept_positions(x: np.ndarray, y: np.ndarray, tolerance: float) -> list[int]:
+def surviving_positions(x: np.ndarray, y: np.ndarray, tolerance: float) -> list[int]:
     """Positions of the points ``simplified`` keeps (it returns a subsequence of
     the points themselves, first and last included)."""
     kx, ky = simplified(x, y, tolerance)
@@ -97,7 +97,7 @@ def thin_shift(shift_id: int) -> int:
     masters = list(
         Segment.objects.filter(leg__shift_id=shift_id, parent=None).values_list("pk", flat=True)
     )
-    deleted = kept_total = 0
+    deleted = surviving_total = 0
     for mode, model in ((GPS_TRACK, Pose), (LOCAL_TRACK, LocalPose)):
         tracks = _points(mode, masters)
         if not tracks:
@@ -105,9 +105,9 @@ def thin_shift(shift_id: int) -> int:
         lines = [Line(x, y, "0,0,0") for _ids, x, y in tracks.values()]
         tolerance, drawn = map_tolerance(mode, lines, OVERVIEW_SIZE)
         for (seg, (ids, _x, _y)), line in zip(tracks.items(), drawn, strict=True):
-            keep = set(kept_positions(np.asarray(line.x), np.asarray(line.y), tolerance))
+            keep = set(surviving_positions(np.asarray(line.x), np.asarray(line.y), tolerance))
             drop = [pk for i, pk in enumerate(ids) if i not in keep]
-            kept_total += len(keep)
+            surviving_total += len(keep)
             for begin in range(0, len(drop), CHUNK):
                 model.objects.filter(segment_id=seg, id__in=drop[begin : begin + CHUNK]).delete()
             deleted += len(drop)
@@ -115,6 +115,6 @@ def thin_shift(shift_id: int) -> int:
         [ThinnedSegment(segment_id=pk) for pk in masters], ignore_conflicts=True
     )
     log.info(
-        "retention: shift %s thinned, %s poses deleted, %s kept", shift_id, deleted, kept_total
+        "retention: shift %s thinned, %s poses deleted, %s kept", shift_id, deleted, surviving_total
     )
     return deleted

@@ -44,7 +44,7 @@ class Held:
         self.lock = threading.RLock()
         self._positions = 0
         self._frame_bytes = 0
-        self._kept_at: dict[str, float] = {}
+        self._appended_at: dict[str, float] = {}
         self._skipped: dict[str, Event] = {}  # the newest position not kept, per kind
 
     def __len__(self) -> int:
@@ -58,7 +58,7 @@ class Held:
                 for skipped in self._skipped.values():
                     self._append(skipped)
                 self._skipped.clear()
-                self._kept_at.clear()
+                self._appended_at.clear()
                 self._append(event)
             elif kind in _POSITIONS:
                 self._add_position(event)
@@ -79,8 +79,8 @@ class Held:
 
     def _add_position(self, event: Event) -> None:
         t = event.at.timestamp()
-        kept = self._kept_at.get(event.kind)
-        thinned = kept is not None and t - kept < REPORT_PERIOD and not self.database_ok()
+        appended = self._appended_at.get(event.kind)
+        thinned = appended is not None and t - appended < REPORT_PERIOD and not self.database_ok()
         if self._positions >= MAX_POSITIONS or thinned:
             dropped = self._skipped.get(event.kind)
             if dropped is not None:
@@ -88,7 +88,7 @@ class Held:
             self._skipped[event.kind] = event
             return
         self._skipped.pop(event.kind, None)
-        self._kept_at[event.kind] = t
+        self._appended_at[event.kind] = t
         self._append(event)
 
     def _append(self, event: Event) -> None:

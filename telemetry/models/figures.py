@@ -1,4 +1,4 @@
-"""What each master segment's track amounts to, kept as its poses are written.
+"""What each master segment's track amounts to, stored as its poses are written.
 
 One row per master and track kind (GPS, local).  The statistics, the segment
 list, the comparison and the growth fit read these rows instead of the

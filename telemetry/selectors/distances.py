@@ -15,8 +15,8 @@ differ by less than 0.2 micrometres up to 85 degrees latitude, and on the
 equator the formula is exactly a * dlambda.
 
 The GUI's segment list, the API, the statistics, the report and the exports
-all read distances from here: from the figures kept at write time
-(``kept_distances``, telemetry.services.segment_figures) or, where the
+all read distances from here: from the figures stored at write time
+(``stored_distances``, telemetry.services.segment_figures) or, where the
 track is drawn anyway, from its poses (``measured_paths``).
 """
 
@@ -189,7 +189,7 @@ def measured_paths(
     masters: Iterable[Segment], mode: str = GPS_TRACK, tracks: dict[int, Track] | None = None
 ) -> dict[int, MeasuredPath]:
     """Paths of the given master segments, keyed by id, measured on their poses
-    (for drawing them; ``kept_distances`` gives the distances without reading poses).
+    (for drawing them; ``stored_distances`` gives the distances without reading poses).
 
     The next master of each is looked up among the given ones of the same
     leg, so pass whole legs.  ``distance`` is None when fewer than two points
@@ -240,8 +240,8 @@ def _fill(x: np.ndarray, y: np.ndarray, start, track: Track | None, after) -> No
 
 
 @dataclass(slots=True)
-class KeptPath:
-    """A master's path as the figures kept at write time describe it."""
+class StoredPath:
+    """A master's path as the figures stored at write time describe it."""
 
     distance: float | None
     points: int = 0
@@ -251,9 +251,9 @@ class KeptPath:
     last_stamp: datetime | None = None
 
 
-def kept_paths(masters: Iterable[Segment], mode: str = GPS_TRACK) -> dict[int, KeptPath]:
-    """The distance rule on the figures kept at write time (SegmentFigures): the
-    join from the start position to the first point, the kept length of the
+def stored_paths(masters: Iterable[Segment], mode: str = GPS_TRACK) -> dict[int, StoredPath]:
+    """The distance rule on the figures stored at write time (SegmentFigures): the
+    join from the start position to the first point, the stored length of the
     track, the join from its last point to the next start.  No pose is read, so
     the time does not depend on how many are stored.  Pass whole legs, as for
     ``measured_paths``; distance None where fewer than two points are known."""
@@ -267,18 +267,18 @@ def kept_paths(masters: Iterable[Segment], mode: str = GPS_TRACK) -> dict[int, K
     )
     kept = {row[0]: row[1:] for row in plain_rows(figures)}
     joins: list[tuple[int, tuple, tuple]] = []
-    paths: dict[int, KeptPath] = {}
+    paths: dict[int, StoredPath] = {}
     for master, start, after in neighbours:
         found = kept.get(master.pk)
         if found is None:
-            paths[master.pk] = KeptPath(None, 0, start is not None, start or after)
+            paths[master.pk] = StoredPath(None, 0, start is not None, start or after)
             if start is not None and after is not None:
                 joins.append((master.pk, start, after))
             continue
         points, length, first_x, first_y, last_x, last_y, last_stamp = found
         first = (first_x, first_y)
         known = points + (start is not None) + (after is not None)
-        paths[master.pk] = KeptPath(
+        paths[master.pk] = StoredPath(
             length if known >= 2 else None, points, start is not None, start or first, last_stamp
         )
         if start is not None:
@@ -294,14 +294,14 @@ def kept_paths(masters: Iterable[Segment], mode: str = GPS_TRACK) -> dict[int, K
     return paths
 
 
-def kept_distances(masters: Iterable[Segment], mode: str = GPS_TRACK) -> dict[int, float | None]:
-    """{master id: distance} by ``kept_paths``."""
-    return {pk: path.distance for pk, path in kept_paths(masters, mode).items()}
+def stored_distances(masters: Iterable[Segment], mode: str = GPS_TRACK) -> dict[int, float | None]:
+    """{master id: distance} by ``stored_paths``."""
+    return {pk: path.distance for pk, path in stored_paths(masters, mode).items()}
 
 
 def displayed_distances(masters: list[Segment]) -> dict[int, float | None]:
     """What a list shows for one leg's masters: the GPS distance where one was
     measured, else the local one, else None (nothing measured)."""
-    by_gps = kept_distances(masters, GPS_TRACK)
-    by_local = kept_distances(masters, LOCAL_TRACK)
+    by_gps = stored_distances(masters, GPS_TRACK)
+    by_local = stored_distances(masters, LOCAL_TRACK)
     return {pk: d if d is not None else by_local[pk] for pk, d in by_gps.items()}

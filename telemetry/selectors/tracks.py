@@ -64,17 +64,17 @@ class Track:
 
 
 def load_tracks(
-    segment_ids: list[int], mode: str = GPS_TRACK, *, within_kept_span: bool = True
+    segment_ids: list[int], mode: str = GPS_TRACK, *, within_stored_span: bool = True
 ) -> dict[int, Track]:
     """Tracks of the given master segments; segments without points are absent.
 
-    The read is bounded by the span the segments' kept figures give (on
+    The read is bounded by the span the segments' stored figures give (on
     PostgreSQL only the month partitions they span are read);
-    ``within_kept_span=False`` reads every pose, for measuring the figures
+    ``within_stored_span=False`` reads every pose, for measuring the figures
     themselves (telemetry.services.segment_figures)."""
     if mode not in TRACK_KINDS:
         raise ValueError(f"mode must be one of {TRACK_KINDS}")
-    arrays = storage.track_arrays(segment_ids, mode, mode if within_kept_span else None)
+    arrays = storage.track_arrays(segment_ids, mode, mode if within_stored_span else None)
     if mode == GPS_TRACK:
         return {seg: Track(seg, x, y, t, no_fix=no_fix) for seg, x, y, t, no_fix in arrays}
     return {seg: Track(seg, x, y, t, frame=frame) for seg, x, y, t, frame in arrays}

@@ -31,7 +31,7 @@ from events.services.segments import GpsPosition
 from telemetry import storage
 from telemetry.models import LocalPose, Pose
 from telemetry.models.poses import FixStatus
-from telemetry.services.segment_figures import Added, keep_figures, measure_figures
+from telemetry.services.segment_figures import Added, add_to_figures, measure_figures
 from telemetry.storage.keys import GPS_TRACK, LOCAL_TRACK
 from telemetry.storage.rows import as_uuid
 
@@ -143,7 +143,7 @@ def store_poses(
     new = {p.uid for p in stored}
     if len(new) < len(fixes):
         refuse_foreign(Pose, [as_uuid(f.uid) for f in fixes], new, segment_id=master.pk)
-    keep_figures(master.pk, GPS_TRACK, stored, announce=track_row(master, local=False))
+    add_to_figures(master.pk, GPS_TRACK, stored, announce=track_row(master, local=False))
     return len(new)
 
 
@@ -186,7 +186,7 @@ def store_pose(
                 fix.fix_status != FixStatus.NO_FIX,
             )  # fmt: skip
             # The figures and the feed row are one statement; the row stays locked to the commit.
-            keep_figures(
+            add_to_figures(
                 master.pk, GPS_TRACK, [point], seen, announce=track_row(master, local=False)
             )
     if stored is None:
@@ -245,14 +245,14 @@ def store_local_poses(segment: Segment, poses: list[MapPose]) -> int:
     stored = {point.uid for point in fresh}
     refuse_foreign(LocalPose, [as_uuid(p.uid) for p in poses], stored, segment_id=master.pk)
     heading = next((p.yaw for p in reversed(poses) if as_uuid(p.uid) in stored), None)
-    keep_figures(
+    add_to_figures(
         master.pk, LOCAL_TRACK, fresh, announce=track_row(master, local=True, heading=heading)
     )
     return len(fresh)
 
 
 def track_row(master: Segment, *, local: bool, heading=None):
-    """How open browsers learn what the track now holds (keep_figures' ``announce``):
+    """How open browsers learn what the track now holds (add_to_figures' ``announce``):
     the usable points a write added, in driving order, when they follow the
     track's end; else that the track changed inside (a late batch), which they
     read again."""

@@ -1,7 +1,7 @@
 """Keeping each master segment's figures (telemetry.models.SegmentFigures) equal
 to what its poses give, in the transaction that writes the poses.
 
-A batch whose points all come after the kept last point in driving order (the
+A batch whose points all come after the stored last point in driving order (the
 live case) adds its own length and the step from that point.  A late point or
 batch (concurrent single poses committed out of order, an outage spool
 replayed) replaces the step between its two neighbours in driving order, found
@@ -64,13 +64,13 @@ class Added:
     appended: bool
 
 
-def keep_figures(
+def add_to_figures(
     master_id: int, mode: str, new: list[NewPoint], seen=_UNREAD, announce=None
 ) -> Added:
     """Add the points just stored on ``master_id`` (the storage port's answer) to its
     figures, in time that depends on the new points, not on the track: an
     upsert, after a read of the row unless the caller gives what it read
-    (``seen``, storage.Kept or None).  Call inside the transaction that
+    (``seen``, storage.StoredFigures or None).  Call inside the transaction that
     stored them; from then on the figures row is locked until the commit, so
     concurrent writers of one master learn in commit order where their points lie.
     ``announce`` gives the change-feed row of what was added (``Added``,
@@ -81,7 +81,7 @@ def keep_figures(
     rows = sorted((p for p in new if p.usable), key=lambda p: _key(p.robot_stamp, p.received, p.id))
     alone = _alone(new, rows, mode)
     if seen is _UNREAD:
-        seen = storage.read_kept(master_id, mode)
+        seen = storage.read_stored_figures(master_id, mode)
     for _attempt in range(2):
         added = Added(rows, _appends(rows, seen))
         feed_row = announce(added) if announce is not None else None
@@ -98,7 +98,7 @@ def keep_figures(
 
 def _appends(rows: list[NewPoint], seen) -> bool:
     """Whether the sorted usable ``rows`` all come after the last point ``seen``
-    (storage.Kept or None) holds, in driving order."""
+    (storage.StoredFigures or None) holds, in driving order."""
     if not rows or seen is None or not seen.points:
         return True
     first = _key(rows[0].robot_stamp, rows[0].received, rows[0].id)
@@ -133,7 +133,7 @@ def _alone(new: list[NewPoint], rows: list[NewPoint], mode: str) -> dict:
 
 def _change(master_id, mode, rows: list[NewPoint], alone: dict, seen) -> storage.Change:
     """What ``rows`` change in the figures that hold ``seen``: an appended batch
-    adds its length and the step from the kept last point; a late one replaces
+    adds its length and the step from the stored last point; a late one replaces
     the step between its neighbours in driving order with the steps through it."""
     uids = uid_sums.combined(uid_sums.EMPTY if seen is None else seen.uid_sum, alone["uid_sum"])
     if not rows:
@@ -177,7 +177,7 @@ def _measured(master_ids: list[int], mode: str) -> dict[int, _Measured]:
     distance rule."""
     found = {
         pk: _Measured(path_length(t.x, t.y, mode), len(t), t.no_fix, t.x, t.y)
-        for pk, t in load_tracks(master_ids, mode, within_kept_span=False).items()
+        for pk, t in load_tracks(master_ids, mode, within_stored_span=False).items()
     }
     for pk, total in _uid_sums(master_ids, mode).items():
         if pk not in found:
@@ -245,7 +245,7 @@ def measure_figures(master_ids: Iterable[int], modes=TRACK_KINDS) -> None:
 
 
 def sum_uids_again() -> None:
-    """Set the uid sum of every kept figures row from the poses stored, and
+    """Set the uid sum of every stored figures row from the poses stored, and
     nothing else (figures kept before they kept a sum, thinned ones too), in
     one pass over each pose table."""
     for mode in TRACK_KINDS:
@@ -265,7 +265,7 @@ _EXACT = (
 
 
 def differences(kept: SegmentFigures | None, fresh: SegmentFigures) -> list[str]:
-    """Where the kept figures differ from freshly measured ones ("length: 1.0 != 2.0")."""
+    """Where the stored figures differ from freshly measured ones ("length: 1.0 != 2.0")."""
     found = []
     for name in ("length", *_EXACT):
         was = getattr(kept, name) if kept is not None else getattr(SegmentFigures(), name)
@@ -282,8 +282,8 @@ def differences(kept: SegmentFigures | None, fresh: SegmentFigures) -> list[str]
 def recount_figures(
     master_ids: list[int], *, fix: bool = False
 ) -> dict[tuple[int, str], list[str]]:
-    """{(segment id, mode): differences} between the kept figures of the given
-    masters and their poses; with ``fix``, the kept figures are set right."""
+    """{(segment id, mode): differences} between the stored figures of the given
+    masters and their poses; with ``fix``, the stored figures are set right."""
     found = {}
     kept = {
         (f.segment_id, f.mode): f for f in SegmentFigures.objects.filter(segment_id__in=master_ids)

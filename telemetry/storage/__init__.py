@@ -18,12 +18,12 @@ from types import ModuleType
 from django.db import connection
 
 from telemetry.storage import postgresql, spatialite
-from telemetry.storage.rows import Change, Kept, NewPoint
+from telemetry.storage.rows import Change, NewPoint, StoredFigures
 
 __all__ = [
-    "Change", "Kept", "NewPoint", "adapter", "insert_fixes", "insert_local_poses",
+    "Change", "StoredFigures", "NewPoint", "adapter", "insert_fixes", "insert_local_poses",
     "insert_pose", "is_partitioned", "locked_figures", "neighbours", "plain_rows", "points_between",
-    "read_kept", "track_arrays", "write_change",
+    "read_stored_figures", "track_arrays", "write_change",
 ]  # fmt: skip
 
 ADAPTERS = {module.NAME: module for module in (postgresql, spatialite)}
@@ -38,7 +38,7 @@ def insert_pose(
     master_id: int, fix, source_id: int | None, received, refused_by=None
 ) -> tuple | None:
     """Store one checked fix on the master segment ``master_id``: (the new row's
-    id, what its segment's figures held, ``Kept`` or None), or None when
+    id, what its segment's figures held, ``StoredFigures`` or None), or None when
     nothing was stored (a known uid, the segment or pose source no longer
     exists, or the queryset ``refused_by`` finds a row: a rule the caller
     states, checked in the same statement)."""
@@ -57,9 +57,9 @@ def insert_local_poses(master, poses, received) -> list[NewPoint]:
     return adapter().insert_local_poses(master, poses, received)
 
 
-def read_kept(master_id: int, mode: str) -> Kept | None:
+def read_stored_figures(master_id: int, mode: str) -> StoredFigures | None:
     """What the segment's figures row of ``mode`` holds, or None without one."""
-    return adapter().read_kept(master_id, mode)
+    return adapter().read_stored_figures(master_id, mode)
 
 
 def locked_figures(master_id: int, mode: str):
@@ -69,8 +69,8 @@ def locked_figures(master_id: int, mode: str):
 
 
 def write_change(
-    master_id: int, mode: str, seen: Kept | None, change: Change, feed_row=None
-) -> tuple[bool, Kept | None]:
+    master_id: int, mode: str, seen: StoredFigures | None, change: Change, feed_row=None
+) -> tuple[bool, StoredFigures | None]:
     """Add ``change`` to the figures row if it still holds ``seen`` (or, for
     None, does not exist yet): (True, None) when it did, else (False, what the
     row holds now).  When it did not, the row is locked until the transaction
@@ -95,14 +95,14 @@ def points_between(master_id: int, mode: str, first: tuple, last: tuple) -> list
     return adapter().points_between(master_id, mode, first, last)
 
 
-def track_arrays(segment_ids, mode: str, kept_mode: str | None):
+def track_arrays(segment_ids, mode: str, figures_mode: str | None):
     """(segment id, x, y, seconds since 1970, extra) of each segment that has
     points of ``mode``, its usable points in driving order; ``extra`` is the
     count of fixes without a position (GPS) or the frame of the first point
-    (local).  A ``kept_mode`` bounds the read by the span the segments' kept
+    (local).  A ``figures_mode`` bounds the read by the span the segments' kept
     figures of that mode give (PostgreSQL reads only the months they span);
     None reads every pose, for measuring the figures themselves."""
-    return adapter().track_arrays(segment_ids, mode, kept_mode)
+    return adapter().track_arrays(segment_ids, mode, figures_mode)
 
 
 def plain_rows(queryset) -> list[tuple]:

@@ -16,7 +16,7 @@ from django.db.models import F, OrderBy, Q
 from telemetry.models.poses import FixStatus
 
 # The two kinds of track: GPS poses (longitude, latitude) and local poses
-# (map-frame metres).  Also the ``mode`` of a segment's kept figures row.
+# (map-frame metres).  Also the ``mode`` of a segment's stored figures row.
 GPS_TRACK = "gps"
 LOCAL_TRACK = "local"
 TRACK_KINDS = (GPS_TRACK, LOCAL_TRACK)
@@ -60,9 +60,9 @@ POSE_COLUMNS = (
 )
 LOCAL_POSE_COLUMNS = "uid, segment_id, frame, x, y, yaw, robot_stamp, received"
 
-# What a writer reads of a segment's figures row (rows.Kept), and the columns
+# What a writer reads of a segment's figures row (rows.StoredFigures), and the columns
 # a change writes.
-KEPT_COLUMNS = (
+STORED_FIGURES_COLUMNS = (
     "points", "no_fix", "last_robot_stamp", "last_received", "last_id", "last_x", "last_y",
     "uid_sum",
 )  # fmt: skip

@@ -20,7 +20,7 @@ from events.models import Announcement
 from telemetry.models import LocalPose, Pose, SegmentFigures
 from telemetry.models.poses import FixStatus
 from telemetry.storage import keys, shared
-from telemetry.storage.rows import NewPoint, as_uuid, floats, kept_from
+from telemetry.storage.rows import NewPoint, as_uuid, floats, stored_figures_from
 
 NAME = "postgresql"
 POINT = "ST_SetSRID(ST_MakePoint(%s, %s), 4326)"
@@ -218,7 +218,7 @@ def _new_points(stored, sent, received, position) -> list[NewPoint]:
 _UPSERT_OR_READ = f"""
 WITH applied AS ({shared.upsert_sql(LEAST, GREATEST)} RETURNING 1),
 held AS (
-  SELECT {", ".join(keys.KEPT_COLUMNS)} FROM {shared.FIGURES}
+  SELECT {", ".join(keys.STORED_FIGURES_COLUMNS)} FROM {shared.FIGURES}
   WHERE segment_id = %s AND mode = %s AND NOT EXISTS (SELECT 1 FROM applied) FOR UPDATE
 )
 SELECT EXISTS (SELECT 1 FROM applied), held.*
@@ -236,7 +236,7 @@ fed AS (
   SELECT %s, %s, %s, %s, %s WHERE EXISTS (SELECT 1 FROM applied) RETURNING id
 ),
 held AS (
-  SELECT {", ".join(keys.KEPT_COLUMNS)} FROM {shared.FIGURES}
+  SELECT {", ".join(keys.STORED_FIGURES_COLUMNS)} FROM {shared.FIGURES}
   WHERE segment_id = %s AND mode = %s AND NOT EXISTS (SELECT 1 FROM applied) FOR UPDATE
 )
 SELECT (SELECT id FROM fed), held.*
@@ -263,9 +263,9 @@ def write_change(master_id, mode, seen, change, feed_row=None):
     if applied:
         return True, None
     if now[0] is not None:
-        return False, kept_from(now)
+        return False, stored_figures_from(now)
     # A row another writer created after this statement began.
-    return False, shared.read_kept(master_id, mode)
+    return False, shared.read_stored_figures(master_id, mode)
 
 
 # --- reads -------------------------------------------------------------------
@@ -291,7 +291,7 @@ def _in_span() -> str:
 
 def gps_tracks_sql() -> str:
     """The query of the GPS tracks (parameters as ``_read`` gives them: $1 the
-    segment ids, $2 to $4 see ``_in_span``, $5 the kept figures' mode or
+    segment ids, $2 to $4 see ``_in_span``, $5 the stored figures' mode or
     NULL).  Where the read is bounded, the count of fixes without a position
     is the figures': such a fix may lie outside the span, its segment may have
     no pose inside."""
@@ -345,18 +345,18 @@ _EVERY_POSE = {
 }
 
 
-def _read(query: str, columns: str, segment_ids: list[int], kept_mode: str | None) -> list:
+def _read(query: str, columns: str, segment_ids: list[int], figures_mode: str | None) -> list:
     """The rows of ``query`` (its columns as ``columns`` declares them), in
     binary (as the bytes are stored), read in one statement by
     ``ftt_read_within_kept_span`` (telemetry migration 0014): it looks up the
-    span of the segments' kept figures of ``kept_mode`` and plans ``query``
+    span of the segments' stored figures of ``figures_mode`` and plans ``query``
     with it, JIT compiling off (it costs a plain scan more than it saves).
 
     The figures are written in the poses' transaction, so every pose
-    committed before the look-up is inside.  A ``kept_mode`` of None reads
+    committed before the look-up is inside.  A ``figures_mode`` of None reads
     every pose, for measuring the figures themselves.  The aggregate keeps
     its sorted subquery's order."""
-    if kept_mode is None:
+    if figures_mode is None:
         # Every pose: nothing to look up (and the figures' migration 0007
         # measures tracks before 0014 makes the function).
         for param, value in _EVERY_POSE.items():
@@ -369,16 +369,16 @@ def _read(query: str, columns: str, segment_ids: list[int], kept_mode: str | Non
         cursor.execute(
             f"SELECT * FROM ftt_read_within_kept_span(%s::text, %s::bigint[], %s::text) "
             f"AS read({columns})",
-            [query, segment_ids, kept_mode],
+            [query, segment_ids, figures_mode],
         )
         return cursor.fetchall()
 
 
-def gps_tracks_plan(segment_ids: list[int], kept_mode: str, analyze: bool = False) -> list[str]:
+def gps_tracks_plan(segment_ids: list[int], figures_mode: str, analyze: bool = False) -> list[str]:
     """PostgreSQL's plan of the GPS tracks query as ``track_arrays`` runs it,
     which shows the partitions it reads."""
     explain = "EXPLAIN (ANALYZE, BUFFERS) " if analyze else "EXPLAIN "
-    rows = _read(explain + gps_tracks_sql(), "line text", segment_ids, kept_mode)
+    rows = _read(explain + gps_tracks_sql(), "line text", segment_ids, figures_mode)
     return [line for (line,) in rows]
 
 
@@ -388,15 +388,15 @@ def _seconds(stamps: bytes | None) -> np.ndarray:
     return micro / 1e6
 
 
-def track_arrays(segment_ids: list[int], mode: str, kept_mode: str | None):
+def track_arrays(segment_ids: list[int], mode: str, figures_mode: str | None):
     ids = [int(pk) for pk in segment_ids]
     if mode == keys.GPS_TRACK:
-        for seg, points, stamps, no_fix in _read(gps_tracks_sql(), _GPS_COLUMNS, ids, kept_mode):
+        for seg, points, stamps, no_fix in _read(gps_tracks_sql(), _GPS_COLUMNS, ids, figures_mode):
             points = np.frombuffer(points or b"", dtype=_WKB_POINT)
             x, y = points["x"].astype(float), points["y"].astype(float)
             yield seg, x, y, _seconds(stamps), no_fix
         return
-    for seg, x, y, stamps, frame in _read(local_tracks_sql(), _LOCAL_COLUMNS, ids, kept_mode):
+    for seg, x, y, stamps, frame in _read(local_tracks_sql(), _LOCAL_COLUMNS, ids, figures_mode):
         x = np.frombuffer(x, dtype=_PG_FLOAT).astype(float)
         y = np.frombuffer(y, dtype=_PG_FLOAT).astype(float)
         yield seg, x, y, _seconds(stamps), frame or ""
@@ -423,7 +423,7 @@ def is_partitioned(table: str) -> bool:
         return cursor.fetchone()[0]
 
 
-read_kept = shared.read_kept
+read_stored_figures = shared.read_stored_figures
 locked_figures = shared.locked_figures
 neighbours = shared.neighbours
 points_between = shared.points_between

@@ -22,7 +22,7 @@ class NewPoint(NamedTuple):
 
 
 @dataclass(frozen=True)
-class Kept:
+class StoredFigures:
     """What a writer reads of the figures row: the pose set's version (its
     counts) and the last usable point, the one an appended batch joins."""
 
@@ -40,9 +40,9 @@ class Kept:
 class Change:
     """What new points change in a segment's figures.  ``alone`` are the
     figures of the new points by themselves (the row of a segment without one);
-    ``length`` is what they add to the kept length; ``first``/``last`` say
+    ``length`` is what they add to the stored length; ``first``/``last`` say
     whether they become the track's first or last point; ``uid_sum`` is the
-    kept uid sum with theirs added."""
+    stored uid sum with theirs added."""
 
     alone: dict
     length: float
@@ -51,13 +51,15 @@ class Change:
     uid_sum: str
 
 
-def kept_from(values) -> Kept | None:
-    """``Kept`` from the values of a figures row's ``keys.KEPT_COLUMNS``; None
+def stored_figures_from(values) -> StoredFigures | None:
+    """``StoredFigures`` from the values of a figures row's ``keys.STORED_FIGURES_COLUMNS``; None
     when the segment has no figures row yet."""
     if values[0] is None:
         return None
     points, no_fix, robot_stamp, received, last_id, x, y, uids = values
-    return Kept(points, no_fix, instant(robot_stamp), instant(received), last_id, x, y, uids)
+    return StoredFigures(
+        points, no_fix, instant(robot_stamp), instant(received), last_id, x, y, uids
+    )
 
 
 def instant(value) -> datetime | None:

@@ -9,18 +9,18 @@ from django.db import connection
 from events.models import PoseSource, Segment
 from telemetry.models import LocalPose, Pose, SegmentFigures
 from telemetry.storage import keys
-from telemetry.storage.rows import Change, Kept, floats, kept_from
+from telemetry.storage.rows import Change, StoredFigures, floats, stored_figures_from
 
 FIGURES = SegmentFigures._meta.db_table
 
 
-def kept_returning(segment_column: str, mode: str) -> str:
-    """SQL of ``Kept`` as scalar subqueries, for the RETURNING list of a pose
+def stored_figures_returning(segment_column: str, mode: str) -> str:
+    """SQL of ``StoredFigures`` as scalar subqueries, for the RETURNING list of a pose
     insert (``segment_column``: its row's segment), so a single pose reads the
     figures without a statement of its own."""
     return ", ".join(
         f"(SELECT {column} FROM {FIGURES} WHERE segment_id = {segment_column} AND mode = '{mode}')"
-        for column in keys.KEPT_COLUMNS
+        for column in keys.STORED_FIGURES_COLUMNS
     )
 
 
@@ -39,7 +39,7 @@ WHERE m.id = %s
   AND (%s IS NULL OR EXISTS (SELECT 1 FROM {PoseSource._meta.db_table} WHERE id = %s))
   {guard}
 ON CONFLICT DO NOTHING
-RETURNING id, {kept_returning(Pose._meta.db_table + ".segment_id", keys.GPS_TRACK)}
+RETURNING id, {stored_figures_returning(Pose._meta.db_table + ".segment_id", keys.GPS_TRACK)}
 """
 
 
@@ -67,7 +67,7 @@ def insert_pose(point: str, master_id: int, fix, source_id, received, refused_by
     with connection.cursor() as cursor:
         cursor.execute(one_pose_sql(point, refused), params)
         row = cursor.fetchone()
-    return None if row is None else (row[0], kept_from(row[1:]))
+    return None if row is None else (row[0], stored_figures_from(row[1:]))
 
 
 # Creates the row or takes it as it is, and locks it either way (an upsert
@@ -83,15 +83,15 @@ def locked_figures(master_id: int, mode: str) -> SegmentFigures:
     return next(iter(SegmentFigures.objects.raw(_LOCK, [master_id, mode])))
 
 
-def read_kept(master_id: int, mode: str) -> Kept | None:
+def read_stored_figures(master_id: int, mode: str) -> StoredFigures | None:
     with connection.cursor() as cursor:
         cursor.execute(
-            f"SELECT {', '.join(keys.KEPT_COLUMNS)} FROM {FIGURES} "
+            f"SELECT {', '.join(keys.STORED_FIGURES_COLUMNS)} FROM {FIGURES} "
             "WHERE segment_id = %s AND mode = %s",
             [master_id, mode],
         )
         row = cursor.fetchone()
-    return None if row is None else kept_from(row)
+    return None if row is None else stored_figures_from(row)
 
 
 def upsert_sql(least: str, greatest: str) -> str:
@@ -122,7 +122,7 @@ WHERE f.points = %s AND f.no_fix = %s
 """
 
 
-def upsert_params(master_id: int, mode: str, seen: Kept | None, change: Change) -> list:
+def upsert_params(master_id: int, mode: str, seen: StoredFigures | None, change: Change) -> list:
     alone = adapted(change.alone[name] for name in keys.FIGURE_FIELDS)
     params = [master_id, mode, *alone, change.length, change.uid_sum]
     params += [change.first] * 2 + [change.last] * 5

@@ -69,7 +69,7 @@ def write_change(master_id, mode, seen, change, feed_row=None):
         cursor.execute(_UPSERT, shared.upsert_params(master_id, mode, seen, change))
         if cursor.fetchone() is not None:
             return True, None
-    return False, shared.read_kept(master_id, mode)
+    return False, shared.read_stored_figures(master_id, mode)
 
 
 class _Epoch(Func):
@@ -102,8 +102,8 @@ def _rows(segment_ids, mode):
     return ordered.values_list(*columns).iterator(chunk_size=20000)
 
 
-def track_arrays(segment_ids, mode: str, kept_mode: str | None):
-    # One table: every read is of every pose, ``kept_mode`` bounds nothing.
+def track_arrays(segment_ids, mode: str, figures_mode: str | None):
+    # One table: every read is of every pose, ``figures_mode`` bounds nothing.
     buckets: dict[int, tuple[list, list, list, list]] = {}
     no_fix: dict[int, int] = {}
     for seg, x, y, t, extra in _rows(list(segment_ids), mode):
@@ -131,7 +131,7 @@ def is_partitioned(table: str) -> bool:
     return False
 
 
-read_kept = shared.read_kept
+read_stored_figures = shared.read_stored_figures
 locked_figures = shared.locked_figures
 neighbours = shared.neighbours
 points_between = shared.points_between

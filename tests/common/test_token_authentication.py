@@ -54,7 +54,7 @@ def test_an_inactive_account_or_a_wrong_token_is_refused(role_user):
     assert wrong.get(URL).status_code == 401
 
 
-def test_a_kept_token_costs_no_query_on_the_next_request(role_user):
+def test_a_cached_token_costs_no_query_on_the_next_request(role_user):
     client = _client(role_user(roles.VIEWER))
     assert client.get(URL).status_code == 200
     with CaptureQueriesContext(connection) as captured:
@@ -62,7 +62,7 @@ def test_a_kept_token_costs_no_query_on_the_next_request(role_user):
     assert not [q for q in captured.captured_queries if "authtoken_token" in q["sql"]]
 
 
-def test_a_kept_token_is_revoked_at_once_by_the_changes_of_this_process(role_user):
+def test_a_cached_token_is_revoked_at_once_by_the_changes_of_this_process(role_user):
     operator = role_user(roles.OPERATOR)
     client = _client(operator)
     assert client.post(URL, {"location": "x"}, format="json").status_code == 201

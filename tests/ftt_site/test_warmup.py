@@ -21,7 +21,7 @@ print(json.dumps({
     "urls_loaded": all(
         name in sys.modules for name in ("ftt_site.urls", "ftt_site.api_urls", "gui.urls")
     ),
-    "report_figures_imported": "matplotlib" in sys.modules,
+    "report_charts_imported": "matplotlib" in sys.modules,
 }))
 """
 
@@ -38,4 +38,4 @@ def test_the_asgi_application_has_its_views_loaded_before_the_first_request():
         check=True,
     )
     state = json.loads(done.stdout.strip().splitlines()[-1])
-    assert state == {"urls_loaded": True, "report_figures_imported": True}
+    assert state == {"urls_loaded": True, "report_charts_imported": True}

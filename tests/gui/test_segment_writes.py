@@ -106,7 +106,7 @@ def test_a_quick_reason_annotates_the_open_take_over_whichever_is_selected(api_c
     assert listed(client, leg)[newer.pk] == body["segment"]
 
 
-def test_a_quick_reason_without_an_open_take_over_is_refused_in_words(api_client, leg):
+def test_a_quick_reason_without_an_open_take_over_is_refused_with_a_message(api_client, leg):
     segments.report_mode(leg, SegmentType.AUTO)
     client = api_client("operator")
     url = f"/gui/api/legs/{leg.pk}/quick-reason/"

@@ -3,14 +3,14 @@
 import pytest
 
 from events.models import ItoReason
-from reports.figures import charts
+from reports.charts import bars
 
 
 @pytest.fixture
 def drawn(monkeypatch):
     """The figures the charts draw, kept open after they are saved."""
     figures = []
-    monkeypatch.setattr(charts.plt, "close", figures.append)
+    monkeypatch.setattr(bars.plt, "close", figures.append)
     return figures
 
 
@@ -27,7 +27,7 @@ def covered(fig) -> list:
 
 
 def test_the_distance_legend_leaves_bars_and_their_figures_readable(tmp_path, drawn):
-    charts.distance_chart(
+    bars.distance_chart(
         ["Shift 1", "Shift 2", "Shift 3"], [900.0] * 3, [400.0] * 3, str(tmp_path / "d.png")
     )
     assert covered(drawn[0]) == []
@@ -40,5 +40,5 @@ def test_the_reasons_legend_covers_no_bar(tmp_path, drawn):
         for key in "abcdef"
     }
     counts = [{key: 6 for key in reasons}, {key: 6 for key in reasons}]
-    charts.reasons_chart(["Shift 1", "Shift 2"], counts, reasons, str(tmp_path / "r.png"))
+    bars.reasons_chart(["Shift 1", "Shift 2"], counts, reasons, str(tmp_path / "r.png"))
     assert covered(drawn[0]) == []

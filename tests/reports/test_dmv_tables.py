@@ -49,7 +49,7 @@ def dmv(settings):
     return settings
 
 
-def test_the_disengagement_table_has_the_forms_columns_and_words(scenario, dmv, tmp_path):
+def test_the_disengagement_table_has_the_forms_columns_and_choices(scenario, dmv, tmp_path):
     husky_take_over, jackal_take_over = _take_overs(scenario)
     segments.annotate_segment(husky_take_over, initiator="other", location_type="Yard")
     segments.annotate_segment(jackal_take_over, initiator="autonomous_system", location_type="")
@@ -89,14 +89,14 @@ def test_the_mapping_is_the_installations_table(scenario, dmv, tmp_path):
     assert [rows[0][header[6]], rows[0][header[7]]] == ["Remote Operator", "Rural Road"]
 
 
-def test_a_word_the_form_does_not_have_stops_the_start(dmv):
+def test_a_choice_the_form_does_not_have_stops_the_start(dmv):
     dmv.FTT_DMV_LOCATIONS = {"road": "Road"}
     dmv.FTT_DMV_INITIATORS = {"autonomous_system": "AV System"}
     with pytest.raises(SystemCheckError) as raised:
         call_command("check")
     said = str(raised.value)
     assert "'Road' is not one of Interstate, Freeway" in said
-    assert "no DMV word for the initiator 'safety_driver'" in said
+    assert "no DMV choice for the initiator 'safety_driver'" in said
 
 
 def test_the_mileage_table_gives_autonomous_miles_per_vehicle_and_month(scenario, dmv, tmp_path):

@@ -10,9 +10,9 @@ from PIL import Image as PILImage
 
 from events.services import logs, segments
 from events.services.segments import LocalPosition
+from reports.charts.maps import Background, Line, MapPainter
 from reports.documents.event_report import render_report
 from reports.documents.options import ReportOptions
-from reports.figures.maps import Background, Line, MapPainter
 from reports.selectors.statistics import event_statistics
 from telemetry.services import map_images, pose_writes
 from telemetry.services.pose_writes import MapPose

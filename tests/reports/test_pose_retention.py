@@ -12,8 +12,8 @@ from django.core.management import call_command
 from events.models import SegmentType
 from events.services import segments
 from events.services.segments import GpsPosition
+from reports.charts.maps import Line, map_tolerance
 from reports.documents.sections import OVERVIEW_SIZE
-from reports.figures.maps import Line, map_tolerance
 from reports.selectors.provenance import data_digest
 from reports.selectors.statistics import event_statistics, figures
 from reports.services.pose_retention import thin_old_poses
@@ -90,7 +90,7 @@ def test_old_shifts_are_thinned_to_the_report_drawing_and_figures_stay(leg, othe
 
     call_command("ftt_pose_storage")
 
-    # Figures and statistics read the kept figures: unchanged.
+    # Figures and statistics read the stored figures: unchanged.
     after = _figures()
     assert after.keys() == figures.keys()
     for key, kept in figures.items():

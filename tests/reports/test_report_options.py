@@ -6,10 +6,10 @@ from datetime import UTC, datetime, timedelta
 import pytest
 from django.core.management import CommandError, call_command
 
+from reports.charts.timeline import time_axis
 from reports.documents import sections
 from reports.documents.event_report import render_report
 from reports.documents.options import ReportOptions
-from reports.figures.timeline import time_axis
 from reports.models import Report
 
 
@@ -58,7 +58,7 @@ def test_tiles_are_never_closer_than_the_maximum_zoom(scenario, tile_server, til
     assert capped and max(capped) <= 12
 
 
-def test_out_of_range_options_are_refused_with_words(scenario, api_client):
+def test_out_of_range_options_are_refused_with_field_messages(scenario, api_client):
     operator = api_client("operator")
     for options, words in (
         ({"max_zoom": 25}, "maximum map zoom"),

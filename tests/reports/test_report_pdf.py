@@ -200,7 +200,7 @@ def test_open_segments_make_the_report_provisional(open_scenario, tmp_path, tile
 
 
 def test_event_without_poses_still_reports_times_and_lists_the_gaps(scenario, tmp_path, tile_cache):
-    # Poses removed behind the services' back; their kept figures are set right as
+    # Poses removed behind the services' back; their stored figures are set right as
     # an administrator would (ftt_recount_figures --fix).
     Pose.objects.all().delete()
     recount_figures([seg.pk for seg in scenario.masters.values()], fix=True)

@@ -100,7 +100,7 @@ def test_event_without_poses_still_has_times_and_joins(scenario):
 
     masters = list(Pose.objects.values_list("segment_id", flat=True).distinct())
     Pose.objects.all().delete()
-    # A raw delete passes by the figures kept at write time: measure them again.
+    # A raw delete passes by the figures stored at write time: measure them again.
     measure_figures(masters)
     overall = event_statistics(scenario.event).overall
     assert overall.auto_seconds == T_A

@@ -6,7 +6,7 @@ from zoneinfo import ZoneInfo
 
 import pytest
 
-from reports.figures import timeline
+from reports.charts import timeline
 
 T0 = datetime(2026, 5, 4, 9, 0, tzinfo=UTC)
 

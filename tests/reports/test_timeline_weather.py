@@ -7,11 +7,11 @@ from zoneinfo import ZoneInfo
 import numpy as np
 from PIL import Image
 
+from reports.charts import weather
+from reports.charts.timeline import draw_timeline
 from reports.documents import sections
 from reports.documents.event_report import render_report
 from reports.documents.options import ReportOptions
-from reports.figures import weather
-from reports.figures.timeline import draw_timeline
 
 T0 = datetime(2026, 5, 4, 9, 0, tzinfo=UTC)
 

@@ -18,7 +18,7 @@ from events.services import finality, logs
 from events.services.robots import ensure_robot_account
 from rosbridge_app.legacy_api.views import UIDS
 from telemetry.models import Image, LocalPose, MapImage, Pose
-from telemetry.selectors.distances import kept_distances
+from telemetry.selectors.distances import stored_distances
 from tests.support.fkie import FKIE_BAG, full_rate_length, gps_path_length, master_path_length
 from tests.support.legacy_node import LegacyNode, jpeg
 
@@ -111,7 +111,7 @@ def test_the_fkie_recording_through_the_original_node(field):
         r"the five take-overs as ([\d., and]+) m", " ".join(API_DOC.read_text().split())
     )
     documented = [float(x) for x in re.findall(r"\d+\.\d+", said.group(1))]
-    stored = kept_distances(found)
+    stored = stored_distances(found)
     shown = [round(stored[m.pk], 2) for m in found]
     assert shown == documented, shown
     recorded = sum(master_path_length(m) for m in found)

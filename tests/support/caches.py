@@ -16,7 +16,7 @@ def forget_cached_tracks() -> None:
 
 
 def forget_memos() -> None:
-    """Tokens, robot bindings and segments kept per process belong to one test:
+    """Tokens, robot bindings and segments cached per process belong to one test:
     ids are reused after a rolled-back test on SQLite."""
     for memo in MEMOS:
         memo.clear()

@@ -15,7 +15,7 @@ from pyproj import Geod
 from events.models import SegmentType
 from events.services import segments
 from events.services.segments import GpsPosition
-from reports.selectors.exports import segments_csv_lines
+from reports.selectors.exports import segments_csv_rows
 from reports.selectors.statistics import event_runs
 from telemetry.selectors.distances import measured_paths, path_length
 from telemetry.selectors.tracks import masters
@@ -70,7 +70,7 @@ def test_gui_api_statistics_and_csv_give_the_same_distance(drive, leg, client, r
     api_by_id = {f["id"]: f["properties"]["distance_m"] for f in api}
     event = leg.shift.test_event
     runs = {run.id: run.distance for run in event_runs(event)}
-    rows = csv.DictReader(io.StringIO("".join(segments_csv_lines(event))))
+    rows = csv.DictReader(io.StringIO("".join(segments_csv_rows(event))))
     csv_by_id = {int(r["segment_id"]): float(r["distance_m"]) for r in rows if r["distance_m"]}
 
     for name, (segment, expected) in drive.items():

@@ -1,4 +1,4 @@
-"""Deleting a pose keeps the segment's kept figures exact (issue 46, item 2): on
+"""Deleting a pose keeps the segment's stored figures exact (issue 46, item 2): on
 every deletion path, ``ftt_recount_figures`` finds no difference afterwards and
 the segment's distance is that of the poses left.  Run on PostGIS and on
 SpatiaLite (the figures' SQL differs)."""

@@ -228,14 +228,14 @@ def _drive_with_blind_fixes(leg, *, every_fix_stamped=False):
 
 @pytest.mark.parametrize("every_fix_stamped", [False, True])
 def test_tracks_read_within_the_kept_span_are_those_of_every_pose(leg, every_fix_stamped):
-    """The drawing read, bounded by the kept figures' span, gives the tracks of
+    """The drawing read, bounded by the stored figures' span, gives the tracks of
     every pose: poses without the robot's clock, fixes without a position
     outside the span, and a master with such fixes only included."""
     master, blind = _drive_with_blind_fixes(leg, every_fix_stamped=every_fix_stamped)
     ids = [master.pk, blind.pk]
     for mode in (GPS_TRACK, LOCAL_TRACK):
         bounded = load_tracks(ids, mode)
-        every = load_tracks(ids, mode, within_kept_span=False)
+        every = load_tracks(ids, mode, within_stored_span=False)
         assert bounded.keys() == every.keys()
         for pk, track in every.items():
             assert _as_read(bounded[pk]) == _as_read(track)

@@ -1,4 +1,4 @@
-"""Per-segment figures kept at write time equal what the distance rule gives
+"""Per-segment figures stored at write time equal what the distance rule gives
 from the poses, whatever order, repetition or path the poses arrive by."""
 
 import random
@@ -21,7 +21,7 @@ from exchange.importer import import_bundle
 from reports.selectors.statistics import event_statistics
 from telemetry.models import Pose, SegmentFigures, ThinnedSegment
 from telemetry.models.poses import FixStatus
-from telemetry.selectors.distances import displayed_distances, kept_distances, measured_paths
+from telemetry.selectors.distances import displayed_distances, measured_paths, stored_distances
 from telemetry.selectors.tracks import masters
 from telemetry.services import pose_writes
 from telemetry.services.pose_writes import GpsFix, MapPose
@@ -60,11 +60,11 @@ def _open_master(leg, lon=8.0):
     return segments.report_mode(leg, SegmentType.AUTO, at=T0, gps=GpsPosition(lon, 50.0)).master
 
 
-def _assert_kept_equal_poses(leg):
+def _assert_stored_equal_poses(leg):
     ids = [m.pk for m in masters(leg=leg)]
     assert recount_figures(ids) == {}
     for mode in (GPS_TRACK, LOCAL_TRACK):
-        kept = kept_distances(list(masters(leg=leg)), mode)
+        kept = stored_distances(list(masters(leg=leg)), mode)
         measured = {
             pk: p.distance for pk, p in measured_paths(list(masters(leg=leg)), mode).items()
         }
@@ -92,7 +92,7 @@ def test_random_orders_duplicates_and_late_batches_keep_exact_figures(leg, seed)
     shuffled = live[70:]
     rnd.shuffle(shuffled)
     pose_writes.store_poses(first, shuffled)
-    _assert_kept_equal_poses(leg)
+    _assert_stored_equal_poses(leg)
     # The spool of an outage replayed: earlier stamps after later ones, in random batches.
     rnd.shuffle(late)
     for fix in late:
@@ -106,7 +106,7 @@ def test_random_orders_duplicates_and_late_batches_keep_exact_figures(leg, seed)
     # A second master after the first: the join to its start changes the first's distance.
     segments.report_mode(leg, SegmentType.ITO, at=T0 + timedelta(minutes=5),
                          gps=GpsPosition(8.002, 50.0))  # fmt: skip
-    _assert_kept_equal_poses(leg)
+    _assert_stored_equal_poses(leg)
     kept = SegmentFigures.objects.get(segment=first, mode=GPS_TRACK)
     usable = Pose.objects.filter(segment=first).exclude(fix_status=FixStatus.NO_FIX)
     assert (
@@ -162,7 +162,7 @@ def test_import_merging_poses_into_a_track_measures_it_again(leg, tmp_path, medi
     with open_archive(tmp_path / "day.zip") as bundle:
         import_bundle(bundle)
     assert Pose.objects.filter(segment=master).count() == 40
-    _assert_kept_equal_poses(leg)
+    _assert_stored_equal_poses(leg)
 
 
 def _in_batches(master, share):
@@ -202,7 +202,7 @@ def test_two_writers_on_one_segment_at_once(leg, send):
         t.join()
     assert errors == []
     assert Pose.objects.filter(segment=master).count() == 200
-    _assert_kept_equal_poses(leg)
+    _assert_stored_equal_poses(leg)
 
 
 @pytest.mark.django_db(transaction=True)
@@ -257,7 +257,7 @@ def test_late_single_pose_in_the_middle_of_a_long_track_reads_only_its_neighbour
         if q["sql"].startswith("SELECT") and Pose._meta.db_table in q["sql"]
     ]
     assert len(reads) == 1 and reads[0].count("LIMIT 1") >= 2
-    _assert_kept_equal_poses(leg)
+    _assert_stored_equal_poses(leg)
     kept = SegmentFigures.objects.get(segment=master, mode=GPS_TRACK)
     assert (
         kept.points

@@ -23,10 +23,10 @@ from django.utils.translation import gettext, gettext_lazy
 from common.numbers import short
 from common.progress import ProgressBar
 from events.models import Leg, Shift, TestEvent
+from reports.charts.tiles import MAX_ZOOM
 from reports.documents.comparison import render_comparison
 from reports.documents.event_report import render_report
 from reports.documents.options import FULL, LEVELS, ReportError, ReportOptions
-from reports.figures.tiles import MAX_ZOOM
 from reports.models import Report
 from reports.selectors import exports
 from reports.selectors.disengagements import (
@@ -336,7 +336,7 @@ class Command(BaseCommand):
 
     def _exports(self, event, o) -> bool:
         writers = (
-            ("csv", lambda: exports.segments_csv_lines(event, "local" if o["local"] else "gps")),
+            ("csv", lambda: exports.segments_csv_rows(event, "local" if o["local"] else "gps")),
             ("geojson", lambda: exports.tracks_geojson_pieces(event)),
             ("gpx", lambda: exports.tracks_gpx_pieces(event)),
             ("json", lambda: [json_report(event, "local" if o["local"] else "gps")]),

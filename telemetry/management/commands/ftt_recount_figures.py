@@ -1,8 +1,8 @@
 """Measure every master segment's figures from its poses again and say where the
-figures kept at write time differed (there should never be a difference).
+figures stored at write time differed (there should never be a difference).
 
     manage.py ftt_recount_figures            # report only; exit status 1 on a difference
-    manage.py ftt_recount_figures --fix      # also set the kept figures right
+    manage.py ftt_recount_figures --fix      # also set the stored figures right
     manage.py ftt_recount_figures --event 7  # one test event
 """
 
@@ -28,7 +28,7 @@ class Command(BaseCommand):
         masters = Segment.objects.masters()
         if event is not None:
             masters = masters.filter(leg__shift__test_event=event)
-        # Thinned by the retention policy: the kept figures are from every pose,
+        # Thinned by the retention policy: the stored figures are from every pose,
         # which are no longer there to measure.
         thinned = masters.filter(thinning__isnull=False).count()
         masters = masters.filter(thinning__isnull=True)
@@ -53,8 +53,8 @@ class Command(BaseCommand):
         )
         if thinned:
             self.stdout.write(
-                _("%(count)s masters with thinned poses left out (their kept figures stand).")
+                _("%(count)s masters with thinned poses left out (their stored figures stand).")
                 % {"count": thinned}
             )
         if differing and not fix:
-            raise CommandError(_("The kept figures differ from the poses."))
+            raise CommandError(_("The stored figures differ from the poses."))

@@ -61,7 +61,7 @@ CASES = {
     "/api/images/": (_images, LIST_QUERIES),
     # The leg, its masters, their points: more segments add none.
     # GPS and local points on PostGIS are one query in a transaction whose first
-    # statement reads the kept span and switches JIT off (savepoint, span, query,
+    # statement reads the stored span and switches JIT off (savepoint, span, query,
     # release: telemetry/storage/postgresql.py).
     "/api/tracks/?leg={leg}": (_poses, 6),
     "/api/local-tracks/?leg={leg}": (_local_poses, 6),

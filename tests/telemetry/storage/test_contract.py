@@ -163,9 +163,9 @@ def _change(points, uid_sum="1"):
 
 def test_the_figures_upsert_applies_only_while_the_row_holds_what_was_read(adapter, master):
     mode = keys.GPS_TRACK
-    assert adapter.read_kept(master.pk, mode) is None
+    assert adapter.read_stored_figures(master.pk, mode) is None
     assert adapter.write_change(master.pk, mode, None, _change(1)) == (True, None)
-    seen = adapter.read_kept(master.pk, mode)
+    seen = adapter.read_stored_figures(master.pk, mode)
     assert (seen.points, seen.last_x, seen.last_id) == (1, 1.0, 1)
     # A writer that read before the row was made finds what it holds now.
     applied, now = adapter.write_change(master.pk, mode, None, _change(2))

@@ -25,8 +25,8 @@ from matplotlib.ticker import MaxNLocator  # noqa: E402
 from matplotlib.transforms import Affine2D  # noqa: E402
 
 from reports import formatting as fmt  # noqa: E402
-from reports.figures import style  # noqa: E402
-from reports.figures.style import rgb  # noqa: E402
+from reports.charts import style  # noqa: E402
+from reports.charts.style import rgb  # noqa: E402
 from reports.projection import local_frame  # noqa: E402
 from telemetry.selectors.track_drawing import simplified  # noqa: E402
 from telemetry.storage.keys import GPS_TRACK  # noqa: E402
@@ -66,7 +66,7 @@ class Background:
 
 @dataclass
 class MapPainter:
-    tiles: object | None = None  # reports.figures.tiles.TileSource
+    tiles: object | None = None  # reports.charts.tiles.TileSource
     dpi: int = DPI
     tiles_used: set = field(default_factory=set)
 
@@ -134,7 +134,7 @@ class MapPainter:
 def _figure(size):
     # Fixed margins: a constrained layout would cost half the time of a map,
     # and a report has one map per segment.
-    fig, ax = style.figure(size)
+    fig, ax = style.new_chart(size)
     fig.subplots_adjust(left=AXES_LEFT, right=AXES_RIGHT, bottom=0.12, top=0.97)
     ax.tick_params(labelsize=7)
     return fig, ax

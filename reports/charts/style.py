@@ -1,4 +1,4 @@
-"""Colours and fonts shared by every report figure."""
+"""Colours and fonts shared by every chart of a report."""
 
 import logging
 
@@ -57,15 +57,15 @@ def localise_ticks(ax) -> None:
     ax.yaxis.set_major_formatter(LocalNumbers())
 
 
-def figure(size, **options):
-    """A figure with one axes (plt.subplots), numbered in the report's language:
-    every report figure is made here or by fixed_figure."""
+def new_chart(size, **options):
+    """A chart: figure and one axes (plt.subplots), numbered in the report's language:
+    every chart of a report is made here or by fixed_chart."""
     fig, ax = plt.subplots(figsize=size, **options)
     localise_ticks(ax)
     return fig, ax
 
 
-def fixed_figure(
+def fixed_chart(
     width: float,
     height: float,
     left: float,
@@ -73,7 +73,7 @@ def fixed_figure(
     top: float = 0.3,
     right: float = 0.15,
 ):
-    """Figure and axes with margins in inches given by the caller.  A constrained
+    """A chart: figure and axes with margins in inches given by the caller.  A constrained
     layout measures every text several times, most of a chart's or timeline's
     drawing time; the caller knows its widest text in advance, except a chart's
     y tick labels, which widen the margin once drawn (fit_y_ticks)."""

@@ -13,7 +13,7 @@ import numpy as np  # noqa: E402
 from django.utils.translation import gettext as _  # noqa: E402
 
 from reports import formatting as fmt  # noqa: E402
-from reports.figures.style import fit_y_ticks, fixed_figure, label_width, rgb  # noqa: E402
+from reports.charts.style import fit_y_ticks, fixed_chart, label_width, rgb  # noqa: E402
 
 # Inches left of the axes for the y label and short tick labels; longer ones
 # widen it (fit_y_ticks).
@@ -29,7 +29,7 @@ def legend_width(labels, size: float, columns: int = 1) -> float:
 
 
 def place_legend(ax, size: float, columns: int = 1) -> None:
-    """The legend beside the axes, where it covers no bar and no bar's figure."""
+    """The legend beside the axes, where it covers no bar and no bar's number."""
     ax.legend(
         fontsize=size, ncols=columns, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0
     )
@@ -38,7 +38,7 @@ def place_legend(ax, size: float, columns: int = 1) -> None:
 def distance_chart(labels, auto, manual, path, dpi=150) -> str:
     """Stacked autonomous and manual distance per shift, with the autonomy share."""
     names = ["AUTO", _("ITO (manual)")]
-    fig, ax = fixed_figure(7.0, 3.0, CHART_LEFT, right=legend_width(names, 7))
+    fig, ax = fixed_chart(7.0, 3.0, CHART_LEFT, right=legend_width(names, 7))
     x = np.arange(len(labels))
     ax.bar(x, auto, color="#2ca02c", label=names[0])
     ax.bar(x, manual, bottom=auto, color="#d62728", label=names[1])
@@ -66,7 +66,7 @@ def reasons_chart(labels, counts_by_shift, reasons, path, dpi=150) -> str:
     names = [reasons[key].shown_short if key in reasons else key for key in keys]
     columns = -(-len(keys) // LEGEND_ROWS)
     right = legend_width(names, 6, columns) if keys else 0.15
-    fig, ax = fixed_figure(7.0, 3.0, CHART_LEFT, right=right)
+    fig, ax = fixed_chart(7.0, 3.0, CHART_LEFT, right=right)
     x = np.arange(len(labels))
     width = 0.8 / max(len(keys), 1)
     for i, (key, name) in enumerate(zip(keys, names, strict=True)):
@@ -100,7 +100,7 @@ def estimate_chart(labels, estimates, path, name, unit, scale=1.0, dpi=150) -> s
     A shift without interventions has no estimate: its lower bound is drawn
     as an upward arrow from the bound ("at least").
     """
-    fig, ax = fixed_figure(7.0, 2.8, CHART_LEFT)
+    fig, ax = fixed_chart(7.0, 2.8, CHART_LEFT)
     for i, est in enumerate(estimates):
         if est.value is not None:
             value, lower, upper = est.value / scale, est.lower / scale, est.upper / scale

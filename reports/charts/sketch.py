@@ -9,7 +9,7 @@ overview map (with tiles) stays a matplotlib figure.
 
 import numpy as np
 
-from reports.figures.maps import nice_length, scale_label
+from reports.charts.maps import nice_length, scale_label
 from reports.projection import local_frame
 from telemetry.storage.keys import GPS_TRACK
 

@@ -1,5 +1,5 @@
-"""The word lists of the California DMV's disengagement form (OL 311R) and the
-check that FTT's settings map its own words onto them (a system check,
+"""The choice lists of the California DMV's disengagement form (OL 311R) and the
+check that FTT's settings map its own values onto them (a system check,
 ``reports.checks``; the tables are ``reports.selectors.disengagements``)."""
 
 from django.conf import settings
@@ -16,7 +16,7 @@ def check_dmv_settings() -> list[str]:
     known = {key for key, _label in Segment.INITIATORS}
     initiators = settings.FTT_DMV_INITIATORS
     for key in sorted(known - set(initiators)):
-        problems.append(f"FTT_DMV_INITIATORS names no DMV word for the initiator {key!r}.")
+        problems.append(f"FTT_DMV_INITIATORS names no DMV choice for the initiator {key!r}.")
     for key, word in initiators.items():
         if key not in known:
             problems.append(f"FTT_DMV_INITIATORS: {key!r} is not an initiator of FTT.")

@@ -1,4 +1,4 @@
-"""Figures of the comparison report: reliability growth and take-over hotspots."""
+"""Charts of the comparison report: reliability growth and take-over hotspots."""
 
 import matplotlib
 
@@ -9,13 +9,13 @@ import numpy as np  # noqa: E402
 from django.utils.translation import gettext as _  # noqa: E402
 
 from reports import formatting as fmt  # noqa: E402
-from reports.figures.style import figure, fixed_figure, rgb  # noqa: E402
+from reports.charts.style import fixed_chart, new_chart, rgb  # noqa: E402
 
 
 def growth_chart(points, total, fit, path) -> str:
     """Cumulative interventions against cumulative autonomous distance (km),
     with the Crow-AMSAA fit and its band when there is one."""
-    fig, ax = figure((7.0, 3.2), layout="constrained")
+    fig, ax = new_chart((7.0, 3.2), layout="constrained")
     km = [p["distance"] / 1000 for p in points]
     ax.step(
         km, [p["interventions"] for p in points], where="post", color="black", label=_("observed")
@@ -56,7 +56,7 @@ def hotspot_chart(spots, reasons, path) -> str | None:
     members = [m for spot in spots for m in spot["members"]]
     if not members:
         return None
-    fig, ax = fixed_figure(7.0, 4.5, 0.75)
+    fig, ax = fixed_chart(7.0, 4.5, 0.75)
     keys = [m["reasons"][0] if m["reasons"] else "unassigned" for m in members]
     east = np.array([m["east"] for m in members])
     north = np.array([m["north"] for m in members])

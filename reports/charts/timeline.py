@@ -14,8 +14,8 @@ import numpy as np  # noqa: E402
 from django.utils.translation import gettext  # noqa: E402
 
 from reports import formatting as fmt  # noqa: E402
-from reports.figures import style, weather  # noqa: E402
-from reports.figures.style import rgb  # noqa: E402
+from reports.charts import style, weather  # noqa: E402
+from reports.charts.style import rgb  # noqa: E402
 
 MARKER_REASONS = ("goal", "end_shift")
 WEATHER_ROW = -1.2  # a band above the AUTO bars
@@ -76,7 +76,7 @@ def draw_timeline(
         reasons[key].shown_short if key in reasons else key for key in reason_rows
     ]
     height = 1.2 + 0.28 * len(labels) + (0.3 if weather_changes else 0.0)
-    fig, ax = style.fixed_figure(7.0, height, style.label_width(labels) + 0.2, top=0.08)
+    fig, ax = style.fixed_chart(7.0, height, style.label_width(labels) + 0.2, top=0.08)
     row_of = {key: len(modes) + i for i, key in enumerate(reason_rows)}
     ax.xaxis_date(tz)
     # Bars of one row, colour and hatch are one collection, markers of one colour one
