@@ -9,6 +9,7 @@ way Django's migrate then finds nothing to do.
 """
 
 import tempfile
+import uuid
 from pathlib import Path
 
 import psycopg
@@ -35,12 +36,7 @@ def migrated_postgres_template() -> str:
     if db["ENGINE"] != "django.contrib.gis.db.backends.postgis":
         return ""
     name = f"ftt_template_{code_digest()}"
-    server = {
-        "host": db["HOST"] or "127.0.0.1",
-        "port": db["PORT"] or 5432,
-        "user": db["USER"],
-        "password": db["PASSWORD"],
-    }
+    server = _server()
     with psycopg.connect(**server, dbname="postgres", autocommit=True) as conn:
         conn.execute("SELECT pg_advisory_lock(%s)", (_LOCK,))
         try:
@@ -50,6 +46,54 @@ def migrated_postgres_template() -> str:
         finally:
             conn.execute("SELECT pg_advisory_unlock(%s)", (_LOCK,))
     return name
+
+
+def older_database(tree: Path, rev: str) -> str:
+    """The URL of a new PostgreSQL database as the FTT in ``tree`` (commit ``rev``)
+    migrates it: a copy of a template that the first call on a server makes with
+    that code's migrate (one process at a time).  drop_database removes it."""
+    server = _server()
+    template = f"ftt_older_{rev}"
+    name = f"{template}_{uuid.uuid4().hex[:8]}"
+    with psycopg.connect(**server, dbname="postgres", autocommit=True) as conn:
+        conn.execute("SELECT pg_advisory_lock(%s)", (_LOCK,))
+        try:
+            found = conn.execute("SELECT 1 FROM pg_database WHERE datname = %s", (template,))
+            if found.fetchone() is None:
+                building = f"{template}_building"
+                conn.execute(f'DROP DATABASE IF EXISTS "{building}" WITH (FORCE)')
+                conn.execute(f'CREATE DATABASE "{building}"')
+                Site(
+                    tempfile.mkdtemp(prefix="ftt-older-"),
+                    root=tree,
+                    FTT_DATABASE_URL=_url(server, building),
+                ).manage("migrate", "--noinput", "-v", "0")
+                conn.execute(f'ALTER DATABASE "{building}" RENAME TO "{template}"')
+            conn.execute(f'CREATE DATABASE "{name}" TEMPLATE "{template}"')
+        finally:
+            conn.execute("SELECT pg_advisory_unlock(%s)", (_LOCK,))
+    return _url(server, name)
+
+
+def drop_database(url: str) -> None:
+    with psycopg.connect(**_server(), dbname="postgres", autocommit=True) as conn:
+        conn.execute(f'DROP DATABASE IF EXISTS "{url.rsplit("/", 1)[1]}" WITH (FORCE)')
+
+
+def _server() -> dict:
+    db = settings.DATABASES["default"]
+    return {
+        "host": db["HOST"] or "127.0.0.1",
+        "port": db["PORT"] or 5432,
+        "user": db["USER"],
+        "password": db["PASSWORD"],
+    }
+
+
+def _url(server: dict, name: str) -> str:
+    return (
+        f"postgis://{server['user']}:{server['password']}@{server['host']}:{server['port']}/{name}"
+    )
 
 
 def _make_template(conn, server: dict, name: str) -> None:
@@ -64,10 +108,7 @@ def _make_template(conn, server: dict, name: str) -> None:
         conn.execute(f'DROP DATABASE "{old}" WITH (FORCE)')
     building = f"{name}_building"
     conn.execute(f'CREATE DATABASE "{building}"')
-    url = (
-        f"postgis://{server['user']}:{server['password']}@{server['host']}:{server['port']}"
-        f"/{building}"
-    )
+    url = _url(server, building)
     Site(tempfile.mkdtemp(prefix="ftt-template-"), FTT_DATABASE_URL=url).manage(
         "migrate", "--noinput", "-v", "0"
     )

@@ -54,9 +54,11 @@ def copy_sqlite(source: Path, target: Path) -> None:
 
 
 class Site:
-    def __init__(self, data_dir: Path, **env: str):
-        """``env`` adds FTT_* variables, e.g. FTT_DATABASE_URL for a PostGIS site."""
+    def __init__(self, data_dir: Path, root: Path = ROOT, **env: str):
+        """``env`` adds FTT_* variables, e.g. FTT_DATABASE_URL for a PostGIS site;
+        ``root`` is the code that runs it (another tree: an older FTT)."""
         self.data_dir = Path(data_dir)
+        self.root = Path(root)
         self.env = {k: v for k, v in os.environ.items() if k != "FTT_DATABASE_URL"}
         self.env |= {"FTT_DATA_DIR": str(self.data_dir), "FTT_LOG_LEVEL": "WARNING"}
         self.env.pop("FTT_MEDIA_ROOT", None)
@@ -65,7 +67,7 @@ class Site:
     def manage(self, *args: str) -> str:
         done = subprocess.run(
             [sys.executable, "manage.py", *args],
-            cwd=ROOT,
+            cwd=self.root,
             env=self.env,
             capture_output=True,
             text=True,
