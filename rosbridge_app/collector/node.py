@@ -472,12 +472,14 @@ class CollectorNode(Node):
             log.warning("%s (%s): %s", name, info["topic"], text)
 
     def _mode_publisher(self) -> bool:
-        """Whether a publisher of the mode is connected: a silent one says its
-        mode only on change (collector/unknown_mode.py)."""
+        """Whether a publisher of the mode is matched with a mode subscription:
+        a silent one says its mode only on change (collector/unknown_mode.py).
+        The graph knows a publisher before its messages can reach the
+        collector, so it is asked of the subscriptions, not the graph."""
         return any(
-            self.count_publishers(info["topic"])
-            for name, info in self.inputs.items()
-            if is_mode_input(name)
+            sub.get_publisher_count()
+            for key, sub in list(self._ftt_subs.items())
+            if is_mode_input(key.split(" (")[0])
         )
 
     def _take_modes(self) -> None:

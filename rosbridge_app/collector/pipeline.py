@@ -43,7 +43,7 @@ from rosbridge_app.collector.reason_rules import ReasonWatcher
 from rosbridge_app.collector.reason_rules import parse as parse_reason_rules
 from rosbridge_app.collector.tf_buffer import TfBuffer, TfLookupError
 from rosbridge_app.collector.thinning import Thinner
-from rosbridge_app.collector.unknown_mode import FirstWord, ModeWait
+from rosbridge_app.collector.unknown_mode import FirstMode, ModeWait
 
 log = logging.getLogger("ftt.collector")
 
@@ -163,8 +163,8 @@ class Pipeline:
         mode: when logging stops, and when the collector stops while logging
         (a restart continues that segment, as any left open)."""
         if self.logging and self.open_mode is None and self.waiting:
-            if self.waiting.word is not None:
-                self._settle_first_word()
+            if self.waiting.first_mode is not None:
+                self._settle_first_mode()
             else:
                 self._switch(UNKNOWN, self.waiting.first_at(), held=self.waiting.take())
 
@@ -236,16 +236,16 @@ class Pipeline:
         received = received or at
         waiting = self.waiting
         if self.open_mode is None and waiting:
-            if waiting.word is not None:
-                if mode == waiting.word.mode:
+            if waiting.first_mode is not None:
+                if mode == waiting.first_mode.mode:
                     self._heard_again(mode, received)
                     return
-                self._settle_first_word()
+                self._settle_first_mode()
             elif waiting.says_what_was_held(at, self._first_held_robot_time()):
                 self._switch(mode, waiting.first_at(), held=waiting.take())
                 return
             else:
-                waiting.word = FirstWord(
+                waiting.first_mode = FirstMode(
                     mode, at, received, robot_stamp, uncertainty, self._reason(mode, at)
                 )
                 return
@@ -257,33 +257,34 @@ class Pipeline:
         return min(_robot_time(first) for first in firsts)
 
     def _heard_again(self, mode: str, received: datetime) -> None:
-        """The mode is still ``mode``: a repeat proves the first word periodic."""
+        """The mode is still ``mode``: a repeat proves the first mode message periodic."""
         waiting = self.waiting
-        if self.open_mode is None and waiting.word is not None and mode == waiting.word.mode:
+        pending = waiting.first_mode
+        if self.open_mode is None and pending is not None and mode == pending.mode:
             if waiting.repeats(received):
                 self._switch(mode, waiting.first_at(), held=waiting.take())
             else:
-                self._settle_first_word()
+                self._settle_first_mode()
 
-    def _settle_first_word(self) -> None:
-        """The first word was a switch: what was held before it has no known mode."""
-        word, first = self.waiting.word, self.waiting.first_at()
+    def _settle_first_mode(self) -> None:
+        """The first mode message was a switch: what was held before it has no known mode."""
+        message, first = self.waiting.first_mode, self.waiting.first_at()
         fixes, poses = self.waiting.take()
 
         def split(held):
-            before = [h for h in held if _robot_time(h) < word.at]
+            before = [h for h in held if _robot_time(h) < message.at]
             # As at every switch, the last position before it starts the new track.
             return before, before[-1:] + held[len(before) :]
 
         (fixes_before, fixes_after), (poses_before, poses_after) = split(fixes), split(poses)
         self._switch(UNKNOWN, first, held=(fixes_before, poses_before))
         self._switch(
-            word.mode,
-            word.at,
-            word.robot_stamp,
-            word.uncertainty,
+            message.mode,
+            message.at,
+            message.robot_stamp,
+            message.uncertainty,
             held=(fixes_after, poses_after),
-            reason=word.reason,
+            reason=message.reason,
         )
 
     def _reason(self, mode: str, at: datetime) -> str | None:
@@ -370,13 +371,13 @@ class Pipeline:
 
     def _end_wait(self, at: datetime) -> None:
         """The mode stayed unknown too long: a segment of unknown mode takes the
-        held positions; a first word that can no longer prove periodic is a switch."""
+        held positions; a first mode message that can no longer prove periodic is a switch."""
         if not (self.logging and self.open_mode is None and self.waiting):
             return
         waiting = self.waiting
-        if waiting.word is not None:
+        if waiting.first_mode is not None:
             if at >= waiting.undecided_until(self.params["params.unknown_mode_wait"]):
-                self._settle_first_word()
+                self._settle_first_mode()
         elif waiting.is_over(at, self.params["params.unknown_mode_wait"]):
             self._switch(UNKNOWN, waiting.first_at(), held=waiting.take())
 

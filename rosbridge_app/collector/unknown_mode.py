@@ -17,8 +17,9 @@ the bag importer alike (both through the pipeline):
     recorder joined the mode topic), and it came within
     ``params.unknown_mode_wait`` seconds of the first held position, or
   - its publisher repeats it (periodic): the same mode is heard again within
-    the wait, no sooner than the first message came after the first held
-    position, so the held positions lie within one period before it;
+    the wait, no sooner than half the time the first message came after the
+    first held position, so the held positions lie within two periods before
+    it;
 
 * otherwise it is a switch (an on-change publisher the collector was already
   connected to said nothing while the robot drove): the held positions before
@@ -44,7 +45,7 @@ from typing import NamedTuple
 MAX_HELD = 50_000
 
 
-class FirstWord(NamedTuple):
+class FirstMode(NamedTuple):
     """The first mode heard while positions are held, not yet known to say what
     they were: when it was said (``at``, robot time), when it was received, the
     timing of its switch and the reason the rules suggested then."""
@@ -65,7 +66,7 @@ class ModeWait:
         self.poses: deque[tuple[datetime, dict]] = deque(maxlen=MAX_HELD)
         # Whether a mode publisher was connected when the first position was held.
         self.listening = False
-        self.word: FirstWord | None = None
+        self.first_mode: FirstMode | None = None
 
     def __bool__(self) -> bool:
         return bool(self.fixes or self.poses)
@@ -86,18 +87,20 @@ class ModeWait:
         return at <= first or not self.listening
 
     def repeats(self, received: datetime) -> bool | None:
-        """The pending first word heard again at ``received``: True if it is
+        """The pending first mode heard again at ``received``: True if it is
         periodic enough to cover the held positions, False if not; None when
-        no word is pending."""
-        word = self.word
-        if word is None:
+        no first mode is pending."""
+        pending = self.first_mode
+        if pending is None:
             return None
-        return received - word.received >= word.received - self.first_at()
+        # Its first message may come up to a period late (a busy robot, or the
+        # mode topic matched after the positions' topic): two periods, not one.
+        return 2 * (received - pending.received) >= pending.received - self.first_at()
 
     def undecided_until(self, wait: float) -> datetime | None:
-        """After this time the pending first word can no longer prove periodic."""
-        word = self.word
-        return None if word is None else word.received + timedelta(seconds=wait)
+        """After this time the pending first mode can no longer prove periodic."""
+        pending = self.first_mode
+        return None if pending is None else pending.received + timedelta(seconds=wait)
 
     def take(self) -> tuple[list[tuple[datetime, dict]], list[tuple[datetime, dict]]]:
         """The held fixes and poses, oldest first; nothing is held afterwards."""
@@ -109,4 +112,4 @@ class ModeWait:
         self.fixes.clear()
         self.poses.clear()
         self.listening = False
-        self.word = None
+        self.first_mode = None

@@ -159,6 +159,15 @@ def test_only_a_latched_or_periodic_first_mode_takes_the_track_held_before_it():
     periodic.on_mode_value("auto", at(1.8))
     assert masters(periodic.events) == [("auto", 0.0)]
 
+    # A 2 Hz mode whose first message came a period late (a busy robot, the
+    # mode topic matched after the positions' topic) is periodic all the same.
+    late = listening_pipe()
+    drive(late, 0.7)
+    late.on_mode_value("auto", at(0.7))
+    drive(late, 0.5, start=0.7)
+    late.on_mode_value("auto", at(1.2))
+    assert masters(late.events) == [("auto", 0.0)]
+
     # A switch after 4 s of silence; the 10 Hz repeats that follow cannot make
     # it periodic: the 4 s before it have no known mode, the switch keeps its time.
     on_change = listening_pipe()

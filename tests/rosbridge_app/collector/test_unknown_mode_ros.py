@@ -91,7 +91,7 @@ def test_a_robot_that_says_its_mode_only_on_change_loses_nothing(
     drive(BEFORE_SWITCH)
     before = len(sent)
     said = time.time()
-    mode.publish(Bool(data=True))  # its first word: AUTO
+    mode.publish(Bool(data=True))  # its first mode message: AUTO
     drive(1.5)
     mode.publish(Bool(data=False))  # ITO
     drive(1.0)
@@ -99,7 +99,7 @@ def test_a_robot_that_says_its_mode_only_on_change_loses_nothing(
     assert ros.set_logging(False).success
 
     found = masters(robot_leg)
-    # The robot was connected and silent: its first word is a switch, within the wait or not.
+    # The robot was connected and silent: its first mode message is a switch, in the wait or not.
     assert [m.segment_type_id for m in found] == ["unknown", "auto", "ito"]
     unknown, auto = found[0], found[1]
     stored = track(unknown)
