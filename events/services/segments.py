@@ -57,18 +57,18 @@ class GpsPosition:
     longitude: float
     latitude: float
 
-    @classmethod
-    def check(cls, longitude, latitude) -> None:
-        """The rule without building a position: it runs per stored pose, and
-        only a position it does not pass at once is checked in full (the
-        messages)."""
-        if not (_within(longitude, LONGITUDE_RANGE) and _within(latitude, LATITUDE_RANGE)):
-            cls(longitude, latitude)
-
-    def __post_init__(self):
+    @staticmethod
+    def check(longitude, latitude) -> None:
+        """The rule, also without building a position: it runs per stored pose,
+        and only a position it does not pass at once is checked field by field
+        (the messages)."""
+        if _within(longitude, LONGITUDE_RANGE) and _within(latitude, LATITUDE_RANGE):
+            return
         errors = {}
-        for name, (low, high) in (("longitude", LONGITUDE_RANGE), ("latitude", LATITUDE_RANGE)):
-            value = getattr(self, name)
+        for name, value, (low, high) in (
+            ("longitude", longitude, LONGITUDE_RANGE),
+            ("latitude", latitude, LATITUDE_RANGE),
+        ):
             # Labels are translated only for a message: this check runs per stored pose.
             if not (isinstance(value, int | float) and math.isfinite(value)):
                 errors[name] = [_("%(name)s must be a finite number.") % {"name": _label(name)}]
@@ -79,6 +79,9 @@ class GpsPosition:
                 ]
         if errors:
             raise RuleViolation(errors)
+
+    def __post_init__(self):
+        self.check(self.longitude, self.latitude)
 
     def as_point(self) -> Point:
         return Point(self.longitude, self.latitude, srid=4326)

@@ -55,16 +55,14 @@ class GpsFix:
     def check(self) -> None:
         """The rules every stored fix satisfies, whichever way it is stored."""
         GpsPosition.check(self.longitude, self.latitude)
-        altitude, accuracy = self.altitude, self.horizontal_accuracy
-        if (altitude is not None and not math.isfinite(altitude)) or (
-            accuracy is not None and not math.isfinite(accuracy)
+        for name, value in (
+            ("altitude", self.altitude),
+            ("horizontal_accuracy", self.horizontal_accuracy),
         ):
-            for name in ("altitude", "horizontal_accuracy"):
-                value = getattr(self, name)
-                if value is not None and not math.isfinite(value):
-                    words = name.replace("_", " ")
-                    message = _("%(name)s must be a finite number.") % {"name": words}
-                    raise RuleViolation({name: [message]})
+            if value is not None and not math.isfinite(value):
+                label = name.replace("_", " ")
+                message = _("%(name)s must be a finite number.") % {"name": label}
+                raise RuleViolation({name: [message]})
         if self.fix_status not in FIX_STATUSES:
             message = _("Unknown fix status %(status)s.") % {"status": self.fix_status}
             raise RuleViolation({"fix_status": [message]})
